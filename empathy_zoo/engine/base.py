@@ -1,0 +1,327 @@
+"""The part of the rules both gridworlds share: torus, moves, resets, observations, swap.
+
+A :class:`GridEngine` holds the state of ``num_envs`` environments as numpy arrays and steps them
+all at once. Subclasses add what differs (who harms whom, batteries, observation values). The
+PettingZoo ``ParallelEnv`` is this engine with ``num_envs = 1``; :mod:`empathy_zoo.vector` is the
+same engine with many environments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from empathy_zoo.grid import MOVES, NUM_ACTIONS, torus_distance, window_indices
+from empathy_zoo.metrics import equality
+from empathy_zoo.randomness import EnvStreams
+
+__all__ = ["GridEngine", "StepEvents", "check_grid_arguments"]
+
+NO_AGENT = -1
+
+
+@dataclass
+class StepEvents:
+    """What happened in one step of every environment (arrays over ``(N,)`` or ``(N, A)``)."""
+
+    rewards: np.ndarray
+    """(N, A) float32: the environment's reward of each agent this step (0 for absent agents)."""
+    terminated: np.ndarray
+    """(N, A) bool: the agent's episode ended for good this step."""
+    truncated: np.ndarray
+    """(N, A) bool: the agent's episode was cut short this step (time limit, or the robot fell)."""
+    harmed_by: np.ndarray
+    """(N, A) int64: index of the agent that harmed this agent this step, else -1."""
+    collected: np.ndarray
+    """(N, A) bool: the agent collected a battery this step."""
+    present_before: np.ndarray
+    """(N, A) bool: the agent was in the environment when the step began."""
+    episode_over: np.ndarray
+    """(N,) bool: the episode ended this step (the environment needs a reset)."""
+
+
+def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -> None:
+    """Raise ``ValueError`` for grid arguments the rules cannot honour."""
+    for name, value in (("size", size), ("view", view), ("max_cycles", max_cycles)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+            raise ValueError(f"{name} must be an int, got {value!r}")
+    if size < min_size:
+        raise ValueError(f"size must be at least {min_size}, got {size}")
+    if view < 1 or view % 2 == 0 or view >= size:
+        raise ValueError(f"view must be odd, positive and smaller than size={size}, got {view}")
+    if max_cycles < 1:
+        raise ValueError(f"max_cycles must be positive, got {max_cycles}")
+
+
+class GridEngine:
+    """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
+
+    name: ClassVar[str]
+    agents: ClassVar[tuple[str, ...]]
+    symbols: ClassVar[tuple[str, ...]]
+    """One character per agent for the text render."""
+    colors: ClassVar[tuple[tuple[int, int, int], ...]]
+    """One RGB colour per agent for the image render."""
+    min_size: ClassVar[int] = 3
+    obs_low: ClassVar[float]
+    obs_high: ClassVar[float]
+
+    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
+        check_grid_arguments(size, view, max_cycles, self.min_size)
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be positive, got {num_envs}")
+        self.num_envs = int(num_envs)
+        self.size = int(size)
+        self.view = int(view)
+        self.max_cycles = int(max_cycles)
+        self.num_agents = len(self.agents)
+        self.obs_size = self.view * self.view
+        self.window = window_indices(self.size, self.view)
+        self.streams = EnvStreams(self.num_envs)
+        n, a = self.num_envs, self.num_agents
+        self.pos = np.zeros((n, a, 2), dtype=np.int64)
+        self.present = np.zeros((n, a), dtype=bool)
+        self.inventory = np.zeros((n, a), dtype=np.int64)
+        self.t = np.zeros(n, dtype=np.int64)
+        self.running = np.zeros(n, dtype=bool)
+        # what happened so far this episode (the metrics are computed from these, never from rewards)
+        self.episode_return = np.zeros((n, a), dtype=np.float64)
+        self.episode_battery_return = np.zeros((n, a), dtype=np.float64)
+        self.episode_harms = np.zeros((n, a), dtype=np.int64)
+        self.episode_survival = np.zeros((n, a), dtype=np.int64)
+        self._rows = np.arange(n)
+
+    # ------------------------------------------------------------------ hooks for subclasses
+    def _reset_extra(self, env_ids: np.ndarray) -> None:
+        """Reset environment-specific state (batteries) of ``env_ids``."""
+
+    def _blocked_start_cells(self, env_id: int) -> np.ndarray:
+        """Flat cells where no agent may start (batteries)."""
+        return np.zeros(0, dtype=np.int64)
+
+    def _random_start(self, env_ids: np.ndarray) -> None:
+        """Draw start cells for every agent of ``env_ids`` from their streams."""
+        raise NotImplementedError
+
+    def _start_conflict(self, cell: np.ndarray, other: np.ndarray) -> bool:
+        """Whether two agents may not start on ``cell`` and ``other``."""
+        raise NotImplementedError
+
+    def _apply_options(self, env_id: int, options: Mapping[str, Any]) -> set[str]:
+        """Apply environment-specific options; return the option keys consumed."""
+        return set()
+
+    def _resolve(self, previous: np.ndarray, events: StepEvents) -> None:
+        """Apply the environment's rules after everyone moved, filling ``events``."""
+        raise NotImplementedError
+
+    def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
+        """The ``(N, size*size)`` float32 picture that ``viewer`` sees, given cells and inventories."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ reset
+    def reset(
+        self,
+        env_ids: Sequence[int] | np.ndarray | None = None,
+        seeds: Sequence[int | None] | None = None,
+        options: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Start new episodes in ``env_ids`` (all when ``None``), reseeding those given a seed."""
+        ids = self._rows if env_ids is None else np.asarray(env_ids, dtype=np.int64)
+        if seeds is not None:
+            if len(seeds) != len(ids):
+                raise ValueError(f"got {len(seeds)} seeds for {len(ids)} environments")
+            for i, s in zip(ids, seeds):
+                if s is not None:
+                    self.streams.seed(int(i), s)
+        self.streams.ensure_seeded(ids)
+        self.t[ids] = 0
+        self.present[ids] = True
+        self.inventory[ids] = 0
+        self.running[ids] = True
+        for array in (self.episode_return, self.episode_battery_return, self.episode_harms, self.episode_survival):
+            array[ids] = 0
+        self._reset_extra(ids)
+        if options:
+            if len(ids) != 1:
+                raise ValueError("reset options place one environment at a time")
+            self._reset_with_options(int(ids[0]), options)
+        else:
+            self._random_start(ids)
+
+    def _reset_with_options(self, env_id: int, options: Mapping[str, Any]) -> None:
+        if not isinstance(options, Mapping):
+            raise ValueError(f"options must be a mapping, got {type(options).__name__}")
+        consumed = self._apply_options(env_id, options) | {"positions"}
+        unknown = set(options) - consumed
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}")
+        positions = options.get("positions") or {}
+        if not isinstance(positions, Mapping):
+            raise ValueError(f"options['positions'] must map agent names to (row, col), got {positions!r}")
+        placed: dict[int, np.ndarray] = {}
+        for agent, cell in positions.items():
+            if agent not in self.agents:
+                raise ValueError(f"options['positions'] names unknown agent {agent!r}; agents are {list(self.agents)}")
+            placed[self.agents.index(agent)] = self._check_cell(cell, f"options['positions'][{agent!r}]")
+        blocked = set(self._blocked_start_cells(env_id).tolist())
+        for index, cell in placed.items():
+            if int(cell[0] * self.size + cell[1]) in blocked:
+                raise ValueError(f"{self.agents[index]} is placed on a battery at {tuple(cell.tolist())}")
+        indices = sorted(placed)
+        for x in range(len(indices)):
+            for y in range(x + 1, len(indices)):
+                a, b = indices[x], indices[y]
+                if np.array_equal(placed[a], placed[b]):
+                    raise ValueError(f"{self.agents[a]} and {self.agents[b]} are both placed on {tuple(placed[a].tolist())}")
+                if self._start_conflict(placed[a], placed[b]):
+                    raise ValueError(
+                        f"{self.agents[a]} at {tuple(placed[a].tolist())} and {self.agents[b]} at "
+                        f"{tuple(placed[b].tolist())} would start in contact"
+                    )
+        env = np.array([env_id])
+        for index in range(self.num_agents):
+            if index in placed:
+                continue
+            while True:  # rejection sampling from the environment's own stream
+                flat = int(np.floor(self.streams.uniform(env)[0] * self.size * self.size))
+                cell = np.array(divmod(flat, self.size), dtype=np.int64)
+                if flat in blocked:
+                    continue
+                if any(np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()):
+                    continue
+                placed[index] = cell
+                break
+        for index, cell in placed.items():
+            self.pos[env_id, index] = cell
+
+    def _check_cell(self, cell: Any, where: str) -> np.ndarray:
+        try:
+            row, col = (int(v) for v in cell)
+            if any(float(v) != int(v) for v in cell):
+                raise TypeError
+        except (TypeError, ValueError):
+            raise ValueError(f"{where} must be a (row, col) pair of ints, got {cell!r}") from None
+        if not (0 <= row < self.size and 0 <= col < self.size):
+            raise ValueError(f"{where} = {(row, col)} is off the {self.size}x{self.size} grid")
+        return np.array([row, col], dtype=np.int64)
+
+    # ------------------------------------------------------------------ step
+    def check_actions(self, actions: np.ndarray) -> np.ndarray:
+        """Validate an ``(N, A)`` integer action array; raise ``ValueError`` naming the problem."""
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs, self.num_agents):
+            raise ValueError(f"actions must have shape {(self.num_envs, self.num_agents)}, got {actions.shape}")
+        if not np.issubdtype(actions.dtype, np.integer):
+            if not np.issubdtype(actions.dtype, np.floating) or not np.all(np.mod(actions, 1) == 0):
+                raise ValueError(f"actions must be integers in [0, {NUM_ACTIONS}), got dtype {actions.dtype}")
+        bad = ((actions < 0) | (actions >= NUM_ACTIONS)) & self.present
+        if bad.any():
+            env, agent = np.argwhere(bad)[0]
+            raise ValueError(
+                f"invalid action {actions[env, agent]!r} for {self.agents[agent]} in env {env}: "
+                f"actions are integers in [0, {NUM_ACTIONS})"
+            )
+        return actions.astype(np.int64, copy=False)
+
+    def step(self, actions: np.ndarray) -> StepEvents:
+        """Move every present agent simultaneously, then apply the rules; returns the events."""
+        if not self.running.all():
+            raise RuntimeError("step() called on an environment whose episode is over; reset it first")
+        actions = self.check_actions(actions)
+        n, a = self.num_envs, self.num_agents
+        present = self.present.copy()
+        previous = self.pos.copy()
+        moves = MOVES[np.where(present, actions, 4)]
+        self.pos = (self.pos + moves) % self.size
+        events = StepEvents(
+            rewards=np.zeros((n, a), dtype=np.float32),
+            terminated=np.zeros((n, a), dtype=bool),
+            truncated=np.zeros((n, a), dtype=bool),
+            harmed_by=np.full((n, a), NO_AGENT, dtype=np.int64),
+            collected=np.zeros((n, a), dtype=bool),
+            present_before=present,
+            episode_over=np.zeros(n, dtype=bool),
+        )
+        self._resolve(previous, events)
+        self.t += 1
+        self.episode_survival += self.present
+        timeout = (self.t >= self.max_cycles)[:, None] & self.present & ~events.terminated
+        events.truncated |= timeout
+        events.episode_over |= timeout.any(axis=1) | ~self.present.any(axis=1)
+        self.running &= ~events.episode_over
+        self.episode_return += events.rewards
+        return events
+
+    # ------------------------------------------------------------------ observations
+    def observe(self, viewer: int) -> np.ndarray:
+        """``(N, view*view)`` float32 observations of agent ``viewer`` in every environment."""
+        return self._window(self._paint(self.pos, self.inventory, viewer), self.pos[:, viewer])
+
+    def observe_swapped(self, viewer: int, other: int) -> np.ndarray:
+        """What ``viewer`` would observe had it exchanged cell and inventory with ``other``.
+
+        Rows where ``other`` has left the environment are meaningless; see :meth:`present`.
+        """
+        if viewer == other:
+            raise ValueError("an agent cannot swap places with itself")
+        pos = self.pos.copy()
+        pos[:, [viewer, other]] = pos[:, [other, viewer]]
+        inventory = self.inventory.copy()
+        inventory[:, [viewer, other]] = inventory[:, [other, viewer]]
+        return self._window(self._paint(pos, inventory, viewer), pos[:, viewer])
+
+    def in_view(self, viewer: int, other: int) -> np.ndarray:
+        """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
+        half = self.view // 2
+        delta = (self.pos[:, other] - self.pos[:, viewer] + half) % self.size
+        return (delta <= 2 * half).all(axis=1)
+
+    def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
+        """Index of the closest other present agent of ``viewer`` (torus distance, ties to the
+        lowest index) and a mask of environments where such an agent exists."""
+        others = [i for i in range(self.num_agents) if i != viewer]
+        dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, others, :], self.size).astype(np.float64)
+        dist[~self.present[:, others]] = np.inf
+        choice = np.argmin(dist, axis=1)
+        return np.asarray(others)[choice], np.isfinite(dist[self._rows, choice])
+
+    def _window(self, canvas: np.ndarray, centre: np.ndarray) -> np.ndarray:
+        cells = centre[:, 0] * self.size + centre[:, 1]
+        return canvas[self._rows[:, None], self.window[cells]]
+
+    # ------------------------------------------------------------------ metrics
+    def episode_metrics(self, env_ids: np.ndarray, learner: int = 0) -> dict[str, np.ndarray]:
+        """Episode metrics of ``learner`` (SPEC §5) in ``env_ids``, from what happened so far."""
+        other = 1 - learner if self.num_agents == 2 else None
+        own_b = self.episode_battery_return[env_ids, learner]
+        oth_b = self.episode_battery_return[env_ids, other] if other is not None else np.zeros(len(env_ids))
+        return {
+            "survival": self.episode_survival[env_ids, learner].copy(),
+            "harms": self.episode_harms[env_ids, learner].copy(),
+            "batteries": self.inventory[env_ids, learner].copy(),
+            "other_batteries": self.inventory[env_ids, other].copy() if other is not None else np.zeros(len(env_ids), np.int64),
+            "equality": equality(own_b, oth_b),
+            "return": self.episode_return[env_ids, learner].copy(),
+            "other_return": self.episode_return[env_ids, other].copy() if other is not None else np.zeros(len(env_ids)),
+            "length": self.t[env_ids].copy(),
+        }
+
+    # ------------------------------------------------------------------ checkpoint
+    def state(self) -> dict[str, Any]:
+        """A copy of the whole state (for checkpoints)."""
+        return {key: getattr(self, key).copy() for key in self._state_keys()} | {"streams": self.streams.state()}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        for key in self._state_keys():
+            getattr(self, key)[...] = state[key]
+        self.streams.load_state(state["streams"])
+
+    def _state_keys(self) -> tuple[str, ...]:
+        return (
+            "pos", "present", "inventory", "t", "running", "episode_return",
+            "episode_battery_return", "episode_harms", "episode_survival",
+        )

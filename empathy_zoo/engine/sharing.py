@@ -1,0 +1,113 @@
+"""Sharing rules (SPEC §3): a robot and a human collect batteries with diminishing returns."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.engine.base import GridEngine, StepEvents
+
+__all__ = ["SharingEngine", "battery_value", "FLOOR", "BATTERY"]
+
+FLOOR = 0.0
+BATTERY = -1.0
+ROBOT, HUMAN = 0, 1
+TIE_TO_ROBOT = 0.5
+"""A battery both agents reach in the same step goes to the robot when the env's draw is below this."""
+
+
+def battery_value(n: np.ndarray | int) -> np.ndarray:
+    """Worth of an agent's ``n``-th battery (n = 1, 2, …): ``1.1 − 0.1·n``."""
+    return 1.1 - 0.1 * np.asarray(n, dtype=np.float64)
+
+
+def agent_value(batteries: np.ndarray) -> np.ndarray:
+    """Observation value of an agent that holds ``batteries``: ``1 + batteries``."""
+    return 1.0 + batteries
+
+
+class SharingEngine(GridEngine):
+    """``robot_0`` and ``human_0`` collect the batteries on every odd (row, col) cell."""
+
+    name = "sharing_v0"
+    agents = ("robot_0", "human_0")
+    symbols = ("R", "H")
+    colors = ((40, 110, 220), (200, 60, 60))
+    obs_low = -1.0
+
+    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
+        super().__init__(num_envs, size, view, max_cycles)
+        rows, cols = np.divmod(np.arange(self.size * self.size), self.size)
+        self.initial_batteries = (rows % 2 == 1) & (cols % 2 == 1)
+        self.num_batteries = int(self.initial_batteries.sum())
+        self.obs_high = float(agent_value(self.num_batteries))
+        self._free_cells = np.flatnonzero(~self.initial_batteries)
+        self.batteries = np.zeros((self.num_envs, self.size * self.size), dtype=bool)
+
+    def _reset_extra(self, env_ids: np.ndarray) -> None:
+        self.batteries[env_ids] = self.initial_batteries
+
+    def _blocked_start_cells(self, env_id: int) -> np.ndarray:
+        return np.flatnonzero(self.batteries[env_id])
+
+    def _start_conflict(self, cell: np.ndarray, other: np.ndarray) -> bool:
+        return False  # only distinct cells are required
+
+    def _apply_options(self, env_id: int, options: Mapping[str, Any]) -> set[str]:
+        if "batteries" not in options or options["batteries"] is None:
+            return {"batteries"}
+        cells = options["batteries"]
+        if isinstance(cells, (str, bytes)) or not hasattr(cells, "__iter__"):
+            raise ValueError(f"options['batteries'] must be a list of (row, col) cells, got {cells!r}")
+        layout = np.zeros(self.size * self.size, dtype=bool)
+        for k, cell in enumerate(cells):
+            row, col = self._check_cell(cell, f"options['batteries'][{k}]")
+            if layout[row * self.size + col]:
+                raise ValueError(f"options['batteries'] lists {(int(row), int(col))} twice")
+            layout[row * self.size + col] = True
+        self.batteries[env_id] = layout
+        return {"batteries"}
+
+    def _random_start(self, env_ids: np.ndarray) -> None:
+        free = len(self._free_cells)
+        robot = np.floor(self.streams.uniform(env_ids) * free).astype(np.int64)
+        human = np.floor(self.streams.uniform(env_ids) * (free - 1)).astype(np.int64)
+        human += human >= robot
+        for agent, index in ((ROBOT, robot), (HUMAN, human)):
+            cell = self._free_cells[index]
+            self.pos[env_ids, agent, 0], self.pos[env_ids, agent, 1] = np.divmod(cell, self.size)
+
+    def _resolve(self, previous: np.ndarray, events: StepEvents) -> None:
+        cells = self.pos[:, :, 0] * self.size + self.pos[:, :, 1]
+        on_battery = self.batteries[self._rows[:, None], cells]
+        tie = on_battery[:, ROBOT] & on_battery[:, HUMAN] & (cells[:, ROBOT] == cells[:, HUMAN])
+        collects = on_battery.copy()
+        tie_envs = np.flatnonzero(tie)
+        if tie_envs.size:
+            to_robot = self.streams.uniform(tie_envs) < TIE_TO_ROBOT
+            collects[tie_envs, ROBOT] = to_robot
+            collects[tie_envs, HUMAN] = ~to_robot
+        self.inventory += collects
+        value = np.where(collects, battery_value(self.inventory), 0.0)
+        events.rewards[:] = value
+        events.collected[:] = collects
+        self.episode_battery_return += value
+        for agent in range(self.num_agents):
+            self.batteries[self._rows[collects[:, agent]], cells[collects[:, agent], agent]] = False
+        empty = ~self.batteries.any(axis=1)
+        events.terminated[empty] = True
+        events.episode_over |= empty
+
+    def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
+        canvas = np.where(self.batteries, np.float32(BATTERY), np.float32(FLOOR))
+        cells = pos[:, :, 0] * self.size + pos[:, :, 1]
+        for agent in range(self.num_agents):
+            if agent != viewer:
+                canvas[self._rows, cells[:, agent]] = agent_value(inventory[:, agent])
+        canvas[self._rows, cells[:, viewer]] = agent_value(inventory[:, viewer])
+        return canvas
+
+    def _state_keys(self) -> tuple[str, ...]:
+        return super()._state_keys() + ("batteries",)
