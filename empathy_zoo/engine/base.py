@@ -8,6 +8,7 @@ same engine with many environments.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -157,8 +158,11 @@ class GridEngine:
             raise ValueError(f"options must be a mapping, got {type(options).__name__}")
         consumed = self._apply_options(env_id, options) | {"positions"}
         unknown = set(options) - consumed
-        if unknown:
-            raise ValueError(f"unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}")
+        if unknown:  # PettingZoo's own API test passes foreign options; ignore them loudly
+            warnings.warn(
+                f"ignoring unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}",
+                stacklevel=4,
+            )
         positions = options.get("positions") or {}
         if not isinstance(positions, Mapping):
             raise ValueError(f"options['positions'] must map agent names to (row, col), got {positions!r}")
@@ -255,6 +259,15 @@ class GridEngine:
         self.running &= ~events.episode_over
         self.episode_return += events.rewards
         return events
+
+    # ------------------------------------------------------------------ infos
+    def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
+        """The ``infos[agent]`` entry after a reset."""
+        return {}
+
+    def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
+        """The ``infos[agent]`` entry after a step."""
+        return {}
 
     # ------------------------------------------------------------------ observations
     def observe(self, viewer: int) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -82,6 +82,17 @@ class CoexistenceEngine(GridEngine):
         events.truncated[cat_harms, CAT] = True  # the robot fell: the episode ends for the cat too
         events.episode_over |= cat_harms
         events.rewards[:] = np.where(self.present & events.present_before, 1.0, 0.0)
+
+    def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
+        return {"harmed_by": None, "harmed": []}
+
+    def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
+        by = int(events.harmed_by[env_id, agent])
+        victims = np.flatnonzero(events.harmed_by[env_id] == agent)
+        return {
+            "harmed_by": None if by < 0 else self.agents[by],
+            "harmed": [self.agents[v] for v in victims],
+        }
 
     def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
         canvas = np.zeros((self.num_envs, self.size * self.size), dtype=np.float32)

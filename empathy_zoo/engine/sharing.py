@@ -100,6 +100,12 @@ class SharingEngine(GridEngine):
         events.terminated[empty] = True
         events.episode_over |= empty
 
+    def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
+        return {"batteries": int(self.inventory[env_id, agent])}
+
+    def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
+        return {"batteries": int(self.inventory[env_id, agent])}
+
     def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
         canvas = np.where(self.batteries, np.float32(BATTERY), np.float32(FLOOR))
         cells = pos[:, :, 0] * self.size + pos[:, :, 1]

@@ -1,0 +1,22 @@
+"""empathy-zoo: PettingZoo gridworlds for negative side effects, with Empathic DQN and baselines.
+
+Environments: :mod:`empathy_zoo.coexistence_v0`, :mod:`empathy_zoo.sharing_v0` (PettingZoo
+ParallelEnv and AEC), :class:`empathy_zoo.vector.VectorEnv` (many at once, as arrays).
+"""
+
+from __future__ import annotations
+
+from empathy_zoo import coexistence_v0, sharing_v0
+from empathy_zoo.empathy import EmpathyWrapper
+from empathy_zoo.fixed_agents import FixedAgents
+from empathy_zoo.policies import POLICIES, Patrol, RandomWalk, make_policy
+
+__version__ = "0.1.0"
+
+ENVIRONMENTS = {"coexistence_v0": coexistence_v0, "sharing_v0": sharing_v0}
+"""Environment modules by name."""
+
+__all__ = [
+    "coexistence_v0", "sharing_v0", "ENVIRONMENTS", "EmpathyWrapper", "FixedAgents",
+    "POLICIES", "Patrol", "RandomWalk", "make_policy", "__version__",
+]

@@ -1,0 +1,86 @@
+"""``FixedAgents``: a ParallelEnv whose agents are only the learners; fixed agents act inside."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import EzPickle
+from pettingzoo import ParallelEnv
+from pettingzoo.utils.wrappers import BaseParallelWrapper
+
+from empathy_zoo.policies import FixedPolicy, make_policy
+from empathy_zoo.randomness import derive_key
+
+__all__ = ["FixedAgents", "policy_seed"]
+
+
+def policy_seed(env_seed: int, agent_index: int) -> int:
+    """The seed a fixed agent gets when its environment is reset with ``env_seed``."""
+    return derive_key(env_seed, 1 + agent_index)
+
+
+class FixedAgents(BaseParallelWrapper, EzPickle):
+    """Drive the agents named in ``policies`` inside the environment.
+
+    ``FixedAgents(env, {"cat_0": RandomWalk()})`` (or ``{"cat_0": "random_walk"}``) returns a
+    ParallelEnv whose ``agents`` are the remaining (learning) agents. Each fixed agent is reset
+    with a seed derived from the env's seed at ``reset(seed=...)``, so the same seed gives the
+    same trajectory; ``reset()`` without a seed continues every stream. A fixed policy receives
+    its own observation and its ``infos`` entry plus ``"step"`` (the env's step count).
+    """
+
+    def __init__(self, env: ParallelEnv, policies: Mapping[str, FixedPolicy | str]) -> None:
+        BaseParallelWrapper.__init__(self, env)
+        EzPickle.__init__(self, env, policies)
+        all_agents = list(env.possible_agents)
+        unknown = [agent for agent in policies if agent not in all_agents]
+        if unknown:
+            raise ValueError(f"fixed policies given for unknown agent(s) {unknown}; agents are {all_agents}")
+        self.policies = {agent: make_policy(policy) for agent, policy in policies.items()}
+        self.possible_agents = [agent for agent in all_agents if agent not in self.policies]
+        if not self.possible_agents:
+            raise ValueError("every agent is fixed; leave at least one agent to learn")
+        self._fixed_index = {agent: all_agents.index(agent) for agent in self.policies}
+        self._last: dict[str, tuple[np.ndarray, dict]] = {}
+        self._step = 0
+        self.agents: list[str] = []
+
+    def observation_space(self, agent: str) -> Any:
+        return self.env.observation_space(agent)
+
+    def action_space(self, agent: str) -> Any:
+        return self.env.action_space(agent)
+
+    def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
+        observations, infos = self.env.reset(seed=seed, options=options)
+        for agent, policy in self.policies.items():
+            policy.reset(None if seed is None else policy_seed(seed, self._fixed_index[agent]))
+        self._step = 0
+        self._remember(observations, infos)
+        self.agents = [agent for agent in self.env.agents if agent not in self.policies]
+        return self._learners(observations), self._learners(infos)
+
+    def step(self, actions: Mapping[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
+        for agent in actions:
+            if agent in self.policies:
+                raise ValueError(f"{agent} is a fixed agent driven inside FixedAgents; do not pass its action")
+        merged = dict(actions)
+        for agent in self.env.agents:
+            if agent in self.policies:
+                observation, info = self._last[agent]
+                merged[agent] = self.policies[agent].act(observation, {**info, "step": self._step})
+        observations, rewards, terminations, truncations, infos = self.env.step(merged)
+        self._step += 1
+        self._remember(observations, infos)
+        self.agents = [agent for agent in self.env.agents if agent not in self.policies]
+        return tuple(self._learners(d) for d in (observations, rewards, terminations, truncations, infos))  # type: ignore[return-value]
+
+    def _remember(self, observations: dict, infos: dict) -> None:
+        for agent in self.policies:
+            if agent in observations:
+                self._last[agent] = (observations[agent], infos.get(agent, {}))
+
+    def _learners(self, values: dict) -> dict:
+        return {agent: value for agent, value in values.items() if agent not in self.policies}

@@ -1,0 +1,33 @@
+"""Name -> class look-up shared by every plug-in point (fixed policies, learning methods)."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["resolve_name"]
+
+
+def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
+    """Return ``registry[spec]``, or the object named by a ``package.module:Name`` string.
+
+    Raises ``ValueError`` naming the unknown entry and what is registered.
+    """
+    if not isinstance(spec, str) or not spec:
+        raise ValueError(f"a {kind} is named by a non-empty string, got {spec!r}")
+    if spec in registry:
+        return registry[spec]
+    if ":" not in spec:
+        raise ValueError(
+            f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')"
+        )
+    module_name, _, attribute = spec.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as error:
+        raise ValueError(f"cannot import module {module_name!r} for {kind} {spec!r}: {error}") from error
+    try:
+        return getattr(module, attribute)
+    except AttributeError:
+        raise ValueError(f"module {module_name!r} has no {attribute!r} (for {kind} {spec!r})") from None

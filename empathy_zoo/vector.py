@@ -1,0 +1,189 @@
+"""The vector face of the engines: ``N`` environments as arrays, with autoreset.
+
+``VectorEnv("coexistence_v0", num_envs=64, fixed={"cat_0": "random_walk"})`` steps 64
+Coexistence environments at once; the learning agents (those not in ``fixed``) act through an
+``(N, L)`` action array, the fixed ones act inside with their batched policies. Environment
+``i`` is seeded with ``seeds[i]`` (or ``seed + i`` for an int), exactly as
+``parallel_env().reset(seed=seeds[i])`` would be, and its fixed agents are seeded exactly as
+:class:`empathy_zoo.FixedAgents` seeds them: the same seeds and actions give the same
+trajectories on both faces. An environment whose episode ends is reset in the same step; its
+last observation stays available in :attr:`VectorStep.final_observations`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.engine import ENGINES, GridEngine
+from empathy_zoo.fixed_agents import policy_seed
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.policies import BatchedPolicy, FixedPolicy, batched, make_policy
+
+__all__ = ["VectorEnv", "VectorStep"]
+
+
+@dataclass
+class VectorStep:
+    """One step of every environment, as arrays."""
+
+    observations: np.ndarray
+    """(N, L, V) float32: observations to act on next (after any autoreset)."""
+    final_observations: np.ndarray
+    """(N, L, V) float32: observations at the end of this step, before any autoreset."""
+    swapped: np.ndarray
+    """(N, L, V) float32: each learner's swapped observation with its closest other agent at the
+    end of this step (before autoreset); zeros where :attr:`swapped_valid` is False."""
+    swapped_valid: np.ndarray
+    """(N, L) bool: that other agent is still present (and in view, with ``in_view_only``)."""
+    rewards: np.ndarray
+    """(N, A) float32: the environment's rewards of all agents."""
+    terminated: np.ndarray
+    """(N, A) bool."""
+    truncated: np.ndarray
+    """(N, A) bool."""
+    episode_over: np.ndarray
+    """(N,) bool: the episode ended this step (the environment has been reset)."""
+    harmed_by: np.ndarray
+    """(N, A) int64: index of the agent that harmed each agent this step, else -1."""
+    collected: np.ndarray
+    """(N, A) bool: the agent collected a battery this step."""
+    finished: dict[str, np.ndarray]
+    """Metrics of the episodes that ended this step (SPEC §5, for the first learner), with
+    ``"env"`` giving each one's environment index."""
+
+
+class VectorEnv:
+    """``num_envs`` environments of one kind stepped as arrays (see the module documentation)."""
+
+    def __init__(
+        self,
+        env: str | type[GridEngine],
+        num_envs: int,
+        *,
+        fixed: Mapping[str, FixedPolicy | str] | None = None,
+        in_view_only: bool = False,
+        size: int = 7,
+        view: int = 5,
+        max_cycles: int = 500,
+    ) -> None:
+        if isinstance(env, str):
+            if env not in ENGINES:
+                raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENGINES)}")
+            env = ENGINES[env]
+        self.engine: GridEngine = env(num_envs, size=size, view=view, max_cycles=max_cycles)
+        self.num_envs = self.engine.num_envs
+        self.agents = list(self.engine.agents)
+        fixed = dict(fixed or {})
+        unknown = [agent for agent in fixed if agent not in self.agents]
+        if unknown:
+            raise ValueError(f"fixed policies given for unknown agent(s) {unknown}; agents are {self.agents}")
+        self.learners = [agent for agent in self.agents if agent not in fixed]
+        if not self.learners:
+            raise ValueError("every agent is fixed; leave at least one agent to learn")
+        self.learner_index = [self.agents.index(agent) for agent in self.learners]
+        self.fixed: dict[int, BatchedPolicy] = {
+            self.agents.index(agent): batched(make_policy(policy), self.num_envs) for agent, policy in fixed.items()
+        }
+        self.in_view_only = bool(in_view_only)
+        self.obs_size = self.engine.obs_size
+        self._observations: np.ndarray | None = None
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, seed: int | Sequence[int] | None = None) -> np.ndarray:
+        """Reset every environment; returns ``(N, L, V)`` observations."""
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = [int(s) for s in seed]
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"got {len(seeds)} seeds for {self.num_envs} environments")
+        ids = np.arange(self.num_envs)
+        self.engine.reset(ids, seeds)
+        for index, policy in self.fixed.items():
+            policy.reset(ids, [None if s is None else policy_seed(s, index) for s in seeds])
+        self._observations = self._observe_learners()
+        return self._observations
+
+    def step(self, actions: np.ndarray) -> VectorStep:
+        """Step with ``(N, L)`` learner actions; ends and resets finished episodes."""
+        if self._observations is None:
+            raise RuntimeError("call reset() before step()")
+        actions = np.asarray(actions)
+        if actions.ndim == 1 and len(self.learners) == 1:
+            actions = actions[:, None]
+        if actions.shape != (self.num_envs, len(self.learners)):
+            raise ValueError(f"actions must have shape {(self.num_envs, len(self.learners))}, got {actions.shape}")
+        engine = self.engine
+        full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.int64)
+        full[:, self.learner_index] = actions
+        for index, policy in self.fixed.items():
+            observations = engine.observe(index) if policy.needs_observation else None
+            full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
+        events = engine.step(full)
+        final = self._observe_learners()
+        swapped, valid = self._swapped_closest()
+        over = events.episode_over
+        done_ids = np.flatnonzero(over)
+        finished: dict[str, np.ndarray] = {"env": done_ids}
+        if done_ids.size:
+            metrics = engine.episode_metrics(done_ids, self.learner_index[0])
+            finished.update({name: metrics[name] for name in (*METRIC_NAMES, "length")})
+            engine.reset(done_ids)
+            for index, policy in self.fixed.items():
+                policy.reset(done_ids, [None] * done_ids.size)
+            observations = final.copy()
+            observations[done_ids] = self._observe_learners()[done_ids]
+        else:
+            observations = final
+        self._observations = observations
+        return VectorStep(
+            observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
+            rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
+            episode_over=over, harmed_by=events.harmed_by, collected=events.collected, finished=finished,
+        )
+
+    # ------------------------------------------------------------------ observations
+    def _observe_learners(self) -> np.ndarray:
+        return np.stack([self.engine.observe(i) for i in self.learner_index], axis=1)
+
+    def _swapped_closest(self) -> tuple[np.ndarray, np.ndarray]:
+        engine = self.engine
+        swapped = np.zeros((self.num_envs, len(self.learners), self.obs_size), dtype=np.float32)
+        valid = np.zeros((self.num_envs, len(self.learners)), dtype=bool)
+        for column, viewer in enumerate(self.learner_index):
+            other, exists = engine.closest_other(viewer)
+            for o in np.unique(other[exists]):
+                rows = exists & (other == o)
+                if self.in_view_only:
+                    rows &= engine.in_view(viewer, int(o))
+                    exists[(other == o) & ~rows] = False
+                swapped[rows, column] = engine.observe_swapped(viewer, int(o))[rows]
+            valid[:, column] = exists
+        return swapped, valid
+
+    def swapped_observations(self, viewer: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(N, A, V)`` swapped observations of ``viewer`` with every agent, and an ``(N, A)``
+        mask of those that exist (other agent present, in view with ``in_view_only``; never self)."""
+        v = self.agents.index(viewer)
+        engine = self.engine
+        out = np.zeros((self.num_envs, engine.num_agents, self.obs_size), dtype=np.float32)
+        mask = np.zeros((self.num_envs, engine.num_agents), dtype=bool)
+        for o in range(engine.num_agents):
+            if o == v:
+                continue
+            ok = engine.present[:, o] & engine.present[:, v]
+            if self.in_view_only:
+                ok &= engine.in_view(v, o)
+            out[:, o] = np.where(ok[:, None], engine.observe_swapped(v, o), 0.0)
+            mask[:, o] = ok
+        return out, mask
+
+    # ------------------------------------------------------------------ checkpoint
+    def state(self) -> dict[str, Any]:
+        return {"engine": self.engine.state(), "observations": None if self._observations is None else self._observations.copy()}
