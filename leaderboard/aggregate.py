@@ -1,0 +1,298 @@
+"""Leaderboard computation: per-run scalars, per-method means with bootstrap intervals, curves.
+
+Pure functions over arrays, in the spirit of rliable: a *run* is one result file (one seed of one
+method on one env); runs are grouped by ``(env, method_label)``; every interval is a 95 %
+percentile bootstrap of the mean **over seeds**, drawn from an explicit random state (a fixed
+integer seed by default), so the same result files always give the same leaderboard.
+
+Two phases are scored per run (see :data:`PHASES`):
+
+* ``train_final10`` -- mean of each metric over the final 10 % of training episodes (at least one);
+* ``eval`` -- mean over the episodes of the run's last greedy evaluation.
+
+Nothing here formats text or draws; see :mod:`leaderboard.tables` and :mod:`leaderboard.plots`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.atomic import read_json
+from empathy_zoo.metrics import METRIC_NAMES
+
+__all__ = [
+    "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
+    "N_BINS", "Score", "Curve", "result_files", "load_results", "group_runs", "final_episode_count",
+    "run_scalars", "bootstrap_mean_ci", "score_runs", "binned_curve", "learning_curves",
+]
+
+SCHEMA_VERSION = 1
+"""The result-file schema this module reads."""
+PHASES: tuple[str, ...] = ("eval", "train_final10")
+"""Scored phases: last greedy evaluation, and the final 10 % of training episodes."""
+FINAL_FRACTION = 0.1
+"""Fraction of the last training episodes averaged for ``train_final10``."""
+N_RESAMPLES = 2000
+"""Bootstrap resamples (over seeds) per interval."""
+CONFIDENCE = 0.95
+"""Coverage of the percentile-bootstrap intervals."""
+DEFAULT_SEED = 0
+"""Seed of the ``numpy.random.Generator`` used for every interval unless one is given."""
+N_BINS = 50
+"""Bins of training env steps per learning curve."""
+
+_REQUIRED_KEYS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "train", "eval")
+
+RandomState = np.random.Generator | int
+
+
+@dataclass(frozen=True)
+class Score:
+    """One cell of the leaderboard: a metric of one method on one env, in one phase."""
+
+    env: str
+    method_label: str
+    method: str
+    """Registry name(s) of the learning method, comma-joined if a label covers several."""
+    phase: str
+    metric: str
+    mean: float
+    ci_low: float
+    ci_high: float
+    n_seeds: int
+    """Seeds with a finite value; with 1, the interval is the point itself."""
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A learning curve of one metric for one method: per-bin mean over seeds and its interval."""
+
+    env: str
+    method_label: str
+    metric: str
+    steps: np.ndarray
+    """Centre (in training env steps) of every bin."""
+    mean: np.ndarray
+    ci_low: np.ndarray
+    ci_high: np.ndarray
+    n_seeds: int
+
+
+def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
+    """Sorted ``*.json`` result files of ``results_dir`` (or of its ``runs/`` subdirectory).
+
+    Names starting with ``.`` (temporary files of an atomic write in progress) are ignored.
+    """
+    root = Path(results_dir)
+    if not root.is_dir():
+        raise ValueError(f"results directory {root} does not exist")
+    if (root / "runs").is_dir():
+        root = root / "runs"
+    return sorted(p for p in root.glob("*.json") if not p.name.startswith(".") and p.is_file())
+
+
+def _check_result(result: Any, path: Path) -> dict[str, Any]:
+    if not isinstance(result, dict):
+        raise ValueError(f"{path} is not a result file (expected a JSON object)")
+    missing = [key for key in _REQUIRED_KEYS if key not in result]
+    if missing:
+        raise ValueError(f"{path} is not a result file: missing {', '.join(missing)}")
+    if result["schema"] != SCHEMA_VERSION:
+        raise ValueError(f"{path} has result schema {result['schema']!r}; this leaderboard reads {SCHEMA_VERSION}")
+    if not isinstance(result["seed"], int) or not isinstance(result["train"], dict):
+        raise ValueError(f"{path} is not a result file: 'seed' must be an int and 'train' an object")
+    if "episode_end_step" not in result["train"]:
+        raise ValueError(f"{path} is not a result file: 'train' has no 'episode_end_step' column")
+    lengths = {len(column) for column in result["train"].values()}
+    if len(lengths) > 1:
+        raise ValueError(f"{path}: the 'train' columns have different lengths {sorted(lengths)}")
+    return result
+
+
+def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """Every result file of ``results_dir`` (see :func:`result_files`), in file-name order.
+
+    A corrupted or malformed file raises ``ValueError`` naming it; so do two runs with the same
+    ``(env, method_label, seed)``, which would otherwise be counted twice.
+    """
+    results: list[dict[str, Any]] = []
+    seen: dict[tuple[str, str, Any], Path] = {}
+    for path in result_files(results_dir):
+        result = _check_result(read_json(path), path)
+        key = (result["env"], result["method_label"], result["seed"])
+        if key in seen:
+            raise ValueError(f"{seen[key]} and {path} are the same run {key}; move one away")
+        seen[key] = path
+        results.append(result)
+    return results
+
+
+def group_runs(results: Iterable[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, Any]]]:
+    """Runs grouped by ``(env, method_label)``; groups sorted by env, method, label; runs by seed."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for result in results:
+        groups.setdefault((result["env"], result["method_label"]), []).append(result)
+
+    def order(key: tuple[str, str]) -> tuple[str, str, str]:
+        return key[0], min(str(run["method"]) for run in groups[key]), key[1]
+
+    return {key: sorted(groups[key], key=lambda run: run["seed"]) for key in sorted(groups, key=order)}
+
+
+def _method_name(runs: Sequence[dict[str, Any]]) -> str:
+    return ",".join(sorted({str(run["method"]) for run in runs}))
+
+
+def _nanmean(values: np.ndarray, axis: int) -> np.ndarray:
+    """Mean ignoring NaN along ``axis``; NaN (without a warning) where nothing is finite."""
+    finite = np.isfinite(values)
+    total = np.where(finite, values, 0.0).sum(axis=axis)
+    count = finite.sum(axis=axis)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def _column(episodes: dict[str, Any], metric: str) -> np.ndarray:
+    return np.asarray(episodes.get(metric, []), dtype=np.float64)
+
+
+def final_episode_count(n_episodes: int, fraction: float = FINAL_FRACTION) -> int:
+    """How many final episodes make up ``fraction`` of ``n_episodes``: ceil, at least 1 (0 if none)."""
+    if n_episodes <= 0:
+        return 0
+    return max(1, math.ceil(round(n_episodes * fraction, 9)))
+
+
+def run_scalars(
+    result: dict[str, Any], metrics: Sequence[str] = METRIC_NAMES, final_fraction: float = FINAL_FRACTION
+) -> dict[str, dict[str, float]]:
+    """``{phase: {metric: value}}`` for one run; NaN where the run has no such episodes."""
+    train = result["train"]
+    evaluations = result["eval"]
+    last_eval = max(evaluations, key=lambda evaluation: evaluation["step"]) if evaluations else {}
+    scalars: dict[str, dict[str, float]] = {"eval": {}, "train_final10": {}}
+    for metric in metrics:
+        column = _column(train, metric)
+        final = column[len(column) - final_episode_count(len(column), final_fraction):]
+        scalars["train_final10"][metric] = float(_nanmean(final, axis=0))
+        scalars["eval"][metric] = float(_nanmean(_column(last_eval, metric), axis=0))
+    return scalars
+
+
+def bootstrap_mean_ci(
+    values: np.ndarray | Sequence[float],
+    *,
+    random_state: RandomState = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean over seeds (axis 0) and its percentile-bootstrap interval: ``(mean, low, high)``.
+
+    ``values`` has shape ``(seeds,)`` or ``(seeds, k)``. Seeds are resampled with replacement,
+    ``n_resamples`` times, with indices ``random_state.integers(0, seeds, (n_resamples, seeds))``
+    (an int seeds a fresh ``numpy.random.default_rng``), the same indices for every column.
+    NaN entries are ignored. Where at most one seed is finite, the interval is the point itself.
+    """
+    data = np.asarray(values, dtype=np.float64)
+    if data.ndim == 0 or data.shape[0] == 0:
+        raise ValueError("bootstrap_mean_ci needs at least one seed")
+    rng = random_state if isinstance(random_state, np.random.Generator) else np.random.default_rng(random_state)
+    mean = _nanmean(data, axis=0)
+    n_finite = np.isfinite(data).sum(axis=0)
+    n_seeds = data.shape[0]
+    if n_seeds == 1:
+        return mean, mean.copy(), mean.copy()
+    indices = rng.integers(0, n_seeds, size=(n_resamples, n_seeds))
+    resampled = _nanmean(data[indices], axis=1)
+    tail = 100.0 * (1.0 - confidence) / 2.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN column gives NaN, as wanted
+        low, high = np.nanpercentile(resampled, [tail, 100.0 - tail], axis=0)
+    single = n_finite <= 1
+    return mean, np.where(single, mean, low), np.where(single, mean, high)
+
+
+def score_runs(
+    results: Iterable[dict[str, Any]],
+    *,
+    metrics: Sequence[str] = METRIC_NAMES,
+    final_fraction: float = FINAL_FRACTION,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> list[Score]:
+    """Every leaderboard cell, ordered by env, method (see :func:`group_runs`), phase, metric.
+
+    Each group's interval is drawn from a fresh generator seeded with ``random_state``, so a
+    group's numbers do not depend on which other runs are in the directory.
+    """
+    scores: list[Score] = []
+    for (env, label), runs in group_runs(results).items():
+        per_run = [run_scalars(run, metrics, final_fraction) for run in runs]
+        for phase in PHASES:
+            table = np.array([[scalars[phase][metric] for metric in metrics] for scalars in per_run])
+            mean, low, high = bootstrap_mean_ci(
+                table, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+            )
+            n_finite = np.isfinite(table).sum(axis=0)
+            for j, metric in enumerate(metrics):
+                scores.append(Score(env, label, _method_name(runs), phase, metric,
+                                    float(mean[j]), float(low[j]), float(high[j]), int(n_finite[j])))
+    return scores
+
+
+def binned_curve(end_steps: np.ndarray | Sequence[int], values: np.ndarray | Sequence[float],
+                 edges: np.ndarray) -> np.ndarray:
+    """Mean of ``values`` per bin of ``end_steps``; bins are ``(edges[i], edges[i+1]]``.
+
+    The first bin also takes step 0 and the last everything beyond ``edges[-1]``; a bin without
+    a finite value is NaN.
+    """
+    steps = np.asarray(end_steps, dtype=np.float64)
+    data = np.asarray(values, dtype=np.float64)
+    n_bins = len(edges) - 1
+    index = np.clip(np.searchsorted(edges, steps, side="left") - 1, 0, n_bins - 1)
+    finite = np.isfinite(data)
+    total = np.bincount(index, weights=np.where(finite, data, 0.0), minlength=n_bins)
+    count = np.bincount(index, weights=finite.astype(np.float64), minlength=n_bins)
+    return np.where(count > 0, total / np.maximum(count, 1.0), np.nan)
+
+
+def learning_curves(
+    results: Iterable[dict[str, Any]],
+    metric: str,
+    *,
+    env: str | None = None,
+    n_bins: int = N_BINS,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> list[Curve]:
+    """Training curves of ``metric`` per ``(env, method_label)`` group (only ``env`` if given).
+
+    Each run's training episodes are binned by ``episode_end_step`` into ``n_bins`` equal bins
+    over ``[0, steps]`` (the group's largest ``steps``, so seeds share bins), averaged per bin,
+    then averaged over seeds with a per-bin bootstrap interval (see :func:`bootstrap_mean_ci`).
+    """
+    curves: list[Curve] = []
+    for (group_env, label), runs in group_runs(results).items():
+        if env is not None and group_env != env:
+            continue
+        edges = np.linspace(0.0, float(max(run["steps"] for run in runs)), n_bins + 1)
+        per_run = np.array([
+            binned_curve(run["train"].get("episode_end_step", []), _column(run["train"], metric), edges)
+            for run in runs
+        ])
+        mean, low, high = bootstrap_mean_ci(
+            per_run, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+        )
+        centres = (edges[:-1] + edges[1:]) / 2.0
+        curves.append(Curve(group_env, label, metric, centres, mean, low, high, len(runs)))
+    return curves

@@ -1,0 +1,127 @@
+"""Learning-curve figures (PNG): one line per method, a shaded bootstrap band over seeds.
+
+Uses matplotlib's object API with the Agg canvas directly (no ``pyplot``, no global backend
+switch), so it is safe headless and in worker processes. Every PNG is written atomically.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from empathy_zoo.atomic import write_bytes_atomic
+from leaderboard.aggregate import (
+    CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves,
+)
+
+__all__ = [
+    "FIGURE_SPECS", "FALLBACK_SPEC", "figure_filename", "render_curves_png", "plot_metric",
+    "plot_learning_curves",
+]
+
+FigureSpec = tuple[tuple[str, str], ...]
+
+FIGURE_SPECS: dict[str, FigureSpec] = {
+    "coexistence_v0": (("survival", "Steps survived per episode"), ("harms", "Harms per episode")),
+    "sharing_v0": (("batteries", "Batteries per episode (robot)"), ("equality", "Equality per episode")),
+}
+"""Per env, the ``(metric, y-axis label)`` pairs drawn by default."""
+FALLBACK_SPEC: FigureSpec = (("return", "Return per episode (robot)"),)
+"""Drawn for an env without an entry in :data:`FIGURE_SPECS`."""
+
+
+def figure_filename(env: str, metric: str) -> str:
+    """File name of the figure of ``metric`` on ``env``."""
+    return f"{env}_{metric}.png"
+
+
+def render_curves_png(
+    curves: Sequence[Curve],
+    *,
+    title: str,
+    ylabel: str,
+    xlabel: str = "training env steps",
+    confidence: float = CONFIDENCE,
+    dpi: int = 110,
+) -> bytes:
+    """PNG bytes of ``curves``: a line per curve (its mean) with its interval shaded."""
+    figure = Figure(figsize=(7.5, 4.2), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    colours = [f"C{i % 10}" for i in range(len(curves))]
+    for curve, colour in zip(curves, colours):
+        label = f"{curve.method_label} (n={curve.n_seeds})"
+        axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)
+        axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
+    axes.set_title(title)
+    axes.set_xlabel(xlabel)
+    axes.set_ylabel(ylabel)
+    axes.grid(True, alpha=0.3)
+    axes.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
+    if curves:
+        axes.legend(
+            loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False,
+            title=f"method (shaded: {confidence:.0%} CI over seeds)", title_fontsize="small",
+        )
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
+    return buffer.getvalue()
+
+
+def plot_metric(
+    results: Iterable[dict[str, Any]],
+    env: str,
+    metric: str,
+    path: str | os.PathLike[str],
+    *,
+    ylabel: str | None = None,
+    title: str | None = None,
+    n_bins: int = N_BINS,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> Path:
+    """Draw the training curves of ``metric`` on ``env`` (every method) and write the PNG to ``path``."""
+    curves = learning_curves(
+        results, metric, env=env, n_bins=n_bins, random_state=random_state,
+        n_resamples=n_resamples, confidence=confidence,
+    )
+    if not curves:
+        raise ValueError(f"no runs on env {env!r} to plot")
+    ylabel = ylabel or f"{metric} per episode"
+    png = render_curves_png(
+        curves, title=title or f"{env}: {ylabel.lower()}", ylabel=ylabel, confidence=confidence
+    )
+    return write_bytes_atomic(path, png)
+
+
+def plot_learning_curves(
+    results: Iterable[dict[str, Any]],
+    figures_dir: str | os.PathLike[str],
+    *,
+    specs: Mapping[str, FigureSpec] = FIGURE_SPECS,
+    n_bins: int = N_BINS,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> dict[tuple[str, str], Path]:
+    """The default figures of every env present in ``results`` (see :data:`FIGURE_SPECS`).
+
+    Returns ``{(env, metric): path}``, envs sorted, metrics in spec order.
+    """
+    results = list(results)
+    envs = sorted({env for env, _ in group_runs(results)})
+    paths: dict[tuple[str, str], Path] = {}
+    for env in envs:
+        for metric, ylabel in specs.get(env, FALLBACK_SPEC):
+            paths[(env, metric)] = plot_metric(
+                results, env, metric, Path(figures_dir) / figure_filename(env, metric), ylabel=ylabel,
+                n_bins=n_bins, random_state=random_state, n_resamples=n_resamples, confidence=confidence,
+            )
+    return paths

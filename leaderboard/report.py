@@ -1,0 +1,91 @@
+"""Write the whole leaderboard of a results directory: Markdown, CSV, HTML and PNG figures."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import os
+import subprocess
+from pathlib import Path
+
+from empathy_zoo.atomic import write_text_atomic
+from leaderboard.aggregate import (
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, result_files, score_runs,
+)
+from leaderboard.plots import plot_learning_curves
+from leaderboard.tables import Provenance, csv_text, html_report, markdown_report
+
+__all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "package_version", "git_commit",
+           "write_leaderboard"]
+
+MARKDOWN_NAME = "LEADERBOARD.md"
+CSV_NAME = "leaderboard.csv"
+HTML_NAME = "leaderboard.html"
+FIGURES_DIR = "figures"
+_FALLBACK_VERSION = "0.1.0"
+
+
+def package_version() -> str:
+    """The installed empathy-zoo version, or ``"0.1.0"`` when it is not installed."""
+    try:
+        return importlib.metadata.version("empathy-zoo")
+    except importlib.metadata.PackageNotFoundError:
+        return _FALLBACK_VERSION
+
+
+def git_commit(cwd: str | os.PathLike[str] | None = None) -> str | None:
+    """Short commit of the git checkout holding ``cwd`` (default: this package), else None."""
+    try:
+        completed = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=cwd or Path(__file__).resolve().parent,
+            capture_output=True, text=True, timeout=10, check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    commit = completed.stdout.strip()
+    return commit if completed.returncode == 0 and commit else None
+
+
+def write_leaderboard(
+    results_dir: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str] | None = None,
+    command: str | None = None,
+    *,
+    n_bins: int = N_BINS,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
+    final_fraction: float = FINAL_FRACTION,
+) -> dict[str, Path]:
+    """Score every result file of ``results_dir`` and write the leaderboard into ``out_dir``.
+
+    ``results_dir`` holds the ``*.json`` result files, or is a sweep's output directory with
+    them in ``runs/``. ``out_dir`` defaults to ``results_dir``. ``command`` is printed as the
+    command that produced the leaderboard (default: the equivalent Python call).
+
+    Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
+    ``figures/<env>_<metric>.png``. Returns ``{"markdown", "csv", "html": path}`` plus
+    ``"figure:<env>:<metric>": path`` for every figure. No result file raises ``ValueError``.
+    """
+    files = result_files(results_dir)
+    if not files:
+        raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
+    results = load_results(results_dir)
+    out = Path(results_dir if out_dir is None else out_dir)
+    provenance = Provenance(
+        command=command if command is not None else f"leaderboard.write_leaderboard({str(results_dir)!r})",
+        version=package_version(), commit=git_commit(), n_resamples=n_resamples, confidence=confidence,
+        random_state=random_state, final_fraction=final_fraction,
+    )
+    scores = score_runs(results, final_fraction=final_fraction, random_state=random_state,
+                        n_resamples=n_resamples, confidence=confidence)
+    figures = plot_learning_curves(results, out / FIGURES_DIR, n_bins=n_bins, random_state=random_state,
+                                   n_resamples=n_resamples, confidence=confidence)
+    links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
+    pngs = {key: path.read_bytes() for key, path in figures.items()}
+    paths = {
+        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links)),
+        "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance)),
+        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs)),
+    }
+    paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
+    return paths

@@ -1,0 +1,267 @@
+"""Leaderboard formatting: Markdown, CSV and a self-contained HTML page from computed scores.
+
+Formatting only: every number comes from :func:`leaderboard.aggregate.score_runs`; every output
+carries the metric definitions and its :class:`Provenance` (command, package version, commit).
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import io
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+
+from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
+from leaderboard.aggregate import (
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_RESAMPLES, PHASES, Score,
+)
+
+__all__ = [
+    "PHASE_TITLES", "SINGLE_SEED_MARK", "CSV_COLUMNS", "Provenance", "format_interval",
+    "table_rows", "markdown_table", "markdown_report", "csv_text", "html_report",
+]
+
+PHASE_TITLES: dict[str, str] = {
+    "eval": "Final greedy evaluation",
+    "train_final10": "Training, final 10% of episodes",
+}
+"""Heading of each scored phase."""
+SINGLE_SEED_MARK = "†"
+"""Marks a method scored on a single seed, whose interval is the point itself."""
+CSV_COLUMNS: tuple[str, ...] = (
+    "env", "method_label", "method", "phase", "metric", "mean", "ci_low", "ci_high", "n_seeds",
+    "metric_definition", "command", "version", "commit",
+)
+"""Columns of the long-format CSV, one row per (env, method, phase, metric)."""
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a leaderboard came from, and how its intervals were computed."""
+
+    command: str
+    """The command that produced the leaderboard."""
+    version: str
+    """Version of the empathy-zoo package."""
+    commit: str | None
+    """Short git commit, or None when unknown."""
+    n_resamples: int = N_RESAMPLES
+    confidence: float = CONFIDENCE
+    random_state: int = DEFAULT_SEED
+    final_fraction: float = FINAL_FRACTION
+
+    def commit_text(self) -> str:
+        return self.commit if self.commit else "unknown"
+
+    def method_text(self) -> str:
+        """One paragraph explaining what a cell means."""
+        return (
+            f"Each cell is the mean over seeds [{self.confidence:.0%} percentile-bootstrap interval over "
+            f"seeds, {self.n_resamples} resamples, numpy generator seed {self.random_state}]. "
+            f"'{PHASE_TITLES['eval']}': mean over the episodes of each run's last greedy evaluation. "
+            f"'{PHASE_TITLES['train_final10']}': mean over the last {self.final_fraction:.0%} of each run's "
+            "training episodes (at least one)."
+        )
+
+
+def _single_seed_note() -> str:
+    return f"{SINGLE_SEED_MARK} a single seed: its interval is the point itself (no bootstrap)."
+
+
+def format_interval(mean: float, low: float, high: float, digits: int = 2) -> str:
+    """``"mean [low, high]"`` with ``digits`` decimals; ``"n/a"`` when the mean is NaN."""
+    if math.isnan(mean):
+        return "n/a"
+    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def _envs(scores: Sequence[Score]) -> list[str]:
+    return sorted({score.env for score in scores})
+
+
+def table_rows(
+    scores: Sequence[Score], env: str, phase: str, metrics: Sequence[str] = METRIC_NAMES, digits: int = 2
+) -> tuple[list[str], list[list[str]]]:
+    """Header and rows of one table: rows are methods (in the order of ``scores``), columns metrics."""
+    cells: dict[str, dict[str, Score]] = {}
+    for score in scores:
+        if score.env == env and score.phase == phase:
+            cells.setdefault(score.method_label, {})[score.metric] = score
+    header = ["Method", "Seeds", *metrics]
+    rows = []
+    for label, by_metric in cells.items():
+        n_seeds = max(score.n_seeds for score in by_metric.values())
+        seeds = f"{n_seeds}{SINGLE_SEED_MARK}" if n_seeds == 1 else str(n_seeds)
+        row = [label, seeds]
+        for metric in metrics:
+            score = by_metric.get(metric)
+            row.append("n/a" if score is None else format_interval(score.mean, score.ci_low, score.ci_high, digits))
+        rows.append(row)
+    return header, rows
+
+
+def _sections(
+    scores: Sequence[Score], metrics: Sequence[str], digits: int
+) -> Iterator[tuple[str, str, list[str], list[list[str]]]]:
+    for env in _envs(scores):
+        for phase in PHASES:
+            header, rows = table_rows(scores, env, phase, metrics, digits)
+            if rows:
+                yield env, phase, header, rows
+
+
+def _has_single_seed(scores: Sequence[Score]) -> bool:
+    return any(score.n_seeds == 1 for score in scores)
+
+
+def _md_cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """A Markdown table; the first column is left-aligned, the others right-aligned."""
+    lines = [
+        "| " + " | ".join(_md_cell(cell) for cell in header) + " |",
+        "|" + "|".join([":---", *(["---:"] * (len(header) - 1))]) + "|",
+    ]
+    lines += ["| " + " | ".join(_md_cell(cell) for cell in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def markdown_report(
+    scores: Sequence[Score],
+    provenance: Provenance,
+    figures: Mapping[tuple[str, str], str] | None = None,
+    metrics: Sequence[str] = METRIC_NAMES,
+    digits: int = 2,
+) -> str:
+    """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
+
+    ``figures`` maps ``(env, metric)`` to a link (a path relative to the page).
+    """
+    figures = figures or {}
+    lines = [
+        "# empathy-zoo leaderboard",
+        "",
+        f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, "
+        f"commit `{provenance.commit_text()}`.",
+        "",
+        provenance.method_text(),
+    ]
+    current_env = None
+    for env, phase, header, rows in _sections(scores, metrics, digits):
+        if env != current_env:
+            lines += _markdown_figures(figures, current_env)
+            lines += ["", f"## {env}"]
+            current_env = env
+        lines += ["", f"### {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
+    lines += _markdown_figures(figures, current_env)
+    if _has_single_seed(scores):
+        lines += ["", _single_seed_note()]
+    lines += ["", "## Metric definitions", ""]
+    lines += [f"- **{metric}**: {METRIC_DEFINITIONS.get(metric, '(no definition)')}" for metric in metrics]
+    return "\n".join(lines) + "\n"
+
+
+def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -> list[str]:
+    links = [(metric, link) for (figure_env, metric), link in figures.items() if figure_env == env]
+    if not links:
+        return []
+    lines = ["", "### Learning curves", ""]
+    for metric, link in links:
+        lines += [f"![{env}: {metric} vs training steps]({link})", ""]
+    return lines[:-1]
+
+
+def _csv_number(value: float) -> str:
+    return repr(float(value)) if math.isfinite(value) else ""
+
+
+def csv_text(scores: Sequence[Score], provenance: Provenance) -> str:
+    """Long-format CSV (:data:`CSV_COLUMNS`), one row per score; NaN is an empty cell."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS)
+    for s in scores:
+        writer.writerow([
+            s.env, s.method_label, s.method, s.phase, s.metric,
+            _csv_number(s.mean), _csv_number(s.ci_low), _csv_number(s.ci_high), s.n_seeds,
+            METRIC_DEFINITIONS.get(s.metric, ""), provenance.command, provenance.version, provenance.commit or "",
+        ])
+    return buffer.getvalue()
+
+
+_CSS = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 76em; color: #222; }
+table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
+th, td { border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: right; white-space: nowrap; }
+th:first-child, td:first-child { text-align: left; }
+thead th { background: #f0f0f0; }
+img { max-width: 100%; margin: 0.5em 0; }
+code { background: #f4f4f4; padding: 0.1em 0.3em; }
+.note { color: #555; font-size: 0.9em; }
+"""
+
+
+def _text(text: str) -> str:
+    """Escape ``text`` for an HTML text node (quotes stay readable)."""
+    return html.escape(text, quote=False)
+
+
+def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    head = "".join(f"<th>{_text(cell)}</th>" for cell in header)
+    body = "\n".join("<tr>" + "".join(f"<td>{_text(cell)}</td>" for cell in row) + "</tr>" for row in rows)
+    return f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
+
+
+def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> list[str]:
+    images = [(metric, png) for (figure_env, metric), png in figures.items() if figure_env == env]
+    if not images:
+        return []
+    lines = ["<h3>Learning curves</h3>"]
+    for metric, png in images:
+        data = base64.b64encode(png).decode("ascii")
+        alt = html.escape(f"{env}: {metric} vs training steps")
+        lines.append(f'<img alt="{alt}" src="data:image/png;base64,{data}">')
+    return lines
+
+
+def html_report(
+    scores: Sequence[Score],
+    provenance: Provenance,
+    figures: Mapping[tuple[str, str], bytes] | None = None,
+    metrics: Sequence[str] = METRIC_NAMES,
+    digits: int = 2,
+) -> str:
+    """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
+
+    ``figures`` maps ``(env, metric)`` to the PNG bytes.
+    """
+    figures = figures or {}
+    esc = _text
+    lines = [
+        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+        "<title>empathy-zoo leaderboard</title>", f"<style>{_CSS}</style>", "</head>", "<body>",
+        "<h1>empathy-zoo leaderboard</h1>",
+        f"<p>Produced by <code>{esc(provenance.command)}</code> with empathy-zoo {esc(provenance.version)}, "
+        f"commit <code>{esc(provenance.commit_text())}</code>.</p>",
+        f'<p class="note">{esc(provenance.method_text())}</p>',
+    ]
+    current_env = None
+    for env, phase, header, rows in _sections(scores, metrics, digits):
+        if env != current_env:
+            lines += _html_figures(figures, current_env)
+            lines.append(f"<h2>{esc(env)}</h2>")
+            current_env = env
+        lines += [f"<h3>{esc(PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
+    lines += _html_figures(figures, current_env)
+    if _has_single_seed(scores):
+        lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
+    lines += ["<h2>Metric definitions</h2>", "<dl>"]
+    for metric in metrics:
+        lines.append(f"<dt>{esc(metric)}</dt><dd>{esc(METRIC_DEFINITIONS.get(metric, '(no definition)'))}</dd>")
+    lines += ["</dl>", "</body>", "</html>"]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,199 @@
+"""Leaderboard computation on hand-computed data: selection, means, bootstrap intervals, curves."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from empathy_zoo.metrics import METRIC_NAMES
+from leaderboard.aggregate import (
+    binned_curve, bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results,
+    result_files, run_scalars, score_runs,
+)
+
+
+def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_survival: list[float] | None = None,
+             end_steps: list[int] | None = None, steps: int = 100, method: str = "dqn") -> dict[str, Any]:
+    """A result dict whose every metric column equals ``survival`` (train) / ``eval_survival``."""
+    n = len(survival)
+    end_steps = end_steps if end_steps is not None else [int((i + 1) * steps / n) for i in range(n)]
+    train: dict[str, Any] = {"episode_end_step": end_steps}
+    train.update({metric: list(survival) for metric in METRIC_NAMES})
+    evaluations = []
+    if eval_survival is not None:
+        evaluations.append({"step": steps, **{metric: list(eval_survival) for metric in METRIC_NAMES}})
+    return {"schema": 1, "run_id": f"{env}__{label}__s{seed}", "env": env, "method": method,
+            "method_label": label, "seed": seed, "config": {}, "steps": steps, "train": train,
+            "eval": evaluations, "wall_time_s": 0.0, "version": "0.1.0", "commit": None, "created": "now"}
+
+
+def bootstrap_by_hand(values: np.ndarray, seed: int, n_resamples: int, confidence: float = 0.95) -> tuple[float, float]:
+    rng = np.random.default_rng(seed)
+    indices = rng.integers(0, len(values), size=(n_resamples, len(values)))
+    means = values[indices].mean(axis=1)
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(means, [tail, 100 - tail])
+    return float(low), float(high)
+
+
+@pytest.mark.parametrize(("n", "expected"), [(0, 0), (1, 1), (9, 1), (10, 1), (11, 2), (30, 3), (100, 10), (101, 11)])
+def test_final_episode_count_is_ceil_of_ten_percent_at_least_one(n: int, expected: int) -> None:
+    assert final_episode_count(n) == expected
+
+
+def test_run_scalars_select_final_ten_percent_and_last_evaluation() -> None:
+    run = make_run("coexistence_v0", "DQN", 0, [float(i) for i in range(1, 21)], eval_survival=[1.0, 3.0])
+    run["eval"].insert(0, {"step": 50, **{metric: [100.0] for metric in METRIC_NAMES}})  # earlier one
+    run["eval"].reverse()  # the last evaluation is found by its step, not its position
+    scalars = run_scalars(run)
+    assert scalars["train_final10"]["survival"] == 19.5  # episodes 19 and 20 of 20
+    assert scalars["eval"]["harms"] == 2.0
+
+
+def test_run_scalars_are_nan_without_episodes_or_evaluation() -> None:
+    run = make_run("coexistence_v0", "DQN", 0, [])
+    scalars = run_scalars(run)
+    assert math.isnan(scalars["train_final10"]["survival"]) and math.isnan(scalars["eval"]["survival"])
+
+
+def test_run_scalars_ignore_nan_episodes() -> None:
+    run = make_run("coexistence_v0", "DQN", 0, [5.0] * 18 + [float("nan"), 7.0])
+    assert run_scalars(run)["train_final10"]["survival"] == 7.0
+
+
+def test_bootstrap_identical_seeds_give_a_zero_width_interval() -> None:
+    mean, low, high = bootstrap_mean_ci([3.5, 3.5, 3.5])
+    assert mean == low == high == 3.5
+
+
+def test_bootstrap_single_seed_interval_is_the_point() -> None:
+    mean, low, high = bootstrap_mean_ci([[2.0, 4.0]])
+    assert mean.tolist() == low.tolist() == high.tolist() == [2.0, 4.0]
+
+
+def test_bootstrap_matches_a_direct_numpy_percentile_bootstrap() -> None:
+    values = np.array([1.0, 2.0, 4.0, 8.0, 16.0])
+    mean, low, high = bootstrap_mean_ci(values, random_state=np.random.default_rng(7), n_resamples=500)
+    expected_low, expected_high = bootstrap_by_hand(values, 7, 500)
+    assert mean == pytest.approx(6.2)
+    assert low == pytest.approx(expected_low, rel=1e-12) and high == pytest.approx(expected_high, rel=1e-12)
+    assert low < mean < high
+
+
+def test_bootstrap_with_an_int_seed_is_deterministic_and_columnwise() -> None:
+    table = np.array([[1.0, 10.0], [2.0, 30.0], [6.0, 20.0]])
+    mean, low, high = bootstrap_mean_ci(table, random_state=3, n_resamples=300)
+    for j in range(2):
+        assert (low[j], high[j]) == pytest.approx(bootstrap_by_hand(table[:, j], 3, 300), rel=1e-12)
+    assert mean.tolist() == [3.0, 20.0]
+    again = bootstrap_mean_ci(table, random_state=3, n_resamples=300)
+    assert np.array_equal(again[1], low) and np.array_equal(again[2], high)
+
+
+def test_bootstrap_rejects_no_seeds() -> None:
+    with pytest.raises(ValueError, match="at least one seed"):
+        bootstrap_mean_ci([])
+
+
+def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> None:
+    runs = [
+        make_run("sharing_v0", "Empathic DQN (β=0.5)", 1, [0.0] * 9 + [2.0], eval_survival=[4.0], method="empathic_dqn"),
+        make_run("sharing_v0", "Empathic DQN (β=0.5)", 0, [0.0] * 9 + [6.0], eval_survival=[8.0], method="empathic_dqn"),
+        make_run("sharing_v0", "Empathic DQN (β=0.5)", 2, [0.0] * 9 + [1.0], eval_survival=[0.0], method="empathic_dqn"),
+        make_run("coexistence_v0", "DQN", 0, [5.0, 9.0], eval_survival=[1.0, 2.0]),
+    ]
+    scores = score_runs(runs, random_state=0, n_resamples=400)
+    assert [(s.env, s.phase, s.metric) for s in scores[:2]] == [("coexistence_v0", "eval", "survival"),
+                                                                 ("coexistence_v0", "eval", "harms")]
+    by_key = {(s.env, s.phase, s.metric): s for s in scores}
+    single = by_key[("coexistence_v0", "train_final10", "survival")]
+    assert (single.mean, single.ci_low, single.ci_high, single.n_seeds) == (9.0, 9.0, 9.0, 1)
+    shared = by_key[("sharing_v0", "train_final10", "equality")]
+    assert shared.method == "empathic_dqn" and shared.n_seeds == 3 and shared.mean == 3.0
+    # runs are ordered by seed before resampling: seeds 0, 1, 2 -> values 6, 2, 1
+    expected = bootstrap_by_hand(np.array([6.0, 2.0, 1.0]), 0, 400)
+    assert (shared.ci_low, shared.ci_high) == pytest.approx(expected, rel=1e-12)
+    evaluated = by_key[("sharing_v0", "eval", "survival")]
+    assert evaluated.mean == 4.0
+    assert len(scores) == 2 * 2 * len(METRIC_NAMES)
+
+
+def test_group_runs_orders_envs_then_methods_then_labels() -> None:
+    runs = [make_run("sharing_v0", "B", 0, [1.0]), make_run("coexistence_v0", "Z", 0, [1.0], method="a_method"),
+            make_run("coexistence_v0", "A", 0, [1.0], method="z_method")]
+    assert list(group_runs(runs)) == [("coexistence_v0", "Z"), ("coexistence_v0", "A"), ("sharing_v0", "B")]
+
+
+def test_binned_curve_means_per_step_bin_and_nan_for_empty_bins() -> None:
+    edges = np.array([0.0, 10.0, 20.0, 30.0])
+    curve = binned_curve([5, 10, 11, 20, 35], [1.0, 2.0, 3.0, float("nan"), 5.0], edges)
+    assert curve[0] == 1.5 and curve[1] == 3.0 and curve[2] == 5.0
+    assert np.isnan(binned_curve([5], [1.0], edges)[1:]).all()
+
+
+def test_learning_curves_average_seeds_per_bin_with_bootstrap() -> None:
+    runs = [make_run("coexistence_v0", "DQN", seed, values, end_steps=[25, 50, 75, 100])
+            for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])]
+    runs.append(make_run("sharing_v0", "DQN", 0, [1.0]))
+    (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_bins=4, random_state=5, n_resamples=200)
+    assert curve.steps.tolist() == [12.5, 37.5, 62.5, 87.5]
+    assert curve.mean.tolist() == [3.0, 2.0, 5.0, 6.0] and curve.n_seeds == 3
+    expected = bootstrap_by_hand(np.array([2.0, 4.0, 0.0]), 5, 200)
+    assert (curve.ci_low[1], curve.ci_high[1]) == pytest.approx(expected, rel=1e-12)
+    assert len(learning_curves(runs, "survival", n_bins=4)) == 2
+
+
+def write_runs(directory: Path, runs: list[dict[str, Any]]) -> None:
+    directory.mkdir(parents=True, exist_ok=True)
+    for run in runs:
+        (directory / f"{run['run_id']}.json").write_text(json.dumps(run), encoding="utf-8")
+
+
+def test_load_results_reads_runs_subdirectory_and_ignores_temp_files(tmp_path: Path) -> None:
+    write_runs(tmp_path / "runs", [make_run("coexistence_v0", "DQN", s, [1.0]) for s in (1, 0)])
+    (tmp_path / "runs" / ".coexistence_v0__DQN__s2.json.abc.tmp").write_text("{half", encoding="utf-8")
+    (tmp_path / "runs" / ".hidden.json").write_text("{half", encoding="utf-8")
+    assert [p.name for p in result_files(tmp_path)] == ["coexistence_v0__DQN__s0.json", "coexistence_v0__DQN__s1.json"]
+    assert [r["seed"] for r in load_results(tmp_path)] == [0, 1]
+
+
+def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
+    write_runs(tmp_path, [make_run("coexistence_v0", "DQN", 0, [1.0])])
+    (tmp_path / "broken.json").write_text('{"schema": 1, "run', encoding="utf-8")
+    with pytest.raises(ValueError, match=r"broken\.json is corrupted"):
+        load_results(tmp_path)
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"schema": 2}, "schema 2"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "'seed' must be an int"),
+])
+def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, Any], message: str | None) -> None:
+    run = make_run("coexistence_v0", "DQN", 0, [1.0])
+    run.update(change)
+    for key in [key for key, value in change.items() if value is None]:
+        del run[key]
+    write_runs(tmp_path, [run])
+    with pytest.raises(ValueError, match=message or "missing env, steps"):
+        load_results(tmp_path)
+
+
+def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) -> None:
+    run = make_run("coexistence_v0", "DQN", 0, [1.0, 2.0])
+    run["train"]["harms"] = [0.0]
+    write_runs(tmp_path / "a", [run])
+    with pytest.raises(ValueError, match="different lengths"):
+        load_results(tmp_path / "a")
+    duplicate = make_run("coexistence_v0", "DQN", 0, [1.0])
+    write_runs(tmp_path / "b", [duplicate, {**duplicate, "run_id": "copy"}])
+    with pytest.raises(ValueError, match="same run"):
+        load_results(tmp_path / "b")
+
+
+def test_result_files_rejects_a_missing_directory(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="does not exist"):
+        result_files(tmp_path / "nowhere")

@@ -1,0 +1,187 @@
+"""Leaderboard formatting and the full ``write_leaderboard`` on synthetic result files."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
+from leaderboard import write_leaderboard
+from leaderboard.aggregate import Score
+from leaderboard.tables import (
+    CSV_COLUMNS, Provenance, csv_text, format_interval, html_report, markdown_report, markdown_table, table_rows,
+)
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PROVENANCE = Provenance(command="empathy-zoo leaderboard out", version="0.1.0", commit="abc1234")
+METHODS = {"dqn": "DQN", "empathic_dqn": "Empathic DQN (β=0.5)"}
+
+
+def write_synthetic_results(directory: Path, envs: tuple[str, ...] = ("coexistence_v0", "sharing_v0"),
+                            seeds: tuple[int, ...] = (0, 1, 2), steps: int = 2000) -> list[Path]:
+    """Write one plausible schema-1 result file per (env, method, seed) into ``directory``."""
+    paths = []
+    for env in envs:
+        for m, (method, label) in enumerate(METHODS.items()):
+            for seed in seeds:
+                rng = np.random.default_rng([m, seed])
+                end_steps = np.cumsum(rng.integers(20, 80, size=60))
+                end_steps = end_steps[end_steps <= steps].tolist()
+                n = len(end_steps)
+                progress = np.linspace(0.0, 1.0, n)
+
+                def columns(k: int) -> dict[str, list[float]]:
+                    base = progress if k == n else np.ones(k)
+                    noise = rng.normal(0.0, 0.1, size=k)
+                    return {"survival": (40 * base + m + noise).tolist(), "harms": (1 - base / 2 + noise).tolist(),
+                            "batteries": (3 * base + noise).tolist(), "other_batteries": (4 - base + noise).tolist(),
+                            "equality": (0.5 + base / 4 + noise).tolist(), "return": (base + noise).tolist(),
+                            "other_return": (2 - base + noise).tolist()}
+
+                run_id = f"{env}__{method}__s{seed}"
+                result: dict[str, Any] = {
+                    "schema": 1, "run_id": run_id, "env": env, "method": method, "method_label": label,
+                    "seed": seed, "config": {"beta": 0.5}, "steps": steps,
+                    "train": {"episode_end_step": end_steps, **columns(n)},
+                    "eval": [{"step": s, **columns(5)} for s in (steps // 2, steps)],
+                    "wall_time_s": 1.0, "version": "0.1.0", "commit": None, "created": "2026-01-01T00:00:00Z",
+                }
+                path = directory / f"{run_id}.json"
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(json.dumps(result), encoding="utf-8")
+                paths.append(path)
+    return paths
+
+
+def tiny_scores() -> list[Score]:
+    return [
+        Score("coexistence_v0", "DQN", "dqn", "eval", "survival", 12.5, 10.0, 15.0, 3),
+        Score("coexistence_v0", "DQN", "dqn", "eval", "harms", 0.5, 0.0, 1.0, 3),
+        Score("coexistence_v0", "Empathic DQN (β=0.5)", "empathic_dqn", "eval", "survival", 7.0, 7.0, 7.0, 1),
+        Score("coexistence_v0", "Empathic DQN (β=0.5)", "empathic_dqn", "eval", "harms", float("nan"),
+              float("nan"), float("nan"), 0),
+    ]
+
+
+def test_format_interval() -> None:
+    assert format_interval(1.0, 0.25, 1.755) == "1.00 [0.25, 1.75]"
+    assert format_interval(1.0, 0.5, 2.0, digits=0) == "1 [0, 2]"
+    assert format_interval(float("nan"), float("nan"), float("nan")) == "n/a"
+
+
+def test_markdown_table_exact_lines() -> None:
+    header, rows = table_rows(tiny_scores(), "coexistence_v0", "eval", metrics=("survival", "harms"))
+    assert markdown_table(header, rows).splitlines() == [
+        "| Method | Seeds | survival | harms |",
+        "|:---|---:|---:|---:|",
+        "| DQN | 3 | 12.50 [10.00, 15.00] | 0.50 [0.00, 1.00] |",
+        "| Empathic DQN (β=0.5) | 1† | 7.00 [7.00, 7.00] | n/a |",
+    ]
+    assert table_rows(tiny_scores(), "coexistence_v0", "train_final10")[1] == []
+
+
+def test_markdown_table_escapes_pipes() -> None:
+    assert markdown_table(["a|b"], [["c"]]).splitlines()[0] == "| a\\|b |"
+
+
+def test_csv_exact_lines() -> None:
+    lines = csv_text(tiny_scores(), PROVENANCE).splitlines()
+    assert lines[0] == ",".join(CSV_COLUMNS)
+    tail = "empathy-zoo leaderboard out,0.1.0,abc1234"
+    assert lines[1] == f"coexistence_v0,DQN,dqn,eval,survival,12.5,10.0,15.0,3,{METRIC_DEFINITIONS['survival']},{tail}"
+    assert lines[4] == (f"coexistence_v0,Empathic DQN (β=0.5),empathic_dqn,eval,harms,,,,0,"
+                        f"{METRIC_DEFINITIONS['harms']},{tail}")
+    assert len(lines) == 5
+
+
+def test_markdown_and_html_pages_carry_definitions_provenance_and_single_seed_note() -> None:
+    page = markdown_report(tiny_scores(), PROVENANCE, {("coexistence_v0", "survival"): "figures/x.png"})
+    html = html_report(tiny_scores(), Provenance("cmd <&>", "0.1.0", None), {("coexistence_v0", "harms"): b"PNG"})
+    for text in (page, html):
+        assert "single seed" in text and "Final greedy evaluation" in text
+        assert all(METRIC_DEFINITIONS[metric].split("·")[0] in text for metric in METRIC_NAMES)
+    assert "`empathy-zoo leaderboard out`" in page and "commit `abc1234`" in page
+    assert "![coexistence_v0: survival vs training steps](figures/x.png)" in page
+    assert "<code>cmd &lt;&amp;&gt;</code>" in html and "commit <code>unknown</code>" in html
+    assert 'src="data:image/png;base64,UE5H"' in html
+
+
+def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
+    write_synthetic_results(tmp_path / "sweep" / "runs")
+    paths = write_leaderboard(tmp_path / "sweep", command="empathy-zoo leaderboard sweep")
+    out = tmp_path / "sweep"
+    assert paths["markdown"] == out / "LEADERBOARD.md"
+    assert paths["csv"] == out / "leaderboard.csv" and paths["html"] == out / "leaderboard.html"
+    figures = {key: path for key, path in paths.items() if key.startswith("figure:")}
+    assert sorted(figures) == ["figure:coexistence_v0:harms", "figure:coexistence_v0:survival",
+                               "figure:sharing_v0:batteries", "figure:sharing_v0:equality"]
+    for path in paths.values():
+        assert path.is_file() and path.stat().st_size > 0
+    for path in figures.values():
+        assert path.parent == out / "figures" and path.read_bytes().startswith(PNG_SIGNATURE)
+    markdown = paths["markdown"].read_text(encoding="utf-8")
+    assert "`empathy-zoo leaderboard sweep`" in markdown and "empathy-zoo 0.1.0" in markdown
+    for path in figures.values():
+        assert f"]({path.relative_to(out).as_posix()})" in markdown
+    assert markdown.count("| DQN | 3 |") == 4 and "single seed" not in markdown
+    rows = list(csv.DictReader(io.StringIO(paths["csv"].read_text(encoding="utf-8"))))
+    assert len(rows) == 2 * 2 * 2 * len(METRIC_NAMES)
+    assert {row["n_seeds"] for row in rows} == {"3"} and all(row["command"] == "empathy-zoo leaderboard sweep" for row in rows)
+    for row in rows:
+        assert float(row["ci_low"]) <= float(row["mean"]) <= float(row["ci_high"])
+    html = paths["html"].read_text(encoding="utf-8")
+    assert html.count('<img alt="') == 4 and "<style>" in html and "empathy-zoo leaderboard sweep" in html
+    assert not [p.name for p in out.rglob(".*")], "temporary files left behind"
+
+
+def test_write_leaderboard_is_deterministic_and_writes_to_out_dir(tmp_path: Path) -> None:
+    write_synthetic_results(tmp_path / "runs", envs=("sharing_v0",), seeds=(0, 1))
+    first = write_leaderboard(tmp_path / "runs", tmp_path / "a", command="x")
+    second = write_leaderboard(tmp_path / "runs", tmp_path / "b", command="x")
+    for key in ("markdown", "csv", "html", "figure:sharing_v0:equality"):
+        assert first[key].read_bytes() == second[key].read_bytes()
+    assert not (tmp_path / "runs" / "LEADERBOARD.md").exists()
+
+
+def test_write_leaderboard_single_seed_note(tmp_path: Path) -> None:
+    write_synthetic_results(tmp_path, envs=("coexistence_v0",), seeds=(4,))
+    markdown = write_leaderboard(tmp_path)["markdown"].read_text(encoding="utf-8")
+    assert "| DQN | 1† |" in markdown and "† a single seed: its interval is the point itself" in markdown
+    assert "leaderboard.write_leaderboard(" in markdown
+
+
+def test_write_leaderboard_rejects_an_empty_directory(tmp_path: Path) -> None:
+    (tmp_path / ".partial.json.tmp").write_text("{", encoding="utf-8")
+    with pytest.raises(ValueError, match="no result files"):
+        write_leaderboard(tmp_path)
+    assert not (tmp_path / "LEADERBOARD.md").exists()
+
+
+def test_write_leaderboard_names_a_corrupted_file(tmp_path: Path) -> None:
+    write_synthetic_results(tmp_path, envs=("coexistence_v0",), seeds=(0,))
+    (tmp_path / "zz_bad.json").write_bytes(b'{"schema": 1,')
+    with pytest.raises(ValueError, match="zz_bad.json"):
+        write_leaderboard(tmp_path)
+
+
+def test_a_failing_write_leaves_the_old_files_intact(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    write_synthetic_results(tmp_path / "runs", envs=("coexistence_v0",), seeds=(0, 1))
+    paths = write_leaderboard(tmp_path, command="first")
+    before = {key: path.read_bytes() for key, path in paths.items()}
+
+    def failing_fsync(fd: int) -> None:
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "fsync", failing_fsync)
+    with pytest.raises(OSError, match="disk full"):
+        write_leaderboard(tmp_path, command="second")
+    monkeypatch.undo()
+    assert {key: path.read_bytes() for key, path in paths.items()} == before
+    assert not [p.name for p in tmp_path.rglob(".*")], "temporary files left behind"
