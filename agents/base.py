@@ -1,0 +1,99 @@
+"""The learner plug-in interface the runner drives.
+
+A learner trains ``K`` independent runs of one method on one environment in lockstep (``K = 1``
+is an ordinary single run). Every array has a leading run axis ``K`` and an env axis ``M``
+(environments per run). The runner never looks inside a learner: it asks for actions, hands
+over what happened, and saves/loads ``state_dict()`` for checkpoints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+__all__ = ["StepBatch", "Learner", "Method"]
+
+
+@dataclass
+class StepBatch:
+    """One env step of every run, as arrays ``(K, M, ...)``."""
+
+    obs: np.ndarray
+    """(K, M, V) observations the actions were chosen on."""
+    actions: np.ndarray
+    """(K, M) actions taken."""
+    rewards: np.ndarray
+    """(K, M) the environment's reward of the learner (unshaped)."""
+    terminated: np.ndarray
+    """(K, M) the learner's episode ended for good (truncation is not termination)."""
+    next_obs: np.ndarray
+    """(K, M, V) observations at the end of the step (before any autoreset)."""
+    swapped_next_obs: np.ndarray
+    """(K, M, V) the learner's swapped observation with its closest other agent at the end of the step."""
+    other_present: np.ndarray
+    """(K, M) that other agent is still in the environment (its swapped observation is meaningful)."""
+    harmed_other: np.ndarray
+    """(K, M) number of agents the learner harmed this step."""
+    battery_return: np.ndarray
+    """(K, M) the learner's battery reward so far this episode, this step included."""
+    other_battery_return: np.ndarray
+    """(K, M) the other agent's battery reward so far this episode, this step included."""
+
+
+class Learner(Protocol):
+    """What the runner needs of a learning method (see :mod:`agents.empathic_dqn` for one)."""
+
+    def __init__(self, settings: Sequence[Any], seeds: Sequence[int], obs_size: int, num_actions: int, device: str) -> None: ...
+
+    def act(self, observations: np.ndarray, greedy: bool = False) -> np.ndarray:
+        """``(K, M)`` actions for ``(K, M, V)`` observations (exploring unless ``greedy``)."""
+
+    def observe(self, batch: StepBatch) -> None:
+        """Learn from one step (store it, maybe take gradient steps)."""
+
+    def live_stats(self) -> dict[str, float]:
+        """A few numbers for the progress bar (e.g. ``{"eps": 0.3}``)."""
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything needed to continue exactly: tensors, numbers, lists (``torch.save``-able,
+        loadable with ``weights_only=True``)."""
+
+    def load_state_dict(self, state: dict[str, Any]) -> None: ...
+
+    def memory_bytes_per_run(self) -> int:
+        """Bytes each run holds (replay and networks)."""
+
+
+@dataclass(frozen=True)
+class Method:
+    """A registered learning method: a learner class plus the settings it fixes."""
+
+    name: str
+    """Registry name (``--method``)."""
+    learner: type
+    """The :class:`Learner` class."""
+    settings: type
+    """Its settings dataclass."""
+    preset: dict[str, Any] = field(default_factory=dict)
+    """Settings this method fixes (a user may not override them)."""
+    label: Callable[[Any], str] | None = None
+    """Display name of a run from its settings (defaults to the name)."""
+    description: str = ""
+    """One line for ``empathy-zoo methods``."""
+
+    def make_settings(self, overrides: dict[str, Any]) -> Any:
+        """The method's settings with ``overrides``; overriding a preset raises ``ValueError``."""
+        clash = sorted(k for k in overrides if k in self.preset and overrides[k] != self.preset[k])
+        if clash:
+            raise ValueError(f"method {self.name!r} fixes {', '.join(f'{k}={self.preset[k]!r}' for k in clash)}")
+        known = set(self.settings.__dataclass_fields__)
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown setting(s) {unknown} for method {self.name!r}; known: {sorted(known)}")
+        return self.settings(**{**overrides, **self.preset})
+
+    def display_name(self, settings: Any) -> str:
+        return self.label(settings) if self.label else self.name

@@ -1,0 +1,217 @@
+"""Empathic DQN (Bussmann et al. 2019, Algorithm 1), K runs at once; DQN is its β = 1 case.
+
+Three networks per run, each an MLP obs → 128 → 128 → 5 with ReLU: ``Q`` (the robot's own
+value), its target copy ``Q̂``, and ``Q_emp`` (the empathic value the robot acts on). Per
+gradient step, on a batch ``(s, a, r, s', done, s_emp', other_present)``:
+
+    y     = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))                      (double DQN)
+    y_emp = β·y + (1 − β)·γ·other_present·max_a Q̂(s_emp', a)
+    Q     ← Adam step on mean (Q(s, a) − y)²
+    Q_emp ← Adam step on mean (Q_emp(s, a) − y_emp)²
+
+``s_emp'`` is the robot's swapped observation with the closest other agent at t+1; the
+other-term is 0 once that agent has left. Acting is ε-greedy on ``Q_emp``. The K runs' networks
+are stacked tensors (``agents.stacked_mlp``) so one batched matmul serves every run; runs share
+nothing else: each has its own seed, replay memory, ε stream and target copies.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import torch
+
+from agents.base import StepBatch
+from agents.replay import StackedReplay
+from agents.settings import EmpathicDQNSettings
+from agents.stacked_mlp import StackedMLP, init_stacked_mlp
+from baselines.shaping import shaped_reward
+from empathy_zoo.randomness import counter_integers, counter_uniform, derive_key
+
+__all__ = ["EmpathicDQN", "empathic_targets", "linear_epsilon"]
+
+STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = 11, 12, 13
+
+
+def linear_epsilon(settings: EmpathicDQNSettings, env_step: int) -> float:
+    """ε after ``env_step`` steps of a run: 1 during warm-up, then linear to ``epsilon_end``."""
+    if env_step < settings.learning_starts:
+        return 1.0
+    fraction = min(1.0, (env_step - settings.learning_starts) / settings.epsilon_decay_steps)
+    return settings.epsilon_start + fraction * (settings.epsilon_end - settings.epsilon_start)
+
+
+def empathic_targets(
+    reward: torch.Tensor,
+    terminated: torch.Tensor,
+    q_next_online: torch.Tensor,
+    q_next_target: torch.Tensor,
+    q_swapped_target: torch.Tensor,
+    other_present: torch.Tensor,
+    gamma: float,
+    selfishness: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
+    ``selfishness`` is β per run, ``(K, 1)``."""
+    best = q_next_online.argmax(dim=2, keepdim=True)
+    bootstrap = q_next_target.gather(2, best).squeeze(2)
+    y = reward + gamma * (~terminated).float() * bootstrap
+    other = gamma * other_present.float() * q_swapped_target.max(dim=2).values
+    y_emp = selfishness * y + (1.0 - selfishness) * other
+    return y, y_emp
+
+
+class EmpathicDQN:
+    """``K`` runs of Empathic DQN in lockstep (the runs may differ in seed, β and shaping)."""
+
+    settings_class = EmpathicDQNSettings
+
+    def __init__(
+        self,
+        settings: Sequence[EmpathicDQNSettings],
+        seeds: Sequence[int],
+        obs_size: int,
+        num_actions: int = 5,
+        device: str = "cpu",
+        envs_per_run: int = 1,
+    ) -> None:
+        if len(settings) != len(seeds) or not settings:
+            raise ValueError("give one settings object per seed, and at least one run")
+        shared = {s.shared() for s in settings}
+        if len(shared) != 1:
+            raise ValueError("runs of one ensemble may differ only in seed, selfishness and shaping")
+        self.settings = list(settings)
+        self.config = settings[0]
+        self.seeds = [int(s) for s in seeds]
+        self.num_runs = k = len(seeds)
+        self.envs_per_run = envs_per_run
+        self.num_actions = num_actions
+        self.device = torch.device(device)
+        generators = [torch.Generator().manual_seed(derive_key(s, STREAM_INIT) >> 1) for s in self.seeds]
+        sizes = [obs_size, self.config.hidden_size, self.config.hidden_size, num_actions]
+        q = init_stacked_mlp(sizes, generators, self.device)
+        q_emp = init_stacked_mlp(sizes, generators, self.device)
+        # online parameters: runs 0..K-1 are Q, runs K..2K-1 are Q_emp (one batched pass serves both)
+        self.online = [torch.cat([a, b]).requires_grad_() for a, b in zip(q, q_emp)]
+        self.target = [p[:k].detach().clone() for p in self.online]
+        self.optimizer = torch.optim.Adam(self.online, lr=self.config.learning_rate, fused=True)
+        self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device)
+        self.selfishness = torch.tensor([[s.selfishness] for s in settings], device=self.device)
+        self._explore_keys = np.array([derive_key(s, STREAM_EXPLORE) for s in self.seeds], dtype=np.uint64)[:, None]
+        self._sample_keys = np.array([derive_key(s, STREAM_SAMPLE) for s in self.seeds], dtype=np.uint64)[:, None]
+        self.env_steps = 0  # per run
+        self.grad_steps = 0
+        self.last_loss = float("nan")
+
+    # ------------------------------------------------------------------ acting
+    def q_values(self, observations: torch.Tensor, which: str = "emp") -> torch.Tensor:
+        """``(K, R, A)`` values of ``Q_emp`` (``which="emp"``), ``Q`` or ``Q̂`` (``"target"``)."""
+        k = self.num_runs
+        if which == "target":
+            params = self.target
+        else:
+            part = slice(k, 2 * k) if which == "emp" else slice(0, k)
+            params = [p[part] for p in self.online]
+        with torch.no_grad():
+            return StackedMLP.forward(params, observations)
+
+    def epsilon(self) -> float:
+        return linear_epsilon(self.config, self.env_steps)
+
+    def act(self, observations: np.ndarray, greedy: bool = False) -> np.ndarray:
+        obs = torch.as_tensor(observations, dtype=torch.float32, device=self.device)
+        actions = self.q_values(obs).argmax(dim=2).cpu().numpy()
+        if greedy:
+            return actions
+        m = observations.shape[1]
+        counter = (self.env_steps * m + np.arange(m))[None, :] * 2
+        explore = counter_uniform(self._explore_keys, counter) < self.epsilon()
+        random_actions = counter_integers(self._explore_keys, counter + 1, self.num_actions)
+        return np.where(explore, random_actions, actions)
+
+    # ------------------------------------------------------------------ learning
+    def observe(self, batch: StepBatch) -> None:
+        reward = shaped_reward(self.settings, batch)
+        t = lambda a, dtype=None: torch.as_tensor(a, dtype=dtype, device=self.device)  # noqa: E731
+        self.replay.add(
+            t(batch.obs), t(batch.next_obs), t(batch.swapped_next_obs), t(batch.actions),
+            t(reward, torch.float32), t(batch.terminated), t(batch.other_present),
+        )
+        m = batch.actions.shape[1]
+        for _ in range(m):
+            self.env_steps += 1
+            if self.env_steps >= self.config.learning_starts:
+                self.update()
+
+    def sample_indices(self) -> torch.Tensor:
+        """``(K, B)`` replay indices for the next gradient step, from each run's own stream."""
+        b = self.config.batch_size
+        counter = self.grad_steps * b + np.arange(b)[None, :]
+        index = counter_integers(self._sample_keys, counter, self.replay.size)
+        return torch.as_tensor(index, device=self.device)
+
+    def update(self) -> float:
+        """One gradient step of ``Q`` and ``Q_emp`` in every run; returns the mean loss."""
+        k, cfg = self.num_runs, self.config
+        batch = self.replay.sample(self.sample_indices())
+        with torch.no_grad():
+            q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
+            both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
+            target_both = StackedMLP.forward(self.target, both)
+            b = cfg.batch_size
+            y, y_emp = empathic_targets(
+                batch["reward"], batch["terminated"], q_next, target_both[:, :b], target_both[:, b:],
+                batch["other_present"], cfg.gamma, self.selfishness,
+            )
+        values = StackedMLP.forward(self.online, batch["obs"].repeat(2, 1, 1))
+        taken = values.gather(2, batch["action"].repeat(2, 1).unsqueeze(2)).squeeze(2)
+        targets = torch.cat([y, y_emp])
+        loss = ((taken - targets) ** 2).mean(dim=1).sum()
+        self.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        self.optimizer.step()
+        self.grad_steps += 1
+        if self.grad_steps % cfg.target_update_interval == 0:
+            self.sync_target()
+        self.last_loss = float(loss.detach()) / (2 * k)
+        return self.last_loss
+
+    def sync_target(self) -> None:
+        """Copy every run's ``Q`` into its ``Q̂``."""
+        with torch.no_grad():
+            for target, online in zip(self.target, self.online):
+                target.copy_(online[: self.num_runs])
+
+    # ------------------------------------------------------------------ bookkeeping
+    def live_stats(self) -> dict[str, float]:
+        return {"eps": self.epsilon(), "loss": self.last_loss}
+
+    def memory_bytes_per_run(self) -> int:
+        params = sum(p[0].numel() * p.element_size() for p in self.online) * 2  # Q, Q_emp
+        params += sum(p[0].numel() * p.element_size() for p in self.target)
+        return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "online": [p.detach().clone() for p in self.online],
+            "target": [p.clone() for p in self.target],
+            "optimizer": self.optimizer.state_dict(),
+            "replay": self.replay.state_dict(),
+            "env_steps": self.env_steps,
+            "grad_steps": self.grad_steps,
+            "seeds": list(self.seeds),
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        if list(state["seeds"]) != self.seeds:
+            raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")
+        with torch.no_grad():
+            for p, saved in zip(self.online, state["online"]):
+                p.copy_(saved)
+            for p, saved in zip(self.target, state["target"]):
+                p.copy_(saved)
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.replay.load_state_dict(state["replay"])
+        self.env_steps, self.grad_steps = int(state["env_steps"]), int(state["grad_steps"])

@@ -1,0 +1,40 @@
+"""Every learning method by name: the runner, the CLI and the sweep configs look them up here.
+
+Adding a method = one file with a :class:`~agents.base.Learner` (or a preset of an existing one)
+plus one entry below; or name it ``"package.module:NAME"`` where ``NAME`` is a ``Method``.
+"""
+
+from __future__ import annotations
+
+from agents.base import Method
+from agents.empathic_dqn import EmpathicDQN
+from agents.settings import EmpathicDQNSettings
+from baselines.methods import BASELINE_METHODS
+from empathy_zoo.registry import resolve_name
+
+__all__ = ["METHODS", "get_method"]
+
+METHODS: dict[str, Method] = {
+    "empathic_dqn": Method(
+        name="empathic_dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"harm_penalty": 0.0, "equality_shaping": False},
+        label=lambda s: f"Empathic DQN (β={s.selfishness:g})",
+        description="Empathic DQN: acts on Q_emp, trained on β·own target + (1−β)·the other's swapped value",
+    ),
+    "dqn": Method(
+        name="dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0, "harm_penalty": 0.0, "equality_shaping": False},
+        label=lambda s: "DQN",
+        description="Double DQN (Empathic DQN at β = 1)",
+    ),
+    **BASELINE_METHODS,
+}
+"""Registered methods."""
+
+
+def get_method(name: str) -> Method:
+    """The method registered as ``name``, or a ``package.module:NAME`` ``Method`` object."""
+    method = resolve_name(name, METHODS, "method")
+    if not isinstance(method, Method):
+        raise ValueError(f"{name!r} is not an agents.base.Method")
+    return method

@@ -1,0 +1,72 @@
+"""Settings of Empathic DQN and its DQN baselines (SPEC §6; paper values are the defaults)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+__all__ = ["EmpathicDQNSettings", "PER_RUN_FIELDS"]
+
+
+@dataclass(frozen=True)
+class EmpathicDQNSettings:
+    """Everything Empathic DQN (and DQN, its β = 1 case) can be told. One line per field."""
+
+    selfishness: float = 1.0
+    """β: weight of the robot's own target in the empathic target; 1.0 is plain DQN."""
+    harm_penalty: float = 0.0
+    """Added to the training reward on a step where the robot harms another agent (baseline: -100)."""
+    equality_shaping: bool = False
+    """Train on reward × current equality of the episode's battery rewards (Sharing baseline)."""
+    gamma: float = 0.99
+    """Discount factor γ."""
+    learning_rate: float = 1e-3
+    """Adam step size (both networks)."""
+    batch_size: int = 32
+    """Transitions per gradient step."""
+    replay_capacity: int = 500_000
+    """Transitions kept in each run's replay memory (oldest overwritten first)."""
+    learning_starts: int = 20_000
+    """Warm-up: env steps taken at ε = 1 before the first gradient step."""
+    target_update_interval: int = 10_000
+    """Gradient steps between copies of Q into the target network Q̂."""
+    epsilon_start: float = 1.0
+    """ε at the end of warm-up."""
+    epsilon_end: float = 0.01
+    """ε after the decay."""
+    epsilon_decay_steps: int = 1_000_000
+    """Env steps (after warm-up) over which ε falls linearly from start to end."""
+    hidden_size: int = 128
+    """Width of both hidden layers of every network (obs → hidden → hidden → 5)."""
+
+    def __post_init__(self) -> None:
+        checks = {
+            "selfishness": 0.0 <= self.selfishness <= 1.0,
+            "gamma": 0.0 <= self.gamma <= 1.0,
+            "learning_rate": self.learning_rate > 0,
+            "batch_size": self.batch_size >= 1,
+            "replay_capacity": self.replay_capacity >= self.batch_size,
+            "learning_starts": self.learning_starts >= self.batch_size,
+            "target_update_interval": self.target_update_interval >= 1,
+            "epsilon_start": 0.0 <= self.epsilon_start <= 1.0,
+            "epsilon_end": 0.0 <= self.epsilon_end <= 1.0,
+            "epsilon_decay_steps": self.epsilon_decay_steps >= 1,
+            "hidden_size": self.hidden_size >= 1,
+        }
+        expectations = {
+            "selfishness": "in [0, 1]", "gamma": "in [0, 1]", "learning_rate": "> 0",
+            "batch_size": ">= 1", "replay_capacity": f">= batch_size ({self.batch_size})",
+            "learning_starts": f">= batch_size ({self.batch_size})", "target_update_interval": ">= 1",
+            "epsilon_start": "in [0, 1]", "epsilon_end": "in [0, 1]", "epsilon_decay_steps": ">= 1",
+            "hidden_size": ">= 1",
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"{name} must be {expectations[name]}, got {getattr(self, name)!r}")
+
+    def shared(self) -> tuple:
+        """The settings runs must share to train in one ensemble (all but the per-run ones)."""
+        return tuple(getattr(self, f.name) for f in fields(self) if f.name not in PER_RUN_FIELDS)
+
+
+PER_RUN_FIELDS = frozenset({"selfishness", "harm_penalty", "equality_shaping"})
+"""Settings that may differ between the runs of one ensemble."""

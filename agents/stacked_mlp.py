@@ -1,0 +1,37 @@
+"""K independent MLPs as stacked tensors: one batched matmul runs all of them."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+__all__ = ["StackedMLP", "init_stacked_mlp"]
+
+
+def init_stacked_mlp(sizes: list[int], generators: list[torch.Generator], device: torch.device) -> list[torch.Tensor]:
+    """Parameters ``[W1, b1, W2, b2, ...]`` with a leading run axis (``W: (K, in, out)``,
+    ``b: (K, 1, out)``), each run drawn from its own generator like ``torch.nn.Linear`` does:
+    uniform in ``±1/sqrt(fan_in)`` for weights and biases."""
+    params: list[torch.Tensor] = []
+    for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+        bound = 1.0 / math.sqrt(fan_in)
+        w = torch.stack([
+            (torch.rand(fan_in, fan_out, generator=g) * 2 - 1) * bound for g in generators
+        ])
+        b = torch.stack([(torch.rand(1, fan_out, generator=g) * 2 - 1) * bound for g in generators])
+        params += [w.to(device), b.to(device)]
+    return params
+
+
+class StackedMLP:
+    """Forward pass of K stacked ReLU MLPs on inputs ``(K, rows, in)`` -> ``(K, rows, out)``."""
+
+    @staticmethod
+    def forward(params: list[torch.Tensor], x: torch.Tensor) -> torch.Tensor:
+        last = len(params) // 2 - 1
+        for layer in range(last + 1):
+            x = torch.baddbmm(params[2 * layer + 1], x, params[2 * layer])
+            if layer < last:
+                x = torch.relu(x)
+        return x

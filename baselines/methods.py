@@ -1,0 +1,26 @@
+"""The baselines as registered methods (presets of :class:`agents.empathic_dqn.EmpathicDQN`)."""
+
+from __future__ import annotations
+
+from agents.base import Method
+from agents.empathic_dqn import EmpathicDQN
+from agents.settings import EmpathicDQNSettings
+from baselines.shaping import HARM_PENALTY
+
+BASELINE_METHODS: dict[str, Method] = {
+    "dqn_harm_penalty": Method(
+        name="dqn_harm_penalty", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0, "harm_penalty": HARM_PENALTY, "equality_shaping": False},
+        label=lambda s: "DQN + harm penalty (−100)",
+        description="DQN trained on reward − 100 on every step the robot harms another agent",
+    ),
+    "dqn_equality": Method(
+        name="dqn_equality", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0, "harm_penalty": 0.0, "equality_shaping": True},
+        label=lambda s: "DQN × equality",
+        description="DQN trained on reward × the episode's current equality of battery rewards",
+    ),
+}
+"""The baselines, by registry name."""
+
+__all__ = ["BASELINE_METHODS"]
