@@ -26,6 +26,7 @@ import torch
 from agents.base import StepBatch
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
+from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from baselines.shaping import shaped_reward
 from empathy_zoo.randomness import counter_integers, counter_uniform, derive_key
@@ -96,7 +97,7 @@ class EmpathicDQN:
         # online parameters: runs 0..K-1 are Q, runs K..2K-1 are Q_emp (one batched pass serves both)
         self.online = [torch.cat([a, b]).requires_grad_() for a, b in zip(q, q_emp)]
         self.target = [p[:k].detach().clone() for p in self.online]
-        self.optimizer = torch.optim.Adam(self.online, lr=self.config.learning_rate, fused=True)
+        self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
         self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device)
         self.selfishness = torch.tensor([[s.selfishness] for s in settings], device=self.device)
         self._explore_keys = np.array([derive_key(s, STREAM_EXPLORE) for s in self.seeds], dtype=np.uint64)[:, None]
@@ -169,7 +170,7 @@ class EmpathicDQN:
         taken = values.gather(2, batch["action"].repeat(2, 1).unsqueeze(2)).squeeze(2)
         targets = torch.cat([y, y_emp])
         loss = ((taken - targets) ** 2).mean(dim=1).sum()
-        self.optimizer.zero_grad(set_to_none=True)
+        self.optimizer.zero_grad()
         loss.backward()
         self.optimizer.step()
         self.grad_steps += 1

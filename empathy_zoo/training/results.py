@@ -1,0 +1,84 @@
+"""The per-run result file (schema 1): what a run did, episode by episode, written atomically."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import subprocess
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.atomic import read_json, write_json_atomic
+from empathy_zoo.metrics import METRIC_NAMES
+
+__all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result", "package_version", "git_commit"]
+
+SCHEMA = 1
+RUNS_DIR = "runs"
+
+
+def result_path(out_dir: Path, run_id: str) -> Path:
+    return Path(out_dir) / RUNS_DIR / f"{run_id}.json"
+
+
+@lru_cache(maxsize=1)
+def package_version() -> str:
+    try:
+        return metadata.version("empathy-zoo")
+    except metadata.PackageNotFoundError:
+        return "0.1.0"
+
+
+@lru_cache(maxsize=1)
+def git_commit() -> str | None:
+    """Short commit of the source tree the package runs from, if it is a git checkout."""
+    try:
+        done = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).resolve().parent,
+            capture_output=True, text=True, timeout=10, check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return done.stdout.strip() or None if done.returncode == 0 else None
+
+
+def empty_columns() -> dict[str, list]:
+    return {"episode_end_step": [], **{name: [] for name in METRIC_NAMES}}
+
+
+def build_result(
+    spec: Any, train: dict[str, list], evaluations: list[dict[str, Any]], wall_time_s: float, memory: dict[str, int]
+) -> dict[str, Any]:
+    """The result document of one finished run."""
+    config = spec.config()
+    return {
+        "schema": SCHEMA,
+        "run_id": spec.run_id,
+        "env": spec.env,
+        "variant": config["variant"],
+        "method": spec.method,
+        "method_label": config["label"],
+        "seed": spec.seed,
+        "config": config,
+        "steps": spec.steps,
+        "train": train,
+        "eval": evaluations,
+        "memory_bytes": memory,
+        "wall_time_s": round(float(wall_time_s), 3),
+        "version": package_version(),
+        "commit": git_commit(),
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def write_result(out_dir: Path, result: dict[str, Any]) -> Path:
+    return write_json_atomic(result_path(out_dir, result["run_id"]), result)
+
+
+def read_result(path: Path) -> dict[str, Any]:
+    """Read a result file; a corrupted or foreign one raises ``ValueError`` naming it."""
+    result = read_json(path)
+    if not isinstance(result, dict) or result.get("schema") != SCHEMA:
+        raise ValueError(f"{path} is not an empathy-zoo result file (schema {SCHEMA}); move it away to redo that run")
+    return result

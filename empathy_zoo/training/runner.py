@@ -1,0 +1,218 @@
+"""The runner: trains K compatible runs in lockstep on one batched engine.
+
+``train_runs(specs, out_dir)`` groups the runs into ensembles (same env, method family and
+shared settings), skips the runs whose result file exists, resumes an ensemble from its
+checkpoint, and writes one result file per run, atomically, when it finishes. A run's numbers
+depend only on its own spec: its seed drives its networks, exploration, replay sampling and
+environments, so it gives the same result alone or beside other runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from agents.base import StepBatch
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.randomness import derive_key
+from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
+from empathy_zoo.training.evaluation import evaluate_greedy
+from empathy_zoo.training.results import build_result, empty_columns, result_path, write_result
+from empathy_zoo.training.spec import RunSpec, group_specs
+from empathy_zoo.vector import VectorEnv
+
+__all__ = ["RunnerOptions", "train_runs", "train_ensemble", "checkpoint_path"]
+
+STREAM_ENV = 20
+CHECKPOINT_DIR = "checkpoints"
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """How runs are executed (not what they compute: results do not depend on these)."""
+
+    device: str = "cpu"
+    """Torch device for the networks and replay (``cpu``, ``cuda``, ``cuda:1``)."""
+    max_parallel_runs: int = 32
+    """Most runs trained together in one lockstep ensemble (bounds memory: ~45 MB per run at the paper's replay size)."""
+    checkpoint_interval: int = 50_000
+    """Env steps between checkpoints of an unfinished ensemble (0 = never)."""
+    progress: bool = True
+    """Show progress bars."""
+    threads: int | None = None
+    """Torch CPU threads (None = torch's default)."""
+
+
+def checkpoint_path(out_dir: Path, specs: Sequence[RunSpec]) -> Path:
+    digest = hashlib.sha256("|".join(s.run_id for s in specs).encode()).hexdigest()[:16]
+    return Path(out_dir) / CHECKPOINT_DIR / f"{specs[0].env}-{digest}.pt"
+
+
+def train_runs(
+    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(),
+    on_result: Callable[[dict[str, Any]], None] | None = None,
+) -> list[Path]:
+    """Train every run not finished yet; returns the result files of all ``specs``."""
+    out_dir = Path(out_dir)
+    ids = [s.run_id for s in specs]
+    duplicates = sorted({i for i in ids if ids.count(i) > 1})
+    if duplicates:
+        raise ValueError(f"the same run is listed twice: {duplicates}")
+    todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
+    for chunk in group_specs(todo, options.max_parallel_runs):
+        for result in train_ensemble(chunk, out_dir, options):
+            if on_result is not None:
+                on_result(result)
+    return [result_path(out_dir, s.run_id) for s in specs]
+
+
+class _EpisodeLog:
+    """Training episodes of one run, as columns."""
+
+    def __init__(self) -> None:
+        self.columns = empty_columns()
+
+    def add(self, end_step: int, metrics: dict[str, np.ndarray], row: int) -> None:
+        self.columns["episode_end_step"].append(int(end_step))
+        for name in METRIC_NAMES:
+            value = metrics[name][row]
+            self.columns[name].append(int(value) if name in ("survival", "harms", "batteries", "other_batteries") else round(float(value), 6))
+
+    def recent(self, name: str, count: int = 100) -> float:
+        values = self.columns[name][-count:]
+        return float(np.mean(values)) if values else float("nan")
+
+
+def _vector_state(venv: VectorEnv) -> dict[str, Any]:
+    policies = {}
+    for index, policy in venv.fixed.items():
+        policies[str(index)] = {k: v for k, v in vars(policy).items() if isinstance(v, (np.ndarray, int, float))}
+    return {"engine": venv.engine.state(), "policies": policies}
+
+
+def _load_vector_state(venv: VectorEnv, state: dict[str, Any]) -> None:
+    venv.engine.load_state(state["engine"])
+    for index, values in state["policies"].items():
+        policy = venv.fixed[int(index)]
+        for key, value in values.items():
+            current = getattr(policy, key)
+            if isinstance(current, np.ndarray):
+                current[...] = value
+            else:
+                setattr(policy, key, value)
+
+
+def train_ensemble(specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions()) -> list[dict[str, Any]]:
+    """Train the compatible runs ``specs`` in lockstep; write and return their results."""
+    out_dir = Path(out_dir)
+    if len({s.ensemble_key() for s in specs}) != 1:
+        raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
+    if options.threads:
+        torch.set_num_threads(options.threads)
+    first = specs[0]
+    k = len(specs)
+    method = first.method_object()
+    fixed, env_kwargs = first.fixed_policies(), dict(first.env_kwargs)
+    venv = VectorEnv(first.env, k, fixed=fixed, **env_kwargs)
+    learner_agent = venv.learners[0]
+    robot = venv.agents.index(learner_agent)
+    if len(venv.learners) != 1:
+        raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
+    other = 1 - robot if len(venv.agents) == 2 else None
+    seeds = [s.seed for s in specs]
+    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, 5, options.device)
+    logs = [_EpisodeLog() for _ in specs]
+    evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
+    battery = np.zeros((k, len(venv.agents)))
+    obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
+    step, elapsed = 0, 0.0
+    ckpt = checkpoint_path(out_dir, specs)
+    if ckpt.exists():
+        saved = load_checkpoint(ckpt)
+        if saved["run_ids"] != [s.run_id for s in specs]:
+            raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
+        learner.load_state_dict(saved["learner"])
+        _load_vector_state(venv, from_safe(saved["vector"]))
+        obs, battery = from_safe(saved["obs"]), from_safe(saved["battery"])
+        for log, columns in zip(logs, saved["logs"]):
+            log.columns = columns
+        evaluations = saved["evaluations"]
+        step, elapsed = int(saved["step"]), float(saved["elapsed"])
+    memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
+              "learner_per_run": learner.memory_bytes_per_run()}
+    total = first.steps
+    bar = tqdm(total=total, initial=step, disable=not options.progress, unit="step", mininterval=1.0,
+               desc=f"{first.env} ×{k} runs", dynamic_ncols=True, leave=False)
+    started = time.perf_counter() - elapsed
+    first_step = step
+    rows = np.arange(k)
+    while step < total:
+        actions = learner.act(obs[:, None, :])
+        result = venv.step(actions.reshape(k, 1))
+        collected = result.collected
+        battery += np.where(collected, result.rewards, 0.0)
+        batch = StepBatch(
+            obs=obs[:, None, :],
+            actions=actions,
+            rewards=result.rewards[:, robot, None],
+            terminated=result.terminated[:, robot, None],
+            next_obs=result.final_observations[:, 0, None, :],
+            swapped_next_obs=result.swapped[:, 0, None, :],
+            other_present=result.swapped_valid[:, 0, None],
+            harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
+            battery_return=battery[:, robot, None],
+            other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
+        )
+        learner.observe(batch)
+        step += 1
+        finished = result.finished
+        for j, env_id in enumerate(finished["env"]):
+            logs[env_id].add(step, finished, j)
+        battery[result.episode_over] = 0.0
+        obs = result.observations[:, 0]
+        if step % first.eval_interval == 0 or step == total:
+            per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)
+            for r in rows:
+                evaluations[r].append({"step": step, **per_run[r]})
+        if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
+            save_checkpoint(ckpt, {
+                "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
+                "learner": learner.state_dict(), "vector": to_safe(_vector_state(venv)),
+                "obs": to_safe(obs), "battery": to_safe(battery),
+                "logs": [log.columns for log in logs], "evaluations": evaluations,
+            })
+        if options.progress and (step % 500 == 0 or step == total):
+            rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
+            bar.set_postfix(_live(logs, learner, rate), refresh=False)
+            bar.update(step - bar.n)
+    bar.close()
+    wall = time.perf_counter() - started
+    results = []
+    for r, spec in enumerate(specs):
+        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory)
+        write_result(out_dir, document)
+        results.append(document)
+    if ckpt.exists():
+        ckpt.unlink()
+    return results
+
+
+def _live(logs: list[_EpisodeLog], learner: Any, steps_per_second: float) -> dict[str, str]:
+    episodes = sum(len(log.columns["survival"]) for log in logs)
+    stats = {
+        "episodes": str(episodes),
+        "survival": f"{np.nanmean([log.recent('survival') for log in logs]):.0f}",
+        "harms": f"{np.nanmean([log.recent('harms') for log in logs]):.2f}",
+        "equality": f"{np.nanmean([log.recent('equality') for log in logs]):.2f}",
+    }
+    stats |= {key: f"{value:.3g}" for key, value in learner.live_stats().items()}
+    stats["steps/s"] = f"{steps_per_second:.0f}"
+    return stats
