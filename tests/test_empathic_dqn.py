@@ -1,0 +1,192 @@
+"""Empathic DQN: exact targets, β = 1 is DQN, shaping, replay size, determinism, ensembles."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from agents.base import StepBatch
+from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
+from agents.registry import get_method
+from agents.replay import StackedReplay
+from agents.settings import EmpathicDQNSettings
+from baselines.shaping import HARM_PENALTY, shaped_reward
+from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training.spec import RunSpec
+
+TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 500, "target_update_interval": 50}
+
+
+def test_targets_on_a_hand_made_batch() -> None:
+    gamma, beta = 0.9, 0.25
+    reward = torch.tensor([[1.0, 0.0, 1.0, 2.0]])
+    terminated = torch.tensor([[False, True, False, False]])
+    # Q picks the action (double DQN); Q̂ values it.
+    q_next_online = torch.tensor([[[0.0, 5.0], [1.0, 0.0], [3.0, 2.0], [0.0, 1.0]]])
+    q_next_target = torch.tensor([[[10.0, 20.0], [30.0, 40.0], [50.0, 60.0], [7.0, -3.0]]])
+    q_swapped_target = torch.tensor([[[1.0, 4.0], [2.0, -1.0], [8.0, 0.0], [100.0, 100.0]]])
+    other_present = torch.tensor([[True, True, True, False]])
+    y, y_emp = empathic_targets(
+        reward, terminated, q_next_online, q_next_target, q_swapped_target, other_present, gamma,
+        torch.tensor([[beta]]),
+    )
+    expected_y = [1.0 + 0.9 * 20.0, 0.0, 1.0 + 0.9 * 50.0, 2.0 + 0.9 * -3.0]
+    expected_other = [0.9 * 4.0, 0.9 * 2.0, 0.9 * 8.0, 0.0]  # 0: the other has left
+    assert y[0].tolist() == pytest.approx(expected_y)
+    assert y_emp[0].tolist() == pytest.approx([beta * a + (1 - beta) * b for a, b in zip(expected_y, expected_other)])
+
+
+def test_beta_one_target_ignores_the_other() -> None:
+    args = [torch.rand(2, 8, 5) for _ in range(3)]
+    y, y_emp = empathic_targets(torch.rand(2, 8), torch.zeros(2, 8, dtype=torch.bool), *args,
+                                torch.ones(2, 8, dtype=torch.bool), 0.99, torch.ones(2, 1))
+    assert torch.equal(y, y_emp)
+
+
+def _random_batches(count: int, k: int, seed: int, swapped_noise: bool = False) -> list[StepBatch]:
+    rng = np.random.default_rng(seed)
+    other = np.random.default_rng(seed + 1000)
+    out = []
+    for _ in range(count):
+        obs = np.repeat(rng.integers(-1, 2, (1, 1, 25)).astype(np.float32), k, 0)
+        nxt = np.repeat(rng.integers(-1, 2, (1, 1, 25)).astype(np.float32), k, 0)
+        swapped = other.integers(-1, 2, (k, 1, 25)).astype(np.float32) if swapped_noise else nxt
+        out.append(StepBatch(
+            obs=obs, actions=np.repeat(rng.integers(0, 5, (1, 1)), k, 0), rewards=np.repeat(rng.random((1, 1)), k, 0),
+            terminated=np.repeat(rng.random((1, 1)) < 0.1, k, 0), next_obs=nxt, swapped_next_obs=swapped,
+            other_present=np.ones((k, 1), bool), harmed_other=np.zeros((k, 1)),
+            battery_return=np.zeros((k, 1)), other_battery_return=np.zeros((k, 1)),
+        ))
+    return out
+
+
+def _train(method: str, batches: list[StepBatch], seed: int = 3, **settings) -> EmpathicDQN:
+    m = get_method(method)
+    k = batches[0].obs.shape[0]
+    learner = m.learner([m.make_settings({**TINY, **settings})] * k, [seed] * k, 25)
+    for batch in batches:
+        learner.observe(batch)
+    return learner
+
+
+def test_beta_one_gives_the_same_updates_as_dqn_whatever_the_other_sees() -> None:
+    plain = _train("dqn", _random_batches(200, 1, seed=0))
+    empathic = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=1.0)
+    assert plain.grad_steps > 100
+    for a, b in zip(plain.online, empathic.online):
+        assert torch.equal(a, b)
+
+
+def test_lower_beta_changes_the_empathic_network_only() -> None:
+    selfish = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=1.0)
+    caring = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=0.25)
+    for a, b in zip(selfish.online, caring.online):
+        assert torch.equal(a[0], b[0])  # Q is trained on y, which β does not touch
+        assert not torch.equal(a[1], b[1])  # Q_emp is trained on y_emp
+
+
+def test_ensemble_updates_equal_solo_updates() -> None:
+    solo = _train("empathic_dqn", _random_batches(150, 1, seed=5), selfishness=0.5)
+    ensemble = _train("empathic_dqn", _random_batches(150, 3, seed=5), selfishness=0.5)
+    for a, b in zip(solo.online, ensemble.online):
+        assert torch.equal(a[0], b[0]) and torch.equal(a[1], b[3])  # Q of run 0 and Q_emp of run 0
+        assert torch.equal(b[0], b[1])  # identical runs stay identical
+
+
+def test_target_network_is_copied_on_schedule() -> None:
+    learner = _train("empathic_dqn", _random_batches(64 + 48, 1, seed=1), selfishness=0.5)
+    assert learner.grad_steps == 50 - 1
+    assert not torch.equal(learner.target[0], learner.online[0][:1])
+    learner.observe(_random_batches(1, 1, seed=9)[0])
+    assert learner.grad_steps == 50
+    for target, online in zip(learner.target, learner.online):
+        assert torch.equal(target, online[:1])
+
+
+def test_epsilon_schedule() -> None:
+    s = EmpathicDQNSettings(learning_starts=100, epsilon_decay_steps=1000, epsilon_end=0.01)
+    assert linear_epsilon(s, 0) == 1.0 and linear_epsilon(s, 99) == 1.0
+    assert linear_epsilon(s, 600) == pytest.approx(1.0 - 0.5 * 0.99)
+    assert linear_epsilon(s, 1100) == pytest.approx(0.01) and linear_epsilon(s, 10**7) == pytest.approx(0.01)
+
+
+def test_paper_replay_fits_in_64_mb_per_run() -> None:
+    replay = StackedReplay(1, EmpathicDQNSettings().replay_capacity, 25, torch.device("cpu"))
+    assert replay.nbytes_per_run() <= 64 * 2**20
+    assert replay.nbytes_per_run() == 500_000 * (3 * 25 + 1 + 4 + 1 + 1)
+
+
+def test_replay_rejects_observations_that_are_not_small_integers() -> None:
+    replay = StackedReplay(1, 10, 2, torch.device("cpu"))
+    bad = torch.tensor([[[0.5, 1.0]]])
+    with pytest.raises(ValueError, match="int8"):
+        replay.add(bad, bad, bad, torch.zeros(1, 1), torch.zeros(1, 1), torch.zeros(1, 1, dtype=torch.bool),
+                   torch.ones(1, 1, dtype=torch.bool))
+
+
+def test_settings_reject_bad_values_and_presets_cannot_be_overridden() -> None:
+    with pytest.raises(ValueError, match="selfishness"):
+        EmpathicDQNSettings(selfishness=1.5)
+    with pytest.raises(ValueError, match="batch_size"):
+        EmpathicDQNSettings(batch_size=64, learning_starts=32)
+    with pytest.raises(ValueError, match="fixes selfishness"):
+        get_method("dqn").make_settings({"selfishness": 0.5})
+    with pytest.raises(ValueError, match="unknown setting"):
+        get_method("dqn").make_settings({"selfishnes": 1.0})
+
+
+def test_shaping_rewards() -> None:
+    k = 3
+    settings = [EmpathicDQNSettings(), EmpathicDQNSettings(harm_penalty=HARM_PENALTY), EmpathicDQNSettings(equality_shaping=True)]
+    batch = StepBatch(
+        obs=np.zeros((k, 1, 25)), actions=np.zeros((k, 1), int), rewards=np.full((k, 1), 0.9),
+        terminated=np.zeros((k, 1), bool), next_obs=np.zeros((k, 1, 25)), swapped_next_obs=np.zeros((k, 1, 25)),
+        other_present=np.ones((k, 1), bool), harmed_other=np.ones((k, 1)),
+        battery_return=np.full((k, 1), 1.9), other_battery_return=np.full((k, 1), 1.0),
+    )
+    shaped = shaped_reward(settings, batch)[:, 0]
+    assert shaped[0] == pytest.approx(0.9)
+    assert shaped[1] == pytest.approx(0.9 + HARM_PENALTY)
+    assert shaped[2] == pytest.approx(0.9 * 2 * 1.0 / 2.9)
+
+
+def _spec(**kw) -> RunSpec:
+    base = dict(env="coexistence_v0", method="empathic_dqn", settings={**TINY, "selfishness": 0.5}, seed=0,
+                steps=600, eval_interval=300, eval_episodes=2)
+    return RunSpec(**{**base, **kw})
+
+
+def _scores(path) -> dict:
+    result = json.loads(path.read_text())
+    return {"train": result["train"], "eval": result["eval"], "config": result["config"]}
+
+
+def test_same_seed_gives_identical_result_files(tmp_path) -> None:
+    options = RunnerOptions(progress=False)
+    first = train_runs([_spec()], tmp_path / "a", options)[0]
+    second = train_runs([_spec()], tmp_path / "b", options)[0]
+    assert _scores(first) == _scores(second)
+    assert _scores(first)["train"]["survival"], "no training episode recorded"
+    other = train_runs([_spec(seed=1)], tmp_path / "c", options)[0]
+    assert _scores(other)["train"] != _scores(first)["train"]
+
+
+def test_a_run_gives_the_same_result_alone_or_in_an_ensemble(tmp_path) -> None:
+    options = RunnerOptions(progress=False)
+    specs = [_spec(seed=s, settings={**TINY, "selfishness": b}) for s, b in ((0, 1.0), (1, 0.5), (2, 0.25))]
+    together = train_runs(specs, tmp_path / "ensemble", options)
+    alone = train_runs([specs[1]], tmp_path / "solo", options)[0]
+    assert _scores(together[1]) == _scores(alone)
+
+
+def test_scores_come_from_events_not_from_the_shaped_reward(tmp_path) -> None:
+    spec = _spec(method="dqn_harm_penalty", settings=TINY, steps=1500)
+    result = json.loads(train_runs([spec], tmp_path, RunnerOptions(progress=False))[0].read_text())
+    train = result["train"]
+    assert sum(train["harms"]) > 0, "a random early robot should harm the cat sometimes"
+    # Coexistence pays +1 per operative step: the scored return is the survival, never the penalty
+    assert train["return"] == [float(s) for s in train["survival"]]
+    assert min(train["return"]) >= 0
