@@ -10,9 +10,11 @@ environments, so it gives the same result alone or beside other runs.
 from __future__ import annotations
 
 import hashlib
+import multiprocessing
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +50,11 @@ class RunnerOptions:
     progress: bool = True
     """Show progress bars."""
     threads: int | None = None
-    """Torch CPU threads (None = torch's default)."""
+    """Torch CPU threads per process (None = torch's default; worker processes default to 1)."""
+    workers: int = 1
+    """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
+    bar_position: int = 0
+    """Line of this process's progress bar (set for worker processes)."""
 
 
 def checkpoint_path(out_dir: Path, specs: Sequence[RunSpec]) -> Path:
@@ -67,11 +73,42 @@ def train_runs(
     if duplicates:
         raise ValueError(f"the same run is listed twice: {duplicates}")
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    for chunk in group_specs(todo, options.max_parallel_runs):
-        for result in train_ensemble(chunk, out_dir, options):
-            if on_result is not None:
-                on_result(result)
+    chunks = group_specs(todo, options.max_parallel_runs)
+    if options.workers < 1:
+        raise ValueError(f"workers must be positive, got {options.workers}")
+    if options.workers == 1 or len(chunks) <= 1:
+        for chunk in chunks:
+            for result in train_ensemble(chunk, out_dir, options):
+                if on_result is not None:
+                    on_result(result)
+    else:
+        _train_in_processes(chunks, out_dir, options, on_result)
     return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def _train_in_processes(
+    chunks: list[list[RunSpec]], out_dir: Path, options: RunnerOptions,
+    on_result: Callable[[dict[str, Any]], None] | None,
+) -> None:
+    """Spread ensembles over ``options.workers`` processes (one torch thread each by default)."""
+    context = multiprocessing.get_context("spawn")
+    workers = min(options.workers, len(chunks))
+    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+        futures = [
+            pool.submit(train_ensemble, chunk, out_dir, replace(
+                options, workers=1, threads=options.threads or 1, bar_position=i % workers,
+            ))
+            for i, chunk in enumerate(chunks)
+        ]
+        try:
+            for future in as_completed(futures):
+                for result in future.result():
+                    if on_result is not None:
+                        on_result(result)
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
 
 
 class _EpisodeLog:
@@ -150,7 +187,8 @@ def train_ensemble(specs: Sequence[RunSpec], out_dir: str | Path, options: Runne
               "learner_per_run": learner.memory_bytes_per_run()}
     total = first.steps
     bar = tqdm(total=total, initial=step, disable=not options.progress, unit="step", mininterval=1.0,
-               desc=f"{first.env} ×{k} runs", dynamic_ncols=True, leave=False)
+               desc=f"{first.env} ×{k} runs", dynamic_ncols=True, leave=False,
+               position=options.bar_position)
     started = time.perf_counter() - elapsed
     first_step = step
     rows = np.arange(k)
