@@ -162,10 +162,7 @@ class EmpathicDQN:
             both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
             target_both = StackedMLP.forward(self.target, both)
             b = cfg.batch_size
-            y, y_emp = empathic_targets(
-                batch["reward"], batch["terminated"], q_next, target_both[:, :b], target_both[:, b:],
-                batch["other_present"], cfg.gamma, self.selfishness,
-            )
+            y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_both[:, b:])
         values = StackedMLP.forward(self.online, batch["obs"].repeat(2, 1, 1))
         taken = values.gather(2, batch["action"].repeat(2, 1).unsqueeze(2)).squeeze(2)
         targets = torch.cat([y, y_emp])
@@ -178,6 +175,19 @@ class EmpathicDQN:
             self.sync_target()
         self.last_loss = float(loss.detach()) / (2 * k)
         return self.last_loss
+
+    def targets(
+        self, batch: dict[str, torch.Tensor], q_next: torch.Tensor, target_next: torch.Tensor, target_swapped: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """The TD targets ``(y, y_emp)`` of ``Q`` and ``Q_emp`` for a sampled batch, ``(K, B)`` each.
+
+        ``q_next = Q(s')``, ``target_next = Q̂(s')``, ``target_swapped = Q̂(s_emp')``, all
+        ``(K, B, actions)``. Override this to try another way of caring about the other agent.
+        """
+        return empathic_targets(
+            batch["reward"], batch["terminated"], q_next, target_next, target_swapped,
+            batch["other_present"], self.config.gamma, self.selfishness,
+        )
 
     def sync_target(self) -> None:
         """Copy every run's ``Q`` into its ``Q̂``."""

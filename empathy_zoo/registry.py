@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 from collections.abc import Mapping
 from typing import Any
 
@@ -10,7 +12,8 @@ __all__ = ["resolve_name"]
 
 
 def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
-    """Return ``registry[spec]``, or the object named by a ``package.module:Name`` string.
+    """Return ``registry[spec]``, or the object named by a ``package.module:Name`` string
+    (importable from ``sys.path`` or the working directory).
 
     Raises ``ValueError`` naming the unknown entry and what is registered.
     """
@@ -23,6 +26,8 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
             f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')"
         )
     module_name, _, attribute = spec.partition(":")
+    if os.getcwd() not in sys.path:  # like `python -m`: modules of the working directory resolve
+        sys.path.append(os.getcwd())
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:

@@ -1,0 +1,135 @@
+"""Sweep speed: aggregate env-steps/s of K Empathic DQN runs in lockstep vs SB3 DQN.
+
+Prints, in one run on this machine:
+  (a) the measured float32 matmul peak (GFLOP/s),
+  (b) aggregate env-steps/s with every gradient step, for K = 1, 8, 32, 64 runs in one process,
+      and for two worker processes,
+  (c) Stable-Baselines3 DQN env-steps/s on the same environment (same MLP, batch 32, one
+      gradient step per env step), (d) the ratios, (e) achieved GFLOP/s as a fraction of the
+      peak, (f) the projected wall time of the `paper` profile (50 runs × 1,000,000 steps).
+
+    python benchmarks/sweep_speed.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training.spec import RunSpec
+
+OBS, HIDDEN, ACTIONS, BATCH = 25, 128, 5, 32
+PAPER_RUNS, PAPER_STEPS = 50, 1_000_000
+
+
+def flops_per_run_step() -> float:
+    """Matmul FLOPs of one env step of one run: acting, the double-DQN and empathic targets,
+    and the forward and backward passes of Q and Q_emp."""
+    mac_row = OBS * HIDDEN + HIDDEN * HIDDEN + HIDDEN * ACTIONS
+    forward_rows = 1 + BATCH + 2 * BATCH + 2 * BATCH  # act; Q(s'); Q̂(s', s_emp'); Q and Q_emp on s
+    backward = 2 * BATCH * (2 * mac_row - OBS * HIDDEN)  # weight and input grads (no input grad for layer 1)
+    return 2.0 * (forward_rows * mac_row + backward)
+
+
+def matmul_peak(seconds: float = 2.0) -> float:
+    a, b = torch.randn(2048, 2048), torch.randn(2048, 2048)
+    for _ in range(3):
+        a @ b
+    count, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds:
+        a @ b
+        count += 1
+    return 2 * 2048**3 * count / (time.perf_counter() - start) / 1e9
+
+
+def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None) -> float:
+    """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on)."""
+    settings = {"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": 0.5}
+    specs = [
+        RunSpec(env="coexistence_v0", method="empathic_dqn", settings=settings, seed=w * k + i,
+                steps=steps, eval_interval=10 * steps, eval_episodes=1)
+        for w in range(workers) for i in range(k)
+    ]
+    out = Path(tempfile.mkdtemp(prefix="ez-sweep-speed-"))
+    try:
+        start = time.perf_counter()
+        train_runs(specs, out, RunnerOptions(progress=False, max_parallel_runs=k, workers=workers,
+                                             threads=threads, checkpoint_interval=0))
+        return len(specs) * steps / (time.perf_counter() - start)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def sb3_rate(steps: int) -> float | None:
+    try:
+        from stable_baselines3 import DQN
+
+        from empathy_zoo.gym_adapter import make_single_agent_env
+    except ImportError as error:
+        print(f"(SB3 skipped: {error})")
+        return None
+    env = make_single_agent_env("coexistence_v0")
+    model = DQN("MlpPolicy", env, learning_starts=BATCH, batch_size=BATCH, train_freq=1, gradient_steps=1,
+                buffer_size=100_000, policy_kwargs={"net_arch": [HIDDEN, HIDDEN]}, seed=0, device="cpu")
+    model.learn(200)
+    start = time.perf_counter()
+    model.learn(steps, reset_num_timesteps=False)
+    return steps / (time.perf_counter() - start)
+
+
+def machine() -> str:
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import os
+
+    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, torch {torch.__version__}, "
+            f"{torch.get_num_threads()} torch threads")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer steps (noisier figures)")
+    args = parser.parse_args()
+    scale = 0.3 if args.quick else 1.0
+    print(f"command: python benchmarks/sweep_speed.py{' --quick' if args.quick else ''}")
+    print(f"machine: {machine()}")
+    peak = matmul_peak()
+    print(f"(a) float32 matmul peak (2048², {torch.get_num_threads()} threads): {peak:.1f} GFLOP/s")
+    sb3 = sb3_rate(int(2000 * scale))
+    per_step = flops_per_run_step()
+    rows = []
+    for k, steps, workers in ((1, 3000, 1), (8, 1200, 1), (32, 500, 1), (64, 300, 1), (25, 800, 2), (32, 700, 2)):
+        rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers)
+        rows.append((k, workers, rate))
+        print(f"(b) K={k:>3} runs × {workers} process(es): {rate:9.0f} env-steps/s", flush=True)
+    if sb3:
+        print(f"(c) SB3 DQN (same MLP, batch 32, 1 update/step): {sb3:.0f} env-steps/s")
+    best = max(rows, key=lambda r: r[2])
+    for k, workers, rate in rows:
+        ratio = f"{rate / sb3:5.1f}× SB3" if sb3 else "   n/a"
+        achieved = rate * per_step / 1e9
+        print(f"(d,e) K={k:>3} × {workers}: {ratio}; {achieved:6.1f} GFLOP/s = {achieved / peak:5.1%} of peak")
+    hours = PAPER_RUNS * PAPER_STEPS / best[2] / 3600
+    print(f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
+          f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations)")
+    print(f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP")
+    sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
