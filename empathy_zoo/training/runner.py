@@ -55,6 +55,10 @@ class RunnerOptions:
     """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
     bar_position: int = 0
     """Line of this process's progress bar (set for worker processes)."""
+    backend: str = "local"
+    """Where ensembles run: ``local`` (this machine, ``workers`` processes) or ``ray``."""
+    address: str | None = None
+    """Ray cluster address for ``backend="ray"`` (``None`` starts a local Ray instance)."""
 
 
 def checkpoint_path(out_dir: Path, specs: Sequence[RunSpec]) -> Path:
@@ -76,7 +80,13 @@ def train_runs(
     chunks = group_specs(todo, options.max_parallel_runs)
     if options.workers < 1:
         raise ValueError(f"workers must be positive, got {options.workers}")
-    if options.workers == 1 or len(chunks) <= 1:
+    if options.backend == "ray":
+        from empathy_zoo.training.ray_backend import train_with_ray
+
+        train_with_ray(chunks, out_dir, options, on_result)
+    elif options.backend != "local":
+        raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
+    elif options.workers == 1 or len(chunks) <= 1:
         for chunk in chunks:
             for result in train_ensemble(chunk, out_dir, options):
                 if on_result is not None:
@@ -147,8 +157,11 @@ def _load_vector_state(venv: VectorEnv, state: dict[str, Any]) -> None:
                 setattr(policy, key, value)
 
 
-def train_ensemble(specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions()) -> list[dict[str, Any]]:
-    """Train the compatible runs ``specs`` in lockstep; write and return their results."""
+def train_ensemble(
+    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True
+) -> list[dict[str, Any]]:
+    """Train the compatible runs ``specs`` in lockstep and return their results; write them
+    (atomically) unless ``write_results`` is False (a remote worker hands them to the driver)."""
     out_dir = Path(out_dir)
     if len({s.ensemble_key() for s in specs}) != 1:
         raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
@@ -208,6 +221,7 @@ def train_ensemble(specs: Sequence[RunSpec], out_dir: str | Path, options: Runne
             harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
             battery_return=battery[:, robot, None],
             other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
+            truncated=result.truncated[:, robot, None],
         )
         learner.observe(batch)
         step += 1
@@ -236,7 +250,8 @@ def train_ensemble(specs: Sequence[RunSpec], out_dir: str | Path, options: Runne
     results = []
     for r, spec in enumerate(specs):
         document = build_result(spec, logs[r].columns, evaluations[r], wall, memory)
-        write_result(out_dir, document)
+        if write_results:
+            write_result(out_dir, document)
         results.append(document)
     if ckpt.exists():
         ckpt.unlink()
