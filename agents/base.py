@@ -41,6 +41,9 @@ class StepBatch:
     """(K, M) the learner's battery reward so far this episode, this step included."""
     other_battery_return: np.ndarray
     """(K, M) the other agent's battery reward so far this episode, this step included."""
+    truncated: np.ndarray | None = None
+    """(K, M) the learner's episode was cut short this step (time limit); ``None`` when the driver
+    does not say. Learners that bootstrap through time-outs (SB3's PPO) need it."""
 
 
 class Learner(Protocol):
