@@ -28,11 +28,17 @@ class StackedAdam:
         self.exp_avg = [torch.zeros_like(p, requires_grad=False) for p in params]
         self.exp_avg_sq = [torch.zeros_like(p, requires_grad=False) for p in params]
         runs = params[0].shape[0]
-        self.steps = [torch.zeros((), dtype=torch.float32) for _ in range(runs)]
+        self.steps = [torch.zeros((), dtype=torch.float32, device=params[0].device) for _ in range(runs)]
         self._fused = hasattr(torch, "_fused_adam_") and params[0].device.type in ("cpu", "cuda")
+        # one view per (tensor, run); these tensors are never reallocated, so their views are made once
+        self._param_views = self._views(params)
+        self._avg_views = self._views(self.exp_avg)
+        self._avg_sq_views = self._views(self.exp_avg_sq)
+        self._step_views = [s for _ in params for s in self.steps]
 
-    def _views(self, tensors: list[torch.Tensor]) -> list[torch.Tensor]:
-        return [t[r] for r in range(tensors[0].shape[0]) for t in tensors]
+    @staticmethod
+    def _views(tensors: list[torch.Tensor]) -> list[torch.Tensor]:
+        return [view for t in tensors for view in t.unbind(0)]
 
     def zero_grad(self) -> None:
         for p in self.params:
@@ -40,10 +46,8 @@ class StackedAdam:
 
     @torch.no_grad()
     def step(self) -> None:
-        grads = [p.grad for p in self.params]
-        params, grads_v = self._views(self.params), self._views(grads)
-        avg, avg_sq = self._views(self.exp_avg), self._views(self.exp_avg_sq)
-        steps = [s for s in self.steps for _ in self.params]
+        grads_v = self._views([p.grad for p in self.params])
+        params, avg, avg_sq, steps = self._param_views, self._avg_views, self._avg_sq_views, self._step_views
         for s in self.steps:
             s += 1
         if self._fused:

@@ -198,6 +198,13 @@ def train_ensemble(
         step, elapsed = int(saved["step"]), float(saved["elapsed"])
     memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
               "learner_per_run": learner.memory_bytes_per_run()}
+    if options.progress:
+        mb = 2**20
+        tqdm.write(
+            f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
+            f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
+            f"total {k * memory['learner_per_run'] / mb:.0f} MB"
+        )
     total = first.steps
     bar = tqdm(total=total, initial=step, disable=not options.progress, unit="step", mininterval=1.0,
                desc=f"{first.env} ×{k} runs", dynamic_ncols=True, leave=False,
