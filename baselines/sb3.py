@@ -1,0 +1,436 @@
+"""Stable-Baselines3 DQN and PPO as learning methods of the suite (``sb3_dqn``, ``sb3_ppo``).
+
+Name them as ``baselines.sb3:SB3_DQN`` / ``baselines.sb3:SB3_PPO`` (or register
+:data:`SB3_METHODS`); the runner trains them like any method and the suite scores them with its
+own metrics. Needs ``pip install "empathy-zoo[sb3]"``; Stable-Baselines3 is imported only when a
+learner is built, so this module imports without it.
+
+Design: SB3's ``learn()`` owns an environment loop over its own ``VecEnv``, while the runner owns
+the suite's loop (lockstep ensembles, per-run seeds, metrics from the engine's events, greedy
+evaluation, checkpoints, result files). Rather than a second training path that would copy all
+of that, :class:`SB3Learner` plays the part of SB3's ``collect_rollouts`` for one real model per
+run and leaves the learning to SB3's own code:
+
+* acting: SB3's own exploration (``_sample_action``: uniform during warm-up, then ε-greedy
+  ``predict`` for DQN; a sample of ``policy.forward`` with its value and log-probability for PPO);
+* storing: the model's own buffers (``_store_transition`` into the replay buffer, with SB3's
+  time-out handling; ``rollout_buffer.add`` with SB3's bootstrap of truncated episodes);
+* the per-step bookkeeping of ``learn()`` (``num_timesteps``, progress remaining, DQN's
+  ``_on_step``: target copies and ε), and the model's own ``train()`` at the moments ``learn()``
+  calls it (DQN every ``train_freq`` steps after ``learning_starts``; PPO when the rollout buffer
+  is full, after ``compute_returns_and_advantage`` on the next observation).
+
+The loop is ≈ 40 lines mirroring ``collect_rollouts``; a test checks that it leaves the
+networks bit-identical to ``model.learn()`` on the Gymnasium adapter for the same seed. (Rejected:
+running ``learn()`` in a thread fed by the runner: a suspended ``learn()`` cannot be
+checkpointed, and errors cross threads.) Each run keeps its own numpy-global and torch random
+states, swapped in around every call into SB3, so a run draws the same numbers alone or beside
+other runs, as the runner promises. SB3 reads only what ``StepBatch`` says happened (unshaped
+reward, termination, truncation), never the metrics.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import random
+from collections.abc import Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import gymnasium
+import numpy as np
+import torch
+
+from agents.base import Method, StepBatch
+from empathy_zoo.randomness import derive_key
+from empathy_zoo.training.checkpoint import from_safe, to_safe
+
+__all__ = [
+    "SB3Settings", "SB3Learner", "SB3_DQN", "SB3_PPO", "SB3_METHODS", "DEFAULT_KWARGS",
+    "make_sb3_model", "sb3_seed", "INSTALL_HINT",
+]
+
+INSTALL_HINT = 'Stable-Baselines3 is not installed; install it with: pip install "empathy-zoo[sb3]"'
+STREAM_SB3 = 15
+ALGORITHMS = ("dqn", "ppo")
+
+DEFAULT_KWARGS: dict[str, dict[str, Any]] = {
+    "dqn": {
+        "buffer_size": 500_000,
+        "learning_starts": 20_000,
+        "train_freq": 1,
+        "gradient_steps": 1,
+        "target_update_interval": 10_000,
+        "exploration_fraction": 1.0,
+        "exploration_initial_eps": 1.0,
+        "exploration_final_eps": 0.01,
+    },
+    "ppo": {},
+}
+"""Keyword arguments of each SB3 class that differ from SB3's defaults: DQN follows the paper's
+settings (SPEC §6; ε decays over ``schedule_steps``), PPO keeps SB3's. ``algorithm_kwargs`` overrides them."""
+
+_FIELD_KWARGS = {"learning_rate", "gamma", "batch_size", "seed", "device", "policy", "env", "verbose"}
+_LEARN_DEFAULTS = {"dqn": {"learning_rate": 1e-3, "batch_size": 32}, "ppo": {"learning_rate": 3e-4, "batch_size": 64}}
+
+
+@dataclass(frozen=True)
+class SB3Settings:
+    """A Stable-Baselines3 model as a method of the suite. One line per field."""
+
+    algorithm: str = "dqn"
+    """``"dqn"`` or ``"ppo"`` (fixed by the registered method)."""
+    net_arch: tuple[int, ...] = (128, 128)
+    """Hidden layer widths (DQN: the Q-network; PPO: the policy and the value network each), as the paper's MLP."""
+    learning_rate: float | None = None
+    """Adam step size; ``None``: 1e-3 for DQN (the paper's), 3e-4 for PPO (SB3's)."""
+    gamma: float = 0.99
+    """Discount factor γ."""
+    batch_size: int | None = None
+    """Minibatch size; ``None``: 32 for DQN (the paper's), 64 for PPO (SB3's)."""
+    schedule_steps: int = 1_000_000
+    """Env steps over which SB3's progress schedules (ε, learning-rate and clip-range schedules)
+    run, i.e. SB3's ``total_timesteps`` (past them, schedules keep their end values); with
+    ``exploration_fraction=1`` DQN's ε decays over them."""
+    algorithm_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    """More keyword arguments of the SB3 class (``buffer_size``, ``n_steps``, ``ent_coef``,
+    ``policy_kwargs``, …), over :data:`DEFAULT_KWARGS`."""
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {self.algorithm!r}")
+        arch = tuple(self.net_arch)
+        if not arch or any(not isinstance(w, int) or isinstance(w, bool) or w < 1 for w in arch):
+            raise ValueError(f"net_arch must be positive layer widths, got {self.net_arch!r}")
+        object.__setattr__(self, "net_arch", arch)
+        if self.learning_rate is not None and not self.learning_rate > 0:
+            raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
+        if not 0.0 <= self.gamma <= 1.0:
+            raise ValueError(f"gamma must be in [0, 1], got {self.gamma!r}")
+        if self.batch_size is not None and (not isinstance(self.batch_size, int) or self.batch_size < 1):
+            raise ValueError(f"batch_size must be a positive int, got {self.batch_size!r}")
+        if not isinstance(self.schedule_steps, int) or self.schedule_steps < 1:
+            raise ValueError(f"schedule_steps must be a positive int, got {self.schedule_steps!r}")
+        if not isinstance(self.algorithm_kwargs, Mapping):
+            raise ValueError(f"algorithm_kwargs must be a mapping, got {self.algorithm_kwargs!r}")
+        clash = sorted(_FIELD_KWARGS & set(self.algorithm_kwargs))
+        if clash:
+            raise ValueError(f"algorithm_kwargs may not set {clash}: they are settings fields or set by the suite")
+        object.__setattr__(self, "algorithm_kwargs", dict(self.algorithm_kwargs))
+
+    def model_kwargs(self) -> dict[str, Any]:
+        """Every keyword argument of the SB3 class but ``policy``, ``env``, ``seed`` and ``device``."""
+        kwargs = {**DEFAULT_KWARGS[self.algorithm], **self.algorithm_kwargs}
+        defaults = _LEARN_DEFAULTS[self.algorithm]
+        kwargs["learning_rate"] = defaults["learning_rate"] if self.learning_rate is None else self.learning_rate
+        kwargs["batch_size"] = defaults["batch_size"] if self.batch_size is None else self.batch_size
+        kwargs["gamma"] = self.gamma
+        kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), **dict(kwargs.get("policy_kwargs") or {})}
+        return kwargs
+
+    def shared(self) -> tuple:
+        """Runs of one ensemble share every setting (each run is its own SB3 model anyway)."""
+        return tuple(
+            json.dumps(getattr(self, f.name), sort_keys=True, default=str) for f in fields(self)
+        )
+
+
+def _sb3() -> Any:
+    try:
+        import stable_baselines3
+    except ImportError as error:
+        raise ImportError(INSTALL_HINT) from error
+    return stable_baselines3
+
+
+def sb3_seed(seed: int) -> int:
+    """The seed the SB3 model of run ``seed`` is built with (SB3 seeds numpy with it: < 2**32)."""
+    return derive_key(seed, STREAM_SB3) % (2**31)
+
+
+def make_sb3_model(settings: SB3Settings, env: Any, seed: int | None, device: str = "cpu") -> Any:
+    """The SB3 model ``settings`` describe, on ``env`` (a Gymnasium env or an SB3 ``VecEnv``)."""
+    sb3 = _sb3()
+    cls = {"dqn": sb3.DQN, "ppo": sb3.PPO}[settings.algorithm]
+    return cls("MlpPolicy", env, seed=seed, device=device, verbose=0, **settings.model_kwargs())
+
+
+class _Spaces(gymnasium.Env):
+    """Only the spaces: the runner, not SB3, steps the environments."""
+
+    def __init__(self, obs_size: int, num_actions: int) -> None:
+        self.observation_space = gymnasium.spaces.Box(-np.inf, np.inf, (obs_size,), np.float32)
+        self.action_space = gymnasium.spaces.Discrete(num_actions)
+
+    def reset(self, *, seed: int | None = None, options: Any = None) -> tuple[np.ndarray, dict]:
+        raise RuntimeError("this SB3 model is driven by the empathy-zoo runner, not by learn()")
+
+    def step(self, action: Any) -> tuple:
+        raise RuntimeError("this SB3 model is driven by the empathy-zoo runner, not by learn()")
+
+
+class _RunRandomness:
+    """One run's numpy-global and torch random states, swapped in while SB3 code of that run runs."""
+
+    def __init__(self, device: torch.device) -> None:
+        self.cuda = device.type == "cuda"
+        self.saved = self.capture()
+
+    def capture(self) -> dict[str, Any]:
+        state = {"numpy": np.random.get_state(legacy=False), "torch": torch.get_rng_state()}
+        if self.cuda:
+            state["cuda"] = torch.cuda.get_rng_state()
+        return state
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        np.random.set_state(state["numpy"])
+        torch.set_rng_state(state["torch"])
+        if self.cuda:
+            torch.cuda.set_rng_state(state["cuda"])
+
+    @contextmanager
+    def active(self) -> Any:
+        outer = self.capture()
+        self.restore(self.saved)
+        try:
+            yield
+        finally:
+            self.saved = self.capture()
+            self.restore(outer)
+
+
+class _OffPolicyRun:
+    """``collect_rollouts`` and the training condition of ``OffPolicyAlgorithm.learn`` (DQN), one step at a time."""
+
+    def __init__(self, model: Any, schedule_steps: int) -> None:
+        from stable_baselines3.common.type_aliases import TrainFrequencyUnit
+
+        model._convert_train_freq()
+        if model.train_freq.unit != TrainFrequencyUnit.STEP:
+            raise ValueError("train_freq must count steps (the runner's episodes end at different times per run)")
+        self.model, self.schedule_steps = model, schedule_steps
+        self.steps_since_train = 0
+        self._buffer_actions: np.ndarray | None = None
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        model = self.model
+        model._last_obs = obs
+        actions, self._buffer_actions = model._sample_action(model.learning_starts, None, len(obs))
+        return actions
+
+    def observe(self, reward: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, next_obs: np.ndarray) -> None:
+        model = self.model
+        infos = [{"TimeLimit.truncated": bool(cut)} for cut in truncated]
+        model._store_transition(model.replay_buffer, self._buffer_actions, next_obs, reward, terminated | truncated, infos)
+        model.num_timesteps += len(reward)
+        _update_progress(model, self.schedule_steps)
+        model._on_step()
+        self.steps_since_train += 1
+        if self.steps_since_train >= model.train_freq.frequency:
+            collected, self.steps_since_train = self.steps_since_train * len(reward), 0
+            if model.num_timesteps > model.learning_starts:
+                steps = model.gradient_steps if model.gradient_steps >= 0 else collected
+                if steps > 0:
+                    model.train(batch_size=model.batch_size, gradient_steps=steps)
+
+    def state(self) -> dict[str, Any]:
+        return {"steps_since_train": self.steps_since_train}
+
+    def load(self, state: Mapping[str, Any]) -> None:
+        self.steps_since_train = int(state["steps_since_train"])
+
+
+class _OnPolicyRun:
+    """``collect_rollouts`` and the training step of ``OnPolicyAlgorithm.learn`` (PPO), one step at a time.
+
+    A full rollout is finished (returns on the value of the next observation, then ``train()``)
+    at the next :meth:`act`, which is when that observation is known, as in ``learn()``."""
+
+    def __init__(self, model: Any, schedule_steps: int) -> None:
+        self.model, self.schedule_steps = model, schedule_steps
+        self.episode_starts = np.ones(model.n_envs, dtype=bool)
+        self._pending: tuple | None = None
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        from stable_baselines3.common.utils import obs_as_tensor
+
+        model = self.model
+        if model.rollout_buffer.full:
+            with torch.no_grad():
+                last_values = model.policy.predict_values(obs_as_tensor(obs, model.device))
+            model.rollout_buffer.compute_returns_and_advantage(last_values=last_values, dones=self.episode_starts)
+            _update_progress(model, self.schedule_steps)
+            model.train()
+            model.rollout_buffer.reset()
+        model.policy.set_training_mode(False)
+        with torch.no_grad():
+            actions, values, log_probs = model.policy(obs_as_tensor(obs, model.device))
+        actions = actions.cpu().numpy()
+        self._pending = (obs.copy(), actions.reshape(-1, 1), values, log_probs)
+        return actions
+
+    def observe(self, reward: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, next_obs: np.ndarray) -> None:
+        model = self.model
+        obs, actions, values, log_probs = self._pending
+        reward = reward.astype(np.float32)
+        for i in np.flatnonzero(truncated & ~terminated):  # bootstrap a time-out, as SB3 does (same float32 arithmetic)
+            with torch.no_grad():
+                terminal_value = model.policy.predict_values(model.policy.obs_to_tensor(next_obs[i])[0])[0]
+            reward[i] += model.gamma * terminal_value
+        model.rollout_buffer.add(obs, actions, reward, self.episode_starts, values, log_probs)
+        self.episode_starts = terminated | truncated
+        model.num_timesteps += len(reward)
+
+    def state(self) -> dict[str, Any]:
+        return {"episode_starts": self.episode_starts.copy()}
+
+    def load(self, state: Mapping[str, Any]) -> None:
+        self.episode_starts = np.asarray(state["episode_starts"], dtype=bool).copy()
+
+
+def _update_progress(model: Any, schedule_steps: int) -> None:
+    model._update_current_progress_remaining(model.num_timesteps, max(schedule_steps, model.num_timesteps))
+
+
+_COUNTERS = ("num_timesteps", "_n_updates", "_n_calls", "exploration_rate", "_current_progress_remaining", "_episode_num")
+
+
+class SB3Learner:
+    """``K`` runs, one SB3 model each, driven by the runner (see the module documentation)."""
+
+    settings_class = SB3Settings
+
+    def __init__(
+        self,
+        settings: Sequence[SB3Settings],
+        seeds: Sequence[int],
+        obs_size: int,
+        num_actions: int = 5,
+        device: str = "cpu",
+        envs_per_run: int = 1,
+    ) -> None:
+        if len(settings) != len(seeds) or not settings:
+            raise ValueError("give one settings object per seed, and at least one run")
+        _sb3()
+        from stable_baselines3.common.logger import Logger
+        from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
+        from stable_baselines3.common.vec_env import DummyVecEnv
+
+        self.settings = list(settings)
+        self.seeds = [int(s) for s in seeds]
+        self.envs_per_run = int(envs_per_run)
+        self.device = torch.device(device)
+        self.models: list[Any] = []
+        """The SB3 model of every run."""
+        self._runs: list[_OffPolicyRun | _OnPolicyRun] = []
+        self._randomness: list[_RunRandomness] = []
+        outer_python = random.getstate()
+        outer = _RunRandomness(self.device)
+        for config, seed in zip(self.settings, self.seeds):
+            env = DummyVecEnv([lambda: _Spaces(obs_size, num_actions)] * self.envs_per_run)
+            model = make_sb3_model(config, env, sb3_seed(seed), device)  # seeds the global generators
+            model.set_logger(Logger(folder=None, output_formats=[]))
+            self._randomness.append(_RunRandomness(self.device))
+            run_class = _OffPolicyRun if isinstance(model, OffPolicyAlgorithm) else _OnPolicyRun
+            self._runs.append(run_class(model, config.schedule_steps))
+            self.models.append(model)
+        outer.restore(outer.saved)
+        random.setstate(outer_python)
+
+    # ------------------------------------------------------------------ acting
+    def act(self, observations: np.ndarray, greedy: bool = False) -> np.ndarray:
+        k, m = observations.shape[:2]
+        actions = np.empty((k, m), dtype=np.int64)
+        for r, (model, run, rng) in enumerate(zip(self.models, self._runs, self._randomness)):
+            obs = np.asarray(observations[r], dtype=np.float32)
+            if greedy:
+                actions[r] = model.policy.predict(obs, deterministic=True)[0]
+                continue
+            if m != self.envs_per_run:
+                raise ValueError(f"training steps {self.envs_per_run} env(s) per run, got {m}")
+            with rng.active():
+                actions[r] = run.act(obs)
+        return actions
+
+    # ------------------------------------------------------------------ learning
+    def observe(self, batch: StepBatch) -> None:
+        truncated = getattr(batch, "truncated", None)
+        if truncated is None:
+            raise ValueError("SB3 learners need StepBatch.truncated (the time-limit flag) from the runner")
+        for r, (run, rng) in enumerate(zip(self._runs, self._randomness)):
+            with rng.active():
+                run.observe(
+                    np.asarray(batch.rewards[r], dtype=np.float32), np.asarray(batch.terminated[r], dtype=bool),
+                    np.asarray(truncated[r], dtype=bool), np.asarray(batch.next_obs[r], dtype=np.float32),
+                )
+
+    # ------------------------------------------------------------------ bookkeeping
+    def live_stats(self) -> dict[str, float]:
+        stats = {"loss": _nanmean([model.logger.name_to_value.get("train/loss", math.nan) for model in self.models])}
+        if hasattr(self.models[0], "exploration_rate"):
+            stats["eps"] = float(np.mean([model.exploration_rate for model in self.models]))
+        return stats
+
+    def memory_bytes_per_run(self) -> int:
+        model = self.models[0]
+        buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
+        stored = sum(v.nbytes for v in vars(buffer).values() if isinstance(v, np.ndarray))
+        params = sum(t.numel() * t.element_size() for t in model.policy.state_dict().values())
+        trained = sum(p.numel() * p.element_size() for p in model.policy.parameters() if p.requires_grad)
+        return stored + params + 2 * trained  # + Adam's two moments
+
+    def state_dict(self) -> dict[str, Any]:
+        runs = []
+        for model, run, rng in zip(self.models, self._runs, self._randomness):
+            buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
+            runs.append({
+                "policy": {k: v.detach().clone() for k, v in model.policy.state_dict().items()},
+                "optimizer": copy.deepcopy(model.policy.optimizer.state_dict()),
+                "counters": {name: getattr(model, name) for name in _COUNTERS if hasattr(model, name)},
+                "buffer": to_safe({k: v for k, v in vars(buffer).items() if isinstance(v, (np.ndarray, bool, int, float))}),
+                "driver": to_safe(run.state()),
+                "random": to_safe({**rng.saved, "action_space": model.action_space.np_random.bit_generator.state}),
+            })
+        return {"seeds": list(self.seeds), "runs": runs}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        if list(state["seeds"]) != self.seeds:
+            raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")
+        for model, run, rng, saved in zip(self.models, self._runs, self._randomness, state["runs"]):
+            model.policy.load_state_dict(saved["policy"])
+            model.policy.optimizer.load_state_dict(saved["optimizer"])
+            for name, value in saved["counters"].items():
+                setattr(model, name, value)
+            buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
+            for name, value in from_safe(saved["buffer"]).items():
+                setattr(buffer, name, value.copy() if isinstance(value, np.ndarray) else value)
+            run.load(from_safe(saved["driver"]))
+            randomness = from_safe(saved["random"])
+            model.action_space.np_random.bit_generator.state = randomness.pop("action_space")
+            rng.saved = randomness
+
+
+def _nanmean(values: list[float]) -> float:
+    finite = [v for v in values if not math.isnan(v)]
+    return float(np.mean(finite)) if finite else math.nan
+
+
+SB3_DQN = Method(
+    name="sb3_dqn", learner=SB3Learner, settings=SB3Settings, preset={"algorithm": "dqn"},
+    label=lambda s: "SB3 DQN",
+    description="Stable-Baselines3 DQN (its own loss, targets and schedules), paper-sized MLP and replay",
+)
+"""Stable-Baselines3 DQN; name it ``baselines.sb3:SB3_DQN``."""
+
+SB3_PPO = Method(
+    name="sb3_ppo", learner=SB3Learner, settings=SB3Settings, preset={"algorithm": "ppo"},
+    label=lambda s: "SB3 PPO",
+    description="Stable-Baselines3 PPO (SB3's default hyper-parameters), paper-sized MLP",
+)
+"""Stable-Baselines3 PPO; name it ``baselines.sb3:SB3_PPO``."""
+
+SB3_METHODS: dict[str, Method] = {"sb3_dqn": SB3_DQN, "sb3_ppo": SB3_PPO}
+"""Both, by registry name (for ``agents.registry.METHODS``)."""
