@@ -30,7 +30,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
-    "N_BINS", "Score", "Curve", "result_files", "load_results", "group_runs", "final_episode_count",
+    "N_BINS", "Score", "Curve", "table_env", "result_files", "load_results", "group_runs", "final_episode_count",
     "run_scalars", "bootstrap_mean_ci", "score_runs", "binned_curve", "learning_curves",
 ]
 
@@ -99,6 +99,11 @@ def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     return sorted(p for p in root.glob("*.json") if not p.name.startswith(".") and p.is_file())
 
 
+def table_env(result: dict[str, Any]) -> str:
+    """The env name a run is tabled under: its variant (a sweep's env key) if any, else its env."""
+    return str(result.get("variant") or result["env"])
+
+
 def _check_result(result: Any, path: Path) -> dict[str, Any]:
     if not isinstance(result, dict):
         raise ValueError(f"{path} is not a result file (expected a JSON object)")
@@ -127,7 +132,7 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     seen: dict[tuple[str, str, Any], Path] = {}
     for path in result_files(results_dir):
         result = _check_result(read_json(path), path)
-        key = (result["env"], result["method_label"], result["seed"])
+        key = (table_env(result), result["method_label"], result["seed"])
         if key in seen:
             raise ValueError(f"{seen[key]} and {path} are the same run {key}; move one away")
         seen[key] = path
@@ -139,7 +144,7 @@ def group_runs(results: Iterable[dict[str, Any]]) -> dict[tuple[str, str], list[
     """Runs grouped by ``(env, method_label)``; groups sorted by env, method, label; runs by seed."""
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for result in results:
-        groups.setdefault((result["env"], result["method_label"]), []).append(result)
+        groups.setdefault((table_env(result), result["method_label"]), []).append(result)
 
     def order(key: tuple[str, str]) -> tuple[str, str, str]:
         return key[0], min(str(run["method"]) for run in groups[key]), key[1]

@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves,
+    CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
 )
 
 __all__ = [
@@ -117,9 +117,10 @@ def plot_learning_curves(
     """
     results = list(results)
     envs = sorted({env for env, _ in group_runs(results)})
+    base_env = {table_env(run): run["env"] for run in results}  # a variant is drawn like its env
     paths: dict[tuple[str, str], Path] = {}
     for env in envs:
-        for metric, ylabel in specs.get(env, FALLBACK_SPEC):
+        for metric, ylabel in specs.get(env, specs.get(base_env[env], FALLBACK_SPEC)):
             paths[(env, metric)] = plot_metric(
                 results, env, metric, Path(figures_dir) / figure_filename(env, metric), ylabel=ylabel,
                 n_bins=n_bins, random_state=random_state, n_resamples=n_resamples, confidence=confidence,

@@ -1,0 +1,363 @@
+"""Sweeps as TOML files: which methods to train, on which environments, with which seeds.
+
+``load_sweep(path)`` reads and validates a sweep file (Python's ``tomllib``) and returns the
+list of :class:`~empathy_zoo.training.RunSpec` it declares; ``empathy-zoo reproduce`` trains
+them and writes the leaderboard. Everything is checked before any training starts: an unknown
+table or key, a value of the wrong type, an unknown method, environment or fixed policy, an
+empty grid or two entries that would give the same runs raise :class:`SweepConfigError` (a
+``ValueError``) naming the file, the table and the key.
+
+Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
+
+    [sweep]
+    name = "quick"              # default: the file's stem
+    seeds = 3                   # an int N = seeds 0..N-1, or a list of distinct seeds (default 5)
+    steps = 50_000              # env steps per run (default 1,000,000)
+    eval_interval = 10_000      # env steps between greedy evaluations (default 50,000)
+    eval_episodes = 10          # episodes per greedy evaluation (default 10)
+
+    [settings]                  # defaults for every method: any EmpathicDQNSettings field,
+    learning_starts = 2_000     # single values (settings a method fixes are left to it)
+
+    [envs.<variant>]            # one table per environment variant; <variant> names it in
+    env = "coexistence_v0"      #   run ids and tables (default env: the variant name)
+    size = 9                    # environment arguments: size, view, max_cycles
+    fixed = { cat_0 = "random_walk" }  # fixed agents: a registered policy or "package.module:ClassName"
+    methods = ["empathic_dqn"]  # optional: only these [[methods]] (by their `method`) run here
+
+    [[methods]]                 # one table per method entry
+    method = "empathic_dqn"     # registry name (empathy-zoo methods) or "package.module:NAME"
+    envs = ["coexistence_v0"]   # optional: the variants it runs on (default: all)
+    label = "..."               # optional table name; may use {field} placeholders of the
+                                #   settings, e.g. "Mine (β={selfishness:g})"; default: the method's
+    selfishness = [1.0, 0.5]    # any settings field; a list is a grid: one experiment per value
+                                #   (several lists: every combination)
+
+Every experiment (variant × method entry × grid point) runs once per seed. Precedence of
+settings: the method's defaults < ``[settings]`` < the ``[[methods]]`` entry.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import re
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import asdict, fields
+from pathlib import Path
+from typing import Any, get_type_hints
+
+from agents.registry import get_method
+from agents.settings import EmpathicDQNSettings
+from empathy_zoo.engine import ENGINES
+from empathy_zoo.policies import DEFAULT_POLICIES, make_policy
+from empathy_zoo.training.spec import RunSpec
+
+__all__ = [
+    "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
+    "load_sweep", "parse_sweep", "profile_path", "profiles", "read_toml", "check_keys", "check_value",
+    "settings_types", "describe_type",
+]
+
+CONFIG_DIR = Path(__file__).resolve().parent / "configs"
+"""Where the named profiles (``quick``, ``paper``, …) live."""
+
+DEFAULT_SEEDS = 5
+"""Seeds per experiment when ``[sweep]`` does not say (the paper's 5 runs per method)."""
+
+SEEDS = "int (number of seeds) or list of distinct non-negative ints"
+"""Type tag of ``seeds``: an int N (seeds 0..N-1) or a list of seeds."""
+STR_LIST = "list of strings"
+"""Type tag: an array of strings."""
+STR_TABLE = "table of strings"
+"""Type tag: a table whose values are strings."""
+
+SWEEP_KEYS: dict[str, Any] = {
+    "name": str, "seeds": SEEDS, "steps": int, "eval_interval": int, "eval_episodes": int,
+}
+"""Keys of ``[sweep]`` and their types."""
+ENV_KEYS: dict[str, Any] = {
+    "env": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE, "methods": STR_LIST,
+}
+"""Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
+METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
+"""Keys of a ``[[methods]]`` entry besides the method's settings fields."""
+TOP_TABLES = ("sweep", "settings", "envs", "methods")
+ENV_ARGUMENTS = ("size", "view", "max_cycles")
+_VARIANT_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+class SweepConfigError(ValueError):
+    """A sweep (or run) configuration file is invalid; the message names file, table and key."""
+
+
+# ---------------------------------------------------------------------------- value checks
+def describe_type(expected: Any) -> str:
+    return expected.__name__ if isinstance(expected, type) else str(expected)
+
+
+def _type_name(value: Any) -> str:
+    return {dict: "table", list: "array"}.get(type(value), type(value).__name__)
+
+
+def check_value(value: Any, expected: Any, where: str) -> Any:
+    """``value`` if it has the ``expected`` type (an int is accepted as a float), else raise.
+
+    ``expected`` is ``int``, ``float``, ``bool``, ``str``, one of the tags :data:`SEEDS`,
+    ``STR_LIST``, ``STR_TABLE``, or any other type (not checked: the settings class checks it).
+    """
+    def fail() -> SweepConfigError:
+        return SweepConfigError(f"{where}: expected {describe_type(expected)}, got {_type_name(value)} {value!r}")
+
+    if expected is bool or expected is str:
+        if not isinstance(value, expected):
+            raise fail()
+    elif expected is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise fail()
+    elif expected is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise fail()
+        return float(value)
+    elif expected == SEEDS:
+        seeds = [value] if isinstance(value, int) and not isinstance(value, bool) else value
+        if not isinstance(seeds, list) or not seeds or any(
+            isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds
+        ):
+            raise fail()
+        if isinstance(value, int):
+            if value < 1:
+                raise SweepConfigError(f"{where}: expected a positive number of seeds, got {value}")
+            return list(range(value))
+        if len(set(value)) != len(value):
+            raise SweepConfigError(f"{where}: seed(s) listed twice in {value}")
+    elif expected == STR_LIST:
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise fail()
+    elif expected == STR_TABLE:
+        if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
+            raise fail()
+    return value
+
+
+def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
+    """Raise naming the first key of ``table`` not in ``allowed`` (and listing those allowed)."""
+    allowed = list(allowed)
+    for key in table:
+        if key not in allowed:
+            raise SweepConfigError(f"{where}: unknown key {key!r}; allowed keys: {', '.join(allowed)}")
+
+
+def settings_types(settings_class: type) -> dict[str, Any]:
+    """``{field: type}`` of a settings dataclass (annotations resolved)."""
+    hints = get_type_hints(settings_class)
+    return {f.name: hints.get(f.name, Any) for f in fields(settings_class)}
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML file; a missing or malformed one raises :class:`SweepConfigError` naming it."""
+    path = Path(path)
+    try:
+        with path.open("rb") as handle:
+            return tomllib.load(handle)
+    except FileNotFoundError:
+        raise SweepConfigError(f"config file {path} does not exist") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise SweepConfigError(f"{path}: not valid TOML ({error})") from None
+
+
+# ---------------------------------------------------------------------------- profiles
+def profiles() -> list[str]:
+    """Names of the sweep files shipped in :data:`CONFIG_DIR`."""
+    return sorted(p.stem for p in CONFIG_DIR.glob("*.toml"))
+
+
+def profile_path(profile: str | Path) -> Path:
+    """The sweep file of a profile name (``quick``, ``paper``, …) or a path to a ``.toml`` file."""
+    text = str(profile)
+    if text in profiles():
+        return CONFIG_DIR / f"{text}.toml"
+    path = Path(text)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise SweepConfigError(f"sweep file {path} does not exist")
+        return path
+    raise SweepConfigError(f"unknown profile {text!r}; shipped: {', '.join(profiles())} (or give a path to a .toml file)")
+
+
+# ---------------------------------------------------------------------------- the sweep
+def load_sweep(path: str | Path, seeds: int | None = None) -> list[RunSpec]:
+    """The runs of the sweep file ``path`` (see the module documentation); ``seeds = N``
+    replaces the file's seeds with ``0..N-1``."""
+    path = Path(path)
+    return parse_sweep(read_toml(path), source=str(path), seeds=seeds)
+
+
+def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | None = None) -> list[RunSpec]:
+    """The runs declared by the parsed TOML ``data``; ``source`` names the file in errors."""
+    check_keys(data, TOP_TABLES, f"{source}: top level")
+    for table in ("sweep", "settings", "envs"):
+        if not isinstance(data.get(table, {}), dict):
+            raise SweepConfigError(f"{source}: [{table}] must be a table, got {_type_name(data[table])}")
+    run = _sweep_table(data.get("sweep", {}), source)
+    if seeds is not None:
+        if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+            raise SweepConfigError(f"--seeds must be a positive int, got {seeds!r}")
+        run["seeds"] = list(range(seeds))
+    entries = data.get("methods")
+    if not isinstance(entries, list) or not entries or not all(isinstance(e, dict) for e in entries):
+        raise SweepConfigError(f"{source}: declare at least one [[methods]] table (method = \"empathic_dqn\", …)")
+    methods = [_method_entry(entry, i, source) for i, entry in enumerate(entries)]
+    defaults = _settings_table(data.get("settings", {}), methods, source)
+    envs = data.get("envs", {})
+    if not envs:
+        raise SweepConfigError(f"{source}: declare at least one [envs.<variant>] table (e.g. [envs.coexistence_v0])")
+    variants = {name: _env_table(name, table, methods, source) for name, table in envs.items()}
+    for entry in methods:
+        unknown = [v for v in entry["envs"] or () if v not in variants]
+        if unknown:
+            raise SweepConfigError(f"{entry['where']} envs: unknown variant(s) {unknown}; declared: {sorted(variants)}")
+
+    specs: list[RunSpec] = []
+    origin: dict[str, str] = {}  # what a run trains (its config but the label) -> where declared
+    labels: dict[tuple[str, str], str] = {}
+    for variant, env in variants.items():
+        chosen = [m for m in methods if (m["envs"] is None or variant in m["envs"])
+                  and (env["methods"] is None or m["method"] in env["methods"])]
+        if not chosen:
+            raise SweepConfigError(f"{source}: [envs.{variant}] has no method to run (check `methods`/`envs` lists)")
+        for entry in chosen:
+            for point in entry["grid"]:
+                settings = {k: v for k, v in defaults.items() if k in entry["types"] and k not in entry["preset"]}
+                settings |= point
+                where = f"{entry['where']} on [envs.{variant}]" + (f" with {point}" if point else "")
+                experiment = [_spec(run, env, variant, entry, settings, seed, where) for seed in run["seeds"]]
+                label = experiment[0].display_label()
+                if (variant, label) in labels:
+                    raise SweepConfigError(
+                        f"{where} and {labels[variant, label]} have the same label {label!r}: the leaderboard "
+                        "could not tell them apart (give distinct labels; a label may use {field} placeholders)"
+                    )
+                labels[variant, label] = where
+                for spec in experiment:
+                    trains = json.dumps({**spec.config(), "label": None}, sort_keys=True, default=str)
+                    if trains in origin:
+                        raise SweepConfigError(f"{where} duplicates {origin[trains]} (same runs)")
+                    origin[trains] = where
+                specs += experiment
+    return specs
+
+
+def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
+    where = f"{source}: [sweep]"
+    check_keys(table, SWEEP_KEYS, where)
+    run = {"name": Path(source).stem, "seeds": list(range(DEFAULT_SEEDS)), "steps": RunSpec.steps,
+           "eval_interval": RunSpec.eval_interval, "eval_episodes": RunSpec.eval_episodes}
+    for key, value in table.items():
+        run[key] = check_value(value, SWEEP_KEYS[key], f"{where} {key}")
+        if SWEEP_KEYS[key] is int and value < 1:
+            raise SweepConfigError(f"{where} {key}: expected a positive int, got {value}")
+    return run
+
+
+def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, Any]:
+    where = f"{source}: [[methods]] #{index + 1}"
+    if "method" not in entry:
+        raise SweepConfigError(f"{where}: missing key 'method' (a registered method or package.module:NAME)")
+    name = check_value(entry["method"], str, f"{where} method")
+    where += f" ({name})"
+    try:
+        method = get_method(name)
+    except ValueError as error:
+        raise SweepConfigError(f"{where} method: {error}") from None
+    types = settings_types(method.settings)
+    check_keys(entry, [*METHOD_KEYS, *types], where)
+    axes: list[list[tuple[str, Any]]] = []
+    for key, value in entry.items():
+        if key in METHOD_KEYS:
+            check_value(value, METHOD_KEYS[key], f"{where} {key}")
+            continue
+        values = value if isinstance(value, list) else [value]
+        if not values:
+            raise SweepConfigError(f"{where} {key}: empty grid (give at least one value)")
+        checked = [check_value(v, types[key], f"{where} {key}") for v in values]
+        if len(set(map(repr, checked))) != len(checked):
+            raise SweepConfigError(f"{where} {key}: value listed twice in the grid {values}")
+        axes.append([(key, v) for v in checked])
+    return {
+        "method": name, "where": where, "types": types, "preset": method.preset,
+        "envs": entry.get("envs"), "label": entry.get("label"),
+        "grid": [dict(point) for point in itertools.product(*axes)],
+    }
+
+
+def _settings_table(table: dict[str, Any], methods: list[dict[str, Any]], source: str) -> dict[str, Any]:
+    where = f"{source}: [settings]"
+    types = settings_types(EmpathicDQNSettings)
+    for entry in methods:
+        types |= entry["types"]
+    check_keys(table, types, where)
+    checked = {}
+    for key, value in table.items():
+        if isinstance(value, list):
+            raise SweepConfigError(f"{where} {key}: [settings] takes single values; put a grid in a [[methods]] entry")
+        checked[key] = check_value(value, types[key], f"{where} {key}")
+    return checked
+
+
+def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: str) -> dict[str, Any]:
+    where = f"{source}: [envs.{variant}]"
+    if not isinstance(table, dict):
+        raise SweepConfigError(f"{where}: must be a table (env = ..., size = ...), got {_type_name(table)}")
+    if not _VARIANT_NAME.match(variant):
+        raise SweepConfigError(f"{where}: a variant name may hold letters, digits, '_', '-' and '.' only")
+    check_keys(table, ENV_KEYS, where)
+    checked = {key: check_value(value, ENV_KEYS[key], f"{where} {key}") for key, value in table.items()}
+    env = checked.get("env", variant)
+    if env not in ENGINES:
+        key = "env" if "env" in checked else "variant name (or set env = ...)"
+        raise SweepConfigError(f"{where} {key}: unknown environment {env!r}; registered: {sorted(ENGINES)}")
+    kwargs = {key: checked[key] for key in ENV_ARGUMENTS if key in checked}
+    try:
+        ENGINES[env](1, **kwargs)
+    except ValueError as error:
+        raise SweepConfigError(f"{where}: {error}") from None
+    fixed = checked.get("fixed")
+    if fixed is not None:
+        agents = list(ENGINES[env].agents)
+        for agent, policy in fixed.items():
+            if agent not in agents:
+                raise SweepConfigError(f"{where} fixed: unknown agent {agent!r}; agents of {env}: {agents}")
+            try:
+                make_policy(policy)
+            except ValueError as error:
+                raise SweepConfigError(f"{where} fixed.{agent}: {error}") from None
+        fixed = {**DEFAULT_POLICIES.get(env, {}), **fixed}
+    names = checked.get("methods")
+    if names is not None:
+        declared = {m["method"] for m in methods}
+        unknown = [n for n in names if n not in declared]
+        if unknown:
+            raise SweepConfigError(f"{where} methods: {unknown} not declared in any [[methods]]; declared: {sorted(declared)}")
+    return {"env": env, "kwargs": kwargs, "fixed": fixed, "methods": names}
+
+
+def _spec(run: dict[str, Any], env: dict[str, Any], variant: str, entry: dict[str, Any],
+          settings: dict[str, Any], seed: int, where: str) -> RunSpec:
+    try:
+        spec = RunSpec(
+            env=env["env"], method=entry["method"], settings=settings, seed=seed, steps=run["steps"],
+            eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=env["fixed"],
+            env_kwargs=env["kwargs"], variant=variant,
+        )
+    except ValueError as error:
+        raise SweepConfigError(f"{where}: {error}") from None
+    if entry["label"] is None:
+        return spec
+    try:
+        label = entry["label"].format_map(asdict(spec.method_settings()))
+    except (KeyError, ValueError, IndexError) as error:
+        raise SweepConfigError(f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
+                               f"placeholders are settings fields") from None
+    return RunSpec(**{**spec.__dict__, "label": label})
