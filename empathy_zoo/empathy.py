@@ -19,7 +19,9 @@ class EmpathyWrapper(BaseParallelWrapper, EzPickle):
     Works on any ParallelEnv whose ``unwrapped`` implements
     ``swapped_observation(viewer, other, in_view_only)``. The swap is omniscient by default (as in
     the paper); with ``in_view_only=True`` an other agent appears only while it stands inside the
-    viewer's window. Agents that have left have no swapped observation.
+    viewer's window. Every agent that receives an ``infos`` entry gets one, the last step of its
+    episode included (what an empathic learner needs for its final transition); agents that have
+    left are never in it.
     """
 
     def __init__(self, env: ParallelEnv, in_view_only: bool = False) -> None:
@@ -45,14 +47,12 @@ class EmpathyWrapper(BaseParallelWrapper, EzPickle):
 
     def _with_swaps(self, infos: dict) -> dict:
         base = self.env.unwrapped
-        live = [agent for agent in base.agents]
-        present = [agent for agent in infos if agent in live]
         out = {}
         for agent, info in infos.items():
             info = dict(info)
-            if agent in present:
+            if agent in base.possible_agents:
                 swaps = {}
-                for other in live:
+                for other in base.possible_agents:
                     if other == agent:
                         continue
                     swapped = base.swapped_observation(agent, other, in_view_only=self.in_view_only)

@@ -75,7 +75,8 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         self._step += 1
         self._remember(observations, infos)
         self.agents = [agent for agent in self.env.agents if agent not in self.policies]
-        return tuple(self._learners(d) for d in (observations, rewards, terminations, truncations, infos))  # type: ignore[return-value]
+        learners = self._learners
+        return learners(observations), learners(rewards), learners(terminations), learners(truncations), learners(infos)
 
     def _remember(self, observations: dict, infos: dict) -> None:
         for agent in self.policies:

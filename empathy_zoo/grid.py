@@ -6,7 +6,9 @@ from enum import IntEnum
 
 import numpy as np
 
-__all__ = ["Action", "MOVES", "NUM_ACTIONS", "window_indices", "signed_offset", "torus_distance"]
+__all__ = [
+    "Action", "MOVES", "NUM_ACTIONS", "window_indices", "window_slots", "signed_offset", "torus_distance",
+]
 
 
 class Action(IntEnum):
@@ -43,6 +45,20 @@ def window_indices(size: int, view: int) -> np.ndarray:
     win_rows = (rows[:, None, None] + offsets[None, :, None]) % size
     win_cols = (cols[:, None, None] + offsets[None, None, :]) % size
     return (win_rows * size + win_cols).reshape(size * size, view * view)
+
+
+def window_slots(size: int, view: int) -> np.ndarray:
+    """Where every cell appears in the window centred on every other cell.
+
+    Returns an int64 array of shape ``(size * size, size * size)``: entry ``[c, x]`` is the index of
+    flat cell ``x`` in the flattened window centred on flat cell ``c``, or ``view * view`` when
+    ``x`` lies outside that window.
+    """
+    slots = np.full((size * size, size * size), view * view, dtype=np.int64)
+    window = window_indices(size, view)
+    centres = np.repeat(np.arange(size * size), view * view)
+    slots[centres, window.ravel()] = np.tile(np.arange(view * view), size * size)
+    return slots
 
 
 def signed_offset(delta: np.ndarray, size: int) -> np.ndarray:

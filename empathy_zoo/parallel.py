@@ -10,13 +10,14 @@ from gymnasium import spaces
 from gymnasium.utils import EzPickle
 from pettingzoo import ParallelEnv
 
-from empathy_zoo.engine.base import GridEngine, StepEvents
-from empathy_zoo.grid import NUM_ACTIONS
+from empathy_zoo.engine.base import GridEngine
+from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.render import render_rgb, render_text
 
 __all__ = ["GridParallelEnv"]
 
 AgentID = str
+STAY = int(Action.STAY)
 
 
 class GridParallelEnv(ParallelEnv, EzPickle):
@@ -40,6 +41,21 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         self.observation_spaces = {agent: obs_space for agent in self.possible_agents}
         self.action_spaces = {agent: spaces.Discrete(NUM_ACTIONS) for agent in self.possible_agents}
         self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
+        # Every observation and every swapped observation of a step is painted at once, as the rows
+        # of one batch of views: view k shows the agents in order _view_order[k] to _viewers.viewer[k]
+        # (rows 0..A-1: each agent's own view; then one row per (viewer, other) swap).
+        count = self.engine.num_agents
+        pairs = [(v, o) for v in range(count) for o in range(count) if v != o]
+        order = [list(range(count)) for _ in range(count)]
+        for v, o in pairs:
+            swapped = list(range(count))
+            swapped[v], swapped[o] = o, v
+            order.append(swapped)
+        self._view_order = np.array(order, dtype=np.int64)
+        self._viewers = self.engine.views(np.array(list(range(count)) + [v for v, _ in pairs]))
+        self._view_env = np.zeros(len(order), dtype=np.int64)
+        self._swap_row = {(v, o): count + k for k, (v, o) in enumerate(pairs)}
+        self._painted: np.ndarray | None = None
 
     def observation_space(self, agent: AgentID) -> spaces.Box:
         return self.observation_spaces[agent]
@@ -64,49 +80,71 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         except ValueError:
             self.engine.running[:] = False
             self.agents = []
+            self._painted = None
             raise
         self.agents = list(self.possible_agents)
-        observations = {agent: self.engine.observe(self._index[agent])[0] for agent in self.agents}
+        views = self._paint_views()
+        observations = {agent: views[self._index[agent]] for agent in self.agents}
         infos = {agent: self.engine.reset_info(0, self._index[agent]) for agent in self.agents}
         return observations, infos
 
     def step(self, actions: Mapping[AgentID, Any]) -> tuple[dict, dict, dict, dict, dict]:
         if not self.agents:
             raise RuntimeError("step() called with no live agents; call reset() first")
-        array = np.full((1, self.engine.num_agents), 4, dtype=np.int64)
+        live, index = self.agents, self._index
+        values = [STAY] * self.engine.num_agents
         for agent, action in actions.items():
-            if agent not in self._index:
-                raise ValueError(f"action given for unknown agent {agent!r}; agents are {self.agents}")
-            if agent not in self.agents:
-                raise ValueError(f"action given for {agent!r}, which is no longer in the environment")
-            array[0, self._index[agent]] = self._check_action(agent, action)
-        missing = [agent for agent in self.agents if agent not in actions]
-        if missing:
+            if agent not in live:
+                if agent in index:
+                    raise ValueError(f"action given for {agent!r}, which is no longer in the environment")
+                raise ValueError(f"action given for unknown agent {agent!r}; agents are {live}")
+            if type(action) is not int or not 0 <= action < NUM_ACTIONS:  # the common case costs one test
+                action = self._check_action(agent, action)
+            values[index[agent]] = action
+        if len(actions) != len(live):
+            missing = [agent for agent in live if agent not in actions]
             raise ValueError(f"no action given for live agent(s) {missing}")
-        events = self.engine.step(array)
-        live = self.agents
-        observations = {agent: self.engine.observe(self._index[agent])[0] for agent in live}
-        rewards = {agent: float(events.rewards[0, self._index[agent]]) for agent in live}
-        terminations = {agent: bool(events.terminated[0, self._index[agent]]) for agent in live}
-        truncations = {agent: bool(events.truncated[0, self._index[agent]]) for agent in live}
-        infos = {agent: self.engine.step_info(events, 0, self._index[agent]) for agent in live}
+        events = self.engine.step_checked(np.array([values], dtype=np.int64))
+        views = self._paint_views()
+        rewards, terminated, truncated = events.rewards[0].tolist(), events.terminated[0].tolist(), events.truncated[0].tolist()
+        observations = {agent: views[index[agent]] for agent in live}
+        rewards = {agent: rewards[index[agent]] for agent in live}
+        terminations = {agent: terminated[index[agent]] for agent in live}
+        truncations = {agent: truncated[index[agent]] for agent in live}
+        infos = {agent: self.engine.step_info(events, 0, index[agent]) for agent in live}
         self.agents = [agent for agent in live if not (terminations[agent] or truncations[agent])]
         return observations, rewards, terminations, truncations, infos
 
+    def _paint_views(self) -> np.ndarray:
+        """Paint every agent's observation and every swapped observation of the current state."""
+        engine, order = self.engine, self._view_order
+        self._painted = engine.paint(
+            self._view_env, engine.cells[0][order], engine.inventory[0][order], engine.present[0][order],
+            self._viewers,
+        )
+        return self._painted
+
     def _check_action(self, agent: AgentID, action: Any) -> int:
-        value = np.asarray(action)
-        if value.shape != () or not np.issubdtype(value.dtype, np.integer):
-            raise ValueError(f"action for {agent} must be an integer in [0, {NUM_ACTIONS}), got {action!r}")
-        if not 0 <= int(value) < NUM_ACTIONS:
-            raise ValueError(f"action {int(value)} for {agent} is outside Discrete({NUM_ACTIONS})")
-        return int(value)
+        if type(action) is int or isinstance(action, np.integer):  # the common case, checked cheaply
+            value = int(action)
+        else:
+            array = np.asarray(action)
+            if array.shape != () or array.dtype.kind not in "iu":
+                raise ValueError(f"action for {agent} must be an integer in [0, {NUM_ACTIONS}), got {action!r}")
+            value = int(array)
+        if not 0 <= value < NUM_ACTIONS:
+            raise ValueError(f"action {value} for {agent} is outside Discrete({NUM_ACTIONS})")
+        return value
 
     # ------------------------------------------------------------------ empathy primitive
     def swapped_observation(self, viewer: AgentID, other: AgentID, in_view_only: bool = False) -> np.ndarray | None:
-        """The observation ``viewer`` would get had it exchanged cell and inventory with ``other``.
+        """The observation ``viewer`` would get had it exchanged its situation (cell, inventory)
+        with ``other``.
 
         ``None`` when ``other`` has left the environment, or, with ``in_view_only``, when
-        ``other`` is outside ``viewer``'s window. Unknown names raise ``ValueError``.
+        ``other`` is outside ``viewer``'s window. A viewer harmed this very step still has one
+        (like its final observation), as the vector env's ``swapped`` does. Unknown names raise
+        ``ValueError``.
         """
         for name in (viewer, other):
             if name not in self._index:
@@ -114,11 +152,11 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         v, o = self._index[viewer], self._index[other]
         if v == o:
             raise ValueError("an agent cannot swap places with itself")
-        if not self.engine.present[0, o] or not self.engine.present[0, v]:
+        if self._painted is None or not self.engine.present[0, o]:
             return None
         if in_view_only and not self.engine.in_view(v, o)[0]:
             return None
-        return self.engine.observe_swapped(v, o)[0]
+        return self._painted[self._swap_row[v, o]].copy()
 
     # ------------------------------------------------------------------ render
     def render(self) -> str | np.ndarray | None:

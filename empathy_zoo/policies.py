@@ -21,7 +21,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from empathy_zoo.grid import NUM_ACTIONS, Action
-from empathy_zoo.randomness import counter_integers, derive_key
+from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 from empathy_zoo.registry import resolve_name
 
 __all__ = [
@@ -73,7 +73,7 @@ class RandomWalk:
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         if self._key is None:
             self.reset()
-        action = int(counter_integers(self._key, self._count, NUM_ACTIONS)[0])
+        action = counter_integer(self._key, self._count, NUM_ACTIONS)
         self._count += 1
         return action
 

@@ -18,11 +18,12 @@ from collections.abc import Sequence
 import numpy as np
 from gymnasium.utils import seeding
 
-__all__ = ["EnvStreams", "counter_bits", "counter_uniform", "counter_integers", "derive_key"]
+__all__ = ["EnvStreams", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
+_MASK64 = (1 << 64) - 1
 
 
 def counter_bits(key: np.ndarray | int, counter: np.ndarray | int) -> np.ndarray:
@@ -43,6 +44,16 @@ def counter_uniform(key: np.ndarray | int, counter: np.ndarray | int) -> np.ndar
 def counter_integers(key: np.ndarray | int, counter: np.ndarray | int, high: int | np.ndarray) -> np.ndarray:
     """Integers in ``[0, high)`` from ``(key, counter)``; broadcasts."""
     return np.floor(counter_uniform(key, counter) * high).astype(np.int64)
+
+
+def counter_integer(key: int, counter: int, high: int) -> int:
+    """``counter_integers`` of one ``(key, counter)`` in plain Python ints: the same value, without
+    numpy's per-call overhead (a fixed agent acting in one environment draws one number a step)."""
+    z = (int(key) + (int(counter) + 1) * int(_GOLDEN)) & _MASK64
+    z = ((z ^ (z >> 30)) * int(_MIX1)) & _MASK64
+    z = ((z ^ (z >> 27)) * int(_MIX2)) & _MASK64
+    z ^= z >> 31
+    return int((z >> 11) * (1.0 / (1 << 53)) * high)
 
 
 def derive_key(seed: int, *stream: int) -> int:

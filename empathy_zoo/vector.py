@@ -138,7 +138,7 @@ class VectorEnv:
             for index, policy in self.fixed.items():
                 policy.reset(done_ids, [None] * done_ids.size)
             observations = final.copy()
-            observations[done_ids] = self._observe_learners()[done_ids]
+            observations[done_ids] = self._observe_learners(done_ids)
         else:
             observations = final
         self._observations = observations
@@ -149,23 +149,22 @@ class VectorEnv:
         )
 
     # ------------------------------------------------------------------ observations
-    def _observe_learners(self) -> np.ndarray:
-        return np.stack([self.engine.observe(i) for i in self.learner_index], axis=1)
+    def _observe_learners(self, env_ids: np.ndarray | None = None) -> np.ndarray:
+        """``(n, L, V)`` observations of the learners (in ``env_ids``, default all)."""
+        return _by_learner([self.engine.observe(viewer, env_ids) for viewer in self.learner_index])
 
     def _swapped_closest(self) -> tuple[np.ndarray, np.ndarray]:
         engine = self.engine
-        swapped = np.zeros((self.num_envs, len(self.learners), self.obs_size), dtype=np.float32)
-        valid = np.zeros((self.num_envs, len(self.learners)), dtype=bool)
-        for column, viewer in enumerate(self.learner_index):
+        swapped, valid = [], []
+        for viewer in self.learner_index:
             other, exists = engine.closest_other(viewer)
-            for o in np.unique(other[exists]):
-                rows = exists & (other == o)
-                if self.in_view_only:
-                    rows &= engine.in_view(viewer, int(o))
-                    exists[(other == o) & ~rows] = False
-                swapped[rows, column] = engine.observe_swapped(viewer, int(o))[rows]
-            valid[:, column] = exists
-        return swapped, valid
+            if self.in_view_only:
+                exists &= engine.in_view(viewer, other)
+            picture = engine.observe_swapped(viewer, other)
+            picture[~exists] = 0.0
+            swapped.append(picture)
+            valid.append(exists)
+        return _by_learner(swapped), np.stack(valid, axis=1)
 
     def swapped_observations(self, viewer: str) -> tuple[np.ndarray, np.ndarray]:
         """``(N, A, V)`` swapped observations of ``viewer`` with every agent, and an ``(N, A)``
@@ -177,13 +176,18 @@ class VectorEnv:
         for o in range(engine.num_agents):
             if o == v:
                 continue
-            ok = engine.present[:, o] & engine.present[:, v]
+            ok = engine.present[:, o].copy()
             if self.in_view_only:
                 ok &= engine.in_view(v, o)
-            out[:, o] = np.where(ok[:, None], engine.observe_swapped(v, o), 0.0)
+            out[:, o] = np.where(ok[:, None], engine.observe_swapped(v, o), np.float32(0))
             mask[:, o] = ok
         return out, mask
 
     # ------------------------------------------------------------------ checkpoint
     def state(self) -> dict[str, Any]:
         return {"engine": self.engine.state(), "observations": None if self._observations is None else self._observations.copy()}
+
+
+def _by_learner(columns: list[np.ndarray]) -> np.ndarray:
+    """Stack per-learner ``(n, V)`` arrays to ``(n, L, V)`` (without a copy for one learner)."""
+    return columns[0][:, None, :] if len(columns) == 1 else np.stack(columns, axis=1)

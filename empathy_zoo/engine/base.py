@@ -15,13 +15,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.grid import MOVES, NUM_ACTIONS, torus_distance, window_indices
+from empathy_zoo.grid import MOVES, NUM_ACTIONS, Action, torus_distance, window_indices, window_slots
 from empathy_zoo.metrics import equality
 from empathy_zoo.randomness import EnvStreams
 
-__all__ = ["GridEngine", "StepEvents", "check_grid_arguments"]
+__all__ = ["GridEngine", "StepEvents", "Views", "check_grid_arguments"]
 
 NO_AGENT = -1
+STAY = int(Action.STAY)
+OUTSIDE = 1 << 60
+"""Window slot of a cell outside the window: larger than any canvas index."""
 
 
 @dataclass
@@ -42,6 +45,20 @@ class StepEvents:
     """(N, A) bool: the agent was in the environment when the step began."""
     episode_over: np.ndarray
     """(N,) bool: the episode ended this step (the environment needs a reset)."""
+
+
+@dataclass(frozen=True)
+class Views:
+    """Who looks in each of ``K`` views painted together, with the index arrays :meth:`GridEngine.paint`
+    derives from that (build it once with :meth:`GridEngine.views` when the same views are
+    painted every step)."""
+
+    viewer: np.ndarray
+    """(K,) the agent whose observation each view is."""
+    own: np.ndarray
+    """(K,) where the viewer sits in a flattened ``(K, A)`` array."""
+    first: np.ndarray
+    """(K, 1) where each view starts in a flattened ``(K, obs_size)`` canvas."""
 
 
 def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -> None:
@@ -80,10 +97,25 @@ class GridEngine:
         self.max_cycles = int(max_cycles)
         self.num_agents = len(self.agents)
         self.obs_size = self.view * self.view
+        self.num_cells = self.size * self.size
         self.window = window_indices(self.size, self.view)
+        # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups
+        rows, cols = np.divmod(np.arange(self.num_cells), self.size)
+        self._cell_rc = np.stack([rows, cols], axis=1)
+        self._cell_rc.flags.writeable = False
+        destination = (self._cell_rc[:, None, :] + MOVES[None, :, :]) % self.size
+        self._next_cell = (destination[..., 0] * self.size + destination[..., 1]).ravel()
+        """``[cell * NUM_ACTIONS + action]``: the cell an agent on ``cell`` reaches with ``action``."""
+        self._slots = window_slots(self.size, self.view).ravel()
+        self._slots[self._slots == self.obs_size] = OUTSIDE
+        """``[centre * num_cells + cell]``: the window slot of ``cell`` around ``centre``, or
+        ``OUTSIDE`` (see :meth:`paint`)."""
+        self._work = np.zeros(0, dtype=np.int64)
+        self._agent_ids = np.arange(len(self.agents))
         self.streams = EnvStreams(self.num_envs)
         n, a = self.num_envs, self.num_agents
-        self.pos = np.zeros((n, a, 2), dtype=np.int64)
+        self.cells = np.zeros((n, a), dtype=np.int64)
+        """(N, A) int64: the flat cell (``row * size + col``) of every agent (see :attr:`pos`)."""
         self.present = np.zeros((n, a), dtype=bool)
         self.inventory = np.zeros((n, a), dtype=np.int64)
         self.t = np.zeros(n, dtype=np.int64)
@@ -94,6 +126,17 @@ class GridEngine:
         self.episode_harms = np.zeros((n, a), dtype=np.int64)
         self.episode_survival = np.zeros((n, a), dtype=np.int64)
         self._rows = np.arange(n)
+        self._cell_base = (self._rows * self.num_cells)[:, None]
+        """(N, 1): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
+
+    @property
+    def pos(self) -> np.ndarray:
+        """(N, A, 2) int64, read-only: the ``(row, col)`` of every agent (from :attr:`cells`)."""
+        return self._cell_rc[self.cells]
+
+    def flat_cell(self, row: int, col: int) -> int:
+        """The flat id of cell ``(row, col)``."""
+        return int(row) * self.size + int(col)
 
     # ------------------------------------------------------------------ hooks for subclasses
     def _reset_extra(self, env_ids: np.ndarray) -> None:
@@ -115,12 +158,24 @@ class GridEngine:
         """Apply environment-specific options; return the option keys consumed."""
         return set()
 
-    def _resolve(self, previous: np.ndarray, events: StepEvents) -> None:
-        """Apply the environment's rules after everyone moved, filling ``events``."""
+    def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
+        """Apply the environment's rules after everyone moved, filling ``events`` (including
+        ``episode_over`` where the rules end the episode). ``previous`` holds the cells before the
+        move and ``moves`` each agent's ``cell * NUM_ACTIONS + action`` (``STAY`` when absent)."""
         raise NotImplementedError
 
-    def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
-        """The ``(N, size*size)`` float32 picture that ``viewer`` sees, given cells and inventories."""
+    def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
+        """Fill ``out`` (``(K, obs_size)`` float32) with the window around flat cell ``centre[k]`` of
+        environment ``env_ids[k]``, without agents. Floor is 0 unless a subclass says otherwise."""
+        out.fill(0.0)
+
+    def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float:
+        """How each agent holding ``inventory`` (``(K, A)``) looks to ``viewer`` (``(K,)``); a
+        scalar or anything broadcasting to ``(K, A)``."""
+        raise NotImplementedError
+
+    def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float:
+        """How its own cell looks to ``viewer`` (``(K,)``) holding ``inventory`` (``(K,)``)."""
         raise NotImplementedError
 
     # ------------------------------------------------------------------ reset
@@ -190,6 +245,14 @@ class GridEngine:
         for index in range(self.num_agents):
             if index in placed:
                 continue
+            if not any(
+                flat not in blocked and not any(
+                    np.array_equal(self._cell_rc[flat], c) or self._start_conflict(self._cell_rc[flat], c)
+                    for c in placed.values()
+                )
+                for flat in range(self.num_cells)
+            ):
+                raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
             while True:  # rejection sampling from the environment's own stream
                 flat = int(np.floor(self.streams.uniform(env)[0] * self.size * self.size))
                 cell = np.array(divmod(flat, self.size), dtype=np.int64)
@@ -200,7 +263,7 @@ class GridEngine:
                 placed[index] = cell
                 break
         for index, cell in placed.items():
-            self.pos[env_id, index] = cell
+            self.cells[env_id, index] = self.flat_cell(*cell)
 
     def _check_cell(self, cell: Any, where: str) -> np.ndarray:
         try:
@@ -219,8 +282,8 @@ class GridEngine:
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs, self.num_agents):
             raise ValueError(f"actions must have shape {(self.num_envs, self.num_agents)}, got {actions.shape}")
-        if not np.issubdtype(actions.dtype, np.integer):
-            if not np.issubdtype(actions.dtype, np.floating) or not np.all(np.mod(actions, 1) == 0):
+        if actions.dtype.kind not in "iu":
+            if actions.dtype.kind != "f" or not np.all(np.mod(actions, 1) == 0):
                 raise ValueError(f"actions must be integers in [0, {NUM_ACTIONS}), got dtype {actions.dtype}")
         bad = ((actions < 0) | (actions >= NUM_ACTIONS)) & self.present
         if bad.any():
@@ -233,14 +296,17 @@ class GridEngine:
 
     def step(self, actions: np.ndarray) -> StepEvents:
         """Move every present agent simultaneously, then apply the rules; returns the events."""
+        return self.step_checked(self.check_actions(actions))
+
+    def step_checked(self, actions: np.ndarray) -> StepEvents:
+        """:meth:`step` for an ``(N, A)`` int64 array already known valid (see :meth:`check_actions`)."""
         if not self.running.all():
             raise RuntimeError("step() called on an environment whose episode is over; reset it first")
-        actions = self.check_actions(actions)
         n, a = self.num_envs, self.num_agents
         present = self.present.copy()
-        previous = self.pos.copy()
-        moves = MOVES[np.where(present, actions, 4)]
-        self.pos = (self.pos + moves) % self.size
+        previous = self.cells
+        moves = previous * NUM_ACTIONS + np.where(present, actions, STAY)
+        self.cells = self._next_cell[moves]
         events = StepEvents(
             rewards=np.zeros((n, a), dtype=np.float32),
             terminated=np.zeros((n, a), dtype=bool),
@@ -250,14 +316,15 @@ class GridEngine:
             present_before=present,
             episode_over=np.zeros(n, dtype=bool),
         )
-        self._resolve(previous, events)
+        self._resolve(previous, moves, events)
         self.t += 1
         self.episode_survival += self.present
-        timeout = (self.t >= self.max_cycles)[:, None] & self.present & ~events.terminated
-        events.truncated |= timeout
-        events.episode_over |= timeout.any(axis=1) | ~self.present.any(axis=1)
-        self.running &= ~events.episode_over
         self.episode_return += events.rewards
+        ending = self.t >= self.max_cycles
+        if ending.any():
+            events.truncated |= ending[:, None] & self.present & ~events.terminated
+            events.episode_over |= ending
+        self.running &= ~events.episode_over
         return events
 
     # ------------------------------------------------------------------ infos
@@ -270,41 +337,86 @@ class GridEngine:
         return {}
 
     # ------------------------------------------------------------------ observations
-    def observe(self, viewer: int) -> np.ndarray:
-        """``(N, view*view)`` float32 observations of agent ``viewer`` in every environment."""
-        return self._window(self._paint(self.pos, self.inventory, viewer), self.pos[:, viewer])
+    def views(self, viewer: np.ndarray) -> Views:
+        """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices)."""
+        viewer = np.asarray(viewer, dtype=np.int64)
+        rows = np.arange(len(viewer))
+        return Views(viewer=viewer, own=rows * self.num_agents + viewer, first=(rows * self.obs_size)[:, None])
 
-    def observe_swapped(self, viewer: int, other: int) -> np.ndarray:
-        """What ``viewer`` would observe had it exchanged cell and inventory with ``other``.
+    def paint(
+        self, env_ids: np.ndarray, cells: np.ndarray, inventory: np.ndarray, present: np.ndarray, views: Views
+    ) -> np.ndarray:
+        """``(K, obs_size)`` float32 observations of ``K`` views at once.
 
-        Rows where ``other`` has left the environment are meaningless; see :meth:`present`.
+        View ``k`` is environment ``env_ids[k]`` (its batteries) with the agents on flat
+        ``cells[k]`` (``(A,)``), holding ``inventory[k]``, present where ``present[k]``, seen by
+        agent ``views.viewer[k]``: the window around the viewer, the other present agents drawn over
+        it in agent order, the viewer's own cell drawn last.
         """
-        if viewer == other:
-            raise ValueError("an agent cannot swap places with itself")
-        pos = self.pos.copy()
-        pos[:, [viewer, other]] = pos[:, [other, viewer]]
-        inventory = self.inventory.copy()
-        inventory[:, [viewer, other]] = inventory[:, [other, viewer]]
-        return self._window(self._paint(pos, inventory, viewer), pos[:, viewer])
+        size = len(views.viewer) * self.obs_size
+        centre = cells.ravel().take(views.own)
+        # each agent's index in the flattened canvas; absent or out-of-window agents go to one
+        # scratch element past the picture (so drawing needs no masks)
+        slots = self._slots.take((centre * self.num_cells)[:, None] + cells)
+        slots[~present] = OUTSIDE
+        slots += views.first
+        np.minimum(slots, size, out=slots)
+        canvas = np.empty(size + 1, dtype=np.float32)
+        picture = canvas[:-1].reshape(-1, self.obs_size)
+        self._paint_background(env_ids, centre, picture)
+        looks = self._appearance(inventory, views.viewer)
+        for agent in range(self.num_agents):
+            canvas[slots[:, agent]] = looks[:, agent] if isinstance(looks, np.ndarray) else looks
+        picture[:, self.obs_size // 2] = self._self_appearance(inventory.ravel().take(views.own), views.viewer)
+        return picture
 
-    def in_view(self, viewer: int, other: int) -> np.ndarray:
+    def observe(self, viewer: int, env_ids: np.ndarray | None = None) -> np.ndarray:
+        """``(N, obs_size)`` float32 observations of agent ``viewer`` (in ``env_ids``, default all)."""
+        ids = self._rows if env_ids is None else env_ids
+        views = self.views(np.full(len(ids), viewer))
+        return self.paint(ids, self.cells[ids], self.inventory[ids], self.present[ids], views)
+
+    def observe_swapped(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
+        """What ``viewer`` would observe had it exchanged its situation (cell, inventory, presence)
+        with ``other`` (an agent index, or one per environment), in every environment.
+
+        Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
+        """
+        other = np.broadcast_to(np.asarray(other, dtype=np.int64), (self.num_envs,))
+        if (other == viewer).any():
+            raise ValueError("an agent cannot swap places with itself")
+        order = np.broadcast_to(self._agent_ids, (self.num_envs, self.num_agents)).copy()
+        order[self._rows, viewer] = other
+        order[self._rows, other] = viewer
+        rows = self._rows[:, None]
+        return self.paint(
+            self._rows, self.cells[rows, order], self.inventory[rows, order], self.present[rows, order],
+            self.views(np.full(self.num_envs, viewer)),
+        )
+
+    def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
         """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
-        half = self.view // 2
-        delta = (self.pos[:, other] - self.pos[:, viewer] + half) % self.size
-        return (delta <= 2 * half).all(axis=1)
+        other_cell = self.cells[self._rows, other] if np.ndim(other) else self.cells[:, other]
+        return self._slots[self.cells[:, viewer] * self.num_cells + other_cell] < self.obs_size
+
+    def _work_array(self, shape: tuple[int, int]) -> np.ndarray:
+        """A reusable int64 work array of ``shape`` with garbage contents (large temporaries
+        allocated afresh every step cost more in page faults than in arithmetic)."""
+        size = shape[0] * shape[1]
+        if self._work.size < size:
+            self._work = np.empty(size, dtype=np.int64)
+        return self._work[:size].reshape(shape)
 
     def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
         """Index of the closest other present agent of ``viewer`` (torus distance, ties to the
         lowest index) and a mask of environments where such an agent exists."""
         others = [i for i in range(self.num_agents) if i != viewer]
+        if len(others) == 1:
+            return np.full(self.num_envs, others[0]), self.present[:, others[0]].copy()
         dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, others, :], self.size).astype(np.float64)
         dist[~self.present[:, others]] = np.inf
         choice = np.argmin(dist, axis=1)
         return np.asarray(others)[choice], np.isfinite(dist[self._rows, choice])
-
-    def _window(self, canvas: np.ndarray, centre: np.ndarray) -> np.ndarray:
-        cells = centre[:, 0] * self.size + centre[:, 1]
-        return canvas[self._rows[:, None], self.window[cells]]
 
     # ------------------------------------------------------------------ metrics
     def episode_metrics(self, env_ids: np.ndarray, learner: int = 0) -> dict[str, np.ndarray]:
@@ -335,6 +447,6 @@ class GridEngine:
 
     def _state_keys(self) -> tuple[str, ...]:
         return (
-            "pos", "present", "inventory", "t", "running", "episode_return",
+            "cells", "present", "inventory", "t", "running", "episode_return",
             "episode_battery_return", "episode_harms", "episode_survival",
         )

@@ -7,14 +7,52 @@ from typing import Any, ClassVar
 import numpy as np
 
 from empathy_zoo.engine.base import GridEngine, StepEvents
-from empathy_zoo.grid import signed_offset
+from empathy_zoo.grid import MOVES, NUM_ACTIONS, signed_offset
 
-__all__ = ["CoexistenceEngine", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
+__all__ = ["CoexistenceEngine", "harm_outcome", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
 
 OWN_CELL = 1.0
 OTHER_AGENT = -1.0
 FLOOR = 0.0
 ROBOT, CAT = 0, 1
+
+NO_HARM, ROBOT_HARMS_CAT, CAT_HARMS_ROBOT = 0, 1, 2
+"""The outcomes of a step, as :func:`harm_outcome` returns them."""
+
+# What each outcome does to (robot, cat), indexed by outcome:
+HARMED_BY = np.array([[-1, -1], [-1, ROBOT], [CAT, -1]], dtype=np.int64)
+"""Who harmed the robot and who harmed the cat (-1: nobody)."""
+HARMS_DONE = np.array([[0, 0], [1, 0], [0, 1]], dtype=np.int64)
+"""How many others the robot and the cat harmed."""
+CUT_SHORT = np.array([[False, False], [False, False], [False, True]])
+"""Whose episode is truncated: the cat's when the robot falls."""
+
+
+def harm_outcome(before: np.ndarray, after: np.ndarray, size: int) -> np.ndarray:
+    """Who harms whom (SPEC §2) given where the cat stands relative to the robot before and after
+    the simultaneous move (``(K, 2)`` displacements on a ``size`` torus); returns ``(K,)`` outcomes.
+
+    Vertically adjacent, the upper one harms the lower; horizontally adjacent, the right one harms
+    the left; on the same cell, the one that was above before the move harms, and on equal rows
+    the one that was to the right (shortest torus displacement). Diagonal is not contact.
+    """
+    dr, dc = after[:, 0] % size, after[:, 1] % size
+    before = signed_offset(before, size)
+    same = (dr == 0) & (dc == 0)
+    robot_was_above = before[:, 0] > 0
+    cat_was_above = before[:, 0] < 0
+    level = before[:, 0] == 0
+    robot_harms = (
+        ((dr == 1) & (dc == 0))  # robot directly above the cat
+        | ((dr == 0) & (dc == size - 1))  # robot directly right of the cat
+        | (same & (robot_was_above | (level & (before[:, 1] < 0))))
+    )
+    cat_harms = (
+        ((dr == size - 1) & (dc == 0))
+        | ((dr == 0) & (dc == 1))
+        | (same & (cat_was_above | (level & (before[:, 1] > 0))))
+    )
+    return np.select([robot_harms, cat_harms], [ROBOT_HARMS_CAT, CAT_HARMS_ROBOT], NO_HARM)
 
 
 class CoexistenceEngine(GridEngine):
@@ -37,6 +75,14 @@ class CoexistenceEngine(GridEngine):
             if not self._in_contact(np.array([dr, dc]))
         ]
         self._start_offsets = np.array(offsets, dtype=np.int64)
+        # harm_outcome of every (robot cell and action, cat cell and action), looked up each step
+        robot_move, cat_move = (x.ravel() for x in np.indices((self.num_cells * NUM_ACTIONS,) * 2))
+        robot_cell, robot_action = np.divmod(robot_move, NUM_ACTIONS)
+        cat_cell, cat_action = np.divmod(cat_move, NUM_ACTIONS)
+        before = self._cell_rc[cat_cell] - self._cell_rc[robot_cell]
+        after = before + MOVES[cat_action] - MOVES[robot_action]
+        self._outcomes = harm_outcome(before, after, self.size).astype(np.int8)
+        self._move_stride = self.num_cells * NUM_ACTIONS
 
     def _in_contact(self, delta: np.ndarray) -> bool:
         return int(np.abs(signed_offset(delta, self.size)).sum()) <= 1
@@ -45,61 +91,36 @@ class CoexistenceEngine(GridEngine):
         return self._in_contact(other - cell)
 
     def _random_start(self, env_ids: np.ndarray) -> None:
-        cells = self.size * self.size
-        robot = np.floor(self.streams.uniform(env_ids) * cells).astype(np.int64)
+        robot = np.floor(self.streams.uniform(env_ids) * self.num_cells).astype(np.int64)
         pick = np.floor(self.streams.uniform(env_ids) * len(self._start_offsets)).astype(np.int64)
-        robot_rc = np.stack(np.divmod(robot, self.size), axis=1)
-        self.pos[env_ids, ROBOT] = robot_rc
-        self.pos[env_ids, CAT] = (robot_rc + self._start_offsets[pick]) % self.size
+        cat_rc = (self._cell_rc[robot] + self._start_offsets[pick]) % self.size
+        self.cells[env_ids, ROBOT] = robot
+        self.cells[env_ids, CAT] = cat_rc[:, 0] * self.size + cat_rc[:, 1]
 
-    def _resolve(self, previous: np.ndarray, events: StepEvents) -> None:
-        both = self.present[:, ROBOT] & self.present[:, CAT]
-        delta = (self.pos[:, CAT] - self.pos[:, ROBOT]) % self.size  # where the cat stands, seen from the robot
-        dr, dc = delta[:, 0], delta[:, 1]
-        before = signed_offset(previous[:, CAT] - previous[:, ROBOT], self.size)
-        same = (dr == 0) & (dc == 0)
-        robot_was_above = before[:, 0] > 0
-        cat_was_above = before[:, 0] < 0
-        level = before[:, 0] == 0
-        robot_harms = both & (
-            ((dr == 1) & (dc == 0))  # robot directly above the cat
-            | ((dr == 0) & (dc == self.size - 1))  # robot directly right of the cat
-            | (same & (robot_was_above | (level & (before[:, 1] < 0))))
-        )
-        cat_harms = both & (
-            ((dr == self.size - 1) & (dc == 0))
-            | ((dr == 0) & (dc == 1))
-            | (same & (cat_was_above | (level & (before[:, 1] > 0))))
-        )
-        events.harmed_by[robot_harms, CAT] = ROBOT
-        events.harmed_by[cat_harms, ROBOT] = CAT
-        self.episode_harms[robot_harms, ROBOT] += 1
-        self.episode_harms[cat_harms, CAT] += 1
-        self.present[robot_harms, CAT] = False
-        self.present[cat_harms, ROBOT] = False
-        events.terminated[robot_harms, CAT] = True
-        events.terminated[cat_harms, ROBOT] = True
-        events.truncated[cat_harms, CAT] = True  # the robot fell: the episode ends for the cat too
-        events.episode_over |= cat_harms
-        events.rewards[:] = np.where(self.present & events.present_before, 1.0, 0.0)
+    def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
+        outcome = self._outcomes[moves[:, ROBOT] * self._move_stride + moves[:, CAT]]
+        outcome[~(self.present[:, ROBOT] & self.present[:, CAT])] = NO_HARM
+        if outcome.any():
+            events.harmed_by = HARMED_BY[outcome]
+            events.terminated = events.harmed_by >= 0
+            events.truncated = CUT_SHORT[outcome]
+            events.episode_over = outcome == CAT_HARMS_ROBOT
+            self.episode_harms += HARMS_DONE[outcome]
+            self.present &= ~events.terminated
+        events.rewards = (self.present & events.present_before).astype(np.float32)
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
         return {"harmed_by": None, "harmed": []}
 
     def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
-        by = int(events.harmed_by[env_id, agent])
-        victims = np.flatnonzero(events.harmed_by[env_id] == agent)
+        by = events.harmed_by[env_id].tolist()
         return {
-            "harmed_by": None if by < 0 else self.agents[by],
-            "harmed": [self.agents[v] for v in victims],
+            "harmed_by": None if by[agent] < 0 else self.agents[by[agent]],
+            "harmed": [self.agents[victim] for victim, harmer in enumerate(by) if harmer == agent],
         }
 
-    def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
-        canvas = np.zeros((self.num_envs, self.size * self.size), dtype=np.float32)
-        cells = pos[:, :, 0] * self.size + pos[:, :, 1]
-        for agent in range(self.num_agents):
-            if agent != viewer:
-                rows = self._rows[self.present[:, agent]]
-                canvas[rows, cells[rows, agent]] = OTHER_AGENT
-        canvas[self._rows, cells[:, viewer]] = OWN_CELL
-        return canvas
+    def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> float:
+        return OTHER_AGENT
+
+    def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> float:
+        return OWN_CELL

@@ -25,7 +25,7 @@ def battery_value(n: np.ndarray | int) -> np.ndarray:
 
 def agent_value(batteries: np.ndarray) -> np.ndarray:
     """Observation value of an agent that holds ``batteries``: ``1 + batteries``."""
-    return 1.0 + batteries
+    return batteries + 1
 
 
 class SharingEngine(GridEngine):
@@ -67,6 +67,8 @@ class SharingEngine(GridEngine):
             if layout[row * self.size + col]:
                 raise ValueError(f"options['batteries'] lists {(int(row), int(col))} twice")
             layout[row * self.size + col] = True
+        if not layout.any():
+            raise ValueError("options['batteries'] must list at least one battery (with none the episode is over)")
         self.batteries[env_id] = layout
         return {"batteries"}
 
@@ -75,30 +77,28 @@ class SharingEngine(GridEngine):
         robot = np.floor(self.streams.uniform(env_ids) * free).astype(np.int64)
         human = np.floor(self.streams.uniform(env_ids) * (free - 1)).astype(np.int64)
         human += human >= robot
-        for agent, index in ((ROBOT, robot), (HUMAN, human)):
-            cell = self._free_cells[index]
-            self.pos[env_ids, agent, 0], self.pos[env_ids, agent, 1] = np.divmod(cell, self.size)
+        self.cells[env_ids, ROBOT] = self._free_cells[robot]
+        self.cells[env_ids, HUMAN] = self._free_cells[human]
 
-    def _resolve(self, previous: np.ndarray, events: StepEvents) -> None:
-        cells = self.pos[:, :, 0] * self.size + self.pos[:, :, 1]
-        on_battery = self.batteries[self._rows[:, None], cells]
-        tie = on_battery[:, ROBOT] & on_battery[:, HUMAN] & (cells[:, ROBOT] == cells[:, HUMAN])
-        collects = on_battery.copy()
-        tie_envs = np.flatnonzero(tie)
+    def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
+        flat = self.cells + self._cell_base  # into batteries.ravel()
+        collects = self.batteries.ravel()[flat]
+        if not collects.any():
+            return
+        tie_envs = np.flatnonzero(collects[:, ROBOT] & collects[:, HUMAN] & (flat[:, ROBOT] == flat[:, HUMAN]))
         if tie_envs.size:
             to_robot = self.streams.uniform(tie_envs) < TIE_TO_ROBOT
             collects[tie_envs, ROBOT] = to_robot
             collects[tie_envs, HUMAN] = ~to_robot
         self.inventory += collects
-        value = np.where(collects, battery_value(self.inventory), 0.0)
-        events.rewards[:] = value
-        events.collected[:] = collects
+        value = battery_value(self.inventory) * collects
+        events.rewards = value.astype(np.float32)
+        events.collected = collects
         self.episode_battery_return += value
-        for agent in range(self.num_agents):
-            self.batteries[self._rows[collects[:, agent]], cells[collects[:, agent], agent]] = False
+        self.batteries.ravel()[flat[collects]] = False
         empty = ~self.batteries.any(axis=1)
         events.terminated[empty] = True
-        events.episode_over |= empty
+        events.episode_over = empty
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
         return {"batteries": int(self.inventory[env_id, agent])}
@@ -106,14 +106,19 @@ class SharingEngine(GridEngine):
     def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
         return {"batteries": int(self.inventory[env_id, agent])}
 
-    def _paint(self, pos: np.ndarray, inventory: np.ndarray, viewer: int) -> np.ndarray:
-        canvas = np.where(self.batteries, np.float32(BATTERY), np.float32(FLOOR))
-        cells = pos[:, :, 0] * self.size + pos[:, :, 1]
-        for agent in range(self.num_agents):
-            if agent != viewer:
-                canvas[self._rows, cells[:, agent]] = agent_value(inventory[:, agent])
-        canvas[self._rows, cells[:, viewer]] = agent_value(inventory[:, viewer])
-        return canvas
+    def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
+        window = self.window.take(centre, axis=0, out=self._work_array(out.shape), mode="clip")
+        if self.num_envs > 1:
+            window += (env_ids * self.num_cells)[:, None]  # into batteries.ravel()
+        np.multiply(self.batteries.ravel().take(window), np.float32(BATTERY - FLOOR), out=out)
+        if FLOOR:
+            out += np.float32(FLOOR)
+
+    def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
+        return agent_value(inventory)
+
+    def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
+        return agent_value(inventory)
 
     def _state_keys(self) -> tuple[str, ...]:
         return super()._state_keys() + ("batteries",)
