@@ -119,8 +119,11 @@ class VectorEnv:
             actions = actions[:, None]
         if actions.shape != (self.num_envs, len(self.learners)):
             raise ValueError(f"actions must have shape {(self.num_envs, len(self.learners))}, got {actions.shape}")
+        if actions.dtype.kind not in "iuf":
+            raise ValueError(f"actions must be integers, got dtype {actions.dtype}")
         engine = self.engine
-        full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.int64)
+        # in the actions' own type, so that the engine's check sees a 1.5 rather than its truncation
+        full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.result_type(actions.dtype, np.int64))
         full[:, self.learner_index] = actions
         for index, policy in self.fixed.items():
             observations = engine.observe(index) if policy.needs_observation else None

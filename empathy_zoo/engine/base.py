@@ -267,6 +267,8 @@ class GridEngine:
 
     def _check_cell(self, cell: Any, where: str) -> np.ndarray:
         try:
+            if isinstance(cell, (str, bytes)) or any(isinstance(v, (str, bytes, bool, np.bool_)) for v in cell):
+                raise TypeError  # "12" or (True, False) would otherwise pass for a cell
             row, col = (int(v) for v in cell)
             if any(float(v) != int(v) for v in cell):
                 raise TypeError
@@ -289,7 +291,7 @@ class GridEngine:
         if bad.any():
             env, agent = np.argwhere(bad)[0]
             raise ValueError(
-                f"invalid action {actions[env, agent]!r} for {self.agents[agent]} in env {env}: "
+                f"invalid action {actions[env, agent].item()!r} for {self.agents[agent]} in env {env}: "
                 f"actions are integers in [0, {NUM_ACTIONS})"
             )
         return actions.astype(np.int64, copy=False)
