@@ -126,13 +126,16 @@ class GridEngine:
         self.episode_harms = np.zeros((n, a), dtype=np.int64)
         self.episode_survival = np.zeros((n, a), dtype=np.int64)
         self._rows = np.arange(n)
+        self._nobody_harmed = np.full((n, a), NO_AGENT, dtype=np.int64)
         self._cell_base = (self._rows * self.num_cells)[:, None]
         """(N, 1): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
 
     @property
     def pos(self) -> np.ndarray:
         """(N, A, 2) int64, read-only: the ``(row, col)`` of every agent (from :attr:`cells`)."""
-        return self._cell_rc[self.cells]
+        pos = self._cell_rc[self.cells]
+        pos.flags.writeable = False  # a copy: writing to it would move nobody
+        return pos
 
     def flat_cell(self, row: int, col: int) -> int:
         """The flat id of cell ``(row, col)``."""
@@ -302,7 +305,8 @@ class GridEngine:
 
     def step_checked(self, actions: np.ndarray) -> StepEvents:
         """:meth:`step` for an ``(N, A)`` int64 array already known valid (see :meth:`check_actions`)."""
-        if not self.running.all():
+        # (np.count_nonzero instead of .all()/.any(): a third of the cost on the one-environment path)
+        if np.count_nonzero(self.running) < self.num_envs:
             raise RuntimeError("step() called on an environment whose episode is over; reset it first")
         n, a = self.num_envs, self.num_agents
         present = self.present.copy()
@@ -313,7 +317,7 @@ class GridEngine:
             rewards=np.zeros((n, a), dtype=np.float32),
             terminated=np.zeros((n, a), dtype=bool),
             truncated=np.zeros((n, a), dtype=bool),
-            harmed_by=np.full((n, a), NO_AGENT, dtype=np.int64),
+            harmed_by=self._nobody_harmed.copy(),
             collected=np.zeros((n, a), dtype=bool),
             present_before=present,
             episode_over=np.zeros(n, dtype=bool),
@@ -323,7 +327,7 @@ class GridEngine:
         self.episode_survival += self.present
         self.episode_return += events.rewards
         ending = self.t >= self.max_cycles
-        if ending.any():
+        if np.count_nonzero(ending):
             events.truncated |= ending[:, None] & self.present & ~events.terminated
             events.episode_over |= ending
         self.running &= ~events.episode_over
@@ -360,7 +364,8 @@ class GridEngine:
         # each agent's index in the flattened canvas; absent or out-of-window agents go to one
         # scratch element past the picture (so drawing needs no masks)
         slots = self._slots.take((centre * self.num_cells)[:, None] + cells)
-        slots[~present] = OUTSIDE
+        if np.count_nonzero(present) < present.size:
+            slots[~present] = OUTSIDE
         slots += views.first
         np.minimum(slots, size, out=slots)
         canvas = np.empty(size + 1, dtype=np.float32)

@@ -6,7 +6,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.engine.base import GridEngine, StepEvents
+from empathy_zoo.engine.base import NO_AGENT, GridEngine, StepEvents
 from empathy_zoo.grid import MOVES, NUM_ACTIONS, signed_offset
 
 __all__ = ["CoexistenceEngine", "harm_outcome", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
@@ -20,8 +20,8 @@ NO_HARM, ROBOT_HARMS_CAT, CAT_HARMS_ROBOT = 0, 1, 2
 """The outcomes of a step, as :func:`harm_outcome` returns them."""
 
 # What each outcome does to (robot, cat), indexed by outcome:
-HARMED_BY = np.array([[-1, -1], [-1, ROBOT], [CAT, -1]], dtype=np.int64)
-"""Who harmed the robot and who harmed the cat (-1: nobody)."""
+HARMED_BY = np.array([[NO_AGENT, NO_AGENT], [NO_AGENT, ROBOT], [CAT, NO_AGENT]], dtype=np.int64)
+"""Who harmed the robot and who harmed the cat."""
 HARMS_DONE = np.array([[0, 0], [1, 0], [0, 1]], dtype=np.int64)
 """How many others the robot and the cat harmed."""
 CUT_SHORT = np.array([[False, False], [False, False], [False, True]])
@@ -100,7 +100,7 @@ class CoexistenceEngine(GridEngine):
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
         outcome = self._outcomes[moves[:, ROBOT] * self._move_stride + moves[:, CAT]]
         outcome[~(self.present[:, ROBOT] & self.present[:, CAT])] = NO_HARM
-        if outcome.any():
+        if np.count_nonzero(outcome):
             events.harmed_by = HARMED_BY[outcome]
             events.terminated = events.harmed_by >= 0
             events.truncated = CUT_SHORT[outcome]

@@ -83,7 +83,7 @@ class SharingEngine(GridEngine):
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
         flat = self.cells + self._cell_base  # into batteries.ravel()
         collects = self.batteries.ravel()[flat]
-        if not collects.any():
+        if not np.count_nonzero(collects):
             return
         tie_envs = np.flatnonzero(collects[:, ROBOT] & collects[:, HUMAN] & (flat[:, ROBOT] == flat[:, HUMAN]))
         if tie_envs.size:
