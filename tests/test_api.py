@@ -119,6 +119,21 @@ def test_pickle_round_trip_continues_identically(module, dumps, wrapped):
     assert_same(play(original, seed=7, steps=120), play(clone, seed=7, steps=120))
 
 
+@pytest.mark.parametrize("max_cycles", [1, 3, 8])
+@pytest.mark.parametrize("module, reward", [(coexistence_v0, 1.0), (sharing_v0, 0.0)], ids=IDS)
+def test_truncation_at_max_cycles(module, reward, max_cycles):
+    """Agents standing still, apart and off the batteries: everyone is truncated at max_cycles."""
+    env = module.parallel_env(max_cycles=max_cycles)
+    a, b = env.possible_agents
+    env.reset(seed=0, options={"positions": {a: (0, 0), b: (3, 2)}})
+    for t in range(1, max_cycles + 1):
+        _, rewards, terminations, truncations, _ = env.step({a: 4, b: 4})
+        assert rewards == {a: reward, b: reward}
+        assert terminations == {a: False, b: False}
+        assert truncations == {a: t == max_cycles, b: t == max_cycles}
+    assert env.agents == []
+
+
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
 def test_render_ansi_is_a_text_grid(module):
     env = module.parallel_env(render_mode="ansi")

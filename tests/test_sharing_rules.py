@@ -141,17 +141,6 @@ def test_single_battery_collected_by_the_human_ends_the_episode():
     assert term == {ROBOT: True, HUMAN: True} and info[HUMAN]["batteries"] == 1
 
 
-@pytest.mark.parametrize("max_cycles", [1, 4])
-def test_truncation_at_max_cycles(max_cycles):
-    env = placed((0, 0), (0, 2), max_cycles=max_cycles)
-    for t in range(1, max_cycles + 1):
-        _, rew, term, trunc, _ = step(env, STAY, STAY)
-        assert rew == {ROBOT: 0.0, HUMAN: 0.0}
-        assert term == {ROBOT: False, HUMAN: False}
-        assert trunc == {ROBOT: t == max_cycles, HUMAN: t == max_cycles}
-    assert env.agents == []
-
-
 def test_observation_encoding_batteries_and_agents():
     env = sharing_v0.parallel_env()
     obs, infos = env.reset(seed=0, options={"positions": {ROBOT: (2, 2), HUMAN: (4, 3)}})
