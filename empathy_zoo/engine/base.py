@@ -127,6 +127,7 @@ class GridEngine:
         self.episode_survival = np.zeros((n, a), dtype=np.int64)
         self._rows = np.arange(n)
         self._nobody_harmed = np.full((n, a), NO_AGENT, dtype=np.int64)
+        self._agent_base = (self._rows * a)[:, None]
         self._cell_base = (self._rows * self.num_cells)[:, None]
         """(N, 1): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
 
@@ -379,9 +380,11 @@ class GridEngine:
 
     def observe(self, viewer: int, env_ids: np.ndarray | None = None) -> np.ndarray:
         """``(N, obs_size)`` float32 observations of agent ``viewer`` (in ``env_ids``, default all)."""
-        ids = self._rows if env_ids is None else env_ids
-        views = self.views(np.full(len(ids), viewer))
-        return self.paint(ids, self.cells[ids], self.inventory[ids], self.present[ids], views)
+        if env_ids is None:
+            env_ids, cells, inventory, present = self._rows, self.cells, self.inventory, self.present
+        else:
+            cells, inventory, present = self.cells[env_ids], self.inventory[env_ids], self.present[env_ids]
+        return self.paint(env_ids, cells, inventory, present, self.views(np.full(len(env_ids), viewer)))
 
     def observe_swapped(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
         """What ``viewer`` would observe had it exchanged its situation (cell, inventory, presence)
@@ -389,17 +392,22 @@ class GridEngine:
 
         Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
         """
-        other = np.broadcast_to(np.asarray(other, dtype=np.int64), (self.num_envs,))
-        if (other == viewer).any():
-            raise ValueError("an agent cannot swap places with itself")
-        order = np.broadcast_to(self._agent_ids, (self.num_envs, self.num_agents)).copy()
-        order[self._rows, viewer] = other
-        order[self._rows, other] = viewer
-        rows = self._rows[:, None]
-        return self.paint(
-            self._rows, self.cells[rows, order], self.inventory[rows, order], self.present[rows, order],
-            self.views(np.full(self.num_envs, viewer)),
-        )
+        if np.ndim(other) == 0:
+            if other == viewer:
+                raise ValueError("an agent cannot swap places with itself")
+            order = self._agent_ids.copy()
+            order[[viewer, other]] = other, viewer
+            cells, inventory, present = self.cells[:, order], self.inventory[:, order], self.present[:, order]
+        else:
+            other = np.asarray(other, dtype=np.int64)
+            if np.count_nonzero(other == viewer):
+                raise ValueError("an agent cannot swap places with itself")
+            order = np.tile(self._agent_ids, (self.num_envs, 1))
+            order[:, viewer] = other
+            order[self._rows, other] = viewer
+            order += self._agent_base  # into the flattened (N, A) arrays
+            cells, inventory, present = (x.ravel().take(order) for x in (self.cells, self.inventory, self.present))
+        return self.paint(self._rows, cells, inventory, present, self.views(np.full(self.num_envs, viewer)))
 
     def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
         """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
