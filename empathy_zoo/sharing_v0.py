@@ -32,7 +32,7 @@ Everyone terminates when no battery is left; everyone is truncated after `max_cy
 ## Reset options
 `reset(seed, options={"positions": {"robot_0": (r, c), ...}, "batteries": [(r, c), ...]})` places
 agents and/or replaces the battery layout. Unknown agents, off-grid cells, two agents on one
-cell, a battery listed twice or a battery under an agent raise `ValueError`.
+cell, a battery listed twice, an empty battery list or a battery under an agent raise `ValueError`.
 
 ## Perspective swap
 `env.unwrapped.swapped_observation(viewer, other, in_view_only=False)` exchanges cells *and*
