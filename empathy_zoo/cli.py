@@ -38,7 +38,7 @@ SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 RUN_KEYS: dict[str, Any] = {
     "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
     "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
-    "workers": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE,
+    "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE,
     "progress": bool,
 }
 """Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
@@ -46,7 +46,7 @@ RUN_KEYS: dict[str, Any] = {
 RUN_DEFAULTS: dict[str, Any] = {
     "env": "coexistence_v0", "method": "empathic_dqn", "seeds": [0], "steps": 1_000_000, "out": "runs",
     "device": "cpu", "eval_interval": 50_000, "eval_episodes": 10, "checkpoint_interval": 50_000,
-    "max_parallel_runs": 32, "workers": 1, "label": None, "fixed": None, "progress": True,
+    "max_parallel_runs": 32, "workers": 1, "threads": 1, "label": None, "fixed": None, "progress": True,
 }
 """What a ``train`` run does when neither the config file nor the command line says otherwise."""
 
@@ -143,6 +143,7 @@ def _runner_options(args: argparse.Namespace, values: dict[str, Any], bar_positi
         max_parallel_runs=_positive("max_parallel_runs", values["max_parallel_runs"]),
         checkpoint_interval=_positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
         progress=values["progress"], workers=_positive("workers", values["workers"]), bar_position=bar_position,
+        threads=_positive("threads", values["threads"]),
     )
 
 
@@ -243,7 +244,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     if others:
         print(f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
               f"(e.g. {others[0]}); the leaderboard includes them", flush=True)
-    with tqdm(total=len(specs), initial=done, unit="run", desc="sweep", disable=args.no_progress,
+    with tqdm(total=len(specs), initial=done, unit="run", desc="sweep", disable=not values["progress"],
               position=0 if workers == 1 else workers, dynamic_ncols=True) as bar:
         train_runs(specs, out, options, on_result=lambda result: bar.update(1))
     paths = write_leaderboard(out, command=command)
@@ -321,6 +322,9 @@ def _add_runner_options(parser: argparse.ArgumentParser, default: Any = None) ->
     parser.add_argument("--workers", type=int, default=default, metavar="N",
                         help="processes training ensembles side by side" + (
                             d("workers") if default is not None else " (default: one per ensemble, at most the CPUs)"))
+    parser.add_argument("--threads", type=int, default=default, metavar="N",
+                        help="torch CPU threads per process; these small networks gain nothing from more, and "
+                             "extra threads are much slower on a busy machine" + d("threads"))
     parser.add_argument("--checkpoint-interval", type=int, default=default, metavar="N",
                         help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"))
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
