@@ -10,6 +10,7 @@ from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from baselines.methods import BASELINE_METHODS
+from baselines.sb3 import SB3_METHODS
 from empathy_zoo.registry import resolve_name
 
 __all__ = ["METHODS", "get_method"]
@@ -28,6 +29,7 @@ METHODS: dict[str, Method] = {
         description="Double DQN (Empathic DQN at β = 1)",
     ),
     **BASELINE_METHODS,
+    **SB3_METHODS,
 }
 """Registered methods."""
 

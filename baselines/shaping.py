@@ -4,11 +4,14 @@ never how it is scored: the suite's metrics come from the environment's events."
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from agents.base import StepBatch
 from empathy_zoo.metrics import equality
+
+if TYPE_CHECKING:
+    from agents.base import StepBatch
 
 __all__ = ["shaped_reward", "HARM_PENALTY"]
 
