@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
+import os
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Callable, Sequence
@@ -96,6 +98,18 @@ def train_runs(
     return [result_path(out_dir, s.run_id) for s in specs]
 
 
+def _exit_with_parent(parent: int) -> None:
+    """In a worker: end this process if the sweep's process goes away (killed, not interrupted),
+    so no orphan keeps training and writing checkpoints beside a restarted sweep."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(2.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="exit-with-parent").start()
+
+
 def _train_in_processes(
     chunks: list[list[RunSpec]], out_dir: Path, options: RunnerOptions,
     on_result: Callable[[dict[str, Any]], None] | None,
@@ -103,7 +117,7 @@ def _train_in_processes(
     """Spread ensembles over ``options.workers`` processes (one torch thread each by default)."""
     context = multiprocessing.get_context("spawn")
     workers = min(options.workers, len(chunks))
-    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
         futures = [
             pool.submit(train_ensemble, chunk, out_dir, replace(
                 options, workers=1, threads=options.threads or 1, bar_position=i % workers,
