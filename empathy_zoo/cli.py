@@ -144,7 +144,15 @@ def _runner_options(args: argparse.Namespace, values: dict[str, Any], bar_positi
         checkpoint_interval=_positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
         progress=values["progress"], workers=_positive("workers", values["workers"]), bar_position=bar_position,
         threads=_positive("threads", values["threads"]),
+        backend=getattr(args, "backend", None) or "local", address=_ray_address(args),
     )
+
+
+def _ray_address(args: argparse.Namespace) -> str | None:
+    address = getattr(args, "address", None)
+    if address is not None and getattr(args, "backend", None) != "ray":
+        raise ValueError("--address is the Ray cluster to join: use it with --backend ray")
+    return address
 
 
 # ---------------------------------------------------------------------------- train
@@ -328,6 +336,12 @@ def _add_runner_options(parser: argparse.ArgumentParser, default: Any = None) ->
     parser.add_argument("--checkpoint-interval", type=int, default=default, metavar="N",
                         help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"))
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
+    parser.add_argument("--backend", choices=["local", "ray"], default=default,
+                        help="where ensembles train: this machine, or Ray tasks (pip install \"empathy-zoo[ray]\")"
+                        " (default: local)")
+    parser.add_argument("--address", default=default, metavar="ADDR",
+                        help="with --backend ray: the cluster to join (auto, ray://host:10001); "
+                        "default: start Ray on this machine")
 
 
 def _add_train(sub: Any) -> None:
