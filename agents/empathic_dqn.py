@@ -134,11 +134,9 @@ class EmpathicDQN:
 
     # ------------------------------------------------------------------ learning
     def observe(self, batch: StepBatch) -> None:
-        reward = shaped_reward(self.settings, batch)
-        t = lambda a, dtype=None: torch.as_tensor(a, dtype=dtype, device=self.device)  # noqa: E731
         self.replay.add(
-            t(batch.obs), t(batch.next_obs), t(batch.swapped_next_obs), t(batch.actions),
-            t(reward, torch.float32), t(batch.terminated), t(batch.other_present),
+            batch.obs, batch.next_obs, batch.swapped_next_obs, batch.actions,
+            shaped_reward(self.settings, batch), batch.terminated, batch.other_present,
         )
         m = batch.actions.shape[1]
         for _ in range(m):

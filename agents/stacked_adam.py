@@ -28,7 +28,8 @@ class StackedAdam:
         self.exp_avg = [torch.zeros_like(p, requires_grad=False) for p in params]
         self.exp_avg_sq = [torch.zeros_like(p, requires_grad=False) for p in params]
         runs = params[0].shape[0]
-        self.steps = [torch.zeros((), dtype=torch.float32, device=params[0].device) for _ in range(runs)]
+        self.step_count = torch.zeros(runs, dtype=torch.float32, device=params[0].device)
+        self.steps = list(self.step_count.unbind(0))  # one view per run, all advanced by one add
         self._fused = hasattr(torch, "_fused_adam_") and params[0].device.type in ("cpu", "cuda")
         # one view per (tensor, run); these tensors are never reallocated, so their views are made once
         self._param_views = self._views(params)
@@ -48,8 +49,7 @@ class StackedAdam:
     def step(self) -> None:
         grads_v = self._views([p.grad for p in self.params])
         params, avg, avg_sq, steps = self._param_views, self._avg_views, self._avg_sq_views, self._step_views
-        for s in self.steps:
-            s += 1
+        self.step_count += 1
         if self._fused:
             torch._fused_adam_(
                 params, grads_v, avg, avg_sq, [], steps, lr=self.lr, beta1=self.betas[0], beta2=self.betas[1],
@@ -66,11 +66,10 @@ class StackedAdam:
         return {
             "exp_avg": [t.clone() for t in self.exp_avg],
             "exp_avg_sq": [t.clone() for t in self.exp_avg_sq],
-            "steps": torch.stack(self.steps).clone(),
+            "steps": self.step_count.clone(),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         for mine, saved in zip(self.exp_avg + self.exp_avg_sq, state["exp_avg"] + state["exp_avg_sq"]):
             mine.copy_(saved)
-        for mine, saved in zip(self.steps, state["steps"]):
-            mine.copy_(saved)
+        self.step_count.copy_(state["steps"])

@@ -121,10 +121,10 @@ def test_paper_replay_fits_in_64_mb_per_run() -> None:
 
 def test_replay_rejects_observations_that_are_not_small_integers() -> None:
     replay = StackedReplay(1, 10, 2, torch.device("cpu"))
-    bad = torch.tensor([[[0.5, 1.0]]])
+    bad = np.array([[[0.5, 1.0]]])
     with pytest.raises(ValueError, match="int8"):
-        replay.add(bad, bad, bad, torch.zeros(1, 1), torch.zeros(1, 1), torch.zeros(1, 1, dtype=torch.bool),
-                   torch.ones(1, 1, dtype=torch.bool))
+        replay.add(bad, bad, bad, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1), bool), np.ones((1, 1), bool))
+    assert replay.size == 0
 
 
 def test_settings_reject_bad_values_and_presets_cannot_be_overridden() -> None:
