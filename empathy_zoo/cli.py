@@ -245,8 +245,9 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     options = _runner_options(args, values, bar_position=1 if workers == 1 else 0)
     done = _check_results(specs, out)
     experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
-    print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × seeds) in {ensembles} "
-          f"ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}", flush=True)
+    print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
+          f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",
+          flush=True)
     ours = {f"{spec.run_id}.json" for spec in specs}
     others = sorted(p.name for p in (out / RUNS_DIR).glob("*.json") if p.name not in ours) if (out / RUNS_DIR).is_dir() else []
     if others:
@@ -255,9 +256,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     with tqdm(total=len(specs), initial=done, unit="run", desc="sweep", disable=not values["progress"],
               position=0 if workers == 1 else workers, dynamic_ncols=True) as bar:
         train_runs(specs, out, options, on_result=lambda result: bar.update(1))
-    paths = write_leaderboard(out, command=command)
-    for key in ("markdown", "csv", "html"):
-        print(f"{PROG}: wrote {paths[key]}")
+    _print_written(write_leaderboard(out, command=command))
     return 0
 
 
@@ -265,10 +264,13 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     from leaderboard.report import write_leaderboard
 
-    paths = write_leaderboard(args.results, args.out, command=command)
+    _print_written(write_leaderboard(args.results, args.out, command=command))
+    return 0
+
+
+def _print_written(paths: dict[str, Path]) -> None:
     for key in ("markdown", "csv", "html"):
         print(f"{PROG}: wrote {paths[key]}")
-    return 0
 
 
 def cmd_methods(args: argparse.Namespace, command: str) -> int:
