@@ -30,6 +30,7 @@ class EmpathyWrapper(BaseParallelWrapper, EzPickle):
         if not hasattr(env.unwrapped, "swapped_observation"):
             raise ValueError(f"{type(env.unwrapped).__name__} does not implement swapped_observation(viewer, other)")
         self.in_view_only = bool(in_view_only)
+        self._base = env.unwrapped
 
     def observation_space(self, agent: str) -> Any:
         return self.env.observation_space(agent)
@@ -46,7 +47,7 @@ class EmpathyWrapper(BaseParallelWrapper, EzPickle):
         return observations, rewards, terminations, truncations, self._with_swaps(infos)
 
     def _with_swaps(self, infos: dict) -> dict:
-        base = self.env.unwrapped
+        base = self._base
         out = {}
         for agent, info in infos.items():
             info = dict(info)

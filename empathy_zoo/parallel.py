@@ -118,8 +118,8 @@ class GridParallelEnv(ParallelEnv, EzPickle):
     def _paint_views(self) -> np.ndarray:
         """Paint every agent's observation and every swapped observation of the current state."""
         engine, order = self.engine, self._view_order
-        self._painted = engine.paint(
-            self._view_env, engine.cells[0][order], engine.inventory[0][order], engine.present[0][order],
+        self._painted = engine.paint(  # (take reads the one environment's (1, A) arrays flat)
+            self._view_env, engine.cells.take(order), engine.inventory.take(order), engine.present.take(order),
             self._viewers,
         )
         return self._painted

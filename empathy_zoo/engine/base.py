@@ -57,8 +57,14 @@ class Views:
     """(K,) the agent whose observation each view is."""
     own: np.ndarray
     """(K,) where the viewer sits in a flattened ``(K, A)`` array."""
+    own_each: np.ndarray
+    """(K, A) ``own`` repeated for every agent."""
     first: np.ndarray
-    """(K, 1) where each view starts in a flattened ``(K, obs_size)`` canvas."""
+    """(K, A) where each view starts in a flattened ``(K, obs_size)`` canvas."""
+    size: int
+    """``K * obs_size``: the index just past the ``K`` pictures in that canvas (its scratch element)."""
+    scratch: np.ndarray
+    """``size`` as a 0-d array."""
 
 
 def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -> None:
@@ -110,7 +116,6 @@ class GridEngine:
         self._slots[self._slots == self.obs_size] = OUTSIDE
         """``[centre * num_cells + cell]``: the window slot of ``cell`` around ``centre``, or
         ``OUTSIDE`` (see :meth:`paint`)."""
-        self._work = np.zeros(0, dtype=np.int64)
         self._agent_ids = np.arange(len(self.agents))
         self.streams = EnvStreams(self.num_envs)
         n, a = self.num_envs, self.num_agents
@@ -124,12 +129,17 @@ class GridEngine:
         self.episode_return = np.zeros((n, a), dtype=np.float64)
         self.episode_battery_return = np.zeros((n, a), dtype=np.float64)
         self.episode_harms = np.zeros((n, a), dtype=np.int64)
-        self.episode_survival = np.zeros((n, a), dtype=np.int64)
+        self.left_at = np.zeros((n, a), dtype=np.int64)
+        """(N, A) int64: steps the agent was operative before it left (where it is absent)."""
+        self._clear_of_timeouts = 0
         self._rows = np.arange(n)
         self._nobody_harmed = np.full((n, a), NO_AGENT, dtype=np.int64)
         self._agent_base = (self._rows * a)[:, None]
-        self._cell_base = (self._rows * self.num_cells)[:, None]
-        """(N, 1): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
+        self._cell_base = np.repeat(self._rows * self.num_cells, a).reshape(n, a)
+        """(N, A): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
+        # 0-d arrays: cheaper ufunc operands than Python ints on the small arrays of one environment
+        self._num_cells, self._num_actions = np.array(self.num_cells), np.array(NUM_ACTIONS)
+        self._one, self._time_limit = np.array(1), np.array(self.max_cycles)
 
     @property
     def pos(self) -> np.ndarray:
@@ -202,7 +212,7 @@ class GridEngine:
         self.present[ids] = True
         self.inventory[ids] = 0
         self.running[ids] = True
-        for array in (self.episode_return, self.episode_battery_return, self.episode_harms, self.episode_survival):
+        for array in (self.episode_return, self.episode_battery_return, self.episode_harms, self.left_at):
             array[ids] = 0
         self._reset_extra(ids)
         if options:
@@ -302,37 +312,53 @@ class GridEngine:
 
     def step(self, actions: np.ndarray) -> StepEvents:
         """Move every present agent simultaneously, then apply the rules; returns the events."""
-        return self.step_checked(self.check_actions(actions))
-
-    def step_checked(self, actions: np.ndarray) -> StepEvents:
-        """:meth:`step` for an ``(N, A)`` int64 array already known valid (see :meth:`check_actions`)."""
         # (np.count_nonzero instead of .all()/.any(): a third of the cost on the one-environment path)
         if np.count_nonzero(self.running) < self.num_envs:
             raise RuntimeError("step() called on an environment whose episode is over; reset it first")
+        actions = self.check_actions(actions)
+        if np.count_nonzero(self.present) < self.present.size:
+            actions = np.where(self.present, actions, STAY)  # absent agents' actions are ignored
+        return self.step_checked(actions)
+
+    def step_checked(self, actions: np.ndarray) -> StepEvents:
+        """:meth:`step` for an ``(N, A)`` int64 array already known valid, with ``STAY`` for absent
+        agents, in environments whose episodes are running (a face that guarantees this skips
+        the checks)."""
         n, a = self.num_envs, self.num_agents
         present = self.present.copy()
         previous = self.cells
-        moves = previous * NUM_ACTIONS + np.where(present, actions, STAY)
+        moves = previous * self._num_actions + actions
         self.cells = self._next_cell[moves]
+        terminated, truncated, collected = np.zeros((3, n, a), dtype=bool)  # one allocation
         events = StepEvents(
             rewards=np.zeros((n, a), dtype=np.float32),
-            terminated=np.zeros((n, a), dtype=bool),
-            truncated=np.zeros((n, a), dtype=bool),
+            terminated=terminated,
+            truncated=truncated,
             harmed_by=self._nobody_harmed.copy(),
-            collected=np.zeros((n, a), dtype=bool),
+            collected=collected,
             present_before=present,
             episode_over=np.zeros(n, dtype=bool),
         )
         self._resolve(previous, moves, events)
-        self.t += 1
-        self.episode_survival += self.present
+        self.t += self._one
         self.episode_return += events.rewards
-        ending = self.t >= self.max_cycles
-        if np.count_nonzero(ending):
-            events.truncated |= ending[:, None] & self.present & ~events.terminated
-            events.episode_over |= ending
-        self.running &= ~events.episode_over
+        # No environment can reach max_cycles for the next _clear_of_timeouts steps (resets only
+        # lower t), so the time limit is checked only when that count runs out.
+        self._clear_of_timeouts -= 1
+        if self._clear_of_timeouts <= 0:
+            ending = self.t >= self._time_limit
+            if np.count_nonzero(ending):
+                events.truncated |= ending[:, None] & self.present & ~events.terminated
+                events.episode_over |= ending
+            self._clear_of_timeouts = self.max_cycles - int(self.t.max())
+        if np.count_nonzero(events.episode_over):
+            self.running &= ~events.episode_over
         return events
+
+    def _leave(self, gone: np.ndarray) -> None:
+        """Take the agents where ``gone`` (``(N, A)`` bool) out of their environments."""
+        self.left_at = np.where(gone, self.t[:, None], self.left_at)
+        self.present &= ~gone
 
     # ------------------------------------------------------------------ infos
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
@@ -347,8 +373,11 @@ class GridEngine:
     def views(self, viewer: np.ndarray) -> Views:
         """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices)."""
         viewer = np.asarray(viewer, dtype=np.int64)
-        rows = np.arange(len(viewer))
-        return Views(viewer=viewer, own=rows * self.num_agents + viewer, first=(rows * self.obs_size)[:, None])
+        k, a = len(viewer), self.num_agents
+        own = np.arange(k) * a + viewer
+        first = np.repeat(np.arange(k) * self.obs_size, a).reshape(k, a)
+        size = k * self.obs_size
+        return Views(viewer, own, np.repeat(own, a).reshape(k, a), first, size, np.array(size))
 
     def paint(
         self, env_ids: np.ndarray, cells: np.ndarray, inventory: np.ndarray, present: np.ndarray, views: Views
@@ -360,22 +389,23 @@ class GridEngine:
         agent ``views.viewer[k]``: the window around the viewer, the other present agents drawn over
         it in agent order, the viewer's own cell drawn last.
         """
-        size = len(views.viewer) * self.obs_size
-        centre = cells.ravel().take(views.own)
+        # (operands of equal shape and 0-d constants: numpy's cheapest calls on the small arrays of
+        # the one-environment path)
+        centre = cells.take(views.own_each)  # (K, A): the viewer's cell, once per agent
         # each agent's index in the flattened canvas; absent or out-of-window agents go to one
-        # scratch element past the picture (so drawing needs no masks)
-        slots = self._slots.take((centre * self.num_cells)[:, None] + cells)
+        # scratch element past the pictures (so drawing needs no masks)
+        slots = self._slots.take(centre * self._num_cells + cells)
         if np.count_nonzero(present) < present.size:
             slots[~present] = OUTSIDE
         slots += views.first
-        np.minimum(slots, size, out=slots)
-        canvas = np.empty(size + 1, dtype=np.float32)
+        np.minimum(slots, views.scratch, out=slots)
+        canvas = np.empty(views.size + 1, dtype=np.float32)
         picture = canvas[:-1].reshape(-1, self.obs_size)
-        self._paint_background(env_ids, centre, picture)
+        self._paint_background(env_ids, centre[:, 0], picture)
         looks = self._appearance(inventory, views.viewer)
         for agent in range(self.num_agents):
             canvas[slots[:, agent]] = looks[:, agent] if isinstance(looks, np.ndarray) else looks
-        picture[:, self.obs_size // 2] = self._self_appearance(inventory.ravel().take(views.own), views.viewer)
+        picture[:, self.obs_size // 2] = self._self_appearance(inventory.take(views.own), views.viewer)
         return picture
 
     def observe(self, viewer: int, env_ids: np.ndarray | None = None) -> np.ndarray:
@@ -414,14 +444,6 @@ class GridEngine:
         other_cell = self.cells[self._rows, other] if np.ndim(other) else self.cells[:, other]
         return self._slots[self.cells[:, viewer] * self.num_cells + other_cell] < self.obs_size
 
-    def _work_array(self, shape: tuple[int, int]) -> np.ndarray:
-        """A reusable int64 work array of ``shape`` with garbage contents (large temporaries
-        allocated afresh every step cost more in page faults than in arithmetic)."""
-        size = shape[0] * shape[1]
-        if self._work.size < size:
-            self._work = np.empty(size, dtype=np.int64)
-        return self._work[:size].reshape(shape)
-
     def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
         """Index of the closest other present agent of ``viewer`` (torus distance, ties to the
         lowest index) and a mask of environments where such an agent exists."""
@@ -440,7 +462,7 @@ class GridEngine:
         own_b = self.episode_battery_return[env_ids, learner]
         oth_b = self.episode_battery_return[env_ids, other] if other is not None else np.zeros(len(env_ids))
         return {
-            "survival": self.episode_survival[env_ids, learner].copy(),
+            "survival": np.where(self.present[env_ids, learner], self.t[env_ids], self.left_at[env_ids, learner]),
             "harms": self.episode_harms[env_ids, learner].copy(),
             "batteries": self.inventory[env_ids, learner].copy(),
             "other_batteries": self.inventory[env_ids, other].copy() if other is not None else np.zeros(len(env_ids), np.int64),
@@ -459,9 +481,10 @@ class GridEngine:
         for key in self._state_keys():
             getattr(self, key)[...] = state[key]
         self.streams.load_state(state["streams"])
+        self._clear_of_timeouts = 0
 
     def _state_keys(self) -> tuple[str, ...]:
         return (
             "cells", "present", "inventory", "t", "running", "episode_return",
-            "episode_battery_return", "episode_harms", "episode_survival",
+            "episode_battery_return", "episode_harms", "left_at",
         )

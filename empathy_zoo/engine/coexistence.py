@@ -106,7 +106,7 @@ class CoexistenceEngine(GridEngine):
             events.truncated = CUT_SHORT[outcome]
             events.episode_over = outcome == CAT_HARMS_ROBOT
             self.episode_harms += HARMS_DONE[outcome]
-            self.present &= ~events.terminated
+            self._leave(events.terminated)
         events.rewards = (self.present & events.present_before).astype(np.float32)
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:

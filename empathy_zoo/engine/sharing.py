@@ -23,9 +23,12 @@ def battery_value(n: np.ndarray | int) -> np.ndarray:
     return 1.1 - 0.1 * np.asarray(n, dtype=np.float64)
 
 
+_ONE = np.array(1)
+
+
 def agent_value(batteries: np.ndarray) -> np.ndarray:
     """Observation value of an agent that holds ``batteries``: ``1 + batteries``."""
-    return batteries + 1
+    return batteries + _ONE  # (a 0-d array adds faster than the int 1)
 
 
 class SharingEngine(GridEngine):
@@ -45,9 +48,16 @@ class SharingEngine(GridEngine):
         self.obs_high = float(agent_value(self.num_batteries))
         self._free_cells = np.flatnonzero(~self.initial_batteries)
         self.batteries = np.zeros((self.num_envs, self.size * self.size), dtype=bool)
+        self._picture = np.zeros(self.batteries.shape, dtype=np.float32)
+        """The batteries as observation values (``BATTERY`` or ``FLOOR``), kept in step with
+        :attr:`batteries`: painting then reads them with one lookup."""
+
+    def _draw_batteries(self, env_ids: np.ndarray) -> None:
+        self._picture[env_ids] = np.where(self.batteries[env_ids], BATTERY, FLOOR)
 
     def _reset_extra(self, env_ids: np.ndarray) -> None:
         self.batteries[env_ids] = self.initial_batteries
+        self._draw_batteries(env_ids)
 
     def _blocked_start_cells(self, env_id: int) -> np.ndarray:
         return np.flatnonzero(self.batteries[env_id])
@@ -70,6 +80,7 @@ class SharingEngine(GridEngine):
         if not layout.any():
             raise ValueError("options['batteries'] must list at least one battery (with none the episode is over)")
         self.batteries[env_id] = layout
+        self._draw_batteries(np.array([env_id]))
         return {"batteries"}
 
     def _random_start(self, env_ids: np.ndarray) -> None:
@@ -81,8 +92,8 @@ class SharingEngine(GridEngine):
         self.cells[env_ids, HUMAN] = self._free_cells[human]
 
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
-        flat = self.cells + self._cell_base  # into batteries.ravel()
-        collects = self.batteries.ravel()[flat]
+        flat = self.cells + self._cell_base if self.num_envs > 1 else self.cells  # into batteries.ravel()
+        collects = self.batteries.take(flat)
         if not np.count_nonzero(collects):
             return
         tie_envs = np.flatnonzero(collects[:, ROBOT] & collects[:, HUMAN] & (flat[:, ROBOT] == flat[:, HUMAN]))
@@ -95,7 +106,9 @@ class SharingEngine(GridEngine):
         events.rewards = value.astype(np.float32)
         events.collected = collects
         self.episode_battery_return += value
-        self.batteries.ravel()[flat[collects]] = False
+        taken = flat[collects]
+        self.batteries.ravel()[taken] = False
+        self._picture.ravel()[taken] = FLOOR
         empty = ~self.batteries.any(axis=1)
         events.terminated[empty] = True
         events.episode_over = empty
@@ -107,18 +120,20 @@ class SharingEngine(GridEngine):
         return {"batteries": int(self.inventory[env_id, agent])}
 
     def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
-        window = self.window.take(centre, axis=0, out=self._work_array(out.shape), mode="clip")
+        window = self.window.take(centre, 0)
         if self.num_envs > 1:
-            window += (env_ids * self.num_cells)[:, None]  # into batteries.ravel()
-        np.multiply(self.batteries.ravel().take(window), np.float32(BATTERY - FLOOR), out=out)
-        if FLOOR:
-            out += np.float32(FLOOR)
+            window += (env_ids * self.num_cells)[:, None]  # into the flattened picture
+        self._picture.take(window, out=out, mode="clip")  # (the indices are valid; "clip" avoids a buffer)
 
     def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
         return agent_value(inventory)
 
     def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
         return agent_value(inventory)
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        super().load_state(state)
+        self._draw_batteries(self._rows)
 
     def _state_keys(self) -> tuple[str, ...]:
         return super()._state_keys() + ("batteries",)
