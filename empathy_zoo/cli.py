@@ -231,6 +231,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.training.runner import train_runs
     from empathy_zoo.training.spec import group_specs
     from leaderboard.report import write_leaderboard
+    from leaderboard.reproduction import write_reproduction
     from leaderboard.sweep import load_sweep, profile_path
 
     path = profile_path(args.profile)
@@ -257,10 +258,19 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
               position=0 if workers == 1 else workers, dynamic_ncols=True) as bar:
         train_runs(specs, out, options, on_result=lambda result: bar.update(1))
     _print_written(write_leaderboard(out, command=command))
+    print(f"{PROG}: wrote {write_reproduction(out, command=command)}")
     return 0
 
 
 # ---------------------------------------------------------------------------- leaderboard, lists, play
+def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
+    from leaderboard.reproduction import write_reproduction
+
+    produced_by = args.produced_by or "(the command that trained these runs is in each result file's config)"
+    print(f"{PROG}: wrote {write_reproduction(args.results, args.out, command=produced_by)}")
+    return 0
+
+
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     from leaderboard.report import write_leaderboard
 
@@ -405,6 +415,12 @@ def build_parser() -> argparse.ArgumentParser:
     board.add_argument("results", metavar="DIR", help="results directory (with runs/ or *.json)")
     board.add_argument("--out", metavar="OUT", help="where to write (default: DIR)")
     board.set_defaults(handler=cmd_leaderboard)
+
+    report = sub.add_parser("reproduction", help="check the paper's claims on existing results (REPRODUCTION.md)")
+    report.add_argument("results", metavar="DIR", help="results directory of a reproduce sweep")
+    report.add_argument("--out", metavar="PATH", help="where to write (default: DIR/REPRODUCTION.md)")
+    report.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
+    report.set_defaults(handler=cmd_reproduction)
 
     sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
     sub.add_parser("policies", help="list the registered fixed-agent policies").set_defaults(handler=cmd_policies)

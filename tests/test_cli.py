@@ -201,6 +201,7 @@ def test_reproduce_tiny_sweep_writes_leaderboard_and_resumes(tmp_path, capsys):
     board = (out / "LEADERBOARD.md").read_text()
     assert f"empathy-zoo reproduce --profile {sweep}" in board
     assert "Empathic DQN (β=0.5)" in board and "DQN" in board
+    assert f"empathy-zoo reproduce --profile {sweep}" in (out / "REPRODUCTION.md").read_text()
     assert "8 runs" in capsys.readouterr().out
 
     removed = files[3]
