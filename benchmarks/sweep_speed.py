@@ -14,16 +14,15 @@ Prints, in one run on this machine:
 from __future__ import annotations
 
 import argparse
-import platform
 import shutil
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 
+from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 from empathy_zoo.training.runner import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
@@ -86,28 +85,13 @@ def sb3_rate(steps: int) -> float | None:
     return steps / (time.perf_counter() - start)
 
 
-def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import os
-
-    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, torch {torch.__version__}, "
-            f"{torch.get_num_threads()} torch threads")
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps (noisier figures)")
     args = parser.parse_args()
     scale = 0.3 if args.quick else 1.0
     print(f"command: python benchmarks/sweep_speed.py{' --quick' if args.quick else ''}")
-    print(f"machine: {machine()}")
+    print("\n".join(describe_machine(f"torch {torch.__version__} ({torch.get_num_threads()} threads)")))
     peak = matmul_peak()
     print(f"(a) float32 matmul peak (2048², {torch.get_num_threads()} threads): {peak:.1f} GFLOP/s")
     sb3 = sb3_rate(int(2000 * scale))

@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import shlex
 import statistics
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -37,6 +35,7 @@ from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.training.runner import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
+from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 REPLAY = 500_000
 FINAL_EPSILON = 0.01
@@ -159,15 +158,10 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
 
 
 def machine() -> list[str]:
-    model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                  if line.startswith("model name")), platform.processor() or "unknown CPU")
     import stable_baselines3
 
-    return [
-        f"CPU: {model}, {os.cpu_count()} logical cores, load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}",
-        f"Python {platform.python_version()}, numpy {np.__version__}, torch {torch.__version__} "
-        f"({torch.get_num_threads()} thread(s)), stable-baselines3 {stable_baselines3.__version__}",
-    ]
+    return describe_machine(f"torch {torch.__version__} ({torch.get_num_threads()} thread(s))",
+                            f"stable-baselines3 {stable_baselines3.__version__}")
 
 
 def main() -> None:
