@@ -84,4 +84,8 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
                 self._last[agent] = (observations[agent], infos.get(agent, {}))
 
     def _learners(self, values: dict) -> dict:
-        return {agent: value for agent, value in values.items() if agent not in self.policies}
+        """A copy of ``values`` without the fixed agents."""
+        kept = dict(values)
+        for agent in self.policies:
+            kept.pop(agent, None)
+        return kept

@@ -104,14 +104,16 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         if len(actions) != len(live):
             missing = [agent for agent in live if agent not in actions]
             raise ValueError(f"no action given for live agent(s) {missing}")
-        events = self.engine.step_checked(np.array([values], dtype=np.int64))
+        engine = self.engine
+        events = engine.step_checked(np.array([values], dtype=np.int64))
         views = self._paint_views()
-        rewards, terminated, truncated = events.rewards[0].tolist(), events.terminated[0].tolist(), events.truncated[0].tolist()
-        observations = {agent: views[index[agent]] for agent in live}
-        rewards = {agent: rewards[index[agent]] for agent in live}
-        terminations = {agent: terminated[index[agent]] for agent in live}
-        truncations = {agent: truncated[index[agent]] for agent in live}
-        infos = {agent: self.engine.step_info(events, 0, index[agent]) for agent in live}
+        reward, terminated, truncated = events.rewards[0].tolist(), events.terminated[0].tolist(), events.truncated[0].tolist()
+        observations, rewards, terminations, truncations, infos = {}, {}, {}, {}, {}
+        for agent in live:
+            i = index[agent]
+            observations[agent] = views[i]
+            rewards[agent], terminations[agent], truncations[agent] = reward[i], terminated[i], truncated[i]
+            infos[agent] = engine.step_info(events, 0, i)
         self.agents = [agent for agent in live if not (terminations[agent] or truncations[agent])]
         return observations, rewards, terminations, truncations, infos
 

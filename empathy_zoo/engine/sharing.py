@@ -114,10 +114,10 @@ class SharingEngine(GridEngine):
         events.episode_over = empty
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
-        return {"batteries": int(self.inventory[env_id, agent])}
+        return {"batteries": self.inventory.item(env_id, agent)}
 
     def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
-        return {"batteries": int(self.inventory[env_id, agent])}
+        return {"batteries": self.inventory.item(env_id, agent)}
 
     def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
         window = self.window.take(centre, 0)
