@@ -267,3 +267,53 @@ def test_unplaced_agent_is_drawn_out_of_contact():
         cells = positions(env)
         assert cells[ROBOT] == (3, 3)
         assert torus_distance(np.array(cells[ROBOT]), np.array(cells[CAT]), SIZE) > 1
+
+
+def oracle(robot, cat, robot_action, cat_action, size=SIZE):
+    """Who harms whom, written out from SPEC §2 in plain Python: 'robot', 'cat' or None."""
+    moves = {UP: (-1, 0), DOWN: (1, 0), LEFT: (0, -1), RIGHT: (0, 1), STAY: (0, 0)}
+
+    def move(cell, action):
+        return (cell[0] + moves[action][0]) % size, (cell[1] + moves[action][1]) % size
+
+    def shortest(d):
+        d %= size
+        return d - size if d > size // 2 else d
+
+    r, c = move(robot, robot_action), move(cat, cat_action)
+    down, right = (c[0] - r[0]) % size, (c[1] - r[1]) % size  # where the cat is, seen from the robot
+    if (down, right) == (1, 0) or (down, right) == (0, size - 1):
+        return "robot"  # the robot is directly above, or directly to the right of, the cat
+    if (down, right) == (size - 1, 0) or (down, right) == (0, 1):
+        return "cat"
+    if (down, right) == (0, 0):
+        rows, cols = shortest(cat[0] - robot[0]), shortest(cat[1] - robot[1])  # before the move
+        if rows != 0:
+            return "robot" if rows > 0 else "cat"  # the one that was above
+        return "robot" if cols < 0 else "cat"  # the one that was to the right
+    return None
+
+
+@pytest.mark.parametrize("size", [5, 7])
+def test_every_start_and_action_pair_against_the_spec(size):
+    """All legal start pairs × all 25 action pairs, stepped at once in a batched engine."""
+    from empathy_zoo.engine.coexistence import CoexistenceEngine
+
+    cells = [(r, c) for r in range(size) for c in range(size)]
+    cases = [
+        (robot, cat, a, b)
+        for robot in cells
+        for cat in cells
+        if torus_distance(np.array(robot), np.array(cat), size) > 1
+        for a in Action
+        for b in Action
+    ]
+    engine = CoexistenceEngine(len(cases), size=size, view=3)
+    engine.reset(seeds=[0] * len(cases))
+    engine.cells[:] = [[robot[0] * size + robot[1], cat[0] * size + cat[1]] for robot, cat, _, _ in cases]
+    events = engine.step(np.array([[a, b] for _, _, a, b in cases]))
+    harmer = np.array([oracle(*case, size=size) or "" for case in cases])
+    np.testing.assert_array_equal(events.harmed_by[:, 1] == 0, harmer == "robot")  # the cat harmed by the robot
+    np.testing.assert_array_equal(events.harmed_by[:, 0] == 1, harmer == "cat")
+    np.testing.assert_array_equal(events.rewards, np.stack([harmer != "cat", harmer != "robot"], axis=1))
+    assert (harmer == "robot").any() and (harmer == "cat").any() and (harmer == "").any()

@@ -75,13 +75,21 @@ class CoexistenceEngine(GridEngine):
             if not self._in_contact(np.array([dr, dc]))
         ]
         self._start_offsets = np.array(offsets, dtype=np.int64)
-        # harm_outcome of every (robot cell and action, cat cell and action), looked up each step
-        robot_move, cat_move = (x.ravel() for x in np.indices((self.num_cells * NUM_ACTIONS,) * 2))
-        robot_cell, robot_action = np.divmod(robot_move, NUM_ACTIONS)
-        cat_cell, cat_action = np.divmod(cat_move, NUM_ACTIONS)
-        before = self._cell_rc[cat_cell] - self._cell_rc[robot_cell]
+        # The outcome depends on the cat's displacement before the move and the two actions:
+        # tabulate harm_outcome over those, then spread the table over every (robot cell and
+        # action, cat cell and action) so that a step looks it up once.
+        delta, robot_action, cat_action = (x.ravel() for x in np.indices((self.num_cells, NUM_ACTIONS, NUM_ACTIONS)))
+        before = self._cell_rc[delta]
         after = before + MOVES[cat_action] - MOVES[robot_action]
-        self._outcomes = harm_outcome(before, after, self.size).astype(np.int8)
+        by_delta = harm_outcome(before, after, self.size).astype(np.int8).reshape(self.num_cells, NUM_ACTIONS, -1)
+        rc = self._cell_rc
+        displacement = (rc[None, :, :] - rc[:, None, :]) % self.size  # [robot cell, cat cell]
+        displacement = displacement[..., 0] * self.size + displacement[..., 1]
+        actions = np.arange(NUM_ACTIONS)
+        self._outcomes = by_delta[
+            displacement[:, None, :, None], actions[None, :, None, None], actions[None, None, None, :]
+        ].ravel()
+        """``[(robot cell·5 + robot action)·(cells·5) + cat cell·5 + cat action]``: the step's outcome."""
         self._move_stride = self.num_cells * NUM_ACTIONS
 
     def _in_contact(self, delta: np.ndarray) -> bool:

@@ -102,7 +102,7 @@ class SharingEngine(GridEngine):
             collects[tie_envs, ROBOT] = to_robot
             collects[tie_envs, HUMAN] = ~to_robot
         self.inventory += collects
-        value = battery_value(self.inventory) * collects
+        value = np.where(collects, battery_value(self.inventory), 0.0)
         events.rewards = value.astype(np.float32)
         events.collected = collects
         self.episode_battery_return += value
