@@ -184,8 +184,8 @@ class GridEngine:
         out.fill(0.0)
 
     def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float:
-        """How each agent holding ``inventory`` (``(K, A)``) looks to ``viewer`` (``(K,)``); a
-        scalar or anything broadcasting to ``(K, A)``."""
+        """How each agent holding ``inventory`` (``(K, A)``) looks to ``viewer`` (``(K,)``): a
+        scalar (all look alike) or a ``(K, A)`` array."""
         raise NotImplementedError
 
     def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float:
