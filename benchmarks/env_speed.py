@@ -20,13 +20,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import shlex
 import statistics
 import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import pettingzoo
@@ -35,6 +33,7 @@ from empathy_zoo import ENVIRONMENTS, EmpathyWrapper, FixedAgents
 from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.policies import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
+from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 ENVS = ("coexistence_v0", "sharing_v0")
 VECTOR_SIZES = (1, 64, 4096)
@@ -84,18 +83,8 @@ def vector_rates(name: str, num_envs: int, steps: int, repeats: int) -> tuple[fl
     return timed(run, repeats)
 
 
-def machine() -> list[str]:
-    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                if line.startswith("model name")), platform.processor() or "unknown CPU")
-    return [
-        f"CPU: {cpu}, {os.cpu_count()} cores",
-        f"Python {platform.python_version()}, numpy {np.__version__}, pettingzoo {pettingzoo.__version__}, "
-        f"{platform.system()} {platform.release()}",
-    ]
-
-
 def load() -> str:
-    return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def main() -> None:
@@ -123,7 +112,7 @@ def main() -> None:
         print(f"| {label:<{width}} | {cells} |")
     print()
     print("command: python " + shlex.join(sys.argv))
-    for line in machine():
+    for line in describe_machine(f"pettingzoo {pettingzoo.__version__}"):
         print(line)
     print(f"load average (1, 5, 15 min): {load_before} before, {load()} after")
 
