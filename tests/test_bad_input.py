@@ -387,3 +387,12 @@ def test_equality_on_arrays_and_negative_rewards():
         equality(-0.1, 1.0)
     with pytest.raises(ValueError, match="non-negative"):
         equality(np.array([1.0, 2.0]), np.array([1.0, -2.0]))
+
+
+def test_a_battery_layout_larger_than_the_default_is_refused() -> None:
+    from empathy_zoo import sharing_v0
+
+    env = sharing_v0.parallel_env()
+    cells = [(r, c) for r in range(7) for c in range(7) if (r, c) not in ((0, 0), (0, 1))][:10]
+    with pytest.raises(ValueError, match="at most 9"):
+        env.reset(seed=0, options={"batteries": cells, "positions": {"robot_0": (0, 0), "human_0": (0, 1)}})

@@ -79,6 +79,11 @@ class SharingEngine(GridEngine):
             layout[row * self.size + col] = True
         if not layout.any():
             raise ValueError("options['batteries'] must list at least one battery (with none the episode is over)")
+        if layout.sum() > self.num_batteries:
+            raise ValueError(
+                f"options['batteries'] lists {int(layout.sum())} batteries; at most {self.num_batteries} fit this "
+                f"{self.size}x{self.size} env (its observation space holds agent values up to 1 + {self.num_batteries})"
+            )
         self.batteries[env_id] = layout
         self._draw_batteries(np.array([env_id]))
         return {"batteries"}
