@@ -59,13 +59,8 @@ observe had it exchanged places with `other` (here: `other`'s own observation); 
 
 from __future__ import annotations
 
-from typing import Any
-
-from pettingzoo.utils.conversions import parallel_to_aec
-from pettingzoo.utils.env import AECEnv
-
 from empathy_zoo.engine.coexistence import CoexistenceEngine
-from empathy_zoo.parallel import GridParallelEnv
+from empathy_zoo.parallel import GridParallelEnv, env_constructors, grid_metadata
 
 __all__ = ["raw_env", "parallel_env", "env"]
 
@@ -74,19 +69,7 @@ class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
     """Coexistence as a ``ParallelEnv`` (see the module documentation)."""
 
     engine_class = CoexistenceEngine
-    metadata = {
-        "name": "coexistence_v0",
-        "render_modes": ["ansi", "rgb_array"],
-        "is_parallelizable": True,
-        "render_fps": 5,
-    }
+    metadata = grid_metadata("coexistence_v0")
 
 
-def parallel_env(**kwargs: Any) -> raw_env:
-    """Coexistence with the parallel API."""
-    return raw_env(**kwargs)
-
-
-def env(**kwargs: Any) -> AECEnv:
-    """Coexistence with the AEC API (``parallel_to_aec`` over :func:`parallel_env`)."""
-    return parallel_to_aec(parallel_env(**kwargs))
+parallel_env, env = env_constructors(raw_env)

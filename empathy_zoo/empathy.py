@@ -32,12 +32,6 @@ class EmpathyWrapper(BaseParallelWrapper, EzPickle):
         self.in_view_only = bool(in_view_only)
         self._base = env.unwrapped
 
-    def observation_space(self, agent: str) -> Any:
-        return self.env.observation_space(agent)
-
-    def action_space(self, agent: str) -> Any:
-        return self.env.action_space(agent)
-
     def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
         observations, infos = self.env.reset(seed=seed, options=options)
         return observations, self._with_swaps(infos)

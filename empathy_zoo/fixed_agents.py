@@ -47,12 +47,6 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         self._step = 0
         self.agents: list[str] = []
 
-    def observation_space(self, agent: str) -> Any:
-        return self.env.observation_space(agent)
-
-    def action_space(self, agent: str) -> Any:
-        return self.env.action_space(agent)
-
     def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
         observations, infos = self.env.reset(seed=seed, options=options)
         for agent, policy in self.policies.items():

@@ -2,19 +2,21 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 from pettingzoo import ParallelEnv
+from pettingzoo.utils.conversions import parallel_to_aec
+from pettingzoo.utils.env import AECEnv
 
 from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.render import render_rgb, render_text
 
-__all__ = ["GridParallelEnv"]
+__all__ = ["GridParallelEnv", "grid_metadata", "env_constructors"]
 
 AgentID = str
 STAY = int(Action.STAY)
@@ -170,3 +172,23 @@ class GridParallelEnv(ParallelEnv, EzPickle):
 
     def close(self) -> None:
         pass
+
+
+def grid_metadata(name: str) -> dict[str, Any]:
+    """The PettingZoo ``metadata`` of a gridworld named ``name``."""
+    return {"name": name, "render_modes": ["ansi", "rgb_array"], "is_parallelizable": True, "render_fps": 5}
+
+
+def env_constructors(raw: type[GridParallelEnv]) -> tuple[Callable[..., GridParallelEnv], Callable[..., AECEnv]]:
+    """The module-level ``parallel_env`` and ``env`` (AEC, via ``parallel_to_aec``) of ``raw``."""
+    name = raw.metadata["name"]
+
+    def parallel_env(**kwargs: Any) -> GridParallelEnv:
+        return raw(**kwargs)
+
+    def env(**kwargs: Any) -> AECEnv:
+        return parallel_to_aec(raw(**kwargs))
+
+    parallel_env.__doc__ = f"``{name}`` with the parallel API (keyword arguments: see the module documentation)."
+    env.__doc__ = f"``{name}`` with the AEC API (``parallel_to_aec`` over ``parallel_env``)."
+    return parallel_env, env

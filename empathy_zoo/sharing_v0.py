@@ -51,13 +51,8 @@ it in `infos`.
 
 from __future__ import annotations
 
-from typing import Any
-
-from pettingzoo.utils.conversions import parallel_to_aec
-from pettingzoo.utils.env import AECEnv
-
 from empathy_zoo.engine.sharing import SharingEngine
-from empathy_zoo.parallel import GridParallelEnv
+from empathy_zoo.parallel import GridParallelEnv, env_constructors, grid_metadata
 
 __all__ = ["raw_env", "parallel_env", "env"]
 
@@ -66,19 +61,7 @@ class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
     """Sharing as a ``ParallelEnv`` (see the module documentation)."""
 
     engine_class = SharingEngine
-    metadata = {
-        "name": "sharing_v0",
-        "render_modes": ["ansi", "rgb_array"],
-        "is_parallelizable": True,
-        "render_fps": 5,
-    }
+    metadata = grid_metadata("sharing_v0")
 
 
-def parallel_env(**kwargs: Any) -> raw_env:
-    """Sharing with the parallel API."""
-    return raw_env(**kwargs)
-
-
-def env(**kwargs: Any) -> AECEnv:
-    """Sharing with the AEC API (``parallel_to_aec`` over :func:`parallel_env`)."""
-    return parallel_to_aec(parallel_env(**kwargs))
+parallel_env, env = env_constructors(raw_env)
