@@ -54,7 +54,7 @@ observe had it exchanged places with `other` (here: `other`'s own observation); 
 * `render_mode`: `None`, `"ansi"` (text grid: `R` robot, `C` cat, `*` both) or `"rgb_array"`.
 
 ## Version history
-* v0: first release, following SPEC.md §1–2 of this suite.
+* v0: first release, following the behaviour contract in docs/SPEC.md §1–2.
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ it in `infos`.
 * `render_mode`: `None`, `"ansi"` (`R` robot, `H` human, `o` battery, `*` both agents) or `"rgb_array"`.
 
 ## Version history
-* v0: first release, following SPEC.md §1, §3 of this suite.
+* v0: first release, following the behaviour contract in docs/SPEC.md §1, §3.
 """
 
 from __future__ import annotations
