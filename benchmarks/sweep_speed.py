@@ -97,10 +97,13 @@ def main() -> None:
     sb3 = sb3_rate(int(2000 * scale))
     per_step = flops_per_run_step()
     rows = []
-    for k, steps, workers in ((1, 3000, 1), (8, 1200, 1), (32, 500, 1), (64, 300, 1), (25, 800, 2), (32, 700, 2)):
-        rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers)
+    for k, steps, workers, threads in (
+        (1, 3000, 1, 1), (8, 1200, 1, 1), (32, 500, 1, 1), (32, 500, 1, 2), (64, 300, 1, 2), (25, 800, 2, 1), (32, 700, 2, 1),
+    ):
+        rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers, threads=threads)
         rows.append((k, workers, rate))
-        print(f"(b) K={k:>3} runs × {workers} process(es): {rate:9.0f} env-steps/s", flush=True)
+        print(f"(b) K={k:>3} runs × {workers} process(es), {threads} torch thread(s) each: {rate:9.0f} env-steps/s",
+              flush=True)
     if sb3:
         print(f"(c) SB3 DQN (same MLP, batch 32, 1 update/step): {sb3:.0f} env-steps/s")
     best = max(rows, key=lambda r: r[2])
