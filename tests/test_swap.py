@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
-from empathy_zoo.engine.coexistence import OTHER_AGENT, OWN_CELL
 from empathy_zoo.engine.sharing import agent_value
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.policies import DEFAULT_POLICIES
