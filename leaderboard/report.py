@@ -2,47 +2,23 @@
 
 from __future__ import annotations
 
-import importlib.metadata
 import os
-import subprocess
 from pathlib import Path
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, result_files, score_runs,
 )
 from leaderboard.plots import plot_learning_curves
 from leaderboard.tables import Provenance, csv_text, html_report, markdown_report
 
-__all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "package_version", "git_commit",
-           "write_leaderboard"]
+__all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "write_leaderboard"]
 
 MARKDOWN_NAME = "LEADERBOARD.md"
 CSV_NAME = "leaderboard.csv"
 HTML_NAME = "leaderboard.html"
 FIGURES_DIR = "figures"
-_FALLBACK_VERSION = "0.1.0"
-
-
-def package_version() -> str:
-    """The installed empathy-zoo version, or ``"0.1.0"`` when it is not installed."""
-    try:
-        return importlib.metadata.version("empathy-zoo")
-    except importlib.metadata.PackageNotFoundError:
-        return _FALLBACK_VERSION
-
-
-def git_commit(cwd: str | os.PathLike[str] | None = None) -> str | None:
-    """Short commit of the git checkout holding ``cwd`` (default: this package), else None."""
-    try:
-        completed = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=cwd or Path(__file__).resolve().parent,
-            capture_output=True, text=True, timeout=10, check=False,
-        )
-    except (OSError, subprocess.SubprocessError):
-        return None
-    commit = completed.stdout.strip()
-    return commit if completed.returncode == 0 and commit else None
 
 
 def write_leaderboard(

@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import datetime as _dt
-import subprocess
-from functools import lru_cache
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.provenance import git_commit, package_version
 
-__all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result", "package_version", "git_commit"]
+__all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result"]
 
 SCHEMA = 1
 RUNS_DIR = "runs"
@@ -20,27 +18,6 @@ RUNS_DIR = "runs"
 
 def result_path(out_dir: Path, run_id: str) -> Path:
     return Path(out_dir) / RUNS_DIR / f"{run_id}.json"
-
-
-@lru_cache(maxsize=1)
-def package_version() -> str:
-    try:
-        return metadata.version("empathy-zoo")
-    except metadata.PackageNotFoundError:
-        return "0.1.0"
-
-
-@lru_cache(maxsize=1)
-def git_commit() -> str | None:
-    """Short commit of the source tree the package runs from, if it is a git checkout."""
-    try:
-        done = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).resolve().parent,
-            capture_output=True, text=True, timeout=10, check=False,
-        )
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return done.stdout.strip() or None if done.returncode == 0 else None
 
 
 def empty_columns() -> dict[str, list]:
