@@ -51,6 +51,9 @@ class VectorStep:
     """(N, A) int64: index of the agent that harmed each agent this step, else -1."""
     collected: np.ndarray
     """(N, A) bool: the agent collected a battery this step."""
+    battery_return: np.ndarray
+    """(N, A) float64: each agent's battery reward so far in the episode, this step included
+    (taken before any autoreset)."""
     finished: dict[str, np.ndarray]
     """Metrics of the episodes that ended this step (SPEC §5, for the first learner), with
     ``"env"`` giving each one's environment index."""
@@ -129,6 +132,7 @@ class VectorEnv:
             observations = engine.observe(index) if policy.needs_observation else None
             full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
         events = engine.step(full)
+        battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
         swapped, valid = self._swapped_closest()
         over = events.episode_over
@@ -148,7 +152,8 @@ class VectorEnv:
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
-            episode_over=over, harmed_by=events.harmed_by, collected=events.collected, finished=finished,
+            episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
+            battery_return=battery_return, finished=finished,
         )
 
     # ------------------------------------------------------------------ observations

@@ -216,3 +216,20 @@ def test_patrolling_human_path_in_the_env():
         expected.append(cell)
     assert path == expected
     assert path[:2] == [(2, 0), (2, 1)] and path[7] == (1, 6) and path[14] == (0, 5)
+
+
+def test_vector_step_reports_the_episode_battery_return_before_autoreset():
+    from empathy_zoo.vector import VectorEnv
+
+    venv = VectorEnv("sharing_v0", 4, fixed={"human_0": "patrol"})
+    venv.reset(seed=3)
+    rng = np.random.default_rng(0)
+    running = np.zeros((4, 2))
+    ended = 0
+    for _ in range(400):
+        step = venv.step(rng.integers(0, 5, (4, 1)))
+        running += step.rewards  # Sharing pays battery rewards only
+        np.testing.assert_allclose(step.battery_return, running)
+        ended += step.episode_over.sum()
+        running[step.episode_over] = 0.0
+    assert ended > 0, "some episode must end (and be reset) within 400 steps"

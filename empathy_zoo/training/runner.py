@@ -195,7 +195,6 @@ def train_ensemble(
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, 5, options.device)
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
-    battery = np.zeros((k, len(venv.agents)))
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
     step, elapsed = 0, 0.0
     ckpt = checkpoint_path(out_dir, specs)
@@ -205,7 +204,7 @@ def train_ensemble(
             raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
         learner.load_state_dict(saved["learner"])
         _load_vector_state(venv, from_safe(saved["vector"]))
-        obs, battery = from_safe(saved["obs"]), from_safe(saved["battery"])
+        obs = from_safe(saved["obs"])
         for log, columns in zip(logs, saved["logs"]):
             log.columns = columns
         evaluations = saved["evaluations"]
@@ -229,8 +228,7 @@ def train_ensemble(
     while step < total:
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
-        collected = result.collected
-        battery += np.where(collected, result.rewards, 0.0)
+        battery = result.battery_return
         batch = StepBatch(
             obs=obs[:, None, :],
             actions=actions,
@@ -249,7 +247,6 @@ def train_ensemble(
         finished = result.finished
         for j, env_id in enumerate(finished["env"]):
             logs[env_id].add(step, finished, j)
-        battery[result.episode_over] = 0.0
         obs = result.observations[:, 0]
         if step % first.eval_interval == 0 or step == total:
             per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)
@@ -259,7 +256,7 @@ def train_ensemble(
             save_checkpoint(ckpt, {
                 "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
                 "learner": learner.state_dict(), "vector": to_safe(_vector_state(venv)),
-                "obs": to_safe(obs), "battery": to_safe(battery),
+                "obs": to_safe(obs),
                 "logs": [log.columns for log in logs], "evaluations": evaluations,
             })
         if options.progress and (step % 500 == 0 or step == total):
