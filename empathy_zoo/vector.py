@@ -193,7 +193,28 @@ class VectorEnv:
 
     # ------------------------------------------------------------------ checkpoint
     def state(self) -> dict[str, Any]:
-        return {"engine": self.engine.state(), "observations": None if self._observations is None else self._observations.copy()}
+        """Everything needed to continue exactly (for checkpoints): the engine, the numeric state
+        of the batched fixed policies, and the observations to act on."""
+        policies = {
+            str(index): {key: value for key, value in vars(policy).items() if isinstance(value, (np.ndarray, int, float))}
+            for index, policy in self.fixed.items()
+        }
+        observations = None if self._observations is None else self._observations.copy()
+        return {"engine": self.engine.state(), "policies": policies, "observations": observations}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        """Continue from :meth:`state`."""
+        self.engine.load_state(state["engine"])
+        for index, values in state["policies"].items():
+            policy = self.fixed[int(index)]
+            for key, value in values.items():
+                current = getattr(policy, key)
+                if isinstance(current, np.ndarray):
+                    current[...] = value
+                else:
+                    setattr(policy, key, value)
+        if state["observations"] is not None:
+            self._observations = np.array(state["observations"], dtype=np.float32)
 
 
 def _by_learner(columns: list[np.ndarray]) -> np.ndarray:

@@ -152,25 +152,6 @@ class _EpisodeLog:
         return float(np.mean(values)) if values else float("nan")
 
 
-def _vector_state(venv: VectorEnv) -> dict[str, Any]:
-    policies = {}
-    for index, policy in venv.fixed.items():
-        policies[str(index)] = {k: v for k, v in vars(policy).items() if isinstance(v, (np.ndarray, int, float))}
-    return {"engine": venv.engine.state(), "policies": policies}
-
-
-def _load_vector_state(venv: VectorEnv, state: dict[str, Any]) -> None:
-    venv.engine.load_state(state["engine"])
-    for index, values in state["policies"].items():
-        policy = venv.fixed[int(index)]
-        for key, value in values.items():
-            current = getattr(policy, key)
-            if isinstance(current, np.ndarray):
-                current[...] = value
-            else:
-                setattr(policy, key, value)
-
-
 def train_ensemble(
     specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True
 ) -> list[dict[str, Any]]:
@@ -203,7 +184,7 @@ def train_ensemble(
         if saved["run_ids"] != [s.run_id for s in specs]:
             raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
         learner.load_state_dict(saved["learner"])
-        _load_vector_state(venv, from_safe(saved["vector"]))
+        venv.load_state(from_safe(saved["vector"]))
         obs = from_safe(saved["obs"])
         for log, columns in zip(logs, saved["logs"]):
             log.columns = columns
@@ -255,7 +236,7 @@ def train_ensemble(
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
             save_checkpoint(ckpt, {
                 "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
-                "learner": learner.state_dict(), "vector": to_safe(_vector_state(venv)),
+                "learner": learner.state_dict(), "vector": to_safe(venv.state()),
                 "obs": to_safe(obs),
                 "logs": [log.columns for log in logs], "evaluations": evaluations,
             })
