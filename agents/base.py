@@ -34,7 +34,9 @@ class StepBatch:
     swapped_next_obs: np.ndarray
     """(K, M, V) the learner's swapped observation with its closest other agent at the end of the step."""
     other_present: np.ndarray
-    """(K, M) that other agent is still in the environment (its swapped observation is meaningful)."""
+    """(K, M) that other agent is still in the environment and its episode has not ended for good
+    at the end of the step, so its swapped value may bootstrap (SPEC §6: False for a harmed cat,
+    and for the human once the last battery is taken; a time-limit truncation keeps it True)."""
     harmed_other: np.ndarray
     """(K, M) number of agents the learner harmed this step."""
     battery_return: np.ndarray

@@ -39,6 +39,9 @@ class VectorStep:
     end of this step (before autoreset); zeros where :attr:`swapped_valid` is False."""
     swapped_valid: np.ndarray
     """(N, L) bool: that other agent is still present (and in view, with ``in_view_only``)."""
+    swapped_other_terminated: np.ndarray
+    """(N, L) bool: that other agent's episode ended for good this step (a harmed cat; the human
+    when the last battery is taken). A time-limit truncation is not termination."""
     rewards: np.ndarray
     """(N, A) float32: the environment's rewards of all agents."""
     terminated: np.ndarray
@@ -134,7 +137,8 @@ class VectorEnv:
         events = engine.step(full)
         battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
-        swapped, valid = self._swapped_closest()
+        swapped, valid, other = self._swapped_closest()
+        other_terminated = np.take_along_axis(events.terminated, other, axis=1)
         over = events.episode_over
         done_ids = np.flatnonzero(over)
         finished: dict[str, np.ndarray] = {"env": done_ids}
@@ -151,6 +155,7 @@ class VectorEnv:
         self._observations = observations
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
+            swapped_other_terminated=other_terminated,
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
             battery_return=battery_return, finished=finished,
@@ -161,18 +166,21 @@ class VectorEnv:
         """``(n, L, V)`` observations of the learners (in ``env_ids``, default all)."""
         return _by_learner([self.engine.observe(viewer, env_ids) for viewer in self.learner_index])
 
-    def _swapped_closest(self) -> tuple[np.ndarray, np.ndarray]:
+    def _swapped_closest(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each learner's swapped observation with its closest other agent, ``(N, L, V)``; where
+        that agent exists, ``(N, L)``; and its index, ``(N, L)``."""
         engine = self.engine
-        swapped, valid = [], []
+        swapped, valid, others = [], [], []
         for viewer in self.learner_index:
             other, exists = engine.closest_other(viewer)
+            others.append(other)
             if self.in_view_only:
                 exists &= engine.in_view(viewer, other)
             picture = engine.observe_swapped(viewer, other)
             picture[~exists] = 0.0
             swapped.append(picture)
             valid.append(exists)
-        return _by_learner(swapped), np.stack(valid, axis=1)
+        return _by_learner(swapped), np.stack(valid, axis=1), np.stack(others, axis=1)
 
     def swapped_observations(self, viewer: str) -> tuple[np.ndarray, np.ndarray]:
         """``(N, A, V)`` swapped observations of ``viewer`` with every agent, and an ``(N, A)``

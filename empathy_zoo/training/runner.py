@@ -31,9 +31,9 @@ from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_che
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.results import build_result, empty_columns, result_path, write_result
 from empathy_zoo.training.spec import RunSpec, group_specs
-from empathy_zoo.vector import VectorEnv
+from empathy_zoo.vector import VectorEnv, VectorStep
 
-__all__ = ["RunnerOptions", "train_runs", "train_ensemble", "checkpoint_path"]
+__all__ = ["RunnerOptions", "train_runs", "train_ensemble", "checkpoint_path", "learner_batch"]
 
 STREAM_ENV = 20
 CHECKPOINT_DIR = "checkpoints"
@@ -209,20 +209,7 @@ def train_ensemble(
     while step < total:
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
-        battery = result.battery_return
-        batch = StepBatch(
-            obs=obs[:, None, :],
-            actions=actions,
-            rewards=result.rewards[:, robot, None],
-            terminated=result.terminated[:, robot, None],
-            next_obs=result.final_observations[:, 0, None, :],
-            swapped_next_obs=result.swapped[:, 0, None, :],
-            other_present=result.swapped_valid[:, 0, None],
-            harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
-            battery_return=battery[:, robot, None],
-            other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
-            truncated=result.truncated[:, robot, None],
-        )
+        batch = learner_batch(obs, actions, result, robot, other)
         learner.observe(batch)
         step += 1
         finished = result.finished
@@ -255,6 +242,28 @@ def train_ensemble(
     if ckpt.exists():
         ckpt.unlink()
     return results
+
+
+def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep, robot: int, other: int | None) -> StepBatch:
+    """What the learner is told of one step of every run (one env per run): the environment's
+    facts, unshaped. The other-term may bootstrap only while the closest other agent is present
+    and not terminal (SPEC §6): a harmed cat has left, and the human's episode ends for good
+    when the last battery is taken; a time-limit truncation still bootstraps."""
+    k = actions.shape[0]
+    battery = result.battery_return
+    return StepBatch(
+        obs=obs[:, None, :],
+        actions=actions,
+        rewards=result.rewards[:, robot, None],
+        terminated=result.terminated[:, robot, None],
+        next_obs=result.final_observations[:, 0, None, :],
+        swapped_next_obs=result.swapped[:, 0, None, :],
+        other_present=(result.swapped_valid[:, 0] & ~result.swapped_other_terminated[:, 0])[:, None],
+        harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
+        battery_return=battery[:, robot, None],
+        other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
+        truncated=result.truncated[:, robot, None],
+    )
 
 
 def _live(logs: list[_EpisodeLog], learner: Any, steps_per_second: float) -> dict[str, str]:

@@ -1,0 +1,72 @@
+"""SPEC §6: the empathic other-term is 0 when the other agent is terminal at t+1, and still
+bootstraps when it is only truncated (time limit)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from empathy_zoo.training.runner import learner_batch
+from empathy_zoo.vector import VectorEnv
+
+ROBOT = 0
+UP, RIGHT, STAY = 0, 3, 4
+
+
+def _placed(env: str, positions: dict, fixed: dict, max_cycles: int = 500, **options) -> VectorEnv:
+    venv = VectorEnv(env, 1, fixed=fixed, max_cycles=max_cycles)
+    venv.reset(seed=0)
+    venv.engine.reset(np.array([0]), options={"positions": positions, **options})
+    venv._observations = venv._observe_learners()
+    return venv
+
+
+def _step(venv: VectorEnv, action: int):
+    obs = venv._observations[:, 0]
+    actions = np.array([[action]])
+    result = venv.step(actions)
+    return result, learner_batch(obs, actions, result, ROBOT, 1)
+
+
+def test_sharing_ends_with_the_human_terminal_and_no_other_term() -> None:
+    # the last battery sits right of the robot; the human stays far away
+    venv = _placed("sharing_v0", {"robot_0": (0, 0), "human_0": (4, 4)}, {"human_0": "stay"}, batteries=[(0, 1)])
+    result, batch = _step(venv, RIGHT)
+    assert result.episode_over[0] and result.terminated[0].all()
+    assert result.swapped_valid[0, 0]  # the human is still in the grid: its picture exists ...
+    assert result.swapped_other_terminated[0, 0]  # ... but its episode is over for good
+    assert not batch.other_present[0, 0]
+    assert batch.terminated[0, 0]
+
+
+def test_sharing_time_limit_keeps_the_other_term() -> None:
+    venv = _placed("sharing_v0", {"robot_0": (0, 0), "human_0": (4, 4)}, {"human_0": "stay"}, max_cycles=1)
+    result, batch = _step(venv, STAY)
+    assert result.episode_over[0] and result.truncated[0].all() and not result.terminated[0].any()
+    assert batch.other_present[0, 0]
+
+
+def test_sharing_mid_episode_keeps_the_other_term() -> None:
+    venv = _placed("sharing_v0", {"robot_0": (0, 0), "human_0": (4, 4)}, {"human_0": "stay"})
+    result, batch = _step(venv, STAY)
+    assert not result.episode_over[0]
+    assert batch.other_present[0, 0]
+
+
+def test_harmed_cat_gives_no_other_term() -> None:
+    # the robot steps onto the cell right of the cat: the right one harms the left
+    venv = _placed("coexistence_v0", {"robot_0": (2, 4), "cat_0": (3, 3)}, {"cat_0": "stay"})
+    result, batch = _step(venv, 1)  # down to (3, 4)
+    assert result.harmed_by[0, 1] == ROBOT
+    assert result.swapped_other_terminated[0, 0] and not result.swapped_valid[0, 0]
+    assert not batch.other_present[0, 0]
+    assert not batch.terminated[0, 0]
+
+
+def test_cat_truncated_by_the_robot_falling_keeps_the_other_term() -> None:
+    # the cat sits right of the robot's destination: it harms the robot, and is only truncated
+    venv = _placed("coexistence_v0", {"robot_0": (2, 3), "cat_0": (3, 4)}, {"cat_0": "stay"})
+    result, batch = _step(venv, 1)  # down to (3, 3)
+    assert result.harmed_by[0, 0] == 1
+    assert batch.terminated[0, 0]
+    assert result.truncated[0, 1] and not result.swapped_other_terminated[0, 0]
+    assert batch.other_present[0, 0]
