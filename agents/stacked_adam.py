@@ -28,14 +28,16 @@ class StackedAdam:
         self.exp_avg = [torch.zeros_like(p, requires_grad=False) for p in params]
         self.exp_avg_sq = [torch.zeros_like(p, requires_grad=False) for p in params]
         runs = params[0].shape[0]
-        self.step_count = torch.zeros(runs, dtype=torch.float32, device=params[0].device)
-        self.steps = list(self.step_count.unbind(0))  # one view per run, all advanced by one add
-        self._fused = hasattr(torch, "_fused_adam_") and params[0].device.type in ("cpu", "cuda")
+        self._step_table = torch.zeros((len(params), runs), dtype=torch.float32, device=params[0].device)
+        """Adam's step count of every (tensor, run) slice: one distinct 0-d view each, since the
+        reference implementation advances every step tensor it is handed by one."""
+        self.fused = hasattr(torch, "_fused_adam_") and params[0].device.type in ("cpu", "cuda")
+        """Use ``torch._fused_adam_`` (else the reference foreach implementation)."""
         # one view per (tensor, run); these tensors are never reallocated, so their views are made once
         self._param_views = self._views(params)
         self._avg_views = self._views(self.exp_avg)
         self._avg_sq_views = self._views(self.exp_avg_sq)
-        self._step_views = [s for _ in params for s in self.steps]
+        self._step_views = self._views(list(self._step_table))
 
     @staticmethod
     def _views(tensors: list[torch.Tensor]) -> list[torch.Tensor]:
@@ -49,18 +51,23 @@ class StackedAdam:
     def step(self) -> None:
         grads_v = self._views([p.grad for p in self.params])
         params, avg, avg_sq, steps = self._param_views, self._avg_views, self._avg_sq_views, self._step_views
-        self.step_count += 1
-        if self._fused:
+        if self.fused:
+            self._step_table += 1  # the fused kernel reads the step counts; it does not advance them
             torch._fused_adam_(
                 params, grads_v, avg, avg_sq, [], steps, lr=self.lr, beta1=self.betas[0], beta2=self.betas[1],
                 weight_decay=0.0, eps=self.eps, amsgrad=False, maximize=False,
             )
         else:
-            _reference_adam(  # the reference foreach implementation, same per-run views
+            _reference_adam(  # the reference foreach implementation, same views; it advances the steps
                 params, grads_v, avg, avg_sq, [], steps, foreach=True, capturable=False, differentiable=False,
                 fused=None, grad_scale=None, found_inf=None, has_complex=False, amsgrad=False,
                 beta1=self.betas[0], beta2=self.betas[1], lr=self.lr, weight_decay=0.0, eps=self.eps, maximize=False,
             )
+
+    @property
+    def step_count(self) -> torch.Tensor:
+        """``(runs,)`` Adam steps taken by every run."""
+        return self._step_table[0]
 
     def state_dict(self) -> dict[str, Any]:
         return {
@@ -72,4 +79,4 @@ class StackedAdam:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         for mine, saved in zip(self.exp_avg + self.exp_avg_sq, state["exp_avg"] + state["exp_avg_sq"]):
             mine.copy_(saved)
-        self.step_count.copy_(state["steps"])
+        self._step_table.copy_(state["steps"].expand_as(self._step_table))
