@@ -33,8 +33,10 @@ class EmpathicDQNSettings:
     """ε at the end of warm-up."""
     epsilon_end: float = 0.01
     """ε after the decay."""
-    epsilon_decay_steps: int = 1_000_000
-    """Env steps (after warm-up) over which ε falls linearly from start to end."""
+    epsilon_decay_steps: int = 980_000
+    """Env steps (after warm-up) over which ε falls linearly from start to end. The default
+    ends the decay at env step 1,000,000 (20,000 warm-up + 980,000): the paper decays ε "over
+    the first 1,000,000 steps", and SPEC §6 has it reach 0.01 by the end of that budget."""
     hidden_size: int = 128
     """Width of both hidden layers of every network (obs → hidden → hidden → 5)."""
 

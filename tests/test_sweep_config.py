@@ -8,6 +8,7 @@ from dataclasses import asdict, fields
 
 import pytest
 
+from agents.empathic_dqn import linear_epsilon
 from agents.settings import PER_RUN_FIELDS, EmpathicDQNSettings
 from leaderboard.sweep import SweepConfigError, load_sweep, profile_path, profiles
 
@@ -132,6 +133,10 @@ def test_paper_profile_is_the_papers_protocol():
         assert {k: v for k, v in settings.items() if k not in PER_RUN_FIELDS} == {
             k: v for k, v in defaults.items() if k not in PER_RUN_FIELDS
         }
+    for spec in specs:  # ε reaches its floor exactly at the last step, not after it (SPEC §6)
+        settings = spec.method_settings()
+        assert linear_epsilon(settings, spec.steps) == pytest.approx(0.01, abs=1e-12)
+        assert linear_epsilon(settings, spec.steps - 1000) > 0.01 + 1e-6
     labels = {(s.variant, s.display_label()) for s in specs}
     assert labels == {
         *((env, f"Empathic DQN (β={b:g})") for env in ("coexistence_v0", "sharing_v0") for b in (1.0, 0.75, 0.5, 0.25)),
