@@ -1,15 +1,18 @@
-"""REPRODUCTION.md: the paper's claims (SPEC §7), each checked against a sweep's results.
+"""REPRODUCTION.md: the paper's claims (SPEC §7), each judged on a sweep's results by the rules
+of :mod:`leaderboard.verdicts`, on greedy evaluations and on the final 10 % of training.
 
-Each claim is a rule over the leaderboard's numbers (per-method means over seeds with 95 %
-bootstrap intervals, from :mod:`leaderboard.aggregate`), so the verdicts are recomputed from the
-result files, never typed by hand. "Reproduced" needs the direction the paper reports *and* a
-margin the seeds support (intervals that do not overlap where a difference is claimed).
+Only a sweep that contains the paper's experiments (both environments with their default
+arguments and fixed agents; Empathic DQN at β = 1, 0.75, 0.5, 0.25; the −100 penalty and the
+equality-scaled baselines) gets paper verdicts; for any other sweep :func:`write_reproduction`
+refuses with :class:`NotThePaperSweep`, naming what is missing. Runs of other variants in the
+same directory (a sensitivity study, a user's own method) are left out of the verdicts.
 """
 
 from __future__ import annotations
 
+import inspect
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,187 +20,243 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
-from leaderboard.aggregate import bootstrap_mean_ci, load_results, run_scalars, table_env
+from empathy_zoo.engine import ENGINES
+from empathy_zoo.training.spec import DEFAULT_POLICIES
+from leaderboard.aggregate import final_episode_count, load_results, run_scalars
+from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
-__all__ = ["Claim", "assess_claims", "reproduction_markdown", "write_reproduction"]
+__all__ = [
+    "Claim", "Verdict", "PHASES", "BETAS", "NotThePaperSweep", "paper_runs", "missing_paper_experiments",
+    "assess_claims", "reproduction_markdown", "write_reproduction", "training_window_epsilon",
+]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
-PRIMARY = "train_final10"
-"""Phase the verdicts use: the final 10 % of training episodes (the paper's figures are training
-curves, and they hold far more episodes than an evaluation); greedy evaluations are shown beside."""
-HARM_FREE = 0.05
-"""Harms per episode at or below which a method counts as not harming."""
-SURVIVES = 450
-"""Steps survived (of 500) from which a method counts as surviving."""
+PHASES = {"greedy": "eval", "training": "train_final10"}
+"""Verdict phase → the leaderboard phase it reads."""
+COEXISTENCE, SHARING = "coexistence_v0", "sharing_v0"
+EMPATHIC = ("empathic_dqn", "dqn")
+PENALTY, EQUALITY_SHAPED = "dqn_harm_penalty", "dqn_equality"
+_DEFAULT_MAX_CYCLES = inspect.signature(ENGINES[COEXISTENCE]).parameters["max_cycles"].default
+Reference = Callable[..., Any]
+"""``coexistence_optimum(selfishness, epsilon, *, gamma, size, max_cycles)`` → ``.harms``, ``.survival``."""
+
+
+class NotThePaperSweep(ValueError):
+    """The results do not contain the paper's experiments, so there is no paper verdict to give."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One phase's verdict on a claim."""
+
+    ok: bool | None
+    """``None``: not testable (no finite numbers in this phase)."""
+    evidence: str
+
+    @property
+    def word(self) -> str:
+        return "not testable" if self.ok is None else ("reproduced" if self.ok else "not reproduced")
 
 
 @dataclass(frozen=True)
 class Claim:
-    """One claim of the paper and what the results say about it."""
+    """A claim and its verdict in each phase."""
 
     env: str
     text: str
-    verdict: str
-    """``reproduced``, ``not reproduced`` or ``not testable`` (missing methods)."""
-    evidence: str
-    """The numbers behind the verdict (Markdown)."""
+    verdicts: Mapping[str, Verdict]
+    """Keyed by phase name (``greedy``, ``training``)."""
+    papers: bool = True
+    """``False`` for the suite's own questions (not claimed by the paper)."""
 
 
-@dataclass(frozen=True)
-class _Cell:
-    mean: float
-    low: float
-    high: float
-    n: int
-
-    def __str__(self) -> str:
-        return f"{self.mean:.2f} [{self.low:.2f}, {self.high:.2f}]"
+def _key(run: dict[str, Any]) -> str:
+    if run["method"] in EMPATHIC:
+        return f"β={float(run['config']['settings'].get('selfishness', 1.0)):g}"
+    return str(run["method"])
 
 
-def _cells(results: Sequence[dict[str, Any]], env: str, phase: str, metric: str) -> dict[str, _Cell]:
-    """Per method key (``β=<value>`` for Empathic DQN / DQN, else the method name): one cell."""
-    groups: dict[str, list[float]] = {}
+def _is_paper_setting(run: dict[str, Any]) -> bool:
+    """The run's env is one of the paper's with every argument at its default and the default fixed agents."""
+    if run["env"] not in (COEXISTENCE, SHARING):
+        return False
+    config = run.get("config", {})
+    defaults = inspect.signature(ENGINES[run["env"]]).parameters
+    arguments = dict(config.get("env_kwargs") or {})
+    return (all(name in defaults and defaults[name].default == value for name, value in arguments.items())
+            and dict(config.get("fixed") or {}) == DEFAULT_POLICIES[run["env"]])
+
+
+def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """``{env: {method key: runs}}`` of the runs made in the paper's setting."""
+    out: dict[str, dict[str, list[dict[str, Any]]]] = {COEXISTENCE: {}, SHARING: {}}
     for run in results:
-        if table_env(run) != env:
-            continue
-        settings = run["config"].get("settings", {})
-        if run["method"] in ("empathic_dqn", "dqn"):
-            key = f"β={float(settings.get('selfishness', 1.0)):g}"
-        else:
-            key = run["method"]
-        groups.setdefault(key, []).append(run_scalars(run, (metric,))[phase][metric])
-    cells = {}
-    for key, values in groups.items():
-        mean, low, high = bootstrap_mean_ci(np.array(values))
-        cells[key] = _Cell(float(mean), float(low), float(high), len(values))
-    return cells
-
-
-def _training_mean(results: Sequence[dict[str, Any]], env: str, metric: str) -> dict[str, _Cell]:
-    """Mean of a metric over *all* training episodes (area under the learning curve)."""
-    groups: dict[str, list[float]] = {}
-    for run in results:
-        if table_env(run) != env or run["method"] not in ("empathic_dqn", "dqn"):
-            continue
-        beta = float(run["config"]["settings"].get("selfishness", 1.0))
-        column = np.asarray(run["train"][metric], dtype=float)
-        groups.setdefault(f"β={beta:g}", []).append(float(column.mean()) if column.size else float("nan"))
-    out = {}
-    for key, values in groups.items():
-        mean, low, high = bootstrap_mean_ci(np.array(values))
-        out[key] = _Cell(float(mean), float(low), float(high), len(values))
+        if _is_paper_setting(run):
+            out[run["env"]].setdefault(_key(run), []).append(run)
     return out
 
 
-def _row(cells: dict[str, _Cell], keys: Sequence[str]) -> str:
-    return "; ".join(f"{k}: {cells[k]}" for k in keys if k in cells)
+def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
+    """The paper's experiments that ``results`` lack (empty: the paper's sweep is there)."""
+    runs = paper_runs(results)
+    needed = {env: [f"β={b:g}" for b in BETAS] + [baseline]
+              for env, baseline in ((COEXISTENCE, PENALTY), (SHARING, EQUALITY_SHAPED))}
+    return [f"{env} {key}" for env, keys in needed.items() for key in keys if key not in runs[env]]
 
 
-def _falls_with_beta(cells: dict[str, _Cell]) -> tuple[bool, str]:
-    keys = [f"β={b:g}" for b in BETAS if f"β={b:g}" in cells]
-    if len(keys) < 2:
-        return False, "needs at least two β values"
-    first, last = cells[keys[0]], cells[keys[-1]]
-    monotone = all(cells[b].mean <= cells[a].high for a, b in zip(keys, keys[1:]))
-    separated = last.high < first.low
-    return monotone and separated, _row(cells, keys)
+def training_window_epsilon(run: dict[str, Any]) -> float:
+    """Mean ε over the env steps of a run's final 10 % of training episodes (its settings' schedule)."""
+    from agents.empathic_dqn import linear_epsilon
+    from agents.settings import EmpathicDQNSettings
+
+    ends = run["train"]["episode_end_step"]
+    if not ends:
+        return float("nan")
+    first = len(ends) - final_episode_count(len(ends))
+    start = int(ends[first - 1]) if first > 0 else 0
+    settings = EmpathicDQNSettings(**run["config"]["settings"])
+    # the step counter ε is read at before step s+1 is taken is s
+    return float(np.mean([linear_epsilon(settings, step) for step in range(start, int(ends[-1]))]))
 
 
-def assess_claims(results: Sequence[dict[str, Any]], coexistence: str = "coexistence_v0",
-                  sharing: str = "sharing_v0") -> list[Claim]:
-    """Check every claim of SPEC §7 that the results can speak to."""
-    claims: list[Claim] = []
-    envs = {table_env(r) for r in results}
-
-    def add(env: str, text: str, ok: bool | None, evidence: str) -> None:
-        verdict = "not testable" if ok is None else ("reproduced" if ok else "not reproduced")
-        claims.append(Claim(env, text, verdict, evidence))
-
-    if coexistence in envs:
-        harms = _cells(results, coexistence, PRIMARY, "harms")
-        harms_eval = _cells(results, coexistence, "eval", "harms")
-        ok, row = _falls_with_beta(harms)
-        add(coexistence, "Harms to the cat fall as β falls.", ok,
-            f"harms/episode, final 10 % of training: {row}. Greedy evaluation: "
-            f"{_row(harms_eval, [f'β={b:g}' for b in BETAS])}.")
-        survival_final = _cells(results, coexistence, "train_final10", "survival")
-        survival_all = _training_mean(results, coexistence, "survival")
-        keys = [f"β={b:g}" for b in BETAS]
-        if "β=1" in survival_all and "β=0.25" in survival_all:
-            slower = survival_all["β=0.25"].high < survival_all["β=1"].low
-            worse = survival_final["β=0.25"].mean < survival_final["β=1"].mean
-            add(coexistence, "Lower β survives worse and learns more slowly.", slower and worse,
-                f"mean steps survived over all training episodes (area under the learning curve): "
-                f"{_row(survival_all, keys)}. Final 10 % of training: {_row(survival_final, keys)}.")
-        survival_eval = _cells(results, coexistence, "eval", "survival")
-        caring = [k for k in ("β=0.5", "β=0.25") if k in harms]
-        if caring:
-            ok = all(harms[k].mean <= HARM_FREE and survival_final[k].mean >= SURVIVES for k in caring)
-            add(coexistence, "The less selfish agents eventually survive without harming the cat.", ok,
-                f"final 10 % of training, harms/episode (≤ {HARM_FREE} counts as harm-free): {_row(harms, caring)}; "
-                f"steps survived (≥ {SURVIVES} of 500 counts as surviving): {_row(survival_final, caring)}. "
-                f"Greedy evaluation: harms {_row(harms_eval, caring)}; survival {_row(survival_eval, caring)}.")
-        if "dqn_harm_penalty" in harms and "β=1" in harms:
-            ok = harms["dqn_harm_penalty"].mean <= HARM_FREE and harms["dqn_harm_penalty"].high < harms["β=1"].low
-            pair = ["dqn_harm_penalty", "β=1"]
-            add(coexistence, "The −100 harm-penalty baseline harms little.", ok,
-                f"harms/episode, final 10 % of training: {_row(harms, pair)}; steps survived: "
-                f"{_row(survival_final, pair)}. Greedy evaluation: harms {_row(harms_eval, pair)}.")
-    if sharing in envs:
-        batteries = _cells(results, sharing, PRIMARY, "batteries")
-        ok, row = _falls_with_beta(batteries)
-        add(sharing, "The robot collects fewer batteries as β falls.", ok,
-            f"robot batteries/episode, final 10 % of training: {row}. Greedy evaluation: "
-            f"{_row(_cells(results, sharing, 'eval', 'batteries'), [f'β={b:g}' for b in BETAS])}.")
-        eq = _cells(results, sharing, PRIMARY, "equality")
-        eq_eval = _cells(results, sharing, "eval", "equality")
-        betas = [f"β={b:g}" for b in BETAS if f"β={b:g}" in eq]
-        if betas:
-            best = max(betas, key=lambda k: eq[k].mean)
-            add(sharing, "Equality peaks at β = 0.5.", best == "β=0.5",
-                f"equality, final 10 % of training: {_row(eq, betas)} (highest: {best}). Greedy evaluation: "
-                f"{_row(eq_eval, betas)}.")
-        if "dqn_equality" in eq and "β=1" in eq:
-            pair = ["dqn_equality", "β=1"]
-            ok = eq["dqn_equality"].low > eq["β=1"].high
-            add(sharing, "The equality-shaped baseline is fair (more equal than DQN).", ok,
-                f"equality, final 10 % of training: {_row(eq, pair)}; robot batteries: {_row(batteries, pair)}. "
-                f"Greedy evaluation: equality {_row(eq_eval, pair)}.")
-    return claims
+def _curve_mean(run: dict[str, Any], phase: str, metric: str) -> float:
+    """Mean over the whole learning curve: every training episode, or every greedy evaluation."""
+    if phase == "eval":
+        values = [float(np.mean(e[metric])) for e in run["eval"] if len(e[metric])]
+    else:
+        values = [float(v) for v in run["train"][metric]]
+    return float(np.mean(values)) if values else float("nan")
 
 
-def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: str, note: str = "") -> str:
-    """The report, one section per claim."""
+class _Table:
+    """Cells of the paper's runs of one env, per phase, metric and method key."""
+
+    def __init__(self, runs: Mapping[str, list[dict[str, Any]]]) -> None:
+        self.runs = runs
+
+    def cell(self, phase: str, metric: str, key: str) -> Cell:
+        return cell_of([run_scalars(run, (metric,))[phase][metric] for run in self.runs[key]])
+
+    def curve(self, phase: str, metric: str, key: str) -> Cell:
+        return cell_of([_curve_mean(run, phase, metric) for run in self.runs[key]])
+
+    def row(self, phase: str, metric: str, keys: Sequence[str], curve: bool = False) -> list[Cell]:
+        return [(self.curve if curve else self.cell)(phase, metric, k) for k in keys]
+
+
+def _line(keys: Sequence[str], cells: Sequence[Cell]) -> str:
+    return "; ".join(f"{k}: {c}" for k, c in zip(keys, cells))
+
+
+def _verdict(ok: bool, cells: Sequence[Cell], evidence: str) -> Verdict:
+    return Verdict(ok if all(c.finite for c in cells) else None, evidence)
+
+
+def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None = None) -> list[Claim]:
+    """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
+    ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing."""
+    missing = missing_paper_experiments(results)
+    if missing:
+        raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
+    if reference is None:
+        from empathy_zoo.reference import coexistence_optimum as reference
+    runs = paper_runs(results)
+    betas = [f"β={b:g}" for b in BETAS]
+    coexistence, sharing = _Table(runs[COEXISTENCE]), _Table(runs[SHARING])
+    claims: dict[tuple[str, str, bool], dict[str, Verdict]] = {}
+
+    def judge(env: str, text: str, phase_name: str, verdict: Verdict, papers: bool = True) -> None:
+        claims.setdefault((env, text, papers), {})[phase_name] = verdict
+
+    for name, phase in PHASES.items():
+        harms = coexistence.row(phase, "harms", betas)
+        judge(COEXISTENCE, "Harms to the cat fall as β falls.", name,
+              _verdict(falls(harms), harms, f"harms/episode: {_line(betas, harms)}."))
+
+        survival = coexistence.row(phase, "survival", betas)
+        area = coexistence.row(phase, "survival", betas, curve=True)
+        slower = below(area[-1], area[0])
+        judge(COEXISTENCE, "Lower β survives worse and learns more slowly.", name, _verdict(
+            falls(survival) and slower, survival + area,
+            f"steps survived: {_line(betas, survival)} (falls: {'yes' if falls(survival) else 'no'}). "
+            f"Mean over the whole learning curve: {_line(betas, area)} (β=0.25 below β=1: {'yes' if slower else 'no'}).",
+        ))
+
+        caring = ["β=0.5", "β=0.25"]
+        parts, ok, cells = [], True, []
+        for key in caring:
+            h, s = coexistence.cell(phase, "harms", key), coexistence.cell(phase, "survival", key)
+            epsilon = 0.0 if phase == "eval" else float(np.mean([training_window_epsilon(r) for r in runs[COEXISTENCE][key]]))
+            settings = runs[COEXISTENCE][key][0]["config"]["settings"]
+            ref = reference(float(settings["selfishness"]), round(epsilon, 4), gamma=float(settings["gamma"]))
+            max_cycles = int(runs[COEXISTENCE][key][0]["config"]["env_kwargs"].get("max_cycles", _DEFAULT_MAX_CYCLES))
+            ok = ok and matches_reference(h, s, ref.harms, ref.survival, max_cycles)
+            cells += [h, s]
+            parts.append(f"{key}: harms {h} (reference {ref.harms:.3f}), survival {s} (reference {ref.survival:.1f}) "
+                         f"at ε = {epsilon:.4f}")
+        judge(COEXISTENCE, "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
+              name, _verdict(ok, cells, "; ".join(parts) + "."))
+
+        pair = [PENALTY, "β=1"]
+        penalty = coexistence.row(phase, "harms", pair)
+        judge(COEXISTENCE, "The −100 harm-penalty baseline harms the cat less than DQN.", name,
+              _verdict(below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}."))
+
+        batteries = sharing.row(phase, "batteries", betas)
+        judge(SHARING, "The robot collects fewer batteries as β falls.", name,
+              _verdict(falls(batteries), batteries, f"robot batteries/episode: {_line(betas, batteries)}."))
+
+        equality = sharing.row(phase, "equality", betas)
+        human = sharing.row(phase, "other_batteries", betas)
+        judge(SHARING, "Equality peaks at β = 0.5.", name, _verdict(
+            peaks(equality[1], equality[2], equality[3]), equality,
+            f"equality: {_line(betas, equality)}; human batteries/episode: {_line(betas, human)}.",
+        ))
+
+        pair = ["β=1", EQUALITY_SHAPED]
+        fair = sharing.row(phase, "equality", pair)
+        judge(SHARING, "The equality-scaled DQN baseline is more equal than DQN.", name,
+              _verdict(below(fair[0], fair[1]), fair, f"equality: {_line(pair, fair)}."), papers=False)
+    return [Claim(env, text, verdicts, papers) for (env, text, papers), verdicts in claims.items()]
+
+
+def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: str, note: str = "",
+                          appendix: str = "") -> str:
+    """The report: how it was made, the rules, a verdict table, then the evidence per claim."""
     lines = [
-        "# Reproduction report",
-        "",
-        f"Claims of *Towards Empathic Deep Q-Learning* (SPEC §7), checked against the result files in "
-        f"`{results_dir}`, produced by:",
-        "",
-        f"    {command}",
-        "",
-        "and checked by `empathy-zoo reproduction " + results_dir + "` (this file is generated; every number is "
-        "a mean over seeds with its 95 % bootstrap interval, as in the leaderboard). Verdicts use the final "
-        "10 % of training episodes, as the paper's figures are training curves; greedy evaluations are shown "
-        "beside. A claim is *reproduced* when the direction matches and the intervals separate where a "
-        "difference is claimed.",
-        "",
+        "# Reproduction report", "",
+        f"Claims of *Towards Empathic Deep Q-Learning* (SPEC §7), judged on the result files in "
+        f"`{results_dir}`, produced by:", "", f"    {command}", "",
+        f"and checked by `empathy-zoo reproduction {results_dir}` (this file is generated from the result files).", "",
     ]
     if note:
         lines += [note, ""]
-    lines += ["| environment | claim | verdict |", "|---|---|---|"]
-    lines += [f"| {c.env} | {c.text} | **{c.verdict}** |" for c in claims]
+    lines += [RULES, "", "| environment | claim | greedy | training |", "|---|---|---|---|"]
+    for papers, heading in ((True, None), (False, "The suite's own questions (not claims of the paper)")):
+        chosen = [c for c in claims if c.papers == papers]
+        if heading and chosen:
+            lines += [f"| | *{heading}* | | |"]
+        lines += [f"| {c.env} | {c.text} | **{c.verdicts['greedy'].word}** | **{c.verdicts['training'].word}** |"
+                  for c in chosen]
     lines.append("")
     for c in claims:
-        lines += [f"## {c.text} ({c.env}) — {c.verdict}", "", c.evidence, ""]
+        lines += [f"## {c.text} ({c.env}){'' if c.papers else ' — the suite’s own question'}", ""]
+        for phase, verdict in c.verdicts.items():
+            where = "last greedy evaluation" if phase == "greedy" else "final 10 % of training"
+            lines += [f"* **{phase}** ({where}) — {verdict.word}: {verdict.evidence}"]
+        lines.append("")
+    if appendix:
+        lines += [appendix, ""]
     return "\n".join(lines)
 
 
 def write_reproduction(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
-                       command: str = "empathy-zoo reproduce --profile paper", note: str = "") -> Path:
-    """Assess the claims on ``results_dir`` and write the report (``<results_dir>/REPRODUCTION.md``)."""
-    results = load_results(results_dir)
-    claims = assess_claims(results)
+                       command: str = "empathy-zoo reproduce --profile paper", note: str = "",
+                       appendix: str = "", reference: Reference | None = None) -> Path:
+    """Judge the claims on ``results_dir`` and write the report (``<results_dir>/REPRODUCTION.md``);
+    raises :class:`NotThePaperSweep` (writing nothing) when the paper's experiments are not there."""
+    claims = assess_claims(load_results(results_dir), reference)
     path = Path(out_path) if out_path else Path(results_dir) / "REPRODUCTION.md"
-    write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note))
+    write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note, appendix))
     return path
+

@@ -201,8 +201,13 @@ def test_reproduce_tiny_sweep_writes_leaderboard_and_resumes(tmp_path, capsys):
     board = (out / "LEADERBOARD.md").read_text()
     assert f"empathy-zoo reproduce --profile {sweep}" in board
     assert "Empathic DQN (β=0.5)" in board and "DQN" in board
-    assert f"empathy-zoo reproduce --profile {sweep}" in (out / "REPRODUCTION.md").read_text()
-    assert "8 runs" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "8 runs" in printed
+    # a sweep without the paper's experiments gets no paper verdicts, and says why
+    assert not (out / "REPRODUCTION.md").exists()
+    assert "no REPRODUCTION.md" in printed and "missing" in printed
+    assert main(["reproduction", str(out)]) == 2
+    assert "do not contain the paper's experiments" in capsys.readouterr().err
 
     removed = files[3]
     removed.unlink()
