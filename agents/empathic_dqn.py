@@ -10,7 +10,14 @@ gradient step, on a batch ``(s, a, r, s', done, s_emp', other_present)``:
     Q_emp ← Adam step on mean (Q_emp(s, a) − y_emp)²
 
 ``s_emp'`` is the robot's swapped observation with the closest other agent at t+1; the
-other-term is 0 once that agent has left. Acting is ε-greedy on ``Q_emp``. The K runs' networks
+other-term is 0 when that agent is terminal at t+1. Acting is ε-greedy on ``Q_emp``.
+
+β = 1 is standard DQN (the paper: "1.0 recovers standard DQN"), and it is run as such: one
+network ``Q`` (and its target), acting on ``Q``, no ``Q_emp`` (whose target would equal ``y``).
+That is what the DQN-type runs (β = 1 and the reward-shaped baselines) train, at a bit more than
+half the cost of a run that needs ``Q_emp``; runs with β = 1 and β < 1 therefore never share an
+ensemble (see :meth:`EmpathicDQNSettings.shared`). A subclass that overrides :meth:`targets`
+always gets both networks. The K runs' networks
 are stacked tensors (``agents.stacked_mlp``) so one batched matmul serves every run; runs share
 nothing else: each has its own seed, replay memory, ε stream and target copies.
 """
@@ -31,7 +38,7 @@ from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from baselines.shaping import shaped_reward
 from empathy_zoo.randomness import counter_integers, counter_uniform, derive_key
 
-__all__ = ["EmpathicDQN", "empathic_targets", "linear_epsilon"]
+__all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "linear_epsilon"]
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = 11, 12, 13
 
@@ -42,6 +49,15 @@ def linear_epsilon(settings: EmpathicDQNSettings, env_step: int) -> float:
         return 1.0
     fraction = min(1.0, (env_step - settings.learning_starts) / settings.epsilon_decay_steps)
     return settings.epsilon_start + fraction * (settings.epsilon_end - settings.epsilon_start)
+
+
+def double_dqn_target(
+    reward: torch.Tensor, terminated: torch.Tensor, q_next_online: torch.Tensor, q_next_target: torch.Tensor, gamma: float,
+) -> torch.Tensor:
+    """``y = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))``, ``(K, B)``, from ``(K, B, A)`` values."""
+    best = q_next_online.argmax(dim=2, keepdim=True)
+    bootstrap = q_next_target.gather(2, best).squeeze(2)
+    return reward + gamma * (~terminated).float() * bootstrap
 
 
 def empathic_targets(
@@ -56,9 +72,7 @@ def empathic_targets(
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
     ``selfishness`` is β per run, ``(K, 1)``."""
-    best = q_next_online.argmax(dim=2, keepdim=True)
-    bootstrap = q_next_target.gather(2, best).squeeze(2)
-    y = reward + gamma * (~terminated).float() * bootstrap
+    y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
     other = gamma * other_present.float() * q_swapped_target.max(dim=2).values
     y_emp = selfishness * y + (1.0 - selfishness) * other
     return y, y_emp
@@ -82,7 +96,7 @@ class EmpathicDQN:
             raise ValueError("give one settings object per seed, and at least one run")
         shared = {s.shared() for s in settings}
         if len(shared) != 1:
-            raise ValueError("runs of one ensemble may differ only in seed, selfishness and shaping")
+            raise ValueError("runs of one ensemble may differ only in seed, selfishness (all below 1, or all 1) and shaping")
         self.settings = list(settings)
         self.config = settings[0]
         self.seeds = [int(s) for s in seeds]
@@ -93,9 +107,14 @@ class EmpathicDQN:
         generators = [torch.Generator().manual_seed(derive_key(s, STREAM_INIT) >> 1) for s in self.seeds]
         sizes = [obs_size, self.config.hidden_size, self.config.hidden_size, num_actions]
         q = init_stacked_mlp(sizes, generators, self.device)
-        q_emp = init_stacked_mlp(sizes, generators, self.device)
+        self.empathic = type(self).targets is not EmpathicDQN.targets or settings[0].selfishness < 1.0
+        """Train ``Q_emp`` and act on it (else standard DQN: ``Q`` only, acting on ``Q``)."""
+        self.heads = 2 if self.empathic else 1
+        if self.empathic:
+            q_emp = init_stacked_mlp(sizes, generators, self.device)
+            q = [torch.cat([a, b]) for a, b in zip(q, q_emp)]
         # online parameters: runs 0..K-1 are Q, runs K..2K-1 are Q_emp (one batched pass serves both)
-        self.online = [torch.cat([a, b]).requires_grad_() for a, b in zip(q, q_emp)]
+        self.online = [p.requires_grad_() for p in q]
         self.target = [p[:k].detach().clone() for p in self.online]
         self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
         self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device)
@@ -113,7 +132,7 @@ class EmpathicDQN:
         if which == "target":
             params = self.target
         else:
-            part = slice(k, 2 * k) if which == "emp" else slice(0, k)
+            part = slice(k, 2 * k) if which == "emp" and self.empathic else slice(0, k)
             params = [p[part] for p in self.online]
         with torch.no_grad():
             return StackedMLP.forward(params, observations)
@@ -152,18 +171,24 @@ class EmpathicDQN:
         return torch.as_tensor(index, device=self.device)
 
     def update(self) -> float:
-        """One gradient step of ``Q`` and ``Q_emp`` in every run; returns the mean loss."""
-        k, cfg = self.num_runs, self.config
+        """One gradient step of ``Q`` (and ``Q_emp``) in every run; returns the mean loss."""
+        k, cfg, heads = self.num_runs, self.config, self.heads
         batch = self.replay.sample(self.sample_indices())
         with torch.no_grad():
             q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
-            both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
-            target_both = StackedMLP.forward(self.target, both)
-            b = cfg.batch_size
-            y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_both[:, b:])
-        values = StackedMLP.forward(self.online, batch["obs"].repeat(2, 1, 1))
-        taken = values.gather(2, batch["action"].repeat(2, 1).unsqueeze(2)).squeeze(2)
-        targets = torch.cat([y, y_emp])
+            if self.empathic:
+                both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
+                target_both = StackedMLP.forward(self.target, both)
+                b = cfg.batch_size
+                targets = torch.cat(self.targets(batch, q_next, target_both[:, :b], target_both[:, b:]))
+            else:
+                target_next = StackedMLP.forward(self.target, batch["next_obs"])
+                targets = double_dqn_target(batch["reward"], batch["terminated"], q_next, target_next, cfg.gamma)
+        obs, action = batch["obs"], batch["action"]
+        if heads > 1:
+            obs, action = obs.repeat(heads, 1, 1), action.repeat(heads, 1)
+        values = StackedMLP.forward(self.online, obs)
+        taken = values.gather(2, action.unsqueeze(2)).squeeze(2)
         loss = ((taken - targets) ** 2).mean(dim=1).sum()
         self.optimizer.zero_grad()
         loss.backward()
@@ -171,7 +196,7 @@ class EmpathicDQN:
         self.grad_steps += 1
         if self.grad_steps % cfg.target_update_interval == 0:
             self.sync_target()
-        self.last_loss = float(loss.detach()) / (2 * k)
+        self.last_loss = float(loss.detach()) / (heads * k)
         return self.last_loss
 
     def targets(
@@ -198,7 +223,7 @@ class EmpathicDQN:
         return {"eps": self.epsilon(), "loss": self.last_loss}
 
     def memory_bytes_per_run(self) -> int:
-        params = sum(p[0].numel() * p.element_size() for p in self.online) * 2  # Q, Q_emp
+        params = sum(p[0].numel() * p.element_size() for p in self.online) * self.heads  # Q (and Q_emp)
         params += sum(p[0].numel() * p.element_size() for p in self.target)
         return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments
 
@@ -216,6 +241,12 @@ class EmpathicDQN:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         if list(state["seeds"]) != self.seeds:
             raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")
+        shapes = [tuple(p.shape) for p in state["online"]]
+        if shapes != [tuple(p.shape) for p in self.online]:
+            raise ValueError(
+                f"checkpoint holds networks of shapes {shapes}, not {[tuple(p.shape) for p in self.online]}: it was "
+                "made by another version or other settings (β = 1 runs train one network since 0.2); move it away to restart"
+            )
         with torch.no_grad():
             for p, saved in zip(self.online, state["online"]):
                 p.copy_(saved)

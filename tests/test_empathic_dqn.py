@@ -80,12 +80,24 @@ def test_beta_one_gives_the_same_updates_as_dqn_whatever_the_other_sees() -> Non
         assert torch.equal(a, b)
 
 
-def test_lower_beta_changes_the_empathic_network_only() -> None:
+def test_beta_one_is_standard_dqn_with_one_network() -> None:
     selfish = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=1.0)
     caring = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=0.25)
+    assert not selfish.empathic and caring.empathic
     for a, b in zip(selfish.online, caring.online):
+        assert a.shape[0] == 1 and b.shape[0] == 2  # Q only; Q and Q_emp
         assert torch.equal(a[0], b[0])  # Q is trained on y, which β does not touch
-        assert not torch.equal(a[1], b[1])  # Q_emp is trained on y_emp
+    obs = torch.rand(1, 7, 25)
+    assert torch.equal(selfish.q_values(obs, "emp"), selfish.q_values(obs, "self"))  # it acts on Q
+    assert not torch.equal(caring.q_values(obs, "emp"), caring.q_values(obs, "self"))
+
+
+def test_beta_one_and_lower_beta_never_share_an_ensemble() -> None:
+    settings = [EmpathicDQNSettings(selfishness=1.0, **TINY), EmpathicDQNSettings(selfishness=0.5, **TINY)]
+    with pytest.raises(ValueError, match="all below 1, or all 1"):
+        EmpathicDQN(settings, [0, 1], obs_size=25)
+    assert settings[0].shared() != settings[1].shared()
+    assert EmpathicDQNSettings(selfishness=0.25).shared() == EmpathicDQNSettings(selfishness=0.75).shared()
 
 
 def test_ensemble_updates_equal_solo_updates() -> None:
@@ -119,10 +131,10 @@ def test_paper_replay_fits_in_64_mb_per_run() -> None:
     assert replay.nbytes_per_run() == 500_000 * (3 * 25 + 1 + 4 + 1 + 1)
 
 
-def test_replay_rejects_observations_that_are_not_small_integers() -> None:
+def test_replay_rejects_observations_it_cannot_store_exactly() -> None:
     replay = StackedReplay(1, 10, 2, torch.device("cpu"))
-    bad = np.array([[[0.5, 1.0]]])
-    with pytest.raises(ValueError, match="int8"):
+    bad = np.array([[[0.025, 1.0]]], dtype=np.float32)  # not a multiple of 1/20 (0.5 would be stored)
+    with pytest.raises(ValueError, match="cannot be stored exactly"):
         replay.add(bad, bad, bad, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1), bool), np.ones((1, 1), bool))
     assert replay.size == 0
 
