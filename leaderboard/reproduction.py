@@ -27,7 +27,7 @@ from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_ref
 
 __all__ = [
     "Claim", "Verdict", "PHASES", "BETAS", "NotThePaperSweep", "paper_runs", "missing_paper_experiments",
-    "assess_claims", "reproduction_markdown", "write_reproduction", "training_window_epsilon",
+    "assess_claims", "reproduction_markdown", "write_reproduction", "training_window_epsilons",
 ]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
@@ -38,7 +38,7 @@ EMPATHIC = ("empathic_dqn", "dqn")
 PENALTY, EQUALITY_SHAPED = "dqn_harm_penalty", "dqn_equality"
 _DEFAULT_MAX_CYCLES = inspect.signature(ENGINES[COEXISTENCE]).parameters["max_cycles"].default
 Reference = Callable[..., Any]
-"""``coexistence_optimum(selfishness, epsilon, *, gamma, size, max_cycles)`` → ``.harms``, ``.survival``."""
+"""``coexistence_optimum(selfishness, epsilon, *, gamma, max_cycles)`` → ``.harms``, ``.survival``."""
 
 
 class NotThePaperSweep(ValueError):
@@ -104,19 +104,35 @@ def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
     return [f"{env} {key}" for env, keys in needed.items() for key in keys if key not in runs[env]]
 
 
-def training_window_epsilon(run: dict[str, Any]) -> float:
-    """Mean ε over the env steps of a run's final 10 % of training episodes (its settings' schedule)."""
+def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float, int]:
+    """The ε schedule over the env steps of a run's final 10 % of training episodes, as
+    ``{ε rounded to digits: steps}`` (its settings' schedule, read before each step)."""
     from agents.empathic_dqn import linear_epsilon
     from agents.settings import EmpathicDQNSettings
 
     ends = run["train"]["episode_end_step"]
     if not ends:
-        return float("nan")
+        return {}
     first = len(ends) - final_episode_count(len(ends))
     start = int(ends[first - 1]) if first > 0 else 0
     settings = EmpathicDQNSettings(**run["config"]["settings"])
-    # the step counter ε is read at before step s+1 is taken is s
-    return float(np.mean([linear_epsilon(settings, step) for step in range(start, int(ends[-1]))]))
+    counts: dict[float, int] = {}
+    for step in range(start, int(ends[-1])):
+        epsilon = round(linear_epsilon(settings, step), digits)
+        counts[epsilon] = counts.get(epsilon, 0) + 1
+    return counts
+
+
+def _reference_over(reference: Reference, selfishness: float, epsilons: Mapping[float, int], gamma: float,
+                    max_cycles: int) -> tuple[float, float]:
+    """The reference's harms and survival averaged over an ε schedule (weights: steps at each ε)."""
+    total = sum(epsilons.values())
+    harms = survival = 0.0
+    for epsilon, steps in epsilons.items():
+        outcome = reference(selfishness, epsilon, gamma=gamma, max_cycles=max_cycles)
+        harms += outcome.harms * steps / total
+        survival += outcome.survival * steps / total
+    return harms, survival
 
 
 def _curve_mean(run: dict[str, Any], phase: str, metric: str) -> float:
@@ -186,14 +202,22 @@ def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None
         parts, ok, cells = [], True, []
         for key in caring:
             h, s = coexistence.cell(phase, "harms", key), coexistence.cell(phase, "survival", key)
-            epsilon = 0.0 if phase == "eval" else float(np.mean([training_window_epsilon(r) for r in runs[COEXISTENCE][key]]))
-            settings = runs[COEXISTENCE][key][0]["config"]["settings"]
-            ref = reference(float(settings["selfishness"]), round(epsilon, 4), gamma=float(settings["gamma"]))
-            max_cycles = int(runs[COEXISTENCE][key][0]["config"]["env_kwargs"].get("max_cycles", _DEFAULT_MAX_CYCLES))
-            ok = ok and matches_reference(h, s, ref.harms, ref.survival, max_cycles)
+            group = runs[COEXISTENCE][key]
+            epsilons: dict[float, int] = {0.0: 1}
+            if phase != "eval":
+                epsilons = {}
+                for run in group:
+                    for epsilon, steps in training_window_epsilons(run).items():
+                        epsilons[epsilon] = epsilons.get(epsilon, 0) + steps
+            settings = group[0]["config"]["settings"]
+            max_cycles = int(group[0]["config"]["env_kwargs"].get("max_cycles", _DEFAULT_MAX_CYCLES))
+            ref_harms, ref_survival = _reference_over(
+                reference, float(settings["selfishness"]), epsilons, float(settings["gamma"]), max_cycles)
+            ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
             cells += [h, s]
-            parts.append(f"{key}: harms {h} (reference {ref.harms:.3f}), survival {s} (reference {ref.survival:.1f}) "
-                         f"at ε = {epsilon:.4f}")
+            mean_epsilon = sum(e * n for e, n in epsilons.items()) / max(sum(epsilons.values()), 1)
+            parts.append(f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
+                         f"mean ε {mean_epsilon:.4f}")
         judge(COEXISTENCE, "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
               name, _verdict(ok, cells, "; ".join(parts) + "."))
 

@@ -17,8 +17,9 @@ The rules (:data:`RULES` is their text, printed in every REPRODUCTION.md before 
 * A method **matches the reference** when its harms are at most the exact optimum's plus
   :data:`HARM_TOLERANCE` and its survival at least the optimum's minus :data:`SURVIVAL_TOLERANCE`
   × ``max_cycles``, the optimum (:mod:`empathy_zoo.reference`) being the greedy-on-``Q_emp``
-  policy of a fully observing robot at the same β, run at the ε of the phase (0 for greedy
-  evaluations; the mean ε over the steps of the final 10 % of training).
+  policy of a fully observing robot at the same β (exactly tied actions taken with equal
+  probability), run at the ε of the phase (0 for greedy evaluations; in training, averaged over
+  the ε schedule of the steps of the final 10 % of episodes).
 """
 
 from __future__ import annotations
@@ -52,9 +53,9 @@ on the final 10 % of **training** episodes, and both verdicts are shown.
 * *Peaks at β = 0.5*: β = 0.5 is above both β = 0.75 and β = 0.25 (separated); the highest
   mean alone is not a peak.
 * *Harm-free and surviving* come from an exact reference, not a round number: the optimal
-  policy of a fully observing robot with the same β (value iteration, `empathy_zoo.reference`),
-  evaluated exactly at the phase's ε (0 greedy; in training, the mean ε over the final 10 % of
-  the steps). A learner is harm-free when its mean harms are at most the reference's +
+  policy of a fully observing robot with the same β (value iteration, `empathy_zoo.reference`;
+  exactly tied actions taken with equal probability), evaluated exactly at the phase's ε (0
+  greedy; in training, averaged over the ε schedule of the final 10 % of the steps). A learner is harm-free when its mean harms are at most the reference's +
   {HARM_TOLERANCE} per episode, and survives when its mean survival is at least the reference's −
   {SURVIVAL_TOLERANCE:.0%} of the episode ({SURVIVAL_TOLERANCE * 500:.0f} steps of 500).
 * *Learns more slowly*: the mean over the whole learning curve (every training episode; every

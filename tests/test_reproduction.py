@@ -12,7 +12,7 @@ from agents.settings import EmpathicDQNSettings
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import DEFAULT_POLICIES
-from leaderboard.reproduction import NotThePaperSweep, assess_claims, training_window_epsilon, write_reproduction
+from leaderboard.reproduction import NotThePaperSweep, assess_claims, training_window_epsilons, write_reproduction
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 
@@ -23,7 +23,7 @@ class FakeOutcome:
     survival: float
 
 
-def fake_reference(selfishness: float, epsilon: float, *, gamma: float) -> FakeOutcome:
+def fake_reference(selfishness: float, epsilon: float, *, gamma: float, max_cycles: int) -> FakeOutcome:
     """A reference that demands near-zero harms and long survival (more at ε = 0)."""
     return FakeOutcome(harms=0.01 + epsilon, survival=480.0 - 1000 * epsilon)
 
@@ -93,11 +93,11 @@ def test_a_peak_needs_separation_not_just_the_highest_mean() -> None:
 
 def test_survival_is_judged_against_the_reference_at_the_phase_epsilon() -> None:
     runs = _paper_like()
-    # the final 10 % of training (steps 3600-4000) is past the decay (ends at 4000): ε ≈ 0.01 + ...
-    eps = training_window_epsilon(next(r for r in runs if r["env"] == "coexistence_v0"))
-    assert 0.01 < eps < 0.2
+    # the final 10 % of training is steps 3600-4000, where ε falls from ≈ 0.112 to 0.01
+    schedule = training_window_epsilons(next(r for r in runs if r["env"] == "coexistence_v0"))
+    assert sum(schedule.values()) == 400 and min(schedule) == 0.01 and 0.11 < max(schedule) < 0.12
     # a reference that asks for more survival than the runs show fails the claim in training only
-    def strict(selfishness: float, epsilon: float, *, gamma: float) -> FakeOutcome:
+    def strict(selfishness: float, epsilon: float, *, gamma: float, max_cycles: int) -> FakeOutcome:
         return FakeOutcome(harms=0.01, survival=500.0 if epsilon > 0 else 400.0)
     claim = next(c for c in assess_claims(runs, reference=strict) if "eventually survive" in c.text)
     assert (claim.verdicts["greedy"].word, claim.verdicts["training"].word) == ("reproduced", "not reproduced")
