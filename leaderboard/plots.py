@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -19,6 +20,7 @@ from empathy_zoo.atomic import write_bytes_atomic
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
 )
+from leaderboard.reference_curves import reference_curve
 
 __all__ = [
     "FIGURE_SPECS", "FALLBACK_SPEC", "figure_filename", "render_curves_png", "plot_metric",
@@ -45,12 +47,14 @@ def render_curves_png(
     curves: Sequence[Curve],
     *,
     title: str,
+    references: Sequence[np.ndarray | None] | None = None,
     ylabel: str,
     xlabel: str = "training env steps",
     confidence: float = CONFIDENCE,
     dpi: int = 110,
 ) -> bytes:
-    """PNG bytes of ``curves``: a line per curve (its mean) with its interval shaded."""
+    """PNG bytes of ``curves``: a line per curve (its mean) with its interval shaded, and, where
+    ``references[i]`` is given, that curve's exact reference dashed in the same colour."""
     figure = Figure(figsize=(7.5, 4.2), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
@@ -59,6 +63,12 @@ def render_curves_png(
         label = f"{curve.method_label} (n={curve.n_seeds})"
         axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)
         axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
+    drawn = [reference for reference in references or [] if reference is not None]
+    for curve, colour, reference in zip(curves, colours, references or [None] * len(curves)):
+        if reference is not None:
+            axes.plot(curve.steps, reference, color=colour, linewidth=1.2, linestyle="--")
+    if drawn:  # one neutral legend entry for every dashed line
+        axes.plot([], [], color="0.4", linewidth=1.2, linestyle="--", label="exact optimum of that β at the run's ε")
     axes.set_title(title)
     axes.set_xlabel(xlabel)
     axes.set_ylabel(ylabel)
@@ -87,16 +97,20 @@ def plot_metric(
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> Path:
-    """Draw the training curves of ``metric`` on ``env`` (every method) and write the PNG to ``path``."""
+    """Draw the training curves of ``metric`` on ``env`` (every method, with the exact reference
+    where it applies: :mod:`leaderboard.reference_curves`) and write the PNG to ``path``."""
+    results = list(results)
     curves = learning_curves(
         results, metric, env=env, n_bins=n_bins, random_state=random_state,
         n_resamples=n_resamples, confidence=confidence,
     )
     if not curves:
         raise ValueError(f"no runs on env {env!r} to plot")
+    groups = group_runs(results)
+    references = [reference_curve(groups[(curve.env, curve.method_label)], metric, curve.steps) for curve in curves]
     ylabel = ylabel or f"{metric} per episode"
     png = render_curves_png(
-        curves, title=title or f"{env}: {ylabel.lower()}", ylabel=ylabel, confidence=confidence
+        curves, title=title or f"{env}: {ylabel.lower()}", ylabel=ylabel, confidence=confidence, references=references,
     )
     return write_bytes_atomic(path, png)
 

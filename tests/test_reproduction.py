@@ -3,18 +3,13 @@ sweeps that contain the paper's experiments."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
-import numpy as np
 import pytest
 
-from agents.settings import EmpathicDQNSettings
 from empathy_zoo.atomic import write_json_atomic
-from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import DEFAULT_POLICIES
+from helpers_results import synthetic_result
 from leaderboard.reproduction import NotThePaperSweep, assess_claims, training_window_epsilons, write_reproduction
-
-SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 
 
 @dataclass(frozen=True)
@@ -28,34 +23,16 @@ def fake_reference(selfishness: float, epsilon: float, *, gamma: float, max_cycl
     return FakeOutcome(harms=0.01 + epsilon, survival=480.0 - 1000 * epsilon)
 
 
-def _result(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
-    rng = np.random.default_rng(seed)
-    episodes = 40
-    train = {"episode_end_step": list(range(100, 100 * (episodes + 1), 100))}
-    for metric in METRIC_NAMES:
-        centre = means.get(metric, 0.0)
-        train[metric] = (centre + rng.normal(0, 0.01, episodes)).tolist()
-    settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS))
-    return {
-        "schema": 1, "run_id": f"{env}__{method}-{beta}__s{seed}", "env": env, "method": method,
-        "method_label": f"{method} {beta}", "seed": seed, "steps": 4000,
-        "config": {"settings": settings, "variant": env, "env_kwargs": {},
-                   "fixed": DEFAULT_POLICIES[env] if fixed is None else fixed},
-        "train": train,
-        "eval": [{"step": 4000, **{m: [means.get(m, 0.0) + 0.01 * seed] * 3 for m in METRIC_NAMES}}],
-    }
-
-
 def _paper_like(harm_for_low_beta: float = 0.0, equality_at_half: float = 0.95) -> list[dict]:
     runs = []
     for seed in range(5):
         for beta, harms, survival in ((1.0, 0.9, 490), (0.75, 0.5, 480), (0.5, 0.0, 475), (0.25, harm_for_low_beta, 470)):
-            runs.append(_result("coexistence_v0", "empathic_dqn", beta, seed, harms=harms, survival=survival))
-        runs.append(_result("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470))
+            runs.append(synthetic_result("coexistence_v0", "empathic_dqn", beta, seed, harms=harms, survival=survival))
+        runs.append(synthetic_result("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470))
         for beta, batteries, eq in ((1.0, 6, 0.5), (0.75, 5, 0.8), (0.5, 4.5, equality_at_half), (0.25, 3, 0.85)):
-            runs.append(_result("sharing_v0", "empathic_dqn", beta, seed, batteries=batteries,
+            runs.append(synthetic_result("sharing_v0", "empathic_dqn", beta, seed, batteries=batteries,
                                 other_batteries=9 - batteries, equality=eq))
-        runs.append(_result("sharing_v0", "dqn_equality", 1.0, seed, batteries=4.5, equality=0.97))
+        runs.append(synthetic_result("sharing_v0", "dqn_equality", 1.0, seed, batteries=4.5, equality=0.97))
     return runs
 
 
@@ -117,5 +94,5 @@ def test_a_sweep_without_the_papers_experiments_gets_no_verdicts(tmp_path) -> No
 def test_runs_outside_the_papers_setting_are_left_out() -> None:
     runs = _paper_like()
     # a variant with another fixed agent that would break the harm trend is not the paper's
-    runs += [_result("coexistence_v0", "empathic_dqn", 0.25, s, fixed={"cat_0": "stay"}, harms=5.0) for s in range(5)]
+    runs += [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, s, fixed={"cat_0": "stay"}, harms=5.0) for s in range(5)]
     assert _verdicts(runs)["Harms to the cat fall as β falls."] == ("reproduced", "reproduced")

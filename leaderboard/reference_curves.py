@@ -1,0 +1,44 @@
+"""The exact optimum beside the learners: per Empathic DQN curve of Coexistence, what the
+fully observing optimum of the same β (:mod:`empathy_zoo.reference`) would score at the ε the
+run explored with at each point of training. Drawn dashed in the curve's colour."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.policies import DEFAULT_POLICIES
+
+__all__ = ["REFERENCE_METRICS", "reference_curve"]
+
+REFERENCE_METRICS = ("harms", "survival")
+"""Metrics the Coexistence reference gives."""
+_EMPATHIC = ("empathic_dqn", "dqn")
+
+
+def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarray) -> np.ndarray | None:
+    """The reference's ``metric`` at each of ``steps`` for a group of runs, or ``None`` when the
+    reference does not apply (another env, fixed agent or method; runs of different settings)."""
+    from agents.empathic_dqn import linear_epsilon
+    from agents.settings import EmpathicDQNSettings
+    from empathy_zoo.reference import coexistence_optimum
+
+    if metric not in REFERENCE_METRICS or not runs:
+        return None
+    first = runs[0]
+    config = first.get("config", {})
+    if (first["env"] != "coexistence_v0" or first["method"] not in _EMPATHIC
+            or dict(config.get("fixed") or {}) != DEFAULT_POLICIES["coexistence_v0"]
+            or set(config.get("env_kwargs") or {}) - {"size", "max_cycles"}
+            or any(run.get("config", {}).get("settings") != config.get("settings") for run in runs)):
+        return None
+    settings = EmpathicDQNSettings(**config["settings"])
+    arguments = {"gamma": settings.gamma, **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()}}
+    values = []
+    for step in steps:
+        epsilon = round(linear_epsilon(settings, int(step)), 3)
+        outcome = coexistence_optimum(settings.selfishness, epsilon, **arguments)
+        values.append(getattr(outcome, metric))
+    return np.asarray(values, dtype=np.float64)
