@@ -267,10 +267,19 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
 
 # ---------------------------------------------------------------------------- leaderboard, lists, play
 def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
+    from leaderboard.aggregate import load_results
     from leaderboard.reproduction import write_reproduction
+    from leaderboard.sensitivity import sensitivity_markdown
 
     produced_by = args.produced_by or "(the command that trained these runs is in each result file's config)"
-    print(f"{PROG}: wrote {write_reproduction(args.results, args.out, command=produced_by)}")
+    appendix = ""
+    if args.sensitivity:
+        appendix = sensitivity_markdown(
+            load_results(args.sensitivity),
+            f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
+            f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
+        )
+    print(f"{PROG}: wrote {write_reproduction(args.results, args.out, command=produced_by, appendix=appendix)}")
     return 0
 
 
@@ -423,6 +432,8 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("results", metavar="DIR", help="results directory of a reproduce sweep")
     report.add_argument("--out", metavar="PATH", help="where to write (default: DIR/REPRODUCTION.md)")
     report.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
+    report.add_argument("--sensitivity", metavar="DIR",
+                        help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition")
     report.set_defaults(handler=cmd_reproduction)
 
     sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
