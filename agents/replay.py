@@ -1,15 +1,23 @@
-"""Per-run replay memories as preallocated tensors, observations stored as int8.
+"""Per-run replay memories as preallocated tensors, observations stored as one-byte codes.
 
-Observations of both environments are small integers (-1 … 10), so each transition costs
-3·V bytes of observations (s, s', s_emp' packed in one int8 row), 3 bytes of flags (action,
-terminated, other present) and 4 bytes of reward: 82 bytes at V = 25, 41 MB per run at the
-paper's 500,000 transitions. Packing keeps a sample to three gathers.
+Every observation value of the suite is a multiple of 1/20 in [-1, 11.75] (small integers, and
+Sharing's ``inventory_encoding="authors"`` values ``(n+1)/20``), so an observation value is
+stored as a uint8 code and decoded exactly by a 256-entry float32 table
+(:mod:`empathy_zoo.observation_codes`, the arithmetic the engine draws them with): a sampled
+observation is bit for bit the float32 observation that was added, and integers decode to
+themselves. A value the code cannot hold exactly raises ``ValueError`` when added; nothing is
+rounded. Each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
+row), 3 bytes of flags (action, terminated, other present) and 4 bytes of reward: 82 bytes at
+V = 25, 41 MB per run at the paper's 500,000 transitions. Packing keeps a sample to three
+gathers and one table look-up.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import torch
+
+from empathy_zoo.observation_codes import DECODE_TABLE, MAX_VALUE, MIN_VALUE, encode
 
 __all__ = ["StackedReplay"]
 
@@ -24,28 +32,32 @@ class StackedReplay:
         k, c = num_runs, capacity
         self.num_runs, self.capacity, self.obs_size = k, c, obs_size
         self.device = device
-        self.observations = torch.zeros((k, c, 3, obs_size), dtype=torch.int8, device=device)
-        """(s, s', s_emp') of every transition."""
+        self.observations = torch.zeros((k, c, 3, obs_size), dtype=torch.uint8, device=device)
+        """(s, s', s_emp') of every transition, as codes (see :attr:`decode_table`)."""
+        self.decode_table = torch.from_numpy(DECODE_TABLE.copy()).to(device)
+        """(256,) float32: the observation value of every code."""
         self.flags = torch.zeros((k, c, 3), dtype=torch.uint8, device=device)
         """(action, terminated, other present) of every transition."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0
-        self._runs = torch.arange(k, device=device)[:, None]
+        self._first_row = torch.arange(k, device=device)[:, None] * c
+        """(K, 1): where each run's buffer starts in the flattened ``(K·capacity, …)`` tensors."""
 
-    @staticmethod
-    def _as_int8(observations: np.ndarray) -> np.ndarray:
-        small = observations.astype(np.int8)
-        if not np.array_equal(small, observations):
-            raise ValueError("replay stores observations as int8; got values that are not small integers")
-        return small
+    def check_range(self, low: float, high: float) -> None:
+        """Refuse, before any training, observations in ``[low, high]`` that the codes cannot hold."""
+        if low < MIN_VALUE or high > MAX_VALUE:
+            raise ValueError(
+                f"observations range over [{low:g}, {high:g}], but the replay memory stores values in "
+                f"[{MIN_VALUE:g}, {MAX_VALUE:g}] only (one-byte codes); use a smaller env (fewer batteries)"
+            )
 
     def add(self, obs: np.ndarray, next_obs: np.ndarray, swapped_next_obs: np.ndarray, action: np.ndarray,
             reward: np.ndarray, terminated: np.ndarray, other_present: np.ndarray) -> None:
         """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``."""
         m = action.shape[1]
         rows = (np.arange(m) + self.position) % self.capacity
-        packed = self._as_int8(np.stack([obs, next_obs, swapped_next_obs], axis=2))
+        packed = encode(np.stack([obs, next_obs, swapped_next_obs], axis=2))  # raises unless exact
         flags = np.stack([action, terminated, other_present], axis=2).astype(np.uint8)
         self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
         self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
@@ -54,14 +66,20 @@ class StackedReplay:
         self.size = min(self.size + m, self.capacity)
 
     def sample(self, index: torch.Tensor) -> dict[str, torch.Tensor]:
-        """Transitions at ``index`` ``(K, B)`` (one row of indices per run), observations as float32."""
-        observations = self.observations[self._runs, index].float()
-        flags = self.flags[self._runs, index]
+        """Transitions at ``index`` ``(K, B)`` (one row of indices per run), observations as float32
+        (decoded by a look-up in :attr:`decode_table`: exactly the values that were added)."""
+        rows = index + self._first_row  # (index_select on flat rows: the cheapest gathers)
+        k, b = rows.shape
+        rows = rows.reshape(-1)
+        codes = self.observations.view(k * self.capacity, -1).index_select(0, rows)
+        observations = self.decode_table.index_select(0, codes.view(-1).int()).view(k, b, 3, self.obs_size)
+        flags = self.flags.view(k * self.capacity, 3).index_select(0, rows).view(k, b, 3)
         return {
             "obs": observations[:, :, OBS], "next_obs": observations[:, :, NEXT_OBS],
             "swapped_next_obs": observations[:, :, SWAPPED_NEXT_OBS],
             "action": flags[:, :, ACTION].long(), "terminated": flags[:, :, TERMINATED].bool(),
-            "other_present": flags[:, :, OTHER_PRESENT].bool(), "reward": self.reward[self._runs, index],
+            "other_present": flags[:, :, OTHER_PRESENT].bool(),
+            "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
         }
 
     def nbytes_per_run(self) -> int:
@@ -76,7 +94,17 @@ class StackedReplay:
         }
 
     def load_state_dict(self, state: dict) -> None:
+        """Continue from :meth:`state_dict`. A checkpoint written before the codes (int8 integer
+        observations) is converted: integer ``v`` becomes code ``20·v + 20``, the same value."""
         size = int(state["size"])
-        for name in ("observations", "flags", "reward"):
+        observations = state["observations"]
+        if observations.dtype == torch.int8:  # the old format: the values themselves
+            observations = torch.from_numpy(encode(observations.cpu().numpy()))
+        elif observations.dtype != torch.uint8:
+            raise ValueError(
+                f"replay checkpoint holds observations of dtype {observations.dtype}; expected uint8 codes (or int8 values)"
+            )
+        self.observations[:, :size] = observations
+        for name in ("flags", "reward"):
             getattr(self, name)[:, :size] = state[name]
         self.position, self.size = int(state["position"]), size

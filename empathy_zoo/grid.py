@@ -8,6 +8,7 @@ import numpy as np
 
 __all__ = [
     "Action", "MOVES", "NUM_ACTIONS", "window_indices", "window_slots", "signed_offset", "torus_distance",
+    "cells_by_distance",
 ]
 
 
@@ -70,3 +71,10 @@ def torus_distance(a: np.ndarray, b: np.ndarray, size: int) -> np.ndarray:
     """Manhattan distance on the torus between cells ``a`` and ``b`` (arrays ``(..., 2)``)."""
     d = np.abs(signed_offset(np.asarray(b) - np.asarray(a), size))
     return d.sum(axis=-1)
+
+
+def cells_by_distance(size: int, centre: tuple[int, int]) -> np.ndarray:
+    """Every flat cell of a ``size`` torus, nearest to ``centre`` first (torus Manhattan distance),
+    ties by flat (row-major) index."""
+    cells = np.stack(np.divmod(np.arange(size * size), size), axis=1)
+    return np.argsort(torus_distance(np.asarray(centre), cells, size), kind="stable")

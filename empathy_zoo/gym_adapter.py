@@ -35,11 +35,13 @@ the reward.
 ``self.np_random`` is seeded too (Gymnasium's contract) but the dynamics never draw from it.
 
 ## Arguments
-`SingleAgentEnv(env="coexistence_v0", fixed=None, size=7, view=5, max_cycles=500, render_mode=None)`
+`SingleAgentEnv(env="coexistence_v0", fixed=None, size=7, view=5, max_cycles=500, render_mode=None, **env_options)`
 * `env`: `"coexistence_v0"` or `"sharing_v0"`.
 * `fixed`: `{agent: policy}` (a `FixedPolicy`, a registered name or `"package.module:ClassName"`);
   `None` = the paper's (`empathy_zoo.policies.DEFAULT_POLICIES`). Exactly one agent must be left.
 * `size`, `view`, `max_cycles`, `render_mode`: as for the PettingZoo env.
+* `env_options`: the environment's own arguments, passed on to its PettingZoo env (Sharing:
+  `start`, `inventory_encoding`); any other keyword raises `TypeError`.
 """
 
 from __future__ import annotations
@@ -78,11 +80,16 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         view: int = 5,
         max_cycles: int = 500,
         render_mode: str | None = None,
+        **env_options: Any,
     ) -> None:
-        EzPickle.__init__(self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode)
+        EzPickle.__init__(
+            self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options
+        )
         if env not in ENVIRONMENTS:
             raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENVIRONMENTS)}")
-        parallel = ENVIRONMENTS[env].parallel_env(size=size, view=view, max_cycles=max_cycles, render_mode=render_mode)
+        parallel = ENVIRONMENTS[env].parallel_env(
+            size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options
+        )
         self.fixed = dict(DEFAULT_POLICIES.get(env, {}) if fixed is None else fixed)
         self._env = FixedAgents(parallel, self.fixed)
         if len(self._env.possible_agents) != 1:

@@ -12,7 +12,7 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 from pettingzoo.utils.env import AECEnv
 
-from empathy_zoo.engine.base import GridEngine
+from empathy_zoo.engine.base import GridEngine, check_env_arguments
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.render import render_rgb, render_text
 
@@ -28,12 +28,17 @@ class GridParallelEnv(ParallelEnv, EzPickle):
     engine_class: ClassVar[type[GridEngine]]
     metadata: ClassVar[dict[str, Any]]
 
-    def __init__(self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None) -> None:
-        EzPickle.__init__(self, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode)
+    def __init__(
+        self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None, **env_options: Any
+    ) -> None:
+        """``env_options``: the environment's own arguments (``engine_class.extra_arguments``);
+        any other keyword raises ``TypeError`` naming it."""
+        EzPickle.__init__(self, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
+        check_env_arguments(self.engine_class, env_options)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
-        self.engine = self.engine_class(1, size=size, view=view, max_cycles=max_cycles)
+        self.engine = self.engine_class(1, size=size, view=view, max_cycles=max_cycles, **env_options)
         self.possible_agents: list[AgentID] = list(self.engine.agents)
         self.agents: list[AgentID] = []
         obs_space = spaces.Box(

@@ -7,9 +7,9 @@ value; a purely selfish robot grabs everything it can. This is the paper's secon
 | | |
 |---|---|
 | Import | `from empathy_zoo import sharing_v0` |
-| Agents | `robot_0` (the learner), `human_0` (fixed: `Patrol`, up on steps 0, 7, 14, …, else right) |
+| Agents | `robot_0` (the learner), `human_0` (fixed: `Patrol`, up on steps 0, 7, 14, …, else right; or `RandomWalk`, see Fidelity options) |
 | Actions | `Discrete(5)`: 0 up (row−1), 1 down (row+1), 2 left (col−1), 3 right (col+1), 4 stay |
-| Observations | `Box(-1, 1 + #batteries, (view·view,), float32)`: the `view×view` window around the agent, wrapping, row-major; floor `0`, battery `-1`, an agent `1 + batteries it has collected`; the own cell is drawn last |
+| Observations | `Box(-1, high, (view·view,), float32)`: the `view×view` window around the agent, wrapping, row-major; floor `0`, battery `-1`, an agent `1 + batteries it has collected` (`high = 1 + #batteries`), or `(n+1)/20` with `inventory_encoding="authors"` (`high = (1 + #batteries)/20`); the own cell is drawn last |
 | Parallel API | yes (`parallel_env`); AEC via `env` |
 
 ## Rules
@@ -17,7 +17,7 @@ value; a purely selfish robot grabs everything it can. This is the paper's secon
 * **Batteries**: one on every cell whose row and column are both odd (9 on the default 7×7).
 * **Collecting**: an agent that ends its move on a battery collects it. If both end on the same
   battery in the same step, the env's seeded generator gives it to one of them (probability ½).
-* **Start**: two distinct random cells without a battery.
+* **Start**: two distinct random cells without a battery (or near the centre: `start="centre"`).
 
 ## Rewards
 Per agent and independent: its n-th battery is worth `1.1 − 0.1·n` (1.0, 0.9, …, 0.2). No other
@@ -40,13 +40,47 @@ battery counts (here: `other`'s own observation). Wrap with `empathy_zoo.Empathy
 it in `infos`.
 
 ## Arguments
-`sharing_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None)`
+`sharing_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, start="random",
+inventory_encoding="count_plus_one")`
 * `size`: side of the torus (≥ 3). `view`: observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
 * `render_mode`: `None`, `"ansi"` (`R` robot, `H` human, `o` battery, `*` both agents) or `"rgb_array"`.
+* `start`: `"random"` (default) or `"centre"`; see Fidelity options.
+* `inventory_encoding`: `"count_plus_one"` (default) or `"authors"`; see Fidelity options.
+
+Any other value of `start` or `inventory_encoding` raises `ValueError` naming the argument and
+the allowed values; an unknown keyword raises `TypeError`. The vector env takes the same keywords
+(`VectorEnv("sharing_v0", n, start="centre", inventory_encoding="authors")`), and so does a sweep
+file's `[envs.<variant>]` table.
+
+## Fidelity options
+The defaults are the behaviour contract (docs/SPEC.md §3). Three options bring the environment
+closer to either of the paper's two sources, which disagree in places: the authors' public code
+(bartbussmann/empathicDQN, `GridworldSharingGym.py` and `EmpathicDQN.py`) and the paper's text.
+* `start="centre"` *(authors' code)*: the authors start both agents in the middle cell. Here two
+  agents may not share a cell and no agent may start on a battery (the middle cell of the 7×7
+  grid holds one), so the cells are ordered by torus (Manhattan) distance from the centre cell
+  `(size//2, size//2)`, ties by row-major index, and the robot starts on the first battery-free
+  cell of that order, the human on the next one: on 7×7, robot `(2, 3)` and human `(3, 2)`; on
+  9×9, robot `(4, 4)` and human `(3, 4)`. Reset options that place only some agents put the others
+  the same way (skipping placed agents and the options' batteries). No random number is drawn for
+  the start, so the env's generator gives its numbers from the first one on to the battery
+  tie-breaks: for a seed, they differ from those with `start="random"` (a different
+  configuration), and are still deterministic.
+* `inventory_encoding="authors"` *(authors' code)*: the authors' env draws an agent as
+  `5·(n+1)` and their network divides its input by 100, so an agent holding `n` batteries is seen
+  as `5·(n+1)/100`, computed as `np.float32((n + 1) / 20)` (0.05 empty-handed, 0.5 with all 9
+  batteries of the 7×7 grid); the observation space's `high` follows. Battery `-1` and floor `0`
+  are unchanged. The default `"count_plus_one"` (`1 + n`) follows the paper's text ("the number
+  of batteries collected"), shifted by one so that an empty-handed agent differs from floor.
+* The human's policy is a fixed agent: `Patrol` *(authors' code, the default)* or `RandomWalk`
+  (the paper's text: the human "who performs random behavior"): `FixedAgents(parallel_env(),
+  {"human_0": "random_walk"})`, `VectorEnv("sharing_v0", n, fixed={"human_0": "random_walk"})`,
+  or `fixed = { human_0 = "random_walk" }` in a sweep file.
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1, §3.
+* v0, 2026-11-29: fidelity options `start`, `inventory_encoding`; defaults unchanged.
 """
 
 from __future__ import annotations
@@ -62,6 +96,12 @@ class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
 
     engine_class = SharingEngine
     metadata = grid_metadata("sharing_v0")
+
+    def __init__(
+        self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None,
+        start: str = "random", inventory_encoding: str = "count_plus_one",
+    ) -> None:
+        super().__init__(size, view, max_cycles, render_mode, start=start, inventory_encoding=inventory_encoding)
 
 
 parallel_env, env = env_constructors(raw_env)

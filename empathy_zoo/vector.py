@@ -7,7 +7,9 @@ Coexistence environments at once; the learning agents (those not in ``fixed``) a
 ``parallel_env().reset(seed=seeds[i])`` would be, and its fixed agents are seeded exactly as
 :class:`empathy_zoo.FixedAgents` seeds them: the same seeds and actions give the same
 trajectories on both faces. An environment whose episode ends is reset in the same step; its
-last observation stays available in :attr:`VectorStep.final_observations`.
+last observation stays available in :attr:`VectorStep.final_observations`. Keyword arguments
+beyond ``size``, ``view`` and ``max_cycles`` are the environment's own (e.g. Sharing's ``start``
+and ``inventory_encoding``), exactly as the PettingZoo env takes them.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.engine import ENGINES, GridEngine
+from empathy_zoo.engine.base import check_env_arguments
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import BatchedPolicy, FixedPolicy, batched, make_policy
@@ -75,12 +78,14 @@ class VectorEnv:
         size: int = 7,
         view: int = 5,
         max_cycles: int = 500,
+        **env_options: Any,
     ) -> None:
         if isinstance(env, str):
             if env not in ENGINES:
                 raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENGINES)}")
             env = ENGINES[env]
-        self.engine: GridEngine = env(num_envs, size=size, view=view, max_cycles=max_cycles)
+        check_env_arguments(env, env_options)
+        self.engine: GridEngine = env(num_envs, size=size, view=view, max_cycles=max_cycles, **env_options)
         self.num_envs = self.engine.num_envs
         self.agents = list(self.engine.agents)
         fixed = dict(fixed or {})

@@ -21,7 +21,9 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
 
     [envs.<variant>]            # one table per environment variant; <variant> names it in
     env = "coexistence_v0"      #   run ids and tables (default env: the variant name)
-    size = 9                    # environment arguments: size, view, max_cycles
+    size = 9                    # environment arguments: size, view, max_cycles, and the
+                                #   environment's own: sharing_v0 takes start = "random" | "centre"
+                                #   and inventory_encoding = "count_plus_one" | "authors"
     fixed = { cat_0 = "random_walk" }  # fixed agents: a registered policy or "package.module:ClassName"
     methods = ["empathic_dqn"]  # optional: only these [[methods]] (by their `method`) run here
 
@@ -56,6 +58,7 @@ from empathy_zoo.training.spec import RunSpec
 
 __all__ = [
     "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
+    "EXTRA_ENV_ARGUMENTS",
     "load_sweep", "parse_sweep", "profile_path", "profiles", "read_toml", "check_keys", "check_value",
     "settings_types", "describe_type",
 ]
@@ -77,14 +80,19 @@ SWEEP_KEYS: dict[str, Any] = {
     "name": str, "seeds": SEEDS, "steps": int, "eval_interval": int, "eval_episodes": int,
 }
 """Keys of ``[sweep]`` and their types."""
+EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
+    name for engine in ENGINES.values() for name in engine.extra_arguments
+))
+"""Environment-specific arguments some registered environment takes (Sharing's ``start``, …)."""
 ENV_KEYS: dict[str, Any] = {
-    "env": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE, "methods": STR_LIST,
+    "env": str, "size": int, "view": int, "max_cycles": int, **{name: str for name in EXTRA_ENV_ARGUMENTS},
+    "fixed": STR_TABLE, "methods": STR_LIST,
 }
 """Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
 METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
 """Keys of a ``[[methods]]`` entry besides the method's settings fields."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
-ENV_ARGUMENTS = ("size", "view", "max_cycles")
+ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS)
 _VARIANT_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
@@ -319,6 +327,10 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
         key = "env" if "env" in checked else "variant name (or set env = ...)"
         raise SweepConfigError(f"{where} {key}: unknown environment {env!r}; registered: {sorted(ENGINES)}")
     kwargs = {key: checked[key] for key in ENV_ARGUMENTS if key in checked}
+    for key in EXTRA_ENV_ARGUMENTS:
+        if key in kwargs and key not in ENGINES[env].extra_arguments:
+            own = ", ".join(ENGINES[env].extra_arguments) or "none"
+            raise SweepConfigError(f"{where} {key}: {env} takes no argument {key!r} (its own arguments: {own})")
     try:
         ENGINES[env](1, **kwargs)
     except ValueError as error:

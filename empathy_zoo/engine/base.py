@@ -9,7 +9,7 @@ same engine with many environments.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -19,7 +19,10 @@ from empathy_zoo.grid import MOVES, NUM_ACTIONS, Action, torus_distance, window_
 from empathy_zoo.metrics import equality
 from empathy_zoo.randomness import EnvStreams
 
-__all__ = ["GridEngine", "StepEvents", "Views", "check_grid_arguments"]
+__all__ = [
+    "GridEngine", "StepEvents", "Views", "GRID_ARGUMENTS", "check_grid_arguments", "check_choice",
+    "check_env_arguments",
+]
 
 NO_AGENT = -1
 STAY = int(Action.STAY)
@@ -80,6 +83,29 @@ def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -
         raise ValueError(f"max_cycles must be positive, got {max_cycles}")
 
 
+GRID_ARGUMENTS = ("size", "view", "max_cycles")
+"""Constructor arguments every environment takes (besides its :attr:`GridEngine.extra_arguments`)."""
+
+
+def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
+    """``value`` if it is one of the strings ``allowed``, else raise ``ValueError`` naming the
+    argument ``name`` and the allowed values (never a silent default)."""
+    if not isinstance(value, str) or value not in allowed:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {value!r}")
+    return value
+
+
+def check_env_arguments(
+    engine: type[GridEngine], kwargs: Mapping[str, Any], error: type[Exception] = TypeError
+) -> None:
+    """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
+    ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
+    known = (*GRID_ARGUMENTS, *engine.extra_arguments)
+    unknown = [key for key in kwargs if key not in known]
+    if unknown:
+        raise error(f"{engine.name} takes no argument(s) {unknown}; its environment arguments: {', '.join(known)}")
+
+
 class GridEngine:
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
@@ -92,6 +118,9 @@ class GridEngine:
     min_size: ClassVar[int] = 3
     obs_low: ClassVar[float]
     obs_high: ClassVar[float]
+    extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {}
+    """Environment-specific keyword arguments of the constructor and their allowed values (the
+    first one is the default); every face and the sweep files accept exactly these."""
 
     def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
         check_grid_arguments(size, view, max_cycles, self.min_size)
@@ -140,6 +169,9 @@ class GridEngine:
         # 0-d arrays: cheaper ufunc operands than Python ints on the small arrays of one environment
         self._num_cells, self._num_actions = np.array(self.num_cells), np.array(NUM_ACTIONS)
         self._one, self._time_limit = np.array(1), np.array(self.max_cycles)
+        self.start_order: np.ndarray | None = None
+        """Flat cells in the order agents take them at reset (each agent the first one not blocked,
+        taken or in conflict), or ``None``: start cells are drawn at random (:meth:`_random_start`)."""
 
     @property
     def pos(self) -> np.ndarray:
@@ -219,8 +251,11 @@ class GridEngine:
             if len(ids) != 1:
                 raise ValueError("reset options place one environment at a time")
             self._reset_with_options(int(ids[0]), options)
-        else:
+        elif self.start_order is None:
             self._random_start(ids)
+        else:  # no randomness drawn; without options every environment has the same layout
+            placed = self._ordered_start(int(ids[0]), {}, range(self.num_agents))
+            self.cells[ids] = [self.flat_cell(*placed[index]) for index in range(self.num_agents)]
 
     def _reset_with_options(self, env_id: int, options: Mapping[str, Any]) -> None:
         if not isinstance(options, Mapping):
@@ -256,9 +291,11 @@ class GridEngine:
                         f"{tuple(placed[b].tolist())} would start in contact"
                     )
         env = np.array([env_id])
-        for index in range(self.num_agents):
-            if index in placed:
-                continue
+        missing = [index for index in range(self.num_agents) if index not in placed]
+        if self.start_order is not None:
+            placed = self._ordered_start(env_id, placed, missing)
+            missing = []
+        for index in missing:
             if not any(
                 flat not in blocked and not any(
                     np.array_equal(self._cell_rc[flat], c) or self._start_conflict(self._cell_rc[flat], c)
@@ -278,6 +315,27 @@ class GridEngine:
                 break
         for index, cell in placed.items():
             self.cells[env_id, index] = self.flat_cell(*cell)
+
+    def _ordered_start(
+        self, env_id: int, placed: Mapping[int, np.ndarray], missing: Iterable[int]
+    ) -> dict[int, np.ndarray]:
+        """``placed`` (agent index -> (row, col)) plus a cell for every agent in ``missing``, in
+        turn: the first cell of :attr:`start_order` that is not blocked in ``env_id`` and neither
+        taken by nor in conflict with an agent placed before it."""
+        blocked = set(self._blocked_start_cells(env_id).tolist())
+        placed = dict(placed)
+        for index in missing:
+            for flat in self.start_order.tolist():
+                cell = self._cell_rc[flat]
+                if flat in blocked or any(
+                    np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()
+                ):
+                    continue
+                placed[index] = cell
+                break
+            else:
+                raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
+        return placed
 
     def _check_cell(self, cell: Any, where: str) -> np.ndarray:
         try:

@@ -1,4 +1,16 @@
-"""Sharing rules (SPEC §3): a robot and a human collect batteries with diminishing returns."""
+"""Sharing rules (SPEC §3): a robot and a human collect batteries with diminishing returns.
+
+Two fidelity options (SPEC §3, constructor keywords; the defaults are the suite's rules):
+
+* ``start``: ``"random"`` draws two distinct battery-free cells from the env's generator;
+  ``"centre"`` orders the cells by torus distance from the centre cell ``(size//2, size//2)``
+  (ties by row-major index) and puts the robot on the first battery-free one and the human on the
+  next (7×7: robot (2, 3), human (3, 2)). It draws nothing, so the generator's first number goes
+  to the first battery tie-break: a seed gives another (still deterministic) sequence of
+  tie-breaks than with ``"random"``.
+* ``inventory_encoding``: an agent holding ``n`` batteries is drawn as ``1 + n``
+  (``"count_plus_one"``) or as ``5·(n+1)/100`` (``"authors"``, :func:`authors_agent_value`).
+"""
 
 from __future__ import annotations
 
@@ -7,15 +19,24 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.engine.base import GridEngine, StepEvents
+from empathy_zoo.engine.base import GridEngine, StepEvents, check_choice
+from empathy_zoo.grid import cells_by_distance
+from empathy_zoo.observation_codes import step_value
 
-__all__ = ["SharingEngine", "battery_value", "FLOOR", "BATTERY"]
+__all__ = [
+    "SharingEngine", "battery_value", "agent_value", "authors_agent_value", "FLOOR", "BATTERY", "STARTS",
+    "INVENTORY_ENCODINGS",
+]
 
 FLOOR = 0.0
 BATTERY = -1.0
 ROBOT, HUMAN = 0, 1
 TIE_TO_ROBOT = 0.5
 """A battery both agents reach in the same step goes to the robot when the env's draw is below this."""
+STARTS = ("random", "centre")
+"""Values of the ``start`` argument (the first is the default)."""
+INVENTORY_ENCODINGS = ("count_plus_one", "authors")
+"""Values of the ``inventory_encoding`` argument (the first is the default)."""
 
 
 def battery_value(n: np.ndarray | int) -> np.ndarray:
@@ -31,6 +52,13 @@ def agent_value(batteries: np.ndarray) -> np.ndarray:
     return batteries + _ONE  # (a 0-d array adds faster than the int 1)
 
 
+def authors_agent_value(batteries: np.ndarray | int) -> np.ndarray:
+    """Observation value of an agent that holds ``batteries`` in the authors' encoding:
+    ``5·(n+1)/100``, computed as ``np.float32((n + 1) / 20)`` (the replay memory decodes stored
+    values with the same arithmetic, :func:`empathy_zoo.observation_codes.step_value`)."""
+    return step_value(np.asarray(batteries) + 1)
+
+
 class SharingEngine(GridEngine):
     """``robot_0`` and ``human_0`` collect the batteries on every odd (row, col) cell."""
 
@@ -39,13 +67,25 @@ class SharingEngine(GridEngine):
     symbols = ("R", "H")
     colors = ((40, 110, 220), (200, 60, 60))
     obs_low = -1.0
+    extra_arguments = {"start": STARTS, "inventory_encoding": INVENTORY_ENCODINGS}
 
-    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
+    def __init__(
+        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *,
+        start: str = "random", inventory_encoding: str = "count_plus_one",
+    ) -> None:
+        self.start = check_choice("start", start, STARTS)
+        self.inventory_encoding = check_choice("inventory_encoding", inventory_encoding, INVENTORY_ENCODINGS)
         super().__init__(num_envs, size, view, max_cycles)
         rows, cols = np.divmod(np.arange(self.size * self.size), self.size)
         self.initial_batteries = (rows % 2 == 1) & (cols % 2 == 1)
         self.num_batteries = int(self.initial_batteries.sum())
-        self.obs_high = float(agent_value(self.num_batteries))
+        if inventory_encoding == "authors":  # a lookup over every count the env can reach
+            self._agent_value = authors_agent_value(np.arange(self.num_batteries + 1)).take
+        else:
+            self._agent_value = agent_value
+        self.obs_high = float(self._agent_value(self.num_batteries))
+        if start == "centre":
+            self.start_order = cells_by_distance(self.size, (self.size // 2, self.size // 2))
         self._free_cells = np.flatnonzero(~self.initial_batteries)
         self.batteries = np.zeros((self.num_envs, self.size * self.size), dtype=bool)
         self._picture = np.zeros(self.batteries.shape, dtype=np.float32)
@@ -82,7 +122,7 @@ class SharingEngine(GridEngine):
         if layout.sum() > self.num_batteries:
             raise ValueError(
                 f"options['batteries'] lists {int(layout.sum())} batteries; at most {self.num_batteries} fit this "
-                f"{self.size}x{self.size} env (its observation space holds agent values up to 1 + {self.num_batteries})"
+                f"{self.size}x{self.size} env (its observation space holds agents with up to {self.num_batteries} batteries)"
             )
         self.batteries[env_id] = layout
         self._draw_batteries(np.array([env_id]))
@@ -131,10 +171,10 @@ class SharingEngine(GridEngine):
         self._picture.take(window, out=out, mode="clip")  # (the indices are valid; "clip" avoids a buffer)
 
     def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
-        return agent_value(inventory)
+        return self._agent_value(inventory)
 
     def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray:
-        return agent_value(inventory)
+        return self._agent_value(inventory)
 
     def load_state(self, state: Mapping[str, Any]) -> None:
         super().load_state(state)

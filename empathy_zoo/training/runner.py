@@ -190,6 +190,8 @@ def train_ensemble(
             log.columns = columns
         evaluations = saved["evaluations"]
         step, elapsed = int(saved["step"]), float(saved["elapsed"])
+    if hasattr(learner, "replay") and hasattr(learner.replay, "check_range"):  # fail now, not mid-run
+        learner.replay.check_range(venv.engine.obs_low, venv.engine.obs_high)
     memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
               "learner_per_run": learner.memory_bytes_per_run()}
     if options.progress:

@@ -11,6 +11,7 @@ from typing import Any
 from agents.base import Method
 from agents.registry import get_method
 from empathy_zoo.engine import ENGINES
+from empathy_zoo.engine.base import check_choice, check_env_arguments
 from empathy_zoo.policies import DEFAULT_POLICIES
 
 __all__ = ["RunSpec", "group_specs"]
@@ -38,7 +39,8 @@ class RunSpec:
     fixed: Mapping[str, str] | None = None
     """Fixed agents and their policies (name or ``package.module:ClassName``); ``None`` = the paper's."""
     env_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    """Environment arguments (``size``, ``view``, ``max_cycles``)."""
+    """Environment arguments (``size``, ``view``, ``max_cycles``, and the environment's own, e.g.
+    Sharing's ``start`` and ``inventory_encoding``)."""
     label: str | None = None
     """Display name in tables; ``None`` = the method's own label."""
     variant: str | None = None
@@ -53,9 +55,11 @@ class RunSpec:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive int, got {value!r}")
-        unknown = set(self.env_kwargs) - {"size", "view", "max_cycles"}
-        if unknown:
-            raise ValueError(f"unknown environment argument(s) {sorted(unknown)}; known: size, view, max_cycles")
+        engine = ENGINES[self.env]
+        check_env_arguments(engine, self.env_kwargs, ValueError)
+        for name, allowed in engine.extra_arguments.items():
+            if name in self.env_kwargs:
+                check_choice(name, self.env_kwargs[name], allowed)
         self.method_settings()  # validates method and settings
 
     # ------------------------------------------------------------------ derived
