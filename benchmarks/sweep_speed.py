@@ -30,12 +30,13 @@ OBS, HIDDEN, ACTIONS, BATCH = 25, 128, 5, 32
 PAPER_RUNS, PAPER_STEPS = 50, 1_000_000
 
 
-def flops_per_run_step() -> float:
-    """Matmul FLOPs of one env step of one run: acting, the double-DQN and empathic targets,
-    and the forward and backward passes of Q and Q_emp."""
+def flops_per_run_step(empathic: bool = True) -> float:
+    """Matmul FLOPs of one env step of one run: acting, the targets, and the forward and backward
+    passes of Q and Q_emp (``empathic``, β < 1) or of Q alone (standard DQN, β = 1)."""
     mac_row = OBS * HIDDEN + HIDDEN * HIDDEN + HIDDEN * ACTIONS
-    forward_rows = 1 + BATCH + 2 * BATCH + 2 * BATCH  # act; Q(s'); Q̂(s', s_emp'); Q and Q_emp on s
-    backward = 2 * BATCH * (2 * mac_row - OBS * HIDDEN)  # weight and input grads (no input grad for layer 1)
+    heads = 2 if empathic else 1
+    forward_rows = 1 + BATCH + heads * BATCH + heads * BATCH  # act; Q(s'); Q̂(s'[, s_emp']); Q[, Q_emp] on s
+    backward = heads * BATCH * (2 * mac_row - OBS * HIDDEN)  # weight and input grads (no input grad for layer 1)
     return 2.0 * (forward_rows * mac_row + backward)
 
 
@@ -50,9 +51,9 @@ def matmul_peak(seconds: float = 2.0) -> float:
     return 2 * 2048**3 * count / (time.perf_counter() - start) / 1e9
 
 
-def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None) -> float:
+def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None, selfishness: float = 0.5) -> float:
     """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on)."""
-    settings = {"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": 0.5}
+    settings = {"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": selfishness}
     specs = [
         RunSpec(env="coexistence_v0", method="empathic_dqn", settings=settings, seed=w * k + i,
                 steps=steps, eval_interval=10 * steps, eval_episodes=1)
@@ -113,8 +114,18 @@ def main() -> None:
         print(f"(d,e) K={k:>3} × {workers}: {ratio}; {achieved:6.1f} GFLOP/s = {achieved / peak:5.1%} of peak")
     hours = PAPER_RUNS * PAPER_STEPS / best[2] / 3600
     print(f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
-          f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations)")
-    print(f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP")
+          f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations) if every run needed Q_emp")
+    # the paper's ensembles: per env 15 runs with β < 1 (Q and Q_emp) and 10 DQN-type runs (Q only)
+    empathic = ensemble_rate(15, max(50, int(600 * scale)), workers=2, threads=1)
+    dqn = ensemble_rate(10, max(50, int(900 * scale)), workers=2, threads=1, selfishness=1.0)
+    print(f"(f) the paper's ensembles, 2 processes × 1 thread: K=15 β<1 {empathic:.0f} env-steps/s "
+          f"({empathic * per_step / 1e9 / peak:.1%} of peak); K=10 β=1 {dqn:.0f} env-steps/s "
+          f"({dqn * flops_per_run_step(False) / 1e9 / peak:.1%} of peak)")
+    minutes = (30 * PAPER_STEPS / empathic + 20 * PAPER_STEPS / dqn) / 60
+    print(f"(f) projected paper profile: 30 runs × 1M at the first rate + 20 runs × 1M at the second = "
+          f"{minutes:.0f} minutes (+ greedy evaluations)")
+    print(f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP with Q_emp, "
+          f"{flops_per_run_step(False) / 1e6:.2f} MFLOP standard DQN")
     sys.stdout.flush()
 
 
