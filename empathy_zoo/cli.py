@@ -39,9 +39,11 @@ RUN_KEYS: dict[str, Any] = {
     "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
     "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
     "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE,
-    "progress": bool,
+    "start": str, "inventory_encoding": str, "progress": bool,
 }
 """Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
+ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding")
+"""Keys of a run that are environment arguments (the env checks which it takes)."""
 
 RUN_DEFAULTS: dict[str, Any] = {
     "env": "coexistence_v0", "method": "empathic_dqn", "seeds": [0], "steps": 1_000_000, "out": "runs",
@@ -200,7 +202,7 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.training.spec import RunSpec
 
     run, settings = _train_values(args)
-    env_kwargs = {key: run[key] for key in ("size", "view", "max_cycles") if run.get(key) is not None}
+    env_kwargs = {key: run[key] for key in ENV_ARGUMENTS if run.get(key) is not None}
     fixed = None
     if run["fixed"] is not None:
         from empathy_zoo.policies import DEFAULT_POLICIES
@@ -393,6 +395,9 @@ def _add_train(sub: Any) -> None:
     parser.add_argument("--size", type=int, help="side of the torus (default: 7)")
     parser.add_argument("--view", type=int, help="side of the observation window (default: 5)")
     parser.add_argument("--max-cycles", type=int, help="steps before truncation (default: 500)")
+    parser.add_argument("--start", help="Sharing only: start cells, random or centre (default: random)")
+    parser.add_argument("--inventory-encoding", metavar="ENCODING",
+                        help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)")
     parser.add_argument("--fixed", type=_agent_policy, action="append", metavar="AGENT=POLICY",
                         help="fixed agent policy, a name or package.module:ClassName (repeatable)")
     _add_runner_options(parser, default=argparse.SUPPRESS)

@@ -291,3 +291,17 @@ def test_corrupted_result_file_is_a_clear_error_and_left_alone(tmp_path, capsys)
     assert path.read_text() == "{ truncated"
     assert main(["leaderboard", str(out)]) == 2
     assert str(path) in capsys.readouterr().err
+
+
+def test_train_takes_sharings_fidelity_options(tmp_path, capsys):
+    out = tmp_path / "runs"
+    argv = ["train", "--env", "sharing_v0", "--start", "centre", "--inventory-encoding", "authors",
+            "--selfishness", "0.5", "--out", str(out), *TINY]
+    assert main(argv) == 0
+    (result,) = [json.loads(p.read_text()) for p in (out / "runs").glob("*.json")]
+    assert result["config"]["env_kwargs"] == {"max_cycles": 50, "start": "centre", "inventory_encoding": "authors"}
+    capsys.readouterr()
+    assert main(["train", "--env", "coexistence_v0", "--start", "centre", "--out", str(tmp_path / "x"), *TINY]) == 2
+    assert "start" in capsys.readouterr().err
+    assert main(["train", "--env", "sharing_v0", "--start", "middle", "--out", str(tmp_path / "y"), *TINY]) == 2
+    assert "'middle'" in capsys.readouterr().err
