@@ -1,4 +1,8 @@
-"""Atomic file writes: a reader (or a crash) never sees a half-written results file."""
+"""Atomic file writes: a reader (or a crash) never sees a half-written results file.
+
+:func:`check_output_dir` is asked before any long work starts: it refuses an output directory
+that is a file, cannot be created or cannot be written, so no training is lost at the first write.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +13,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
 
-__all__ = ["write_bytes_atomic", "write_text_atomic", "write_json_atomic", "write_with_atomic", "read_json"]
+__all__ = [
+    "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "write_with_atomic", "read_json",
+    "check_output_dir",
+]
+
+PROBE_PREFIX = ".write-probe-"
+"""Name prefix of the empty file :func:`check_output_dir` writes (atomically) and removes."""
 
 
 def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], None]) -> Path:
@@ -51,3 +61,27 @@ def read_json(path: str | os.PathLike[str]) -> Any:
         return json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path} is corrupted ({error}); move it away to redo that run") from error
+
+
+def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()) -> Path:
+    """``path`` (and ``path / sub`` for every name in ``subdirs``), created if missing, once an empty
+    file was written there atomically and removed again; a ``ValueError`` naming the directory
+    and the reason when it is a file, cannot be created or cannot be written."""
+    root = Path(path)
+    for directory in (root, *(root / sub for sub in subdirs)):
+        if directory.exists() and not directory.is_dir():
+            raise ValueError(f"output directory {directory} is a file, not a directory; "
+                             "choose another output directory (--out) or move the file away")
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise ValueError(f"cannot create output directory {directory} ({error.strerror or error}); "
+                             "choose another output directory (--out)") from None
+        probe = directory / f"{PROBE_PREFIX}{os.getpid()}"
+        try:
+            write_bytes_atomic(probe, b"")
+            probe.unlink()
+        except OSError as error:
+            raise ValueError(f"output directory {directory} is not writable ({error.strerror or error}); "
+                             "choose another output directory (--out) or fix its permissions") from None
+    return root

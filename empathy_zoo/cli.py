@@ -469,6 +469,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:  # a write that failed mid-way (disk full, a directory removed): no traceback
+        print(f"{PROG}: error: {error}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; run the same command again to resume from the last checkpoint", file=sys.stderr)
         return 130

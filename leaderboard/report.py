@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.atomic import check_output_dir, write_text_atomic
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, result_files, score_runs,
@@ -46,7 +46,7 @@ def write_leaderboard(
     if not files:
         raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
     results = load_results(results_dir)
-    out = Path(results_dir if out_dir is None else out_dir)
+    out = check_output_dir(results_dir if out_dir is None else out_dir, (FIGURES_DIR,))
     provenance = Provenance(
         command=command if command is not None else f"leaderboard.write_leaderboard({str(results_dir)!r})",
         version=package_version(), commit=git_commit(), n_resamples=n_resamples, confidence=confidence,

@@ -25,11 +25,12 @@ import torch
 from tqdm.auto import tqdm
 
 from agents.base import StepBatch
+from empathy_zoo.atomic import check_output_dir
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
-from empathy_zoo.training.results import build_result, empty_columns, result_path, write_result
+from empathy_zoo.training.results import RUNS_DIR, build_result, empty_columns, result_path, write_result
 from empathy_zoo.training.spec import RunSpec, group_specs
 from empathy_zoo.vector import VectorEnv, VectorStep
 
@@ -72,22 +73,27 @@ def train_runs(
     specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(),
     on_result: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[Path]:
-    """Train every run not finished yet; returns the result files of all ``specs``."""
+    """Train every run not finished yet; returns the result files of all ``specs``.
+
+    ``out_dir`` is checked first (created, written to): one that cannot hold the results raises
+    ``ValueError`` before any training starts."""
     out_dir = Path(out_dir)
     ids = [s.run_id for s in specs]
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
     if duplicates:
         raise ValueError(f"the same run is listed twice: {duplicates}")
-    todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    chunks = group_specs(todo, options.max_parallel_runs)
     if options.workers < 1:
         raise ValueError(f"workers must be positive, got {options.workers}")
+    if options.backend not in ("local", "ray"):
+        raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
+    local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
+    check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
+    todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
+    chunks = group_specs(todo, options.max_parallel_runs)
     if options.backend == "ray":
         from empathy_zoo.training.ray_backend import train_with_ray
 
         train_with_ray(chunks, out_dir, options, on_result)
-    elif options.backend != "local":
-        raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
     elif options.workers == 1 or len(chunks) <= 1:
         for chunk in chunks:
             for result in train_ensemble(chunk, out_dir, options):
