@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
+import secrets
+import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -18,17 +19,24 @@ __all__ = [
     "check_output_dir",
 ]
 
+TEMP_SUFFIX = ".tmp"
+"""Name suffix of the temporary file of an atomic write in progress (its name starts with ``.``)."""
 PROBE_PREFIX = ".write-probe-"
 """Name prefix of the empty file :func:`check_output_dir` writes (atomically) and removes."""
 
 
 def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], None]) -> Path:
-    """Call ``write(file)`` on a temporary file beside ``path``, fsync it, then rename it over ``path``."""
+    """Call ``write(file)`` on a temporary file beside ``path``, fsync it, then rename it over ``path``.
+
+    The file gets the permissions an ordinary write would give it: a new file ``0666 & ~umask``
+    (the kernel applies the umask), a rewritten one the mode it had."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = _create_temp(path)
     try:
         with os.fdopen(fd, "wb") as handle:
+            if path.exists() and hasattr(os, "fchmod"):  # a new file keeps the mode it was created with
+                os.fchmod(handle.fileno(), stat.S_IMODE(path.stat().st_mode))
             write(handle)
             handle.flush()
             os.fsync(handle.fileno())
@@ -40,6 +48,17 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
             pass
         raise
     return path
+
+
+def _create_temp(path: Path) -> tuple[int, Path]:
+    """A new, empty temporary file beside ``path`` (mode ``0666 & ~umask``), named
+    ``.<name>.<pid>.<random>.tmp`` so a later run can tell whose it is, and its descriptor."""
+    while True:
+        tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{TEMP_SUFFIX}"
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666), tmp
+        except FileExistsError:
+            continue
 
 
 def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
