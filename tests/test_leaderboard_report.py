@@ -176,9 +176,23 @@ def test_a_failing_write_leaves_the_old_files_intact(tmp_path: Path, monkeypatch
     paths = write_leaderboard(tmp_path, command="first")
     before = {key: path.read_bytes() for key, path in paths.items()}
 
+    import leaderboard.report as report
+
+    real_fsync, real_check, checking = os.fsync, report.check_output_dir, []
+
+    def check_output_dir(*args: object) -> Path:  # the up-front directory check still passes
+        checking.append(True)
+        try:
+            return real_check(*args)
+        finally:
+            checking.pop()
+
     def failing_fsync(fd: int) -> None:
+        if checking:
+            return real_fsync(fd)
         raise OSError("disk full")
 
+    monkeypatch.setattr(report, "check_output_dir", check_output_dir)
     monkeypatch.setattr(os, "fsync", failing_fsync)
     with pytest.raises(OSError, match="disk full"):
         write_leaderboard(tmp_path, command="second")
