@@ -27,6 +27,7 @@ import numpy as np
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_path_name
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
@@ -112,6 +113,12 @@ def _check_result(result: Any, path: Path) -> dict[str, Any]:
         raise ValueError(f"{path} is not a result file: missing {', '.join(missing)}")
     if result["schema"] != SCHEMA_VERSION:
         raise ValueError(f"{path} has result schema {result['schema']!r}; this leaderboard reads {SCHEMA_VERSION}")
+    for key in ("run_id", "env", "variant"):  # these become parts of file names
+        if key in result and not (key == "variant" and result[key] is None):
+            try:
+                check_path_name(result[key], repr(key))
+            except ValueError as error:
+                raise ValueError(f"{path}: {error}; the file is not a result of this suite, move it away") from None
     if not isinstance(result["seed"], int) or not isinstance(result["train"], dict):
         raise ValueError(f"{path} is not a result file: 'seed' must be an int and 'train' an object")
     if "episode_end_step" not in result["train"]:

@@ -17,6 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
 )
@@ -136,7 +137,7 @@ def plot_learning_curves(
     for env in envs:
         for metric, ylabel in specs.get(env, specs.get(base_env[env], FALLBACK_SPEC)):
             paths[(env, metric)] = plot_metric(
-                results, env, metric, Path(figures_dir) / figure_filename(env, metric), ylabel=ylabel,
+                results, env, metric, confined(figures_dir, figure_filename(env, metric)), ylabel=ylabel,
                 n_bins=n_bins, random_state=random_state, n_resamples=n_resamples, confidence=confidence,
             )
     return paths

@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import itertools
 import json
-import re
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, fields
@@ -53,6 +52,7 @@ from typing import Any, get_type_hints
 from agents.registry import get_method
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.engine import ENGINES
+from empathy_zoo.names import check_path_name
 from empathy_zoo.policies import DEFAULT_POLICIES, make_policy
 from empathy_zoo.training.spec import RunSpec
 
@@ -93,7 +93,6 @@ METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
 """Keys of a ``[[methods]]`` entry besides the method's settings fields."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
 ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS)
-_VARIANT_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
 class SweepConfigError(ValueError):
@@ -318,8 +317,10 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
     where = f"{source}: [envs.{variant}]"
     if not isinstance(table, dict):
         raise SweepConfigError(f"{where}: must be a table (env = ..., size = ...), got {_type_name(table)}")
-    if not _VARIANT_NAME.match(variant):
-        raise SweepConfigError(f"{where}: a variant name may hold letters, digits, '_', '-' and '.' only")
+    try:
+        check_path_name(variant, "variant name")
+    except ValueError as error:
+        raise SweepConfigError(f"{where}: {error}") from None
     check_keys(table, ENV_KEYS, where)
     checked = {key: check_value(value, ENV_KEYS[key], f"{where} {key}") for key, value in table.items()}
     env = checked.get("env", variant)

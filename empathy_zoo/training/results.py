@@ -8,6 +8,7 @@ from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_path_name
 from empathy_zoo.provenance import git_commit, package_version
 
 __all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result"]
@@ -17,7 +18,8 @@ RUNS_DIR = "runs"
 
 
 def result_path(out_dir: Path, run_id: str) -> Path:
-    return Path(out_dir) / RUNS_DIR / f"{run_id}.json"
+    """Where the result file of ``run_id`` lives (a ``run_id`` that is no file name raises ``ValueError``)."""
+    return Path(out_dir) / RUNS_DIR / f"{check_path_name(run_id, 'run id')}.json"
 
 
 def empty_columns() -> dict[str, list]:

@@ -12,6 +12,7 @@ from agents.base import Method
 from agents.registry import get_method
 from empathy_zoo.engine import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
+from empathy_zoo.names import check_path_name
 from empathy_zoo.policies import DEFAULT_POLICIES
 
 __all__ = ["RunSpec", "group_specs"]
@@ -49,6 +50,8 @@ class RunSpec:
     def __post_init__(self) -> None:
         if self.env not in ENGINES:
             raise ValueError(f"unknown environment {self.env!r}; registered: {sorted(ENGINES)}")
+        if self.variant is not None:
+            check_path_name(self.variant, "variant")
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative int, got {self.seed!r}")
         for name in ("steps", "eval_interval", "eval_episodes"):
