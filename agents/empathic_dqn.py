@@ -15,9 +15,10 @@ other-term is 0 when that agent is terminal at t+1. Acting is ε-greedy on ``Q_e
 β = 1 is standard DQN (the paper: "1.0 recovers standard DQN"), and it is run as such: one
 network ``Q`` (and its target), acting on ``Q``, no ``Q_emp`` (whose target would equal ``y``).
 That is what the DQN-type runs (β = 1 and the reward-shaped baselines) train, at a bit more than
-half the cost of a run that needs ``Q_emp``; runs with β = 1 and β < 1 therefore never share an
-ensemble (see :meth:`EmpathicDQNSettings.shared`). A subclass that overrides :meth:`targets`
-always gets both networks. The K runs' networks
+half the cost of a run that needs ``Q_emp``. Runs of both kinds share an ensemble: the stacked
+parameters hold ``Q`` of every run, then ``Q_emp`` of the runs that have one, so each run computes
+exactly what it would alone. A subclass that overrides :meth:`targets` gives every run both
+networks. The K runs' networks
 are stacked tensors (``agents.stacked_mlp``) so one batched matmul serves every run; runs share
 nothing else: each has its own seed, replay memory, ε stream and target copies.
 """
@@ -96,7 +97,7 @@ class EmpathicDQN:
             raise ValueError("give one settings object per seed, and at least one run")
         shared = {s.shared() for s in settings}
         if len(shared) != 1:
-            raise ValueError("runs of one ensemble may differ only in seed, selfishness (all below 1, or all 1) and shaping")
+            raise ValueError("runs of one ensemble may differ only in seed, selfishness and shaping")
         self.settings = list(settings)
         self.config = settings[0]
         self.seeds = [int(s) for s in seeds]
@@ -107,14 +108,21 @@ class EmpathicDQN:
         generators = [torch.Generator().manual_seed(derive_key(s, STREAM_INIT) >> 1) for s in self.seeds]
         sizes = [obs_size, self.config.hidden_size, self.config.hidden_size, num_actions]
         q = init_stacked_mlp(sizes, generators, self.device)
-        self.empathic = type(self).targets is not EmpathicDQN.targets or settings[0].selfishness < 1.0
-        """Train ``Q_emp`` and act on it (else standard DQN: ``Q`` only, acting on ``Q``)."""
-        self.heads = 2 if self.empathic else 1
-        if self.empathic:
-            q_emp = init_stacked_mlp(sizes, generators, self.device)
+        overridden = type(self).targets is not EmpathicDQN.targets
+        self.empathic_runs = np.array([overridden or s.selfishness < 1.0 for s in settings])
+        """Which runs train ``Q_emp`` and act on it (the others are standard DQN: ``Q`` only)."""
+        self._emp = np.flatnonzero(self.empathic_runs)
+        if self._emp.size:
+            q_emp = init_stacked_mlp(sizes, [generators[i] for i in self._emp], self.device)
             q = [torch.cat([a, b]) for a, b in zip(q, q_emp)]
-        # online parameters: runs 0..K-1 are Q, runs K..2K-1 are Q_emp (one batched pass serves both)
+        # online parameters: rows 0..K-1 are every run's Q, the rows after them the Q_emp of the
+        # runs that have one (in run order): one batched pass serves both
         self.online = [p.requires_grad_() for p in q]
+        self._emp_rows = torch.as_tensor(self._emp, device=self.device)
+        acting = np.arange(k)
+        acting[self._emp] = k + np.arange(self._emp.size)
+        self._acting = None if self._emp.size in (0, k) else torch.as_tensor(acting, device=self.device)
+        """Row of each run's acting network in :attr:`online` (``None``: a slice will do)."""
         self.target = [p[:k].detach().clone() for p in self.online]
         self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
         self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device)
@@ -131,8 +139,10 @@ class EmpathicDQN:
         k = self.num_runs
         if which == "target":
             params = self.target
+        elif which == "emp" and self._acting is not None:
+            params = [p.index_select(0, self._acting) for p in self.online]
         else:
-            part = slice(k, 2 * k) if which == "emp" and self.empathic else slice(0, k)
+            part = slice(k, 2 * k) if which == "emp" and self._emp.size == k else slice(0, k)
             params = [p[part] for p in self.online]
         with torch.no_grad():
             return StackedMLP.forward(params, observations)
@@ -171,22 +181,26 @@ class EmpathicDQN:
         return torch.as_tensor(index, device=self.device)
 
     def update(self) -> float:
-        """One gradient step of ``Q`` (and ``Q_emp``) in every run; returns the mean loss."""
-        k, cfg, heads = self.num_runs, self.config, self.heads
+        """One gradient step of every run's ``Q`` (and ``Q_emp``); returns the mean loss."""
+        k, cfg, emp = self.num_runs, self.config, self._emp.size
         batch = self.replay.sample(self.sample_indices())
         with torch.no_grad():
             q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
-            if self.empathic:
+            if emp:
                 both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
                 target_both = StackedMLP.forward(self.target, both)
                 b = cfg.batch_size
-                targets = torch.cat(self.targets(batch, q_next, target_both[:, :b], target_both[:, b:]))
+                y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_both[:, b:])
+                targets = torch.cat([y, y_emp if emp == k else y_emp.index_select(0, self._emp_rows)])
             else:
                 target_next = StackedMLP.forward(self.target, batch["next_obs"])
                 targets = double_dqn_target(batch["reward"], batch["terminated"], q_next, target_next, cfg.gamma)
         obs, action = batch["obs"], batch["action"]
-        if heads > 1:
-            obs, action = obs.repeat(heads, 1, 1), action.repeat(heads, 1)
+        if emp == k:
+            obs, action = obs.repeat(2, 1, 1), action.repeat(2, 1)
+        elif emp:
+            obs = torch.cat([obs, obs.index_select(0, self._emp_rows)])
+            action = torch.cat([action, action.index_select(0, self._emp_rows)])
         values = StackedMLP.forward(self.online, obs)
         taken = values.gather(2, action.unsqueeze(2)).squeeze(2)
         loss = ((taken - targets) ** 2).mean(dim=1).sum()
@@ -196,7 +210,7 @@ class EmpathicDQN:
         self.grad_steps += 1
         if self.grad_steps % cfg.target_update_interval == 0:
             self.sync_target()
-        self.last_loss = float(loss.detach()) / (heads * k)
+        self.last_loss = float(loss.detach()) / (k + emp)
         return self.last_loss
 
     def targets(
@@ -223,7 +237,8 @@ class EmpathicDQN:
         return {"eps": self.epsilon(), "loss": self.last_loss}
 
     def memory_bytes_per_run(self) -> int:
-        params = sum(p[0].numel() * p.element_size() for p in self.online) * self.heads  # Q (and Q_emp)
+        heads = 2 if self._emp.size else 1  # Q (and Q_emp): the largest run's share
+        params = sum(p[0].numel() * p.element_size() for p in self.online) * heads
         params += sum(p[0].numel() * p.element_size() for p in self.target)
         return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments
 

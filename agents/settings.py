@@ -66,9 +66,8 @@ class EmpathicDQNSettings:
                 raise ValueError(f"{name} must be {expectations[name]}, got {getattr(self, name)!r}")
 
     def shared(self) -> tuple:
-        """The settings runs must share to train in one ensemble: all but the per-run ones, and
-        whether the run needs ``Q_emp`` (β < 1) or is standard DQN (β = 1, one network)."""
-        return (*(getattr(self, f.name) for f in fields(self) if f.name not in PER_RUN_FIELDS), self.selfishness < 1.0)
+        """The settings runs must share to train in one ensemble (all but the per-run ones)."""
+        return tuple(getattr(self, f.name) for f in fields(self) if f.name not in PER_RUN_FIELDS)
 
 
 PER_RUN_FIELDS = frozenset({"selfishness", "harm_penalty", "equality_shaping"})

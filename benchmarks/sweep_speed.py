@@ -51,12 +51,14 @@ def matmul_peak(seconds: float = 2.0) -> float:
     return 2 * 2048**3 * count / (time.perf_counter() - start) / 1e9
 
 
-def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None, selfishness: float = 0.5) -> float:
-    """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on)."""
-    settings = {"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": selfishness}
+def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None,
+                  selfishness: float | list[float] = 0.5) -> float:
+    """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on); a list of
+    ``k`` selfishness values mixes runs with and without ``Q_emp`` in one ensemble."""
+    betas = selfishness if isinstance(selfishness, list) else [selfishness] * k
     specs = [
-        RunSpec(env="coexistence_v0", method="empathic_dqn", settings=settings, seed=w * k + i,
-                steps=steps, eval_interval=10 * steps, eval_episodes=1)
+        RunSpec(env="coexistence_v0", method="empathic_dqn", seed=w * k + i, steps=steps, eval_interval=10 * steps,
+                eval_episodes=1, settings={"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": betas[i]})
         for w in range(workers) for i in range(k)
     ]
     out = Path(tempfile.mkdtemp(prefix="ez-sweep-speed-"))
@@ -115,15 +117,15 @@ def main() -> None:
     hours = PAPER_RUNS * PAPER_STEPS / best[2] / 3600
     print(f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
           f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations) if every run needed Q_emp")
-    # the paper's ensembles: per env 15 runs with β < 1 (Q and Q_emp) and 10 DQN-type runs (Q only)
-    empathic = ensemble_rate(15, max(50, int(600 * scale)), workers=2, threads=1)
-    dqn = ensemble_rate(10, max(50, int(900 * scale)), workers=2, threads=1, selfishness=1.0)
-    print(f"(f) the paper's ensembles, 2 processes × 1 thread: K=15 β<1 {empathic:.0f} env-steps/s "
-          f"({empathic * per_step / 1e9 / peak:.1%} of peak); K=10 β=1 {dqn:.0f} env-steps/s "
-          f"({dqn * flops_per_run_step(False) / 1e9 / peak:.1%} of peak)")
-    minutes = (30 * PAPER_STEPS / empathic + 20 * PAPER_STEPS / dqn) / 60
-    print(f"(f) projected paper profile: 30 runs × 1M at the first rate + 20 runs × 1M at the second = "
-          f"{minutes:.0f} minutes (+ greedy evaluations)")
+    # the paper's ensembles: per env one ensemble of 25 runs, 15 with β < 1 (Q and Q_emp) and 10
+    # DQN-type runs (Q only), one worker process per env
+    paper_betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
+    paper_rate = ensemble_rate(25, max(50, int(700 * scale)), workers=2, threads=1, selfishness=paper_betas)
+    mean_flops = (15 * per_step + 10 * flops_per_run_step(False)) / 25
+    print(f"(f) the paper's ensembles (K = 25: 15 with β < 1 and 10 with β = 1) × 2 processes, 1 thread each: "
+          f"{paper_rate:.0f} env-steps/s ({paper_rate * mean_flops / 1e9 / peak:.1%} of peak)")
+    print(f"(f) projected paper profile: 50 runs × 1M at that rate = {PAPER_RUNS * PAPER_STEPS / paper_rate / 60:.0f} "
+          f"minutes (+ greedy evaluations)")
     print(f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP with Q_emp, "
           f"{flops_per_run_step(False) / 1e6:.2f} MFLOP standard DQN")
     sys.stdout.flush()
