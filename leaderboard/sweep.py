@@ -16,8 +16,9 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     eval_interval = 10_000      # env steps between greedy evaluations (default 50,000)
     eval_episodes = 10          # episodes per greedy evaluation (default 10)
 
-    [settings]                  # defaults for every method: any EmpathicDQNSettings field,
-    learning_starts = 2_000     # single values (settings a method fixes are left to it)
+    [settings]                  # defaults for every method: any field every method declared takes,
+    learning_starts = 2_000     # single values (settings a method fixes are left to it; a field
+                                #   some method lacks is an error: put it in the entries that take it)
 
     [envs.<variant>]            # one table per environment variant; <variant> names it in
     env = "coexistence_v0"      #   run ids and tables (default env: the variant name)
@@ -236,7 +237,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
             raise SweepConfigError(f"{source}: [envs.{variant}] has no method to run (check `methods`/`envs` lists)")
         for entry in chosen:
             for point in entry["grid"]:
-                settings = {k: v for k, v in defaults.items() if k in entry["types"] and k not in entry["preset"]}
+                settings = {k: v for k, v in defaults.items() if k not in entry["preset"]}
                 settings |= point
                 where = f"{entry['where']} on [envs.{variant}]" + (f" with {point}" if point else "")
                 experiment = [_spec(run, env, variant, entry, settings, seed, where) for seed in run["seeds"]]
@@ -310,6 +311,14 @@ def _settings_table(table: dict[str, Any], methods: list[dict[str, Any]], source
         if isinstance(value, list):
             raise SweepConfigError(f"{where} {key}: [settings] takes single values; put a grid in a [[methods]] entry")
         checked[key] = check_value(value, types[key], f"{where} {key}")
+    for entry in methods:  # a default is applied to every method, or refused: never dropped
+        foreign = [key for key in checked if key not in entry["types"]]
+        if foreign:
+            raise SweepConfigError(
+                f"{where} {foreign[0]}: {entry['where']} has no such setting (its settings: "
+                f"{', '.join(entry['types'])}); move {foreign[0]} into the [[methods]] entries that take it "
+                "(an SB3 method takes its own keyword arguments as algorithm_kwargs = { ... })"
+            )
     return checked
 
 

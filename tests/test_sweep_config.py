@@ -288,3 +288,31 @@ def test_variants_of_one_env_are_tabled_apart():
     runs = [{"env": "coexistence_v0", "variant": variant, "method": "dqn", "method_label": "DQN", "seed": 0}
             for variant in ("coexistence_v0", "coexistence_9x9")]
     assert list(group_runs(runs)) == [("coexistence_9x9", "DQN"), ("coexistence_v0", "DQN")]
+
+
+@pytest.mark.parametrize("key, value", [("learning_starts", "100"), ("replay_capacity", "500"),
+                                        ("epsilon_decay_steps", "900")])
+def test_a_shared_setting_a_method_does_not_take_is_refused_not_dropped(tmp_path, key, value):
+    """[settings] are defaults for every method: one a method has no field for is an error."""
+    text = BASE + f'\n[settings]\n{key} = {value}\n\n[[methods]]\nmethod = "baselines.sb3:SB3_DQN"\n'
+    message = error_of(tmp_path, text)
+    assert f"[settings] {key}" in message and "[[methods]] #2 (baselines.sb3:SB3_DQN)" in message, message
+    assert "algorithm_kwargs" in message and "[[methods]] entries" in message, message
+
+
+def test_a_shared_setting_every_method_takes_is_applied_to_every_method(tmp_path):
+    text = BASE + '\n[settings]\nlearning_rate = 0.002\ngamma = 0.9\n\n[[methods]]\nmethod = "baselines.sb3:SB3_DQN"\n'
+    specs = load_sweep(write(tmp_path, text))
+    assert {s.method_settings().learning_rate for s in specs} == {0.002}
+    assert {s.method_settings().gamma for s in specs} == {0.9}
+
+
+def test_a_train_config_setting_an_sb3_method_does_not_take_is_refused(tmp_path, capsys):
+    from empathy_zoo.cli import main
+
+    config = write(tmp_path, '[settings]\nlearning_starts = 100\n', "run.toml")
+    argv = ["train", "--config", str(config), "--method", "baselines.sb3:SB3_DQN", "--out", str(tmp_path / "out")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unknown setting(s) ['learning_starts'] for method 'sb3_dqn'" in err and "Traceback" not in err, err
+    assert not (tmp_path / "out").exists()
