@@ -144,8 +144,8 @@ class EmpathicDQN:
         else:
             part = slice(k, 2 * k) if which == "emp" and self._emp.size == k else slice(0, k)
             params = [p[part] for p in self.online]
-        with torch.no_grad():
-            return StackedMLP.forward(params, observations)
+        with torch.no_grad():  # (exact: the same values alone or in any ensemble)
+            return StackedMLP.forward_exact(params, observations)
 
     def epsilon(self) -> float:
         return linear_epsilon(self.config, self.env_steps)

@@ -28,6 +28,24 @@ class StackedMLP:
     """Forward pass of K stacked ReLU MLPs on inputs ``(K, rows, in)`` -> ``(K, rows, out)``."""
 
     @staticmethod
+    def forward_exact(params: list[torch.Tensor], x: torch.Tensor) -> torch.Tensor:
+        """:meth:`forward` computed as products and sums over each run's own tensors (no batched
+        matmul), so a run's values are bit for bit the same alone or beside any other runs.
+
+        The CPU's batched matmul may sum a run's products in an order that depends on how many
+        runs share the call when a run has few rows (acting on one observation), and one flipped
+        greedy action would make a run's trajectory depend on its ensemble. This costs more FLOP
+        for FLOP, so it serves the passes with few rows (acting, greedy evaluation) on one thread.
+        """
+        last = len(params) // 2 - 1
+        for layer in range(last + 1):
+            weight, bias = params[2 * layer], params[2 * layer + 1]
+            x = (x.unsqueeze(-1) * weight.unsqueeze(1)).sum(dim=2) + bias
+            if layer < last:
+                x = torch.relu(x)
+        return x
+
+    @staticmethod
     def forward(params: list[torch.Tensor], x: torch.Tensor) -> torch.Tensor:
         last = len(params) // 2 - 1
         for layer in range(last + 1):

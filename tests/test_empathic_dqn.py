@@ -93,10 +93,8 @@ def test_beta_one_is_standard_dqn_with_one_network() -> None:
 
 
 def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
-    """β = 1 runs (Q only) and β < 1 runs (Q and Q_emp) in one ensemble: each run's networks are
-    bit for bit those of the run alone, and it acts on the same network. (The acting pass's values
-    may differ from a solo run's in the last bit: the CPU's batched matmul with one row per run
-    sums in an order that depends on the batch; parameters, and result files, do not.)"""
+    """β = 1 runs (Q only) and β < 1 runs (Q and Q_emp) in one ensemble: each run's networks and
+    the values it acts on are bit for bit those of the run alone."""
     betas = [1.0, 0.5, 1.0, 0.25]
     m = get_method("empathic_dqn")
     batches = _random_batches(150, len(betas), seed=9, swapped_noise=True)
@@ -104,7 +102,7 @@ def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
     for batch in batches:
         mixed.observe(batch)
     assert [p.shape[0] for p in mixed.online] == [6] * 6  # 4 Q + 2 Q_emp
-    probe = torch.rand(len(betas), 1, 25)  # one env per run, as in training
+    probe = torch.rand(len(betas), 10, 25)  # as many rows as a greedy evaluation's episodes
     acting = mixed.q_values(probe)
     for run, beta in enumerate(betas):
         solo = m.learner([m.make_settings({**TINY, "selfishness": beta})], [run], 25)
@@ -115,8 +113,7 @@ def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
         for mine, alone in zip(mixed.online, solo.online):
             assert torch.equal(mine[heads], alone)
         solo_values = solo.q_values(probe[run:run + 1])[0]
-        torch.testing.assert_close(acting[run], solo_values, rtol=1e-6, atol=1e-6)
-        assert torch.equal(acting[run].argmax(dim=1), solo_values.argmax(dim=1))
+        assert torch.equal(acting[run], solo_values)
         own = solo.q_values(probe[run:run + 1], "self")[0]
         assert torch.equal(solo_values, own) == (beta == 1.0)  # β = 1 acts on Q itself
 
@@ -224,3 +221,16 @@ def test_scores_come_from_events_not_from_the_shaped_reward(tmp_path) -> None:
     # Coexistence pays +1 per operative step: the scored return is the survival, never the penalty
     assert train["return"] == [float(s) for s in train["survival"]]
     assert min(train["return"]) >= 0
+
+
+@pytest.mark.parametrize("rows", [1, 10, 32])
+def test_exact_forward_is_the_same_alone_or_stacked(rows: int) -> None:
+    from agents.stacked_mlp import StackedMLP, init_stacked_mlp
+
+    k = 9
+    params = init_stacked_mlp([25, 128, 128, 5], [torch.Generator().manual_seed(i) for i in range(k)], torch.device("cpu"))
+    x = torch.rand(k, rows, 25, generator=torch.Generator().manual_seed(99))
+    stacked = StackedMLP.forward_exact(params, x)
+    for run in range(k):
+        assert torch.equal(stacked[run], StackedMLP.forward_exact([p[run:run + 1] for p in params], x[run:run + 1])[0])
+    torch.testing.assert_close(stacked, StackedMLP.forward(params, x), rtol=1e-5, atol=1e-5)
