@@ -48,13 +48,17 @@ observe had it exchanged places with `other` (here: `other`'s own observation); 
 
 ## Arguments
 `coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None)`
-* `size`: side of the torus (≥ 5, so that "above" is never ambiguous).
+* `size`: side of the torus (≥ 5, so that "above" is never ambiguous; at most 255: the lookup
+  tables take about `600 + 8·view²` bytes per cell, 50 MB at size 255 with view 5; see docs/limits.md).
 * `view`: side of the observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
 * `render_mode`: `None`, `"ansi"` (text grid: `R` robot, `C` cat, `*` both) or `"rgb_array"`.
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1–2.
+* v0, 2026-11-29: `size` is at most 255, and a `view` whose lookup tables would need more than
+  1 GiB is refused (both with a `ValueError` stating the memory); the tables grow with the number
+  of cells instead of its square (size 101 took 4.1 GB). Every observation and outcome unchanged.
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ from enum import IntEnum
 import numpy as np
 
 __all__ = [
-    "Action", "MOVES", "NUM_ACTIONS", "window_indices", "window_slots", "signed_offset", "torus_distance",
+    "Action", "MOVES", "NUM_ACTIONS", "window_indices", "spread_ids", "displacement_origin", "window_slot_by_displacement",
+    "signed_offset", "torus_distance",
     "cells_by_distance",
 ]
 
@@ -48,17 +49,36 @@ def window_indices(size: int, view: int) -> np.ndarray:
     return (win_rows * size + win_cols).reshape(size * size, view * view)
 
 
-def window_slots(size: int, view: int) -> np.ndarray:
-    """Where every cell appears in the window centred on every other cell.
+def spread_ids(size: int) -> np.ndarray:
+    """Every flat cell's id on a grid twice as wide: ``row * 2·size + col`` (int64, ``(size²,)``).
 
-    Returns an int64 array of shape ``(size * size, size * size)``: entry ``[c, x]`` is the index of
-    flat cell ``x`` in the flattened window centred on flat cell ``c``, or ``view * view`` when
-    ``x`` lies outside that window.
-    """
-    slots = np.full((size * size, size * size), view * view, dtype=np.int64)
-    window = window_indices(size, view)
-    centres = np.repeat(np.arange(size * size), view * view)
-    slots[centres, window.ravel()] = np.tile(np.arange(view * view), size * size)
+    The difference of two such ids, ``dr · 2·size + dc`` with ``|dr|, |dc| < size``, tells the
+    displacement ``(dr, dc)`` between two cells apart (on the plain ``row * size + col`` ids it
+    would not), so tables indexed by it hold about ``4·size²`` entries instead of one per pair
+    of cells (``size⁴``)."""
+    rows, cols = np.divmod(np.arange(size * size, dtype=np.int64), size)
+    return rows * (2 * size) + cols
+
+
+def displacement_origin(size: int) -> int:
+    """Where the displacement ``(0, 0)`` sits in a table indexed by
+    ``spread_ids[x] - spread_ids[c] + origin`` (whose length is ``2·origin + 1``)."""
+    return (size - 1) * (2 * size) + (size - 1)
+
+
+def window_slot_by_displacement(size: int, view: int) -> np.ndarray:
+    """Where a cell appears in the flattened ``view x view`` window centred on another cell,
+    indexed by their displacement (see :func:`spread_ids`): ``view * view`` when outside.
+
+    Entry ``spread_ids[x] - spread_ids[c] + displacement_origin(size)`` is the index of flat cell
+    ``x`` in the window centred on flat cell ``c`` (the window wraps around the torus)."""
+    origin = displacement_origin(size)
+    slots = np.full(2 * origin + 1, view * view, dtype=np.int64)
+    dr, dc = (d.ravel() for d in np.meshgrid(np.arange(1 - size, size), np.arange(1 - size, size), indexing="ij"))
+    half = view // 2
+    row, col = (dr + half) % size, (dc + half) % size  # the window's row and column, if < view
+    inside = (row < view) & (col < view)
+    slots[dr[inside] * (2 * size) + dc[inside] + origin] = row[inside] * view + col[inside]
     return slots
 
 

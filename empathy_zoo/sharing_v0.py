@@ -42,7 +42,9 @@ it in `infos`.
 ## Arguments
 `sharing_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, start="random",
 inventory_encoding="count_plus_one")`
-* `size`: side of the torus (≥ 3). `view`: observation window (odd, < `size`).
+* `size`: side of the torus (≥ 3, at most 255: the lookup tables take about `600 + 8·view²` bytes
+  per cell, 50 MB at size 255 with view 5, and every environment keeps 5 bytes per cell for its
+  batteries; see docs/limits.md). `view`: observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
 * `render_mode`: `None`, `"ansi"` (`R` robot, `H` human, `o` battery, `*` both agents) or `"rgb_array"`.
 * `start`: `"random"` (default) or `"centre"`; see Fidelity options.
@@ -81,6 +83,9 @@ closer to either of the paper's two sources, which disagree in places: the autho
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1, §3.
 * v0, 2026-11-29: fidelity options `start`, `inventory_encoding`; defaults unchanged.
+* v0, 2026-11-29: `size` is at most 255, and a `view` whose lookup tables would need more than
+  1 GiB is refused (both with a `ValueError` stating the memory); the tables grow with the number
+  of cells instead of its square. Every observation and outcome unchanged.
 """
 
 from __future__ import annotations

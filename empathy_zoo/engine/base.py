@@ -15,13 +15,18 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.grid import MOVES, NUM_ACTIONS, Action, torus_distance, window_indices, window_slots
+from empathy_zoo.engine.arguments import (
+    GRID_ARGUMENTS, MAX_SIZE, check_choice, check_env_arguments, check_grid_arguments, table_bytes,
+)
+from empathy_zoo.grid import (
+    MOVES, NUM_ACTIONS, Action, displacement_origin, spread_ids, torus_distance, window_slot_by_displacement,
+)
 from empathy_zoo.metrics import equality
 from empathy_zoo.randomness import EnvStreams
 
 __all__ = [
-    "GridEngine", "StepEvents", "Views", "GRID_ARGUMENTS", "check_grid_arguments", "check_choice",
-    "check_env_arguments",
+    "GridEngine", "StepEvents", "Views", "GRID_ARGUMENTS", "MAX_SIZE", "check_grid_arguments", "check_choice",
+    "check_env_arguments", "table_bytes",
 ]
 
 NO_AGENT = -1
@@ -70,42 +75,6 @@ class Views:
     """``size`` as a 0-d array."""
 
 
-def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -> None:
-    """Raise ``ValueError`` for grid arguments the rules cannot honour."""
-    for name, value in (("size", size), ("view", view), ("max_cycles", max_cycles)):
-        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
-            raise ValueError(f"{name} must be an int, got {value!r}")
-    if size < min_size:
-        raise ValueError(f"size must be at least {min_size}, got {size}")
-    if view < 1 or view % 2 == 0 or view >= size:
-        raise ValueError(f"view must be odd, positive and smaller than size={size}, got {view}")
-    if max_cycles < 1:
-        raise ValueError(f"max_cycles must be positive, got {max_cycles}")
-
-
-GRID_ARGUMENTS = ("size", "view", "max_cycles")
-"""Constructor arguments every environment takes (besides its :attr:`GridEngine.extra_arguments`)."""
-
-
-def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
-    """``value`` if it is one of the strings ``allowed``, else raise ``ValueError`` naming the
-    argument ``name`` and the allowed values (never a silent default)."""
-    if not isinstance(value, str) or value not in allowed:
-        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {value!r}")
-    return value
-
-
-def check_env_arguments(
-    engine: type[GridEngine], kwargs: Mapping[str, Any], error: type[Exception] = TypeError
-) -> None:
-    """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
-    ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
-    known = (*GRID_ARGUMENTS, *engine.extra_arguments)
-    unknown = [key for key in kwargs if key not in known]
-    if unknown:
-        raise error(f"{engine.name} takes no argument(s) {unknown}; its environment arguments: {', '.join(known)}")
-
-
 class GridEngine:
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
@@ -133,18 +102,21 @@ class GridEngine:
         self.num_agents = len(self.agents)
         self.obs_size = self.view * self.view
         self.num_cells = self.size * self.size
-        self.window = window_indices(self.size, self.view)
-        # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups
+        # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups;
+        # every table grows with the number of cells, none with its square
         rows, cols = np.divmod(np.arange(self.num_cells), self.size)
         self._cell_rc = np.stack([rows, cols], axis=1)
         self._cell_rc.flags.writeable = False
         destination = (self._cell_rc[:, None, :] + MOVES[None, :, :]) % self.size
         self._next_cell = (destination[..., 0] * self.size + destination[..., 1]).ravel()
         """``[cell * NUM_ACTIONS + action]``: the cell an agent on ``cell`` reaches with ``action``."""
-        self._slots = window_slots(self.size, self.view).ravel()
-        self._slots[self._slots == self.obs_size] = OUTSIDE
-        """``[centre * num_cells + cell]``: the window slot of ``cell`` around ``centre``, or
-        ``OUTSIDE`` (see :meth:`paint`)."""
+        self._spread = spread_ids(self.size)
+        """``[cell]``: the cell's id on a grid twice as wide; the difference of two tells their displacement."""
+        self._spread_centre = self._spread - displacement_origin(self.size)
+        self._window_slot = window_slot_by_displacement(self.size, self.view)
+        self._window_slot[self._window_slot == self.obs_size] = OUTSIDE
+        """``[_spread[cell] - _spread_centre[centre]]``: the window slot of ``cell`` around ``centre``,
+        or ``OUTSIDE`` (see :meth:`paint`)."""
         self._agent_ids = np.arange(len(self.agents))
         self.streams = EnvStreams(self.num_envs)
         n, a = self.num_envs, self.num_agents
@@ -167,7 +139,7 @@ class GridEngine:
         self._cell_base = np.repeat(self._rows * self.num_cells, a).reshape(n, a)
         """(N, A): where each environment's cells start in a flattened ``(N, num_cells)`` array."""
         # 0-d arrays: cheaper ufunc operands than Python ints on the small arrays of one environment
-        self._num_cells, self._num_actions = np.array(self.num_cells), np.array(NUM_ACTIONS)
+        self._num_actions = np.array(NUM_ACTIONS)
         self._one, self._time_limit = np.array(1), np.array(self.max_cycles)
         self.start_order: np.ndarray | None = None
         """Flat cells in the order agents take them at reset (each agent the first one not blocked,
@@ -452,7 +424,7 @@ class GridEngine:
         centre = cells.take(views.own_each)  # (K, A): the viewer's cell, once per agent
         # each agent's index in the flattened canvas; absent or out-of-window agents go to one
         # scratch element past the pictures (so drawing needs no masks)
-        slots = self._slots.take(centre * self._num_cells + cells)
+        slots = self._window_slot.take(self._spread.take(cells) - self._spread_centre.take(centre))
         if np.count_nonzero(present) < present.size:
             slots[~present] = OUTSIDE
         slots += views.first
@@ -500,7 +472,8 @@ class GridEngine:
     def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
         """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
         other_cell = self.cells[self._rows, other] if np.ndim(other) else self.cells[:, other]
-        return self._slots[self.cells[:, viewer] * self.num_cells + other_cell] < self.obs_size
+        displacement = self._spread[other_cell] - self._spread_centre[self.cells[:, viewer]]
+        return self._window_slot[displacement] < self.obs_size
 
     def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
         """Index of the closest other present agent of ``viewer`` (torus distance, ties to the

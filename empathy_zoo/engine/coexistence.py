@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from empathy_zoo.engine.base import NO_AGENT, GridEngine, StepEvents
-from empathy_zoo.grid import MOVES, NUM_ACTIONS, signed_offset
+from empathy_zoo.grid import MOVES, NUM_ACTIONS, displacement_origin, signed_offset
 
 __all__ = ["CoexistenceEngine", "harm_outcome", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
 
@@ -68,29 +68,28 @@ class CoexistenceEngine(GridEngine):
 
     def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
         super().__init__(num_envs, size, view, max_cycles)
-        offsets = [
-            (dr, dc)
-            for dr in range(self.size)
-            for dc in range(self.size)
-            if not self._in_contact(np.array([dr, dc]))
-        ]
-        self._start_offsets = np.array(offsets, dtype=np.int64)
+        dr, dc = (d.ravel() for d in np.indices((self.size, self.size)))
+        contact = np.abs(signed_offset(dr, self.size)) + np.abs(signed_offset(dc, self.size)) <= 1
+        self._start_offsets = np.stack([dr[~contact], dc[~contact]], axis=1)
+        """Where the cat may start relative to the robot (not in contact), row-major."""
         # The outcome depends on the cat's displacement before the move and the two actions:
-        # tabulate harm_outcome over those, then spread the table over every (robot cell and
-        # action, cat cell and action) so that a step looks it up once.
-        delta, robot_action, cat_action = (x.ravel() for x in np.indices((self.num_cells, NUM_ACTIONS, NUM_ACTIONS)))
-        before = self._cell_rc[delta]
-        after = before + MOVES[cat_action] - MOVES[robot_action]
-        by_delta = harm_outcome(before, after, self.size).astype(np.int8).reshape(self.num_cells, NUM_ACTIONS, -1)
-        rc = self._cell_rc
-        displacement = (rc[None, :, :] - rc[:, None, :]) % self.size  # [robot cell, cat cell]
-        displacement = displacement[..., 0] * self.size + displacement[..., 1]
-        actions = np.arange(NUM_ACTIONS)
-        self._outcomes = by_delta[
-            displacement[:, None, :, None], actions[None, :, None, None], actions[None, None, None, :]
-        ].ravel()
-        """``[(robot cell·5 + robot action)·(cells·5) + cat cell·5 + cat action]``: the step's outcome."""
-        self._move_stride = self.num_cells * NUM_ACTIONS
+        # tabulate harm_outcome over those (one entry per displacement between two cells, see
+        # grid.spread_ids, times 5 × 5 actions), so that a step looks it up once.
+        origin = displacement_origin(self.size)
+        dr, dc = np.divmod(np.arange(2 * origin + 1) - origin + (self.size - 1), 2 * self.size)
+        before = np.stack([dr, dc - (self.size - 1)], axis=1)  # every (dr, dc) with |dr|, |dc| < size, and unused ones
+        robot_action, cat_action = (a.ravel() for a in np.indices((NUM_ACTIONS, NUM_ACTIONS)))
+        self._outcomes = np.stack([
+            harm_outcome(before, before + MOVES[c] - MOVES[r], self.size).astype(np.int8)
+            for r, c in zip(robot_action, cat_action)
+        ], axis=1).ravel()
+        """``[displacement · 25 + robot action · 5 + cat action]``: the step's outcome."""
+        moves = np.arange(self.num_cells * NUM_ACTIONS)
+        cell, action = np.divmod(moves, NUM_ACTIONS)
+        self._cat_move = (self._spread[cell] + origin) * NUM_ACTIONS**2 + action
+        self._robot_move = self._spread[cell] * NUM_ACTIONS**2 - NUM_ACTIONS * action
+        """``[cell · 5 + action]``: the cat's and the robot's parts of the index into :attr:`_outcomes`
+        (their difference is ``displacement · 25 + robot action · 5 + cat action``)."""
 
     def _in_contact(self, delta: np.ndarray) -> bool:
         return int(np.abs(signed_offset(delta, self.size)).sum()) <= 1
@@ -106,7 +105,7 @@ class CoexistenceEngine(GridEngine):
         self.cells[env_ids, CAT] = cat_rc[:, 0] * self.size + cat_rc[:, 1]
 
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
-        outcome = self._outcomes[moves[:, ROBOT] * self._move_stride + moves[:, CAT]]
+        outcome = self._outcomes.take(self._cat_move.take(moves[:, CAT]) - self._robot_move.take(moves[:, ROBOT]))
         outcome[~(self.present[:, ROBOT] & self.present[:, CAT])] = NO_HARM
         if np.count_nonzero(outcome):
             events.harmed_by = HARMED_BY[outcome]

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.engine.base import GridEngine, StepEvents, check_choice
-from empathy_zoo.grid import cells_by_distance
+from empathy_zoo.grid import cells_by_distance, window_indices
 from empathy_zoo.observation_codes import step_value
 
 __all__ = [
@@ -76,6 +76,8 @@ class SharingEngine(GridEngine):
         self.start = check_choice("start", start, STARTS)
         self.inventory_encoding = check_choice("inventory_encoding", inventory_encoding, INVENTORY_ENCODINGS)
         super().__init__(num_envs, size, view, max_cycles)
+        self.window = window_indices(self.size, self.view)
+        """``[centre]``: the flat cells of the window around ``centre``, row-major."""
         rows, cols = np.divmod(np.arange(self.size * self.size), self.size)
         self.initial_batteries = (rows % 2 == 1) & (cols % 2 == 1)
         self.num_batteries = int(self.initial_batteries.sum())

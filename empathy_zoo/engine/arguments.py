@@ -1,0 +1,77 @@
+"""The arguments every environment takes (``size``, ``view``, ``max_cycles`` and its own), their
+checks, and the limits on grid size and memory (docs/limits.md)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from empathy_zoo.engine.base import GridEngine
+
+__all__ = [
+    "GRID_ARGUMENTS", "MAX_SIZE", "MAX_TABLE_BYTES", "table_bytes", "check_grid_arguments", "check_choice",
+    "check_env_arguments",
+]
+
+GRID_ARGUMENTS = ("size", "view", "max_cycles")
+"""Constructor arguments every environment takes (besides its :attr:`GridEngine.extra_arguments`)."""
+MAX_SIZE = 255
+"""Largest ``size`` (side of the torus) an environment accepts: the range the suite tests."""
+MAX_TABLE_BYTES = 1 << 30
+"""Most memory an engine's lookup tables may need (1 GiB); a larger ``view`` is refused."""
+
+
+def table_bytes(size: int, view: int) -> int:
+    """An upper bound, in bytes, of the memory an engine builds its lookup tables with: about
+    ``600 + 8·view²`` per cell (the window of every cell, the moves, the displacements)."""
+    return size * size * (600 + 8 * view * view)
+
+
+def _megabytes(count: int) -> str:
+    return f"{count / 2**20:,.0f} MB"
+
+
+def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -> None:
+    """Raise ``ValueError`` for grid arguments the rules cannot honour, or whose lookup tables
+    would need more memory than the limits allow (the message says how much)."""
+    for name, value in (("size", size), ("view", view), ("max_cycles", max_cycles)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+            raise ValueError(f"{name} must be an int, got {value!r}")
+    if size < min_size:
+        raise ValueError(f"size must be at least {min_size}, got {size}")
+    if size > MAX_SIZE:
+        raise ValueError(
+            f"size must be at most {MAX_SIZE}, got {size}: its lookup tables alone would need about "
+            f"{_megabytes(table_bytes(size, min(view, size - 1)))} (docs/limits.md)"
+        )
+    if view < 1 or view % 2 == 0 or view >= size:
+        raise ValueError(f"view must be odd, positive and smaller than size={size}, got {view}")
+    if table_bytes(size, view) > MAX_TABLE_BYTES:
+        raise ValueError(
+            f"view={view} on size={size} would need about {_megabytes(table_bytes(size, view))} of lookup tables, "
+            f"more than the limit of {_megabytes(MAX_TABLE_BYTES)}: use a smaller view or size (docs/limits.md)"
+        )
+    if max_cycles < 1:
+        raise ValueError(f"max_cycles must be positive, got {max_cycles}")
+
+
+def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
+    """``value`` if it is one of the strings ``allowed``, else raise ``ValueError`` naming the
+    argument ``name`` and the allowed values (never a silent default)."""
+    if not isinstance(value, str) or value not in allowed:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))}; got {value!r}")
+    return value
+
+
+def check_env_arguments(
+    engine: type[GridEngine], kwargs: Mapping[str, Any], error: type[Exception] = TypeError
+) -> None:
+    """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
+    ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
+    known = (*GRID_ARGUMENTS, *engine.extra_arguments)
+    unknown = [key for key in kwargs if key not in known]
+    if unknown:
+        raise error(f"{engine.name} takes no argument(s) {unknown}; its environment arguments: {', '.join(known)}")
