@@ -108,16 +108,23 @@ def _positive(name: str, value: int, allow_zero: bool = False) -> int:
     return value
 
 
-def _check_results(specs: Sequence[Any], out: Path) -> int:
-    """Read every result file the runs already have (a corrupted one raises, untouched); count them."""
-    from empathy_zoo.training.results import read_result, result_path
+def _check_results(specs: Sequence[Any], out: Path, others: bool = False) -> int:
+    """Read every result file the runs already have, and with ``others`` every other one in
+    ``out/runs`` (a corrupted or malformed one raises, untouched); count the runs' files."""
+    from empathy_zoo.training.results import RUNS_DIR, read_result, result_path
 
     done = 0
+    ours = set()
     for spec in specs:
         path = result_path(out, spec.run_id)
+        ours.add(path.name)
         if path.exists():
             read_result(path)
             done += 1
+    if others and (out / RUNS_DIR).is_dir():
+        for path in sorted((out / RUNS_DIR).glob("*.json")):
+            if path.name not in ours and not path.name.startswith("."):
+                read_result(path)
     return done
 
 
@@ -246,7 +253,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
         values["workers"] = max(1, min(os.cpu_count() or 1, ensembles))
     workers = values["workers"]
     options = _runner_options(args, values, bar_position=1 if workers == 1 else 0)
-    done = _check_results(specs, out)
+    done = _check_results(specs, out, others=True)  # the leaderboard reads them all: refuse now, not after training
     experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
     print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
           f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",

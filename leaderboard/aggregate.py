@@ -27,7 +27,8 @@ import numpy as np
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_path_name
+from empathy_zoo.training.result_schema import SCHEMA as SCHEMA_VERSION
+from empathy_zoo.training.result_schema import check_result
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
@@ -35,8 +36,6 @@ __all__ = [
     "run_scalars", "bootstrap_mean_ci", "score_runs", "binned_curve", "learning_curves",
 ]
 
-SCHEMA_VERSION = 1
-"""The result-file schema this module reads."""
 PHASES: tuple[str, ...] = ("eval", "train_final10")
 """Scored phases: last greedy evaluation, and the final 10 % of training episodes."""
 FINAL_FRACTION = 0.1
@@ -49,8 +48,6 @@ DEFAULT_SEED = 0
 """Seed of the ``numpy.random.Generator`` used for every interval unless one is given."""
 N_BINS = 50
 """Bins of training env steps per learning curve."""
-
-_REQUIRED_KEYS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "train", "eval")
 
 RandomState = np.random.Generator | int
 
@@ -105,40 +102,17 @@ def table_env(result: dict[str, Any]) -> str:
     return str(result.get("variant") or result["env"])
 
 
-def _check_result(result: Any, path: Path) -> dict[str, Any]:
-    if not isinstance(result, dict):
-        raise ValueError(f"{path} is not a result file (expected a JSON object)")
-    missing = [key for key in _REQUIRED_KEYS if key not in result]
-    if missing:
-        raise ValueError(f"{path} is not a result file: missing {', '.join(missing)}")
-    if result["schema"] != SCHEMA_VERSION:
-        raise ValueError(f"{path} has result schema {result['schema']!r}; this leaderboard reads {SCHEMA_VERSION}")
-    for key in ("run_id", "env", "variant"):  # these become parts of file names
-        if key in result and not (key == "variant" and result[key] is None):
-            try:
-                check_path_name(result[key], repr(key))
-            except ValueError as error:
-                raise ValueError(f"{path}: {error}; the file is not a result of this suite, move it away") from None
-    if not isinstance(result["seed"], int) or not isinstance(result["train"], dict):
-        raise ValueError(f"{path} is not a result file: 'seed' must be an int and 'train' an object")
-    if "episode_end_step" not in result["train"]:
-        raise ValueError(f"{path} is not a result file: 'train' has no 'episode_end_step' column")
-    lengths = {len(column) for column in result["train"].values()}
-    if len(lengths) > 1:
-        raise ValueError(f"{path}: the 'train' columns have different lengths {sorted(lengths)}")
-    return result
-
-
 def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     """Every result file of ``results_dir`` (see :func:`result_files`), in file-name order.
 
-    A corrupted or malformed file raises ``ValueError`` naming it; so do two runs with the same
+    A corrupted or malformed file raises ``ValueError`` naming it and the field
+    (:func:`empathy_zoo.training.result_schema.check_result`); so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice.
     """
     results: list[dict[str, Any]] = []
     seen: dict[tuple[str, str, Any], Path] = {}
     for path in result_files(results_dir):
-        result = _check_result(read_json(path), path)
+        result = check_result(read_json(path), path)
         key = (table_env(result), result["method_label"], result["seed"])
         if key in seen:
             raise ValueError(f"{seen[key]} and {path} are the same run {key}; move one away")

@@ -28,7 +28,8 @@ def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_sur
     if eval_survival is not None:
         evaluations.append({"step": steps, **{metric: list(eval_survival) for metric in METRIC_NAMES}})
     return {"schema": 1, "run_id": f"{env}__{label}__s{seed}", "env": env, "method": method,
-            "method_label": label, "seed": seed, "config": {}, "steps": steps, "train": train,
+            "method_label": label, "seed": seed, "steps": steps,
+            "config": {"settings": {}, "env_kwargs": {}, "fixed": {}}, "train": train,
             "eval": evaluations, "wall_time_s": 0.0, "version": "0.1.0", "commit": None, "created": "now"}
 
 
@@ -170,7 +171,7 @@ def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("change", "message"), [
-    ({"schema": 2}, "schema 2"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "'seed' must be an int"),
+    ({"schema": 2}, "schema 1, got 2"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "field seed: expected an int"),
 ])
 def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, Any], message: str | None) -> None:
     run = make_run("coexistence_v0", "DQN", 0, [1.0])
@@ -178,7 +179,7 @@ def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, 
     for key in [key for key, value in change.items() if value is None]:
         del run[key]
     write_runs(tmp_path, [run])
-    with pytest.raises(ValueError, match=message or "missing env, steps"):
+    with pytest.raises(ValueError, match=message or "field env: missing"):
         load_results(tmp_path)
 
 

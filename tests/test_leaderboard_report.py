@@ -48,7 +48,8 @@ def write_synthetic_results(directory: Path, envs: tuple[str, ...] = ("coexisten
                 run_id = f"{env}__{method}__s{seed}"
                 result: dict[str, Any] = {
                     "schema": 1, "run_id": run_id, "env": env, "method": method, "method_label": label,
-                    "seed": seed, "config": {"beta": 0.5}, "steps": steps,
+                    "seed": seed, "steps": steps,
+                    "config": {"beta": 0.5, "settings": {}, "env_kwargs": {}, "fixed": {}},
                     "train": {"episode_end_step": end_steps, **columns(n)},
                     "eval": [{"step": s, **columns(5)} for s in (steps // 2, steps)],
                     "wall_time_s": 1.0, "version": "0.1.0", "commit": None, "created": "2026-01-01T00:00:00Z",

@@ -1,8 +1,10 @@
 """Result files are read defensively: a name that becomes part of a path (variant, env, run id)
-can never point outside the output directory."""
+can never point outside the output directory, and a file of valid JSON with wrong contents is
+refused when it is read, in one line naming the file and the field, before anything is written."""
 
 from __future__ import annotations
 
+import copy
 import os
 
 import pytest
@@ -39,7 +41,7 @@ def test_a_result_file_cannot_make_the_leaderboard_write_outside(tmp_path, capsy
     before = everything_below(tmp_path)
     assert main(["leaderboard", str(results)]) == 2
     err = capsys.readouterr().err
-    assert "run1.json" in err and repr(field) in err and "Traceback" not in err, err
+    assert "run1.json: field " + field in err and "Traceback" not in err, err
     assert everything_below(tmp_path) == before
 
 
@@ -67,5 +69,96 @@ def test_a_forged_run_id_is_refused_by_the_leaderboard(tmp_path):
     bad = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
     bad["run_id"] = "../../etc/x"
     write_runs(tmp_path, [bad])
-    with pytest.raises(ValueError, match="run0.json.*'run_id'"):
+    with pytest.raises(ValueError, match="run0.json: field run_id"):
         write_leaderboard(tmp_path)
+
+
+def _set(path, value):
+    def mutate(result):
+        *parents, last = path
+        for key in parents:
+            result = result[key]
+        if value is DELETE:
+            del result[last]
+        else:
+            result[last] = value
+    return mutate
+
+
+DELETE = object()
+MALFORMED = {
+    "eval entry without step": (_set(["eval", 0, "step"], DELETE), "eval[0].step: missing"),
+    "step as a string": (_set(["eval", 0, "step"], "4000"), "eval[0].step: expected an int"),
+    "step past the run": (_set(["eval", 0, "step"], 10**9), "eval[0].step: expected a step <= steps"),
+    "string in a train column": (_set(["train", "survival", 3], "12"), "train.survival[3]: expected a number"),
+    "fractional end step": (_set(["train", "episode_end_step", 0], 1.5), "train.episode_end_step[0]: expected an integer"),
+    "eval metric not a list": (_set(["eval", 0, "harms"], 3), "eval[0].harms: expected an array"),
+    "eval without a metric": (_set(["eval", 0, "equality"], DELETE), "eval[0].equality: missing"),
+    "train without a metric": (_set(["train", "harms"], DELETE), "train.harms: missing"),
+    "columns of different lengths": (_set(["train", "harms"], [0.0]), "train: columns of different lengths"),
+    "no config": (_set(["config"], DELETE), "config: missing"),
+    "config not an object": (_set(["config"], "paper"), "config: expected an object"),
+    "config without settings": (_set(["config", "settings"], DELETE), "config.settings: missing"),
+    "a setting of the wrong type": (_set(["config", "settings", "selfishness"], "half"), "config.settings: expected settings of dqn"),
+    "an unknown setting": (_set(["config", "settings", "speed"], 2), "config.settings: expected settings of dqn"),
+    "a fixed policy not a string": (_set(["config", "fixed", "cat_0"], 3), "config.fixed.cat_0"),
+    "seed as a string": (_set(["seed"], "0"), "seed: expected an int >= 0"),
+    "negative seed": (_set(["seed"], -1), "seed: expected an int >= 0"),
+    "steps as a bool": (_set(["steps"], True), "steps: expected an int >= 1"),
+    "label not a string": (_set(["method_label"], 3), "method_label: expected a non-empty one-line string"),
+    "eval not an array": (_set(["eval"], {}), "eval: expected an array"),
+    "train not an object": (_set(["train"], []), "train: expected an object"),
+    "another schema": (_set(["schema"], 2), "schema: this suite reads result schema 1"),
+    "a list, not an object": (lambda result: None, None),
+}
+
+
+def malformed(case):
+    result = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 0))  # (it shares DEFAULT_POLICIES)
+    mutate, expected = MALFORMED[case]
+    if expected is None:
+        return [result], "(the whole file): expected an object"
+    mutate(result)
+    return result, expected
+
+
+@pytest.mark.parametrize("case", sorted(MALFORMED))
+def test_a_malformed_result_file_is_one_line_naming_file_and_field(tmp_path, capsys, case):
+    document, expected = malformed(case)
+    write_runs(tmp_path, [synthetic_result("coexistence_v0", "dqn", 1.0, 1), document])
+    before = everything_below(tmp_path)
+    assert main(["leaderboard", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert str(tmp_path / "runs" / "run1.json") in err and expected in err, err
+    assert everything_below(tmp_path) == before
+    assert main(["reproduction", str(tmp_path)]) == 2
+    assert expected in capsys.readouterr().err
+    assert everything_below(tmp_path) == before
+
+
+def test_reading_a_result_checks_its_schema(tmp_path):
+    from empathy_zoo.training.results import read_result
+
+    document, expected = malformed("eval entry without step")
+    write_json_atomic(tmp_path / "r.json", document)
+    with pytest.raises(ValueError, match=f"r.json: field {expected}".replace("[", r"\[").replace("]", r"\]")):
+        read_result(tmp_path / "r.json")
+
+
+def test_reproduce_refuses_a_malformed_result_file_before_training(tmp_path, capsys, monkeypatch):
+    from helpers_sweeps import TINY_SWEEP
+
+    import empathy_zoo.training.runner as runner
+
+    monkeypatch.setattr(runner, "train_ensemble", lambda *a, **k: pytest.fail("training started"))
+    sweep = tmp_path / "tiny.toml"
+    sweep.write_text(TINY_SWEEP)
+    out = tmp_path / "out"
+    document, expected = malformed("no config")
+    write_runs(out, [document])
+    before = everything_below(tmp_path)
+    assert main(["reproduce", "--profile", str(sweep), "--out", str(out), "--no-progress", "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "run0.json" in err and "Traceback" not in err, err
+    assert everything_below(tmp_path) == before

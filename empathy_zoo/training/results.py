@@ -10,10 +10,10 @@ from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 from empathy_zoo.provenance import git_commit, package_version
+from empathy_zoo.training.result_schema import SCHEMA, check_result
 
 __all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result"]
 
-SCHEMA = 1
 RUNS_DIR = "runs"
 
 
@@ -56,8 +56,5 @@ def write_result(out_dir: Path, result: dict[str, Any]) -> Path:
 
 
 def read_result(path: Path) -> dict[str, Any]:
-    """Read a result file; a corrupted or foreign one raises ``ValueError`` naming it."""
-    result = read_json(path)
-    if not isinstance(result, dict) or result.get("schema") != SCHEMA:
-        raise ValueError(f"{path} is not an empathy-zoo result file (schema {SCHEMA}); move it away to redo that run")
-    return result
+    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
+    return check_result(read_json(path), path)

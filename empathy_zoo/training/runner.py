@@ -86,13 +86,15 @@ def train_runs(
         raise ValueError(f"workers must be positive, got {options.workers}")
     if options.backend not in ("local", "ray"):
         raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
+    if options.backend == "ray":
+        from empathy_zoo.training.ray_backend import import_ray, train_with_ray
+
+        import_ray()  # (missing Ray is said before anything is written)
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
     chunks = group_specs(todo, options.max_parallel_runs)
     if options.backend == "ray":
-        from empathy_zoo.training.ray_backend import train_with_ray
-
         train_with_ray(chunks, out_dir, options, on_result)
     elif options.workers == 1 or len(chunks) <= 1:
         for chunk in chunks:

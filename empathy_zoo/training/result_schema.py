@@ -1,0 +1,145 @@
+"""The result file's schema (1), checked field by field when a file is read.
+
+:func:`check_result` accepts exactly what :func:`empathy_zoo.training.results.build_result`
+writes (and what the leaderboard, the verdicts and the command line read from it); anything else
+raises one ``ValueError`` line naming the file and the field, e.g.
+``runs/x.json: field eval[2].step: expected an int >= 1, got 'late'``. A result file is data, so
+checking it never imports a plug-in: the settings of a registered method are checked by its
+settings class, those of a ``package.module:NAME`` method only for their shape.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_path_name
+
+__all__ = ["SCHEMA", "REQUIRED_FIELDS", "ResultFileError", "check_result"]
+
+SCHEMA = 1
+"""The result-file schema this suite writes and reads."""
+REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
+"""Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
+``version``, ``commit`` and ``created`` are written too, and checked when present)."""
+CONFIG_TABLES = ("settings", "env_kwargs", "fixed")
+"""Tables of ``config`` every result file has."""
+_SHOWN = 60
+"""Characters of a bad value quoted in a message."""
+
+
+class ResultFileError(ValueError):
+    """A result file is not what this suite writes; the message names the file and the field."""
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= _SHOWN else text[: _SHOWN - 3] + "..."
+
+
+class _Checker:
+    """Checks of one document, each raising :class:`ResultFileError` naming ``path`` and the field."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, field: str, expected: str, value: Any) -> ResultFileError:
+        return ResultFileError(
+            f"{self.path}: field {field}: expected {expected}, got {_shown(value)}; the file is damaged or not a "
+            "result of this suite: move it away (its run is redone on the next reproduce/train)"
+        )
+
+    def table(self, value: Any, field: str) -> Mapping[str, Any]:
+        if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
+            raise self.fail(field, "an object", value)
+        return value
+
+    def has(self, table: Mapping[str, Any], keys: tuple[str, ...], field: str) -> None:
+        missing = [key for key in keys if key not in table]
+        if missing:
+            raise ResultFileError(
+                f"{self.path}: field {field}{missing[0]}: missing (a result file has {', '.join(keys)}); "
+                "the file is damaged or not a result of this suite: move it away"
+            )
+
+    def integer(self, value: Any, field: str, low: int) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise self.fail(field, f"an int >= {low}", value)
+        return value
+
+    def text(self, value: Any, field: str) -> str:
+        if not isinstance(value, str) or not value or "\n" in value:
+            raise self.fail(field, "a non-empty one-line string", value)
+        return value
+
+    def name(self, value: Any, field: str) -> str:
+        try:
+            return check_path_name(value, "a file-name-safe name")
+        except ValueError:
+            raise self.fail(field, "a name of letters, digits, '_', '-' and '.' (it becomes part of file names)",
+                            value) from None
+
+    def numbers(self, value: Any, field: str, integral: bool = False) -> list:
+        if not isinstance(value, list):
+            raise self.fail(field, "an array of numbers", value)
+        for i, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, (int, float)) or (
+                    integral and (not isinstance(item, int) and not (math.isfinite(item) and item == int(item)))):
+                raise self.fail(f"{field}[{i}]", "an integer" if integral else "a number", item)
+        return value
+
+
+def check_result(document: Any, path: str | Path) -> dict[str, Any]:
+    """``document`` (a parsed result file) if it follows the schema, else :class:`ResultFileError`."""
+    check = _Checker(Path(path))
+    result = check.table(document, "(the whole file)")
+    check.has(result, REQUIRED_FIELDS, "")
+    if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
+        raise ResultFileError(f"{path}: field schema: this suite reads result schema {SCHEMA}, "
+                              f"got {_shown(result['schema'])}; move the file away")
+    check.name(result["run_id"], "run_id")
+    check.name(result["env"], "env")
+    if result.get("variant") is not None:
+        check.name(result["variant"], "variant")
+    check.text(result["method"], "method")
+    check.text(result["method_label"], "method_label")
+    check.integer(result["seed"], "seed", 0)
+    steps = check.integer(result["steps"], "steps", 1)
+    _check_config(check, result)
+    train = check.table(result["train"], "train")
+    check.has(train, ("episode_end_step", *METRIC_NAMES), "train.")
+    for name, column in train.items():
+        check.numbers(column, f"train.{name}", integral=name == "episode_end_step")
+    lengths = {name: len(column) for name, column in train.items()}
+    if len(set(lengths.values())) > 1:
+        raise ResultFileError(f"{path}: field train: columns of different lengths {lengths}; move the file away")
+    if not isinstance(result["eval"], list):
+        raise check.fail("eval", "an array of evaluations", result["eval"])
+    for i, evaluation in enumerate(result["eval"]):
+        entry = check.table(evaluation, f"eval[{i}]")
+        check.has(entry, ("step", *METRIC_NAMES), f"eval[{i}].")
+        if check.integer(entry["step"], f"eval[{i}].step", 1) > steps:
+            raise check.fail(f"eval[{i}].step", f"a step <= steps ({steps})", entry["step"])
+        for name in METRIC_NAMES:
+            check.numbers(entry[name], f"eval[{i}].{name}")
+    return result
+
+
+def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
+    config = check.table(result["config"], "config")
+    check.has(config, CONFIG_TABLES, "config.")
+    settings = check.table(config["settings"], "config.settings")
+    check.table(config["env_kwargs"], "config.env_kwargs")
+    for agent, policy in check.table(config["fixed"], "config.fixed").items():
+        check.text(policy, f"config.fixed.{agent}")
+    from agents.registry import METHODS  # lazily: the method registry imports the learners
+
+    method = METHODS.get(result["method"])
+    if method is not None:
+        try:
+            method.settings(**settings)
+        except (TypeError, ValueError) as error:
+            raise check.fail("config.settings", f"settings of {result['method']} ({error})", settings) from None
