@@ -29,6 +29,7 @@ from empathy_zoo.atomic import read_json
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.training.result_schema import SCHEMA as SCHEMA_VERSION
 from empathy_zoo.training.result_schema import check_result
+from empathy_zoo.training.results import check_one_experiment_per_label
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
@@ -107,17 +108,22 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
 
     A corrupted or malformed file raises ``ValueError`` naming it and the field
     (:func:`empathy_zoo.training.result_schema.check_result`); so do two runs with the same
-    ``(env, method_label, seed)``, which would otherwise be counted twice.
+    ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
+    with one ``(env, method_label)``, which would be mixed in one row.
     """
     results: list[dict[str, Any]] = []
     seen: dict[tuple[str, str, Any], Path] = {}
-    for path in result_files(results_dir):
-        result = check_result(read_json(path), path)
+    paths = result_files(results_dir)
+    for path in paths:
+        results.append(check_result(read_json(path), path))
+    check_one_experiment_per_label(
+        (table_env(result), result["method_label"], result["run_id"], str(path)) for result, path in zip(results, paths)
+    )
+    for path, result in zip(paths, results):
         key = (table_env(result), result["method_label"], result["seed"])
         if key in seen:
             raise ValueError(f"{seen[key]} and {path} are the same run {key}; move one away")
         seen[key] = path
-        results.append(result)
     return results
 
 

@@ -190,9 +190,12 @@ def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) 
     with pytest.raises(ValueError, match="different lengths"):
         load_results(tmp_path / "a")
     duplicate = make_run("coexistence_v0", "DQN", 0, [1.0])
-    write_runs(tmp_path / "b", [duplicate, {**duplicate, "run_id": "copy"}])
+    write_runs(tmp_path / "b", [duplicate, {**duplicate, "run_id": "coexistence_v0__DQN__s0-copy"}])
     with pytest.raises(ValueError, match="same run"):
         load_results(tmp_path / "b")
+    write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "copy"}])  # another experiment, one label
+    with pytest.raises(ValueError, match="same label 'DQN'.*two experiments"):
+        load_results(tmp_path / "c")
 
 
 def test_result_files_rejects_a_missing_directory(tmp_path: Path) -> None:

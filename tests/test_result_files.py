@@ -162,3 +162,43 @@ def test_reproduce_refuses_a_malformed_result_file_before_training(tmp_path, cap
     err = capsys.readouterr().err
     assert expected in err and "run0.json" in err and "Traceback" not in err, err
     assert everything_below(tmp_path) == before
+
+
+# ---------------------------------------------------------------------------- two experiments, one label
+def test_a_second_train_differing_only_in_a_setting_is_refused_when_it_starts(tmp_path, capsys, monkeypatch):
+    from helpers_sweeps import TINY_TRAIN
+
+    out = tmp_path / "out"
+    assert main(["train", "--out", str(out), *TINY_TRAIN, "--learning-rate", "0.001"]) == 0
+    [first] = (out / "runs").glob("*.json")
+    capsys.readouterr()
+    import empathy_zoo.training.runner as runner
+
+    monkeypatch.setattr(runner, "train_ensemble", lambda *a, **k: pytest.fail("training started"))
+    for seed in ("0", "1"):  # the same seed, or another: the tables would mix the two experiments
+        assert main(["train", "--out", str(out), *TINY_TRAIN, "--learning-rate", "0.002", "--seed", seed]) == 2
+        err = capsys.readouterr().err
+        assert str(first) in err and "same label 'Empathic DQN (β=1)'" in err and "--label" in err, err
+        assert "Traceback" not in err
+    assert list((out / "runs").glob("*.json")) == [first]
+    monkeypatch.undo()
+    assert main(["train", "--out", str(out), *TINY_TRAIN, "--learning-rate", "0.002", "--label", "lr 0.002"]) == 0
+    assert main(["leaderboard", str(out)]) == 0
+
+
+def test_train_runs_refuses_two_experiments_with_one_label_in_one_call(tmp_path):
+    from empathy_zoo.training.runner import RunnerOptions, train_runs
+
+    specs = [RunSpec(steps=100, settings={"learning_rate": lr, "learning_starts": 32}) for lr in (1e-3, 2e-3)]
+    with pytest.raises(ValueError, match="same label 'Empathic DQN"):
+        train_runs(specs, tmp_path, RunnerOptions(progress=False))
+    assert not (tmp_path / "runs").exists()
+
+
+def test_the_leaderboard_names_two_experiments_with_one_label(tmp_path):
+    a = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    b = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 1))
+    b["run_id"] = "coexistence_v0__dqn-other__s1"
+    write_runs(tmp_path, [a, b])
+    with pytest.raises(ValueError, match="run1.json.*same label 'dqn 1.0' on coexistence_v0.*other settings"):
+        write_leaderboard(tmp_path)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as _dt
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +13,10 @@ from empathy_zoo.names import check_path_name
 from empathy_zoo.provenance import git_commit, package_version
 from empathy_zoo.training.result_schema import SCHEMA, check_result
 
-__all__ = ["SCHEMA", "result_path", "build_result", "write_result", "read_result"]
+__all__ = [
+    "SCHEMA", "RUNS_DIR", "result_path", "build_result", "write_result", "read_result", "experiment_of",
+    "check_one_experiment_per_label",
+]
 
 RUNS_DIR = "runs"
 
@@ -58,3 +62,23 @@ def write_result(out_dir: Path, result: dict[str, Any]) -> Path:
 def read_result(path: Path) -> dict[str, Any]:
     """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
     return check_result(read_json(path), path)
+
+
+def experiment_of(run_id: str) -> str:
+    """The run id without its seed: the runs of one experiment (all but the seed equal) share it."""
+    return run_id.rsplit("__s", 1)[0]
+
+
+def check_one_experiment_per_label(runs: Iterable[tuple[str, str, str, str]]) -> None:
+    """Raise ``ValueError`` when two of ``runs`` (``(table env, label, run id, where it is)``) share
+    a table row, i.e. an env and a label, but come from different experiments: the leaderboard
+    groups runs by env and label, so it would mix them (or count one seed twice)."""
+    seen: dict[tuple[str, str], tuple[str, str, str]] = {}
+    for env, label, run_id, where in runs:
+        first = seen.setdefault((env, label), (experiment_of(run_id), run_id, where))
+        if first[0] != experiment_of(run_id):
+            raise ValueError(
+                f"{where} and {first[2]} have the same label {label!r} on {env} but come from two experiments "
+                f"(run ids {run_id} and {first[1]}: other settings); the tables could not tell them apart: give one "
+                "its own label (train --label, or label in its sweep entry) or move one away"
+            )

@@ -30,7 +30,9 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
-from empathy_zoo.training.results import RUNS_DIR, build_result, empty_columns, result_path, write_result
+from empathy_zoo.training.results import (
+    RUNS_DIR, build_result, check_one_experiment_per_label, empty_columns, read_result, result_path, write_result,
+)
 from empathy_zoo.training.spec import RunSpec, group_specs
 from empathy_zoo.vector import VectorEnv, VectorStep
 
@@ -90,6 +92,9 @@ def train_runs(
         from empathy_zoo.training.ray_backend import import_ray, train_with_ray
 
         import_ray()  # (missing Ray is said before anything is written)
+    check_one_experiment_per_label(
+        [*_finished_runs(out_dir), *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs)]
+    )
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
@@ -104,6 +109,16 @@ def train_runs(
     else:
         _train_in_processes(chunks, out_dir, options, on_result)
     return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def _finished_runs(out_dir: Path) -> list[tuple[str, str, str, str]]:
+    """``(table env, label, run id, path)`` of every result file in ``out_dir`` (each one checked)."""
+    runs = []
+    for path in sorted((out_dir / RUNS_DIR).glob("*.json")) if (out_dir / RUNS_DIR).is_dir() else []:
+        if not path.name.startswith("."):
+            result = read_result(path)
+            runs.append((result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path)))
+    return runs
 
 
 def _exit_with_parent(parent: int) -> None:
