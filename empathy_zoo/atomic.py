@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import secrets
 import stat
 from collections.abc import Callable
@@ -16,13 +17,17 @@ from typing import Any, BinaryIO
 
 __all__ = [
     "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "write_with_atomic", "read_json",
-    "check_output_dir",
+    "check_output_dir", "remove_stale_temp_files",
 ]
 
 TEMP_SUFFIX = ".tmp"
 """Name suffix of the temporary file of an atomic write in progress (its name starts with ``.``)."""
 PROBE_PREFIX = ".write-probe-"
 """Name prefix of the empty file :func:`check_output_dir` writes (atomically) and removes."""
+_OURS = re.compile(
+    rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^{re.escape(PROBE_PREFIX)}(?P<prober>\d+))$"
+)
+"""The end of a temporary file name this module writes, with the writer's process id."""
 
 
 def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], None]) -> Path:
@@ -104,3 +109,31 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
             raise ValueError(f"output directory {directory} is not writable ({error.strerror or error}); "
                              "choose another output directory (--out) or fix its permissions") from None
     return root
+
+
+def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporary files that writes killed mid-way left in ``directory`` (those of a live
+    process on this machine are kept: it may still be writing); returns what was removed."""
+    removed = []
+    for path in Path(directory).glob(".*"):
+        if not path.is_file() or not (path.name.endswith(TEMP_SUFFIX) or path.name.startswith(PROBE_PREFIX)):
+            continue
+        match = _OURS.search(path.name)
+        pid = int(match["pid"] or match["prober"]) if match else None  # no pid: written before names carried one
+        if pid is not None and _alive(pid):
+            continue
+        path.unlink(missing_ok=True)
+        removed.append(path)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # it exists (another user's), or this system cannot tell: keep the file
+    return True

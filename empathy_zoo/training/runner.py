@@ -9,9 +9,9 @@ environments, so it gives the same result alone or beside other runs.
 
 from __future__ import annotations
 
-import hashlib
 import multiprocessing
 import os
+import sys
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -25,7 +25,7 @@ import torch
 from tqdm.auto import tqdm
 
 from agents.base import StepBatch
-from empathy_zoo.atomic import check_output_dir
+from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
@@ -33,13 +33,15 @@ from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.results import (
     RUNS_DIR, build_result, check_one_experiment_per_label, empty_columns, read_result, result_path, write_result,
 )
-from empathy_zoo.training.spec import RunSpec, group_specs
+from empathy_zoo.training.resume import (
+    CHECKPOINT_DIR, checkpoint_path, plan_ensembles, remove_checkpoint, write_manifest,
+)
+from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv, VectorStep
 
-__all__ = ["RunnerOptions", "train_runs", "train_ensemble", "checkpoint_path", "learner_batch"]
+__all__ = ["RunnerOptions", "train_runs", "train_ensemble", "checkpoint_path", "learner_batch", "CHECKPOINT_DIR"]
 
 STREAM_ENV = 20
-CHECKPOINT_DIR = "checkpoints"
 
 
 @dataclass(frozen=True)
@@ -66,19 +68,18 @@ class RunnerOptions:
     """Ray cluster address for ``backend="ray"`` (``None`` starts a local Ray instance)."""
 
 
-def checkpoint_path(out_dir: Path, specs: Sequence[RunSpec]) -> Path:
-    digest = hashlib.sha256("|".join(s.run_id for s in specs).encode()).hexdigest()[:16]
-    return Path(out_dir) / CHECKPOINT_DIR / f"{specs[0].env}-{digest}.pt"
-
-
 def train_runs(
     specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(),
-    on_result: Callable[[dict[str, Any]], None] | None = None,
+    on_result: Callable[[dict[str, Any]], None] | None = None, on_note: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """Train every run not finished yet; returns the result files of all ``specs``.
 
     ``out_dir`` is checked first (created, written to): one that cannot hold the results raises
-    ``ValueError`` before any training starts."""
+    ``ValueError`` before any training starts. Checkpointed ensembles resume as they were
+    (:mod:`empathy_zoo.training.resume`); what is resumed, restarted or removed, and the temporary
+    files of writes killed mid-way that are removed, is said through ``on_note`` (default: printed
+    to stderr). ``on_result`` gets every result of ``specs`` written here."""
+    note = on_note or _print_note
     out_dir = Path(out_dir)
     ids = [s.run_id for s in specs]
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
@@ -97,8 +98,16 @@ def train_runs(
     )
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
+    stale = [path for sub in (RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
+    if stale:
+        note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    chunks = group_specs(todo, options.max_parallel_runs)
+    if options.max_parallel_runs < 1:
+        raise ValueError(f"max_parallel_runs must be positive, got {options.max_parallel_runs}")
+    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note)
+    wanted = {s.run_id for s in todo}
+    if on_result is not None:
+        report, on_result = on_result, lambda result: report(result) if result["run_id"] in wanted else None
     if options.backend == "ray":
         train_with_ray(chunks, out_dir, options, on_result)
     elif options.workers == 1 or len(chunks) <= 1:
@@ -109,6 +118,10 @@ def train_runs(
     else:
         _train_in_processes(chunks, out_dir, options, on_result)
     return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def _print_note(text: str) -> None:
+    print(f"empathy-zoo: {text}", file=sys.stderr, flush=True)
 
 
 def _finished_runs(out_dir: Path) -> list[tuple[str, str, str, str]]:
@@ -246,6 +259,7 @@ def train_ensemble(
             for r in rows:
                 evaluations[r].append({"step": step, **per_run[r]})
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
+            write_manifest(ckpt, specs)
             save_checkpoint(ckpt, {
                 "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
                 "learner": learner.state_dict(), "vector": to_safe(venv.state()),
@@ -261,11 +275,10 @@ def train_ensemble(
     results = []
     for r, spec in enumerate(specs):
         document = build_result(spec, logs[r].columns, evaluations[r], wall, memory)
-        if write_results:
+        if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
             write_result(out_dir, document)
         results.append(document)
-    if ckpt.exists():
-        ckpt.unlink()
+    remove_checkpoint(ckpt)
     return results
 
 
