@@ -10,7 +10,8 @@ from gymnasium.utils import EzPickle
 from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
-from empathy_zoo.policies import FixedPolicy, make_policy
+from empathy_zoo.actions import check_joint_action
+from empathy_zoo.policies import FixedPolicy, checked_policy_action, make_policy
 from empathy_zoo.randomness import derive_key
 
 __all__ = ["FixedAgents", "policy_seed"]
@@ -43,12 +44,13 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         if not self.possible_agents:
             raise ValueError("every agent is fixed; leave at least one agent to learn")
         self._fixed_index = {agent: all_agents.index(agent) for agent in self.policies}
+        self._num_actions = int(env.action_space(all_agents[0]).n)
         self._last: dict[str, tuple[np.ndarray, dict]] = {}
         self._step = 0
         self.agents: list[str] = []
 
     def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
-        observations, infos = self.env.reset(seed=seed, options=options)
+        observations, infos = self.env.reset(seed=seed, options=options)  # (a bad seed or option changes nothing)
         for agent, policy in self.policies.items():
             policy.reset(None if seed is None else policy_seed(seed, self._fixed_index[agent]))
         self._step = 0
@@ -57,14 +59,22 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         return self._learners(observations), self._learners(infos)
 
     def step(self, actions: Mapping[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
-        for agent in actions:
-            if agent in self.policies:
-                raise ValueError(f"{agent} is a fixed agent driven inside FixedAgents; do not pass its action")
-        merged = dict(actions)
+        """Step with the learners' ``actions``; they are checked before any fixed agent acts, so
+        a bad one raises ``ValueError`` and changes nothing."""
+        if isinstance(actions, Mapping):
+            for agent in actions:
+                if agent in self.policies:
+                    raise ValueError(f"{agent} is a fixed agent driven inside FixedAgents; do not pass its action")
+        if not self.env.agents:
+            raise RuntimeError("step() called with no live agents; call reset() first")
+        merged: dict[str, Any] = check_joint_action(actions, self.agents, self.possible_agents, self._num_actions)
         for agent in self.env.agents:
             if agent in self.policies:
                 observation, info = self._last[agent]
-                merged[agent] = self.policies[agent].act(observation, {**info, "step": self._step})
+                merged[agent] = checked_policy_action(
+                    self.policies[agent], agent, self.policies[agent].act(observation, {**info, "step": self._step}),
+                    self._num_actions,
+                )
         observations, rewards, terminations, truncations, infos = self.env.step(merged)
         self._step += 1
         self._remember(observations, infos)

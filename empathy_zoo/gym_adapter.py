@@ -107,9 +107,8 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         self._running = False
 
     def reset(self, *, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        observations, infos = self._env.reset(seed=seed, options=options)  # (a bad seed or option changes nothing)
         super().reset(seed=seed)
-        self._running = False
-        observations, infos = self._env.reset(seed=seed, options=options)
         self._running = True
         return observations[self.agent], dict(infos[self.agent])
 

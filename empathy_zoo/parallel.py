@@ -9,14 +9,15 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 from pettingzoo import ParallelEnv
-from pettingzoo.utils.conversions import parallel_to_aec
+from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.env import AECEnv
 
+from empathy_zoo.actions import check_action, check_joint_action
 from empathy_zoo.engine.base import GridEngine, check_env_arguments
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.render import render_rgb, render_text
 
-__all__ = ["GridParallelEnv", "grid_metadata", "env_constructors"]
+__all__ = ["GridParallelEnv", "GridAECEnv", "grid_metadata", "env_constructors"]
 
 AgentID = str
 STAY = int(Action.STAY)
@@ -82,13 +83,7 @@ class GridParallelEnv(ParallelEnv, EzPickle):
     def reset(
         self, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[AgentID, np.ndarray], dict[AgentID, dict]]:
-        try:
-            self.engine.reset(seeds=None if seed is None else [seed], options=options)
-        except ValueError:
-            self.engine.running[:] = False
-            self.agents = []
-            self._painted = None
-            raise
+        self.engine.reset(seeds=None if seed is None else [seed], options=options)  # (a bad one changes nothing)
         self.agents = list(self.possible_agents)
         views = self._paint_views()
         observations = {agent: views[self._index[agent]] for agent in self.agents}
@@ -100,17 +95,8 @@ class GridParallelEnv(ParallelEnv, EzPickle):
             raise RuntimeError("step() called with no live agents; call reset() first")
         live, index = self.agents, self._index
         values = [STAY] * self.engine.num_agents
-        for agent, action in actions.items():
-            if agent not in live:
-                if agent in index:
-                    raise ValueError(f"action given for {agent!r}, which is no longer in the environment")
-                raise ValueError(f"action given for unknown agent {agent!r}; agents are {live}")
-            if type(action) is not int or not 0 <= action < NUM_ACTIONS:  # the common case costs one test
-                action = self._check_action(agent, action)
+        for agent, action in check_joint_action(actions, live, index).items():
             values[index[agent]] = action
-        if len(actions) != len(live):
-            missing = [agent for agent in live if agent not in actions]
-            raise ValueError(f"no action given for live agent(s) {missing}")
         engine = self.engine
         events = engine.step_checked(np.array([values], dtype=np.int64))
         views = self._paint_views()
@@ -133,17 +119,12 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         )
         return self._painted
 
-    def _check_action(self, agent: AgentID, action: Any) -> int:
-        if type(action) is int or isinstance(action, np.integer):  # the common case, checked cheaply
-            value = int(action)
-        else:
-            array = np.asarray(action)
-            if array.shape != () or array.dtype.kind not in "iu":
-                raise ValueError(f"action for {agent} must be an integer in [0, {NUM_ACTIONS}), got {action!r}")
-            value = int(array)
-        if not 0 <= value < NUM_ACTIONS:
-            raise ValueError(f"action {value} for {agent} is outside Discrete({NUM_ACTIONS})")
-        return value
+    def check_action(self, agent: AgentID, action: Any) -> int:
+        """``action`` as an ``int`` if ``agent`` is live and may take it, else ``ValueError``
+        (what :meth:`step` checks of each action; the AEC face asks before it records one)."""
+        if agent not in self.agents:
+            raise ValueError(f"{agent!r} is not a live agent; agents are {self.agents}")
+        return check_action(agent, action)
 
     # ------------------------------------------------------------------ empathy primitive
     def swapped_observation(self, viewer: AgentID, other: AgentID, in_view_only: bool = False) -> np.ndarray | None:
@@ -179,6 +160,23 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         pass
 
 
+class GridAECEnv(parallel_to_aec_wrapper):
+    """The AEC face: ``parallel_to_aec`` over a :class:`GridParallelEnv`, except that an action is
+    checked when it is given (a bad one raises ``ValueError`` and changes nothing), not when the
+    last agent of the round acts."""
+
+    def step(self, action: Any) -> None:
+        agent = getattr(self, "agent_selection", None)
+        if agent is None or not self.agents:
+            raise RuntimeError("step() called with no live agents; call reset() first")
+        if self.terminations[agent] or self.truncations[agent]:
+            if action is not None:
+                raise ValueError(f"{agent} is done (terminated or truncated): step(None) removes it, got {action!r}")
+        else:
+            action = self.unwrapped.check_action(agent, action)
+        super().step(action)
+
+
 def grid_metadata(name: str) -> dict[str, Any]:
     """The PettingZoo ``metadata`` of a gridworld named ``name``."""
     return {"name": name, "render_modes": ["ansi", "rgb_array"], "is_parallelizable": True, "render_fps": 5}
@@ -192,8 +190,8 @@ def env_constructors(raw: type[GridParallelEnv]) -> tuple[Callable[..., GridPara
         return raw(**kwargs)
 
     def env(**kwargs: Any) -> AECEnv:
-        return parallel_to_aec(raw(**kwargs))
+        return GridAECEnv(raw(**kwargs))
 
     parallel_env.__doc__ = f"``{name}`` with the parallel API (keyword arguments: see the module documentation)."
-    env.__doc__ = f"``{name}`` with the AEC API (``parallel_to_aec`` over ``parallel_env``)."
+    env.__doc__ = f"``{name}`` with the AEC API (:class:`GridAECEnv`: ``parallel_to_aec`` over ``parallel_env``)."
     return parallel_env, env

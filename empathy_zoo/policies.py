@@ -20,13 +20,14 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from empathy_zoo.actions import check_action
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 from empathy_zoo.registry import resolve_name
 
 __all__ = [
     "FixedPolicy", "BatchedPolicy", "RandomWalk", "Patrol", "Stay", "POLICIES",
-    "DEFAULT_POLICIES", "make_policy", "batched",
+    "DEFAULT_POLICIES", "make_policy", "batched", "checked_policy_action",
 ]
 
 
@@ -169,7 +170,8 @@ class _PolicyCopies:
     def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
         actions = np.full(len(self.copies), 4, dtype=np.int64)
         for i in np.flatnonzero(active):
-            actions[i] = int(self.copies[i].act(observations[i], {"step": int(steps[i])}))
+            policy = self.copies[i]
+            actions[i] = checked_policy_action(policy, "a fixed agent", policy.act(observations[i], {"step": int(steps[i])}))
         return actions
 
 
@@ -198,6 +200,16 @@ def make_policy(spec: str | FixedPolicy, **kwargs: Any) -> FixedPolicy:
     if not isinstance(policy, FixedPolicy):
         raise ValueError(f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info)")
     return policy
+
+
+def checked_policy_action(policy: Any, agent: str, action: Any, num_actions: int = NUM_ACTIONS) -> int:
+    """``action`` (what ``policy`` chose for ``agent``) as an ``int``, or a ``ValueError`` naming the
+    policy: a fixed policy is held to the same rule as every action (never truncated)."""
+    try:
+        return check_action(agent, action, num_actions)
+    except ValueError as error:
+        raise ValueError(f"fixed policy {type(policy).__module__}:{type(policy).__qualname__} of {agent} "
+                         f"chose an invalid action: {error}") from None
 
 
 def batched(policy: FixedPolicy, num_envs: int) -> BatchedPolicy:

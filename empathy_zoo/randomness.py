@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 from gymnasium.utils import seeding
 
-__all__ = ["EnvStreams", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
+__all__ = ["EnvStreams", "check_seed", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -63,6 +63,13 @@ def derive_key(seed: int, *stream: int) -> int:
     return int(np.random.SeedSequence([int(seed), *map(int, stream)]).generate_state(1, np.uint64)[0])
 
 
+def check_seed(seed: int | None) -> int | None:
+    """``seed`` if it is a non-negative int (or ``None``: fresh entropy), else ``ValueError``."""
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise ValueError(f"seed must be a non-negative int or None, got {seed!r}")
+    return seed
+
+
 class EnvStreams:
     """One seeded generator per environment, drawn in blocks.
 
@@ -81,8 +88,7 @@ class EnvStreams:
 
     def seed(self, env_id: int, seed: int | None) -> None:
         """(Re)seed environment ``env_id``; ``None`` draws fresh entropy, as Gymnasium does."""
-        if seed is not None and (not isinstance(seed, (int, np.integer)) or seed < 0):
-            raise ValueError(f"seed must be a non-negative int or None, got {seed!r}")
+        check_seed(seed)
         generator, used = seeding.np_random(None if seed is None else int(seed))
         self.generators[env_id] = generator
         self.seeds[env_id] = used

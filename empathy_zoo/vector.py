@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine import ENGINES, GridEngine
 from empathy_zoo.engine.base import check_env_arguments
 from empathy_zoo.fixed_agents import policy_seed
@@ -128,13 +129,11 @@ class VectorEnv:
         actions = np.asarray(actions)
         if actions.ndim == 1 and len(self.learners) == 1:
             actions = actions[:, None]
-        if actions.shape != (self.num_envs, len(self.learners)):
-            raise ValueError(f"actions must have shape {(self.num_envs, len(self.learners))}, got {actions.shape}")
-        if actions.dtype.kind not in "iuf":
-            raise ValueError(f"actions must be integers, got dtype {actions.dtype}")
         engine = self.engine
-        # in the actions' own type, so that the engine's check sees a 1.5 rather than its truncation
-        full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.result_type(actions.dtype, np.int64))
+        # checked before the fixed agents act, so a bad action changes nothing
+        actions = check_action_array(actions, (self.num_envs, len(self.learners)), self.learners,
+                                     engine.present[:, self.learner_index])
+        full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.int64)
         full[:, self.learner_index] = actions
         for index, policy in self.fixed.items():
             observations = engine.observe(index) if policy.needs_observation else None

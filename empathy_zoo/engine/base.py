@@ -8,21 +8,22 @@ same engine with many environments.
 
 from __future__ import annotations
 
-import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
+from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine.arguments import (
     GRID_ARGUMENTS, MAX_SIZE, check_choice, check_env_arguments, check_grid_arguments, table_bytes,
 )
+from empathy_zoo.engine.placement import HandPlacement
 from empathy_zoo.grid import (
     MOVES, NUM_ACTIONS, Action, displacement_origin, spread_ids, torus_distance, window_slot_by_displacement,
 )
 from empathy_zoo.metrics import equality
-from empathy_zoo.randomness import EnvStreams
+from empathy_zoo.randomness import EnvStreams, check_seed
 
 __all__ = [
     "GridEngine", "StepEvents", "Views", "GRID_ARGUMENTS", "MAX_SIZE", "check_grid_arguments", "check_choice",
@@ -75,7 +76,7 @@ class Views:
     """``size`` as a 0-d array."""
 
 
-class GridEngine:
+class GridEngine(HandPlacement):
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
     name: ClassVar[str]
@@ -203,11 +204,29 @@ class GridEngine:
         seeds: Sequence[int | None] | None = None,
         options: Mapping[str, Any] | None = None,
     ) -> None:
-        """Start new episodes in ``env_ids`` (all when ``None``), reseeding those given a seed."""
+        """Start new episodes in ``env_ids`` (all when ``None``), reseeding those given a seed.
+
+        Bad seeds or options raise ``ValueError`` and leave every environment as it was."""
         ids = self._rows if env_ids is None else np.asarray(env_ids, dtype=np.int64)
         if seeds is not None:
             if len(seeds) != len(ids):
                 raise ValueError(f"got {len(seeds)} seeds for {len(ids)} environments")
+            for s in seeds:
+                check_seed(s)
+        if options:
+            if len(ids) != 1:
+                raise ValueError("reset options place one environment at a time")
+            before = self.state()  # placing agents by hand is checked as it goes: undo it on an error
+            try:
+                self._reset(ids, seeds, options)
+            except BaseException:
+                self.load_state(before)
+                raise
+        else:
+            self._reset(ids, seeds, options)
+
+    def _reset(self, ids: np.ndarray, seeds: Sequence[int | None] | None, options: Mapping[str, Any] | None) -> None:
+        if seeds is not None:
             for i, s in zip(ids, seeds):
                 if s is not None:
                     self.streams.seed(int(i), s)
@@ -220,8 +239,6 @@ class GridEngine:
             array[ids] = 0
         self._reset_extra(ids)
         if options:
-            if len(ids) != 1:
-                raise ValueError("reset options place one environment at a time")
             self._reset_with_options(int(ids[0]), options)
         elif self.start_order is None:
             self._random_start(ids)
@@ -229,116 +246,10 @@ class GridEngine:
             placed = self._ordered_start(int(ids[0]), {}, range(self.num_agents))
             self.cells[ids] = [self.flat_cell(*placed[index]) for index in range(self.num_agents)]
 
-    def _reset_with_options(self, env_id: int, options: Mapping[str, Any]) -> None:
-        if not isinstance(options, Mapping):
-            raise ValueError(f"options must be a mapping, got {type(options).__name__}")
-        consumed = self._apply_options(env_id, options) | {"positions"}
-        unknown = set(options) - consumed
-        if unknown:  # PettingZoo's own API test passes foreign options; ignore them loudly
-            warnings.warn(
-                f"ignoring unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}",
-                stacklevel=4,
-            )
-        positions = options.get("positions") or {}
-        if not isinstance(positions, Mapping):
-            raise ValueError(f"options['positions'] must map agent names to (row, col), got {positions!r}")
-        placed: dict[int, np.ndarray] = {}
-        for agent, cell in positions.items():
-            if agent not in self.agents:
-                raise ValueError(f"options['positions'] names unknown agent {agent!r}; agents are {list(self.agents)}")
-            placed[self.agents.index(agent)] = self._check_cell(cell, f"options['positions'][{agent!r}]")
-        blocked = set(self._blocked_start_cells(env_id).tolist())
-        for index, cell in placed.items():
-            if int(cell[0] * self.size + cell[1]) in blocked:
-                raise ValueError(f"{self.agents[index]} is placed on a battery at {tuple(cell.tolist())}")
-        indices = sorted(placed)
-        for x in range(len(indices)):
-            for y in range(x + 1, len(indices)):
-                a, b = indices[x], indices[y]
-                if np.array_equal(placed[a], placed[b]):
-                    raise ValueError(f"{self.agents[a]} and {self.agents[b]} are both placed on {tuple(placed[a].tolist())}")
-                if self._start_conflict(placed[a], placed[b]):
-                    raise ValueError(
-                        f"{self.agents[a]} at {tuple(placed[a].tolist())} and {self.agents[b]} at "
-                        f"{tuple(placed[b].tolist())} would start in contact"
-                    )
-        env = np.array([env_id])
-        missing = [index for index in range(self.num_agents) if index not in placed]
-        if self.start_order is not None:
-            placed = self._ordered_start(env_id, placed, missing)
-            missing = []
-        for index in missing:
-            if not any(
-                flat not in blocked and not any(
-                    np.array_equal(self._cell_rc[flat], c) or self._start_conflict(self._cell_rc[flat], c)
-                    for c in placed.values()
-                )
-                for flat in range(self.num_cells)
-            ):
-                raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
-            while True:  # rejection sampling from the environment's own stream
-                flat = int(np.floor(self.streams.uniform(env)[0] * self.size * self.size))
-                cell = np.array(divmod(flat, self.size), dtype=np.int64)
-                if flat in blocked:
-                    continue
-                if any(np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()):
-                    continue
-                placed[index] = cell
-                break
-        for index, cell in placed.items():
-            self.cells[env_id, index] = self.flat_cell(*cell)
-
-    def _ordered_start(
-        self, env_id: int, placed: Mapping[int, np.ndarray], missing: Iterable[int]
-    ) -> dict[int, np.ndarray]:
-        """``placed`` (agent index -> (row, col)) plus a cell for every agent in ``missing``, in
-        turn: the first cell of :attr:`start_order` that is not blocked in ``env_id`` and neither
-        taken by nor in conflict with an agent placed before it."""
-        blocked = set(self._blocked_start_cells(env_id).tolist())
-        placed = dict(placed)
-        for index in missing:
-            for flat in self.start_order.tolist():
-                cell = self._cell_rc[flat]
-                if flat in blocked or any(
-                    np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()
-                ):
-                    continue
-                placed[index] = cell
-                break
-            else:
-                raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
-        return placed
-
-    def _check_cell(self, cell: Any, where: str) -> np.ndarray:
-        try:
-            if isinstance(cell, (str, bytes)) or any(isinstance(v, (str, bytes, bool, np.bool_)) for v in cell):
-                raise TypeError  # "12" or (True, False) would otherwise pass for a cell
-            row, col = (int(v) for v in cell)
-            if any(float(v) != int(v) for v in cell):
-                raise TypeError
-        except (TypeError, ValueError):
-            raise ValueError(f"{where} must be a (row, col) pair of ints, got {cell!r}") from None
-        if not (0 <= row < self.size and 0 <= col < self.size):
-            raise ValueError(f"{where} = {(row, col)} is off the {self.size}x{self.size} grid")
-        return np.array([row, col], dtype=np.int64)
-
     # ------------------------------------------------------------------ step
     def check_actions(self, actions: np.ndarray) -> np.ndarray:
         """Validate an ``(N, A)`` integer action array; raise ``ValueError`` naming the problem."""
-        actions = np.asarray(actions)
-        if actions.shape != (self.num_envs, self.num_agents):
-            raise ValueError(f"actions must have shape {(self.num_envs, self.num_agents)}, got {actions.shape}")
-        if actions.dtype.kind not in "iu":
-            if actions.dtype.kind != "f" or not np.all(np.mod(actions, 1) == 0):
-                raise ValueError(f"actions must be integers in [0, {NUM_ACTIONS}), got dtype {actions.dtype}")
-        bad = ((actions < 0) | (actions >= NUM_ACTIONS)) & self.present
-        if bad.any():
-            env, agent = np.argwhere(bad)[0]
-            raise ValueError(
-                f"invalid action {actions[env, agent].item()!r} for {self.agents[agent]} in env {env}: "
-                f"actions are integers in [0, {NUM_ACTIONS})"
-            )
-        return actions.astype(np.int64, copy=False)
+        return check_action_array(actions, (self.num_envs, self.num_agents), self.agents, self.present)
 
     def step(self, actions: np.ndarray) -> StepEvents:
         """Move every present agent simultaneously, then apply the rules; returns the events."""
