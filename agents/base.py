@@ -8,6 +8,7 @@ over what happened, and saves/loads ``state_dict()`` for checkpoints.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -98,6 +99,9 @@ class Method:
         unknown = sorted(set(overrides) - known)
         if unknown:
             raise ValueError(f"unknown setting(s) {unknown} for method {self.name!r}; known: {sorted(known)}")
+        for name, value in overrides.items():  # (a settings class need not think of inf and NaN)
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
         return self.settings(**{**overrides, **self.preset})
 
     def display_name(self, settings: Any) -> str:

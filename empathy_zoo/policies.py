@@ -160,8 +160,9 @@ class _PolicyCopies:
 
     needs_observation = True
 
-    def __init__(self, policy: FixedPolicy, num_envs: int) -> None:
+    def __init__(self, policy: FixedPolicy, num_envs: int, agent: str) -> None:
         self.copies = [copy.deepcopy(policy) for _ in range(num_envs)]
+        self.agent = agent
 
     def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
         for i, seed in zip(env_ids, seeds):
@@ -171,7 +172,7 @@ class _PolicyCopies:
         actions = np.full(len(self.copies), 4, dtype=np.int64)
         for i in np.flatnonzero(active):
             policy = self.copies[i]
-            actions[i] = checked_policy_action(policy, "a fixed agent", policy.act(observations[i], {"step": int(steps[i])}))
+            actions[i] = checked_policy_action(policy, self.agent, policy.act(observations[i], {"step": int(steps[i])}))
         return actions
 
 
@@ -212,8 +213,8 @@ def checked_policy_action(policy: Any, agent: str, action: Any, num_actions: int
                          f"chose an invalid action: {error}") from None
 
 
-def batched(policy: FixedPolicy, num_envs: int) -> BatchedPolicy:
-    """The policy acting for ``num_envs`` environments (its own fast path when it has one)."""
+def batched(policy: FixedPolicy, num_envs: int, agent: str = "a fixed agent") -> BatchedPolicy:
+    """The policy acting for ``num_envs`` environments as ``agent`` (its own fast path when it has one)."""
     if hasattr(policy, "batched"):
         return policy.batched(num_envs)
-    return _PolicyCopies(policy, num_envs)
+    return _PolicyCopies(policy, num_envs, agent)

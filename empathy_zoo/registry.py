@@ -4,18 +4,25 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import sys
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["resolve_name"]
+__all__ = ["resolve_name", "PLUGIN_NAME"]
+
+_IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
+PLUGIN_NAME = re.compile(rf"{_IDENTIFIER}(?:\.{_IDENTIFIER})*:{_IDENTIFIER}")
+"""What a ``package.module:Name`` plug-in name looks like."""
 
 
 def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
     """Return ``registry[spec]``, or the object named by a ``package.module:Name`` string
-    (importable from ``sys.path`` or the working directory).
+    (importable from ``sys.path`` or the working directory). Importing it runs that module's
+    code: name only modules you trust (docs/limits.md).
 
-    Raises ``ValueError`` naming the unknown entry and what is registered.
+    Raises ``ValueError`` naming the unknown entry and what is registered, a malformed name, or
+    what importing the module raised.
     """
     if not isinstance(spec, str) or not spec:
         raise ValueError(f"a {kind} is named by a non-empty string, got {spec!r}")
@@ -25,6 +32,9 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
         raise ValueError(
             f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')"
         )
+    if not PLUGIN_NAME.fullmatch(spec):
+        raise ValueError(f"{spec!r} is not a valid 'package.module:Name' (dotted module path, a colon, a name) "
+                         f"nor a registered {kind}: {sorted(registry)}")
     module_name, _, attribute = spec.partition(":")
     if os.getcwd() not in sys.path:  # like `python -m`: modules of the working directory resolve
         sys.path.append(os.getcwd())
@@ -32,6 +42,9 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
         module = importlib.import_module(module_name)
     except ImportError as error:
         raise ValueError(f"cannot import module {module_name!r} for {kind} {spec!r}: {error}") from error
+    except Exception as error:  # noqa: BLE001 - a plug-in's own code failed while it was imported
+        raise ValueError(f"importing module {module_name!r} for {kind} {spec!r} raised "
+                         f"{type(error).__name__}: {error}") from error
     try:
         return getattr(module, attribute)
     except AttributeError:

@@ -26,6 +26,7 @@ from empathy_zoo.engine.base import check_env_arguments
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import BatchedPolicy, FixedPolicy, batched, make_policy
+from empathy_zoo.randomness import check_seed
 
 __all__ = ["VectorEnv", "VectorStep"]
 
@@ -98,7 +99,7 @@ class VectorEnv:
             raise ValueError("every agent is fixed; leave at least one agent to learn")
         self.learner_index = [self.agents.index(agent) for agent in self.learners]
         self.fixed: dict[int, BatchedPolicy] = {
-            self.agents.index(agent): batched(make_policy(policy), self.num_envs) for agent, policy in fixed.items()
+            self.agents.index(agent): batched(make_policy(policy), self.num_envs, agent) for agent, policy in fixed.items()
         }
         self.in_view_only = bool(in_view_only)
         self.obs_size = self.engine.obs_size
@@ -109,10 +110,12 @@ class VectorEnv:
         """Reset every environment; returns ``(N, L, V)`` observations."""
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [int(check_seed(seed)) + i for i in range(self.num_envs)]
         else:
-            seeds = [int(s) for s in seed]
+            if isinstance(seed, (str, bytes, bool)) or not hasattr(seed, "__len__"):
+                raise ValueError(f"seed must be a non-negative int or a list of them, got {seed!r}")
+            seeds = [check_seed(s) for s in seed]
             if len(seeds) != self.num_envs:
                 raise ValueError(f"got {len(seeds)} seeds for {self.num_envs} environments")
         ids = np.arange(self.num_envs)

@@ -37,3 +37,13 @@ class NotAPolicy:
 
     def reset(self, seed: int | None = None) -> None:
         pass
+
+
+class ReturnsAFloat:
+    """Chooses 2.7, which is no action: every path must refuse it (never truncate it to 2)."""
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> float:
+        return 2.7

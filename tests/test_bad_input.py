@@ -272,7 +272,7 @@ def test_coexistence_needs_size_five():
     "kwargs, message",
     [
         ({"env": "nope_v0", "num_envs": 2}, "unknown environment 'nope_v0'"),
-        ({"env": "coexistence_v0", "num_envs": 0}, "num_envs must be positive"),
+        ({"env": "coexistence_v0", "num_envs": 0}, "num_envs must be a positive int"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {"dog_0": "stay"}}, "unknown agent"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {ROBOT: "stay", CAT: "stay"}}, "every agent is fixed"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {CAT: "nope"}}, "unknown fixed policy 'nope'"),

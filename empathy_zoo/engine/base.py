@@ -94,8 +94,8 @@ class GridEngine(HandPlacement):
 
     def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
         check_grid_arguments(size, view, max_cycles, self.min_size)
-        if num_envs < 1:
-            raise ValueError(f"num_envs must be positive, got {num_envs}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         self.num_envs = int(num_envs)
         self.size = int(size)
         self.view = int(view)
