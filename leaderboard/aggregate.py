@@ -106,7 +106,8 @@ def table_env(result: dict[str, Any]) -> str:
 def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     """Every result file of ``results_dir`` (see :func:`result_files`), in file-name order.
 
-    A corrupted or malformed file raises ``ValueError`` naming it and the field
+    A directory without result files raises ``ValueError``; a corrupted or malformed file raises
+    ``ValueError`` naming it and the field
     (:func:`empathy_zoo.training.result_schema.check_result`); so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
     with one ``(env, method_label)``, which would be mixed in one row.
@@ -114,6 +115,8 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     results: list[dict[str, Any]] = []
     seen: dict[tuple[str, str, Any], Path] = {}
     paths = result_files(results_dir)
+    if not paths:
+        raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
     for path in paths:
         results.append(check_result(read_json(path), path))
     check_one_experiment_per_label(

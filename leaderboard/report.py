@@ -8,7 +8,7 @@ from pathlib import Path
 from empathy_zoo.atomic import check_output_dir, write_text_atomic
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, result_files, score_runs,
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, score_runs,
 )
 from leaderboard.plots import plot_learning_curves
 from leaderboard.tables import Provenance, csv_text, html_report, markdown_report
@@ -42,9 +42,6 @@ def write_leaderboard(
     ``figures/<env>_<metric>.png``. Returns ``{"markdown", "csv", "html": path}`` plus
     ``"figure:<env>:<metric>": path`` for every figure. No result file raises ``ValueError``.
     """
-    files = result_files(results_dir)
-    if not files:
-        raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
     results = load_results(results_dir)
     out = check_output_dir(results_dir if out_dir is None else out_dir, (FIGURES_DIR,))
     provenance = Provenance(

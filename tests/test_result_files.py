@@ -202,3 +202,17 @@ def test_the_leaderboard_names_two_experiments_with_one_label(tmp_path):
     write_runs(tmp_path, [a, b])
     with pytest.raises(ValueError, match="run1.json.*same label 'dqn 1.0' on coexistence_v0.*other settings"):
         write_leaderboard(tmp_path)
+
+
+@pytest.mark.parametrize("command", ["leaderboard", "reproduction"])
+@pytest.mark.parametrize("layout", ["empty", "empty runs/", "only temporary files"])
+def test_a_directory_without_result_files_is_refused_alike(tmp_path, capsys, command, layout):
+    if layout != "empty":
+        (tmp_path / "runs").mkdir()
+    if layout == "only temporary files":
+        (tmp_path / "runs" / ".x.json.1.abcd0123.tmp").write_text("{")
+    before = everything_below(tmp_path)
+    assert main([command, str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"empathy-zoo: error: no result files (*.json) in {tmp_path}: run a sweep first\n"
+    assert everything_below(tmp_path) == before
