@@ -7,7 +7,7 @@ import subprocess
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["package_version", "git_commit"]
+__all__ = ["package_version", "git_commit", "checkout_commit"]
 
 _FALLBACK_VERSION = "0.1.0"
 
@@ -23,13 +23,26 @@ def package_version() -> str:
 
 @lru_cache(maxsize=1)
 def git_commit() -> str | None:
-    """Short commit of the git checkout the package runs from, else ``None``."""
+    """Short commit of the git checkout the package runs from (``<commit>-dirty`` when tracked
+    files differ from it), else ``None``; read once per process."""
+    return checkout_commit(Path(__file__).resolve().parent)
+
+
+def checkout_commit(directory: Path) -> str | None:
+    """Short commit of the git checkout holding ``directory``, with ``-dirty`` appended when a
+    tracked file differs from it (staged or not; untracked files do not count), else ``None``."""
+    commit = _git(directory, "rev-parse", "--short", "HEAD")
+    if commit is None:
+        return None
+    changes = _git(directory, "status", "--porcelain", "--untracked-files=no")
+    return commit if changes == "" else f"{commit}-dirty"
+
+
+def _git(directory: Path, *args: str) -> str | None:
     try:
         completed = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).resolve().parent,
-            capture_output=True, text=True, timeout=10, check=False,
+            ["git", *args], cwd=directory, capture_output=True, text=True, timeout=10, check=False,
         )
     except (OSError, subprocess.SubprocessError):
         return None
-    commit = completed.stdout.strip()
-    return commit if completed.returncode == 0 and commit else None
+    return completed.stdout.strip() if completed.returncode == 0 else None
