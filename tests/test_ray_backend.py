@@ -127,3 +127,21 @@ def test_without_ray_the_error_says_how_to_install_it(monkeypatch, tmp_path) -> 
     with pytest.raises(ImportError, match=r'pip install "empathy-zoo\[ray\]"'):
         train_runs(SPECS, tmp_path, RAY)
     assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("address, expected", [
+    ("ray://127.0.0.1:1", "cannot reach the Ray cluster at ray://127.0.0.1:1"),
+    ("127.0.0.1:1", "cannot reach the Ray cluster at 127.0.0.1:1"),
+    ("ray://192.0.2.1:10001", "cannot reach the Ray cluster at ray://192.0.2.1:10001"),  # TEST-NET: never answers
+    ("ray://no-port", "expected auto, ray://HOST:PORT"),
+])
+def test_an_unreachable_cluster_fails_at_once_naming_the_address(tmp_path, monkeypatch, address, expected) -> None:
+    ray = pytest.importorskip("ray")
+    if ray.is_initialized():
+        pytest.skip("a Ray is already running in this process")
+    import empathy_zoo.training.ray_backend as backend
+
+    monkeypatch.setattr(backend, "CONNECT_TIMEOUT_S", 0.5)
+    with pytest.raises(ValueError, match=expected):
+        train_runs(SPECS, tmp_path / "out", replace(RAY, address=address))
+    assert not (tmp_path / "out").exists()

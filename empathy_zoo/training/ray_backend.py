@@ -9,7 +9,9 @@ on its own spec, so they do not depend on the backend either.
 
 * ``options.address is None`` starts a local Ray instance (one CPU per core, no dashboard) and
   stops it at the end; an address (``"auto"``, ``"ray://host:10001"``, ``"host:6379"``) joins a
-  running cluster. A Ray already initialised in this process is used as it is.
+  running cluster, once something answers there within :data:`CONNECT_TIMEOUT_S` seconds (else a
+  ``ValueError`` naming the address, before anything is written). A Ray already initialised in
+  this process is used as it is.
 * A task whose worker dies (killed, out of memory, node lost) or that raises is retried up to
   :data:`MAX_RETRIES` times. The driver writes each run once; a result whose file already exists
   when it arrives is skipped. When a task still fails, the other tasks are finished and written
@@ -29,6 +31,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import os
+import socket
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -39,10 +42,12 @@ from empathy_zoo.training.results import result_path, write_result
 from empathy_zoo.training.runner import CHECKPOINT_DIR, RunnerOptions, train_ensemble
 from empathy_zoo.training.spec import RunSpec
 
-__all__ = ["MAX_RETRIES", "RayNotInstalledError", "train_with_ray", "import_ray"]
+__all__ = ["MAX_RETRIES", "CONNECT_TIMEOUT_S", "RayNotInstalledError", "train_with_ray", "import_ray", "check_ray_address"]
 
 MAX_RETRIES = 3
 """Times a failed ensemble task is retried (worker death or exception) before the sweep reports it."""
+CONNECT_TIMEOUT_S = 10.0
+"""Seconds to wait for an answer at a cluster address before the sweep gives up (:func:`check_ray_address`)."""
 
 INSTALL_HINT = 'the Ray backend needs Ray: pip install "empathy-zoo[ray]"'
 
@@ -58,6 +63,25 @@ def import_ray() -> Any:
     except ImportError as error:
         raise RayNotInstalledError(INSTALL_HINT) from error
     return ray
+
+
+def check_ray_address(address: str | None, timeout: float | None = None) -> None:
+    """Raise ``ValueError`` within ``timeout`` seconds (default :data:`CONNECT_TIMEOUT_S`) when the
+    cluster ``address`` (``"ray://HOST:PORT"`` or ``"HOST:PORT"``) is malformed or nothing answers
+    there, instead of letting ``ray.init`` retry for minutes. ``None`` and ``"auto"`` pass."""
+    if address is None or address == "auto":
+        return
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        raise ValueError(f"--address {address!r}: expected auto, ray://HOST:PORT (Ray Client) or HOST:PORT")
+    limit = CONNECT_TIMEOUT_S if timeout is None else timeout
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=limit).close()
+    except OSError as error:
+        raise ValueError(
+            f"cannot reach the Ray cluster at {address} ({error.strerror or error}, waited at most {limit:g} s): check "
+            "the address, that the head node runs Ray (ray start --head) and that its port is open to this machine"
+        ) from None
 
 
 def train_with_ray(

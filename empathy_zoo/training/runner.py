@@ -90,9 +90,10 @@ def train_runs(
     if options.backend not in ("local", "ray"):
         raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
     if options.backend == "ray":
-        from empathy_zoo.training.ray_backend import import_ray, train_with_ray
+        from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 
-        import_ray()  # (missing Ray is said before anything is written)
+        if not import_ray().is_initialized():  # (missing Ray, or no cluster there, is said before anything is written)
+            check_ray_address(options.address)
     check_one_experiment_per_label(
         [*_finished_runs(out_dir), *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs)]
     )
