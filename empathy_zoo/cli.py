@@ -144,14 +144,14 @@ def run_summary(result: dict[str, Any]) -> str:
             f"last eval (step {last}): {evaluation}")
 
 
-def _runner_options(args: argparse.Namespace, values: dict[str, Any], bar_position: int = 0) -> Any:
+def _runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
     from empathy_zoo.training.runner import RunnerOptions
 
     return RunnerOptions(
         device=check_device(values["device"]),
         max_parallel_runs=_positive("max_parallel_runs", values["max_parallel_runs"]),
         checkpoint_interval=_positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
-        progress=values["progress"], workers=_positive("workers", values["workers"]), bar_position=bar_position,
+        progress=values["progress"], workers=_positive("workers", values["workers"]),
         threads=_positive("threads", values["threads"]),
         backend=getattr(args, "backend", None) or "local", address=_ray_address(args),
     )
@@ -234,8 +234,6 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
 
 # ---------------------------------------------------------------------------- reproduce
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
-    from tqdm.auto import tqdm
-
     from empathy_zoo.training.results import RUNS_DIR
     from empathy_zoo.training.runner import train_runs
     from empathy_zoo.training.spec import group_specs
@@ -252,7 +250,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     if args.workers is None:  # one process per ensemble, as many as there are CPUs
         values["workers"] = max(1, min(os.cpu_count() or 1, ensembles))
     workers = values["workers"]
-    options = _runner_options(args, values, bar_position=1 if workers == 1 else 0)
+    options = _runner_options(args, values)
     done = _check_results(specs, out, others=True)  # the leaderboard reads them all: refuse now, not after training
     experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
     print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
@@ -263,9 +261,7 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     if others:
         print(f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
               f"(e.g. {others[0]}); the leaderboard includes them", flush=True)
-    with tqdm(total=len(specs), initial=done, unit="run", desc="sweep", disable=not values["progress"],
-              position=0 if workers == 1 else workers, dynamic_ncols=True) as bar:
-        train_runs(specs, out, options, on_result=lambda result: bar.update(1))
+    train_runs(specs, out, options)
     _print_written(write_leaderboard(out, command=command))
     try:
         print(f"{PROG}: wrote {write_reproduction(out, command=command)}")

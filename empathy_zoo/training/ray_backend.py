@@ -122,7 +122,7 @@ def _run_tasks(
     gpu = options.device.startswith("cuda")
     threads = options.threads or 1
     worker_options = replace(
-        options, backend="local", address=None, workers=1, progress=False, threads=threads, bar_position=0,
+        options, backend="local", address=None, workers=1, progress=False, threads=threads,
         device="cuda" if gpu else options.device,  # Ray hands each task its own GPU as cuda:0
     )
     task = ray.remote(_train_chunk).options(

@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm.auto import tqdm
 
 from agents.base import StepBatch
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
@@ -30,6 +29,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
+from empathy_zoo.training.progress import QueueDrain, QueueReporter, Report, SweepProgress
 from empathy_zoo.training.results import (
     RUNS_DIR, build_result, check_one_experiment_per_label, empty_columns, read_result, result_path, write_result,
 )
@@ -55,13 +55,12 @@ class RunnerOptions:
     checkpoint_interval: int = 50_000
     """Env steps between checkpoints of an unfinished ensemble (0 = never)."""
     progress: bool = True
-    """Show progress bars."""
+    """Show progress bars (drawn by this process only: one per running ensemble, and one for the
+    sweep's env steps when it has several ensembles; see :mod:`empathy_zoo.training.progress`)."""
     threads: int | None = None
     """Torch CPU threads per process (None = torch's default; worker processes default to 1)."""
     workers: int = 1
     """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
-    bar_position: int = 0
-    """Line of this process's progress bar (set for worker processes)."""
     backend: str = "local"
     """Where ensembles run: ``local`` (this machine, ``workers`` processes) or ``ray``."""
     address: str | None = None
@@ -109,16 +108,31 @@ def train_runs(
     wanted = {s.run_id for s in todo}
     if on_result is not None:
         report, on_result = on_result, lambda result: report(result) if result["run_id"] in wanted else None
-    if options.backend == "ray":
-        train_with_ray(chunks, out_dir, options, on_result)
-    elif options.workers == 1 or len(chunks) <= 1:
-        for chunk in chunks:
-            for result in train_ensemble(chunk, out_dir, options):
-                if on_result is not None:
-                    on_result(result)
-    else:
-        _train_in_processes(chunks, out_dir, options, on_result)
+    progress = SweepProgress([(len(chunk), chunk[0].steps) for chunk in chunks], enabled=options.progress)
+    try:
+        if options.backend == "ray":  # (the tasks report nothing: the sweep bar counts finished runs' steps)
+            train_with_ray(chunks, out_dir, options, _counting(on_result, progress))
+        elif options.workers == 1 or len(chunks) <= 1:
+            for index, chunk in enumerate(chunks):
+                for result in train_ensemble(chunk, out_dir, options, report=progress.update, ensemble=index):
+                    if on_result is not None:
+                        on_result(result)
+        else:
+            _train_in_processes(chunks, out_dir, options, on_result, progress)
+    finally:
+        progress.close()
     return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def _counting(
+    on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress
+) -> Callable[[dict[str, Any]], None]:
+    def counted(result: dict[str, Any]) -> None:
+        progress.sweep.update(result["steps"])
+        if on_result is not None:
+            on_result(result)
+
+    return counted
 
 
 def _print_note(text: str) -> None:
@@ -149,27 +163,36 @@ def _exit_with_parent(parent: int) -> None:
 
 def _train_in_processes(
     chunks: list[list[RunSpec]], out_dir: Path, options: RunnerOptions,
-    on_result: Callable[[dict[str, Any]], None] | None,
+    on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress,
 ) -> None:
-    """Spread ensembles over ``options.workers`` processes (one torch thread each by default)."""
+    """Spread ensembles over ``options.workers`` processes (one torch thread each by default);
+    their progress comes back through a queue and is drawn here."""
     context = multiprocessing.get_context("spawn")
     workers = min(options.workers, len(chunks))
-    with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
-        futures = [
-            pool.submit(train_ensemble, chunk, out_dir, replace(
-                options, workers=1, threads=options.threads or 1, bar_position=i % workers,
-            ))
-            for i, chunk in enumerate(chunks)
-        ]
-        try:
-            for future in as_completed(futures):
-                for result in future.result():
-                    if on_result is not None:
-                        on_result(result)
-        except BaseException:
-            for future in futures:
-                future.cancel()
-            raise
+    manager = context.Manager() if options.progress else None
+    drain = QueueDrain(manager.Queue(), progress) if manager is not None else None
+    reporter = QueueReporter(drain.source) if drain is not None else None
+    try:
+        with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent,
+                                 initargs=(os.getpid(),)) as pool:
+            futures = [
+                pool.submit(train_ensemble, chunk, out_dir, replace(options, workers=1, threads=options.threads or 1),
+                            True, reporter, i)
+                for i, chunk in enumerate(chunks)
+            ]
+            try:
+                for future in as_completed(futures):
+                    for result in future.result():
+                        if on_result is not None:
+                            on_result(result)
+            except BaseException:
+                for future in futures:
+                    future.cancel()
+                raise
+    finally:
+        if drain is not None:
+            drain.stop()
+            manager.shutdown()
 
 
 class _EpisodeLog:
@@ -190,11 +213,27 @@ class _EpisodeLog:
 
 
 def train_ensemble(
-    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True
+    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True,
+    report: Callable[[Report], None] | None = None, ensemble: int = 0,
 ) -> list[dict[str, Any]]:
     """Train the compatible runs ``specs`` in lockstep and return their results; write them
-    (atomically) unless ``write_results`` is False (a remote worker hands them to the driver)."""
-    out_dir = Path(out_dir)
+    (atomically) unless ``write_results`` is False (a remote worker hands them to the driver).
+
+    With ``options.progress``, progress goes to ``report`` (as ensemble number ``ensemble`` of a
+    sweep), or, without one, to bars drawn here."""
+    own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
+    try:
+        return _train_ensemble(specs, Path(out_dir), options, write_results,
+                               (own.update if own else report) if options.progress else None, ensemble)
+    finally:
+        if own is not None:
+            own.close()
+
+
+def _train_ensemble(
+    specs: Sequence[RunSpec], out_dir: Path, options: RunnerOptions, write_results: bool,
+    report: Callable[[Report], None] | None, ensemble: int,
+) -> list[dict[str, Any]]:
     if len({s.ensemble_key() for s in specs}) != 1:
         raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
     if options.threads:
@@ -231,17 +270,15 @@ def train_ensemble(
         learner.replay.check_range(venv.engine.obs_low, venv.engine.obs_high)
     memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
               "learner_per_run": learner.memory_bytes_per_run()}
-    if options.progress:
+    total = first.steps
+    label = f"{first.env} ×{k} runs"
+    if report is not None:
         mb = 2**20
-        tqdm.write(
+        report(Report(ensemble, step, total, k, label, line=(
             f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
             f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
             f"total {k * memory['learner_per_run'] / mb:.0f} MB"
-        )
-    total = first.steps
-    bar = tqdm(total=total, initial=step, disable=not options.progress, unit="step", mininterval=1.0,
-               desc=f"{first.env} ×{k} runs", dynamic_ncols=True, leave=False,
-               position=options.bar_position)
+        )))
     started = time.perf_counter() - elapsed
     first_step = step
     rows = np.arange(k)
@@ -267,11 +304,9 @@ def train_ensemble(
                 "obs": to_safe(obs),
                 "logs": [log.columns for log in logs], "evaluations": evaluations,
             })
-        if options.progress and (step % 500 == 0 or step == total):
+        if report is not None and (step % 500 == 0 or step == total):
             rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
-            bar.set_postfix(_live(logs, learner, rate), refresh=False)
-            bar.update(step - bar.n)
-    bar.close()
+            report(Report(ensemble, step, total, k, label, stats=_live(logs, learner, rate), done=step == total))
     wall = time.perf_counter() - started
     results = []
     for r, spec in enumerate(specs):
