@@ -165,6 +165,10 @@ class GridAECEnv(parallel_to_aec_wrapper):
     checked when it is given (a bad one raises ``ValueError`` and changes nothing), not when the
     last agent of the round acts."""
 
+    def __init__(self, parallel_env: GridParallelEnv) -> None:
+        super().__init__(parallel_env)
+        self.agents: list[AgentID] = []
+
     def step(self, action: Any) -> None:
         agent = getattr(self, "agent_selection", None)
         if agent is None or not self.agents:
