@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.engine import ENGINES
+from empathy_zoo.engine.arguments import GRID_ARGUMENTS
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
@@ -24,7 +26,8 @@ SCHEMA = 1
 """The result-file schema this suite writes and reads."""
 REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
-``version``, ``commit`` and ``created`` are written too, and checked when present)."""
+``version``, ``commit`` and ``created`` are written too, and checked when present, as are the
+fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed")
 """Tables of ``config`` every result file has."""
 _SHOWN = 60
@@ -70,6 +73,14 @@ class _Checker:
             raise self.fail(field, f"an int >= {low}", value)
         return value
 
+    def positive(self, value: Any, field: str) -> int:
+        return self.integer(value, field, 1)
+
+    def number(self, value: Any, field: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(field, "a number", value)
+        return value
+
     def text(self, value: Any, field: str) -> str:
         if not isinstance(value, str) or not value or "\n" in value:
             raise self.fail(field, "a non-empty one-line string", value)
@@ -86,9 +97,9 @@ class _Checker:
         if not isinstance(value, list):
             raise self.fail(field, "an array of numbers", value)
         for i, item in enumerate(value):
-            if isinstance(item, bool) or not isinstance(item, (int, float)) or (
-                    integral and (not isinstance(item, int) and not (math.isfinite(item) and item == int(item)))):
-                raise self.fail(f"{field}[{i}]", "an integer" if integral else "a number", item)
+            self.number(item, f"{field}[{i}]")
+            if integral and not isinstance(item, int) and not (math.isfinite(item) and item == int(item)):
+                raise self.fail(f"{field}[{i}]", "an integer", item)
         return value
 
 
@@ -109,6 +120,11 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     check.integer(result["seed"], "seed", 0)
     steps = check.integer(result["steps"], "steps", 1)
     _check_config(check, result)
+    _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": check.number})
+    if result.get("commit") is not None:
+        check.text(result["commit"], "commit")
+    for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
+        check.integer(count, f"memory_bytes.{name}", 0)
     train = check.table(result["train"], "train")
     check.has(train, ("episode_end_step", *METRIC_NAMES), "train.")
     for name, column in train.items():
@@ -128,13 +144,37 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     return result
 
 
+def _check_optional(check: _Checker, table: Mapping[str, Any], prefix: str, checks: Mapping[str, Any]) -> None:
+    """Fields nobody needs, written by this suite: checked when present."""
+    for name, check_field in checks.items():
+        if name in table:
+            check_field(table[name], f"{prefix}{name}")
+
+
 def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
     config = check.table(result["config"], "config")
     check.has(config, CONFIG_TABLES, "config.")
     settings = check.table(config["settings"], "config.settings")
-    check.table(config["env_kwargs"], "config.env_kwargs")
+    env_kwargs = check.table(config["env_kwargs"], "config.env_kwargs")
+    engine = ENGINES.get(result["env"])
+    for name, value in env_kwargs.items() if engine is not None else ():
+        field = f"config.env_kwargs.{name}"
+        if name in GRID_ARGUMENTS:
+            check.positive(value, field)
+        elif name in engine.extra_arguments:
+            if value not in engine.extra_arguments[name]:
+                raise check.fail(field, f"one of {', '.join(engine.extra_arguments[name])}", value)
+        else:
+            raise check.fail(field, f"an argument of {result['env']} ({', '.join((*GRID_ARGUMENTS, *engine.extra_arguments))})",
+                             name)
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.text(policy, f"config.fixed.{agent}")
+    _check_optional(check, config, "config.", {
+        "env": check.name, "method": check.text, "label": check.text, "seed": lambda v, f: check.integer(v, f, 0),
+        "steps": check.positive, "eval_interval": check.positive, "eval_episodes": check.positive,
+    })
+    if config.get("variant") is not None:
+        check.name(config["variant"], "config.variant")
     from agents.registry import METHODS  # lazily: the method registry imports the learners
 
     method = METHODS.get(result["method"])
