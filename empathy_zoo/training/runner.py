@@ -26,6 +26,7 @@ import torch
 from agents.base import StepBatch
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
@@ -221,6 +222,7 @@ def train_ensemble(
 
     With ``options.progress``, progress goes to ``report`` (as ensemble number ``ensemble`` of a
     sweep), or, without one, to bars drawn here."""
+    git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
     own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
     try:
         return _train_ensemble(specs, Path(out_dir), options, write_results,
