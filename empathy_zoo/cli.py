@@ -288,6 +288,14 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     return 0
 
 
+def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
+    from leaderboard.sensitivity import write_sensitivity
+
+    produced_by = args.produced_by or "(the command that trained these runs is in each result file's config)"
+    print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=produced_by)}")
+    return 0
+
+
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     from leaderboard.report import write_leaderboard
 
@@ -443,6 +451,12 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--sensitivity", metavar="DIR",
                         help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition")
     report.set_defaults(handler=cmd_reproduction)
+
+    sensitivity = sub.add_parser("sensitivity", help="Sharing's claims per fidelity condition (SENSITIVITY.md)")
+    sensitivity.add_argument("results", metavar="DIR", help="results directory of a sharing_sensitivity sweep")
+    sensitivity.add_argument("--out", metavar="PATH", help="where to write (default: DIR/SENSITIVITY.md)")
+    sensitivity.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results")
+    sensitivity.set_defaults(handler=cmd_sensitivity)
 
     sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
     sub.add_parser("policies", help="list the registered fixed-agent policies").set_defaults(handler=cmd_policies)

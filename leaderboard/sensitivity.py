@@ -10,13 +10,17 @@ condition and β, with the verdicts of "fewer batteries as β falls" and "equali
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
-from leaderboard.aggregate import run_scalars
-from leaderboard.verdicts import Cell, cell_of, falls, peaks
+from empathy_zoo.atomic import write_text_atomic
 
-__all__ = ["Condition", "condition_of", "sensitivity_rows", "sensitivity_markdown"]
+from leaderboard.aggregate import load_results, run_scalars
+from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
+
+__all__ = ["Condition", "condition_of", "sensitivity_rows", "sensitivity_markdown", "write_sensitivity"]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
@@ -73,7 +77,8 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
     lines = [
         "## When does C5 hold? Sharing under the fidelity options", "",
         "Empathic DQN on Sharing under every combination of the env's fidelity options (docs/SPEC.md §3; "
-        "the env's docstring), judged by the rules above, produced by:", "", f"    {command}", "",
+        "the env's docstring), judged by REPRODUCTION.md's rules (`leaderboard/verdicts.py`), produced by:", "",
+        f"    {command}", "",
     ]
     for name in PHASES:
         where = "last greedy evaluation" if name == "greedy" else "final 10 % of training"
@@ -94,3 +99,13 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
                 )
         lines.append("")
     return "\n".join(lines)
+
+
+def write_sensitivity(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
+                      command: str = "empathy-zoo reproduce --profile sharing_sensitivity", note: str = "") -> Path:
+    """Write the sensitivity section as a file of its own (``<results_dir>/SENSITIVITY.md``), with
+    the rules it applies."""
+    text = "\n".join(["# Sharing under its fidelity options", "", *([note, ""] if note else []), RULES, "",
+                      sensitivity_markdown(load_results(results_dir), command)])
+    path = Path(out_path) if out_path else Path(results_dir) / "SENSITIVITY.md"
+    return write_text_atomic(path, text)

@@ -39,3 +39,14 @@ def test_each_condition_gets_its_own_rows_and_verdicts() -> None:
 def test_no_sharing_runs_is_an_error() -> None:
     with pytest.raises(ValueError, match="no Empathic DQN runs of sharing_v0"):
         sensitivity_markdown([synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)], "x")
+
+
+def test_sensitivity_command_writes_the_file(tmp_path) -> None:
+    from empathy_zoo.atomic import write_json_atomic
+    from empathy_zoo.cli import main
+
+    for run in _condition_runs("centre", "authors", "random_walk", equality_at_half=1.0):
+        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+    assert main(["sensitivity", str(tmp_path), "--produced-by", "empathy-zoo reproduce --profile x"]) == 0
+    text = (tmp_path / "SENSITIVITY.md").read_text()
+    assert "**The rules**" in text and "empathy-zoo reproduce --profile x" in text and "human `random_walk`" in text
