@@ -284,7 +284,8 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
-    print(f"{PROG}: wrote {write_reproduction(args.results, args.out, command=produced_by, appendix=appendix)}")
+    note = Path(args.note).read_text() if args.note else ""
+    print(f"{PROG}: wrote {write_reproduction(args.results, args.out, command=produced_by, note=note, appendix=appendix)}")
     return 0
 
 
@@ -292,7 +293,8 @@ def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
     from leaderboard.sensitivity import write_sensitivity
 
     produced_by = args.produced_by or "(the command that trained these runs is in each result file's config)"
-    print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=produced_by)}")
+    note = Path(args.note).read_text() if args.note else ""
+    print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=produced_by, note=note)}")
     return 0
 
 
@@ -450,12 +452,14 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
     report.add_argument("--sensitivity", metavar="DIR",
                         help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition")
+    report.add_argument("--note", metavar="FILE.md", help="prose placed before the rules (how the run was made, what it shows)")
     report.set_defaults(handler=cmd_reproduction)
 
     sensitivity = sub.add_parser("sensitivity", help="Sharing's claims per fidelity condition (SENSITIVITY.md)")
     sensitivity.add_argument("results", metavar="DIR", help="results directory of a sharing_sensitivity sweep")
     sensitivity.add_argument("--out", metavar="PATH", help="where to write (default: DIR/SENSITIVITY.md)")
     sensitivity.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results")
+    sensitivity.add_argument("--note", metavar="FILE.md", help="prose placed before the rules")
     sensitivity.set_defaults(handler=cmd_sensitivity)
 
     sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
