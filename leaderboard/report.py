@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from empathy_zoo.atomic import check_output_dir, write_text_atomic
+from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_text_atomic
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, score_runs,
@@ -44,6 +44,8 @@ def write_leaderboard(
     """
     results = load_results(results_dir)
     out = check_output_dir(results_dir if out_dir is None else out_dir, (FIGURES_DIR,))
+    for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
+        remove_stale_temp_files(directory)
     provenance = Provenance(
         command=command if command is not None else f"leaderboard.write_leaderboard({str(results_dir)!r})",
         version=package_version(), commit=git_commit(), n_resamples=n_resamples, confidence=confidence,

@@ -27,3 +27,32 @@ TINY_TRAIN = [
     "--learning-starts", "32", "--replay-capacity", "200", "--hidden-size", "8", "--no-progress",
 ]
 """``train`` flags of the same run."""
+
+TWO_ENV_SWEEP = """
+[sweep]
+seeds = 2
+steps = 300
+eval_interval = 150
+eval_episodes = 2
+
+[settings]
+learning_starts = 32
+replay_capacity = 300
+hidden_size = 16
+target_update_interval = 50
+epsilon_decay_steps = 200
+
+[envs.coexistence_v0]
+max_cycles = 50
+
+[envs.sharing_v0]
+max_cycles = 50
+
+[[methods]]
+method = "empathic_dqn"
+selfishness = 0.5
+
+[[methods]]
+method = "dqn"
+"""
+"""Empathic DQN (β = 0.5) and DQN on both environments, 2 seeds, 300 steps: 8 runs in 4 ensembles."""

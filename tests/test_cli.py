@@ -8,6 +8,7 @@ import json
 import textwrap
 
 import pytest
+from helpers_sweeps import TWO_ENV_SWEEP as TINY_SWEEP
 
 import empathy_zoo.training.runner as runner
 from empathy_zoo.cli import _train_values, build_parser, main
@@ -17,33 +18,6 @@ TINY = [
     "--learning-starts", "32", "--batch-size", "32", "--replay-capacity", "300", "--hidden-size", "16",
     "--target-update-interval", "50", "--epsilon-decay-steps", "200", "--no-progress",
 ]
-TINY_SWEEP = """
-[sweep]
-seeds = 2
-steps = 300
-eval_interval = 150
-eval_episodes = 2
-
-[settings]
-learning_starts = 32
-replay_capacity = 300
-hidden_size = 16
-target_update_interval = 50
-epsilon_decay_steps = 200
-
-[envs.coexistence_v0]
-max_cycles = 50
-
-[envs.sharing_v0]
-max_cycles = 50
-
-[[methods]]
-method = "empathic_dqn"
-selfishness = 0.5
-
-[[methods]]
-method = "dqn"
-"""
 
 
 def run_files(out):

@@ -149,3 +149,18 @@ def test_temporary_files_of_killed_writes_are_removed_on_the_next_run(tmp_path):
     train_runs(specs(seeds=(0,)), out, options(), on_note=notes.append)
     assert [p for p in stale if p.exists()] == [] and live.exists()
     assert any("3 temporary file(s)" in note for note in notes), notes
+
+
+def test_temporary_files_beside_the_leaderboard_are_removed_when_it_is_written(tmp_path):
+    from helpers_results import synthetic_result
+
+    from empathy_zoo.atomic import write_json_atomic
+    from leaderboard.report import write_leaderboard
+
+    write_json_atomic(tmp_path / "runs" / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    stale = [tmp_path / ".LEADERBOARD.md.4194305.0badc0de.tmp", tmp_path / "figures" / ".x.png.4194305.0badc0de.tmp",
+             tmp_path / ".write-probe-4194305"]
+    for path in stale:
+        write_bytes_atomic(path, b"half")
+    write_leaderboard(tmp_path)
+    assert [p for p in stale if p.exists()] == []

@@ -99,7 +99,7 @@ def train_runs(
     )
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
-    stale = [path for sub in (RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
+    stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
     if stale:
         note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
