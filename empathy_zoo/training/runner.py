@@ -87,6 +87,8 @@ def train_runs(
         raise ValueError(f"the same run is listed twice: {duplicates}")
     if options.workers < 1:
         raise ValueError(f"workers must be positive, got {options.workers}")
+    if options.max_parallel_runs < 1:
+        raise ValueError(f"max_parallel_runs must be positive, got {options.max_parallel_runs}")
     if options.backend not in ("local", "ray"):
         raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
     if options.backend == "ray":
@@ -103,12 +105,10 @@ def train_runs(
     if stale:
         note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    if options.max_parallel_runs < 1:
-        raise ValueError(f"max_parallel_runs must be positive, got {options.max_parallel_runs}")
     chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note)
     wanted = {s.run_id for s in todo}
-    if on_result is not None:
-        report, on_result = on_result, lambda result: report(result) if result["run_id"] in wanted else None
+    if on_result is not None:  # (a resumed ensemble may finish runs not asked for here)
+        given, on_result = on_result, lambda result: given(result) if result["run_id"] in wanted else None
     progress = SweepProgress([(len(chunk), chunk[0].steps) for chunk in chunks], enabled=options.progress)
     try:
         if options.backend == "ray":  # (the tasks report nothing: the sweep bar counts finished runs' steps)
