@@ -26,7 +26,7 @@ def synthetic_result(env: str, method: str, beta: float, seed: int, fixed: dict 
         "schema": 1, "run_id": f"{env}__{method}-{beta}__s{seed}", "env": env, "method": method,
         "method_label": f"{method} {beta}", "seed": seed, "steps": 4000,
         "config": {"settings": settings, "variant": env, "env_kwargs": {},
-                   "fixed": DEFAULT_POLICIES[env] if fixed is None else fixed},
+                   "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed)},
         "train": train,
         "eval": [{"step": 4000, **{m: [means.get(m, 0.0) + 0.01 * seed] * 3 for m in METRIC_NAMES}}],
     }
