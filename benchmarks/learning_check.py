@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv
 

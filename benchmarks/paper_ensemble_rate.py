@@ -27,7 +27,7 @@ def main() -> None:
         sys.path.insert(0, args.tree)
     import torch
 
-    from empathy_zoo.training.runner import RunnerOptions, train_runs
+    from empathy_zoo.training import RunnerOptions, train_runs
     from empathy_zoo.training.spec import RunSpec
 
     torch.set_num_threads(1)

@@ -23,7 +23,7 @@ from pathlib import Path
 import torch
 
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 OBS, HIDDEN, ACTIONS, BATCH = 25, 128, 5, 32

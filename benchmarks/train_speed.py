@@ -33,7 +33,7 @@ import torch
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from leaderboard.sweep import SEEDS, STR_TABLE
+from empathy_zoo.training.sweep import SEEDS, STR_TABLE
 
 __all__ = ["main", "build_parser", "RUN_KEYS", "RUN_DEFAULTS"]
 
@@ -111,7 +111,7 @@ def _positive(name: str, value: int, allow_zero: bool = False) -> int:
 def _check_results(specs: Sequence[Any], out: Path, others: bool = False) -> int:
     """Read every result file the runs already have, and with ``others`` every other one in
     ``out/runs`` (a corrupted or malformed one raises, untouched); count the runs' files."""
-    from empathy_zoo.training.results import RUNS_DIR, read_result, result_path
+    from empathy_zoo.result_file import RUNS_DIR, read_result, result_path
 
     done = 0
     ours = set()
@@ -168,7 +168,7 @@ def _ray_address(args: argparse.Namespace) -> str | None:
 def _train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, Any]]:
     """Run keys and method settings, merged: defaults < config file < command line."""
     from agents.settings import EmpathicDQNSettings
-    from leaderboard.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
+    from empathy_zoo.training.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
 
     types = settings_types(EmpathicDQNSettings)
     given = vars(args)
@@ -204,7 +204,7 @@ def _train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, A
 
 
 def cmd_train(args: argparse.Namespace, command: str) -> int:
-    from empathy_zoo.training.results import read_result
+    from empathy_zoo.result_file import read_result
     from empathy_zoo.training.runner import train_runs
     from empathy_zoo.training.spec import RunSpec
 
@@ -234,12 +234,12 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
 
 # ---------------------------------------------------------------------------- reproduce
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
-    from empathy_zoo.training.results import RUNS_DIR
+    from empathy_zoo.result_file import RUNS_DIR
     from empathy_zoo.training.runner import train_runs
     from empathy_zoo.training.spec import group_specs
     from leaderboard.report import write_leaderboard
     from leaderboard.reproduction import NotThePaperSweep, write_reproduction
-    from leaderboard.sweep import load_sweep, profile_path
+    from empathy_zoo.training.sweep import load_sweep, profile_path
 
     path = profile_path(args.profile)
     specs = load_sweep(path, seeds=args.seeds)
@@ -385,7 +385,7 @@ def _add_runner_options(parser: argparse.ArgumentParser, default: Any = None) ->
 
 def _add_train(sub: Any) -> None:
     from agents.settings import EmpathicDQNSettings
-    from leaderboard.sweep import settings_types
+    from empathy_zoo.training.sweep import settings_types
 
     parser = sub.add_parser(
         "train", help="train one run (or several seeds as one ensemble)", argument_default=argparse.SUPPRESS,
@@ -435,7 +435,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     reproduce = sub.add_parser("reproduce", help="train a sweep (resumable) and write its leaderboard")
     reproduce.add_argument("--profile", required=True, metavar="quick|paper|PATH.toml",
-                           help="a shipped sweep (leaderboard/configs/<name>.toml) or a sweep file")
+                           help="a shipped sweep (empathy_zoo/profiles/<name>.toml) or a sweep file")
     reproduce.add_argument("--seeds", type=int, metavar="N", help="replace the sweep's seeds with 0..N-1")
     reproduce.add_argument("--out", metavar="DIR", help="output directory (default: results/<profile>)")
     _add_runner_options(reproduce)

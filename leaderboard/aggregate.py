@@ -27,9 +27,8 @@ import numpy as np
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.training.result_schema import SCHEMA as SCHEMA_VERSION
-from empathy_zoo.training.result_schema import check_result
-from empathy_zoo.training.results import check_one_experiment_per_label
+from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
+from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
@@ -108,7 +107,7 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
 
     A directory without result files raises ``ValueError``; a corrupted or malformed file raises
     ``ValueError`` naming it and the field
-    (:func:`empathy_zoo.training.result_schema.check_result`); so do two runs with the same
+    (:func:`empathy_zoo.result_file.check_result`); so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
     with one ``(env, method_label)``, which would be mixed in one row.
     """

@@ -2,7 +2,7 @@
 
 The paper's Sharing differs from the authors' code in ways SPEC resolved one way (start cells,
 how an agent's inventory is drawn, the human's policy). A sensitivity sweep
-(``leaderboard/configs/sharing_sensitivity.toml``) trains Empathic DQN at every β under every
+(``empathy_zoo/profiles/sharing_sensitivity.toml``) trains Empathic DQN at every β under every
 combination; :func:`sensitivity_markdown` tables the robot/human battery split and equality per
 condition and β, with the verdicts of "fewer batteries as β falls" and "equality peaks at β =
 0.5" in each, by the same rules as REPRODUCTION.md (:mod:`leaderboard.verdicts`).

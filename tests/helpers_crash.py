@@ -34,14 +34,14 @@ def killing(function: Callable[..., Any], count: int, when: str) -> Callable[...
 
 
 def install(hook: str, count: int, when: str) -> None:
-    import empathy_zoo.training.runner as runner
+    import empathy_zoo.training.ensemble as ensemble
     from empathy_zoo.vector import VectorEnv
 
     if hook == "step":
         VectorEnv.step = killing(VectorEnv.step, count, when)
     elif hook in ("checkpoint", "result", "manifest"):
         name = {"checkpoint": "save_checkpoint", "result": "write_result", "manifest": "write_manifest"}[hook]
-        setattr(runner, name, killing(getattr(runner, name), count, when))
+        setattr(ensemble, name, killing(getattr(ensemble, name), count, when))
     elif hook in ("replace", "fsync"):
         setattr(os, hook, killing(getattr(os, hook), count, when))
     else:

@@ -10,8 +10,9 @@ import textwrap
 import pytest
 from helpers_sweeps import TWO_ENV_SWEEP as TINY_SWEEP
 
-import empathy_zoo.training.runner as runner
+import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.cli import _train_values, build_parser, main
+from empathy_zoo.training.resume import CHECKPOINT_DIR
 
 TINY = [
     "--steps", "300", "--eval-interval", "150", "--eval-episodes", "2", "--max-cycles", "50",
@@ -202,7 +203,7 @@ def test_killed_run_resumes_from_its_checkpoint_and_matches_an_uninterrupted_run
     reference = tmp_path / "reference"
     assert train(reference, *args) == 0
 
-    real_save = runner.save_checkpoint
+    real_save = ensemble.save_checkpoint
     saved_steps = []
 
     def save_then_die(path, payload):
@@ -212,17 +213,17 @@ def test_killed_run_resumes_from_its_checkpoint_and_matches_an_uninterrupted_run
             raise Killed
 
     out = tmp_path / "killed"
-    monkeypatch.setattr(runner, "save_checkpoint", save_then_die)
+    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
     with pytest.raises(Killed):
         train(out, *args)
     assert saved_steps == [100, 200]
     assert run_files(out) == []
-    [checkpoint] = (out / runner.CHECKPOINT_DIR).glob("*.pt")
+    [checkpoint] = (out / CHECKPOINT_DIR).glob("*.pt")
 
-    monkeypatch.setattr(runner, "save_checkpoint", real_save)
-    real_load = runner.load_checkpoint
+    monkeypatch.setattr(ensemble, "save_checkpoint", real_save)
+    real_load = ensemble.load_checkpoint
     loaded = []
-    monkeypatch.setattr(runner, "load_checkpoint", lambda path: loaded.append(path) or real_load(path))
+    monkeypatch.setattr(ensemble, "load_checkpoint", lambda path: loaded.append(path) or real_load(path))
     assert train(out, *args) == 0
     assert loaded == [checkpoint] and not checkpoint.exists()
     resumed, uninterrupted = run_files(out), run_files(reference)
@@ -234,18 +235,18 @@ def test_killed_run_resumes_from_its_checkpoint_and_matches_an_uninterrupted_run
 
 def test_corrupted_checkpoint_is_a_clear_error_and_left_alone(tmp_path, monkeypatch, capsys):
     args = ["--checkpoint-interval", "100"]
-    real_save = runner.save_checkpoint
+    real_save = ensemble.save_checkpoint
 
     def save_then_die(path, payload):
         real_save(path, payload)
         raise Killed
 
     out = tmp_path / "out"
-    monkeypatch.setattr(runner, "save_checkpoint", save_then_die)
+    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
     with pytest.raises(Killed):
         train(out, *args)
-    monkeypatch.setattr(runner, "save_checkpoint", real_save)
-    [checkpoint] = (out / runner.CHECKPOINT_DIR).glob("*.pt")
+    monkeypatch.setattr(ensemble, "save_checkpoint", real_save)
+    [checkpoint] = (out / CHECKPOINT_DIR).glob("*.pt")
     checkpoint.write_bytes(b"not a checkpoint")
     assert train(out, *args) == 2
     err = capsys.readouterr().err

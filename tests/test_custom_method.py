@@ -7,7 +7,7 @@ import json
 import torch
 
 from agents.registry import get_method
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300}

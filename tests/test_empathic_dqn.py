@@ -14,7 +14,7 @@ from agents.registry import get_method
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from baselines.shaping import HARM_PENALTY, shaped_reward
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 500, "target_update_interval": 50}

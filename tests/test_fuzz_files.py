@@ -24,8 +24,8 @@ from hypothesis import strategies as st
 
 import empathy_zoo.cli as cli
 import empathy_zoo.training.runner as runner
-from empathy_zoo.training.result_schema import REQUIRED_FIELDS
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.result_file import REQUIRED_FIELDS
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 TALLY: Counter[str] = Counter()

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from empathy_zoo.training.runner import learner_batch
+from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
 
 ROBOT = 0

@@ -11,7 +11,7 @@ from helpers_sweeps import TINY_SWEEP, TINY_TRAIN
 import empathy_zoo.training.runner as runner
 from empathy_zoo import atomic
 from empathy_zoo.cli import main
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 import empathy_zoo.training.runner as runner
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8}

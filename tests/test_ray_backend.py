@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from empathy_zoo.training.ray_backend import train_with_ray
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec, group_specs
 
 TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 200, "target_update_interval": 50}

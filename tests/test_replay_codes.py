@@ -163,7 +163,7 @@ def test_state_dict_round_trip_and_old_int8_checkpoints_convert() -> None:
 
 
 def test_training_an_env_the_codes_cannot_hold_is_refused_before_it_starts(tmp_path) -> None:
-    from empathy_zoo.training.runner import RunnerOptions, train_ensemble
+    from empathy_zoo.training import RunnerOptions, train_ensemble
     from empathy_zoo.training.spec import RunSpec
 
     # Sharing on 9×9 holds 16 batteries: an agent can be drawn as 17, beyond the codes' 11.75

@@ -12,7 +12,7 @@ from helpers_results import synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
-from empathy_zoo.training.results import result_path
+from empathy_zoo.result_file import result_path
 from empathy_zoo.training.spec import RunSpec
 from leaderboard.plots import plot_learning_curves
 from leaderboard.report import write_leaderboard
@@ -138,7 +138,7 @@ def test_a_malformed_result_file_is_one_line_naming_file_and_field(tmp_path, cap
 
 
 def test_reading_a_result_checks_its_schema(tmp_path):
-    from empathy_zoo.training.results import read_result
+    from empathy_zoo.result_file import read_result
 
     document, expected = malformed("eval entry without step")
     write_json_atomic(tmp_path / "r.json", document)
@@ -187,7 +187,7 @@ def test_a_second_train_differing_only_in_a_setting_is_refused_when_it_starts(tm
 
 
 def test_train_runs_refuses_two_experiments_with_one_label_in_one_call(tmp_path):
-    from empathy_zoo.training.runner import RunnerOptions, train_runs
+    from empathy_zoo.training import RunnerOptions, train_runs
 
     specs = [RunSpec(steps=100, settings={"learning_rate": lr, "learning_starts": 32}) for lr in (1e-3, 2e-3)]
     with pytest.raises(ValueError, match="same label 'Empathic DQN"):

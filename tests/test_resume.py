@@ -9,9 +9,10 @@ import os
 
 import pytest
 
-import empathy_zoo.training.runner as runner
+import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.atomic import write_bytes_atomic
-from empathy_zoo.training.runner import CHECKPOINT_DIR, RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
+from empathy_zoo.training.resume import CHECKPOINT_DIR
 from empathy_zoo.training.spec import RunSpec
 
 SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8, "target_update_interval": 50,
@@ -44,19 +45,19 @@ def contents(paths):
 
 
 def kill_after_checkpoint(monkeypatch, step=200):
-    real = runner.save_checkpoint
+    real = ensemble.save_checkpoint
 
     def save_then_die(path, payload):
         real(path, payload)
         if payload["step"] == step:
             raise Killed
 
-    monkeypatch.setattr(runner, "save_checkpoint", save_then_die)
+    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
 
 
 def count_loads(monkeypatch):
-    real, loaded = runner.load_checkpoint, []
-    monkeypatch.setattr(runner, "load_checkpoint", lambda path: loaded.append(path.name) or real(path))
+    real, loaded = ensemble.load_checkpoint, []
+    monkeypatch.setattr(ensemble, "load_checkpoint", lambda path: loaded.append(path.name) or real(path))
     return loaded
 
 
@@ -102,7 +103,7 @@ def test_more_seeds_resume_the_old_ensemble_and_start_the_new_runs(tmp_path, mon
 
 def test_a_partly_written_ensemble_resumes_without_rewriting_what_was_written(tmp_path, monkeypatch, reference):
     out = tmp_path / "out"
-    real_write, written = runner.write_result, []
+    real_write, written = ensemble.write_result, []
 
     def write_one_then_die(out_dir, result):
         if written:
@@ -110,7 +111,7 @@ def test_a_partly_written_ensemble_resumes_without_rewriting_what_was_written(tm
         written.append(real_write(out_dir, result))
 
     with monkeypatch.context() as patch:
-        patch.setattr(runner, "write_result", write_one_then_die)
+        patch.setattr(ensemble, "write_result", write_one_then_die)
         with pytest.raises(Killed):
             train_runs(specs(), out, options())
     [first] = written

@@ -15,7 +15,7 @@ import torch
 from agents.base import StepBatch
 from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.training.runner import RunnerOptions, train_runs
+from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
 from baselines.sb3 import INSTALL_HINT, SB3_DQN, SB3_PPO, SB3Learner, SB3Settings, make_sb3_model, sb3_seed  # isort: skip

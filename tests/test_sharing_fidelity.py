@@ -15,10 +15,10 @@ from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.engine.sharing import BATTERY, FLOOR, INVENTORY_ENCODINGS, STARTS
 from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.grid import NUM_ACTIONS, Action
-from empathy_zoo.training.runner import RunnerOptions, train_ensemble
+from empathy_zoo.training import RunnerOptions, train_ensemble
 from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv
-from leaderboard.sweep import SweepConfigError, load_sweep
+from empathy_zoo.training.sweep import SweepConfigError, load_sweep
 
 ROBOT, HUMAN = "robot_0", "human_0"
 OPTIONS = {"start": "centre", "inventory_encoding": "authors"}

@@ -1,4 +1,4 @@
-"""Sweep files (leaderboard/sweep.py): every validation error names file, table and key; grids,
+"""Sweep files (empathy_zoo/training/sweep.py): every validation error names file, table and key; grids,
 seeds and the shipped profiles expand to the expected runs."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 
 from agents.empathic_dqn import linear_epsilon
 from agents.settings import PER_RUN_FIELDS, EmpathicDQNSettings
-from leaderboard.sweep import SweepConfigError, load_sweep, profile_path, profiles
+from empathy_zoo.training.sweep import SweepConfigError, load_sweep, profile_path, profiles
 
 BASE = """
 [sweep]

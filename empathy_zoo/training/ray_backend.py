@@ -38,8 +38,11 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.training.results import result_path, write_result
-from empathy_zoo.training.runner import CHECKPOINT_DIR, RunnerOptions, train_ensemble
+from empathy_zoo.result_file import result_path
+from empathy_zoo.training.results import write_result
+from empathy_zoo.training.ensemble import train_ensemble
+from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.training.resume import CHECKPOINT_DIR
 from empathy_zoo.training.spec import RunSpec
 
 __all__ = ["MAX_RETRIES", "CONNECT_TIMEOUT_S", "RayNotInstalledError", "train_with_ray", "import_ray", "check_ray_address"]

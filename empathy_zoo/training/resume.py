@@ -28,7 +28,7 @@ from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.training.checkpoint import load_checkpoint
-from empathy_zoo.training.results import result_path
+from empathy_zoo.result_file import result_path
 from empathy_zoo.training.spec import RunSpec, group_specs
 
 __all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]

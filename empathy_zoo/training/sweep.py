@@ -64,7 +64,7 @@ __all__ = [
     "settings_types", "describe_type",
 ]
 
-CONFIG_DIR = Path(__file__).resolve().parent / "configs"
+CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
 """Where the named profiles (``quick``, ``paper``, …) live."""
 
 DEFAULT_SEEDS = 5

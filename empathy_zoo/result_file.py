@@ -1,4 +1,8 @@
-"""The result file's schema (1), checked field by field when a file is read.
+"""The per-run result file: where it lives, its schema (1), and reading it back.
+
+A sweep writes one JSON file per finished run, ``<out_dir>/runs/<run id>.json`` (the schema is
+documented field by field in ``docs/formats.md``); everything that reads results (the leaderboard,
+the verdicts, the command line) reads them through :func:`read_result`, never the training code.
 
 :func:`check_result` accepts exactly what :func:`empathy_zoo.training.results.build_result`
 writes (and what the leaderboard, the verdicts and the command line read from it); anything else
@@ -11,16 +15,20 @@ settings class, those of a ``package.module:NAME`` method only for their shape.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.atomic import read_json
 from empathy_zoo.engine import ENGINES
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
-__all__ = ["SCHEMA", "REQUIRED_FIELDS", "ResultFileError", "check_result"]
+__all__ = [
+    "SCHEMA", "REQUIRED_FIELDS", "RUNS_DIR", "ResultFileError", "check_result", "read_result", "result_path",
+    "experiment_of", "check_one_experiment_per_label",
+]
 
 SCHEMA = 1
 """The result-file schema this suite writes and reads."""
@@ -183,3 +191,36 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
             method.settings(**settings)
         except (TypeError, ValueError) as error:
             raise check.fail("config.settings", f"settings of {result['method']} ({error})", settings) from None
+
+
+RUNS_DIR = "runs"
+
+
+def result_path(out_dir: Path, run_id: str) -> Path:
+    """Where the result file of ``run_id`` lives (a ``run_id`` that is no file name raises ``ValueError``)."""
+    return Path(out_dir) / RUNS_DIR / f"{check_path_name(run_id, 'run id')}.json"
+
+
+def read_result(path: Path) -> dict[str, Any]:
+    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
+    return check_result(read_json(path), path)
+
+
+def experiment_of(run_id: str) -> str:
+    """The run id without its seed: the runs of one experiment (all but the seed equal) share it."""
+    return run_id.rsplit("__s", 1)[0]
+
+
+def check_one_experiment_per_label(runs: Iterable[tuple[str, str, str, str]]) -> None:
+    """Raise ``ValueError`` when two of ``runs`` (``(table env, label, run id, where it is)``) share
+    a table row, i.e. an env and a label, but come from different experiments: the leaderboard
+    groups runs by env and label, so it would mix them (or count one seed twice)."""
+    seen: dict[tuple[str, str], tuple[str, str, str]] = {}
+    for env, label, run_id, where in runs:
+        first = seen.setdefault((env, label), (experiment_of(run_id), run_id, where))
+        if first[0] != experiment_of(run_id):
+            raise ValueError(
+                f"{where} and {first[2]} have the same label {label!r} on {env} but come from two experiments "
+                f"(run ids {run_id} and {first[1]}: other settings); the tables could not tell them apart: give one "
+                "its own label (train --label, or label in its sweep entry) or move one away"
+            )

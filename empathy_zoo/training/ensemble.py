@@ -1,0 +1,195 @@
+"""The ensemble trainer: K compatible runs in lockstep on one batched engine.
+
+:func:`train_ensemble` trains the runs of one ensemble (same env, learner and shared settings)
+step by step: the learner acts for every run at once, the vector env steps every run's
+environment, and :func:`learner_batch` hands the learner what happened, unshaped. It resumes
+from the ensemble's checkpoint, evaluates greedily every ``eval_interval`` steps, and writes one
+result file per run (atomically) at the end. A run's numbers depend only on its own spec.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from agents.base import StepBatch
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.provenance import git_commit
+from empathy_zoo.randomness import derive_key
+from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
+from empathy_zoo.training.evaluation import evaluate_greedy
+from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.training.progress import Report, SweepProgress
+from empathy_zoo.result_file import result_path
+from empathy_zoo.training.results import build_result, empty_columns, write_result
+from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, write_manifest
+from empathy_zoo.training.spec import RunSpec
+from empathy_zoo.vector import VectorEnv, VectorStep
+
+__all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
+
+STREAM_ENV = 20
+
+
+class _EpisodeLog:
+    """Training episodes of one run, as columns."""
+
+    def __init__(self) -> None:
+        self.columns = empty_columns()
+
+    def add(self, end_step: int, metrics: dict[str, np.ndarray], row: int) -> None:
+        self.columns["episode_end_step"].append(int(end_step))
+        for name in METRIC_NAMES:
+            value = metrics[name][row]
+            self.columns[name].append(int(value) if name in ("survival", "harms", "batteries", "other_batteries") else round(float(value), 6))
+
+    def recent(self, name: str, count: int = 100) -> float:
+        values = self.columns[name][-count:]
+        return float(np.mean(values)) if values else float("nan")
+
+
+def train_ensemble(
+    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True,
+    report: Callable[[Report], None] | None = None, ensemble: int = 0,
+) -> list[dict[str, Any]]:
+    """Train the compatible runs ``specs`` in lockstep and return their results; write them
+    (atomically) unless ``write_results`` is False (a remote worker hands them to the driver).
+
+    With ``options.progress``, progress goes to ``report`` (as ensemble number ``ensemble`` of a
+    sweep), or, without one, to bars drawn here."""
+    git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
+    own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
+    try:
+        return _train_ensemble(specs, Path(out_dir), options, write_results,
+                               (own.update if own else report) if options.progress else None, ensemble)
+    finally:
+        if own is not None:
+            own.close()
+
+
+def _train_ensemble(
+    specs: Sequence[RunSpec], out_dir: Path, options: RunnerOptions, write_results: bool,
+    report: Callable[[Report], None] | None, ensemble: int,
+) -> list[dict[str, Any]]:
+    if len({s.ensemble_key() for s in specs}) != 1:
+        raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
+    if options.threads:
+        torch.set_num_threads(options.threads)
+    first = specs[0]
+    k = len(specs)
+    method = first.method_object()
+    fixed, env_kwargs = first.fixed_policies(), dict(first.env_kwargs)
+    venv = VectorEnv(first.env, k, fixed=fixed, **env_kwargs)
+    learner_agent = venv.learners[0]
+    robot = venv.agents.index(learner_agent)
+    if len(venv.learners) != 1:
+        raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
+    other = 1 - robot if len(venv.agents) == 2 else None
+    seeds = [s.seed for s in specs]
+    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, 5, options.device)
+    logs = [_EpisodeLog() for _ in specs]
+    evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
+    obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
+    step, elapsed = 0, 0.0
+    ckpt = checkpoint_path(out_dir, specs)
+    if ckpt.exists():
+        saved = load_checkpoint(ckpt)
+        if saved["run_ids"] != [s.run_id for s in specs]:
+            raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
+        learner.load_state_dict(saved["learner"])
+        venv.load_state(from_safe(saved["vector"]))
+        obs = from_safe(saved["obs"])
+        for log, columns in zip(logs, saved["logs"]):
+            log.columns = columns
+        evaluations = saved["evaluations"]
+        step, elapsed = int(saved["step"]), float(saved["elapsed"])
+    if hasattr(learner, "replay") and hasattr(learner.replay, "check_range"):  # fail now, not mid-run
+        learner.replay.check_range(venv.engine.obs_low, venv.engine.obs_high)
+    memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
+              "learner_per_run": learner.memory_bytes_per_run()}
+    total = first.steps
+    label = f"{first.env} ×{k} runs"
+    if report is not None:
+        mb = 2**20
+        report(Report(ensemble, step, total, k, label, line=(
+            f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
+            f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
+            f"total {k * memory['learner_per_run'] / mb:.0f} MB"
+        )))
+    started = time.perf_counter() - elapsed
+    first_step = step
+    rows = np.arange(k)
+    while step < total:
+        actions = learner.act(obs[:, None, :])
+        result = venv.step(actions.reshape(k, 1))
+        batch = learner_batch(obs, actions, result, robot, other)
+        learner.observe(batch)
+        step += 1
+        finished = result.finished
+        for j, env_id in enumerate(finished["env"]):
+            logs[env_id].add(step, finished, j)
+        obs = result.observations[:, 0]
+        if step % first.eval_interval == 0 or step == total:
+            per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)
+            for r in rows:
+                evaluations[r].append({"step": step, **per_run[r]})
+        if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
+            write_manifest(ckpt, specs)
+            save_checkpoint(ckpt, {
+                "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
+                "learner": learner.state_dict(), "vector": to_safe(venv.state()),
+                "obs": to_safe(obs),
+                "logs": [log.columns for log in logs], "evaluations": evaluations,
+            })
+        if report is not None and (step % 500 == 0 or step == total):
+            rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
+            report(Report(ensemble, step, total, k, label, stats=_live(logs, learner, rate), done=step == total))
+    wall = time.perf_counter() - started
+    results = []
+    for r, spec in enumerate(specs):
+        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory)
+        if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
+            write_result(out_dir, document)
+        results.append(document)
+    remove_checkpoint(ckpt)
+    return results
+
+
+def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep, robot: int, other: int | None) -> StepBatch:
+    """What the learner is told of one step of every run (one env per run): the environment's
+    facts, unshaped. The other-term may bootstrap only while the closest other agent is present
+    and not terminal (SPEC §6): a harmed cat has left, and the human's episode ends for good
+    when the last battery is taken; a time-limit truncation still bootstraps."""
+    k = actions.shape[0]
+    battery = result.battery_return
+    return StepBatch(
+        obs=obs[:, None, :],
+        actions=actions,
+        rewards=result.rewards[:, robot, None],
+        terminated=result.terminated[:, robot, None],
+        next_obs=result.final_observations[:, 0, None, :],
+        swapped_next_obs=result.swapped[:, 0, None, :],
+        other_present=(result.swapped_valid[:, 0] & ~result.swapped_other_terminated[:, 0])[:, None],
+        harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
+        battery_return=battery[:, robot, None],
+        other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
+        truncated=result.truncated[:, robot, None],
+    )
+
+
+def _live(logs: list[_EpisodeLog], learner: Any, steps_per_second: float) -> dict[str, str]:
+    episodes = sum(len(log.columns["survival"]) for log in logs)
+    stats = {
+        "episodes": str(episodes),
+        "survival": f"{np.nanmean([log.recent('survival') for log in logs]):.0f}",
+        "harms": f"{np.nanmean([log.recent('harms') for log in logs]):.2f}",
+        "equality": f"{np.nanmean([log.recent('equality') for log in logs]):.2f}",
+    }
+    stats |= {key: f"{value:.3g}" for key, value in learner.live_stats().items()}
+    stats["steps/s"] = f"{steps_per_second:.0f}"
+    return stats

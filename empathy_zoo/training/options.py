@@ -1,0 +1,30 @@
+"""How runs are executed: :class:`RunnerOptions` (results never depend on these)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["RunnerOptions"]
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """How runs are executed (not what they compute: results do not depend on these)."""
+
+    device: str = "cpu"
+    """Torch device for the networks and replay (``cpu``, ``cuda``, ``cuda:1``)."""
+    max_parallel_runs: int = 32
+    """Most runs trained together in one lockstep ensemble (bounds memory: ~45 MB per run at the paper's replay size)."""
+    checkpoint_interval: int = 50_000
+    """Env steps between checkpoints of an unfinished ensemble (0 = never)."""
+    progress: bool = True
+    """Show progress bars (drawn by this process only: one per running ensemble, and one for the
+    sweep's env steps when it has several ensembles; see :mod:`empathy_zoo.training.progress`)."""
+    threads: int | None = None
+    """Torch CPU threads per process (None = torch's default; worker processes default to 1)."""
+    workers: int = 1
+    """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
+    backend: str = "local"
+    """Where ensembles run: ``local`` (this machine, ``workers`` processes) or ``ray``."""
+    address: str | None = None
+    """Ray cluster address for ``backend="ray"`` (``None`` starts a local Ray instance)."""
