@@ -10,8 +10,7 @@ from empathy_zoo import coexistence_v0, sharing_v0
 from empathy_zoo.empathy import EmpathyWrapper
 from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.policies import POLICIES, Patrol, RandomWalk, make_policy
-
-__version__ = "0.1.0"
+from empathy_zoo._version import __version__
 
 ENVIRONMENTS = {"coexistence_v0": coexistence_v0, "sharing_v0": sharing_v0}
 """Environment modules by name."""

@@ -2,23 +2,19 @@
 
 from __future__ import annotations
 
-import importlib.metadata
 import subprocess
 from functools import lru_cache
 from pathlib import Path
 
+from empathy_zoo._version import __version__
+
 __all__ = ["package_version", "git_commit", "checkout_commit"]
 
-_FALLBACK_VERSION = "0.1.0"
 
-
-@lru_cache(maxsize=1)
 def package_version() -> str:
-    """The installed empathy-zoo version, or ``"0.1.0"`` when it is not installed."""
-    try:
-        return importlib.metadata.version("empathy-zoo")
-    except importlib.metadata.PackageNotFoundError:
-        return _FALLBACK_VERSION
+    """The version of the empathy-zoo code that runs (:mod:`empathy_zoo._version`, the one place it
+    is written; the installed package's metadata is built from it)."""
+    return __version__
 
 
 @lru_cache(maxsize=1)
