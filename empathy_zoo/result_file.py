@@ -15,6 +15,7 @@ settings class, those of a ``package.module:NAME`` method only for their shape.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -34,12 +35,14 @@ SCHEMA = 1
 """The result-file schema this suite writes and reads."""
 REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
-``version``, ``commit`` and ``created`` are written too, and checked when present, as are the
+``version``, ``commit``, ``plugin_sha256`` and ``created`` are written too, and checked when present, as are the
 fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed")
 """Tables of ``config`` every result file has."""
 _SHOWN = 60
 """Characters of a bad value quoted in a message."""
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+"""A plug-in module's source hash (``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`)."""
 
 
 class ResultFileError(ValueError):
@@ -131,6 +134,9 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": check.number})
     if result.get("commit") is not None:
         check.text(result["commit"], "commit")
+    for module, digest in check.table(result.get("plugin_sha256", {}), "plugin_sha256").items():
+        if digest is not None and not (isinstance(digest, str) and _SHA256.fullmatch(digest)):
+            raise check.fail(f"plugin_sha256.{module}", "a SHA-256 (64 lowercase hex digits) or null", digest)
     for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
         check.integer(count, f"memory_bytes.{name}", 0)
     train = check.table(result["train"], "train")

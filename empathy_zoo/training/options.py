@@ -28,3 +28,9 @@ class RunnerOptions:
     """Where ensembles run: ``local`` (this machine, ``workers`` processes) or ``ray``."""
     address: str | None = None
     """Ray cluster address for ``backend="ray"`` (``None`` starts a local Ray instance)."""
+    rerun_changed: bool = False
+    """Retrain the finished runs whose result files were made by other code (another empathy-zoo
+    version or an edited plug-in module, or code that cannot be told: see
+    :mod:`empathy_zoo.training.fingerprint`) and overwrite their files with the new results;
+    ``False`` refuses a sweep asking for changed runs, before training anything (runs whose code
+    cannot be told are reused then, with a note)."""

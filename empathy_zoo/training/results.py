@@ -8,8 +8,8 @@ from typing import Any
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.provenance import git_commit, package_version
 from empathy_zoo.result_file import SCHEMA, result_path
+from empathy_zoo.training.fingerprint import run_fingerprint
 
 __all__ = ["build_result", "write_result", "empty_columns"]
 
@@ -21,7 +21,8 @@ def empty_columns() -> dict[str, list]:
 def build_result(
     spec: Any, train: dict[str, list], evaluations: list[dict[str, Any]], wall_time_s: float, memory: dict[str, int]
 ) -> dict[str, Any]:
-    """The result document of one finished run."""
+    """The result document of one finished run, with the fingerprint of the code that made it
+    (``version``, ``commit``, ``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`)."""
     config = spec.config()
     return {
         "schema": SCHEMA,
@@ -37,8 +38,7 @@ def build_result(
         "eval": evaluations,
         "memory_bytes": memory,
         "wall_time_s": round(float(wall_time_s), 3),
-        "version": package_version(),
-        "commit": git_commit(),
+        **run_fingerprint(spec).fields(),
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
     }
 

@@ -1,8 +1,9 @@
 """The runner: trains a sweep's runs, ensemble by ensemble, here or on Ray.
 
 ``train_runs(specs, out_dir)`` groups the runs into ensembles (same env, method family and
-shared settings), skips the runs whose result file exists, resumes an ensemble from its
-checkpoint, and writes one result file per run, atomically, when it finishes. A run's numbers
+shared settings), skips the runs whose result file exists (once it was made by this code),
+resumes an ensemble from its checkpoint, and writes one result file per run, atomically, when it
+finishes. A run's numbers
 depend only on its own spec: its seed drives its networks, exploration, replay sampling and
 environments, so it gives the same result alone or beside other runs.
 """
@@ -15,13 +16,15 @@ import sys
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
 from empathy_zoo.training.ensemble import train_ensemble
+from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
@@ -29,7 +32,10 @@ from empathy_zoo.result_file import RUNS_DIR, check_one_experiment_per_label, re
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
 from empathy_zoo.training.spec import RunSpec
 
-__all__ = ["RunnerOptions", "train_runs", "CHECKPOINT_DIR"]
+__all__ = ["RunnerOptions", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX"]
+
+SUPERSEDED_SUFFIX = ".superseded"
+"""Suffix of a result file set aside while its run is retrained (``rerun_changed``)."""
 
 
 def train_runs(
@@ -42,7 +48,19 @@ def train_runs(
     ``ValueError`` before any training starts. Checkpointed ensembles resume as they were
     (:mod:`empathy_zoo.training.resume`); what is resumed, restarted or removed, and the temporary
     files of writes killed mid-way that are removed, is said through ``on_note`` (default: printed
-    to stderr). ``on_result`` gets every result of ``specs`` written here."""
+    to stderr). ``on_result`` gets every result of ``specs`` written here.
+
+    A finished run is reused only when its result file was made by this code: this empathy-zoo
+    version and, for a ``package.module:NAME`` method or fixed policy, the same source of that
+    module (:mod:`empathy_zoo.training.fingerprint`). The recorded commit does not count: most
+    commits do not touch a given method, so a new one alone does not make results stale. When
+    some finished runs were made by other code, ``ValueError`` lists them and what changed, before
+    anything is written, unless ``options.rerun_changed``: then they are retrained, their result
+    files set aside as ``<run id>.json.superseded`` meanwhile, each removed once its run's new
+    result is written and put back if it is not (an error, Ctrl-C). A process killed outright
+    leaves it set aside: that run is retrained by the next call that asks for it. Finished runs
+    whose code cannot be told (files written before plug-in hashes were recorded, modules without
+    a source file) are reused with a note, or retrained with ``rerun_changed``."""
     note = on_note or _print_note
     out_dir = Path(out_dir)
     ids = [s.run_id for s in specs]
@@ -58,14 +76,54 @@ def train_runs(
     if options.backend == "ray":
         if not import_ray().is_initialized():  # (missing Ray, or no cluster there, is said before anything is written)
             check_ray_address(options.address)
-    check_one_experiment_per_label(
-        [*_finished_runs(out_dir), *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs)]
-    )
+    finished = _finished_results(out_dir)
+    check_one_experiment_per_label([
+        *((result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path))
+          for path, result in finished.items()),
+        *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
+    ])
+    redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
     stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
     if stale:
         note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
+    _settle_superseded(out_dir / RUNS_DIR)
+    with _set_aside(out_dir, redo):
+        _train_todo(specs, out_dir, options, on_result, note)
+    return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def _runs_to_redo(
+    specs: Sequence[RunSpec], out_dir: Path, finished: dict[Path, dict[str, Any]], rerun_changed: bool,
+    note: Callable[[str], None],
+) -> set[str]:
+    """The finished runs of ``specs`` to retrain because other code made them (``rerun_changed``);
+    without ``rerun_changed``, ``ValueError`` when there are any (see :func:`train_runs`)."""
+    changed, unknown = code_changes(specs, {s.run_id: finished[path] for s in specs
+                                            if (path := result_path(out_dir, s.run_id)) in finished})
+    if changed and not rerun_changed:
+        count = len({run_id for run_ids in changed.values() for run_id in run_ids})
+        raise ValueError(
+            f"{count} finished run(s) in {out_dir / RUNS_DIR} were made by other code than this, so their results "
+            f"are not what these runs give now: {listing(changed)}; to go on, write to a new output directory (--out), "
+            "delete those result files, or retrain them over their files (rerun_changed=True, --rerun-changed)"
+        )
+    if unknown and not rerun_changed:
+        note(f"reusing finished runs whose code cannot be checked: {listing(unknown)}; "
+             "rerun_changed=True (--rerun-changed) retrains them")
+    if not rerun_changed or not (changed or unknown):
+        return set()
+    note(f"retraining finished runs made by other code, or by code that cannot be checked: "
+         f"{listing({**changed, **unknown})}; their result files are replaced when the new ones are written")
+    return {run_id for groups in (changed, unknown) for run_ids in groups.values() for run_id in run_ids}
+
+
+def _train_todo(
+    specs: Sequence[RunSpec], out_dir: Path, options: RunnerOptions,
+    on_result: Callable[[dict[str, Any]], None] | None, note: Callable[[str], None],
+) -> None:
+    """Train the runs of ``specs`` that have no result file (``train_runs`` checked everything)."""
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
     chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note)
     wanted = {s.run_id for s in todo}
@@ -84,7 +142,32 @@ def train_runs(
             _train_in_processes(chunks, out_dir, options, on_result, progress)
     finally:
         progress.close()
-    return [result_path(out_dir, s.run_id) for s in specs]
+
+
+@contextmanager
+def _set_aside(out_dir: Path, run_ids: Collection[str]) -> Iterator[None]:
+    """Set the result files of ``run_ids`` aside (``<run id>.json.superseded``) while they are
+    retrained; afterwards each is removed if its run's new result was written, else put back."""
+    moved: list[Path] = []
+    try:
+        for run_id in sorted(run_ids):
+            path = result_path(out_dir, run_id)
+            moved.append(path.rename(path.with_name(path.name + SUPERSEDED_SUFFIX)))
+        yield
+    finally:
+        _settle_superseded(out_dir / RUNS_DIR, moved)
+
+
+def _settle_superseded(runs_dir: Path, restore: Iterable[Path] = ()) -> None:
+    """Remove every set-aside result file of ``runs_dir`` whose run has a new result file; put
+    those of ``restore`` without one back."""
+    restore = set(restore)
+    for old in sorted(runs_dir.glob(f"*.json{SUPERSEDED_SUFFIX}")):
+        new = old.with_name(old.name.removesuffix(SUPERSEDED_SUFFIX))
+        if new.exists():
+            old.unlink()
+        elif old in restore:
+            old.rename(new)
 
 
 def _counting(
@@ -102,14 +185,11 @@ def _print_note(text: str) -> None:
     print(f"empathy-zoo: {text}", file=sys.stderr, flush=True)
 
 
-def _finished_runs(out_dir: Path) -> list[tuple[str, str, str, str]]:
-    """``(table env, label, run id, path)`` of every result file in ``out_dir`` (each one checked)."""
-    runs = []
-    for path in sorted((out_dir / RUNS_DIR).glob("*.json")) if (out_dir / RUNS_DIR).is_dir() else []:
-        if not path.name.startswith("."):
-            result = read_result(path)
-            runs.append((result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path)))
-    return runs
+def _finished_results(out_dir: Path) -> dict[Path, dict[str, Any]]:
+    """Every result file in ``out_dir``, read (and checked), by path."""
+    runs_dir = out_dir / RUNS_DIR
+    paths = sorted(runs_dir.glob("*.json")) if runs_dir.is_dir() else []
+    return {path: read_result(path) for path in paths if not path.name.startswith(".")}
 
 
 def _exit_with_parent(parent: int) -> None:
