@@ -18,7 +18,7 @@ from empathy_zoo.provenance import package_version
 from empathy_zoo.result_file import ResultFileError, check_result, read_result
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training import fingerprint, runner
-from empathy_zoo.training.fingerprint import module_sha256, plugin_names
+from empathy_zoo.training.fingerprint import CodeFingerprint, module_sha256, plugin_names
 from empathy_zoo.training.results import write_result
 from empathy_zoo.training.spec import RunSpec
 
@@ -236,6 +236,17 @@ def test_a_module_without_a_file_has_no_hash():
     assert module_sha256(types.ModuleType("built_in_memory")) is None
     assert module_sha256(sys) is None  # built into the interpreter
     assert module_sha256(json) == hashlib.sha256(Path(json.__file__).read_bytes()).hexdigest()
+
+
+def test_a_plugin_without_a_file_cannot_be_told_and_the_commit_never_counts():
+    now = CodeFingerprint("0.1.0", "0123abc", {"built": None, "edited": sha256("new")})
+    made = CodeFingerprint("0.1.0", "4567def-dirty", {"built": None, "edited": sha256("new")})
+    assert now.changes_since(made) == ([], ["plug-in module built has no source file to hash: whether it changed "
+                                            "cannot be told"])
+    made = CodeFingerprint("0.1.0", "0123abc", {"built": sha256("old"), "edited": sha256("old")})
+    changed, unknown = now.changes_since(made)
+    assert [reason.split(" (")[0] for reason in changed] == ["plug-in module edited changed since these results were made"]
+    assert unknown == ["plug-in module built has no source file to hash: whether it changed cannot be told"]
 
 
 def test_the_result_file_checks_plugin_hashes_when_present(finished_dqn):

@@ -84,12 +84,14 @@ class CodeFingerprint:
         elif recorded.version != self.version:
             changed.append(f"made by empathy-zoo {recorded.version}, this is {self.version}")
         for module, digest in sorted((self.plugins or {}).items()):
-            before = None if recorded.plugins is None else recorded.plugins.get(module)
             if recorded.plugins is None:
                 unknown.append(f"made before result files recorded plug-in source hashes: whether plug-in module "
                                f"{module} changed cannot be told")
-            elif digest is None or before is None:
-                unknown.append(f"plug-in module {module} has no source file to hash: whether it changed cannot be told")
+                continue
+            before = recorded.plugins.get(module)
+            if digest is None or before is None:
+                unknown.append(f"plug-in module {module} {'has' if digest is None else 'had'} no source file to hash: "
+                               "whether it changed cannot be told")
             elif digest != before:
                 changed.append(f"plug-in module {module} changed since these results were made (source hash "
                                f"{before[:_SHOWN_HASH]}… → {digest[:_SHOWN_HASH]}…)")
