@@ -8,17 +8,13 @@ import json
 import textwrap
 
 import pytest
+from helpers_cli_method import TINY
 from helpers_sweeps import TWO_ENV_SWEEP as TINY_SWEEP
 
 import empathy_zoo.training.ensemble as ensemble
-from empathy_zoo.cli import _train_values, build_parser, main
+from empathy_zoo.cli import main, parse_args
+from empathy_zoo.cli.train import train_values
 from empathy_zoo.training.resume import CHECKPOINT_DIR
-
-TINY = [
-    "--steps", "300", "--eval-interval", "150", "--eval-episodes", "2", "--max-cycles", "50",
-    "--learning-starts", "32", "--batch-size", "32", "--replay-capacity", "300", "--hidden-size", "16",
-    "--target-update-interval", "50", "--epsilon-decay-steps", "200", "--no-progress",
-]
 
 
 def run_files(out):
@@ -53,7 +49,7 @@ def test_train_writes_a_result_file_with_the_schema(tmp_path, capsys):
 
 
 def parsed_values(*argv):
-    return _train_values(build_parser().parse_args(["train", *argv]))
+    return train_values(parse_args(["train", *argv]))
 
 
 def test_precedence_defaults_then_config_then_command_line(tmp_path):
@@ -74,9 +70,9 @@ def test_precedence_defaults_then_config_then_command_line(tmp_path):
     assert run["fixed"] == {"human_0": "stay"} and run["eval_interval"] == 50_000
     assert settings == {"selfishness": 0.25, "learning_rate": 0.002, "hidden_size": 64}
     run, settings = parsed_values("--config", str(config), "--steps", "700", "--seed", "1", "--selfishness", "0.75",
-                                  "--equality-shaping")
+                                  "--gamma", "0.5")
     assert (run["env"], run["steps"], run["seeds"]) == ("sharing_v0", 700, [1])
-    assert settings == {"selfishness": 0.75, "learning_rate": 0.002, "hidden_size": 64, "equality_shaping": True}
+    assert settings == {"selfishness": 0.75, "learning_rate": 0.002, "hidden_size": 64, "gamma": 0.5}
     run, settings = parsed_values()
     assert (run["env"], run["method"], run["seeds"], run["steps"], settings) == (
         "coexistence_v0", "empathic_dqn", [0], 1_000_000, {})

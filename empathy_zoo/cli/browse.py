@@ -1,0 +1,80 @@
+"""What the suite offers: ``methods`` and ``policies`` list what is registered, ``play`` runs a
+random robot beside an environment's fixed agents and prints each episode's metrics."""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.cli.common import agent_policy, positive
+
+__all__ = ["add_browse_commands", "cmd_methods", "cmd_play", "cmd_policies"]
+
+
+def cmd_methods(args: argparse.Namespace, command: str) -> int:
+    """One line per registered learning method."""
+    from agents.registry import METHODS
+
+    width = max(map(len, METHODS))
+    for name, method in METHODS.items():
+        print(f"{name:<{width}}  {method.description}")
+    return 0
+
+
+def cmd_policies(args: argparse.Namespace, command: str) -> int:
+    """One line per registered fixed-agent policy, with where it is a default."""
+    from empathy_zoo.policies import DEFAULT_POLICIES, POLICIES
+
+    width = max(map(len, POLICIES))
+    for name, policy in POLICIES.items():
+        doc = " ".join((inspect.getdoc(policy) or "").split("\n\n")[0].split())
+        first = doc.split(". ")[0].rstrip(".") + "." if doc else ""
+        uses = [f"{agent} in {env}" for env, agents in DEFAULT_POLICIES.items() for agent, p in agents.items() if p == name]
+        print(f"{name:<{width}}  {first}" + (f" (default: {', '.join(uses)})" if uses else ""))
+    return 0
+
+
+def cmd_play(args: argparse.Namespace, command: str) -> int:
+    """Episodes of a uniformly random robot beside the fixed agents."""
+    from empathy_zoo import ENVIRONMENTS, FixedAgents
+    from empathy_zoo.metrics import METRIC_NAMES
+    from empathy_zoo.policies import DEFAULT_POLICIES
+
+    if args.env not in ENVIRONMENTS:
+        raise ValueError(f"unknown environment {args.env!r}; registered: {sorted(ENVIRONMENTS)}")
+    positive("--episodes", args.episodes)
+    fixed = {**DEFAULT_POLICIES.get(args.env, {}), **dict(args.fixed or [])}
+    env = FixedAgents(ENVIRONMENTS[args.env].parallel_env(render_mode=args.render), fixed)
+    engine = env.unwrapped.engine
+    learner = env.possible_agents[0]
+    rng = np.random.default_rng(args.seed)
+    for episode in range(args.episodes):
+        env.reset(seed=args.seed + episode)
+        if args.render:
+            print(env.render())
+        while env.agents:
+            env.step({agent: int(rng.integers(5)) for agent in env.agents})
+            if args.render:
+                print(env.render())
+        metrics = engine.episode_metrics(np.array([0]), engine.agents.index(learner))
+        print(f"episode {episode} (seed {args.seed + episode}): "
+              + ", ".join(f"{name} {float(metrics[name][0]):g}" for name in METRIC_NAMES), flush=True)
+    return 0
+
+
+def add_browse_commands(sub: Any) -> None:
+    """The ``methods``, ``policies`` and ``play`` subcommands."""
+    sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
+    sub.add_parser("policies", help="list the registered fixed-agent policies").set_defaults(handler=cmd_policies)
+
+    play = sub.add_parser("play", help="random robot beside the fixed agents; prints episode metrics")
+    play.add_argument("--env", default="coexistence_v0", help="environment (default: coexistence_v0)")
+    play.add_argument("--episodes", type=int, default=1, help="episodes (default: 1)")
+    play.add_argument("--seed", type=int, default=0, help="seed of the first episode (default: 0)")
+    play.add_argument("--render", choices=["ansi"], default=None, help="print the grid every step")
+    play.add_argument("--fixed", type=agent_policy, action="append", metavar="AGENT=POLICY",
+                      help="fixed agent policy, a name or package.module:ClassName (repeatable)")
+    play.set_defaults(handler=cmd_play)

@@ -1,0 +1,157 @@
+"""What the subcommands share: the program's name, the run defaults, the runner's options (on the
+parser and checked into :class:`~empathy_zoo.training.options.RunnerOptions`), the device check,
+reading the result files a command will touch, and the one-line summaries it prints."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "PROG", "RUN_DEFAULTS", "SUMMARY_METRICS", "add_runner_options", "agent_policy", "check_device", "check_results",
+    "help_text", "positive", "print_written", "run_summary", "runner_options",
+]
+
+PROG = "empathy-zoo"
+SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
+
+RUN_DEFAULTS: dict[str, Any] = {
+    "env": "coexistence_v0", "method": "empathic_dqn", "seeds": [0], "steps": 1_000_000, "out": "runs",
+    "device": "cpu", "eval_interval": 50_000, "eval_episodes": 10, "checkpoint_interval": 50_000,
+    "max_parallel_runs": 32, "workers": 1, "threads": 1, "label": None, "fixed": None, "progress": True,
+}
+"""What a ``train`` run does when neither the config file nor the command line says otherwise."""
+
+
+def help_text(text: str) -> str:
+    """``text`` as an argparse help string (a literal ``%`` escaped)."""
+    return text.replace("%", "%%")
+
+
+def agent_policy(text: str) -> tuple[str, str]:
+    """``AGENT=POLICY`` of ``--fixed`` as a pair."""
+    agent, sep, policy = text.partition("=")
+    if not sep or not agent or not policy:
+        raise argparse.ArgumentTypeError(f"expected AGENT=POLICY (e.g. cat_0=stay), got {text!r}")
+    return agent, policy
+
+
+def check_device(device: str) -> str:
+    """``device`` if torch can use it here; a clear ``ValueError`` otherwise (e.g. no CUDA)."""
+    import torch
+
+    try:
+        parsed = torch.device(device)
+    except (RuntimeError, TypeError) as error:
+        raise ValueError(f"--device {device!r} is not a torch device ({error}); use cpu or cuda") from None
+    if parsed.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(f"--device {device}: CUDA is not available on this machine (torch {torch.__version__}); "
+                             "use --device cpu or install a CUDA build of torch")
+        if parsed.index is not None and parsed.index >= torch.cuda.device_count():
+            raise ValueError(f"--device {device}: only {torch.cuda.device_count()} CUDA device(s) here")
+    elif parsed.type == "mps":
+        if not torch.backends.mps.is_available():
+            raise ValueError(f"--device {device}: MPS is not available on this machine; use --device cpu")
+    elif parsed.type != "cpu":
+        raise ValueError(f"--device {device}: unsupported device type {parsed.type!r}; use cpu or cuda")
+    return device
+
+
+def positive(name: str, value: int, allow_zero: bool = False) -> int:
+    """``value`` if it is positive (or zero, with ``allow_zero``); a ``ValueError`` naming ``name`` otherwise."""
+    if value < (0 if allow_zero else 1):
+        raise ValueError(f"{name} must be {'non-negative' if allow_zero else 'positive'}, got {value}")
+    return value
+
+
+def check_results(specs: Sequence[Any], out: Path, others: bool = False) -> int:
+    """Read every result file the runs already have, and with ``others`` every other one in
+    ``out/runs`` (a corrupted or malformed one raises, untouched); count the runs' files."""
+    from empathy_zoo.result_file import RUNS_DIR, read_result, result_path
+
+    done = 0
+    ours = set()
+    for spec in specs:
+        path = result_path(out, spec.run_id)
+        ours.add(path.name)
+        if path.exists():
+            read_result(path)
+            done += 1
+    if others and (out / RUNS_DIR).is_dir():
+        for path in sorted((out / RUNS_DIR).glob("*.json")):
+            if path.name not in ours and not path.name.startswith("."):
+                read_result(path)
+    return done
+
+
+def _fmt(value: float) -> str:
+    return "n/a" if not np.isfinite(value) else f"{value:.3g}" if abs(value) < 100 else f"{value:.0f}"
+
+
+def run_summary(result: dict[str, Any]) -> str:
+    """One line: the run's final-10 % training means and its last greedy evaluation."""
+    from leaderboard.aggregate import run_scalars
+
+    scalars = run_scalars(result, SUMMARY_METRICS)
+    train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in SUMMARY_METRICS)
+    evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in SUMMARY_METRICS)
+    last = max((e["step"] for e in result["eval"]), default=None)
+    return (f"{result['run_id']} [{result['method_label']}]: final 10% of training: {train} | "
+            f"last eval (step {last}): {evaluation}")
+
+
+def print_written(paths: dict[str, Path]) -> None:
+    """Name the leaderboard's files, one line each."""
+    for key in ("markdown", "csv", "html"):
+        print(f"{PROG}: wrote {paths[key]}")
+
+
+def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
+    """The checked :class:`~empathy_zoo.training.runner.RunnerOptions` of ``values`` and ``args``."""
+    from empathy_zoo.training.runner import RunnerOptions
+
+    return RunnerOptions(
+        device=check_device(values["device"]),
+        max_parallel_runs=positive("max_parallel_runs", values["max_parallel_runs"]),
+        checkpoint_interval=positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
+        progress=values["progress"], workers=positive("workers", values["workers"]),
+        threads=positive("threads", values["threads"]),
+        backend=getattr(args, "backend", None) or "local", address=_ray_address(args),
+    )
+
+
+def _ray_address(args: argparse.Namespace) -> str | None:
+    address = getattr(args, "address", None)
+    if address is not None and getattr(args, "backend", None) != "ray":
+        raise ValueError("--address is the Ray cluster to join: use it with --backend ray")
+    return address
+
+
+def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> None:
+    """The options of how runs train (device, parallelism, checkpoints, progress, backend)."""
+    def d(key: str) -> str:
+        return f" (default: {RUN_DEFAULTS[key]})"
+
+    parser.add_argument("--device", default=default, help="torch device: cpu, cuda, cuda:N" + d("device"))
+    parser.add_argument("--max-parallel-runs", type=int, default=default, metavar="K",
+                        help="most runs trained in lockstep in one ensemble" + d("max_parallel_runs"))
+    parser.add_argument("--workers", type=int, default=default, metavar="N",
+                        help="processes training ensembles side by side" + (
+                            d("workers") if default is not None else " (default: one per ensemble, at most the CPUs)"))
+    parser.add_argument("--threads", type=int, default=default, metavar="N",
+                        help="torch CPU threads per process; these small networks gain nothing from more, and "
+                             "extra threads are much slower on a busy machine" + d("threads"))
+    parser.add_argument("--checkpoint-interval", type=int, default=default, metavar="N",
+                        help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"))
+    parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
+    parser.add_argument("--backend", choices=["local", "ray"], default=default,
+                        help="where ensembles train: this machine, or Ray tasks (pip install \"empathy-zoo[ray]\")"
+                        " (default: local)")
+    parser.add_argument("--address", default=default, metavar="ADDR",
+                        help="with --backend ray: the cluster to join (auto, ray://host:10001); "
+                        "default: start Ray on this machine")

@@ -1,0 +1,127 @@
+"""A method's settings as ``train`` options: one ``--<field>`` per field of its settings dataclass.
+
+``train`` builds them for the method it trains (``--method``, else ``method`` in the ``--config``
+file, else the default), so a plug-in method's own settings are options like the built-in ones.
+A field's type says how its option reads values:
+
+==============================  ==================================================
+``bool``                        ``--field`` / ``--no-field``
+``int``, ``float``, ``str``     one value of that type
+``tuple[T, ...]``, ``list[T]``  one or more values of type ``T`` (``int``, ``float``, ``str``)
+``T | None``                    as ``T``
+anything else                   no option: set it in ``[settings]`` of ``--config``
+==============================  ==================================================
+
+A field whose option would be a run option's (a setting named ``seed``, say) is set in
+``[settings]`` too. A field the method fixes (``Method.preset``) keeps its option, listed apart:
+another value is refused naming the method, as the same key in a ``--config`` file is.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import inspect
+import textwrap
+import types
+from dataclasses import MISSING, Field, fields, is_dataclass
+from typing import TYPE_CHECKING, Any, Union, get_args, get_origin
+
+from empathy_zoo.cli.common import help_text
+
+if TYPE_CHECKING:
+    from agents.base import Method
+
+__all__ = ["SETTINGS_DEST", "add_settings_options", "field_docs", "given_settings", "option_reading"]
+
+SETTINGS_DEST = "settings."
+"""Prefix of a setting's attribute on the parsed namespace (apart from the run options')."""
+_SCALARS = (int, float, str)
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The docstring under every field of a dataclass (``{}`` when the source is unavailable)."""
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    except (OSError, TypeError, SyntaxError):
+        return {}
+    body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
+    docs = {}
+    for node, after in zip(body, body[1:]):
+        if (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and isinstance(after, ast.Expr)
+                and isinstance(after.value, ast.Constant) and isinstance(after.value.value, str)):
+            docs[node.target.id] = " ".join(after.value.value.split())
+    return docs
+
+
+class _StoreAs(argparse.Action):
+    """Store an ``nargs="+"`` option's values as the field's container (a tuple field gets a tuple)."""
+
+    def __init__(self, *args: Any, sequence: type, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.sequence = sequence  # (argparse gives every action a ``container``: its parser or group)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        setattr(namespace, self.dest, self.sequence(values))
+
+
+def option_reading(kind: Any) -> dict[str, Any] | None:
+    """``add_argument`` keywords that read a value of type ``kind``; ``None`` if no option can."""
+    arguments = get_args(kind)
+    if get_origin(kind) in (Union, types.UnionType) and type(None) in arguments and len(arguments) == 2:
+        kind = next(a for a in arguments if a is not type(None))  # T | None reads as T
+        arguments = get_args(kind)
+    if kind is bool:
+        return {"action": argparse.BooleanOptionalAction}
+    if kind in _SCALARS:
+        return {"type": kind, "metavar": kind.__name__.upper()}
+    container = get_origin(kind)
+    if container is tuple and len(arguments) == 2 and arguments[1] is Ellipsis or container is list and arguments:
+        if arguments[0] in _SCALARS:
+            return {"type": arguments[0], "nargs": "+", "metavar": arguments[0].__name__.upper(),
+                    "action": _StoreAs, "sequence": container}
+    return None
+
+
+def _default(field: Field) -> Any:
+    if field.default is MISSING and field.default_factory is not MISSING:
+        return field.default_factory()
+    return field.default
+
+
+def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> None:
+    """One option per field of ``method``'s settings dataclass, its help the field's docstring."""
+    from empathy_zoo.training.sweep import settings_types
+
+    settings = method.settings
+    if not (isinstance(settings, type) and is_dataclass(settings)):
+        raise ValueError(f"method {method.name!r}: its settings {settings!r} is not a dataclass")
+    docs, kinds = field_docs(settings), settings_types(settings)
+    free = parser.add_argument_group(f"settings of {method.name}",
+                                     f"the fields of {settings.__name__} (also keys of [settings] in --config)")
+    fixed = None
+    in_config_only = []
+    for field in fields(settings):
+        reading = option_reading(kinds[field.name])
+        if reading is None:
+            in_config_only.append(field.name)
+            continue
+        if field.name in method.preset:
+            fixed = fixed or parser.add_argument_group(f"settings {method.name} fixes", "another value is an error")
+            group, text = fixed, f"{docs.get(field.name, '')} (fixed at {method.preset[field.name]!r})"
+        else:
+            group, text = free, f"{docs.get(field.name, '')} (default: {_default(field)!r})"
+        try:
+            group.add_argument("--" + field.name.replace("_", "-"), dest=SETTINGS_DEST + field.name,
+                               help=help_text(text.strip()), **reading)
+        except argparse.ArgumentError:  # its option is a run option's (a setting named ``seed``, say)
+            in_config_only.append(field.name)
+    if in_config_only:
+        free.description += f"; in [settings] only: {', '.join(in_config_only)}"
+
+
+def given_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The settings given as options (the namespace holds only those given)."""
+    given = vars(args)
+    return {key.removeprefix(SETTINGS_DEST): value for key, value in given.items() if key.startswith(SETTINGS_DEST)}

@@ -1,0 +1,128 @@
+"""Sweeps and their reports: ``reproduce`` (train a sweep, resumable, then write its
+leaderboard), ``leaderboard``, ``reproduction`` (the paper's claims) and ``sensitivity``
+(Sharing's claims per fidelity condition), the last three over existing result files."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.cli.common import (
+    PROG, RUN_DEFAULTS, add_runner_options, check_results, positive, print_written, runner_options,
+)
+
+__all__ = ["add_sweep_commands", "cmd_leaderboard", "cmd_reproduce", "cmd_reproduction", "cmd_sensitivity"]
+
+PRODUCED_BY = "(the command that trained these runs is in each result file's config)"
+"""What a report says produced its results when ``--produced-by`` does not."""
+
+
+def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
+    """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md."""
+    from empathy_zoo.result_file import RUNS_DIR
+    from empathy_zoo.training.runner import train_runs
+    from empathy_zoo.training.spec import group_specs
+    from empathy_zoo.training.sweep import load_sweep, profile_path
+    from leaderboard.report import write_leaderboard
+    from leaderboard.reproduction import NotThePaperSweep, write_reproduction
+
+    path = profile_path(args.profile)
+    specs = load_sweep(path, seeds=args.seeds)
+    out = Path(args.out) if args.out else Path("results") / path.stem
+    values = {**RUN_DEFAULTS, **{k: v for k, v in vars(args).items() if k in RUN_DEFAULTS and v is not None}}
+    values["progress"] = not args.no_progress
+    ensembles = len(group_specs(specs, positive("max_parallel_runs", values["max_parallel_runs"])))
+    if args.workers is None:  # one process per ensemble, as many as there are CPUs
+        values["workers"] = max(1, min(os.cpu_count() or 1, ensembles))
+    workers = values["workers"]
+    options = runner_options(args, values)
+    done = check_results(specs, out, others=True)  # the leaderboard reads them all: refuse now, not after training
+    experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
+    print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
+          f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",
+          flush=True)
+    ours = {f"{spec.run_id}.json" for spec in specs}
+    others = sorted(p.name for p in (out / RUNS_DIR).glob("*.json") if p.name not in ours) if (out / RUNS_DIR).is_dir() else []
+    if others:
+        print(f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
+              f"(e.g. {others[0]}); the leaderboard includes them", flush=True)
+    train_runs(specs, out, options)
+    print_written(write_leaderboard(out, command=command))
+    try:
+        print(f"{PROG}: wrote {write_reproduction(out, command=command)}")
+    except NotThePaperSweep as reason:
+        print(f"{PROG}: no REPRODUCTION.md: {reason}; the paper's claims are judged only on its own experiments")
+    return 0
+
+
+def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
+    """Write REPRODUCTION.md of existing results (with the sensitivity sweep's table if given)."""
+    from leaderboard.aggregate import load_results
+    from leaderboard.reproduction import write_reproduction
+    from leaderboard.sensitivity import sensitivity_markdown
+
+    appendix = ""
+    if args.sensitivity:
+        appendix = sensitivity_markdown(
+            load_results(args.sensitivity),
+            f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
+            f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
+        )
+    note = Path(args.note).read_text() if args.note else ""
+    written = write_reproduction(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note,
+                                 appendix=appendix)
+    print(f"{PROG}: wrote {written}")
+    return 0
+
+
+def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
+    """Write SENSITIVITY.md of existing results."""
+    from leaderboard.sensitivity import write_sensitivity
+
+    note = Path(args.note).read_text() if args.note else ""
+    print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note)}")
+    return 0
+
+
+def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
+    """Write the leaderboard (Markdown, CSV, HTML) of existing results."""
+    from leaderboard.report import write_leaderboard
+
+    print_written(write_leaderboard(args.results, args.out, command=command))
+    return 0
+
+
+def add_sweep_commands(sub: Any) -> None:
+    """The ``reproduce``, ``leaderboard``, ``reproduction`` and ``sensitivity`` subcommands."""
+    reproduce = sub.add_parser("reproduce", help="train a sweep (resumable) and write its leaderboard")
+    reproduce.add_argument("--profile", required=True, metavar="quick|paper|PATH.toml",
+                           help="a shipped sweep (empathy_zoo/profiles/<name>.toml) or a sweep file")
+    reproduce.add_argument("--seeds", type=int, metavar="N", help="replace the sweep's seeds with 0..N-1")
+    reproduce.add_argument("--out", metavar="DIR", help="output directory (default: results/<profile>)")
+    add_runner_options(reproduce)
+    reproduce.set_defaults(handler=cmd_reproduce)
+
+    board = sub.add_parser("leaderboard", help="write the leaderboard of existing results")
+    board.add_argument("results", metavar="DIR", help="results directory (with runs/ or *.json)")
+    board.add_argument("--out", metavar="OUT", help="where to write (default: DIR)")
+    board.set_defaults(handler=cmd_leaderboard)
+
+    report = sub.add_parser("reproduction", help="check the paper's claims on existing results (REPRODUCTION.md)")
+    _add_report_options(report, "a reproduce sweep", "REPRODUCTION.md")
+    report.add_argument("--sensitivity", metavar="DIR",
+                        help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition")
+    report.set_defaults(handler=cmd_reproduction)
+
+    sensitivity = sub.add_parser("sensitivity", help="Sharing's claims per fidelity condition (SENSITIVITY.md)")
+    _add_report_options(sensitivity, "a sharing_sensitivity sweep", "SENSITIVITY.md")
+    sensitivity.set_defaults(handler=cmd_sensitivity)
+
+
+def _add_report_options(parser: argparse.ArgumentParser, sweep: str, report: str) -> None:
+    parser.add_argument("results", metavar="DIR", help=f"results directory of {sweep}")
+    parser.add_argument("--out", metavar="PATH", help=f"where to write (default: DIR/{report})")
+    parser.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
+    parser.add_argument("--note", metavar="FILE.md",
+                        help="prose placed before the rules (how the run was made, what it shows)")

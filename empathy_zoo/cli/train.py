@@ -1,0 +1,156 @@
+"""``empathy-zoo train``: runs of one method on one environment.
+
+Its options are the run's (environment, seeds, steps, …) and one per field of the chosen
+method's settings (:mod:`empathy_zoo.cli.settings_options`). The method is known before the
+parser is built: :func:`train_method` reads ``--method``, or ``method`` in the ``--config`` file.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.cli.common import (
+    PROG, RUN_DEFAULTS, add_runner_options, agent_policy, check_results, run_summary, runner_options,
+)
+from empathy_zoo.cli.settings_options import add_settings_options, given_settings
+from empathy_zoo.training.sweep import SEEDS, STR_TABLE
+
+__all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
+
+RUN_KEYS: dict[str, Any] = {
+    "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
+    "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
+    "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE,
+    "start": str, "inventory_encoding": str, "progress": bool,
+}
+"""Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
+ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding")
+"""Keys of a run that are environment arguments (the env checks which it takes)."""
+
+
+def train_method(argv: Sequence[str]) -> str:
+    """The method ``train``'s arguments ``argv`` name: ``--method``, else ``method`` in the
+    ``--config`` file, else the default. Other arguments are left to the full parser (so is a
+    malformed ``--method`` or ``--config``: the default is returned and that parser reports it)."""
+    from empathy_zoo.training.sweep import check_value, read_toml
+
+    first = argparse.ArgumentParser(add_help=False, argument_default=argparse.SUPPRESS, exit_on_error=False)
+    first.add_argument("--method")
+    first.add_argument("--config")
+    try:
+        known, _ = first.parse_known_args(argv)
+    except argparse.ArgumentError:
+        return RUN_DEFAULTS["method"]
+    if "method" in known:
+        return known.method
+    if "config" in known:
+        data = read_toml(known.config)
+        if "method" in data:
+            return check_value(data["method"], RUN_KEYS["method"], f"{known.config}: method")
+    return RUN_DEFAULTS["method"]
+
+
+def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Run keys and method settings, merged: defaults < config file < command line."""
+    from agents.registry import get_method
+    from empathy_zoo.training.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
+
+    given = vars(args)
+    run: dict[str, Any] = dict(RUN_DEFAULTS)
+    settings: dict[str, Any] = {}
+    if "config" in given:
+        path = given["config"]
+        data = read_toml(path)
+        check_keys(data, [*RUN_KEYS, "settings"], f"{path}: top level")
+        if "seed" in data and "seeds" in data:
+            raise SweepConfigError(f"{path}: give 'seed' or 'seeds', not both")
+        for key, value in data.items():
+            if key == "seed":
+                run["seeds"] = [check_value(value, int, f"{path}: seed")]
+            elif key != "settings":
+                run[key] = check_value(value, RUN_KEYS[key], f"{path}: {key}")
+        table = data.get("settings", {})
+        if not isinstance(table, dict):
+            raise SweepConfigError(f"{path}: [settings] must be a table")
+        types = settings_types(get_method(given.get("method", run["method"])).settings)
+        check_keys(table, types, f"{path}: [settings]")
+        settings |= {k: check_value(v, types[k], f"{path}: [settings] {k}") for k, v in table.items()}
+    for key in RUN_KEYS.keys() - {"seed", "fixed"}:
+        if key in given:
+            run[key] = given[key]
+    if "seed" in given:
+        run["seeds"] = [given["seed"]]
+    if "fixed" in given:
+        run["fixed"] = dict(given["fixed"])
+    if "no_progress" in given:
+        run["progress"] = False
+    return run, settings | given_settings(args)
+
+
+def cmd_train(args: argparse.Namespace, command: str) -> int:
+    """Train the runs and print one summary line each."""
+    from empathy_zoo.result_file import read_result
+    from empathy_zoo.training.runner import train_runs
+    from empathy_zoo.training.spec import RunSpec
+
+    run, settings = train_values(args)
+    env_kwargs = {key: run[key] for key in ENV_ARGUMENTS if run.get(key) is not None}
+    fixed = None
+    if run["fixed"] is not None:
+        from empathy_zoo.policies import DEFAULT_POLICIES
+
+        fixed = {**DEFAULT_POLICIES.get(run["env"], {}), **run["fixed"]}
+    specs = [
+        RunSpec(env=run["env"], method=run["method"], settings=settings, seed=seed, steps=run["steps"],
+                eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=fixed,
+                env_kwargs=env_kwargs, label=run["label"])
+        for seed in run["seeds"]
+    ]
+    options = runner_options(args, run)
+    out = Path(run["out"])
+    done = check_results(specs, out)
+    print(f"{PROG}: {len(specs)} run(s) of {specs[0].display_label()} on {run['env']}, {run['steps']:,} steps each"
+          + (f" ({done} already finished)" if done else "") + f"; results in {out / 'runs'}", flush=True)
+    paths = train_runs(specs, out, options)
+    for path in paths:
+        print(run_summary(read_result(path)))
+    return 0
+
+
+def add_train(sub: Any, method: str) -> None:
+    """The ``train`` subcommand, with the options of ``method``'s settings."""
+    from agents.registry import get_method
+
+    parser = sub.add_parser(
+        "train", help="train one run (or several seeds as one ensemble)", argument_default=argparse.SUPPRESS,
+        description="Train runs of one method on one environment. Precedence: defaults < --config file < command line. "
+                    "The settings options are the method's: see empathy-zoo train --method NAME --help.",
+    )
+    parser.add_argument("--config", metavar="FILE.toml",
+                        help="TOML file: top-level run keys (env, method, seed(s), steps, …) and a [settings] table")
+    parser.add_argument("--env", help=f"environment (default: {RUN_DEFAULTS['env']})")
+    parser.add_argument("--method", help=f"registered method or package.module:NAME (default: {RUN_DEFAULTS['method']})")
+    seeds = parser.add_mutually_exclusive_group()
+    seeds.add_argument("--seed", type=int, help="seed of the run (default: 0)")
+    seeds.add_argument("--seeds", type=int, nargs="+", metavar="S", help="several seeds, trained as one ensemble")
+    parser.add_argument("--steps", type=int, help=f"env steps per run (default: {RUN_DEFAULTS['steps']})")
+    parser.add_argument("--out", metavar="DIR", help=f"output directory (default: {RUN_DEFAULTS['out']})")
+    parser.add_argument("--eval-interval", type=int, metavar="N",
+                        help=f"env steps between greedy evaluations (default: {RUN_DEFAULTS['eval_interval']})")
+    parser.add_argument("--eval-episodes", type=int, metavar="N",
+                        help=f"episodes per greedy evaluation (default: {RUN_DEFAULTS['eval_episodes']})")
+    parser.add_argument("--label", help="display name in tables (default: the method's)")
+    parser.add_argument("--size", type=int, help="side of the torus (default: 7)")
+    parser.add_argument("--view", type=int, help="side of the observation window (default: 5)")
+    parser.add_argument("--max-cycles", type=int, help="steps before truncation (default: 500)")
+    parser.add_argument("--start", help="Sharing only: start cells, random or centre (default: random)")
+    parser.add_argument("--inventory-encoding", metavar="ENCODING",
+                        help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)")
+    parser.add_argument("--fixed", type=agent_policy, action="append", metavar="AGENT=POLICY",
+                        help="fixed agent policy, a name or package.module:ClassName (repeatable)")
+    add_runner_options(parser, default=argparse.SUPPRESS)
+    add_settings_options(parser, get_method(method))
+    parser.set_defaults(handler=cmd_train)
