@@ -6,7 +6,10 @@ naming the ones it takes."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from dataclasses import fields
+from importlib.metadata import entry_points
 
 import pytest
 from helpers_cli_method import TINY, AverseSettings
@@ -134,3 +137,12 @@ def test_fields_no_option_can_read_are_config_keys(tmp_path, capsys):
     run, settings = values("--method", ODD, "--config", str(config), "--seed", "7", "--rate", "0.5")
     assert run["seeds"] == [7]  # --seed is the run's
     assert settings == {"seed": 4, "extras": {"depth": 2}, "rate": 0.5}
+
+
+def test_the_console_script_and_python_dash_m_run_the_command_line():
+    [script] = entry_points(group="console_scripts", name="empathy-zoo")
+    assert script.load() is main
+    done = subprocess.run([sys.executable, "-m", "empathy_zoo.cli", "train", "--method", "dqn", "--help"],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "settings dqn fixes" in done.stdout and "--selfishness" in done.stdout
