@@ -2,13 +2,15 @@
 
 The cat stays a fixed agent (``FixedAgents``), so the robot is RLlib's only agent; RLlib sees the
 PettingZoo env through its own ``ParallelPettingZooEnv`` wrapper. RLlib is not a dependency of
-the suite: ``pip install "ray[rllib]"`` first (it pins its own Gymnasium version).
+the suite: ``pip install -e ".[rllib]"`` first (RLlib pins its own Gymnasium release, so a
+virtual environment of its own is best; tests/test_rllib.py checks this setup).
 
     python examples/rllib_coexistence.py --iterations 5
 
 Prints, per iteration, the mean training return (= survival: +1 per operative step) and episode
 length; then runs the trained policy greedily for a few episodes and prints the suite's scored
-metrics (survival, harms), computed from what happened, not from the reward.
+metrics (survival, harms: ``engine.episode_metrics``), computed from what happened, not from
+the reward.
 """
 
 from __future__ import annotations
@@ -30,23 +32,30 @@ def make_env(config: dict | None = None):
     return ParallelPettingZooEnv(FixedAgents(coexistence_v0.parallel_env(**(config or {})), {"cat_0": "random_walk"}))
 
 
+def greedy_action(module, observation: np.ndarray) -> int:
+    """The module's greedy action: its inference action distribution, made deterministic."""
+    with torch.no_grad():
+        out = module.forward_inference({"obs": torch.as_tensor(observation[None])})
+    dist = module.get_inference_action_dist_cls().from_logits(out["action_dist_inputs"]).to_deterministic()
+    return int(dist.sample()[0])
+
+
 def greedy_scores(module, episodes: int, seed: int) -> dict[str, float]:
-    """Run the trained robot greedily; survival and harms come from the env's events."""
-    env = FixedAgents(coexistence_v0.parallel_env(), {"cat_0": "random_walk"})
-    survival, harms = [], []
+    """Run the trained robot greedily; the suite's metrics of each episode, averaged."""
+    env = make_env()
+    engine = env.par_env.unwrapped.engine
+    robot = env.par_env.unwrapped.possible_agents.index(ROBOT)
+    scores: dict[str, list[float]] = {"survival": [], "harms": []}
     for episode in range(episodes):
         obs, _ = env.reset(seed=seed + episode)
-        steps = harmed = 0
-        while env.agents:
-            with torch.no_grad():
-                out = module.forward_inference({"obs": torch.as_tensor(obs[ROBOT][None])})
-            action = int(torch.argmax(out["action_dist_inputs"], dim=-1)[0])
-            obs, _, terminated, _, infos = env.step({ROBOT: action})
-            harmed += len(infos[ROBOT]["harmed"])
-            steps += 0 if terminated[ROBOT] else 1
-        survival.append(steps)
-        harms.append(harmed)
-    return {"survival": float(np.mean(survival)), "harms": float(np.mean(harms))}
+        done = False
+        while not done:
+            obs, _, terminated, truncated, _ = env.step({ROBOT: greedy_action(module, obs[ROBOT])})
+            done = terminated["__all__"] or truncated["__all__"]
+        metrics = engine.episode_metrics(np.array([0]), learner=robot)
+        for name in scores:
+            scores[name].append(float(metrics[name][0]))
+    return {name: float(np.mean(values)) for name, values in scores.items()}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -65,6 +74,7 @@ def main(argv: list[str] | None = None) -> None:
     register_env("coexistence_v0_robot", make_env)
     config = (
         PPOConfig()
+        .api_stack(enable_rl_module_and_learner=True, enable_env_runner_and_connector_v2=True)
         .environment("coexistence_v0_robot")
         .env_runners(num_env_runners=1, num_envs_per_env_runner=1)
         .multi_agent(policies={ROBOT}, policy_mapping_fn=lambda agent_id, episode, **kwargs: ROBOT)

@@ -1,15 +1,11 @@
-"""The envs through other libraries' wrappers: RLlib's ``ParallelPettingZooEnv`` and SuperSuit's
-vector envs. Each test is skipped when its library is not installed (neither is a dependency).
+"""The envs through SuperSuit's vector envs (skipped when SuperSuit is not installed; it is not a
+dependency). RLlib's wrapper and training are tested in tests/test_rllib.py, in an environment of
+their own (RLlib pins its own Gymnasium release).
 
-Two upstream limitations shape these tests (see docs/ecosystem.md):
-
-* RLlib's ``ParallelPettingZooEnv`` sets ``__all__`` only when *every* agent is terminated (or
-  every one truncated). When Coexistence's robot is harmed, the robot is terminated and the cat
-  truncated, so the wrapper does not flag the end: drive it by ``par_env.agents``, or make the
-  cat a fixed agent (``FixedAgents``), which is how the suite trains anyway.
-* SuperSuit's ``black_death_v3`` (3.11.0 and earlier) ends an episode only when every agent is
-  terminated *and* truncated, i.e. never (fixed upstream in SuperSuit PR #265, unreleased). It
-  does handle the cat leaving; the episode end after that is marked as an expected failure.
+One upstream limitation shapes these tests (see docs/ecosystem.md): SuperSuit's ``black_death_v3``
+(3.11.0 and earlier) ends an episode only when every agent is terminated *and* truncated, i.e.
+never (fixed upstream in SuperSuit PR #265, unreleased). It does handle the cat leaving; the
+episode end after that is marked as an expected failure.
 """
 
 from __future__ import annotations
@@ -23,47 +19,9 @@ from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
 
 STEPS = 1000
 ENVS = {
-    "coexistence_v0": lambda: coexistence_v0.parallel_env(),
     "sharing_v0": lambda: sharing_v0.parallel_env(),
     "coexistence_v0+FixedAgents": lambda: FixedAgents(coexistence_v0.parallel_env(), {"cat_0": "random_walk"}),
 }
-
-
-# ---------------------------------------------------------------------------------------- RLlib
-@pytest.fixture(scope="module")
-def rllib_wrapper():
-    module = pytest.importorskip("ray.rllib.env.wrappers.pettingzoo_env", exc_type=ImportError,
-                                 reason='RLlib is not installed (pip install "ray[rllib]")')
-    return module.ParallelPettingZooEnv
-
-
-@pytest.mark.parametrize("name", sorted(ENVS))
-def test_rllib_parallel_pettingzoo_env_steps_through_episodes(rllib_wrapper, name: str) -> None:
-    env = rllib_wrapper(ENVS[name]())
-    assert set(env.observation_space) == set(env.par_env.possible_agents)
-    rng = np.random.default_rng(0)
-    obs, infos = env.reset(seed=0)
-    live = set(obs)
-    episodes = left = 0
-    for _ in range(STEPS):
-        actions = {agent: int(rng.integers(0, 5)) for agent in live}
-        obs, rewards, terminated, truncated, infos = env.step(actions)
-        assert set(obs) == set(rewards) == live, "every agent that acted gets its last observation and reward"
-        for agent in live:
-            assert env.observation_space[agent].contains(obs[agent])
-        gone = {agent for agent in live if terminated[agent] or truncated[agent]}
-        if terminated["__all__"] or truncated["__all__"] or not env.par_env.agents:
-            assert not env.par_env.agents
-            episodes += 1
-            obs, infos = env.reset()
-            live = set(obs)
-        else:
-            left += len(gone)  # an agent left mid-episode (a harmed cat): it gets no further action
-            live -= gone
-            assert live == set(env.par_env.agents)
-    assert episodes >= 1
-    if name == "coexistence_v0":
-        assert left >= 1, "with this seed the robot harms the cat at least once"
 
 
 # ------------------------------------------------------------------------------------- SuperSuit
