@@ -36,7 +36,6 @@ from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
-from baselines.shaping import shaped_reward
 from empathy_zoo.randomness import counter_integers, counter_uniform, derive_key
 
 __all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "linear_epsilon"]
@@ -80,7 +79,8 @@ def empathic_targets(
 
 
 class EmpathicDQN:
-    """``K`` runs of Empathic DQN in lockstep (the runs may differ in seed, β and shaping)."""
+    """``K`` runs of Empathic DQN in lockstep (the runs may differ in seed and β; each trains on
+    ``StepBatch.rewards``, whatever reward transform its method composes)."""
 
     settings_class = EmpathicDQNSettings
 
@@ -97,7 +97,7 @@ class EmpathicDQN:
             raise ValueError("give one settings object per seed, and at least one run")
         shared = {s.shared() for s in settings}
         if len(shared) != 1:
-            raise ValueError("runs of one ensemble may differ only in seed, selfishness and shaping")
+            raise ValueError("runs of one ensemble may differ only in seed and selfishness")
         self.settings = list(settings)
         self.config = settings[0]
         self.seeds = [int(s) for s in seeds]
@@ -165,7 +165,7 @@ class EmpathicDQN:
     def observe(self, batch: StepBatch) -> None:
         self.replay.add(
             batch.obs, batch.next_obs, batch.swapped_next_obs, batch.actions,
-            shaped_reward(self.settings, batch), batch.terminated, batch.other_present,
+            batch.rewards, batch.terminated, batch.other_present,
         )
         m = batch.actions.shape[1]
         for _ in range(m):

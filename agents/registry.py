@@ -18,13 +18,12 @@ __all__ = ["METHODS", "get_method"]
 METHODS: dict[str, Method] = {
     "empathic_dqn": Method(
         name="empathic_dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
-        preset={"harm_penalty": 0.0, "equality_shaping": False},
         label=lambda s: f"Empathic DQN (β={s.selfishness:g})",
         description="Empathic DQN: acts on Q_emp, trained on β·own target + (1−β)·the other's swapped value",
     ),
     "dqn": Method(
         name="dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
-        preset={"selfishness": 1.0, "harm_penalty": 0.0, "equality_shaping": False},
+        preset={"selfishness": 1.0},
         label=lambda s: "DQN",
         description="Double DQN (Empathic DQN at β = 1)",
     ),

@@ -9,14 +9,12 @@ __all__ = ["EmpathicDQNSettings", "PER_RUN_FIELDS"]
 
 @dataclass(frozen=True)
 class EmpathicDQNSettings:
-    """Everything Empathic DQN (and DQN, its β = 1 case) can be told. One line per field."""
+    """Everything Empathic DQN (and DQN, its β = 1 case) can be told. One line per field.
+    (Reward shaping is not a setting: a method composes a reward transform, see
+    :class:`agents.base.RewardTransform`.)"""
 
     selfishness: float = 1.0
     """β: weight of the robot's own target in the empathic target; 1.0 is plain DQN."""
-    harm_penalty: float = 0.0
-    """Added to the training reward on a step where the robot harms another agent (baseline: -100)."""
-    equality_shaping: bool = False
-    """Train on reward × current equality of the episode's battery rewards (Sharing baseline)."""
     gamma: float = 0.99
     """Discount factor γ."""
     learning_rate: float = 1e-3
@@ -70,5 +68,5 @@ class EmpathicDQNSettings:
         return tuple(getattr(self, f.name) for f in fields(self) if f.name not in PER_RUN_FIELDS)
 
 
-PER_RUN_FIELDS = frozenset({"selfishness", "harm_penalty", "equality_shaping"})
+PER_RUN_FIELDS = frozenset({"selfishness"})
 """Settings that may differ between the runs of one ensemble."""

@@ -1,22 +1,23 @@
-"""The baselines as registered methods (presets of :class:`agents.empathic_dqn.EmpathicDQN`)."""
+"""The baselines as registered methods: standard DQN (:class:`agents.empathic_dqn.EmpathicDQN` at
+β = 1) composed with a reward transform of :mod:`baselines.shaping`."""
 
 from __future__ import annotations
 
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
-from baselines.shaping import HARM_PENALTY
+from baselines.shaping import EqualityScaling, HarmPenalty
 
 BASELINE_METHODS: dict[str, Method] = {
     "dqn_harm_penalty": Method(
         name="dqn_harm_penalty", learner=EmpathicDQN, settings=EmpathicDQNSettings,
-        preset={"selfishness": 1.0, "harm_penalty": HARM_PENALTY, "equality_shaping": False},
+        preset={"selfishness": 1.0}, reward=HarmPenalty(),
         label=lambda s: "DQN + harm penalty (−100)",
         description="DQN trained on reward − 100 on every step the robot harms another agent",
     ),
     "dqn_equality": Method(
         name="dqn_equality", learner=EmpathicDQN, settings=EmpathicDQNSettings,
-        preset={"selfishness": 1.0, "harm_penalty": 0.0, "equality_shaping": True},
+        preset={"selfishness": 1.0}, reward=EqualityScaling(),
         label=lambda s: "DQN × equality",
         description="DQN trained on reward × the episode's current equality of battery rewards",
     ),

@@ -76,7 +76,7 @@ class TimedEmpathicDQN(EmpathicDQN):
 
 TIMED_EMPATHIC_DQN = Method(
     name="timed_empathic_dqn", learner=TimedEmpathicDQN, settings=EmpathicDQNSettings,
-    preset={"harm_penalty": 0.0, "equality_shaping": False}, description="Empathic DQN with a stopwatch",
+    description="Empathic DQN with a stopwatch",
 )
 
 

@@ -31,8 +31,9 @@ __all__ = [
     "experiment_of", "check_one_experiment_per_label",
 ]
 
-SCHEMA = 1
-"""The result-file schema this suite writes and reads."""
+SCHEMA = 2
+"""The result-file schema this suite writes. Schema 1 files (empathy-zoo 0.1) are read too, upgraded
+in memory by :func:`upgrade_schema_1`."""
 REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
 ``version``, ``commit``, ``plugin_sha256`` and ``created`` are written too, and checked when present, as are the
@@ -119,8 +120,10 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     check = _Checker(Path(path))
     result = check.table(document, "(the whole file)")
     check.has(result, REQUIRED_FIELDS, "")
+    if result["schema"] == 1 and not isinstance(result["schema"], bool):
+        result = upgrade_schema_1(result, path)
     if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
-        raise ResultFileError(f"{path}: field schema: this suite reads result schema {SCHEMA}, "
+        raise ResultFileError(f"{path}: field schema: this suite reads result schemas 1 and {SCHEMA}, "
                               f"got {_shown(result['schema'])}; move the file away")
     check.name(result["run_id"], "run_id")
     check.name(result["env"], "env")
@@ -158,6 +161,28 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     return result
 
 
+LEGACY_SHAPING = {"harm_penalty": 0.0, "equality_shaping": False}
+"""Settings of schema 1 that are reward transforms since schema 2, with their "no shaping" values."""
+
+
+def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]:
+    """A schema-1 result as schema 2: the settings ``harm_penalty`` and ``equality_shaping`` become
+    ``config.reward`` (``{"name": "harm_penalty", "penalty": p}``, ``{"name": "equality_scaling"}``
+    or ``None``), as the method's reward transform records it now. The run id stays as written."""
+    config = result.get("config")
+    if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
+        return {**result, "schema": SCHEMA}  # (the checks that follow say what is wrong)
+    settings = dict(config["settings"])
+    shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
+    penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
+    if penalty != 0.0 and scaled is True:
+        raise ResultFileError(f"{path}: field config.settings: a schema-1 run with both a harm penalty and equality "
+                              "shaping has no schema-2 form (no registered method trained one); move the file away")
+    reward = ({"name": "harm_penalty", "penalty": penalty} if penalty != 0.0
+              else {"name": "equality_scaling"} if scaled is True else None)
+    return {**result, "schema": SCHEMA, "config": {**config, "settings": settings, "reward": reward}}
+
+
 def _check_optional(check: _Checker, table: Mapping[str, Any], prefix: str, checks: Mapping[str, Any]) -> None:
     """Fields nobody needs, written by this suite: checked when present."""
     for name, check_field in checks.items():
@@ -189,6 +214,8 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
     })
     if config.get("variant") is not None:
         check.name(config["variant"], "config.variant")
+    if config.get("reward") is not None:
+        check.text(check.table(config["reward"], "config.reward").get("name"), "config.reward.name")
     from agents.registry import METHODS  # lazily: the method registry imports the learners
 
     method = METHODS.get(result["method"])

@@ -13,7 +13,8 @@ from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
 from agents.registry import get_method
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
-from baselines.shaping import HARM_PENALTY, shaped_reward
+from agents.base import with_train_rewards
+from baselines.shaping import HARM_PENALTY, EqualityScaling, HarmPenalty
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
@@ -168,19 +169,22 @@ def test_settings_reject_bad_values_and_presets_cannot_be_overridden() -> None:
         get_method("dqn").make_settings({"selfishnes": 1.0})
 
 
-def test_shaping_rewards() -> None:
+def test_reward_transforms_shape_only_the_rows_of_their_runs() -> None:
     k = 3
-    settings = [EmpathicDQNSettings(), EmpathicDQNSettings(harm_penalty=HARM_PENALTY), EmpathicDQNSettings(equality_shaping=True)]
     batch = StepBatch(
-        obs=np.zeros((k, 1, 25)), actions=np.zeros((k, 1), int), rewards=np.full((k, 1), 0.9),
+        obs=np.zeros((k, 1, 25)), actions=np.zeros((k, 1), int), rewards=np.full((k, 1), 0.9, dtype=np.float32),
         terminated=np.zeros((k, 1), bool), next_obs=np.zeros((k, 1, 25)), swapped_next_obs=np.zeros((k, 1, 25)),
         other_present=np.ones((k, 1), bool), harmed_other=np.ones((k, 1)),
         battery_return=np.full((k, 1), 1.9), other_battery_return=np.full((k, 1), 1.0),
     )
-    shaped = shaped_reward(settings, batch)[:, 0]
-    assert shaped[0] == pytest.approx(0.9)
-    assert shaped[1] == pytest.approx(0.9 + HARM_PENALTY)
-    assert shaped[2] == pytest.approx(0.9 * 2 * 1.0 / 2.9)
+    shaped = with_train_rewards(batch, [None, HarmPenalty(), EqualityScaling()])
+    assert shaped.rewards.dtype == np.float32 and batch.rewards[:, 0].tolist() == [np.float32(0.9)] * 3  # a copy
+    assert shaped.rewards[0, 0] == np.float32(0.9)
+    assert shaped.rewards[1, 0] == pytest.approx(0.9 + HARM_PENALTY)
+    assert shaped.rewards[2, 0] == pytest.approx(0.9 * 2 * 1.0 / 2.9)
+    assert with_train_rewards(batch, [None] * k) is batch
+    with pytest.raises(ValueError, match="3 runs"):
+        with_train_rewards(batch, [HarmPenalty()])
 
 
 def _spec(**kw) -> RunSpec:
@@ -207,10 +211,14 @@ def test_same_seed_gives_identical_result_files(tmp_path) -> None:
 def test_a_run_gives_the_same_result_alone_or_in_an_ensemble(tmp_path) -> None:
     options = RunnerOptions(progress=False)
     specs = [_spec(seed=s, settings={**TINY, "selfishness": b}) for s, b in ((0, 1.0), (1, 0.5), (2, 0.25))]
+    specs.append(_spec(seed=0, method="dqn_harm_penalty", settings=TINY))
     together = train_runs(specs, tmp_path / "ensemble", options)
-    for i in (0, 1):  # a standard-DQN run and an empathic one, each beside runs of the other kind
+    for i in (0, 1, 3):  # standard DQN, Empathic DQN and a reward-shaped DQN, each beside runs of other kinds
         alone = train_runs([specs[i]], tmp_path / f"solo{i}", options)[0]
         assert _scores(together[i]) == _scores(alone)
+    # the same seed with and without the penalty: only the reward it trains on differs, and it does
+    # (the first harm changes its targets); the suite scores both from events
+    assert _scores(together[3])["train"] != _scores(together[0])["train"]
 
 
 def test_scores_come_from_events_not_from_the_shaped_reward(tmp_path) -> None:

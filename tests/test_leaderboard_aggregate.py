@@ -171,7 +171,7 @@ def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("change", "message"), [
-    ({"schema": 2}, "schema 1, got 2"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "field seed: expected an int"),
+    ({"schema": 3}, "schemas 1 and 2, got 3"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "field seed: expected an int"),
 ])
 def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, Any], message: str | None) -> None:
     run = make_run("coexistence_v0", "DQN", 0, [1.0])

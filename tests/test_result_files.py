@@ -108,7 +108,7 @@ MALFORMED = {
     "label not a string": (_set(["method_label"], 3), "method_label: expected a non-empty one-line string"),
     "eval not an array": (_set(["eval"], {}), "eval: expected an array"),
     "train not an object": (_set(["train"], []), "train: expected an object"),
-    "another schema": (_set(["schema"], 2), "schema: this suite reads result schema 1"),
+    "another schema": (_set(["schema"], 3), "schema: this suite reads result schemas 1 and 2, got 3"),
     "a list, not an object": (lambda result: None, None),
 }
 
@@ -216,3 +216,25 @@ def test_a_directory_without_result_files_is_refused_alike(tmp_path, capsys, com
     err = capsys.readouterr().err
     assert err == f"empathy-zoo: error: no result files (*.json) in {tmp_path}: run a sweep first\n"
     assert everything_below(tmp_path) == before
+
+
+def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() -> None:
+    """Files of empathy-zoo 0.1 (schema 1) carried shaping as settings; they read as schema 2."""
+    from pathlib import Path
+
+    from empathy_zoo.atomic import read_json
+    from empathy_zoo.result_file import SCHEMA, read_result
+
+    runs = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / "runs"
+    expected = {"dqn_harm_penalty": {"name": "harm_penalty", "penalty": -100.0},
+                "dqn_equality": {"name": "equality_scaling"}, "empathic_dqn": None}
+    seen = set()
+    for path in sorted(runs.glob("*__s0.json")):
+        raw = read_json(path)
+        assert raw["schema"] == 1 and "harm_penalty" in raw["config"]["settings"]
+        result = read_result(path)
+        assert result["schema"] == SCHEMA == 2 and result["run_id"] == raw["run_id"]
+        assert "harm_penalty" not in result["config"]["settings"] and "equality_shaping" not in result["config"]["settings"]
+        assert result["config"]["reward"] == expected[result["method"]]
+        seen.add(result["method"])
+    assert seen == set(expected)

@@ -10,6 +10,7 @@ import pytest
 
 from agents.empathic_dqn import linear_epsilon
 from agents.settings import PER_RUN_FIELDS, EmpathicDQNSettings
+from baselines.shaping import HarmPenalty
 from empathy_zoo.training.sweep import SweepConfigError, load_sweep, profile_path, profiles
 
 BASE = """
@@ -88,7 +89,9 @@ hidden_size = 32
     penalty = [s for s in specs if s.method == "dqn_harm_penalty"]
     assert len(penalty) == 2 and {s.variant for s in penalty} == {"coexistence_v0"}
     settings = penalty[0].method_settings()
-    assert (settings.hidden_size, settings.selfishness, settings.harm_penalty) == (32, 1.0, -100.0)  # preset kept
+    assert (settings.hidden_size, settings.selfishness) == (32, 1.0)  # preset kept
+    assert penalty[0].method_object().reward == HarmPenalty(-100.0) and penalty[0].config()["reward"] == {
+        "name": "harm_penalty", "penalty": -100.0}
 
 
 def test_env_variant_fixed_policy_and_methods_filter(tmp_path):
@@ -199,7 +202,7 @@ def test_unknown_key_in_settings(tmp_path):
     ("seeds = 2", 'seeds = "3"', "[sweep] seeds", "expected int (number of seeds) or list"),
     ("selfishness = [1.0, 0.5]", 'selfishness = "high"', "[[methods]] #1 (empathic_dqn) selfishness", "expected float"),
     ("selfishness = [1.0, 0.5]", "hidden_size = 1.5", "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
-    ("selfishness = [1.0, 0.5]", "equality_shaping = 1", "[[methods]] #1 (empathic_dqn) equality_shaping", "expected bool"),
+    ("selfishness = [1.0, 0.5]", 'hidden_size = "big"', "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
     ("selfishness = [1.0, 0.5]", "selfishness = [1.0, \"x\"]", "selfishness", "expected float, got str 'x'"),
     ("selfishness = [1.0, 0.5]", 'envs = "sharing_v0"', "envs", "expected list of strings"),
     ("[envs.sharing_v0]", '[envs.sharing_v0]\nsize = "9"', "[envs.sharing_v0] size", "expected int"),
@@ -314,5 +317,5 @@ def test_a_train_config_setting_an_sb3_method_does_not_take_is_refused(tmp_path,
     argv = ["train", "--config", str(config), "--method", "baselines.sb3:SB3_DQN", "--out", str(tmp_path / "out")]
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "unknown setting(s) ['learning_starts'] for method 'sb3_dqn'" in err and "Traceback" not in err, err
+    assert "[settings]: unknown key 'learning_starts'; allowed keys: algorithm" in err and "Traceback" not in err, err
     assert not (tmp_path / "out").exists()

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from agents.base import StepBatch
+from agents.base import StepBatch, with_train_rewards
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import derive_key
@@ -92,6 +92,7 @@ def _train_ensemble(
     other = 1 - robot if len(venv.agents) == 2 else None
     seeds = [s.seed for s in specs]
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, 5, options.device)
+    transforms = [s.method_object().reward for s in specs]
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
@@ -128,7 +129,7 @@ def _train_ensemble(
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
         batch = learner_batch(obs, actions, result, robot, other)
-        learner.observe(batch)
+        learner.observe(with_train_rewards(batch, transforms))
         step += 1
         finished = result.finished
         for j, env_id in enumerate(finished["env"]):

@@ -8,7 +8,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from agents.base import Method
+from agents.base import Method, transform_config
 from agents.registry import get_method
 from empathy_zoo.engine import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
@@ -87,6 +87,7 @@ class RunSpec:
             "fixed": self.fixed_policies(),
             "method": self.method,
             "settings": asdict(self.method_settings()),
+            "reward": transform_config(self.method_object().reward),
             "seed": self.seed,
             "steps": self.steps,
             "eval_interval": self.eval_interval,
