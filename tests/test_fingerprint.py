@@ -258,3 +258,20 @@ def test_the_result_file_checks_plugin_hashes_when_present(finished_dqn):
         check_result({**result, "plugin_sha256": {MODULE: "abc"}}, path)
     with pytest.raises(ResultFileError, match="field plugin_sha256: expected an object"):
         check_result({**result, "plugin_sha256": ["abc"]}, path)
+
+
+def test_the_command_line_refuses_results_of_other_code_or_retrains_them_with_rerun_changed(
+    finished_dqn, tmp_path, monkeypatch, capsys
+):
+    from empathy_zoo.cli import main
+
+    out, path = copy_of(finished_dqn, tmp_path)
+    made = json.loads(path.read_text())
+    monkeypatch.setattr(fingerprint, "package_version", lambda: "99.0.0")
+    argv = ["train", "--method", "dqn", "--steps", "300", "--eval-interval", "150", "--eval-episodes", "2",
+            "--out", str(out), "--checkpoint-interval", "0", "--no-progress",
+            *[f"--{key.replace('_', '-')}={value}" for key, value in TINY.items()]]
+    assert main(argv) == 2
+    assert "made by empathy-zoo" in capsys.readouterr().err and json.loads(path.read_text()) == made
+    assert main([*argv, "--rerun-changed"]) == 0
+    assert json.loads(path.read_text())["version"] == "99.0.0"

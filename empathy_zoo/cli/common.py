@@ -122,6 +122,7 @@ def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
         progress=values["progress"], workers=positive("workers", values["workers"]),
         threads=positive("threads", values["threads"]),
         backend=getattr(args, "backend", None) or "local", address=_ray_address(args),
+        rerun_changed=bool(getattr(args, "rerun_changed", False)),
     )
 
 
@@ -149,6 +150,9 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
     parser.add_argument("--checkpoint-interval", type=int, default=default, metavar="N",
                         help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"))
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
+    parser.add_argument("--rerun-changed", action="store_true",
+                        help="retrain (over their files) the finished runs made by another empathy-zoo version or "
+                             "an edited plug-in; without it such runs are refused, never silently reused")
     parser.add_argument("--backend", choices=["local", "ray"], default=default,
                         help="where ensembles train: this machine, or Ray tasks (pip install \"empathy-zoo[ray]\")"
                         " (default: local)")
