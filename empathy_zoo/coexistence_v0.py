@@ -35,6 +35,9 @@ The cat's reward is reported but no learner trains on it.
 ## Infos
 `infos[agent]["harmed_by"]`: the harming agent's name on the step it is harmed, else `None`;
 `infos[agent]["harmed"]`: the agents it harmed this step.
+At the step that ends the episode, `infos[agent]["episode"]` of each agent still in it holds its
+episode metrics (SPEC §5: `survival`, `harms`, `batteries`, `other_batteries`, `equality`,
+`return`, `other_return`, and `length`), exactly as the leaderboard scores a learner's episode.
 
 ## Reset options
 `reset(seed, options={"positions": {"robot_0": (r, c), "cat_0": (r, c)}})` places agents (any

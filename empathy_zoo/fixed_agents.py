@@ -11,7 +11,8 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from empathy_zoo.actions import check_joint_action
-from empathy_zoo.policies import FixedPolicy, checked_policy_action, make_policy
+from empathy_zoo.engine.base import GridEngine
+from empathy_zoo.policies import FixedPolicy, PolicyEntry, checked_policy_action, make_policy, policy_context
 from empathy_zoo.randomness import derive_key
 
 __all__ = ["FixedAgents", "policy_seed"]
@@ -25,16 +26,24 @@ def policy_seed(env_seed: int, agent_index: int) -> int:
 class FixedAgents(BaseParallelWrapper, EzPickle):
     """Drive the agents named in ``policies`` inside the environment.
 
-    ``FixedAgents(env, {"cat_0": RandomWalk()})`` (or ``{"cat_0": "random_walk"}``) returns a
-    ParallelEnv whose ``agents`` are the remaining (learning) agents. Each fixed agent is reset
-    with a seed derived from the env's seed at ``reset(seed=...)``, so the same seed gives the
-    same trajectory; ``reset()`` without a seed continues every stream. A fixed policy receives
-    its own observation and its ``infos`` entry plus ``"step"`` (the env's step count).
+    ``FixedAgents(env, {"cat_0": RandomWalk()})`` (or ``{"cat_0": "random_walk"}``, or a policy
+    entry ``{"cat_0": {"policy": "pkg.mod:Chaser", "speed": 2}}``) returns a ParallelEnv whose
+    ``agents`` are the remaining (learning) agents; ``env`` is one of the suite's gridworlds.
+    Each fixed agent is reset with a seed derived from the env's seed at ``reset(seed=...)``, so
+    the same seed gives the same trajectory; ``reset()`` without a seed continues every stream. A
+    fixed policy receives its own observation and its context (the env's ``infos`` entry,
+    ``step``, ``agent``, ``size``, and ``positions`` if it declares ``needs_state``; see
+    :class:`empathy_zoo.policies.FixedPolicy`), exactly as the vector env gives them.
     """
 
-    def __init__(self, env: ParallelEnv, policies: Mapping[str, FixedPolicy | str]) -> None:
+    def __init__(self, env: ParallelEnv, policies: Mapping[str, FixedPolicy | PolicyEntry]) -> None:
         BaseParallelWrapper.__init__(self, env)
         EzPickle.__init__(self, env, policies)
+        engine = getattr(env.unwrapped, "engine", None)
+        if not isinstance(engine, GridEngine):
+            raise ValueError(f"FixedAgents drives the fixed agents of the suite's gridworlds (an env with an engine), "
+                             f"got {type(env.unwrapped).__name__}")
+        self._engine = engine
         all_agents = list(env.possible_agents)
         unknown = [agent for agent in policies if agent not in all_agents]
         if unknown:
@@ -46,14 +55,12 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         self._fixed_index = {agent: all_agents.index(agent) for agent in self.policies}
         self._num_actions = int(env.action_space(all_agents[0]).n)
         self._last: dict[str, tuple[np.ndarray, dict]] = {}
-        self._step = 0
         self.agents: list[str] = []
 
     def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
         observations, infos = self.env.reset(seed=seed, options=options)  # (a bad seed or option changes nothing)
         for agent, policy in self.policies.items():
             policy.reset(None if seed is None else policy_seed(seed, self._fixed_index[agent]))
-        self._step = 0
         self._remember(observations, infos)
         self.agents = [agent for agent in self.env.agents if agent not in self.policies]
         return self._learners(observations), self._learners(infos)
@@ -71,12 +78,11 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         for agent in self.env.agents:
             if agent in self.policies:
                 observation, info = self._last[agent]
-                merged[agent] = checked_policy_action(
-                    self.policies[agent], agent, self.policies[agent].act(observation, {**info, "step": self._step}),
-                    self._num_actions,
-                )
+                policy = self.policies[agent]
+                context = policy_context(self._engine, 0, self._fixed_index[agent], info,
+                                         bool(getattr(policy, "needs_state", False)))
+                merged[agent] = checked_policy_action(policy, agent, policy.act(observation, context), self._num_actions)
         observations, rewards, terminations, truncations, infos = self.env.step(merged)
-        self._step += 1
         self._remember(observations, infos)
         self.agents = [agent for agent in self.env.agents if agent not in self.policies]
         learners = self._learners

@@ -15,6 +15,7 @@ from pettingzoo.utils.env import AECEnv
 from empathy_zoo.actions import check_action, check_joint_action
 from empathy_zoo.engine.base import GridEngine, check_env_arguments
 from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.render import render_rgb, render_text
 
 __all__ = ["GridParallelEnv", "GridAECEnv", "grid_metadata", "env_constructors"]
@@ -108,6 +109,10 @@ class GridParallelEnv(ParallelEnv, EzPickle):
             rewards[agent], terminations[agent], truncations[agent] = reward[i], terminated[i], truncated[i]
             infos[agent] = engine.step_info(events, 0, i)
         self.agents = [agent for agent in live if not (terminations[agent] or truncations[agent])]
+        if not self.agents:  # the episode is over: each agent's metrics, as the leaderboard scores a learner
+            for agent in live:
+                metrics = engine.episode_metrics(np.zeros(1, dtype=np.int64), index[agent])
+                infos[agent]["episode"] = {name: metrics[name].item() for name in (*METRIC_NAMES, "length")}
         return observations, rewards, terminations, truncations, infos
 
     def _paint_views(self) -> np.ndarray:

@@ -1,22 +1,31 @@
 """Fixed (non-learning) agents: the cat's random walk, the human's patrol, and your own.
 
-A fixed policy is any object with ``reset(seed)`` and ``act(observation, info) -> int``
-(:class:`FixedPolicy`). ``reset`` is called at the start of every episode: with a seed it
-reseeds, with ``None`` it continues its random stream. Register a new one by name in
-:data:`POLICIES`, or name it as ``"package.module:ClassName"`` in a config or on the command
-line; :func:`make_policy` resolves both.
+A fixed policy is any object with ``reset(seed)`` and ``act(observation, context) -> int``
+(:class:`FixedPolicy`, whose documentation lists what ``context`` holds). ``reset`` is called at
+the start of every episode: with a seed it reseeds, with ``None`` it continues its random stream.
+Register a new one by name in :data:`POLICIES`, or name it as ``"package.module:ClassName"`` in a
+config or on the command line; :func:`make_policy` resolves both, and builds it with keyword
+arguments from a policy entry ``{"policy": name, **arguments}`` (a sweep file's
+``fixed = { cat_0 = { policy = "pkg.mod:Chaser", speed = 2 } }``).
 
 A policy may also offer ``batched(num_envs) -> BatchedPolicy`` to act for many environments
 with one numpy call (the training fast path); without it, :func:`batched` runs one copy of the
 policy per environment, which is correct but slower.
+
+A policy that keeps anything between steps (a random generator, a memory, a counter) offers
+``state()`` and ``load_state(state)`` so a checkpointed training run resumes it exactly; one that
+keeps nothing says ``stateless = True``. Training with checkpoints refuses any other (see
+:class:`FixedPolicy`).
 """
 
 from __future__ import annotations
 
 import copy
+import inspect
+import json
 import secrets
 from collections.abc import Mapping, Sequence
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -25,25 +34,74 @@ from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 from empathy_zoo.registry import resolve_name
 
+if TYPE_CHECKING:
+    from empathy_zoo.engine.base import GridEngine
+
 __all__ = [
     "FixedPolicy", "BatchedPolicy", "RandomWalk", "Patrol", "Stay", "POLICIES",
-    "DEFAULT_POLICIES", "make_policy", "batched", "checked_policy_action",
+    "DEFAULT_POLICIES", "CONTEXT_KEYS", "PolicyEntry", "make_policy", "batched", "checked_policy_action",
+    "policy_context", "policy_entry", "entry_label", "policy_name", "unsaved_policy", "policy_state",
+    "load_policy_state", "plain_data_problem",
 ]
+
+PolicyEntry = str | Mapping[str, Any]
+"""How a configuration names a fixed policy: a registered name or ``package.module:ClassName``,
+or ``{"policy": name, **arguments}`` to build it with keyword arguments."""
+
+CONTEXT_KEYS = ("step", "agent", "size")
+"""Keys of every policy context besides the environment's own ``infos`` entry (see :class:`FixedPolicy`)."""
 
 
 @runtime_checkable
 class FixedPolicy(Protocol):
-    """What the suite asks of a non-learning agent."""
+    """What the suite asks of a non-learning agent.
+
+    **Acting.** ``reset(seed)`` starts each episode; ``act(observation, context)`` is asked for
+    the action of every step the agent is in the environment, with its own ``(view·view,)``
+    float32 observation and a ``context`` dict that is the same on every path that drives the
+    policy (:class:`empathy_zoo.FixedAgents` over the PettingZoo env, the vector env and training):
+
+    | key | type | meaning |
+    |---|---|---|
+    | `step` | `int` | steps of this episode so far (0 at the first act) |
+    | `agent` | `str` | this agent's name (`"cat_0"`) |
+    | `size` | `int` | side of the (torus) grid |
+    | `harmed_by` | `str` or `None` | Coexistence: who harmed this agent in the last step (`None` after a reset) |
+    | `harmed` | `list[str]` | Coexistence: whom this agent harmed in the last step |
+    | `batteries` | `int` | Sharing: batteries this agent holds |
+    | `positions` | `dict[str, tuple[int, int]]` | only with `needs_state = True`: `(row, col)` of every agent present, this one included |
+
+    The environment's keys are exactly its ``infos[agent]`` entry after the last step (or the
+    reset). The window of an observation is small (5×5 by default): a policy that must find an
+    agent outside it (a chaser) declares the class attribute ``needs_state = True`` to receive
+    ``positions``, the true state; the others do without.
+
+    **Checkpoints.** A policy that keeps anything between steps (a ``np.random.Generator``, a
+    memory, a counter) defines ``state() -> dict`` and ``load_state(state) -> None``: ``state``
+    returns plain data (numbers, strings, booleans, ``None``, lists, dicts with string keys, numpy
+    arrays), which a checkpoint stores and ``load_state`` gets back, with every tuple turned into
+    a list; a generator saves ``rng.bit_generator.state`` and loads it by assigning it back. A
+    policy that keeps nothing between steps declares ``stateless = True`` instead (a class
+    attribute; :class:`Stay` does). Training with checkpoints refuses a policy that does neither
+    (train it with ``--checkpoint-interval 0``), since a resumed run would silently act otherwise
+    than an uninterrupted one. The per-environment copies of the generic batched path save and
+    load each copy's state; a policy's own ``batched()`` object follows the same protocol.
+    """
 
     def reset(self, seed: int | None = None) -> None:
         """Start an episode; reseed when ``seed`` is given, else continue the random stream."""
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
-        """The action (an int in ``[0, 5)``) for this step."""
+        """The action (an int in ``[0, 5)``) for this step, given the observation and the context."""
 
 
 class BatchedPolicy(Protocol):
-    """A fixed policy acting for ``num_envs`` environments at once."""
+    """A fixed policy acting for ``num_envs`` environments at once.
+
+    It may also declare ``needs_context = True``: ``act`` then gets a fourth argument, one
+    context (see :class:`FixedPolicy`) per environment (``None`` where the agent is absent), and
+    ``needs_state`` as a per-environment policy does. It saves its state like a
+    :class:`FixedPolicy` (``state``/``load_state``, or ``stateless = True``)."""
 
     needs_observation: bool
 
@@ -78,6 +136,13 @@ class RandomWalk:
         self._count += 1
         return action
 
+    def state(self) -> dict[str, Any]:
+        return {"key": self._key, "count": self._count}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        self._key = None if state["key"] is None else int(state["key"])
+        self._count = int(state["count"])
+
     def batched(self, num_envs: int) -> _RandomWalkBatch:
         return _RandomWalkBatch(num_envs)
 
@@ -98,6 +163,17 @@ class _RandomWalkBatch:
         actions = counter_integers(self.keys, self.counts, NUM_ACTIONS)
         self.counts += active.astype(np.uint64)
         return actions
+
+    def state(self) -> dict[str, Any]:
+        return {"keys": self.keys.copy(), "counts": self.counts.copy()}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        for name in ("keys", "counts"):
+            value = np.asarray(state[name])
+            current = getattr(self, name)
+            if value.shape != current.shape:
+                raise ValueError(f"random walk state {name!r} has shape {value.shape}, expected {current.shape}")
+            current[...] = value.astype(np.uint64)
 
 
 class Patrol:
@@ -125,12 +201,20 @@ class Patrol:
         self._t += 1
         return action
 
+    def state(self) -> dict[str, Any]:
+        return {"t": self._t}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        self._t = int(state["t"])
+
     def batched(self, num_envs: int) -> _PatrolBatch:
         return _PatrolBatch(self)
 
 
 class _PatrolBatch:
     needs_observation = False
+    stateless = True
+    """Its step count is the environment's."""
 
     def __init__(self, patrol: Patrol) -> None:
         self.patrol = patrol
@@ -147,6 +231,7 @@ class Stay:
     """Never moves (a sitting target; handy in tests and as a control)."""
 
     needs_observation = False
+    stateless = True
 
     def reset(self, seed: int | None = None) -> None:
         pass
@@ -159,21 +244,35 @@ class _PolicyCopies:
     """One copy of a per-environment policy for each environment (the generic, slower path)."""
 
     needs_observation = True
+    needs_context = True
 
     def __init__(self, policy: FixedPolicy, num_envs: int, agent: str) -> None:
         self.copies = [copy.deepcopy(policy) for _ in range(num_envs)]
         self.agent = agent
+        self.needs_state = bool(getattr(policy, "needs_state", False))
 
     def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
         for i, seed in zip(env_ids, seeds):
             self.copies[i].reset(seed)
 
-    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
-        actions = np.full(len(self.copies), 4, dtype=np.int64)
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray,
+            contexts: Sequence[Mapping[str, Any] | None]) -> np.ndarray:
+        actions = np.full(len(self.copies), int(Action.STAY), dtype=np.int64)
         for i in np.flatnonzero(active):
             policy = self.copies[i]
-            actions[i] = checked_policy_action(policy, self.agent, policy.act(observations[i], {"step": int(steps[i])}))
+            actions[i] = checked_policy_action(policy, self.agent, policy.act(observations[i], contexts[i]))
         return actions
+
+    def state(self) -> dict[str, Any]:
+        return {"copies": [policy_state(policy) for policy in self.copies]}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        states = state["copies"]
+        if len(states) != len(self.copies):
+            raise ValueError(f"state of {len(states)} copies of {policy_name(self.copies[0])} for "
+                             f"{len(self.copies)} environments")
+        for policy, saved in zip(self.copies, states):
+            load_policy_state(policy, saved)
 
 
 POLICIES: dict[str, type] = {"random_walk": RandomWalk, "patrol": Patrol, "stay": Stay}
@@ -186,14 +285,59 @@ DEFAULT_POLICIES: dict[str, dict[str, str]] = {
 """The paper's fixed agents for each environment."""
 
 
-def make_policy(spec: str | FixedPolicy, **kwargs: Any) -> FixedPolicy:
-    """A policy from a registered name, a ``package.module:ClassName`` string, or an instance."""
+# ---------------------------------------------------------------------------- naming and building
+def policy_entry(entry: Any) -> str | dict[str, Any]:
+    """``entry`` (see :data:`PolicyEntry`) checked and in its one form: a name, or
+    ``{"policy": name, **arguments}`` with at least one argument (an entry without arguments is
+    its name). Arguments are named like Python parameters and hold plain data (numbers, strings,
+    booleans, lists, tables with string keys); anything else raises ``ValueError`` naming it."""
+    if isinstance(entry, str):
+        return entry
+    if not isinstance(entry, Mapping):
+        raise ValueError(f"a fixed policy is a name or {{'policy': name, <argument>: value, ...}}, got {entry!r}")
+    if "policy" not in entry:
+        raise ValueError(f"missing key 'policy' (a registered policy or package.module:ClassName) in {dict(entry)}")
+    name = entry["policy"]
+    if not isinstance(name, str):
+        raise ValueError(f"'policy' must be a policy name (a string), got {name!r}")
+    arguments = {key: value for key, value in entry.items() if key != "policy"}
+    for key, value in arguments.items():
+        if not isinstance(key, str) or not key.isidentifier():
+            raise ValueError(f"argument {key!r} of fixed policy {name!r} is not a parameter name")
+        problem = plain_data_problem(value, arrays=False)
+        if problem:
+            raise ValueError(f"argument {key!r} of fixed policy {name!r}: {problem}")
+    return {"policy": name, **arguments} if arguments else name
+
+
+def entry_label(entry: PolicyEntry) -> str:
+    """A policy entry as one string: its name, or ``name(arg=value, ...)`` (arguments sorted,
+    values as JSON), which tells two entries apart exactly when they build different policies."""
+    entry = policy_entry(entry)
+    if isinstance(entry, str):
+        return entry
+    arguments = ", ".join(f"{key}={json.dumps(entry[key], sort_keys=True)}" for key in sorted(entry) if key != "policy")
+    return f"{entry['policy']}({arguments})"
+
+
+def make_policy(spec: PolicyEntry | FixedPolicy, **kwargs: Any) -> FixedPolicy:
+    """A policy from a registered name, a ``package.module:ClassName`` string, a policy entry
+    ``{"policy": name, **arguments}``, or an instance; ``kwargs`` are constructor arguments."""
+    if isinstance(spec, Mapping):
+        entry = policy_entry(spec)
+        name, arguments = (entry, {}) if isinstance(entry, str) else (entry["policy"], dict(entry))
+        arguments.pop("policy", None)
+        overlap = sorted(arguments.keys() & kwargs.keys())
+        if overlap:
+            raise ValueError(f"argument(s) {overlap} of fixed policy {name!r} given twice")
+        return make_policy(name, **arguments, **kwargs)
     if not isinstance(spec, str):
         if kwargs:
             raise ValueError("keyword arguments are only accepted with a policy name")
         policy = spec
     else:
         factory = resolve_name(spec, POLICIES, "fixed policy")
+        _check_arguments(spec, factory, kwargs)
         try:
             policy = factory(**kwargs)
         except TypeError as error:
@@ -203,14 +347,33 @@ def make_policy(spec: str | FixedPolicy, **kwargs: Any) -> FixedPolicy:
     return policy
 
 
+def _check_arguments(spec: str, factory: Any, kwargs: Mapping[str, Any]) -> None:
+    """Raise ``ValueError`` naming a keyword argument ``factory`` does not take."""
+    try:
+        parameters = inspect.signature(factory).parameters.values()
+    except (TypeError, ValueError):  # no signature to read: the call itself will say
+        return
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        return
+    named = [p.name for p in parameters if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
+    for key in kwargs:
+        if key not in named:
+            raise ValueError(f"cannot build fixed policy {spec!r}: it takes no argument {key!r} "
+                             f"(its arguments: {', '.join(named) or 'none'})")
+
+
+def policy_name(policy: Any) -> str:
+    """``module:qualname`` of ``policy``'s class (how errors name a policy)."""
+    return f"{type(policy).__module__}:{type(policy).__qualname__}"
+
+
 def checked_policy_action(policy: Any, agent: str, action: Any, num_actions: int = NUM_ACTIONS) -> int:
     """``action`` (what ``policy`` chose for ``agent``) as an ``int``, or a ``ValueError`` naming the
     policy: a fixed policy is held to the same rule as every action (never truncated)."""
     try:
         return check_action(agent, action, num_actions)
     except ValueError as error:
-        raise ValueError(f"fixed policy {type(policy).__module__}:{type(policy).__qualname__} of {agent} "
-                         f"chose an invalid action: {error}") from None
+        raise ValueError(f"fixed policy {policy_name(policy)} of {agent} chose an invalid action: {error}") from None
 
 
 def batched(policy: FixedPolicy, num_envs: int, agent: str = "a fixed agent") -> BatchedPolicy:
@@ -218,3 +381,80 @@ def batched(policy: FixedPolicy, num_envs: int, agent: str = "a fixed agent") ->
     if hasattr(policy, "batched"):
         return policy.batched(num_envs)
     return _PolicyCopies(policy, num_envs, agent)
+
+
+# ---------------------------------------------------------------------------- the context
+def policy_context(
+    engine: GridEngine, env_id: int, agent: int, info: Mapping[str, Any], with_positions: bool
+) -> dict[str, Any]:
+    """The context (see :class:`FixedPolicy`) of agent index ``agent`` in environment ``env_id``
+    of ``engine``, whose ``infos`` entry after the last step is ``info``."""
+    context = {**info, "step": int(engine.t[env_id]), "agent": engine.agents[agent], "size": engine.size}
+    if with_positions:
+        cells = engine.pos[env_id].tolist()
+        present = engine.present[env_id].tolist()
+        context["positions"] = {name: tuple(cells[i]) for i, name in enumerate(engine.agents) if present[i]}
+    return context
+
+
+# ---------------------------------------------------------------------------- checkpoints
+def unsaved_policy(policy: Any) -> Any | None:
+    """What a checkpoint of ``policy`` would lose: ``None`` when it has ``state``/``load_state``
+    or declares ``stateless = True``, else the policy lacking them (for the per-environment
+    copies of the generic batched path, the copied policy)."""
+    if isinstance(policy, _PolicyCopies):
+        return unsaved_policy(policy.copies[0]) if policy.copies else None
+    if getattr(policy, "stateless", False) is True:
+        return None
+    if callable(getattr(policy, "state", None)) and callable(getattr(policy, "load_state", None)):
+        return None
+    return policy
+
+
+def policy_state(policy: Any) -> Any:
+    """``policy.state()``, checked to be plain data (``{}`` for a stateless policy without one);
+    a policy that saves no state raises ``ValueError`` naming it."""
+    if unsaved_policy(policy) is not None:
+        raise ValueError(f"fixed policy {policy_name(unsaved_policy(policy))} saves no state: give it state() and "
+                         "load_state(state), or declare stateless = True (see empathy_zoo.policies.FixedPolicy)")
+    if not callable(getattr(policy, "state", None)):
+        return {}
+    state = policy.state()
+    problem = plain_data_problem(state, arrays=True)
+    if problem:
+        raise ValueError(f"state() of fixed policy {policy_name(policy)} is not plain data: {problem}")
+    return state
+
+
+def load_policy_state(policy: Any, state: Any) -> None:
+    """Give ``policy`` the ``state`` :func:`policy_state` took."""
+    if callable(getattr(policy, "load_state", None)):
+        policy.load_state(state)
+    elif state != {}:
+        raise ValueError(f"fixed policy {policy_name(policy)} has no load_state() for its saved state")
+
+
+PLAIN_SCALARS = (type(None), bool, int, float, str)
+"""Scalars plain data may hold."""
+
+
+def plain_data_problem(value: Any, arrays: bool, where: str = "the value") -> str | None:
+    """What keeps ``value`` from being plain data (numbers, strings, booleans, ``None``, lists,
+    tuples, dicts with string keys, and numeric numpy arrays and scalars when ``arrays``), or
+    ``None`` when it is."""
+    if isinstance(value, PLAIN_SCALARS) or (arrays and isinstance(value, np.generic) and value.dtype.kind in "biuf"):
+        return None
+    if arrays and isinstance(value, np.ndarray):
+        return None if value.dtype.kind in "biuf" else f"{where} is an array of {value.dtype}"
+    if isinstance(value, (list, tuple)):
+        return next((p for i, item in enumerate(value) if (p := plain_data_problem(item, arrays, f"{where}[{i}]"))), None)
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                return f"{where} has a key {key!r} that is not a string"
+            problem = plain_data_problem(item, arrays, f"{where}[{key!r}]")
+            if problem:
+                return problem
+        return None
+    allowed = "numbers, strings, booleans, None, lists and tables" + (", numeric numpy arrays" if arrays else "")
+    return f"{where} is a {type(value).__module__}.{type(value).__qualname__} (plain data is {allowed})"

@@ -28,6 +28,9 @@ Everyone terminates when no battery is left; everyone is truncated after `max_cy
 
 ## Infos
 `infos[agent]["batteries"]`: batteries the agent has collected so far.
+At the step that ends the episode, `infos[agent]["episode"]` of each agent still in it holds its
+episode metrics (SPEC §5: `survival`, `harms`, `batteries`, `other_batteries`, `equality`,
+`return`, `other_return`, and `length`), exactly as the leaderboard scores a learner's episode.
 
 ## Reset options
 `reset(seed, options={"positions": {"robot_0": (r, c), ...}, "batteries": [(r, c), ...]})` places

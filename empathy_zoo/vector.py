@@ -10,25 +10,37 @@ trajectories on both faces. An environment whose episode ends is reset in the sa
 last observation stays available in :attr:`VectorStep.final_observations`. Keyword arguments
 beyond ``size``, ``view`` and ``max_cycles`` are the environment's own (e.g. Sharing's ``start``
 and ``inventory_encoding``), exactly as the PettingZoo env takes them.
+
+A fixed policy gets the same context here as through :class:`empathy_zoo.FixedAgents` (see
+:class:`empathy_zoo.policies.FixedPolicy`), and :meth:`VectorEnv.state` saves each one's own state
+(``state()``), so a run resumed from a checkpoint continues exactly; :meth:`VectorEnv.check_checkpointable`
+says up front which policy could not be saved.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine import ENGINES, GridEngine
-from empathy_zoo.engine.base import check_env_arguments
+from empathy_zoo.engine.base import StepEvents, check_env_arguments
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import BatchedPolicy, FixedPolicy, batched, make_policy
+from empathy_zoo.policies import (
+    BatchedPolicy, FixedPolicy, PolicyEntry, batched, load_policy_state, make_policy, policy_context, policy_name,
+    policy_state, unsaved_policy,
+)
 from empathy_zoo.randomness import check_seed
 
-__all__ = ["VectorEnv", "VectorStep"]
+__all__ = ["STATE_LAYOUT", "VectorEnv", "VectorStep"]
+
+STATE_LAYOUT = 2
+"""Layout of :meth:`VectorEnv.state` (1, unmarked: policies' numeric attributes by agent index;
+2: each policy's own ``state()`` by agent name, and the last step's events)."""
 
 
 @dataclass
@@ -75,7 +87,7 @@ class VectorEnv:
         env: str | type[GridEngine],
         num_envs: int,
         *,
-        fixed: Mapping[str, FixedPolicy | str] | None = None,
+        fixed: Mapping[str, FixedPolicy | PolicyEntry] | None = None,
         in_view_only: bool = False,
         size: int = 7,
         view: int = 5,
@@ -104,6 +116,10 @@ class VectorEnv:
         self.in_view_only = bool(in_view_only)
         self.obs_size = self.engine.obs_size
         self._observations: np.ndarray | None = None
+        self._events: StepEvents | None = None
+        """The last step's events (the fixed agents' contexts tell them), or ``None`` before a step."""
+        self._fresh = np.ones(self.num_envs, dtype=bool)
+        """(N,) bool: the environment was reset after :attr:`_events` (its context is the reset's)."""
 
     # ------------------------------------------------------------------ episode
     def reset(self, seed: int | Sequence[int] | None = None) -> np.ndarray:
@@ -122,6 +138,7 @@ class VectorEnv:
         self.engine.reset(ids, seeds)
         for index, policy in self.fixed.items():
             policy.reset(ids, [None if s is None else policy_seed(s, index) for s in seeds])
+        self._events, self._fresh[:] = None, True
         self._observations = self._observe_learners()
         return self._observations
 
@@ -140,8 +157,12 @@ class VectorEnv:
         full[:, self.learner_index] = actions
         for index, policy in self.fixed.items():
             observations = engine.observe(index) if policy.needs_observation else None
-            full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
+            if getattr(policy, "needs_context", False):
+                full[:, index] = policy.act(observations, engine.t, engine.present[:, index], self._contexts(index, policy))
+            else:
+                full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
         events = engine.step(full)
+        self._events, self._fresh = events, events.episode_over.copy()
         battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
         swapped, valid, other = self._swapped_closest()
@@ -167,6 +188,20 @@ class VectorEnv:
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
             battery_return=battery_return, finished=finished,
         )
+
+    def _contexts(self, index: int, policy: BatchedPolicy) -> list[dict[str, Any] | None]:
+        """Each environment's context of fixed agent ``index`` (``None`` where it is absent), as
+        :class:`empathy_zoo.FixedAgents` builds it from the env's ``infos``."""
+        engine, events = self.engine, self._events
+        with_positions = bool(getattr(policy, "needs_state", False))
+        contexts: list[dict[str, Any] | None] = []
+        for env_id, (present, fresh) in enumerate(zip(engine.present[:, index].tolist(), self._fresh.tolist())):
+            if not present:
+                contexts.append(None)
+                continue
+            info = engine.reset_info(env_id, index) if fresh or events is None else engine.step_info(events, env_id, index)
+            contexts.append(policy_context(engine, env_id, index, info, with_positions))
+        return contexts
 
     # ------------------------------------------------------------------ observations
     def _observe_learners(self, env_ids: np.ndarray | None = None) -> np.ndarray:
@@ -207,27 +242,54 @@ class VectorEnv:
         return out, mask
 
     # ------------------------------------------------------------------ checkpoint
+    def check_checkpointable(self) -> None:
+        """Raise ``ValueError`` naming the first fixed policy (and its agent) whose state a
+        checkpoint could not save: one without ``state()``/``load_state()`` that does not declare
+        ``stateless = True`` (see :class:`empathy_zoo.policies.FixedPolicy`)."""
+        for index, policy in self.fixed.items():
+            unsaved = unsaved_policy(policy)
+            if unsaved is not None:
+                raise ValueError(
+                    f"fixed policy {policy_name(unsaved)} of {self.agents[index]} cannot be checkpointed: a resumed run "
+                    "would not continue it exactly. Give it state() -> dict (plain data) and load_state(state), or "
+                    "declare stateless = True if it keeps nothing between steps (see empathy_zoo.policies.FixedPolicy); "
+                    "or train without checkpoints (--checkpoint-interval 0)"
+                )
+
     def state(self) -> dict[str, Any]:
-        """Everything needed to continue exactly (for checkpoints): the engine, the numeric state
-        of the batched fixed policies, and the observations to act on."""
-        policies = {
-            str(index): {key: value for key, value in vars(policy).items() if isinstance(value, (np.ndarray, int, float))}
-            for index, policy in self.fixed.items()
-        }
+        """Everything needed to continue exactly (for checkpoints): the engine, each fixed policy's
+        own state (by agent name), the last step's events and the observations to act on.
+        Raises ``ValueError`` as :meth:`check_checkpointable` does."""
+        self.check_checkpointable()
+        policies = {self.agents[index]: policy_state(policy) for index, policy in self.fixed.items()}
         observations = None if self._observations is None else self._observations.copy()
-        return {"engine": self.engine.state(), "policies": policies, "observations": observations}
+        return {
+            "layout": STATE_LAYOUT, "engine": self.engine.state(), "policies": policies,
+            "events": None if self._events is None else asdict(self._events), "fresh": self._fresh.copy(),
+            "observations": observations,
+        }
 
     def load_state(self, state: Mapping[str, Any]) -> None:
-        """Continue from :meth:`state`."""
+        """Continue from :meth:`state`; a state of another layout (an earlier version's
+        checkpoint) raises ``ValueError``."""
+        if state.get("layout") != STATE_LAYOUT:
+            raise ValueError(
+                f"this vector env state has layout {state.get('layout', 1)}, this version reads layout {STATE_LAYOUT} "
+                "(it saves each fixed policy's own state): a checkpoint written by an earlier version cannot be "
+                "resumed; delete or move it to restart those runs"
+            )
+        names = {self.agents[index] for index in self.fixed}
+        if set(state["policies"]) != names:
+            raise ValueError(f"the state holds fixed policies of {sorted(state['policies'])}, this env fixes {sorted(names)}")
         self.engine.load_state(state["engine"])
-        for index, values in state["policies"].items():
-            policy = self.fixed[int(index)]
-            for key, value in values.items():
-                current = getattr(policy, key)
-                if isinstance(current, np.ndarray):
-                    current[...] = value
-                else:
-                    setattr(policy, key, value)
+        for index, policy in self.fixed.items():
+            load_policy_state(policy, state["policies"][self.agents[index]])
+        events = state["events"]
+        self._events = None if events is None else StepEvents(**{key: np.asarray(value) for key, value in events.items()})
+        fresh = np.array(state["fresh"], dtype=bool)
+        if fresh.shape != (self.num_envs,):
+            raise ValueError(f"the state is of {fresh.size} environments, this vector env has {self.num_envs}")
+        self._fresh = fresh
         if state["observations"] is not None:
             self._observations = np.array(state["observations"], dtype=np.float32)
 

@@ -85,6 +85,8 @@ def _train_ensemble(
     method = first.method_object()
     fixed, env_kwargs = first.fixed_policies(), dict(first.env_kwargs)
     venv = VectorEnv(first.env, k, fixed=fixed, **env_kwargs)
+    if options.checkpoint_interval > 0:
+        venv.check_checkpointable()  # (a fixed policy whose state a checkpoint would lose: refused before training)
     learner_agent = venv.learners[0]
     robot = venv.agents.index(learner_agent)
     if len(venv.learners) != 1:

@@ -13,7 +13,7 @@ from agents.registry import get_method
 from empathy_zoo.engine import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
 from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.policies import DEFAULT_POLICIES, PolicyEntry, entry_label, policy_entry
 
 __all__ = ["RunSpec", "group_specs"]
 
@@ -37,8 +37,9 @@ class RunSpec:
     """Env steps between greedy evaluations (there is always one at the end)."""
     eval_episodes: int = 10
     """Episodes per greedy evaluation (ε = 0, fixed start seeds)."""
-    fixed: Mapping[str, str] | None = None
-    """Fixed agents and their policies (name or ``package.module:ClassName``); ``None`` = the paper's."""
+    fixed: Mapping[str, PolicyEntry] | None = None
+    """Fixed agents and their policies: a name or ``package.module:ClassName``, or
+    ``{"policy": name, **arguments}`` to build it with keyword arguments; ``None`` = the paper's."""
     env_kwargs: Mapping[str, Any] = field(default_factory=dict)
     """Environment arguments (``size``, ``view``, ``max_cycles``, and the environment's own, e.g.
     Sharing's ``start`` and ``inventory_encoding``)."""
@@ -64,6 +65,16 @@ class RunSpec:
             if name in self.env_kwargs:
                 check_choice(name, self.env_kwargs[name], allowed)
         self.method_settings()  # validates method and settings
+        if self.fixed is not None:
+            if not isinstance(self.fixed, Mapping):
+                raise ValueError(f"fixed must be a table {{agent: policy}}, got {self.fixed!r}")
+            entries = {}
+            for agent, entry in self.fixed.items():
+                try:
+                    entries[agent] = policy_entry(entry)
+                except ValueError as error:
+                    raise ValueError(f"fixed policy of {agent!r}: {error}") from None
+            object.__setattr__(self, "fixed", entries)  # one form: an entry without arguments is its name
 
     # ------------------------------------------------------------------ derived
     def method_object(self) -> Method:
@@ -72,7 +83,8 @@ class RunSpec:
     def method_settings(self) -> Any:
         return self.method_object().make_settings(dict(self.settings))
 
-    def fixed_policies(self) -> dict[str, str]:
+    def fixed_policies(self) -> dict[str, PolicyEntry]:
+        """The fixed agents' policy entries (what :class:`~empathy_zoo.vector.VectorEnv` builds them from)."""
         return dict(DEFAULT_POLICIES.get(self.env, {}) if self.fixed is None else self.fixed)
 
     def display_label(self) -> str:
@@ -84,7 +96,7 @@ class RunSpec:
             "env": self.env,
             "variant": self.variant or self.env,
             "env_kwargs": dict(self.env_kwargs),
-            "fixed": self.fixed_policies(),
+            "fixed": {agent: entry_label(entry) for agent, entry in self.fixed_policies().items()},
             "method": self.method,
             "settings": asdict(self.method_settings()),
             "reward": transform_config(self.method_object().reward),

@@ -25,7 +25,9 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     size = 9                    # environment arguments: size, view, max_cycles, and the
                                 #   environment's own: sharing_v0 takes start = "random" | "centre"
                                 #   and inventory_encoding = "count_plus_one" | "authors"
-    fixed = { cat_0 = "random_walk" }  # fixed agents: a registered policy or "package.module:ClassName"
+    fixed = { cat_0 = "random_walk" }  # fixed agents: a registered policy or "package.module:ClassName",
+                                #   or a table to build it with keyword arguments:
+                                #   fixed = { cat_0 = { policy = "pkg.mod:Chaser", speed = 2 } }
     methods = ["empathic_dqn"]  # optional: only these [[methods]] (by their `method`) run here
 
     [[methods]]                 # one table per method entry
@@ -54,11 +56,11 @@ from agents.registry import get_method
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.engine import ENGINES
 from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import DEFAULT_POLICIES, make_policy
+from empathy_zoo.policies import DEFAULT_POLICIES, make_policy, policy_entry
 from empathy_zoo.training.spec import RunSpec
 
 __all__ = [
-    "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
+    "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "POLICY_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
     "EXTRA_ENV_ARGUMENTS",
     "load_sweep", "parse_sweep", "profile_path", "profiles", "read_toml", "check_keys", "check_value",
     "settings_types", "describe_type",
@@ -76,6 +78,8 @@ STR_LIST = "list of strings"
 """Type tag: an array of strings."""
 STR_TABLE = "table of strings"
 """Type tag: a table whose values are strings."""
+POLICY_TABLE = "table of strings (policy names) or of tables { policy = name, <argument> = value, ... }"
+"""Type tag: a table whose values are policy names or tables ``{ policy = name, ... }``."""
 
 SWEEP_KEYS: dict[str, Any] = {
     "name": str, "seeds": SEEDS, "steps": int, "eval_interval": int, "eval_episodes": int,
@@ -87,7 +91,7 @@ EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
 """Environment-specific arguments some registered environment takes (Sharing's ``start``, …)."""
 ENV_KEYS: dict[str, Any] = {
     "env": str, "size": int, "view": int, "max_cycles": int, **{name: str for name in EXTRA_ENV_ARGUMENTS},
-    "fixed": STR_TABLE, "methods": STR_LIST,
+    "fixed": POLICY_TABLE, "methods": STR_LIST,
 }
 """Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
 METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
@@ -113,7 +117,7 @@ def check_value(value: Any, expected: Any, where: str) -> Any:
     """``value`` if it has the ``expected`` type (an int is accepted as a float), else raise.
 
     ``expected`` is ``int``, ``float``, ``bool``, ``str``, one of the tags :data:`SEEDS`,
-    ``STR_LIST``, ``STR_TABLE``, or any other type (not checked: the settings class checks it).
+    ``STR_LIST``, ``STR_TABLE``, ``POLICY_TABLE``, or any other type (not checked: the settings class checks it).
     """
     def fail() -> SweepConfigError:
         return SweepConfigError(f"{where}: expected {describe_type(expected)}, got {_type_name(value)} {value!r}")
@@ -145,6 +149,9 @@ def check_value(value: Any, expected: Any, where: str) -> Any:
             raise fail()
     elif expected == STR_TABLE:
         if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
+            raise fail()
+    elif expected == POLICY_TABLE:
+        if not isinstance(value, dict) or not all(isinstance(v, (str, dict)) for v in value.values()):
             raise fail()
     return value
 
@@ -347,15 +354,16 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
         raise SweepConfigError(f"{where}: {error}") from None
     fixed = checked.get("fixed")
     if fixed is not None:
-        agents = list(ENGINES[env].agents)
+        agents, entries = list(ENGINES[env].agents), {}
         for agent, policy in fixed.items():
             if agent not in agents:
                 raise SweepConfigError(f"{where} fixed: unknown agent {agent!r}; agents of {env}: {agents}")
             try:
-                make_policy(policy)
+                entries[agent] = policy_entry(policy)
+                make_policy(entries[agent])
             except ValueError as error:
                 raise SweepConfigError(f"{where} fixed.{agent}: {error}") from None
-        fixed = {**DEFAULT_POLICIES.get(env, {}), **fixed}
+        fixed = {**DEFAULT_POLICIES.get(env, {}), **entries}
     names = checked.get("methods")
     if names is not None:
         declared = {m["method"] for m in methods}
