@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from agents.base import Learner, Method, StepBatch
+from agents.base import Learner, Method, RewardTransform, StepBatch
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 
-__all__ = ["EmpathicDQN", "EmpathicDQNSettings", "Learner", "Method", "StepBatch"]
+__all__ = ["EmpathicDQN", "EmpathicDQNSettings", "Learner", "Method", "RewardTransform", "StepBatch"]

@@ -10,5 +10,6 @@ from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.runner import train_runs
 from empathy_zoo.training.spec import RunSpec, group_specs
+from empathy_zoo.training.sweep import load_sweep
 
-__all__ = ["RunSpec", "RunnerOptions", "group_specs", "train_ensemble", "train_runs"]
+__all__ = ["RunSpec", "RunnerOptions", "group_specs", "load_sweep", "train_ensemble", "train_runs"]

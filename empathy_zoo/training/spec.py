@@ -124,7 +124,7 @@ class RunSpec:
         method = self.method_object()
         return (
             self.env, json.dumps(dict(self.env_kwargs), sort_keys=True), json.dumps(self.fixed_policies(), sort_keys=True),
-            method.learner, self.method_settings().shared(), self.steps, self.eval_interval, self.eval_episodes,
+            method.learner, _shared(self.method_settings()), self.steps, self.eval_interval, self.eval_episodes,
         )
 
 
@@ -139,3 +139,9 @@ def group_specs(specs: Iterable[RunSpec], max_parallel_runs: int) -> list[list[R
     for members in groups.values():
         chunks += [members[i : i + max_parallel_runs] for i in range(0, len(members), max_parallel_runs)]
     return chunks
+
+
+def _shared(settings: Any) -> Any:
+    """What runs must share to train in one ensemble: ``settings.shared()`` when the settings class
+    says which of its fields may differ between runs, else every setting (equal settings, any seed)."""
+    return settings.shared() if hasattr(settings, "shared") else settings
