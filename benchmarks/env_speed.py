@@ -31,7 +31,7 @@ import pettingzoo
 
 from empathy_zoo import ENVIRONMENTS, EmpathyWrapper, FixedAgents
 from empathy_zoo.grid import NUM_ACTIONS
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 

@@ -121,7 +121,7 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
     (median over rounds), so a busy machine slows them alike."""
     from baselines.sb3 import SB3Settings, make_sb3_model
     from empathy_zoo.gym_adapter import make_single_agent_env
-    from empathy_zoo.policies import DEFAULT_POLICIES
+    from empathy_zoo.environments import DEFAULT_POLICIES
     from empathy_zoo.vector import VectorEnv
 
     rng = np.random.default_rng(0)

@@ -38,7 +38,7 @@ the reward.
 `SingleAgentEnv(env="coexistence_v0", fixed=None, size=7, view=5, max_cycles=500, render_mode=None, **env_options)`
 * `env`: `"coexistence_v0"` or `"sharing_v0"`.
 * `fixed`: `{agent: policy}` (a `FixedPolicy`, a registered name or `"package.module:ClassName"`);
-  `None` = the paper's (`empathy_zoo.policies.DEFAULT_POLICIES`). Exactly one agent must be left.
+  `None` = the paper's (`empathy_zoo.environments.DEFAULT_POLICIES`). Exactly one agent must be left.
 * `size`, `view`, `max_cycles`, `render_mode`: as for the PettingZoo env.
 * `env_options`: the environment's own arguments, passed on to its PettingZoo env (Sharing:
   `start`, `inventory_encoding`); any other keyword raises `TypeError`.
@@ -55,15 +55,11 @@ from gymnasium.utils import EzPickle
 
 from empathy_zoo import ENVIRONMENTS
 from empathy_zoo.fixed_agents import FixedAgents
-from empathy_zoo.policies import DEFAULT_POLICIES, FixedPolicy
+from empathy_zoo.environments import DEFAULT_POLICIES, GYM_IDS
+from empathy_zoo.policies import FixedPolicy
 
 __all__ = ["SingleAgentEnv", "make_single_agent_env", "GYM_IDS"]
 
-GYM_IDS: dict[str, str] = {
-    "empathy_zoo/Coexistence-v0": "coexistence_v0",
-    "empathy_zoo/Sharing-v0": "sharing_v0",
-}
-"""Gymnasium id -> suite environment name."""
 
 
 class SingleAgentEnv(gymnasium.Env, EzPickle):

@@ -39,7 +39,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FixedPolicy", "BatchedPolicy", "RandomWalk", "Patrol", "Stay", "POLICIES",
-    "DEFAULT_POLICIES", "CONTEXT_KEYS", "PolicyEntry", "make_policy", "batched", "checked_policy_action",
+    "CONTEXT_KEYS", "PolicyEntry", "make_policy", "batched", "checked_policy_action",
     "policy_context", "policy_entry", "entry_label", "policy_name", "unsaved_policy", "policy_state",
     "load_policy_state", "plain_data_problem",
 ]
@@ -278,11 +278,6 @@ class _PolicyCopies:
 POLICIES: dict[str, type] = {"random_walk": RandomWalk, "patrol": Patrol, "stay": Stay}
 """Fixed policies by name."""
 
-DEFAULT_POLICIES: dict[str, dict[str, str]] = {
-    "coexistence_v0": {"cat_0": "random_walk"},
-    "sharing_v0": {"human_0": "patrol"},
-}
-"""The paper's fixed agents for each environment."""
 
 
 # ---------------------------------------------------------------------------- naming and building

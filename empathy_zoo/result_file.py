@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.engine import ENGINES
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name

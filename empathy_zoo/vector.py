@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.actions import check_action_array
-from empathy_zoo.engine import ENGINES, GridEngine
+from empathy_zoo.engine import GridEngine
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import StepEvents, check_env_arguments
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.metrics import METRIC_NAMES

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES
 
 __all__ = ["REFERENCE_METRICS", "reference_curve"]
 

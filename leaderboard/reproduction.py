@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
-from empathy_zoo.engine import ENGINES
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import DEFAULT_POLICIES
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 

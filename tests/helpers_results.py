@@ -8,7 +8,7 @@ import numpy as np
 
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 """Schedule of the synthetic runs: 4,000 steps, ε at its floor on the last one."""

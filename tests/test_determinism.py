@@ -11,7 +11,7 @@ import pytest
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
 
 MODULES = [coexistence_v0, sharing_v0]

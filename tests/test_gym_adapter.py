@@ -14,7 +14,7 @@ from gymnasium.utils.env_checker import check_env
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.gym_adapter import GYM_IDS, SingleAgentEnv, make_single_agent_env
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
 
 UP, DOWN, STAY = 0, 1, 4

@@ -26,7 +26,8 @@ def cmd_methods(args: argparse.Namespace, command: str) -> int:
 
 def cmd_policies(args: argparse.Namespace, command: str) -> int:
     """One line per registered fixed-agent policy, with where it is a default."""
-    from empathy_zoo.policies import DEFAULT_POLICIES, POLICIES
+    from empathy_zoo.environments import DEFAULT_POLICIES
+    from empathy_zoo.policies import POLICIES
 
     width = max(map(len, POLICIES))
     for name, policy in POLICIES.items():
@@ -41,7 +42,7 @@ def cmd_play(args: argparse.Namespace, command: str) -> int:
     """Episodes of a uniformly random robot beside the fixed agents."""
     from empathy_zoo import ENVIRONMENTS, FixedAgents
     from empathy_zoo.metrics import METRIC_NAMES
-    from empathy_zoo.policies import DEFAULT_POLICIES
+    from empathy_zoo.environments import DEFAULT_POLICIES
 
     if args.env not in ENVIRONMENTS:
         raise ValueError(f"unknown environment {args.env!r}; registered: {sorted(ENVIRONMENTS)}")

@@ -100,7 +100,7 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
     env_kwargs = {key: run[key] for key in ENV_ARGUMENTS if run.get(key) is not None}
     fixed = None
     if run["fixed"] is not None:
-        from empathy_zoo.policies import DEFAULT_POLICIES
+        from empathy_zoo.environments import DEFAULT_POLICIES
 
         fixed = {**DEFAULT_POLICIES.get(run["env"], {}), **run["fixed"]}
     specs = [

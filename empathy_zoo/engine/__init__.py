@@ -4,10 +4,5 @@ from empathy_zoo.engine.base import GridEngine, StepEvents
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
 
-ENGINES: dict[str, type[GridEngine]] = {
-    "coexistence_v0": CoexistenceEngine,
-    "sharing_v0": SharingEngine,
-}
-"""Engine class of every registered environment, by environment name."""
-
-__all__ = ["ENGINES", "GridEngine", "StepEvents", "CoexistenceEngine", "SharingEngine"]
+__all__ = ["GridEngine", "StepEvents", "CoexistenceEngine", "SharingEngine"]
+# (environments by name: empathy_zoo.environments)

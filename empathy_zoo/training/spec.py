@@ -10,10 +10,11 @@ from typing import Any
 
 from agents.base import Method, transform_config
 from agents.registry import get_method
-from empathy_zoo.engine import ENGINES
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
 from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import DEFAULT_POLICIES, PolicyEntry, entry_label, policy_entry
+from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.policies import PolicyEntry, entry_label, policy_entry
 
 __all__ = ["RunSpec", "group_specs"]
 

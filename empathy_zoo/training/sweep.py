@@ -54,9 +54,10 @@ from typing import Any, get_type_hints
 
 from agents.registry import get_method
 from agents.settings import EmpathicDQNSettings
-from empathy_zoo.engine import ENGINES
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import DEFAULT_POLICIES, make_policy, policy_entry
+from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.policies import make_policy, policy_entry
 from empathy_zoo.training.spec import RunSpec
 
 __all__ = [

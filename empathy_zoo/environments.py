@@ -1,0 +1,58 @@
+"""Every environment of the suite in one table: its engine, its PettingZoo face, the fixed agents
+the paper gives it, and its Gymnasium id.
+
+A new environment is an engine (``empathy_zoo/engine/<name>.py``: the rules, stepping N
+environments as arrays), a face module (``empathy_zoo/<name>.py``: ``raw_env``, ``parallel_env``,
+``env``; its docstring is the environment's documentation page) and one entry in
+:data:`ENVIRONMENT_TABLE`. Everything else (the vector env, the runner, sweep files, the Gymnasium
+face, the command line) looks environments up here.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from types import ModuleType
+
+from empathy_zoo.engine.base import GridEngine
+from empathy_zoo.engine.coexistence import CoexistenceEngine
+from empathy_zoo.engine.sharing import SharingEngine
+
+__all__ = ["Environment", "ENVIRONMENT_TABLE", "ENGINES", "DEFAULT_POLICIES", "GYM_IDS", "face_module"]
+
+
+@dataclass(frozen=True)
+class Environment:
+    """One registered environment."""
+
+    engine: type[GridEngine]
+    """The batched engine: the environment's rules, written once."""
+    module: str
+    """The PettingZoo face module (``raw_env``, ``parallel_env``, ``env``), imported on demand."""
+    gym_id: str
+    """Its id in Gymnasium's registry (the single-agent face, :mod:`empathy_zoo.gym_adapter`)."""
+    fixed: dict[str, str] = field(default_factory=dict)
+    """The paper's fixed agents and their policies; the other agents learn."""
+
+
+ENVIRONMENT_TABLE: dict[str, Environment] = {
+    "coexistence_v0": Environment(CoexistenceEngine, "empathy_zoo.coexistence_v0", "empathy_zoo/Coexistence-v0",
+                                  {"cat_0": "random_walk"}),
+    "sharing_v0": Environment(SharingEngine, "empathy_zoo.sharing_v0", "empathy_zoo/Sharing-v0",
+                              {"human_0": "patrol"}),
+}
+"""Every environment, by name."""
+
+ENGINES: dict[str, type[GridEngine]] = {name: env.engine for name, env in ENVIRONMENT_TABLE.items()}
+"""Engine class of every environment, by name."""
+DEFAULT_POLICIES: dict[str, dict[str, str]] = {name: dict(env.fixed) for name, env in ENVIRONMENT_TABLE.items()}
+"""The paper's fixed agents of every environment (a copy of the table's: changing it changes nothing)."""
+GYM_IDS: dict[str, str] = {env.gym_id: name for name, env in ENVIRONMENT_TABLE.items()}
+"""Gymnasium id -> environment name."""
+
+
+def face_module(name: str) -> ModuleType:
+    """The PettingZoo face module of environment ``name`` (``ValueError`` for an unknown name)."""
+    if name not in ENVIRONMENT_TABLE:
+        raise ValueError(f"unknown environment {name!r}; registered: {sorted(ENVIRONMENT_TABLE)}")
+    return importlib.import_module(ENVIRONMENT_TABLE[name].module)
