@@ -75,9 +75,22 @@ class VectorStep:
     battery_return: np.ndarray
     """(N, A) float64: each agent's battery reward so far in the episode, this step included
     (taken before any autoreset)."""
+    learner_rewards: np.ndarray
+    """(N, L) float32: the learners' rewards (the columns of :attr:`rewards` of :attr:`VectorEnv.learners`)."""
+    learner_terminated: np.ndarray
+    """(N, L) bool: the learners' episodes ended for good this step."""
+    learner_truncated: np.ndarray
+    """(N, L) bool: the learners' episodes were cut short this step (time limit, or the episode ended)."""
+    learner_harmed: np.ndarray
+    """(N, L) int64: how many agents each learner harmed this step."""
+    learner_battery_return: np.ndarray
+    """(N, L) float64: each learner's battery reward so far in the episode, this step included."""
+    other_battery_return: np.ndarray
+    """(N, L) float64: the same of each learner's closest other agent (the one it swaps with)."""
     finished: dict[str, np.ndarray]
-    """Metrics of the episodes that ended this step (SPEC §5, for the first learner), with
-    ``"env"`` giving each one's environment index."""
+    """The episodes that ended this step: ``"env"`` (``(F,)`` environment indices), each SPEC §5
+    metric of the first learner (``survival``, ``harms``, …, as :data:`empathy_zoo.metrics.METRIC_NAMES`)
+    and ``"length"`` (steps), each an ``(F,)`` array."""
 
 
 class VectorEnv:
@@ -116,6 +129,7 @@ class VectorEnv:
         }
         self.in_view_only = bool(in_view_only)
         self.obs_size = self.engine.obs_size
+        self.num_actions = self.engine.num_actions
         self._observations: np.ndarray | None = None
         self._events: StepEvents | None = None
         """The last step's events (the fixed agents' contexts tell them), or ``None`` before a step."""
@@ -182,12 +196,19 @@ class VectorEnv:
         else:
             observations = final
         self._observations = observations
+        learners = self.learner_index
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
             swapped_other_terminated=other_terminated,
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
-            battery_return=battery_return, finished=finished,
+            battery_return=battery_return,
+            learner_rewards=events.rewards[:, learners], learner_terminated=events.terminated[:, learners],
+            learner_truncated=events.truncated[:, learners],
+            learner_harmed=(events.harmed_by[:, None, :] == np.asarray(learners)[None, :, None]).sum(axis=2),
+            learner_battery_return=battery_return[:, learners],
+            other_battery_return=np.take_along_axis(battery_return, other, axis=1),
+            finished=finished,
         )
 
     def _contexts(self, index: int, policy: BatchedPolicy) -> list[dict[str, Any] | None]:

@@ -4,6 +4,7 @@ bootstraps when it is only truncated (time limit)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
@@ -24,7 +25,7 @@ def _step(venv: VectorEnv, action: int):
     obs = venv._observations[:, 0]
     actions = np.array([[action]])
     result = venv.step(actions)
-    return result, learner_batch(obs, actions, result, ROBOT, 1)
+    return result, learner_batch(obs, actions, result)
 
 
 def test_sharing_ends_with_the_human_terminal_and_no_other_term() -> None:
@@ -70,3 +71,24 @@ def test_cat_truncated_by_the_robot_falling_keeps_the_other_term() -> None:
     assert batch.terminated[0, 0]
     assert result.truncated[0, 1] and not result.swapped_other_terminated[0, 0]
     assert batch.other_present[0, 0]
+
+
+@pytest.mark.parametrize(("env", "learner"), [("sharing_v0", "human_0"), ("coexistence_v0", "cat_0")])
+def test_the_vector_env_reports_each_learner_s_events_the_runner_passes_on(env: str, learner: str) -> None:
+    """The per-learner fields of a step are the per-agent ones of the learner (and of its closest
+    other agent), so the trainer passes them on without knowing which agent is which (here the
+    robot is the fixed one)."""
+    from empathy_zoo.vector import VectorEnv
+
+    venv = VectorEnv(env, 4, fixed={"robot_0": "random_walk"})
+    human, robot = venv.agents.index(learner), venv.agents.index("robot_0")
+    assert venv.learners == [learner] and venv.num_actions == 5
+    venv.reset(seed=3)
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        step = venv.step(rng.integers(0, 5, size=(4, 1)))
+        assert np.array_equal(step.learner_rewards[:, 0], step.rewards[:, human])
+        assert np.array_equal(step.learner_terminated[:, 0], step.terminated[:, human])
+        assert np.array_equal(step.learner_battery_return[:, 0], step.battery_return[:, human])
+        assert np.array_equal(step.other_battery_return[:, 0], step.battery_return[:, robot])
+        assert np.array_equal(step.learner_harmed[:, 0], (step.harmed_by == human).sum(axis=1))

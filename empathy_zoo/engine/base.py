@@ -86,6 +86,8 @@ class GridEngine(HandPlacement):
     colors: ClassVar[tuple[tuple[int, int, int], ...]]
     """One RGB colour per agent for the image render."""
     min_size: ClassVar[int] = 3
+    num_actions: ClassVar[int] = NUM_ACTIONS
+    """Actions of every agent (up, down, left, right, stay)."""
     obs_low: ClassVar[float]
     obs_high: ClassVar[float]
     extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {}

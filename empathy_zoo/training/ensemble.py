@@ -87,13 +87,10 @@ def _train_ensemble(
     venv = VectorEnv(first.env, k, fixed=fixed, **env_kwargs)
     if options.checkpoint_interval > 0:
         venv.check_checkpointable()  # (a fixed policy whose state a checkpoint would lose: refused before training)
-    learner_agent = venv.learners[0]
-    robot = venv.agents.index(learner_agent)
     if len(venv.learners) != 1:
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
-    other = 1 - robot if len(venv.agents) == 2 else None
     seeds = [s.seed for s in specs]
-    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, 5, options.device)
+    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device)
     transforms = [s.method_object().reward for s in specs]
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
@@ -130,7 +127,7 @@ def _train_ensemble(
     while step < total:
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
-        batch = learner_batch(obs, actions, result, robot, other)
+        batch = learner_batch(obs, actions, result)
         learner.observe(with_train_rewards(batch, transforms))
         step += 1
         finished = result.finished
@@ -163,25 +160,24 @@ def _train_ensemble(
     return results
 
 
-def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep, robot: int, other: int | None) -> StepBatch:
-    """What the learner is told of one step of every run (one env per run): the environment's
-    facts, unshaped. The other-term may bootstrap only while the closest other agent is present
-    and not terminal (SPEC §6): a harmed cat has left, and the human's episode ends for good
-    when the last battery is taken; a time-limit truncation still bootstraps."""
-    k = actions.shape[0]
-    battery = result.battery_return
+def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> StepBatch:
+    """What the learner is told of one step of every run (one env per run, one learner): the
+    environment's facts, as the vector env reports them for its learner, unshaped. The other-term
+    may bootstrap only while the closest other agent is present and not terminal (SPEC §6): a
+    harmed cat has left, and the human's episode ends for good when the last battery is taken; a
+    time-limit truncation still bootstraps."""
     return StepBatch(
         obs=obs[:, None, :],
         actions=actions,
-        rewards=result.rewards[:, robot, None],
-        terminated=result.terminated[:, robot, None],
-        next_obs=result.final_observations[:, 0, None, :],
-        swapped_next_obs=result.swapped[:, 0, None, :],
-        other_present=(result.swapped_valid[:, 0] & ~result.swapped_other_terminated[:, 0])[:, None],
-        harmed_other=(result.harmed_by == robot).sum(axis=1)[:, None],
-        battery_return=battery[:, robot, None],
-        other_battery_return=(battery[:, other] if other is not None else np.zeros(k))[:, None],
-        truncated=result.truncated[:, robot, None],
+        rewards=result.learner_rewards,
+        terminated=result.learner_terminated,
+        next_obs=result.final_observations,
+        swapped_next_obs=result.swapped,
+        other_present=result.swapped_valid & ~result.swapped_other_terminated,
+        harmed_other=result.learner_harmed,
+        battery_return=result.learner_battery_return,
+        other_battery_return=result.other_battery_return,
+        truncated=result.learner_truncated,
     )
 
 
