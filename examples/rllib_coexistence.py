@@ -9,8 +9,8 @@ virtual environment of its own is best; tests/test_rllib.py checks this setup).
 
 Prints, per iteration, the mean training return (= survival: +1 per operative step) and episode
 length; then runs the trained policy greedily for a few episodes and prints the suite's scored
-metrics (survival, harms: ``engine.episode_metrics``), computed from what happened, not from
-the reward.
+metrics (survival, harms: the env's ``infos[agent]["episode"]`` at an episode's end), computed
+from what happened, not from the reward.
 """
 
 from __future__ import annotations
@@ -41,20 +41,18 @@ def greedy_action(module, observation: np.ndarray) -> int:
 
 
 def greedy_scores(module, episodes: int, seed: int) -> dict[str, float]:
-    """Run the trained robot greedily; the suite's metrics of each episode, averaged."""
+    """Run the trained robot greedily; the suite's metrics of each episode (which the env reports
+    in the robot's last ``infos`` as ``"episode"``), averaged."""
     env = make_env()
-    engine = env.par_env.unwrapped.engine
-    robot = env.par_env.unwrapped.possible_agents.index(ROBOT)
     scores: dict[str, list[float]] = {"survival": [], "harms": []}
     for episode in range(episodes):
         obs, _ = env.reset(seed=seed + episode)
         done = False
         while not done:
-            obs, _, terminated, truncated, _ = env.step({ROBOT: greedy_action(module, obs[ROBOT])})
+            obs, _, terminated, truncated, infos = env.step({ROBOT: greedy_action(module, obs[ROBOT])})
             done = terminated["__all__"] or truncated["__all__"]
-        metrics = engine.episode_metrics(np.array([0]), learner=robot)
         for name in scores:
-            scores[name].append(float(metrics[name][0]))
+            scores[name].append(infos[ROBOT]["episode"][name])
     return {name: float(np.mean(values)) for name, values in scores.items()}
 
 

@@ -153,6 +153,7 @@ def run_greedy_episode(module, env: ParallelPettingZooEnv, seed: int) -> dict:
         record["rewards"].append(rewards[ROBOT])
         record["harmed"] += len(infos[ROBOT]["harmed"])
         if terminated["__all__"] or truncated["__all__"]:
+            record["episode_info"] = infos[ROBOT].get("episode")  # the env's own report, as RLlib received it
             break
     record["metrics"] = engine.episode_metrics(np.array([0]), learner=robot)
     return record
@@ -204,6 +205,7 @@ def test_rllib_leaves_the_cat_to_its_random_walk(greedy_episodes) -> None:
 def test_suite_metrics_score_the_rllib_policy_greedy_episodes(greedy_episodes) -> None:
     for seed, episode in greedy_episodes.items():
         metrics = {name: values[0].item() for name, values in episode["metrics"].items()}
+        assert episode["episode_info"] == metrics, "the episode's metrics reach RLlib in the robot's last infos"
         length = len(episode["actions"])
         assert metrics["length"] == length <= ENV_CONFIG["max_cycles"]
         assert metrics["harms"] == episode["harmed"] <= 1, "harms: the cats the robot harmed, from the env's infos"
