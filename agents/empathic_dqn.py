@@ -36,11 +36,11 @@ from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
-from empathy_zoo.randomness import counter_integers, counter_uniform, derive_key
+from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
 
 __all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "linear_epsilon"]
 
-STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = 11, 12, 13
+STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
 
 
 def linear_epsilon(settings: EmpathicDQNSettings, env_step: int) -> float:

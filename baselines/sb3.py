@@ -45,7 +45,7 @@ import numpy as np
 import torch
 
 from agents.base import Method, StepBatch
-from empathy_zoo.randomness import derive_key
+from empathy_zoo.randomness import STREAMS, derive_key
 
 __all__ = [
     "SB3Settings", "SB3Learner", "SB3_DQN", "SB3_PPO", "SB3_METHODS", "DEFAULT_KWARGS",
@@ -53,7 +53,7 @@ __all__ = [
 ]
 
 INSTALL_HINT = 'Stable-Baselines3 is not installed; install it with: pip install "empathy-zoo[sb3]"'
-STREAM_SB3 = 15
+STREAM_SB3 = STREAMS["sb3"]
 ALGORITHMS = ("dqn", "ppo")
 
 DEFAULT_KWARGS: dict[str, dict[str, Any]] = {

@@ -13,14 +13,14 @@ from pettingzoo.utils.wrappers import BaseParallelWrapper
 from empathy_zoo.actions import check_joint_action
 from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.policies import FixedPolicy, PolicyEntry, checked_policy_action, make_policy, policy_context
-from empathy_zoo.randomness import derive_key
+from empathy_zoo.randomness import STREAMS, derive_key
 
 __all__ = ["FixedAgents", "policy_seed"]
 
 
 def policy_seed(env_seed: int, agent_index: int) -> int:
     """The seed a fixed agent gets when its environment is reset with ``env_seed``."""
-    return derive_key(env_seed, 1 + agent_index)
+    return derive_key(env_seed, STREAMS["fixed_agent"] + agent_index)
 
 
 class FixedAgents(BaseParallelWrapper, EzPickle):

@@ -13,7 +13,7 @@ from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.env import AECEnv
 
 from empathy_zoo.actions import check_action, check_joint_action
-from empathy_zoo.engine.base import GridEngine, check_env_arguments
+from empathy_zoo.engine.base import GridEngine, check_env_arguments, swap_order
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.render import render_rgb, render_text
@@ -56,10 +56,7 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         count = self.engine.num_agents
         pairs = [(v, o) for v in range(count) for o in range(count) if v != o]
         order = [list(range(count)) for _ in range(count)]
-        for v, o in pairs:
-            swapped = list(range(count))
-            swapped[v], swapped[o] = o, v
-            order.append(swapped)
+        order += [swap_order(count, v, o).tolist() for v, o in pairs]
         self._view_order = np.array(order, dtype=np.int64)
         self._viewers = self.engine.views(np.array(list(range(count)) + [v for v, _ in pairs]))
         self._view_env = np.zeros(len(order), dtype=np.int64)

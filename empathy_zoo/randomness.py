@@ -18,7 +18,21 @@ from collections.abc import Sequence
 import numpy as np
 from gymnasium.utils import seeding
 
-__all__ = ["EnvStreams", "check_seed", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
+__all__ = ["STREAMS", "EnvStreams", "check_seed", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
+
+STREAMS: dict[str, int] = {
+    "fixed_agent": 1,       # + the agent's index: a fixed agent's seed from its environment's (policy_seed)
+    "network_init": 11,     # a learner's initial weights (Empathic DQN)
+    "exploration": 12,      # a learner's ε-greedy draws
+    "replay_sample": 13,    # a learner's replay batches
+    "sb3": 15,              # the seed handed to a Stable-Baselines3 algorithm
+    "train_env": 20,        # a run's training environments
+    "eval_env": 30,         # a run's greedy-evaluation start states (+ the episode)
+}
+"""Every random stream derived from a run's seed, by name: ``derive_key(seed, STREAMS[name], ...)``.
+One id per stream, so no two streams of a run ever coincide; a new stream takes a new id here."""
+if len(set(STREAMS.values())) != len(STREAMS):
+    raise AssertionError("two random streams share an id")
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)

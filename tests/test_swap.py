@@ -175,7 +175,7 @@ def test_swap_follows_the_definition_when_it_differs_from_the_others_observation
         """Draws each agent as ``10·(index + 1) + inventory``, to itself too."""
 
         def _appearance(self, inventory, viewer):
-            return 10 * (self._agent_ids + 1) + inventory
+            return 10 * (np.arange(self.num_agents) + 1) + inventory
 
         def _self_appearance(self, inventory, viewer):
             return 10 * (viewer + 1) + inventory
@@ -224,3 +224,14 @@ def test_vector_swapped_agrees_with_the_parallel_primitive(module, in_view_only)
     assert valid_seen > 30
     if in_view_only or module is coexistence_v0:
         assert invalid_seen > 10
+
+
+def test_the_swap_permutation_exchanges_exactly_the_two_agents():
+    from empathy_zoo.engine.base import swap_order
+
+    assert swap_order(3, 0, 2).tolist() == [2, 1, 0]
+    per_env = swap_order(3, 1, np.array([0, 2, 0]))
+    assert per_env.tolist() == [[1, 0, 2], [0, 2, 1], [1, 0, 2]]
+    assert (np.take_along_axis(per_env, per_env, axis=1) == np.arange(3)).all()  # swapping twice is no swap
+    with pytest.raises(ValueError, match="itself"):
+        swap_order(2, 1, np.array([0, 1]))

@@ -27,7 +27,7 @@ from empathy_zoo.randomness import EnvStreams, check_seed
 
 __all__ = [
     "GridEngine", "StepEvents", "Views", "GRID_ARGUMENTS", "MAX_SIZE", "check_grid_arguments", "check_choice",
-    "check_env_arguments", "table_bytes",
+    "check_env_arguments", "table_bytes", "swap_order",
 ]
 
 NO_AGENT = -1
@@ -76,6 +76,19 @@ class Views:
     """``size`` as a 0-d array."""
 
 
+def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndarray:
+    """The swap (SPEC §4) as a permutation of agent indices: ``arange(num_agents)`` with ``viewer``
+    and ``other`` exchanged; ``(A,)`` for one ``other``, ``(N, A)`` for one per environment.
+    Indexing every per-agent array (cell, inventory, presence) with it swaps the two situations."""
+    other = np.asarray(other, dtype=np.int64)
+    if np.count_nonzero(other == viewer):
+        raise ValueError("an agent cannot swap places with itself")
+    order = np.broadcast_to(np.arange(num_agents, dtype=np.int64), (*other.shape, num_agents)).copy()
+    order[..., viewer] = other
+    np.put_along_axis(order, other[..., None], viewer, axis=-1)
+    return order
+
+
 class GridEngine(HandPlacement):
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
@@ -120,7 +133,6 @@ class GridEngine(HandPlacement):
         self._window_slot[self._window_slot == self.obs_size] = OUTSIDE
         """``[_spread[cell] - _spread_centre[centre]]``: the window slot of ``cell`` around ``centre``,
         or ``OUTSIDE`` (see :meth:`paint`)."""
-        self._agent_ids = np.arange(len(self.agents))
         self.streams = EnvStreams(self.num_envs)
         n, a = self.num_envs, self.num_agents
         self.cells = np.zeros((n, a), dtype=np.int64)
@@ -365,19 +377,10 @@ class GridEngine(HandPlacement):
 
         Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
         """
-        if np.ndim(other) == 0:
-            if other == viewer:
-                raise ValueError("an agent cannot swap places with itself")
-            order = self._agent_ids.copy()
-            order[[viewer, other]] = other, viewer
+        order = swap_order(self.num_agents, viewer, other)
+        if order.ndim == 1:
             cells, inventory, present = self.cells[:, order], self.inventory[:, order], self.present[:, order]
         else:
-            other = np.asarray(other, dtype=np.int64)
-            if np.count_nonzero(other == viewer):
-                raise ValueError("an agent cannot swap places with itself")
-            order = np.tile(self._agent_ids, (self.num_envs, 1))
-            order[:, viewer] = other
-            order[self._rows, other] = viewer
             order += self._agent_base  # into the flattened (N, A) arrays
             cells, inventory, present = (x.ravel().take(order) for x in (self.cells, self.inventory, self.present))
         return self.paint(self._rows, cells, inventory, present, self.views(np.full(self.num_envs, viewer)))

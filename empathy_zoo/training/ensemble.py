@@ -20,7 +20,7 @@ import torch
 from agents.base import StepBatch, with_train_rewards
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit
-from empathy_zoo.randomness import derive_key
+from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.options import RunnerOptions
@@ -33,7 +33,7 @@ from empathy_zoo.vector import VectorEnv, VectorStep
 
 __all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
 
-STREAM_ENV = 20
+STREAM_ENV = STREAMS["train_env"]
 
 
 class _EpisodeLog:

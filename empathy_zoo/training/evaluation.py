@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.randomness import derive_key
+from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.vector import VectorEnv
 
 __all__ = ["evaluate_greedy", "STREAM_EVAL"]
 
-STREAM_EVAL = 30
+STREAM_EVAL = STREAMS["eval_env"]
 
 
 def evaluate_greedy(
