@@ -436,4 +436,4 @@ SB3_PPO = Method(
 """Stable-Baselines3 PPO; name it ``baselines.sb3:SB3_PPO``."""
 
 SB3_METHODS: dict[str, Method] = {"sb3_dqn": SB3_DQN, "sb3_ppo": SB3_PPO}
-"""Both, by registry name (for ``agents.registry.METHODS``)."""
+"""Both, by registry name (for ``baselines.registry.METHODS``)."""

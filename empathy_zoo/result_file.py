@@ -216,7 +216,7 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
         check.name(config["variant"], "config.variant")
     if config.get("reward") is not None:
         check.text(check.table(config["reward"], "config.reward").get("name"), "config.reward.name")
-    from agents.registry import METHODS  # lazily: the method registry imports the learners
+    from baselines.registry import METHODS  # lazily: the method registry imports the learners
 
     method = METHODS.get(result["method"])
     if method is not None:

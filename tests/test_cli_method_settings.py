@@ -14,7 +14,7 @@ from importlib.metadata import entry_points
 import pytest
 from helpers_cli_method import TINY, AverseSettings
 
-from agents.registry import METHODS
+from baselines.registry import METHODS
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.settings_options import option_reading
 from empathy_zoo.cli.train import train_values

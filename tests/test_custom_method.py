@@ -6,7 +6,7 @@ import json
 
 import torch
 
-from agents.registry import get_method
+from baselines.registry import get_method
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 

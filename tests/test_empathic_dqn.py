@@ -10,7 +10,7 @@ import torch
 
 from agents.base import StepBatch
 from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
-from agents.registry import get_method
+from baselines.registry import get_method
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from agents.base import with_train_rewards

@@ -28,7 +28,7 @@ SOURCE = '''"""A user's method: the built-in DQN under its own name."""
 
 from dataclasses import replace
 
-from agents.registry import METHODS
+from baselines.registry import METHODS
 
 MY_DQN = replace(METHODS["dqn"], name="my_dqn", label=lambda settings: "My DQN")
 '''

@@ -58,7 +58,7 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
     if unknown:
         message = f"unrecognized arguments: {' '.join(unknown)}"
         if args.command == "train":
-            from agents.registry import get_method
+            from baselines.registry import get_method
             from empathy_zoo.training.sweep import settings_types
 
             names = ", ".join(settings_types(get_method(method).settings))

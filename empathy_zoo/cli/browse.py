@@ -16,7 +16,7 @@ __all__ = ["add_browse_commands", "cmd_methods", "cmd_play", "cmd_policies"]
 
 def cmd_methods(args: argparse.Namespace, command: str) -> int:
     """One line per registered learning method."""
-    from agents.registry import METHODS
+    from baselines.registry import METHODS
 
     width = max(map(len, METHODS))
     for name, method in METHODS.items():

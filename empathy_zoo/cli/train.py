@@ -55,7 +55,7 @@ def train_method(argv: Sequence[str]) -> str:
 
 def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, Any]]:
     """Run keys and method settings, merged: defaults < config file < command line."""
-    from agents.registry import get_method
+    from baselines.registry import get_method
     from empathy_zoo.training.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
 
     given = vars(args)
@@ -122,7 +122,7 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
 
 def add_train(sub: Any, method: str) -> None:
     """The ``train`` subcommand, with the options of ``method``'s settings."""
-    from agents.registry import get_method
+    from baselines.registry import get_method
 
     parser = sub.add_parser(
         "train", help="train one run (or several seeds as one ensemble)", argument_default=argparse.SUPPRESS,

@@ -4,16 +4,13 @@ checks, and the limits on grid size and memory (docs/limits.md)."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from empathy_zoo.engine.base import GridEngine
-
 __all__ = [
     "GRID_ARGUMENTS", "MAX_SIZE", "MAX_TABLE_BYTES", "table_bytes", "check_grid_arguments", "check_choice",
-    "check_env_arguments",
+    "check_env_arguments", "TakesArguments",
 ]
 
 GRID_ARGUMENTS = ("size", "view", "max_cycles")
@@ -22,6 +19,15 @@ MAX_SIZE = 255
 """Largest ``size`` (side of the torus) an environment accepts: the range the suite tests."""
 MAX_TABLE_BYTES = 1 << 30
 """Most memory an engine's lookup tables may need (1 GiB); a larger ``view`` is refused."""
+
+
+class TakesArguments(Protocol):
+    """What :func:`check_env_arguments` reads of an engine class."""
+
+    name: str
+    """The environment's name."""
+    extra_arguments: Mapping[str, tuple[str, ...]]
+    """Its own constructor arguments and their allowed values."""
 
 
 def table_bytes(size: int, view: int) -> int:
@@ -67,7 +73,7 @@ def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
 
 
 def check_env_arguments(
-    engine: type[GridEngine], kwargs: Mapping[str, Any], error: type[Exception] = TypeError
+    engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError
 ) -> None:
     """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
     ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""

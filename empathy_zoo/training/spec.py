@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from agents.base import Method, transform_config
-from agents.registry import get_method
+from baselines.registry import get_method
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
 from empathy_zoo.names import check_path_name

@@ -52,7 +52,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any, get_type_hints
 
-from agents.registry import get_method
+from baselines.registry import get_method
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.names import check_path_name

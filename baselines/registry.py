@@ -1,4 +1,6 @@
-"""Every learning method by name: the runner, the CLI and the sweep configs look them up here.
+"""Every learning method by name, in one table: the runner, the command line, sweep files and the
+result-file checks look them up here. It sits above every method (Empathic DQN and DQN from
+:mod:`agents`, the baselines of this package), so :mod:`agents` never imports :mod:`baselines`.
 
 Adding a method = one file with a :class:`~agents.base.Learner` (or a preset of an existing one)
 plus one entry below; or name it ``"package.module:NAME"`` where ``NAME`` is a ``Method``.
