@@ -1,0 +1,145 @@
+"""The fixed agents of the paper: the cat's random walk, the human's patrol, and a sitting agent.
+
+Each is a :class:`empathy_zoo.policies.FixedPolicy` with its own batched fast path; they are
+registered by name in :data:`empathy_zoo.policies.POLICIES` (``random_walk``, ``patrol``, ``stay``).
+"""
+
+from __future__ import annotations
+
+import secrets
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
+
+__all__ = ["RandomWalk", "Patrol", "Stay"]
+
+
+class RandomWalk:
+    """Uniformly random over the five actions (the cat). Counter-based, so it is reproducible
+    per environment whether it acts alone or batched."""
+
+    needs_observation = False
+
+    def __init__(self) -> None:
+        self._key: int | None = None
+        self._count = 0
+
+    def reset(self, seed: int | None = None) -> None:
+        if seed is not None:
+            self._key, self._count = derive_key(seed), 0
+        elif self._key is None:
+            self._key = secrets.randbits(64)
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        if self._key is None:
+            self.reset()
+        action = counter_integer(self._key, self._count, NUM_ACTIONS)
+        self._count += 1
+        return action
+
+    def state(self) -> dict[str, Any]:
+        return {"key": self._key, "count": self._count}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        self._key = None if state["key"] is None else int(state["key"])
+        self._count = int(state["count"])
+
+    def batched(self, num_envs: int) -> _RandomWalkBatch:
+        return _RandomWalkBatch(num_envs)
+
+
+class _RandomWalkBatch:
+    needs_observation = False
+
+    def __init__(self, num_envs: int) -> None:
+        self.keys = np.array([secrets.randbits(64) for _ in range(num_envs)], dtype=np.uint64)
+        self.counts = np.zeros(num_envs, dtype=np.uint64)
+
+    def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
+        for i, seed in zip(env_ids, seeds):
+            if seed is not None:
+                self.keys[i], self.counts[i] = derive_key(seed), 0
+
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
+        actions = counter_integers(self.keys, self.counts, NUM_ACTIONS)
+        self.counts += active.astype(np.uint64)
+        return actions
+
+    def state(self) -> dict[str, Any]:
+        return {"keys": self.keys.copy(), "counts": self.counts.copy()}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        for name in ("keys", "counts"):
+            value = np.asarray(state[name])
+            current = getattr(self, name)
+            if value.shape != current.shape:
+                raise ValueError(f"random walk state {name!r} has shape {value.shape}, expected {current.shape}")
+            current[...] = value.astype(np.uint64)
+
+
+class Patrol:
+    """The human of Sharing: on steps t = 0, period, 2·period, … move ``first``, otherwise ``then``.
+
+    Defaults follow the original code: up every 7th step (from t = 0), right otherwise.
+    """
+
+    needs_observation = False
+
+    def __init__(self, period: int = 7, first: int = Action.UP, then: int = Action.RIGHT) -> None:
+        if period < 1:
+            raise ValueError(f"period must be positive, got {period}")
+        for name, action in (("first", first), ("then", then)):
+            if not 0 <= int(action) < NUM_ACTIONS:
+                raise ValueError(f"{name} must be an action in [0, {NUM_ACTIONS}), got {action}")
+        self.period, self.first, self.then = int(period), int(first), int(then)
+        self._t = 0
+
+    def reset(self, seed: int | None = None) -> None:
+        self._t = 0
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        action = self.first if self._t % self.period == 0 else self.then
+        self._t += 1
+        return action
+
+    def state(self) -> dict[str, Any]:
+        return {"t": self._t}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        self._t = int(state["t"])
+
+    def batched(self, num_envs: int) -> _PatrolBatch:
+        return _PatrolBatch(self)
+
+
+class _PatrolBatch:
+    needs_observation = False
+    stateless = True
+    """Its step count is the environment's."""
+
+    def __init__(self, patrol: Patrol) -> None:
+        self.patrol = patrol
+
+    def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
+        pass  # the step count comes from the environment
+
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
+        p = self.patrol
+        return np.where(steps % p.period == 0, p.first, p.then).astype(np.int64)
+
+
+class Stay:
+    """Never moves (a sitting target; handy in tests and as a control)."""
+
+    needs_observation = False
+    stateless = True
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        return int(Action.STAY)
