@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
+from empathy_zoo.provenance import package_version
 from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
 from leaderboard.tables import (
@@ -128,7 +129,7 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     for path in figures.values():
         assert path.parent == out / "figures" and path.read_bytes().startswith(PNG_SIGNATURE)
     markdown = paths["markdown"].read_text(encoding="utf-8")
-    assert "`empathy-zoo leaderboard sweep`" in markdown and "empathy-zoo 0.1.0" in markdown
+    assert "`empathy-zoo leaderboard sweep`" in markdown and f"empathy-zoo {package_version()}" in markdown
     for path in figures.values():
         assert f"]({path.relative_to(out).as_posix()})" in markdown
     assert markdown.count("| DQN | 3 |") == 4 and "single seed" not in markdown
