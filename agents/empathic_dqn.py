@@ -37,18 +37,11 @@ from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
+from empathy_zoo.schedules import linear_epsilon
 
 __all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "linear_epsilon"]
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
-
-
-def linear_epsilon(settings: EmpathicDQNSettings, env_step: int) -> float:
-    """ε after ``env_step`` steps of a run: 1 during warm-up, then linear to ``epsilon_end``."""
-    if env_step < settings.learning_starts:
-        return 1.0
-    fraction = min(1.0, (env_step - settings.learning_starts) / settings.epsilon_decay_steps)
-    return settings.epsilon_start + fraction * (settings.epsilon_end - settings.epsilon_start)
 
 
 def double_dqn_target(

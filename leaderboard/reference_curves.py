@@ -5,11 +5,13 @@ run explored with at each point of training. Drawn dashed in the curve's colour.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.schedules import linear_epsilon
 
 __all__ = ["REFERENCE_METRICS", "reference_curve"]
 
@@ -21,8 +23,6 @@ _EMPATHIC = ("empathic_dqn", "dqn")
 def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarray) -> np.ndarray | None:
     """The reference's ``metric`` at each of ``steps`` for a group of runs, or ``None`` when the
     reference does not apply (another env, fixed agent or method; runs of different settings)."""
-    from agents.empathic_dqn import linear_epsilon
-    from agents.settings import EmpathicDQNSettings
     from empathy_zoo.reference import coexistence_optimum
 
     if metric not in REFERENCE_METRICS or not runs:
@@ -34,7 +34,7 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
             or set(config.get("env_kwargs") or {}) - {"size", "max_cycles"}
             or any(run.get("config", {}).get("settings") != config.get("settings") for run in runs)):
         return None
-    settings = EmpathicDQNSettings(**config["settings"])
+    settings = SimpleNamespace(**config["settings"])
     arguments = {"gamma": settings.gamma, **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()}}
     values = []
     for step in steps:

@@ -15,13 +15,14 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
-from empathy_zoo.environments import ENGINES
-from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES
+from empathy_zoo.schedules import linear_epsilon
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
@@ -107,15 +108,13 @@ def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
 def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float, int]:
     """The ε schedule over the env steps of a run's final 10 % of training episodes, as
     ``{ε rounded to digits: steps}`` (its settings' schedule, read before each step)."""
-    from agents.empathic_dqn import linear_epsilon
-    from agents.settings import EmpathicDQNSettings
 
     ends = run["train"]["episode_end_step"]
     if not ends:
         return {}
     first = len(ends) - final_episode_count(len(ends))
     start = int(ends[first - 1]) if first > 0 else 0
-    settings = EmpathicDQNSettings(**run["config"]["settings"])
+    settings = SimpleNamespace(**run["config"]["settings"])
     counts: dict[float, int] = {}
     for step in range(start, int(ends[-1])):
         epsilon = round(linear_epsilon(settings, step), digits)
