@@ -41,6 +41,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
+from empathy_zoo.policies import policy_entry
 from empathy_zoo.provenance import git_commit, package_version
 from empathy_zoo.registry import PLUGIN_NAME, resolve_name
 
@@ -102,14 +103,8 @@ def plugin_names(spec: RunSpec) -> dict[str, tuple[str, str]]:
     """The plug-ins ``spec`` names by module path, by module: ``(plug-in name, kind)`` (its method
     and its fixed policies, each a name or a table with a ``"policy"`` key)."""
     named = [(spec.method, "method")]
-    for agent, entry in spec.fixed_policies().items():
-        if isinstance(entry, Mapping):
-            if "policy" not in entry:
-                raise ValueError(f"fixed agent {agent!r}: a table names its policy under 'policy', got {dict(entry)!r}")
-            entry = entry["policy"]
-        if not isinstance(entry, str):
-            raise ValueError(f"fixed agent {agent!r}: a policy is named by a string, got {entry!r}")
-        named.append((entry, "fixed policy"))
+    for entry in map(policy_entry, spec.fixed_policies().values()):
+        named.append((entry if isinstance(entry, str) else entry["policy"], "fixed policy"))
     return {name.partition(":")[0]: (name, kind) for name, kind in named if PLUGIN_NAME.fullmatch(name)}
 
 
