@@ -90,6 +90,18 @@ def test_config_file_is_applied_end_to_end(tmp_path):
     assert result["config"]["settings"]["learning_rate"] == 0.002
 
 
+def test_a_config_file_builds_a_fixed_agent_with_arguments(tmp_path, capsys):
+    config = tmp_path / "run.toml"
+    config.write_text('env = "sharing_v0"\nfixed = { human_0 = { policy = "patrol", period = 3 } }\n')
+    out = tmp_path / "out"
+    assert train(out, "--config", str(config)) == 0
+    [path] = run_files(out)
+    assert json.loads(path.read_text())["config"]["fixed"] == {"human_0": "patrol(period=3)"}
+    config.write_text('env = "sharing_v0"\nfixed = { human_0 = { policy = "patrol", pace = 3 } }\n')
+    assert train(tmp_path / "bad", "--config", str(config)) == 2
+    assert "takes no argument 'pace'" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(("content", "expected"), [
     ("steps = 100\nfoo = 1\n", "top level: unknown key 'foo'; allowed keys: env, method"),
     ("steps = 'many'\n", "steps: expected int, got str 'many'"),

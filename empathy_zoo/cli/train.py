@@ -16,14 +16,14 @@ from empathy_zoo.cli.common import (
     PROG, RUN_DEFAULTS, add_runner_options, agent_policy, check_results, run_summary, runner_options,
 )
 from empathy_zoo.cli.settings_options import add_settings_options, given_settings
-from empathy_zoo.training.sweep import SEEDS, STR_TABLE
+from empathy_zoo.training.sweep import POLICY_TABLE, SEEDS
 
 __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
 
 RUN_KEYS: dict[str, Any] = {
     "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
     "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
-    "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": STR_TABLE,
+    "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": POLICY_TABLE,
     "start": str, "inventory_encoding": str, "progress": bool,
 }
 """Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
