@@ -62,6 +62,9 @@ observe had it exchanged places with `other` (here: `other`'s own observation); 
 * v0, 2026-11-29: `size` is at most 255, and a `view` whose lookup tables would need more than
   1 GiB is refused (both with a `ValueError` stating the memory); the tables grow with the number
   of cells instead of its square (size 101 took 4.1 GB). Every observation and outcome unchanged.
+* v0, empathy-zoo 0.2.0: `infos[agent]["episode"]` holds each agent's episode metrics at the step
+  that ends the episode; a fixed agent's context is the same on every face. Every observation,
+  reward and outcome unchanged.
 """
 
 from __future__ import annotations

@@ -89,6 +89,9 @@ closer to either of the paper's two sources, which disagree in places: the autho
 * v0, 2026-11-29: `size` is at most 255, and a `view` whose lookup tables would need more than
   1 GiB is refused (both with a `ValueError` stating the memory); the tables grow with the number
   of cells instead of its square. Every observation and outcome unchanged.
+* v0, empathy-zoo 0.2.0: `infos[agent]["episode"]` holds each agent's episode metrics at the step
+  that ends the episode; a fixed agent's context is the same on every face. Every observation,
+  reward and outcome unchanged.
 """
 
 from __future__ import annotations
