@@ -8,10 +8,11 @@ from pathlib import Path
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_text_atomic
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, score_runs,
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, score_runs, table_env,
 )
 from leaderboard.plots import plot_learning_curves
-from leaderboard.tables import Provenance, csv_text, html_report, markdown_report
+from leaderboard.tables import TRADEOFF, Provenance, csv_text, html_report, markdown_report
+from leaderboard.tradeoff import plot_tradeoffs
 
 __all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "write_leaderboard"]
 
@@ -39,8 +40,9 @@ def write_leaderboard(
     command that produced the leaderboard (default: the equivalent Python call).
 
     Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
-    ``figures/<env>_<metric>.png``. Returns ``{"markdown", "csv", "html": path}`` plus
-    ``"figure:<env>:<metric>": path`` for every figure. No result file raises ``ValueError``.
+    ``figures/<env>_<metric>.png`` (learning curves) and ``figures/<env>_tradeoff.png`` (task against
+    side effect, :mod:`leaderboard.tradeoff`). Returns ``{"markdown", "csv", "html": path}`` plus
+    ``"figure:<env>:<metric>": path`` for every figure (``<metric>`` is ``tradeoff`` for the trade-off). No result file raises ``ValueError``.
     """
     results = load_results(results_dir)
     out = check_output_dir(results_dir if out_dir is None else out_dir, (FIGURES_DIR,))
@@ -53,8 +55,10 @@ def write_leaderboard(
     )
     scores = score_runs(results, final_fraction=final_fraction, random_state=random_state,
                         n_resamples=n_resamples, confidence=confidence)
-    figures = plot_learning_curves(results, out / FIGURES_DIR, n_bins=n_bins, random_state=random_state,
-                                   n_resamples=n_resamples, confidence=confidence)
+    curves = plot_learning_curves(results, out / FIGURES_DIR, n_bins=n_bins, random_state=random_state,
+                                  n_resamples=n_resamples, confidence=confidence)
+    tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, {table_env(run): run["env"] for run in results})
+    figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
     pngs = {key: path.read_bytes() for key, path in figures.items()}
     paths = {

@@ -13,6 +13,7 @@ import io
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
@@ -166,14 +167,27 @@ def markdown_report(
     return "\n".join(lines) + "\n"
 
 
+TRADEOFF = "tradeoff"
+"""The figure key (in place of a metric) of an env's task-against-side-effect figure."""
+
+
+def _figure_sections(figures: Mapping[tuple[str, str], Any], env: str | None) -> list[tuple[str, list[tuple[str, Any]]]]:
+    """``[(heading, [(alt text, figure)])]`` of ``env``: its trade-off, then its learning curves."""
+    mine = [(metric, figure) for (figure_env, metric), figure in figures.items() if figure_env == env]
+    tradeoff = [(f"{env}: task against side effect", figure) for metric, figure in mine if metric == TRADEOFF]
+    curves = [(f"{env}: {metric} vs training steps", figure) for metric, figure in mine if metric != TRADEOFF]
+    return [(heading, items) for heading, items in
+            (("Task against side effect", tradeoff), ("Learning curves", curves)) if items]
+
+
 def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -> list[str]:
-    links = [(metric, link) for (figure_env, metric), link in figures.items() if figure_env == env]
-    if not links:
-        return []
-    lines = ["", "### Learning curves", ""]
-    for metric, link in links:
-        lines += [f"![{env}: {metric} vs training steps]({link})", ""]
-    return lines[:-1]
+    lines = []
+    for heading, items in _figure_sections(figures, env):
+        lines += ["", f"### {heading}", ""]
+        for alt, link in items:
+            lines += [f"![{alt}]({link})", ""]
+        lines.pop()
+    return lines
 
 
 def _csv_number(value: float) -> str:
@@ -218,14 +232,12 @@ def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
 
 
 def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> list[str]:
-    images = [(metric, png) for (figure_env, metric), png in figures.items() if figure_env == env]
-    if not images:
-        return []
-    lines = ["<h3>Learning curves</h3>"]
-    for metric, png in images:
-        data = base64.b64encode(png).decode("ascii")
-        alt = html.escape(f"{env}: {metric} vs training steps")
-        lines.append(f'<img alt="{alt}" src="data:image/png;base64,{data}">')
+    lines = []
+    for heading, items in _figure_sections(figures, env):
+        lines.append(f"<h3>{html.escape(heading)}</h3>")
+        for alt, png in items:
+            data = base64.b64encode(png).decode("ascii")
+            lines.append(f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">')
     return lines
 
 

@@ -123,7 +123,8 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     assert paths["csv"] == out / "leaderboard.csv" and paths["html"] == out / "leaderboard.html"
     figures = {key: path for key, path in paths.items() if key.startswith("figure:")}
     assert sorted(figures) == ["figure:coexistence_v0:harms", "figure:coexistence_v0:survival",
-                               "figure:sharing_v0:batteries", "figure:sharing_v0:equality"]
+                               "figure:coexistence_v0:tradeoff", "figure:sharing_v0:batteries",
+                               "figure:sharing_v0:equality", "figure:sharing_v0:tradeoff"]
     for path in paths.values():
         assert path.is_file() and path.stat().st_size > 0
     for path in figures.values():
@@ -139,7 +140,8 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     for row in rows:
         assert float(row["ci_low"]) <= float(row["mean"]) <= float(row["ci_high"])
     html = paths["html"].read_text(encoding="utf-8")
-    assert html.count('<img alt="') == 4 and "<style>" in html and "empathy-zoo leaderboard sweep" in html
+    assert html.count('<img alt="') == 6 and "<style>" in html
+    assert markdown.count("### Task against side effect") == 2 and html.count("<h3>Task against side effect</h3>") == 2 and "empathy-zoo leaderboard sweep" in html
     assert not [p.name for p in out.rglob(".*")], "temporary files left behind"
 
 
