@@ -32,8 +32,8 @@ from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 
 __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
-    "N_BINS", "Score", "Curve", "table_env", "result_files", "load_results", "group_runs", "final_episode_count",
-    "run_scalars", "bootstrap_mean_ci", "score_runs", "binned_curve", "learning_curves",
+    "N_POINTS", "Score", "Curve", "table_env", "result_files", "load_results", "group_runs", "final_episode_count",
+    "run_scalars", "bootstrap_mean_ci", "score_runs", "rolling_curve", "learning_curves",
 ]
 
 PHASES: tuple[str, ...] = ("eval", "train_final10")
@@ -46,8 +46,8 @@ CONFIDENCE = 0.95
 """Coverage of the percentile-bootstrap intervals."""
 DEFAULT_SEED = 0
 """Seed of the ``numpy.random.Generator`` used for every interval unless one is given."""
-N_BINS = 50
-"""Bins of training env steps per learning curve."""
+N_POINTS = 50
+"""Points (equally spaced training env steps) per learning curve."""
 
 RandomState = np.random.Generator | int
 
@@ -71,13 +71,13 @@ class Score:
 
 @dataclass(frozen=True)
 class Curve:
-    """A learning curve of one metric for one method: per-bin mean over seeds and its interval."""
+    """A learning curve of one metric for one method: per-point mean over seeds and its interval."""
 
     env: str
     method_label: str
     metric: str
     steps: np.ndarray
-    """Centre (in training env steps) of every bin."""
+    """Training env steps of every point."""
     mean: np.ndarray
     ci_low: np.ndarray
     ci_high: np.ndarray
@@ -242,21 +242,23 @@ def score_runs(
     return scores
 
 
-def binned_curve(end_steps: np.ndarray | Sequence[int], values: np.ndarray | Sequence[float],
-                 edges: np.ndarray) -> np.ndarray:
-    """Mean of ``values`` per bin of ``end_steps``; bins are ``(edges[i], edges[i+1]]``.
-
-    The first bin also takes step 0 and the last everything beyond ``edges[-1]``; a bin without
-    a finite value is NaN.
-    """
+def rolling_curve(end_steps: np.ndarray | Sequence[int], values: np.ndarray | Sequence[float],
+                  points: np.ndarray, window: int) -> np.ndarray:
+    """At each of ``points`` (env steps), the mean of ``values`` over the last ``window`` episodes
+    that ended at or before it (``end_steps``, ascending); NaN before the first episode ends, and
+    where those episodes hold no finite value. Every point averages up to ``window`` episodes, so a
+    curve has no gaps once the first episode has ended, at any budget."""
+    if window < 1:
+        raise ValueError(f"window must be at least 1 episode, got {window}")
     steps = np.asarray(end_steps, dtype=np.float64)
     data = np.asarray(values, dtype=np.float64)
-    n_bins = len(edges) - 1
-    index = np.clip(np.searchsorted(edges, steps, side="left") - 1, 0, n_bins - 1)
     finite = np.isfinite(data)
-    total = np.bincount(index, weights=np.where(finite, data, 0.0), minlength=n_bins)
-    count = np.bincount(index, weights=finite.astype(np.float64), minlength=n_bins)
-    return np.where(count > 0, total / np.maximum(count, 1.0), np.nan)
+    total = np.concatenate([[0.0], np.cumsum(np.where(finite, data, 0.0))])
+    count = np.concatenate([[0.0], np.cumsum(finite)])
+    ended = np.searchsorted(steps, np.asarray(points, dtype=np.float64), side="right")
+    first = np.maximum(ended - window, 0)
+    n = count[ended] - count[first]
+    return np.where(n > 0, (total[ended] - total[first]) / np.maximum(n, 1.0), np.nan)
 
 
 def learning_curves(
@@ -264,29 +266,32 @@ def learning_curves(
     metric: str,
     *,
     env: str | None = None,
-    n_bins: int = N_BINS,
+    n_points: int = N_POINTS,
+    window: int | None = None,
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> list[Curve]:
     """Training curves of ``metric`` per ``(env, method_label)`` group (only ``env`` if given).
 
-    Each run's training episodes are binned by ``episode_end_step`` into ``n_bins`` equal bins
-    over ``[0, steps]`` (the group's largest ``steps``, so seeds share bins), averaged per bin,
-    then averaged over seeds with a per-bin bootstrap interval (see :func:`bootstrap_mean_ci`).
+    Each run's curve is a rolling mean (:func:`rolling_curve`) at ``n_points`` equally spaced
+    steps up to the group's largest ``steps`` (so seeds share points), over the last ``window``
+    training episodes; ``None`` = a tenth of the run's episodes (:func:`final_episode_count`), so a
+    curve's last point is the run's final-10 % score whatever the budget. The runs' curves are
+    averaged with a per-point bootstrap interval (see :func:`bootstrap_mean_ci`).
     """
     curves: list[Curve] = []
     for (group_env, label), runs in group_runs(results).items():
         if env is not None and group_env != env:
             continue
-        edges = np.linspace(0.0, float(max(run["steps"] for run in runs)), n_bins + 1)
-        per_run = np.array([
-            binned_curve(run["train"].get("episode_end_step", []), _column(run["train"], metric), edges)
-            for run in runs
-        ])
+        points = np.linspace(0.0, float(max(run["steps"] for run in runs)), n_points + 1)[1:]
+        per_run = []
+        for run in runs:
+            ends = run["train"].get("episode_end_step", [])
+            size = window if window is not None else max(1, final_episode_count(len(ends)))
+            per_run.append(rolling_curve(ends, _column(run["train"], metric), points, size))
         mean, low, high = bootstrap_mean_ci(
-            per_run, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+            np.array(per_run), random_state=random_state, n_resamples=n_resamples, confidence=confidence
         )
-        centres = (edges[:-1] + edges[1:]) / 2.0
-        curves.append(Curve(group_env, label, metric, centres, mean, low, high, len(runs)))
+        curves.append(Curve(group_env, label, metric, points, mean, low, high, len(runs)))
     return curves

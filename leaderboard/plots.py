@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, N_BINS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
+    CONFIDENCE, DEFAULT_SEED, N_POINTS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
 )
 from leaderboard.reference_curves import reference_curve
 
@@ -93,7 +93,7 @@ def plot_metric(
     *,
     ylabel: str | None = None,
     title: str | None = None,
-    n_bins: int = N_BINS,
+    n_points: int = N_POINTS,
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
@@ -102,7 +102,7 @@ def plot_metric(
     where it applies: :mod:`leaderboard.reference_curves`) and write the PNG to ``path``."""
     results = list(results)
     curves = learning_curves(
-        results, metric, env=env, n_bins=n_bins, random_state=random_state,
+        results, metric, env=env, n_points=n_points, random_state=random_state,
         n_resamples=n_resamples, confidence=confidence,
     )
     if not curves:
@@ -121,7 +121,7 @@ def plot_learning_curves(
     figures_dir: str | os.PathLike[str],
     *,
     specs: Mapping[str, FigureSpec] = FIGURE_SPECS,
-    n_bins: int = N_BINS,
+    n_points: int = N_POINTS,
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
@@ -138,6 +138,6 @@ def plot_learning_curves(
         for metric, ylabel in specs.get(env, specs.get(base_env[env], FALLBACK_SPEC)):
             paths[(env, metric)] = plot_metric(
                 results, env, metric, confined(figures_dir, figure_filename(env, metric)), ylabel=ylabel,
-                n_bins=n_bins, random_state=random_state, n_resamples=n_resamples, confidence=confidence,
+                n_points=n_points, random_state=random_state, n_resamples=n_resamples, confidence=confidence,
             )
     return paths

@@ -8,7 +8,7 @@ from pathlib import Path
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_text_atomic
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_BINS, N_RESAMPLES, load_results, score_runs, table_env,
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_POINTS, N_RESAMPLES, load_results, score_runs, table_env,
 )
 from leaderboard.plots import plot_learning_curves
 from leaderboard.tables import TRADEOFF, Provenance, csv_text, html_report, markdown_report
@@ -27,7 +27,7 @@ def write_leaderboard(
     out_dir: str | os.PathLike[str] | None = None,
     command: str | None = None,
     *,
-    n_bins: int = N_BINS,
+    n_points: int = N_POINTS,
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
@@ -55,7 +55,7 @@ def write_leaderboard(
     )
     scores = score_runs(results, final_fraction=final_fraction, random_state=random_state,
                         n_resamples=n_resamples, confidence=confidence)
-    curves = plot_learning_curves(results, out / FIGURES_DIR, n_bins=n_bins, random_state=random_state,
+    curves = plot_learning_curves(results, out / FIGURES_DIR, n_points=n_points, random_state=random_state,
                                   n_resamples=n_resamples, confidence=confidence)
     tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, {table_env(run): run["env"] for run in results})
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}

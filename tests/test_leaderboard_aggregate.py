@@ -12,8 +12,8 @@ import pytest
 
 from empathy_zoo.metrics import METRIC_NAMES
 from leaderboard.aggregate import (
-    binned_curve, bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results,
-    result_files, run_scalars, score_runs,
+    bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results,
+    result_files, rolling_curve, run_scalars, score_runs,
 )
 
 
@@ -130,23 +130,36 @@ def test_group_runs_orders_envs_then_methods_then_labels() -> None:
     assert list(group_runs(runs)) == [("coexistence_v0", "Z"), ("coexistence_v0", "A"), ("sharing_v0", "B")]
 
 
-def test_binned_curve_means_per_step_bin_and_nan_for_empty_bins() -> None:
-    edges = np.array([0.0, 10.0, 20.0, 30.0])
-    curve = binned_curve([5, 10, 11, 20, 35], [1.0, 2.0, 3.0, float("nan"), 5.0], edges)
-    assert curve[0] == 1.5 and curve[1] == 3.0 and curve[2] == 5.0
-    assert np.isnan(binned_curve([5], [1.0], edges)[1:]).all()
+def test_rolling_curve_means_the_last_window_episodes_at_each_point() -> None:
+    ends, values = [5, 10, 11, 20, 35], [1.0, 2.0, 3.0, float("nan"), 5.0]
+    curve = rolling_curve(ends, values, np.array([4.0, 10.0, 15.0, 30.0, 40.0]), window=2)
+    assert np.isnan(curve[0])  # no episode has ended yet
+    assert curve[1:].tolist() == [1.5, 2.5, 3.0, 5.0]  # (1, 2), (2, 3), (3, nan), (nan, 5)
+    assert rolling_curve(ends, values, np.array([40.0]), window=100).tolist() == [2.75]
+    assert np.isnan(rolling_curve([], [], np.array([10.0]), window=1)).all()
+    with pytest.raises(ValueError, match="at least 1"):
+        rolling_curve(ends, values, np.array([10.0]), window=0)
 
 
-def test_learning_curves_average_seeds_per_bin_with_bootstrap() -> None:
+def test_learning_curves_have_no_gaps_at_a_small_budget() -> None:
+    """A run with fewer episodes than points: every point after the first episode has a value."""
+    run = make_run("coexistence_v0", "DQN", 0, [3.0, 5.0, 9.0], end_steps=[400, 2_000, 2_100])
+    run["steps"] = 3_000
+    (curve,) = learning_curves([run], "survival", n_points=30, n_resamples=50)
+    assert np.isnan(curve.mean[curve.steps < 400]).all() and np.isfinite(curve.mean[curve.steps >= 400]).all()
+    assert curve.mean[-1] == 9.0  # the last tenth of three episodes: the last one
+
+
+def test_learning_curves_average_seeds_per_point_with_bootstrap() -> None:
     runs = [make_run("coexistence_v0", "DQN", seed, values, end_steps=[25, 50, 75, 100])
             for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])]
     runs.append(make_run("sharing_v0", "DQN", 0, [1.0]))
-    (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_bins=4, random_state=5, n_resamples=200)
-    assert curve.steps.tolist() == [12.5, 37.5, 62.5, 87.5]
+    (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4, random_state=5, n_resamples=200)
+    assert curve.steps.tolist() == [25.0, 50.0, 75.0, 100.0]
     assert curve.mean.tolist() == [3.0, 2.0, 5.0, 6.0] and curve.n_seeds == 3
     expected = bootstrap_by_hand(np.array([2.0, 4.0, 0.0]), 5, 200)
     assert (curve.ci_low[1], curve.ci_high[1]) == pytest.approx(expected, rel=1e-12)
-    assert len(learning_curves(runs, "survival", n_bins=4)) == 2
+    assert len(learning_curves(runs, "survival", n_points=4)) == 2
 
 
 def write_runs(directory: Path, runs: list[dict[str, Any]]) -> None:
