@@ -57,14 +57,15 @@ def write_leaderboard(
                         n_resamples=n_resamples, confidence=confidence)
     curves = plot_learning_curves(results, out / FIGURES_DIR, n_points=n_points, random_state=random_state,
                                   n_resamples=n_resamples, confidence=confidence)
-    tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, {table_env(run): run["env"] for run in results})
+    base_env = {table_env(run): run["env"] for run in results}  # a variant is shown like its env
+    tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
     pngs = {key: path.read_bytes() for key, path in figures.items()}
     paths = {
-        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links)),
+        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links, base_env=base_env)),
         "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance)),
-        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs)),
+        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs, base_env=base_env)),
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     return paths

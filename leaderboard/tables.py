@@ -79,6 +79,24 @@ def format_interval(mean: float, low: float, high: float, digits: int = 2) -> st
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
 
 
+TABLE_METRICS: dict[str, tuple[str, ...]] = {
+    "coexistence_v0": ("survival", "harms", "other_return"),
+    "sharing_v0": ("batteries", "other_batteries", "equality", "return", "other_return"),
+}
+"""The metrics that mean something in each environment's tables (a variant's are its environment's):
+Coexistence has no batteries, and its ``return`` is its ``survival``; ``other_return`` is the
+cat's steps operative there, and the human's battery reward in Sharing, which has no harms.
+The CSV keeps every metric."""
+
+
+def env_metrics(env: str, base_env: Mapping[str, str] | None, metrics: Sequence[str]) -> Sequence[str]:
+    """The columns of ``env``'s tables: its :data:`TABLE_METRICS` when the caller asked for every
+    metric (the default), else exactly ``metrics``."""
+    if tuple(metrics) != METRIC_NAMES:
+        return metrics
+    return TABLE_METRICS.get(env) or TABLE_METRICS.get((base_env or {}).get(env, ""), metrics)
+
+
 def _envs(scores: Sequence[Score]) -> list[str]:
     return sorted({score.env for score in scores})
 
@@ -105,11 +123,11 @@ def table_rows(
 
 
 def _sections(
-    scores: Sequence[Score], metrics: Sequence[str], digits: int
+    scores: Sequence[Score], metrics: Sequence[str], digits: int, base_env: Mapping[str, str] | None = None,
 ) -> Iterator[tuple[str, str, list[str], list[list[str]]]]:
     for env in _envs(scores):
         for phase in PHASES:
-            header, rows = table_rows(scores, env, phase, metrics, digits)
+            header, rows = table_rows(scores, env, phase, env_metrics(env, base_env, metrics), digits)
             if rows:
                 yield env, phase, header, rows
 
@@ -138,6 +156,7 @@ def markdown_report(
     figures: Mapping[tuple[str, str], str] | None = None,
     metrics: Sequence[str] = METRIC_NAMES,
     digits: int = 2,
+    base_env: Mapping[str, str] | None = None,
 ) -> str:
     """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
 
@@ -153,7 +172,7 @@ def markdown_report(
         provenance.method_text(),
     ]
     current_env = None
-    for env, phase, header, rows in _sections(scores, metrics, digits):
+    for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
             lines += _markdown_figures(figures, current_env)
             lines += ["", f"## {env}"]
@@ -247,6 +266,7 @@ def html_report(
     figures: Mapping[tuple[str, str], bytes] | None = None,
     metrics: Sequence[str] = METRIC_NAMES,
     digits: int = 2,
+    base_env: Mapping[str, str] | None = None,
 ) -> str:
     """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
 
@@ -263,7 +283,7 @@ def html_report(
         f'<p class="note">{esc(provenance.method_text())}</p>',
     ]
     current_env = None
-    for env, phase, header, rows in _sections(scores, metrics, digits):
+    for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
             lines += _html_figures(figures, current_env)
             lines.append(f"<h2>{esc(env)}</h2>")

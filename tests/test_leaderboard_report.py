@@ -203,3 +203,22 @@ def test_a_failing_write_leaves_the_old_files_intact(tmp_path: Path, monkeypatch
     monkeypatch.undo()
     assert {key: path.read_bytes() for key, path in paths.items()} == before
     assert not [p.name for p in tmp_path.rglob(".*")], "temporary files left behind"
+
+
+def test_each_environment_s_tables_show_its_own_metrics_a_variant_its_environment_s(tmp_path: Path) -> None:
+    paths = write_synthetic_results(tmp_path / "sweep" / "runs")
+    variant = json.loads(paths[-1].read_text(encoding="utf-8"))  # a sharing_v0 run, as a variant
+    variant.update(variant="sharing_centre", run_id="sharing_centre__x__s0", method_label="Centre")
+    (tmp_path / "sweep" / "runs" / "sharing_centre__x__s0.json").write_text(json.dumps(variant), encoding="utf-8")
+    markdown = write_leaderboard(tmp_path / "sweep", command="c")["markdown"].read_text(encoding="utf-8")
+    headers = {}
+    for section in markdown.split("\n## ")[1:]:
+        env = section.split("\n", 1)[0]
+        tables = [line for line in section.splitlines() if line.startswith("| Method")]
+        if tables:
+            headers[env] = tables[0]
+    assert headers["coexistence_v0"] == "| Method | Seeds | survival | harms | other_return |"
+    assert headers["sharing_v0"] == headers["sharing_centre"] == (
+        "| Method | Seeds | batteries | other_batteries | equality | return | other_return |")
+    csv_metrics = {row.split(",")[4] for row in (tmp_path / "sweep" / "leaderboard.csv").read_text().splitlines()[1:]}
+    assert csv_metrics == set(METRIC_NAMES)  # the CSV keeps every metric
