@@ -6,12 +6,14 @@ import os
 from pathlib import Path
 
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_text_atomic
+from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_POINTS, N_RESAMPLES, load_results, score_runs, table_env,
 )
 from leaderboard.plots import plot_learning_curves
-from leaderboard.tables import TRADEOFF, Provenance, csv_text, html_report, markdown_report
+from leaderboard.improvement import improvements_over_dqn
+from leaderboard.tables import TRADEOFF, Provenance, csv_text, env_metrics, html_report, markdown_report
 from leaderboard.tradeoff import plot_tradeoffs
 
 __all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "write_leaderboard"]
@@ -58,14 +60,18 @@ def write_leaderboard(
     curves = plot_learning_curves(results, out / FIGURES_DIR, n_points=n_points, random_state=random_state,
                                   n_resamples=n_resamples, confidence=confidence)
     base_env = {table_env(run): run["env"] for run in results}  # a variant is shown like its env
+    improvements = improvements_over_dqn(
+        results, {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env},
+        random_state=random_state, n_resamples=n_resamples, confidence=confidence,
+    )
     tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
     pngs = {key: path.read_bytes() for key, path in figures.items()}
     paths = {
-        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links, base_env=base_env)),
+        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links, base_env=base_env, improvements=improvements)),
         "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance)),
-        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs, base_env=base_env)),
+        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs, base_env=base_env, improvements=improvements)),
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     return paths

@@ -19,6 +19,7 @@ from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_RESAMPLES, PHASES, Score,
 )
+from leaderboard.improvement import Improvement
 
 __all__ = [
     "PHASE_TITLES", "SINGLE_SEED_MARK", "CSV_COLUMNS", "Provenance", "format_interval",
@@ -132,6 +133,32 @@ def _sections(
                 yield env, phase, header, rows
 
 
+def improvement_sections(
+    cells: Sequence[Improvement], env: str, digits: int = 2
+) -> list[tuple[str, list[str], list[list[str]]]]:
+    """``[(phase, header, rows)]`` of ``env``'s probability-of-improvement tables: a row per method,
+    a column per metric, each cell ``P [interval] · IQM value``."""
+    sections = []
+    for phase in PHASES:
+        mine = [c for c in cells if c.env == env and c.phase == phase]
+        metrics = list(dict.fromkeys(c.metric for c in mine))
+        rows: dict[str, list[str]] = {}
+        for cell in mine:
+            row = rows.setdefault(cell.method_label, [cell.method_label, str(cell.n_seeds)] + [""] * len(metrics))
+            row[2 + metrics.index(cell.metric)] = (
+                f"{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)} · IQM {cell.iqm:.{digits}f}")
+        if rows:
+            sections.append((phase, ["Method", "Seeds", *metrics], list(rows.values())))
+    return sections
+
+
+IMPROVEMENT_NOTE = (
+    "P(improves on DQN): the probability that a run of the method does better than a run of DQN in that "
+    "metric (fewer harms is better; 0.5 is a tie), over every pair of runs, [95% bootstrap interval, each "
+    "method's runs resampled apart]; IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
+)
+
+
 def _has_single_seed(scores: Sequence[Score]) -> bool:
     return any(score.n_seeds == 1 for score in scores)
 
@@ -157,6 +184,7 @@ def markdown_report(
     metrics: Sequence[str] = METRIC_NAMES,
     digits: int = 2,
     base_env: Mapping[str, str] | None = None,
+    improvements: Sequence[Improvement] = (),
 ) -> str:
     """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
 
@@ -174,11 +202,11 @@ def markdown_report(
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
-            lines += _markdown_figures(figures, current_env)
+            lines += _markdown_improvements(improvements, current_env, digits) + _markdown_figures(figures, current_env)
             lines += ["", f"## {env}"]
             current_env = env
         lines += ["", f"### {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
-    lines += _markdown_figures(figures, current_env)
+    lines += _markdown_improvements(improvements, current_env, digits) + _markdown_figures(figures, current_env)
     if _has_single_seed(scores):
         lines += ["", _single_seed_note()]
     lines += ["", "## Metric definitions", ""]
@@ -207,6 +235,13 @@ def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -
             lines += [f"![{alt}]({link})", ""]
         lines.pop()
     return lines
+
+
+def _markdown_improvements(cells: Sequence[Improvement], env: str | None, digits: int) -> list[str]:
+    lines = []
+    for phase, header, rows in improvement_sections(cells, env, digits) if env is not None else []:
+        lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
+    return lines + (["", IMPROVEMENT_NOTE] if lines else [])
 
 
 def _csv_number(value: float) -> str:
@@ -260,6 +295,13 @@ def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> 
     return lines
 
 
+def _html_improvements(cells: Sequence[Improvement], env: str | None, digits: int) -> list[str]:
+    lines = []
+    for phase, header, rows in improvement_sections(cells, env, digits) if env is not None else []:
+        lines += [f"<h3>{_text('P(improves on DQN): ' + PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
+    return lines + ([f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>'] if lines else [])
+
+
 def html_report(
     scores: Sequence[Score],
     provenance: Provenance,
@@ -267,6 +309,7 @@ def html_report(
     metrics: Sequence[str] = METRIC_NAMES,
     digits: int = 2,
     base_env: Mapping[str, str] | None = None,
+    improvements: Sequence[Improvement] = (),
 ) -> str:
     """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
 
@@ -285,11 +328,11 @@ def html_report(
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
-            lines += _html_figures(figures, current_env)
+            lines += _html_improvements(improvements, current_env, digits) + _html_figures(figures, current_env)
             lines.append(f"<h2>{esc(env)}</h2>")
             current_env = env
         lines += [f"<h3>{esc(PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
-    lines += _html_figures(figures, current_env)
+    lines += _html_improvements(improvements, current_env, digits) + _html_figures(figures, current_env)
     if _has_single_seed(scores):
         lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
     lines += ["<h2>Metric definitions</h2>", "<dl>"]
