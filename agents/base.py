@@ -49,6 +49,10 @@ class StepBatch:
     truncated: np.ndarray | None = None
     """(K, M) the learner's episode was cut short this step (time limit); ``None`` when the driver
     does not say. Learners that bootstrap through time-outs (SB3's PPO) need it."""
+    other_rewards: np.ndarray | None = None
+    """(K, M) the environment's reward of the closest other agent this step (what a method that
+    weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when the
+    driver does not say."""
 
 
 class RewardTransform(Protocol):

@@ -87,6 +87,8 @@ class VectorStep:
     """(N, L) float64: each learner's battery reward so far in the episode, this step included."""
     other_battery_return: np.ndarray
     """(N, L) float64: the same of each learner's closest other agent (the one it swaps with)."""
+    other_rewards: np.ndarray
+    """(N, L) float32: the environment's reward of each learner's closest other agent this step."""
     finished: dict[str, np.ndarray]
     """The episodes that ended this step: ``"env"`` (``(F,)`` environment indices), each SPEC §5
     metric of the first learner (``survival``, ``harms``, …, as :data:`empathy_zoo.metrics.METRIC_NAMES`)
@@ -208,6 +210,7 @@ class VectorEnv:
             learner_harmed=(events.harmed_by[:, None, :] == np.asarray(learners)[None, :, None]).sum(axis=2),
             learner_battery_return=battery_return[:, learners],
             other_battery_return=np.take_along_axis(battery_return, other, axis=1),
+            other_rewards=np.take_along_axis(events.rewards, other, axis=1),
             finished=finished,
         )
 

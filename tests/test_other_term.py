@@ -91,4 +91,5 @@ def test_the_vector_env_reports_each_learner_s_events_the_runner_passes_on(env: 
         assert np.array_equal(step.learner_terminated[:, 0], step.terminated[:, human])
         assert np.array_equal(step.learner_battery_return[:, 0], step.battery_return[:, human])
         assert np.array_equal(step.other_battery_return[:, 0], step.battery_return[:, robot])
+        assert np.array_equal(step.other_rewards[:, 0], step.rewards[:, robot])
         assert np.array_equal(step.learner_harmed[:, 0], (step.harmed_by == human).sum(axis=1))

@@ -178,6 +178,7 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
         battery_return=result.learner_battery_return,
         other_battery_return=result.other_battery_return,
         truncated=result.learner_truncated,
+        other_rewards=result.other_rewards,
     )
 
 
