@@ -136,6 +136,9 @@ class Method:
     """Settings this method fixes (a user may not override them)."""
     reward: RewardTransform | None = None
     """What its runs train on instead of the environment's reward (``None``: that reward)."""
+    in_view_only: bool = False
+    """Swap with the other agent only while it stands in the learner's window (``StepBatch.swapped_next_obs``
+    and ``other_present`` as without it elsewhere); the paper's swap is omniscient (its future work)."""
     label: Callable[[Any], str] | None = None
     """Display name of a run from its settings (defaults to the name)."""
     description: str = ""

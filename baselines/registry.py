@@ -29,6 +29,12 @@ METHODS: dict[str, Method] = {
         label=lambda s: "DQN",
         description="Double DQN (Empathic DQN at β = 1)",
     ),
+    "empathic_dqn_in_view": Method(
+        name="empathic_dqn_in_view", learner=EmpathicDQN, settings=EmpathicDQNSettings, in_view_only=True,
+        label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
+        description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
+                    "the paper's future work)",
+    ),
     **BASELINE_METHODS,
     **SB3_METHODS,
 }

@@ -84,7 +84,7 @@ def _train_ensemble(
     k = len(specs)
     method = first.method_object()
     fixed, env_kwargs = first.fixed_policies(), dict(first.env_kwargs)
-    venv = VectorEnv(first.env, k, fixed=fixed, **env_kwargs)
+    venv = VectorEnv(first.env, k, fixed=fixed, in_view_only=method.in_view_only, **env_kwargs)
     if options.checkpoint_interval > 0:
         venv.check_checkpointable()  # (a fixed policy whose state a checkpoint would lose: refused before training)
     if len(venv.learners) != 1:

@@ -125,7 +125,8 @@ class RunSpec:
         method = self.method_object()
         return (
             self.env, json.dumps(dict(self.env_kwargs), sort_keys=True), json.dumps(self.fixed_policies(), sort_keys=True),
-            method.learner, _shared(self.method_settings()), self.steps, self.eval_interval, self.eval_episodes,
+            method.learner, method.in_view_only, _shared(self.method_settings()), self.steps, self.eval_interval,
+            self.eval_episodes,
         )
 
 
