@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from agents.base import Learner, Method, RewardTransform, StepBatch
+from agents.base import Learner, Method, StepBatch
+from agents.rewards import RewardTransform
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 

@@ -8,15 +8,17 @@ over what happened, and saves/loads ``state_dict()`` for checkpoints.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-__all__ = ["StepBatch", "Learner", "Method", "RewardTransform", "transform_config", "with_train_rewards"]
+if TYPE_CHECKING:
+    from agents.rewards import RewardTransform
+
+__all__ = ["StepBatch", "Learner", "Method"]
 
 
 @dataclass
@@ -53,49 +55,6 @@ class StepBatch:
     """(K, M) the environment's reward of the closest other agent this step (what a method that
     weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when the
     driver does not say."""
-
-
-class RewardTransform(Protocol):
-    """Turns the environment's rewards into the rewards a run trains on (reward shaping).
-
-    A method composes one (:attr:`Method.reward`); the trainer applies it to the runs of that
-    method before the learner sees the step, so the learner knows nothing of it, and the suite's
-    metrics, computed from the environment's events, never see it. Write it as a frozen dataclass
-    whose fields are its parameters (they are recorded in each run's result file, under
-    ``config.reward``), with a ``name``. See :mod:`baselines.shaping` for the built-in ones.
-    """
-
-    name: ClassVar[str]
-    """What the result file calls the transform."""
-
-    def __call__(self, batch: StepBatch) -> np.ndarray:
-        """``(K, M)`` training rewards for every run of ``batch`` (the trainer keeps the rows of the
-        runs that use this transform). ``batch.rewards`` holds the environment's rewards."""
-
-
-def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None:
-    """What a result file records of a reward transform: ``{"name": ..., **its fields}``."""
-    if transform is None:
-        return None
-    fields = dataclasses.asdict(transform) if dataclasses.is_dataclass(transform) else {}
-    return {"name": transform.name, **fields}
-
-
-def with_train_rewards(batch: StepBatch, transforms: Sequence[RewardTransform | None]) -> StepBatch:
-    """``batch`` with each run's rewards replaced by its transform's (``transforms[k]``, ``None``
-    = the environment's reward); the batch itself is not changed."""
-    if all(t is None for t in transforms):
-        return batch
-    if len(transforms) != batch.rewards.shape[0]:
-        raise ValueError(f"got {len(transforms)} reward transforms for {batch.rewards.shape[0]} runs")
-    rewards = batch.rewards.copy()
-    for transform in {id(t): t for t in transforms if t is not None}.values():
-        rows = [k for k, t in enumerate(transforms) if t is transform]
-        shaped = np.asarray(transform(batch))
-        if shaped.shape != rewards.shape:
-            raise ValueError(f"reward transform {transform.name!r} returned shape {shaped.shape}, expected {rewards.shape}")
-        rewards[rows] = shaped[rows]
-    return dataclasses.replace(batch, rewards=rewards)
 
 
 class Learner(Protocol):

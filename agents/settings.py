@@ -11,7 +11,7 @@ __all__ = ["EmpathicDQNSettings", "PER_RUN_FIELDS"]
 class EmpathicDQNSettings:
     """Everything Empathic DQN (and DQN, its β = 1 case) can be told. One line per field.
     (Reward shaping is not a setting: a method composes a reward transform, see
-    :class:`agents.base.RewardTransform`.)"""
+    :class:`agents.rewards.RewardTransform`.)"""
 
     selfishness: float = 1.0
     """β: weight of the robot's own target in the empathic target; 1.0 is plain DQN."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
-from baselines.shaping import EqualityScaling, HarmPenalty
+from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion
 
 BASELINE_METHODS: dict[str, Method] = {
     "dqn_harm_penalty": Method(
@@ -20,6 +20,12 @@ BASELINE_METHODS: dict[str, Method] = {
         preset={"selfishness": 1.0}, reward=EqualityScaling(),
         label=lambda s: "DQN × equality",
         description="DQN trained on reward × the episode's current equality of battery rewards",
+    ),
+    "dqn_inequity_aversion": Method(
+        name="dqn_inequity_aversion", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0}, reward=InequityAversion(),
+        label=lambda s: "DQN + inequity aversion",
+        description="DQN trained on reward − 5·(other ahead) − 0.05·(self ahead), smoothed rewards (Hughes et al. 2018)",
     ),
 }
 """The baselines, by registry name."""

@@ -1,6 +1,7 @@
-"""Reward transforms of the DQN baselines (SPEC §6): a harm penalty (Coexistence) and equality
-scaling (Sharing). A transform changes what a run trains on, never how it is scored: the suite's
-metrics come from the environment's events. Each is a :class:`agents.base.RewardTransform` that
+"""Reward transforms of the DQN baselines: a harm penalty (Coexistence) and equality scaling
+(Sharing), the paper's (SPEC §6); inequity aversion, from the literature. A transform changes
+what a run trains on, never how it is scored: the suite's metrics come from the environment's
+events. Each is a :class:`agents.rewards.RewardTransform` that
 a :class:`agents.base.Method` composes (see :mod:`baselines.methods`)."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import numpy as np
 from agents.base import StepBatch
 from empathy_zoo.metrics import equality
 
-__all__ = ["HarmPenalty", "EqualityScaling", "HARM_PENALTY"]
+__all__ = ["HarmPenalty", "EqualityScaling", "InequityAversion", "HARM_PENALTY"]
 
 HARM_PENALTY = -100.0
 """The Coexistence baseline's penalty for harming the cat."""
@@ -41,3 +42,37 @@ class EqualityScaling:
     def __call__(self, batch: StepBatch) -> np.ndarray:
         current = equality(batch.battery_return, batch.other_battery_return)
         return (batch.rewards.astype(np.float64) * current).astype(np.float32)
+
+
+@dataclass(frozen=True)
+class InequityAversion:
+    """Inequity aversion (Hughes et al. 2018, "Inequity aversion improves cooperation in intertemporal
+    social dilemmas"), for two agents:
+
+        r'ᵢ = rᵢ − α·max(eⱼ − eᵢ, 0) − β·max(eᵢ − eⱼ, 0),    eᵗ = γλ·eᵗ⁻¹ + rᵗ
+
+    with ``eᵢ`` and ``eⱼ`` the temporally smoothed environment rewards of the learner and of its
+    closest other agent (``StepBatch.other_rewards``, what the environment reports for that agent),
+    reset at each episode's start. Both inequities are *penalised*: being ahead costs β, being
+    behind costs α. Defaults: the paper's α = 5, β = 0.05, and γλ = 0.99 · 0.95."""
+
+    name: ClassVar[str] = "inequity_aversion"
+    disadvantageous: float = 5.0
+    """α: weight of the other agent being ahead."""
+    advantageous: float = 0.05
+    """β: weight of being ahead of the other agent."""
+    smoothing: float = 0.99 * 0.95
+    """γλ: how much of the smoothed reward carries to the next step."""
+
+    def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
+        return {side: np.zeros((num_runs, envs_per_run)) for side in ("own", "other")}
+
+    def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        if batch.other_rewards is None:
+            raise ValueError("inequity aversion needs the other agent's rewards (StepBatch.other_rewards)")
+        own = self.smoothing * state["own"] + batch.rewards
+        other = self.smoothing * state["other"] + batch.other_rewards
+        shaped = (batch.rewards - self.disadvantageous * np.maximum(other - own, 0.0)
+                  - self.advantageous * np.maximum(own - other, 0.0))
+        ended = batch.terminated | (batch.truncated if batch.truncated is not None else False)
+        return shaped.astype(np.float32), {"own": np.where(ended, 0.0, own), "other": np.where(ended, 0.0, other)}

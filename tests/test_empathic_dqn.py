@@ -13,7 +13,7 @@ from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
 from baselines.registry import get_method
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
-from agents.base import with_train_rewards
+from agents.rewards import with_train_rewards
 from baselines.shaping import HARM_PENALTY, EqualityScaling, HarmPenalty
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec

@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from agents.base import StepBatch, with_train_rewards
+from agents.base import StepBatch
+from agents.rewards import TrainRewards
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
@@ -91,7 +92,7 @@ def _train_ensemble(
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
     seeds = [s.seed for s in specs]
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device)
-    transforms = [s.method_object().reward for s in specs]
+    train_rewards = TrainRewards([s.method_object().reward for s in specs])
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
@@ -102,6 +103,7 @@ def _train_ensemble(
         if saved["run_ids"] != [s.run_id for s in specs]:
             raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
         learner.load_state_dict(saved["learner"])
+        train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
         venv.load_state(from_safe(saved["vector"]))
         obs = from_safe(saved["obs"])
         for log, columns in zip(logs, saved["logs"]):
@@ -128,7 +130,7 @@ def _train_ensemble(
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
         batch = learner_batch(obs, actions, result)
-        learner.observe(with_train_rewards(batch, transforms))
+        learner.observe(train_rewards(batch))
         step += 1
         finished = result.finished
         for j, env_id in enumerate(finished["env"]):
@@ -145,6 +147,7 @@ def _train_ensemble(
                 "learner": learner.state_dict(), "vector": to_safe(venv.state()),
                 "obs": to_safe(obs),
                 "logs": [log.columns for log in logs], "evaluations": evaluations,
+                "rewards": to_safe(train_rewards.state()),
             })
         if report is not None and (step % 500 == 0 or step == total):
             rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)

@@ -8,7 +8,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from agents.base import Method, transform_config
+from agents.base import Method
+from agents.rewards import transform_config
 from baselines.registry import get_method
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments

@@ -1,0 +1,101 @@
+"""Reward transforms: what a run trains on instead of the environment's reward.
+
+A method composes one (:attr:`agents.base.Method.reward`); the trainer gives each run the
+rewards of its own method's transform before the learner sees the step (:class:`TrainRewards`),
+so a learner knows nothing of it, and the suite's metrics, computed from the environment's
+events, never see it. The built-in transforms are in :mod:`baselines.shaping`.
+
+A transform is a frozen dataclass whose fields are its parameters (recorded in each result file
+under ``config.reward``), with a ``name``, and either
+
+* **stateless**: ``__call__(batch) -> (K, M) rewards``, a pure function of the step; or
+* **stateful**: ``initial_state(num_runs, envs_per_run) -> dict of (K, M) arrays`` and
+  ``__call__(batch, state) -> (rewards, new state)``, a pure function of the step and of its
+  state (e.g. inequity aversion's smoothed rewards). The trainer keeps the state, one per
+  transform and ensemble, and saves it in checkpoints; the transform resets what it must at the
+  end of an episode (``batch.terminated | batch.truncated``).
+
+The rows of the runs that use another transform (or none) are computed and ignored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from agents.base import StepBatch
+
+__all__ = ["RewardTransform", "TrainRewards", "transform_config", "with_train_rewards"]
+
+
+class RewardTransform(Protocol):
+    """Turns the environment's rewards into the rewards a run trains on (see the module page)."""
+
+    name: ClassVar[str]
+    """What the result file calls the transform."""
+
+    def __call__(self, batch: StepBatch, *state: Any) -> Any:
+        """``(K, M)`` training rewards for every run of ``batch`` (``batch.rewards`` holds the
+        environment's); a stateful transform also takes its state and returns ``(rewards, state)``."""
+
+
+def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None:
+    """What a result file records of a reward transform: ``{"name": ..., **its fields}``."""
+    if transform is None:
+        return None
+    fields = dataclasses.asdict(transform) if dataclasses.is_dataclass(transform) else {}
+    return {"name": transform.name, **fields}
+
+
+class TrainRewards:
+    """The rewards each run of an ensemble trains on: run ``k`` gets ``transforms[k]``'s (``None``:
+    the environment's), with the state of every stateful transform kept here."""
+
+    def __init__(self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1) -> None:
+        self.transforms = list(transforms)
+        self.distinct = list({id(t): t for t in self.transforms if t is not None}.values())
+        """Each transform once, in the order of its first run."""
+        self.states: list[dict[str, np.ndarray] | None] = [
+            t.initial_state(len(self.transforms), envs_per_run) if hasattr(t, "initial_state") else None
+            for t in self.distinct
+        ]
+
+    def __call__(self, batch: StepBatch) -> StepBatch:
+        """``batch`` with each run's training rewards (the batch itself is not changed)."""
+        if not self.distinct:
+            return batch
+        if len(self.transforms) != batch.rewards.shape[0]:
+            raise ValueError(f"got {len(self.transforms)} reward transforms for {batch.rewards.shape[0]} runs")
+        rewards = batch.rewards.copy()
+        for i, transform in enumerate(self.distinct):
+            if self.states[i] is None:
+                shaped = transform(batch)
+            else:
+                shaped, self.states[i] = transform(batch, self.states[i])
+            shaped = np.asarray(shaped)
+            if shaped.shape != rewards.shape:
+                raise ValueError(f"reward transform {transform.name!r} returned shape {shaped.shape}, "
+                                 f"expected {rewards.shape}")
+            rows = [k for k, t in enumerate(self.transforms) if t is transform]
+            rewards[rows] = shaped[rows]
+        return dataclasses.replace(batch, rewards=rewards)
+
+    def state(self) -> list[dict[str, np.ndarray] | None]:
+        """The stateful transforms' states (for checkpoints)."""
+        return [None if state is None else {key: value.copy() for key, value in state.items()} for state in self.states]
+
+    def load_state(self, states: Sequence[Any]) -> None:
+        """Continue from :meth:`state`."""
+        if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states)):
+            raise ValueError("this checkpoint holds the state of other reward transforms; move it away to restart")
+        self.states = [None if state is None else {key: np.array(value) for key, value in state.items()}
+                       for state in states]
+
+
+def with_train_rewards(batch: StepBatch, transforms: Sequence[RewardTransform | None]) -> StepBatch:
+    """``batch`` with each run's rewards replaced by its stateless transform's (one step on its own)."""
+    return TrainRewards(transforms, batch.rewards.shape[1])(batch)
