@@ -11,50 +11,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from agents.rewards import RewardTransform
+from agents.rewards import RewardTransform
+from agents.step_batch import StepBatch
 
 __all__ = ["StepBatch", "Learner", "Method"]
-
-
-@dataclass
-class StepBatch:
-    """One env step of every run, as arrays ``(K, M, ...)``."""
-
-    obs: np.ndarray
-    """(K, M, V) observations the actions were chosen on."""
-    actions: np.ndarray
-    """(K, M) actions taken."""
-    rewards: np.ndarray
-    """(K, M) float32: the reward each run trains on: the environment's reward of the learner, or
-    what the run's method's :class:`RewardTransform` made of it (the suite never scores it)."""
-    terminated: np.ndarray
-    """(K, M) the learner's episode ended for good (truncation is not termination)."""
-    next_obs: np.ndarray
-    """(K, M, V) observations at the end of the step (before any autoreset)."""
-    swapped_next_obs: np.ndarray
-    """(K, M, V) the learner's swapped observation with its closest other agent at the end of the step."""
-    other_present: np.ndarray
-    """(K, M) that other agent is still in the environment and its episode has not ended for good
-    at the end of the step, so its swapped value may bootstrap (SPEC §6: False for a harmed cat,
-    and for the human once the last battery is taken; a time-limit truncation keeps it True)."""
-    harmed_other: np.ndarray
-    """(K, M) number of agents the learner harmed this step."""
-    battery_return: np.ndarray
-    """(K, M) the learner's battery reward so far this episode, this step included."""
-    other_battery_return: np.ndarray
-    """(K, M) the other agent's battery reward so far this episode, this step included."""
-    truncated: np.ndarray | None = None
-    """(K, M) the learner's episode was cut short this step (time limit); ``None`` when the driver
-    does not say. Learners that bootstrap through time-outs (SB3's PPO) need it."""
-    other_rewards: np.ndarray | None = None
-    """(K, M) the environment's reward of the closest other agent this step (what a method that
-    weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when the
-    driver does not say."""
 
 
 class Learner(Protocol):

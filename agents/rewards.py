@@ -22,12 +22,11 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from agents.base import StepBatch
+from agents.step_batch import StepBatch
 
 __all__ = ["RewardTransform", "TrainRewards", "transform_config", "with_train_rewards"]
 
