@@ -60,8 +60,9 @@ class Method:
     reward: RewardTransform | None = None
     """What its runs train on instead of the environment's reward (``None``: that reward)."""
     in_view_only: bool = False
-    """Swap with the other agent only while it stands in the learner's window (``StepBatch.swapped_next_obs``
-    and ``other_present`` as without it elsewhere); the paper's swap is omniscient (its future work)."""
+    """Swap with the other agent only while it stands in the learner's window: elsewhere
+    ``StepBatch.other_present`` is False (no other-term) and ``swapped_next_obs`` is zeros. The
+    paper's swap is omniscient (seeing through walls is its future work)."""
     label: Callable[[Any], str] | None = None
     """Display name of a run from its settings (defaults to the name)."""
     description: str = ""

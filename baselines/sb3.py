@@ -46,6 +46,7 @@ import torch
 
 from agents.base import Method, StepBatch
 from empathy_zoo.randomness import STREAMS, derive_key
+from empathy_zoo.safe_data import from_safe, to_safe
 
 __all__ = [
     "SB3Settings", "SB3Learner", "SB3_DQN", "SB3_PPO", "SB3_METHODS", "DEFAULT_KWARGS",
@@ -382,7 +383,6 @@ class SB3Learner:
         return stored + params + 2 * trained  # + Adam's two moments
 
     def state_dict(self) -> dict[str, Any]:
-        from empathy_zoo.training.checkpoint import to_safe  # lazily: training imports the method registry
 
         runs = []
         for model, run, rng in zip(self.models, self._runs, self._randomness):
@@ -398,7 +398,6 @@ class SB3Learner:
         return {"seeds": list(self.seeds), "runs": runs}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        from empathy_zoo.training.checkpoint import from_safe
 
         if list(state["seeds"]) != self.seeds:
             raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")

@@ -7,10 +7,10 @@ import io
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.safe_data import from_safe, to_safe
 
 __all__ = ["save_checkpoint", "load_checkpoint", "to_safe", "from_safe", "CheckpointError"]
 
@@ -19,33 +19,6 @@ FORMAT = 1
 
 class CheckpointError(ValueError):
     """A checkpoint exists but cannot be used."""
-
-
-def to_safe(value: Any) -> Any:
-    """Turn numpy arrays (anywhere in dicts/lists) into tensors ``torch.load(weights_only=True)`` accepts."""
-    if isinstance(value, np.ndarray):
-        if value.dtype == np.uint64:
-            return {"__ndarray__": torch.from_numpy(value.view(np.int64).copy()), "dtype": "uint64"}
-        return {"__ndarray__": torch.from_numpy(np.ascontiguousarray(value).copy()), "dtype": str(value.dtype)}
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, dict):
-        return {key: to_safe(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [to_safe(item) for item in value]
-    return value
-
-
-def from_safe(value: Any) -> Any:
-    """Inverse of :func:`to_safe`."""
-    if isinstance(value, dict):
-        if "__ndarray__" in value:
-            array = value["__ndarray__"].numpy()
-            return array.view(np.uint64) if value["dtype"] == "uint64" else array.astype(value["dtype"], copy=False)
-        return {key: from_safe(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [from_safe(item) for item in value]
-    return value
 
 
 def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
