@@ -10,7 +10,7 @@ import numpy as np
 
 __all__ = [
     "GRID_ARGUMENTS", "MAX_SIZE", "MAX_TABLE_BYTES", "table_bytes", "check_grid_arguments", "check_choice",
-    "check_env_arguments", "TakesArguments",
+    "check_agent_count", "check_env_arguments", "TakesArguments",
 ]
 
 GRID_ARGUMENTS = ("size", "view", "max_cycles")
@@ -28,6 +28,8 @@ class TakesArguments(Protocol):
     """The environment's name."""
     extra_arguments: Mapping[str, tuple[str, ...]]
     """Its own constructor arguments and their allowed values."""
+    count_argument: str | None
+    """Its constructor argument saying how many other agents it holds (``num_cats``), if any."""
 
 
 def table_bytes(size: int, view: int) -> int:
@@ -72,12 +74,25 @@ def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
     return value
 
 
+def check_agent_count(name: str, value: Any, most: int, room: str) -> int:
+    """``value`` as an ``int`` if it is a whole number of agents from 1 to ``most``, else raise
+    ``ValueError`` naming the argument ``name`` (``room`` says what bounds ``most``)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an int, got {value!r}")
+    if value < 1:
+        raise ValueError(f"{name} must be at least 1, got {value}")
+    if value > most:
+        raise ValueError(f"{name}={value} is too many: {room}, so {name} is at most {most}")
+    return int(value)
+
+
 def check_env_arguments(
     engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError
 ) -> None:
     """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
     ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
-    known = (*GRID_ARGUMENTS, *engine.extra_arguments)
+    count = () if engine.count_argument is None else (engine.count_argument,)
+    known = (*GRID_ARGUMENTS, *count, *engine.extra_arguments)
     unknown = [key for key in kwargs if key not in known]
     if unknown:
         raise error(f"{engine.name} takes no argument(s) {unknown}; its environment arguments: {', '.join(known)}")

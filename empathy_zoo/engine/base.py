@@ -16,7 +16,7 @@ import numpy as np
 
 from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine.arguments import (
-    GRID_ARGUMENTS, MAX_SIZE, check_choice, check_env_arguments, check_grid_arguments, table_bytes,
+    GRID_ARGUMENTS, MAX_SIZE, check_agent_count, check_choice, check_env_arguments, check_grid_arguments, table_bytes,
 )
 from empathy_zoo.engine.placement import HandPlacement
 from empathy_zoo.grid import (
@@ -93,11 +93,14 @@ class GridEngine(HandPlacement):
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
     name: ClassVar[str]
-    agents: ClassVar[tuple[str, ...]]
-    symbols: ClassVar[tuple[str, ...]]
-    """One character per agent for the text render."""
-    colors: ClassVar[tuple[tuple[int, int, int], ...]]
-    """One RGB colour per agent for the image render."""
+    agents: tuple[str, ...]
+    """The agents' names: the class gives the default roster (the learner, then one other agent);
+    an engine with :attr:`count_argument` set to ``N`` holds the learner and ``N`` others alike,
+    named ``<kind>_0 … <kind>_{N-1}`` after the default other (``cat_0``)."""
+    symbols: tuple[str, ...]
+    """One character per agent for the text render (the others share one)."""
+    colors: tuple[tuple[int, int, int], ...]
+    """One RGB colour per agent for the image render (the others share one)."""
     min_size: ClassVar[int] = 3
     num_actions: ClassVar[int] = NUM_ACTIONS
     """Actions of every agent (up, down, left, right, stay)."""
@@ -106,8 +109,13 @@ class GridEngine(HandPlacement):
     extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     """Environment-specific keyword arguments of the constructor and their allowed values (the
     first one is the default); every face and the sweep files accept exactly these."""
+    count_argument: ClassVar[str | None] = None
+    """The constructor keyword giving how many other agents (after the first) the environment
+    holds, default 1 (``num_cats``), or ``None`` when the number is fixed."""
 
-    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
+    def __init__(
+        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, num_others: int = 1
+    ) -> None:
         check_grid_arguments(size, view, max_cycles, self.min_size)
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
@@ -115,7 +123,20 @@ class GridEngine(HandPlacement):
         self.size = int(size)
         self.view = int(view)
         self.max_cycles = int(max_cycles)
+        if self.count_argument is None:
+            if num_others != 1:
+                raise ValueError(f"{self.name} holds exactly one other agent, got num_others={num_others!r}")
+        else:
+            num_others = check_agent_count(self.count_argument, num_others, *self._room_for_others())
+            kind = type(self).agents[-1].rsplit("_", 1)[0]
+            self.agents = (self.agents[0], *(f"{kind}_{i}" for i in range(num_others)))
+            self.symbols = (self.symbols[0],) + (self.symbols[-1],) * num_others
+            self.colors = (self.colors[0],) + (self.colors[-1],) * num_others
+        self.num_others = int(num_others)
+        """How many agents besides the first (the learner) the environment holds."""
         self.num_agents = len(self.agents)
+        self._others = [np.array([j for j in range(self.num_agents) if j != i]) for i in range(self.num_agents)]
+        """``[agent]``: the indices of every other agent, in agent order."""
         self.obs_size = self.view * self.view
         self.num_cells = self.size * self.size
         # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups;
@@ -172,6 +193,11 @@ class GridEngine(HandPlacement):
         return int(row) * self.size + int(col)
 
     # ------------------------------------------------------------------ hooks for subclasses
+    def _room_for_others(self) -> tuple[int, str]:
+        """The most other agents the grid can start (besides the first) and why, for the
+        ``ValueError`` of a larger :attr:`count_argument`."""
+        return self.size * self.size - 1, f"the {self.size}x{self.size} grid has {self.size * self.size} cells"
+
     def _reset_extra(self, env_ids: np.ndarray) -> None:
         """Reset environment-specific state (batteries) of ``env_ids``."""
 
@@ -183,8 +209,9 @@ class GridEngine(HandPlacement):
         """Draw start cells for every agent of ``env_ids`` from their streams."""
         raise NotImplementedError
 
-    def _start_conflict(self, cell: np.ndarray, other: np.ndarray) -> bool:
-        """Whether two agents may not start on ``cell`` and ``other``."""
+    def _start_conflict(self, agent: int, cell: np.ndarray, other_agent: int, other: np.ndarray) -> bool:
+        """Whether agent ``agent`` may not start on ``cell`` while agent ``other_agent`` starts on
+        ``other`` (distinct cells)."""
         raise NotImplementedError
 
     def _apply_options(self, env_id: int, options: Mapping[str, Any]) -> set[str]:
@@ -392,9 +419,9 @@ class GridEngine(HandPlacement):
         return self._window_slot[displacement] < self.obs_size
 
     def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
-        """Index of the closest other present agent of ``viewer`` (torus distance, ties to the
-        lowest index) and a mask of environments where such an agent exists."""
-        others = [i for i in range(self.num_agents) if i != viewer]
+        """Index of the closest other present agent of ``viewer`` (torus Manhattan distance, ties
+        to the lowest index) and a mask of environments where such an agent exists."""
+        others = self._others[viewer]
         if len(others) == 1:
             return np.full(self.num_envs, others[0]), self.present[:, others[0]].copy()
         dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, others, :], self.size).astype(np.float64)
@@ -404,18 +431,23 @@ class GridEngine(HandPlacement):
 
     # ------------------------------------------------------------------ metrics
     def episode_metrics(self, env_ids: np.ndarray, learner: int = 0) -> dict[str, np.ndarray]:
-        """Episode metrics of ``learner`` (SPEC §5) in ``env_ids``, from what happened so far."""
-        other = 1 - learner if self.num_agents == 2 else None
+        """Episode metrics of ``learner`` (SPEC §5) in ``env_ids``, from what happened so far.
+
+        With several other agents, ``harms`` counts every one harmed, ``other_batteries`` and
+        ``other_return`` are summed over the others, and ``equality`` compares the learner's
+        battery reward with the others' mean (1 when the learner took exactly its share); with one
+        other agent each is that agent's own figure."""
+        others = self._others[learner]
         own_b = self.episode_battery_return[env_ids, learner]
-        oth_b = self.episode_battery_return[env_ids, other] if other is not None else np.zeros(len(env_ids))
+        oth_b = self.episode_battery_return[env_ids][:, others].sum(axis=1)
         return {
             "survival": np.where(self.present[env_ids, learner], self.t[env_ids], self.left_at[env_ids, learner]),
             "harms": self.episode_harms[env_ids, learner].copy(),
             "batteries": self.inventory[env_ids, learner].copy(),
-            "other_batteries": self.inventory[env_ids, other].copy() if other is not None else np.zeros(len(env_ids), np.int64),
-            "equality": equality(own_b, oth_b),
+            "other_batteries": self.inventory[env_ids][:, others].sum(axis=1),
+            "equality": equality(own_b, oth_b / len(others)),
             "return": self.episode_return[env_ids, learner].copy(),
-            "other_return": self.episode_return[env_ids, other].copy() if other is not None else np.zeros(len(env_ids)),
+            "other_return": self.episode_return[env_ids][:, others].sum(axis=1),
             "length": self.t[env_ids].copy(),
         }
 

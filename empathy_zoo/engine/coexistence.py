@@ -1,4 +1,10 @@
-"""Coexistence rules (SPEC §2): a robot and a cat; whoever is above or to the right harms."""
+"""Coexistence rules (SPEC §2, §3b): a robot and one or more cats; whoever is above or to the
+right harms.
+
+Every cat meets the robot by the same rule, pair by pair (:func:`harm_outcome`); cats pass
+through one another and never harm each other. A robot harmed by several cats in one step names
+the first of them (in agent order) in ``harmed_by``.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +12,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.engine.base import NO_AGENT, GridEngine, StepEvents
+from empathy_zoo.engine.base import GridEngine, StepEvents
+from empathy_zoo.engine.placement import distinct_picks
 from empathy_zoo.grid import MOVES, NUM_ACTIONS, displacement_origin, signed_offset
 
 __all__ = ["CoexistenceEngine", "harm_outcome", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
@@ -15,17 +22,10 @@ OWN_CELL = 1.0
 OTHER_AGENT = -1.0
 FLOOR = 0.0
 ROBOT, CAT = 0, 1
+"""The robot's index and the first cat's (cat ``k`` is ``CAT + k``)."""
 
 NO_HARM, ROBOT_HARMS_CAT, CAT_HARMS_ROBOT = 0, 1, 2
-"""The outcomes of a step, as :func:`harm_outcome` returns them."""
-
-# What each outcome does to (robot, cat), indexed by outcome:
-HARMED_BY = np.array([[NO_AGENT, NO_AGENT], [NO_AGENT, ROBOT], [CAT, NO_AGENT]], dtype=np.int64)
-"""Who harmed the robot and who harmed the cat."""
-HARMS_DONE = np.array([[0, 0], [1, 0], [0, 1]], dtype=np.int64)
-"""How many others the robot and the cat harmed."""
-CUT_SHORT = np.array([[False, False], [False, False], [False, True]])
-"""Whose episode is truncated: the cat's when the robot falls."""
+"""The outcomes of a step for one (robot, cat) pair, as :func:`harm_outcome` returns them."""
 
 
 def harm_outcome(before: np.ndarray, after: np.ndarray, size: int) -> np.ndarray:
@@ -56,7 +56,8 @@ def harm_outcome(before: np.ndarray, after: np.ndarray, size: int) -> np.ndarray
 
 
 class CoexistenceEngine(GridEngine):
-    """``robot_0`` and ``cat_0`` on a torus; contact means one harms the other."""
+    """``robot_0`` and ``cat_0 … cat_{num_cats-1}`` on a torus; contact of the robot and a cat
+    means one harms the other."""
 
     name = "coexistence_v0"
     agents = ("robot_0", "cat_0")
@@ -65,13 +66,16 @@ class CoexistenceEngine(GridEngine):
     min_size: ClassVar[int] = 5
     obs_low = -1.0
     obs_high = 1.0
+    count_argument = "num_cats"
 
-    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500) -> None:
-        super().__init__(num_envs, size, view, max_cycles)
+    def __init__(
+        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *, num_cats: int = 1
+    ) -> None:
+        super().__init__(num_envs, size, view, max_cycles, num_others=num_cats)
         dr, dc = (d.ravel() for d in np.indices((self.size, self.size)))
         contact = np.abs(signed_offset(dr, self.size)) + np.abs(signed_offset(dc, self.size)) <= 1
         self._start_offsets = np.stack([dr[~contact], dc[~contact]], axis=1)
-        """Where the cat may start relative to the robot (not in contact), row-major."""
+        """Where a cat may start relative to the robot (not in contact), row-major."""
         # The outcome depends on the cat's displacement before the move and the two actions:
         # tabulate harm_outcome over those (one entry per displacement between two cells, see
         # grid.spread_ids, times 5 × 5 actions), so that a step looks it up once.
@@ -90,29 +94,44 @@ class CoexistenceEngine(GridEngine):
         self._robot_move = self._spread[cell] * NUM_ACTIONS**2 - NUM_ACTIONS * action
         """``[cell · 5 + action]``: the cat's and the robot's parts of the index into :attr:`_outcomes`
         (their difference is ``displacement · 25 + robot action · 5 + cat action``)."""
+        self._cat_ids = np.arange(CAT, self.num_agents)
+        """The cats' agent indices."""
+
+    def _room_for_others(self) -> tuple[int, str]:
+        room = self.size * self.size - 5  # (the robot's cell and its four neighbours are taken)
+        return room, f"cats start on distinct cells not in contact with the robot: {room} on a {self.size}x{self.size} grid"
 
     def _in_contact(self, delta: np.ndarray) -> bool:
         return int(np.abs(signed_offset(delta, self.size)).sum()) <= 1
 
-    def _start_conflict(self, cell: np.ndarray, other: np.ndarray) -> bool:
-        return self._in_contact(other - cell)
+    def _start_conflict(self, agent: int, cell: np.ndarray, other_agent: int, other: np.ndarray) -> bool:
+        return ROBOT in (agent, other_agent) and self._in_contact(other - cell)  # cats may start side by side
 
     def _random_start(self, env_ids: np.ndarray) -> None:
         robot = np.floor(self.streams.uniform(env_ids) * self.num_cells).astype(np.int64)
-        pick = np.floor(self.streams.uniform(env_ids) * len(self._start_offsets)).astype(np.int64)
-        cat_rc = (self._cell_rc[robot] + self._start_offsets[pick]) % self.size
+        picks = distinct_picks(self.streams, env_ids, len(self._start_offsets), self.num_others)
+        cat_rc = (self._cell_rc[robot][:, None, :] + self._start_offsets[picks]) % self.size
         self.cells[env_ids, ROBOT] = robot
-        self.cells[env_ids, CAT] = cat_rc[:, 0] * self.size + cat_rc[:, 1]
+        self.cells[env_ids, CAT:] = cat_rc[..., 0] * self.size + cat_rc[..., 1]
 
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
-        outcome = self._outcomes.take(self._cat_move.take(moves[:, CAT]) - self._robot_move.take(moves[:, ROBOT]))
-        outcome[~(self.present[:, ROBOT] & self.present[:, CAT])] = NO_HARM
+        present = self.present
+        # (N, cats): each cat's outcome with the robot, looked up pair by pair
+        outcome = self._outcomes.take(self._cat_move.take(moves[:, CAT:]) - self._robot_move.take(moves[:, :CAT]))
+        outcome[~(present[:, :CAT] & present[:, CAT:])] = NO_HARM
         if np.count_nonzero(outcome):
-            events.harmed_by = HARMED_BY[outcome]
-            events.terminated = events.harmed_by >= 0
-            events.truncated = CUT_SHORT[outcome]
-            events.episode_over = outcome == CAT_HARMS_ROBOT
-            self.episode_harms += HARMS_DONE[outcome]
+            cats_harmed = outcome == ROBOT_HARMS_CAT
+            harmers = outcome == CAT_HARMS_ROBOT
+            robot_harmed = harmers.any(axis=1)
+            harmed_by = events.harmed_by
+            harmed_by[:, CAT:][cats_harmed] = ROBOT
+            harmed_by[robot_harmed, ROBOT] = CAT + harmers[robot_harmed].argmax(axis=1)  # the first harmer
+            events.terminated = harmed_by >= 0
+            # the robot fell: every cat still standing is cut short
+            events.truncated = robot_harmed[:, None] & present & ~events.terminated
+            events.episode_over = robot_harmed
+            self.episode_harms[:, ROBOT] += cats_harmed.sum(axis=1)
+            self.episode_harms[:, CAT:] += harmed_by[:, ROBOT, None] == self._cat_ids
             self._leave(events.terminated)
         events.rewards = (self.present & events.present_before).astype(np.float32)
 

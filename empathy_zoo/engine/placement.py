@@ -1,4 +1,5 @@
-"""Reset options: agents (and, in Sharing, batteries) placed by hand, checked as they are placed.
+"""Start cells: agents (and, in Sharing, batteries) placed by hand, checked as they are placed,
+and distinct random picks for the agents placed at random.
 
 :class:`HandPlacement` is the part of :class:`~empathy_zoo.engine.base.GridEngine` that applies
 ``reset(options={"positions": {...}, ...})`` to one environment: every cell is checked (on the
@@ -15,7 +16,22 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["HandPlacement"]
+from empathy_zoo.randomness import EnvStreams
+
+__all__ = ["HandPlacement", "distinct_picks"]
+
+
+def distinct_picks(streams: EnvStreams, env_ids: np.ndarray, choices: int, count: int) -> np.ndarray:
+    """``(len(env_ids), count)`` int64: ``count`` distinct indices below ``choices`` in each of
+    ``env_ids``, drawn in turn from its stream, each uniform over the indices still free (one
+    number per pick: the ``k``-th is ``floor(u·(choices − k))``, then moved past the earlier picks)."""
+    picks = np.empty((len(env_ids), count), dtype=np.int64)
+    for k in range(count):
+        pick = np.floor(streams.uniform(env_ids) * (choices - k)).astype(np.int64)
+        for earlier in np.sort(picks[:, :k], axis=1).T:  # ascending: the pick skips every taken index
+            pick += pick >= earlier
+        picks[:, k] = pick
+    return picks
 
 
 class HandPlacement:
@@ -50,7 +66,7 @@ class HandPlacement:
                 a, b = indices[x], indices[y]
                 if np.array_equal(placed[a], placed[b]):
                     raise ValueError(f"{self.agents[a]} and {self.agents[b]} are both placed on {tuple(placed[a].tolist())}")
-                if self._start_conflict(placed[a], placed[b]):
+                if self._start_conflict(a, placed[a], b, placed[b]):
                     raise ValueError(
                         f"{self.agents[a]} at {tuple(placed[a].tolist())} and {self.agents[b]} at "
                         f"{tuple(placed[b].tolist())} would start in contact"
@@ -62,19 +78,13 @@ class HandPlacement:
             missing = []
         for index in missing:
             if not any(
-                flat not in blocked and not any(
-                    np.array_equal(self._cell_rc[flat], c) or self._start_conflict(self._cell_rc[flat], c)
-                    for c in placed.values()
-                )
-                for flat in range(self.num_cells)
+                flat not in blocked and not self._taken(index, self._cell_rc[flat], placed) for flat in range(self.num_cells)
             ):
                 raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
             while True:  # rejection sampling from the environment's own stream
                 flat = int(np.floor(self.streams.uniform(env)[0] * self.size * self.size))
                 cell = np.array(divmod(flat, self.size), dtype=np.int64)
-                if flat in blocked:
-                    continue
-                if any(np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()):
+                if flat in blocked or self._taken(index, cell, placed):
                     continue
                 placed[index] = cell
                 break
@@ -92,15 +102,20 @@ class HandPlacement:
         for index in missing:
             for flat in self.start_order.tolist():
                 cell = self._cell_rc[flat]
-                if flat in blocked or any(
-                    np.array_equal(cell, c) or self._start_conflict(cell, c) for c in placed.values()
-                ):
+                if flat in blocked or self._taken(index, cell, placed):
                     continue
                 placed[index] = cell
                 break
             else:
                 raise ValueError(f"no free start cell is left for {self.agents[index]} with these options")
         return placed
+
+    def _taken(self, index: int, cell: np.ndarray, placed: Mapping[int, np.ndarray]) -> bool:
+        """Whether agent ``index`` may not start on ``cell`` given the agents ``placed`` so far:
+        one of them stands there or would start in conflict with it."""
+        return any(
+            np.array_equal(cell, other) or self._start_conflict(index, cell, agent, other) for agent, other in placed.items()
+        )
 
     def _check_cell(self, cell: Any, where: str) -> np.ndarray:
         try:

@@ -1,4 +1,7 @@
-"""Sharing rules (SPEC §3): a robot and a human collect batteries with diminishing returns.
+"""Sharing rules (SPEC §3, §3b): a robot and one or more humans collect batteries with
+diminishing returns. Several agents ending on one battery in one step: the env's generator gives
+it to one of them, uniformly (one number per contested battery, in the order of each battery's
+first agent).
 
 Two fidelity options (SPEC §3, constructor keywords; the defaults are the suite's rules):
 
@@ -20,23 +23,27 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.engine.base import GridEngine, StepEvents, check_choice
+from empathy_zoo.engine.placement import distinct_picks
 from empathy_zoo.grid import cells_by_distance, window_indices
 from empathy_zoo.observation_codes import step_value
 
 __all__ = [
-    "SharingEngine", "battery_value", "agent_value", "authors_agent_value", "FLOOR", "BATTERY", "STARTS",
-    "INVENTORY_ENCODINGS",
+    "SharingEngine", "battery_value", "agent_value", "authors_agent_value", "battery_cells", "FLOOR", "BATTERY",
+    "STARTS", "INVENTORY_ENCODINGS",
 ]
 
 FLOOR = 0.0
 BATTERY = -1.0
-ROBOT, HUMAN = 0, 1
-TIE_TO_ROBOT = 0.5
-"""A battery both agents reach in the same step goes to the robot when the env's draw is below this."""
 STARTS = ("random", "centre")
 """Values of the ``start`` argument (the first is the default)."""
 INVENTORY_ENCODINGS = ("count_plus_one", "authors")
 """Values of the ``inventory_encoding`` argument (the first is the default)."""
+
+
+def battery_cells(size: int) -> np.ndarray:
+    """``(size²,)`` bool: the cells that start with a battery (row and column both odd)."""
+    rows, cols = np.divmod(np.arange(size * size), size)
+    return (rows % 2 == 1) & (cols % 2 == 1)
 
 
 def battery_value(n: np.ndarray | int) -> np.ndarray:
@@ -60,7 +67,8 @@ def authors_agent_value(batteries: np.ndarray | int) -> np.ndarray:
 
 
 class SharingEngine(GridEngine):
-    """``robot_0`` and ``human_0`` collect the batteries on every odd (row, col) cell."""
+    """``robot_0`` and ``human_0 … human_{num_humans-1}`` collect the batteries on every odd
+    (row, col) cell."""
 
     name = "sharing_v0"
     agents = ("robot_0", "human_0")
@@ -68,18 +76,18 @@ class SharingEngine(GridEngine):
     colors = ((40, 110, 220), (200, 60, 60))
     obs_low = -1.0
     extra_arguments = {"start": STARTS, "inventory_encoding": INVENTORY_ENCODINGS}
+    count_argument = "num_humans"
 
     def __init__(
         self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *,
-        start: str = "random", inventory_encoding: str = "count_plus_one",
+        start: str = "random", inventory_encoding: str = "count_plus_one", num_humans: int = 1,
     ) -> None:
         self.start = check_choice("start", start, STARTS)
         self.inventory_encoding = check_choice("inventory_encoding", inventory_encoding, INVENTORY_ENCODINGS)
-        super().__init__(num_envs, size, view, max_cycles)
+        super().__init__(num_envs, size, view, max_cycles, num_others=num_humans)
         self.window = window_indices(self.size, self.view)
         """``[centre]``: the flat cells of the window around ``centre``, row-major."""
-        rows, cols = np.divmod(np.arange(self.size * self.size), self.size)
-        self.initial_batteries = (rows % 2 == 1) & (cols % 2 == 1)
+        self.initial_batteries = battery_cells(self.size)
         self.num_batteries = int(self.initial_batteries.sum())
         if inventory_encoding == "authors":  # a lookup over every count the env can reach
             self._agent_value = authors_agent_value(np.arange(self.num_batteries + 1)).take
@@ -89,10 +97,16 @@ class SharingEngine(GridEngine):
         if start == "centre":
             self.start_order = cells_by_distance(self.size, (self.size // 2, self.size // 2))
         self._free_cells = np.flatnonzero(~self.initial_batteries)
+        self._nowhere = -1 - np.arange(self.num_agents)
+        """A distinct negative number per agent: where it reaches no battery (see :meth:`_resolve`)."""
         self.batteries = np.zeros((self.num_envs, self.size * self.size), dtype=bool)
         self._picture = np.zeros(self.batteries.shape, dtype=np.float32)
         """The batteries as observation values (``BATTERY`` or ``FLOOR``), kept in step with
         :attr:`batteries`: painting then reads them with one lookup."""
+
+    def _room_for_others(self) -> tuple[int, str]:
+        free = int(np.count_nonzero(~battery_cells(self.size)))
+        return free - 1, f"the robot and the humans start on distinct cells without a battery: {free} on a {self.size}x{self.size} grid"
 
     def _draw_batteries(self, env_ids: np.ndarray) -> None:
         self._picture[env_ids] = np.where(self.batteries[env_ids], BATTERY, FLOOR)
@@ -104,7 +118,7 @@ class SharingEngine(GridEngine):
     def _blocked_start_cells(self, env_id: int) -> np.ndarray:
         return np.flatnonzero(self.batteries[env_id])
 
-    def _start_conflict(self, cell: np.ndarray, other: np.ndarray) -> bool:
+    def _start_conflict(self, agent: int, cell: np.ndarray, other_agent: int, other: np.ndarray) -> bool:
         return False  # only distinct cells are required
 
     def _apply_options(self, env_id: int, options: Mapping[str, Any]) -> set[str]:
@@ -131,23 +145,19 @@ class SharingEngine(GridEngine):
         return {"batteries"}
 
     def _random_start(self, env_ids: np.ndarray) -> None:
-        free = len(self._free_cells)
-        robot = np.floor(self.streams.uniform(env_ids) * free).astype(np.int64)
-        human = np.floor(self.streams.uniform(env_ids) * (free - 1)).astype(np.int64)
-        human += human >= robot
-        self.cells[env_ids, ROBOT] = self._free_cells[robot]
-        self.cells[env_ids, HUMAN] = self._free_cells[human]
+        picks = distinct_picks(self.streams, env_ids, len(self._free_cells), self.num_agents)
+        self.cells[env_ids] = self._free_cells[picks]
 
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
         flat = self.cells + self._cell_base if self.num_envs > 1 else self.cells  # into batteries.ravel()
         collects = self.batteries.take(flat)
         if not np.count_nonzero(collects):
             return
-        tie_envs = np.flatnonzero(collects[:, ROBOT] & collects[:, HUMAN] & (flat[:, ROBOT] == flat[:, HUMAN]))
-        if tie_envs.size:
-            to_robot = self.streams.uniform(tie_envs) < TIE_TO_ROBOT
-            collects[tie_envs, ROBOT] = to_robot
-            collects[tie_envs, HUMAN] = ~to_robot
+        # where each agent collects, and a distinct negative number where it does not
+        reached = np.where(collects, flat, self._nowhere)
+        together = reached[:, :, None] == reached[:, None, :]  # (N, A, A): agents on one battery
+        if np.count_nonzero(together) > together.shape[0] * together.shape[1]:  # more than each with itself
+            self._share_out(reached, together, collects)
         self.inventory += collects
         value = np.where(collects, battery_value(self.inventory), 0.0)
         events.rewards = value.astype(np.float32)
@@ -159,6 +169,21 @@ class SharingEngine(GridEngine):
         empty = ~self.batteries.any(axis=1)
         events.terminated[empty] = True
         events.episode_over = empty
+
+    def _share_out(self, reached: np.ndarray, together: np.ndarray, collects: np.ndarray) -> None:
+        """Give every battery several agents reached (``reached``: each agent's battery cell, or a
+        distinct negative number; ``together``: which pairs reached the same one) to one of them,
+        uniformly by the env's generator: clear the others' ``collects``."""
+        crowded = np.count_nonzero(together, axis=(1, 2)) > self.num_agents
+        for env_id in np.flatnonzero(crowded).tolist():
+            row = reached[env_id].tolist()
+            for cell in dict.fromkeys(row):  # each battery once, in the order of its first agent
+                contenders = [agent for agent, there in enumerate(row) if there == cell]
+                if len(contenders) > 1:
+                    draw = self.streams.uniform(np.array([env_id])).item()
+                    winner = contenders[int(draw * len(contenders))]
+                    collects[env_id, contenders] = False
+                    collects[env_id, winner] = True
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
         return {"batteries": self.inventory.item(env_id, agent)}
