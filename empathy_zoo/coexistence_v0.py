@@ -8,9 +8,9 @@ to come from elsewhere (empathy, shaping): this is the paper's first environment
 | | |
 |---|---|
 | Import | `from empathy_zoo import coexistence_v0` |
-| Agents | `robot_0` (the learner), `cat_0` (fixed: `RandomWalk`, see `empathy_zoo.policies`) |
+| Agents | `robot_0` (the learner), `cat_0` (fixed: `RandomWalk`, see `empathy_zoo.policies`); with `num_cats=N`, `cat_0 … cat_{N-1}` |
 | Actions | `Discrete(5)`: 0 up (row−1), 1 down (row+1), 2 left (col−1), 3 right (col+1), 4 stay |
-| Observations | `Box(-1, 1, (view·view,), float32)`: the `view×view` window around the agent, wrapping, row-major; own cell `1`, the other agent `-1`, floor `0`; index `view·view // 2` is the own cell |
+| Observations | `Box(-1, 1, (view·view,), float32)`: the `view×view` window around the agent, wrapping, row-major; own cell `1`, every other agent `-1`, floor `0`; index `view·view // 2` is the own cell |
 | Parallel API | yes (`parallel_env`); AEC via `env` |
 
 ## Rules
@@ -22,6 +22,11 @@ to come from elsewhere (empathy, shaping): this is the paper's first environment
   (shortest torus displacement): the one that was above harms; on the same row, the one that
   was to the right harms.
 * **Start**: two distinct random cells not in contact (drawn from the env's seeded generator).
+* **Several cats** (`num_cats=N`): every cat meets the robot by the rules above, pair by pair;
+  cats pass through one another and never harm each other. In one step the robot may harm
+  several cats, and may harm one cat while another harms it (both are reported). A robot harmed
+  by several cats at once names the first of them (agent order) in `harmed_by`. The cats start
+  on distinct cells, none in contact with the robot (two cats may start side by side).
 
 ## Rewards
 Each agent gets `+1` for every step at whose end it is operative, `0` on the step it is harmed.
@@ -29,7 +34,7 @@ The cat's reward is reported but no learner trains on it.
 
 ## Termination and truncation
 * A harmed cat is terminated and leaves (`env.agents` loses it); the robot goes on alone.
-* A harmed robot is terminated and the episode ends; the cat is truncated.
+* A harmed robot is terminated and the episode ends; every cat still present is truncated.
 * Every agent still present is truncated after `max_cycles` steps.
 
 ## Infos
@@ -38,24 +43,33 @@ The cat's reward is reported but no learner trains on it.
 At the step that ends the episode, `infos[agent]["episode"]` of each agent still in it holds its
 episode metrics (SPEC §5: `survival`, `harms`, `batteries`, `other_batteries`, `equality`,
 `return`, `other_return`, and `length`), exactly as the leaderboard scores a learner's episode.
+With several cats, `harms` counts every cat the agent harmed and `other_return` is summed over
+every other agent (the others' outcome as a whole).
 
 ## Reset options
-`reset(seed, options={"positions": {"robot_0": (r, c), "cat_0": (r, c)}})` places agents (any
-agent left out is drawn at random). Unknown agents, off-grid cells, two agents on one cell, or
-agents placed in contact raise `ValueError`.
+`reset(seed, options={"positions": {"robot_0": (r, c), "cat_0": (r, c), ...}})` places agents
+(any agent left out is drawn at random). Unknown agents, off-grid cells, two agents on one cell,
+or the robot placed in contact with a cat raise `ValueError` (cats may be placed side by side).
 
 ## Perspective swap
 `env.unwrapped.swapped_observation(viewer, other, in_view_only=False)` is what `viewer` would
 observe had it exchanged places with `other` (here: `other`'s own observation); `None` once
-`other` has left. Wrap with `empathy_zoo.EmpathyWrapper` to get it in `infos`.
+`other` has left. With several cats the swap exchanges that pair only; every other agent stays.
+Wrap with `empathy_zoo.EmpathyWrapper` to get it in `infos`. The closest other agent (the one
+`empathy_zoo.vector.VectorEnv` swaps with in `VectorStep.swapped`) is the present one at the
+least torus (Manhattan) distance, ties to the lower agent index.
 
 ## Arguments
-`coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None)`
+`coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, num_cats=1)`
 * `size`: side of the torus (≥ 5, so that "above" is never ambiguous; at most 255: the lookup
   tables take about `600 + 8·view²` bytes per cell, 50 MB at size 255 with view 5; see docs/limits.md).
 * `view`: side of the observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
-* `render_mode`: `None`, `"ansi"` (text grid: `R` robot, `C` cat, `*` both) or `"rgb_array"`.
+* `render_mode`: `None`, `"ansi"` (text grid: `R` robot, `C` cat, `*` several agents) or `"rgb_array"`.
+* `num_cats`: how many cats, `1` (default: the paper's environment, unchanged) up to
+  `size² − 5` (each starts on its own cell, not in contact with the robot); any other value
+  raises `ValueError` naming `num_cats`. Give each cat its fixed policy:
+  `FixedAgents(parallel_env(num_cats=3), {f"cat_{i}": "random_walk" for i in range(3)})`.
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1–2.
@@ -65,6 +79,8 @@ observe had it exchanged places with `other` (here: `other`'s own observation); 
 * v0, empathy-zoo 0.2.0: `infos[agent]["episode"]` holds each agent's episode metrics at the step
   that ends the episode; a fixed agent's context is the same on every face. Every observation,
   reward and outcome unchanged.
+* v0, empathy-zoo 0.3.0: `num_cats` (docs/SPEC.md §3b), default 1: with the default every
+  observation, reward, outcome and random draw is unchanged.
 """
 
 from __future__ import annotations

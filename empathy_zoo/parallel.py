@@ -33,8 +33,9 @@ class GridParallelEnv(ParallelEnv, EzPickle):
     def __init__(
         self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None, **env_options: Any
     ) -> None:
-        """``env_options``: the environment's own arguments (``engine_class.extra_arguments``);
-        any other keyword raises ``TypeError`` naming it."""
+        """``env_options``: the environment's own arguments (``engine_class.extra_arguments``, and
+        its ``count_argument``: how many other agents); any other keyword raises ``TypeError``
+        naming it."""
         EzPickle.__init__(self, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
         check_env_arguments(self.engine_class, env_options)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:

@@ -22,7 +22,7 @@ def _battery_cells(engine: GridEngine, env_id: int) -> np.ndarray:
 
 
 def render_text(engine: GridEngine, env_id: int = 0) -> str:
-    """The grid as text: ``.`` floor, ``o`` battery, one letter per agent, ``*`` for two on one cell."""
+    """The grid as text: ``.`` floor, ``o`` battery, one letter per agent, ``*`` for several on one cell."""
     size = engine.size
     grid = [[FLOOR_CHAR] * size for _ in range(size)]
     for cell in _battery_cells(engine, env_id):
@@ -49,6 +49,6 @@ def render_rgb(engine: GridEngine, env_id: int = 0, cell_pixels: int = 24) -> np
     for agent in range(engine.num_agents):
         if engine.present[env_id, agent]:
             r, c = engine.pos[env_id, agent]
-            shift = agent * (px // 6)  # two agents on one cell stay visible
+            shift = min(agent, 2) * (px // 6)  # agents on one cell stay visible
             image[r * px + 2 + shift : (r + 1) * px - 2, c * px + 2 + shift : (c + 1) * px - 2] = engine.colors[agent]
     return image

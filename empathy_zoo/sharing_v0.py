@@ -7,7 +7,7 @@ value; a purely selfish robot grabs everything it can. This is the paper's secon
 | | |
 |---|---|
 | Import | `from empathy_zoo import sharing_v0` |
-| Agents | `robot_0` (the learner), `human_0` (fixed: `Patrol`, up on steps 0, 7, 14, …, else right; or `RandomWalk`, see Fidelity options) |
+| Agents | `robot_0` (the learner), `human_0` (fixed: `Patrol`, up on steps 0, 7, 14, …, else right; or `RandomWalk`, see Fidelity options); with `num_humans=N`, `human_0 … human_{N-1}` |
 | Actions | `Discrete(5)`: 0 up (row−1), 1 down (row+1), 2 left (col−1), 3 right (col+1), 4 stay |
 | Observations | `Box(-1, high, (view·view,), float32)`: the `view×view` window around the agent, wrapping, row-major; floor `0`, battery `-1`, an agent `1 + batteries it has collected` (`high = 1 + #batteries`), or `(n+1)/20` with `inventory_encoding="authors"` (`high = (1 + #batteries)/20`); the own cell is drawn last |
 | Parallel API | yes (`parallel_env`); AEC via `env` |
@@ -18,6 +18,10 @@ value; a purely selfish robot grabs everything it can. This is the paper's secon
 * **Collecting**: an agent that ends its move on a battery collects it. If both end on the same
   battery in the same step, the env's seeded generator gives it to one of them (probability ½).
 * **Start**: two distinct random cells without a battery (or near the centre: `start="centre"`).
+* **Several humans** (`num_humans=N`): every agent starts on its own battery-free cell; agents
+  may share a cell after a move (every one is drawn, the later in agent order on top). Several
+  agents ending on one battery: the env's generator gives it to one of them uniformly (one number
+  per such battery, in the order of each battery's first agent).
 
 ## Rewards
 Per agent and independent: its n-th battery is worth `1.1 − 0.1·n` (1.0, 0.9, …, 0.2). No other
@@ -31,20 +35,25 @@ Everyone terminates when no battery is left; everyone is truncated after `max_cy
 At the step that ends the episode, `infos[agent]["episode"]` of each agent still in it holds its
 episode metrics (SPEC §5: `survival`, `harms`, `batteries`, `other_batteries`, `equality`,
 `return`, `other_return`, and `length`), exactly as the leaderboard scores a learner's episode.
+With several humans, `other_batteries` and `other_return` are summed over every other agent (the
+others' outcome as a whole), and `equality` compares the agent's battery reward with the others'
+mean (`1` when it took exactly its share); with one human each is that human's own figure.
 
 ## Reset options
-`reset(seed, options={"positions": {"robot_0": (r, c), ...}, "batteries": [(r, c), ...]})` places
+`reset(seed, options={"positions": {"robot_0": (r, c), "human_0": (r, c), ...}, "batteries": [(r, c), ...]})` places
 agents and/or replaces the battery layout. Unknown agents, off-grid cells, two agents on one
 cell, a battery listed twice, an empty battery list or a battery under an agent raise `ValueError`.
 
 ## Perspective swap
 `env.unwrapped.swapped_observation(viewer, other, in_view_only=False)` exchanges cells *and*
-battery counts (here: `other`'s own observation). Wrap with `empathy_zoo.EmpathyWrapper` to get
-it in `infos`.
+battery counts (here: `other`'s own observation); with several humans, that pair only. Wrap with
+`empathy_zoo.EmpathyWrapper` to get it in `infos`. The closest other agent (the one
+`empathy_zoo.vector.VectorEnv` swaps with in `VectorStep.swapped`) is the present one at the
+least torus (Manhattan) distance, ties to the lower agent index.
 
 ## Arguments
 `sharing_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, start="random",
-inventory_encoding="count_plus_one")`
+inventory_encoding="count_plus_one", num_humans=1)`
 * `size`: side of the torus (≥ 3, at most 255: the lookup tables take about `600 + 8·view²` bytes
   per cell, 50 MB at size 255 with view 5, and every environment keeps 5 bytes per cell for its
   batteries; see docs/limits.md). `view`: observation window (odd, < `size`).
@@ -52,6 +61,10 @@ inventory_encoding="count_plus_one")`
 * `render_mode`: `None`, `"ansi"` (`R` robot, `H` human, `o` battery, `*` both agents) or `"rgb_array"`.
 * `start`: `"random"` (default) or `"centre"`; see Fidelity options.
 * `inventory_encoding`: `"count_plus_one"` (default) or `"authors"`; see Fidelity options.
+* `num_humans`: how many humans, `1` (default: the paper's environment, unchanged) up to one
+  fewer than the battery-free cells (39 on 7×7); any other value raises `ValueError` naming
+  `num_humans`. Give each human its fixed policy:
+  `FixedAgents(parallel_env(num_humans=2), {"human_0": "patrol", "human_1": "patrol"})`.
 
 Any other value of `start` or `inventory_encoding` raises `ValueError` naming the argument and
 the allowed values; an unknown keyword raises `TypeError`. The vector env takes the same keywords
@@ -67,7 +80,7 @@ closer to either of the paper's two sources, which disagree in places: the autho
   grid holds one), so the cells are ordered by torus (Manhattan) distance from the centre cell
   `(size//2, size//2)`, ties by row-major index, and the robot starts on the first battery-free
   cell of that order, the human on the next one: on 7×7, robot `(2, 3)` and human `(3, 2)`; on
-  9×9, robot `(4, 4)` and human `(3, 4)`. Reset options that place only some agents put the others
+  9×9, robot `(4, 4)` and human `(3, 4)`; several humans take the next ones in turn. Reset options that place only some agents put the others
   the same way (skipping placed agents and the options' batteries). No random number is drawn for
   the start, so the env's generator gives its numbers from the first one on to the battery
   tie-breaks: for a seed, they differ from those with `start="random"` (a different
@@ -92,6 +105,8 @@ closer to either of the paper's two sources, which disagree in places: the autho
 * v0, empathy-zoo 0.2.0: `infos[agent]["episode"]` holds each agent's episode metrics at the step
   that ends the episode; a fixed agent's context is the same on every face. Every observation,
   reward and outcome unchanged.
+* v0, empathy-zoo 0.3.0: `num_humans` (docs/SPEC.md §3b), default 1: with the default every
+  observation, reward, outcome and random draw is unchanged.
 """
 
 from __future__ import annotations
@@ -110,9 +125,10 @@ class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
 
     def __init__(
         self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None,
-        start: str = "random", inventory_encoding: str = "count_plus_one",
+        start: str = "random", inventory_encoding: str = "count_plus_one", num_humans: int = 1,
     ) -> None:
-        super().__init__(size, view, max_cycles, render_mode, start=start, inventory_encoding=inventory_encoding)
+        super().__init__(size, view, max_cycles, render_mode, start=start, inventory_encoding=inventory_encoding,
+                         num_humans=num_humans)
 
 
 parallel_env, env = env_constructors(raw_env)
