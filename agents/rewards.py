@@ -16,6 +16,15 @@ under ``config.reward``), with a ``name``, and either
   end of an episode (``batch.terminated | batch.truncated``).
 
 The rows of the runs that use another transform (or none) are computed and ignored.
+
+Optional capability, **the stepwise inaction baseline**: a transform that declares
+``needs_inaction_baseline = True`` and codes an engine's states with
+``state_codes(engine) -> (N,) int64`` (raising ``ValueError`` for an environment it cannot code)
+gets, in training, :attr:`StepBatch.state_after` and :attr:`StepBatch.baseline_after`: the code of
+the state each step ended in, and of the state it would have ended in had the learner taken the
+no-op, the other agents acting as they did (:mod:`baselines.inaction_baseline` computes them with
+the engine's ``state()``/``load_state()``; relative reachability, :mod:`baselines.reachability`,
+reads them). Without the declaration both fields are ``None``.
 """
 
 from __future__ import annotations

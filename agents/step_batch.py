@@ -43,3 +43,11 @@ class StepBatch:
     """(K, M) the environment's reward of the closest other agent this step (what a method that
     weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when the
     driver does not say."""
+    state_after: np.ndarray | None = None
+    """(K, M) int64: the state each environment is in at the end of the step (before any
+    autoreset), as the code of the run's reward transform (``state_codes``); filled only for a
+    transform that declares ``needs_inaction_baseline`` (:mod:`agents.rewards`), else ``None``."""
+    baseline_after: np.ndarray | None = None
+    """(K, M) int64: the same code of the stepwise inaction baseline: the state the step would
+    have ended in had the learner taken the no-op (action 4) and every other agent done what it
+    did; filled with :attr:`state_after`."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
+from baselines.reachability import RelativeReachability
 from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion
 
 BASELINE_METHODS: dict[str, Method] = {
@@ -26,6 +27,13 @@ BASELINE_METHODS: dict[str, Method] = {
         preset={"selfishness": 1.0}, reward=InequityAversion(),
         label=lambda s: "DQN + inequity aversion",
         description="DQN trained on reward − 5·(other ahead) − 0.05·(self ahead), smoothed rewards (Hughes et al. 2018)",
+    ),
+    "dqn_relative_reachability": Method(
+        name="dqn_relative_reachability", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0}, reward=RelativeReachability(),
+        label=lambda s: "DQN + relative reachability",
+        description="DQN trained on reward − 100·relative reachability lost against the stepwise inaction "
+                    "baseline, exact on Coexistence (Krakovna et al. 2019)",
     ),
 }
 """The baselines, by registry name."""

@@ -2,9 +2,11 @@
 
 :func:`train_ensemble` trains the runs of one ensemble (same env, learner and shared settings)
 step by step: the learner acts for every run at once, the vector env steps every run's
-environment, and :func:`learner_batch` hands the learner what happened, unshaped. It resumes
-from the ensemble's checkpoint, evaluates greedily every ``eval_interval`` steps, and writes one
-result file per run (atomically) at the end. A run's numbers depend only on its own spec.
+environment, and :func:`learner_batch` hands the learner what happened, unshaped (with the
+stepwise inaction baseline of :mod:`baselines.inaction_baseline` when a reward transform needs
+it). It resumes from the ensemble's checkpoint, evaluates greedily every ``eval_interval``
+steps, and writes one result file per run (atomically) at the end. A run's numbers depend only
+on its own spec.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import torch
 
 from agents.base import StepBatch
 from agents.rewards import TrainRewards
+from baselines.inaction_baseline import InactionBaseline
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
@@ -93,6 +96,7 @@ def _train_ensemble(
     seeds = [s.seed for s in specs]
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device)
     train_rewards = TrainRewards([s.method_object().reward for s in specs])
+    inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
@@ -130,6 +134,8 @@ def _train_ensemble(
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
         batch = learner_batch(obs, actions, result)
+        if inaction is not None:
+            batch = inaction.fill(batch)
         learner.observe(train_rewards(batch))
         step += 1
         finished = result.finished

@@ -1,0 +1,124 @@
+"""Relative reachability with a stepwise inaction baseline (Krakovna, Orseau, Kumar, Martic, Legg
+2019, "Penalizing side effects using stepwise relative reachability"), on Coexistence.
+
+    r'ₜ = rₜ − λ · d(s'ₜ; b'ₜ),    d(x; y) = (1/|S|) · Σₛ max(R(y; s) − R(x; s), 0),
+    R(x; s) = γᵣ ^ (fewest steps from x to s)   (0 when s cannot be reached from x)
+
+``s'ₜ`` is the state the step ended in and ``b'ₜ`` the **stepwise inaction baseline**: the state
+reached from ``sₜ₋₁`` had the robot taken the no-op (action 4), the cat moving as it did
+(:mod:`baselines.inaction_baseline`). ``d`` counts only what the robot's action made *less*
+reachable than the baseline left it (the truncation ``max(·, 0)``), averaged over every state.
+
+**Reachability reading.** ``R`` is exact, from a table of the fewest steps between every two
+states built from the engine (:mod:`baselines.reachability_table`): a state is reachable when
+*some* sequence of joint moves, the robot's and the cat's, gets there. The paper defines
+``R(x; y)`` as the best the agent can do in expectation over the environment's randomness; here the
+cat's moves count as if they could be chosen, because (1) the cat is a plug-in policy
+(``random_walk`` by default, any ``FixedPolicy`` otherwise) whose action probabilities the suite
+cannot read, while every move is possible to a random cat, so "some joint sequence" depends only
+on the rules; (2) it is what the authors' code computes (their reachability is built from observed
+transitions, each taken as available); (3) it bounds the paper's value from above, and a harm
+(the cat gone for good: no state with the cat can be reached again) still costs almost the whole
+table. The robot harmed by the cat is the end state, from which nothing else is reachable.
+
+**Defaults.** γᵣ = 0.99, the value discount of the authors' code (``value_discount``). λ is chosen
+per environment in the paper (the best of 0.1 … 100, their code's default 30, on rewards of −1 a
+step and +50 at the goal). Coexistence pays +1 for every step survived, and harming the cat takes
+away the one thing that can end the robot's episode, so the penalty must outweigh many steps:
+harming the cat makes 98 % of the states unreachable (every state with the cat, and the end),
+so ``d ≈ 0.94`` and λ = **100** prices a harm at about −94, on the scale of the paper's own
+hand-written harm penalty (−100, ``dqn_harm_penalty``), with the difference that nothing here
+was told what a harm is. A harmless move costs far less: some states end one step further away
+than from the baseline, each losing a fraction ``1 − γᵣ`` of its reachability (``d`` between
+0.0018 and 0.0020 for every harmless move of the robot at ``size = 7``: about 0.2 a step); the
+no-op costs nothing. λ was fixed from this reasoning before any training run, not tuned on results.
+
+**Scope.** Coexistence with one cat only (``coexistence_v0``, ``robot_0`` and ``cat_0``), on grids up
+to ``size = 9`` (|S| = 2,206 states at the default ``size = 7``, the table built once per process in
+about 0.2 s). Not on Sharing: a state there also holds which of the batteries are left and who
+holds how many (49·49 cells × 2⁹ battery sets ≈ 1.2 million states at ``size = 7``, before
+inventories), so the exact table would hold about 1.5 × 10¹² entries; an approximation (sampled
+goal states, or the UVFA reachability of Krakovna et al. 2020) would be another method. Several
+cats multiply the states by 49 per cat and are refused for the same reason.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from agents.step_batch import StepBatch
+from baselines.reachability_table import MAX_TABLE_SIZE, coexistence_codes, coexistence_reachability
+from empathy_zoo.engine import GridEngine
+
+__all__ = ["RelativeReachability", "SIZE_STRIDE", "truncated_deviation"]
+
+SIZE_STRIDE = 1 << 24
+"""A state code of :meth:`RelativeReachability.state_codes` is ``size · SIZE_STRIDE + `` its code
+on that grid (:func:`baselines.reachability_table.coexistence_codes`), so a code says which
+table it belongs to."""
+
+
+def truncated_deviation(after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
+    """``d = (1/|S|) · Σₛ max(R(b'; s) − R(s'; s), 0)`` over the last axis, given the reachability
+    ``R(s'; ·)`` of every state from the state reached (``after``) and ``R(b'; ·)`` from the
+    baseline: only what became less reachable counts, averaged over every state."""
+    return np.maximum(np.asarray(baseline) - np.asarray(after), 0.0).mean(axis=-1)
+
+
+@dataclass(frozen=True)
+class RelativeReachability:
+    """``r' = r − λ·d(s'; b')``: relative reachability of the state reached against the stepwise
+    inaction baseline (Krakovna et al. 2019; see the module page for the reading and defaults)."""
+
+    name: ClassVar[str] = "relative_reachability"
+    needs_inaction_baseline: ClassVar[bool] = True
+    """The trainer fills :attr:`StepBatch.state_after` and :attr:`StepBatch.baseline_after`."""
+    weight: float = 100.0
+    """λ: the penalty per unit of deviation (a harm of the cat costs about 0.94·λ)."""
+    discount: float = 0.99
+    """γᵣ: reachability of a state ``k`` steps away is ``γᵣᵏ`` (the authors' ``value_discount``)."""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight) and self.weight >= 0):
+            raise ValueError(f"weight (λ) must be a finite number ≥ 0, got {self.weight!r}")
+        if not (isinstance(self.discount, (int, float)) and 0 < self.discount <= 1):
+            raise ValueError(f"discount (γᵣ) must be in (0, 1], got {self.discount!r}")
+
+    def state_codes(self, engine: GridEngine) -> np.ndarray:
+        """``(N,)`` codes of the states of ``engine``'s environments; ``ValueError`` for an
+        environment other than Coexistence with one cat, or a grid too large for an exact table."""
+        agents = tuple(engine.agents)
+        if engine.name != "coexistence_v0" or agents != ("robot_0", "cat_0"):
+            raise ValueError(
+                f"relative reachability is computed exactly on Coexistence with one cat (coexistence_v0 with "
+                f"robot_0 and cat_0), not on {engine.name} with agents {list(agents)}: Sharing's batteries and "
+                "several cats make the state space too large for an exact reachability table")
+        if engine.size > MAX_TABLE_SIZE:
+            raise ValueError(f"relative reachability builds an exact table for sizes up to {MAX_TABLE_SIZE}, "
+                             f"not size={engine.size}")
+        coexistence_reachability(engine.size)  # built now, once per process
+        return engine.size * SIZE_STRIDE + coexistence_codes(engine.cells, engine.present, engine.size)
+
+    def deviation(self, after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
+        """``d(after; baseline)`` for every pair of state codes (arrays of one shape, codes of
+        :meth:`state_codes` on one grid size)."""
+        after, baseline = np.asarray(after, dtype=np.int64), np.asarray(baseline, dtype=np.int64)
+        if after.shape != baseline.shape:
+            raise ValueError(f"state codes of shapes {after.shape} and {baseline.shape}")
+        sizes = np.unique(np.concatenate([after.ravel(), baseline.ravel()]) // SIZE_STRIDE)
+        if len(sizes) != 1:
+            raise ValueError(f"state codes of several grid sizes {sizes.tolist()} in one batch")
+        table = coexistence_reachability(int(sizes[0]))
+        return truncated_deviation(table.reachability(after % SIZE_STRIDE, self.discount),
+                                   table.reachability(baseline % SIZE_STRIDE, self.discount))
+
+    def __call__(self, batch: StepBatch) -> np.ndarray:
+        if batch.state_after is None or batch.baseline_after is None:
+            raise ValueError("relative reachability needs the stepwise inaction baseline (StepBatch.state_after and "
+                             "baseline_after), which the trainer fills for a transform declaring needs_inaction_baseline")
+        penalty = self.weight * self.deviation(batch.state_after, batch.baseline_after)
+        return (batch.rewards.astype(np.float64) - penalty).astype(np.float32)
