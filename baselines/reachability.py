@@ -83,9 +83,10 @@ class RelativeReachability:
     """γᵣ: reachability of a state ``k`` steps away is ``γᵣᵏ`` (the authors' ``value_discount``)."""
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight) and self.weight >= 0):
+        if isinstance(self.weight, bool) or not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight)
+                                                 and self.weight >= 0):
             raise ValueError(f"weight (λ) must be a finite number ≥ 0, got {self.weight!r}")
-        if not (isinstance(self.discount, (int, float)) and 0 < self.discount <= 1):
+        if isinstance(self.discount, bool) or not (isinstance(self.discount, (int, float)) and 0 < self.discount <= 1):
             raise ValueError(f"discount (γᵣ) must be in (0, 1], got {self.discount!r}")
 
     def state_codes(self, engine: GridEngine) -> np.ndarray:
