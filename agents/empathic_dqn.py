@@ -39,7 +39,7 @@ from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
 from empathy_zoo.schedules import linear_epsilon
 
-__all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "linear_epsilon"]
+__all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "other_term", "linear_epsilon"]
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
 
@@ -66,9 +66,14 @@ def empathic_targets(
     """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
     ``selfishness`` is β per run, ``(K, 1)``."""
     y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
-    other = gamma * other_present.float() * q_swapped_target.max(dim=2).values
-    y_emp = selfishness * y + (1.0 - selfishness) * other
+    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma)
     return y, y_emp
+
+
+def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float) -> torch.Tensor:
+    """``γ·other_present·max_a Q̂(s_emp', a)``, ``(K, B)``: the robot's value in the other's place
+    at t+1 (0 where that agent is terminal)."""
+    return gamma * other_present.float() * q_swapped_target.max(dim=2).values
 
 
 class EmpathicDQN:

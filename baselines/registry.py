@@ -13,6 +13,7 @@ from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from baselines.methods import BASELINE_METHODS
 from baselines.sb3 import SB3_METHODS
+from baselines.silver_rule import SilverRuleDQN
 from empathy_zoo.registry import resolve_name
 
 __all__ = ["METHODS", "get_method"]
@@ -34,6 +35,12 @@ METHODS: dict[str, Method] = {
         label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
         description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
                     "the paper's future work)",
+    ),
+    "empathic_dqn_silver": Method(
+        name="empathic_dqn_silver", learner=SilverRuleDQN, settings=EmpathicDQNSettings,
+        label=lambda s: f"Empathic DQN, silver rule (β={s.selfishness:g})",
+        description="Empathic DQN that counts the other's value only where it falls below the robot's own "
+                    "(the paper's silver rule: empathy with bad outcomes only)",
     ),
     **BASELINE_METHODS,
     **SB3_METHODS,
