@@ -28,6 +28,7 @@ STREAMS: dict[str, int] = {
     "sb3": 15,              # the seed handed to a Stable-Baselines3 algorithm
     "train_env": 20,        # a run's training environments
     "eval_env": 30,         # a run's greedy-evaluation start states (+ the episode)
+    "attainable_utility": 40,  # AUP's auxiliary rewards, networks and replay batches (+ which of them)
 }
 """Every random stream derived from a run's seed, by name: ``derive_key(seed, STREAMS[name], ...)``.
 One id per stream, so no two streams of a run ever coincide; a new stream takes a new id here."""

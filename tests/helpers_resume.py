@@ -1,0 +1,33 @@
+"""Train one run twice, uninterrupted and killed at its first checkpoint then resumed, and return
+both result files (for the tests that a stateful reward transform survives a checkpoint)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+
+def whole_and_resumed(spec: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                      checkpoint_interval: int = 250) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The result of ``spec`` trained without checkpoints, and trained again with one every
+    ``checkpoint_interval`` steps, killed just after the first is written, then resumed."""
+    from empathy_zoo.training import RunnerOptions, ensemble, train_runs
+
+    whole = json.loads(train_runs([spec], tmp_path / "whole", RunnerOptions(progress=False, checkpoint_interval=0))[0]
+                       .read_text())
+    real = ensemble.save_checkpoint
+
+    def save_then_die(path, payload):
+        real(path, payload)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
+    options = RunnerOptions(progress=False, checkpoint_interval=checkpoint_interval)
+    with pytest.raises(KeyboardInterrupt):
+        train_runs([spec], tmp_path / "resumed", options)
+    monkeypatch.setattr(ensemble, "save_checkpoint", real)
+    resumed = json.loads(train_runs([spec], tmp_path / "resumed", options)[0].read_text())
+    return whole, resumed
