@@ -62,18 +62,28 @@ def empathic_targets(
     other_present: torch.Tensor,
     gamma: float,
     selfishness: torch.Tensor,
+    others: str = "closest",
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
-    ``selfishness`` is β per run, ``(K, 1)``."""
+    ``selfishness`` is β per run, ``(K, 1)``; with several others aggregated (``others`` "mean" or
+    "min"), ``q_swapped_target`` is ``(K, B, N, A)`` and ``other_present`` ``(K, B, N)``."""
     y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
-    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma)
+    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma, others)
     return y, y_emp
 
 
-def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float) -> torch.Tensor:
+def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float,
+               others: str = "closest") -> torch.Tensor:
     """``γ·other_present·max_a Q̂(s_emp', a)``, ``(K, B)``: the robot's value in the other's place
-    at t+1 (0 where that agent is terminal)."""
-    return gamma * other_present.float() * q_swapped_target.max(dim=2).values
+    at t+1 (0 where that agent is terminal). With ``others`` "mean" or "min", the inputs carry one
+    entry per other agent (``(K, B, N, A)``, ``(K, B, N)``) and the terms are averaged, or the
+    least taken, over all N (a terminal one counting 0)."""
+    terms = gamma * other_present.float() * q_swapped_target.max(dim=-1).values
+    if others == "closest":
+        return terms
+    if terms.dim() != 3:
+        raise ValueError(f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {tuple(q_swapped_target.shape)}")
+    return terms.mean(dim=2) if others == "mean" else terms.min(dim=2).values
 
 
 class EmpathicDQN:
@@ -90,6 +100,7 @@ class EmpathicDQN:
         num_actions: int = 5,
         device: str = "cpu",
         envs_per_run: int = 1,
+        num_others: int = 1,
     ) -> None:
         if len(settings) != len(seeds) or not settings:
             raise ValueError("give one settings object per seed, and at least one run")
@@ -123,7 +134,10 @@ class EmpathicDQN:
         """Row of each run's acting network in :attr:`online` (``None``: a slice will do)."""
         self.target = [p[:k].detach().clone() for p in self.online]
         self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
-        self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device)
+        self.aggregated = self.config.others != "closest" and num_others > 1
+        """The other-term aggregates one swapped value per other agent (``num_others`` of them)."""
+        self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device,
+                                    others=num_others if self.aggregated else 1)
         self.selfishness = torch.tensor([[s.selfishness] for s in settings], device=self.device)
         self._explore_keys = np.array([derive_key(s, STREAM_EXPLORE) for s in self.seeds], dtype=np.uint64)[:, None]
         self._sample_keys = np.array([derive_key(s, STREAM_SAMPLE) for s in self.seeds], dtype=np.uint64)[:, None]
@@ -161,10 +175,13 @@ class EmpathicDQN:
 
     # ------------------------------------------------------------------ learning
     def observe(self, batch: StepBatch) -> None:
-        self.replay.add(
-            batch.obs, batch.next_obs, batch.swapped_next_obs, batch.actions,
-            batch.rewards, batch.terminated, batch.other_present,
-        )
+        swapped, present = batch.swapped_next_obs, batch.other_present
+        if self.aggregated:
+            if batch.swapped_next_obs_all is None or batch.others_present is None:
+                raise ValueError(f"others={self.config.others!r} needs every other agent's swapped observation "
+                                 "(StepBatch.swapped_next_obs_all, others_present)")
+            swapped, present = batch.swapped_next_obs_all, batch.others_present
+        self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present)
         m = batch.actions.shape[1]
         for _ in range(m):
             self.env_steps += 1
@@ -185,10 +202,14 @@ class EmpathicDQN:
         with torch.no_grad():
             q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
             if emp:
-                both = torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1)
-                target_both = StackedMLP.forward(self.target, both)
-                b = cfg.batch_size
-                y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_both[:, b:])
+                swapped, b = batch["swapped_next_obs"], cfg.batch_size
+                if self.aggregated:  # (K, B, N, V) -> rows other by other, and back to (K, B, N, A)
+                    swapped = swapped.transpose(1, 2).reshape(k, -1, swapped.shape[-1])
+                target_both = StackedMLP.forward(self.target, torch.cat([batch["next_obs"], swapped], dim=1))
+                target_swapped = target_both[:, b:]
+                if self.aggregated:
+                    target_swapped = target_swapped.reshape(k, self.replay.others, b, -1).transpose(1, 2)
+                y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_swapped)
                 targets = torch.cat([y, y_emp if emp == k else y_emp.index_select(0, self._emp_rows)])
             else:
                 target_next = StackedMLP.forward(self.target, batch["next_obs"])
@@ -217,12 +238,18 @@ class EmpathicDQN:
         """The TD targets ``(y, y_emp)`` of ``Q`` and ``Q_emp`` for a sampled batch, ``(K, B)`` each.
 
         ``q_next = Q(s')``, ``target_next = Q̂(s')``, ``target_swapped = Q̂(s_emp')``, all
-        ``(K, B, actions)``. Override this to try another way of caring about the other agent.
+        ``(K, B, actions)`` (with several others aggregated, ``target_swapped`` is
+        ``(K, B, others, actions)`` and ``batch["other_present"]`` ``(K, B, others)``: see
+        :func:`other_term`). Override this to try another way of caring about the other agent.
         """
         return empathic_targets(
             batch["reward"], batch["terminated"], q_next, target_next, target_swapped,
-            batch["other_present"], self.config.gamma, self.selfishness,
+            batch["other_present"], self.config.gamma, self.selfishness, self._others_rule(),
         )
+
+    def _others_rule(self) -> str:
+        """How :func:`other_term` treats the other agents (``closest`` unless aggregating)."""
+        return self.config.others if self.aggregated else "closest"
 
     def sync_target(self) -> None:
         """Copy every run's ``Q`` into its ``Q̂``."""

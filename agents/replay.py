@@ -6,7 +6,8 @@ stored as a uint8 code and decoded exactly by a 256-entry float32 table
 (:mod:`empathy_zoo.observation_codes`, the arithmetic the engine draws them with): a sampled
 observation is bit for bit the float32 observation that was added, and integers decode to
 themselves. A value the code cannot hold exactly raises ``ValueError`` when added; nothing is
-rounded. Each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
+rounded. With several other agents whose values a learner aggregates, one swapped observation
+and one presence flag per other agent are kept. Each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
 row), 3 bytes of flags (action, terminated, other present) and 4 bytes of reward: 82 bytes at
 V = 25, 41 MB per run at the paper's 500,000 transitions. Packing keeps a sample to three
 gathers and one table look-up.
@@ -28,16 +29,19 @@ ACTION, TERMINATED, OTHER_PRESENT = 0, 1, 2
 class StackedReplay:
     """``K`` ring buffers of ``capacity`` transitions, filled in lockstep (one row per run per add)."""
 
-    def __init__(self, num_runs: int, capacity: int, obs_size: int, device: torch.device) -> None:
+    def __init__(self, num_runs: int, capacity: int, obs_size: int, device: torch.device, others: int = 1) -> None:
         k, c = num_runs, capacity
-        self.num_runs, self.capacity, self.obs_size = k, c, obs_size
+        if others < 1:
+            raise ValueError(f"others must be >= 1, got {others}")
+        self.num_runs, self.capacity, self.obs_size, self.others = k, c, obs_size, others
         self.device = device
-        self.observations = torch.zeros((k, c, 3, obs_size), dtype=torch.uint8, device=device)
-        """(s, s', s_emp') of every transition, as codes (see :attr:`decode_table`)."""
+        self.observations = torch.zeros((k, c, 2 + others, obs_size), dtype=torch.uint8, device=device)
+        """(s, s', s_emp') of every transition, as codes (see :attr:`decode_table`); with
+        ``others`` > 1, one swapped observation per other agent (``s_emp'₁ … s_emp'ₙ``)."""
         self.decode_table = torch.from_numpy(DECODE_TABLE.copy()).to(device)
         """(256,) float32: the observation value of every code."""
-        self.flags = torch.zeros((k, c, 3), dtype=torch.uint8, device=device)
-        """(action, terminated, other present) of every transition."""
+        self.flags = torch.zeros((k, c, 2 + others), dtype=torch.uint8, device=device)
+        """(action, terminated, other present) of every transition (one "present" per other agent)."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0
@@ -54,11 +58,20 @@ class StackedReplay:
 
     def add(self, obs: np.ndarray, next_obs: np.ndarray, swapped_next_obs: np.ndarray, action: np.ndarray,
             reward: np.ndarray, terminated: np.ndarray, other_present: np.ndarray) -> None:
-        """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``."""
+        """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``; with several
+        others, ``swapped_next_obs`` is ``(K, m, others, V)`` and ``other_present`` ``(K, m, others)``."""
         m = action.shape[1]
         rows = (np.arange(m) + self.position) % self.capacity
-        packed = encode(np.stack([obs, next_obs, swapped_next_obs], axis=2))  # raises unless exact
-        flags = np.stack([action, terminated, other_present], axis=2).astype(np.uint8)
+        if self.others == 1:
+            packed = encode(np.stack([obs, next_obs, swapped_next_obs], axis=2))  # raises unless exact
+            flags = np.stack([action, terminated, other_present], axis=2).astype(np.uint8)
+        else:
+            expected = (*action.shape, self.others)
+            if swapped_next_obs.shape[:3] != expected or other_present.shape != expected:
+                raise ValueError(f"expected swapped observations {(*expected, self.obs_size)} and presence {expected} "
+                                 f"for {self.others} other agents, got {swapped_next_obs.shape} and {other_present.shape}")
+            packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped_next_obs], axis=2))
+            flags = np.concatenate([action[..., None], terminated[..., None], other_present], axis=2).astype(np.uint8)
         self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
         self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
         self.reward[:, rows] = torch.from_numpy(np.asarray(reward, dtype=np.float32)).to(self.device)
@@ -72,13 +85,16 @@ class StackedReplay:
         k, b = rows.shape
         rows = rows.reshape(-1)
         codes = self.observations.view(k * self.capacity, -1).index_select(0, rows)
-        observations = self.decode_table.index_select(0, codes.view(-1).int()).view(k, b, 3, self.obs_size)
-        flags = self.flags.view(k * self.capacity, 3).index_select(0, rows).view(k, b, 3)
-        return {
+        width = 2 + self.others
+        observations = self.decode_table.index_select(0, codes.view(-1).int()).view(k, b, width, self.obs_size)
+        flags = self.flags.view(k * self.capacity, width).index_select(0, rows).view(k, b, width)
+        swapped = SWAPPED_NEXT_OBS if self.others == 1 else slice(SWAPPED_NEXT_OBS, None)
+        present = OTHER_PRESENT if self.others == 1 else slice(OTHER_PRESENT, None)
+        return {  # (with several others: swapped_next_obs (K, B, others, V), other_present (K, B, others))
             "obs": observations[:, :, OBS], "next_obs": observations[:, :, NEXT_OBS],
-            "swapped_next_obs": observations[:, :, SWAPPED_NEXT_OBS],
+            "swapped_next_obs": observations[:, :, swapped],
             "action": flags[:, :, ACTION].long(), "terminated": flags[:, :, TERMINATED].bool(),
-            "other_present": flags[:, :, OTHER_PRESENT].bool(),
+            "other_present": flags[:, :, present].bool(),
             "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
         }
 

@@ -9,7 +9,8 @@ A transform is a frozen dataclass whose fields are its parameters (recorded in e
 under ``config.reward``), with a ``name``, and either
 
 * **stateless**: ``__call__(batch) -> (K, M) rewards``, a pure function of the step; or
-* **stateful**: ``initial_state(num_runs, envs_per_run) -> dict of (K, M) arrays`` and
+* **stateful**: ``initial_state(num_runs, envs_per_run) -> dict of (K, M) arrays`` (it may also
+  take ``seeds``, the runs' seeds in order, to draw each run's own random numbers) and
   ``__call__(batch, state) -> (rewards, new state)``, a pure function of the step and of its
   state (e.g. inequity aversion's smoothed rewards). The trainer keeps the state, one per
   transform and ensemble, and saves it in checkpoints; the transform resets what it must at the
@@ -30,6 +31,7 @@ reads them). Without the declaration both fields are ``None``.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from collections.abc import Sequence
 from typing import Any, ClassVar, Protocol
 
@@ -63,14 +65,25 @@ class TrainRewards:
     """The rewards each run of an ensemble trains on: run ``k`` gets ``transforms[k]``'s (``None``:
     the environment's), with the state of every stateful transform kept here."""
 
-    def __init__(self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1) -> None:
+    def __init__(self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1,
+                 seeds: Sequence[int] | None = None) -> None:
         self.transforms = list(transforms)
         self.distinct = list({id(t): t for t in self.transforms if t is not None}.values())
         """Each transform once, in the order of its first run."""
+        if seeds is not None and len(seeds) != len(self.transforms):
+            raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")
         self.states: list[dict[str, np.ndarray] | None] = [
-            t.initial_state(len(self.transforms), envs_per_run) if hasattr(t, "initial_state") else None
+            self._initial_state(t, envs_per_run, seeds) if hasattr(t, "initial_state") else None
             for t in self.distinct
         ]
+
+    def _initial_state(self, transform: RewardTransform, envs_per_run: int,
+                       seeds: Sequence[int] | None) -> dict[str, np.ndarray]:
+        if "seeds" not in inspect.signature(transform.initial_state).parameters:
+            return transform.initial_state(len(self.transforms), envs_per_run)
+        if seeds is None:
+            raise ValueError(f"reward transform {transform.name!r} draws random numbers per run: give TrainRewards the runs' seeds")
+        return transform.initial_state(len(self.transforms), envs_per_run, seeds=list(seeds))
 
     def __call__(self, batch: StepBatch) -> StepBatch:
         """``batch`` with each run's training rewards (the batch itself is not changed)."""

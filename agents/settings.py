@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-__all__ = ["EmpathicDQNSettings", "PER_RUN_FIELDS"]
+__all__ = ["EmpathicDQNSettings", "OTHERS_RULES", "PER_RUN_FIELDS"]
+
+OTHERS_RULES = ("closest", "mean", "min")
+"""The values of :attr:`EmpathicDQNSettings.others`."""
 
 
 @dataclass(frozen=True)
@@ -37,6 +40,13 @@ class EmpathicDQNSettings:
     the first 1,000,000 steps", and SPEC §6 has it reach 0.01 by the end of that budget."""
     hidden_size: int = 128
     """Width of both hidden layers of every network (obs → hidden → hidden → 5)."""
+    others: str = "closest"
+    """Whose swapped value the other-term takes when the environment has several other agents
+    (``num_cats`` / ``num_humans`` > 1): ``"closest"`` (the paper's rule: the closest other agent),
+    ``"mean"`` (the average over every other agent: utilitarian) or ``"min"`` (the worst off:
+    suffering-focused). An other agent that is terminal (harmed, or done) counts with 0, as the
+    single other agent does, so harming one of several is never free. With one other agent the
+    three are the same."""
 
     def __post_init__(self) -> None:
         checks = {
@@ -51,13 +61,14 @@ class EmpathicDQNSettings:
             "epsilon_end": 0.0 <= self.epsilon_end <= 1.0,
             "epsilon_decay_steps": self.epsilon_decay_steps >= 1,
             "hidden_size": self.hidden_size >= 1,
+            "others": self.others in OTHERS_RULES,
         }
         expectations = {
             "selfishness": "in [0, 1]", "gamma": "in [0, 1]", "learning_rate": "> 0",
             "batch_size": ">= 1", "replay_capacity": f">= batch_size ({self.batch_size})",
             "learning_starts": f">= batch_size ({self.batch_size})", "target_update_interval": ">= 1",
             "epsilon_start": "in [0, 1]", "epsilon_end": "in [0, 1]", "epsilon_decay_steps": ">= 1",
-            "hidden_size": ">= 1",
+            "hidden_size": ">= 1", "others": f"one of {OTHERS_RULES}",
         }
         for name, ok in checks.items():
             if not ok:

@@ -51,3 +51,10 @@ class StepBatch:
     """(K, M) int64: the same code of the stepwise inaction baseline: the state the step would
     have ended in had the learner taken the no-op (action 4) and every other agent done what it
     did; filled with :attr:`state_after`."""
+    swapped_next_obs_all: np.ndarray | None = None
+    """(K, M, N, V) the learner's swapped observation with each of the N other agents, in agent
+    order, at the end of the step (zeros for one that has left); ``None`` when the driver does not
+    say. What a learner aggregating over every other agent reads (``others="mean"`` / ``"min"``)."""
+    others_present: np.ndarray | None = None
+    """(K, M, N) each other agent is present and not terminal at the end of the step (as
+    :attr:`other_present` is for the closest); ``None`` when the driver does not say."""

@@ -41,9 +41,9 @@ Adam's moments, replay, scale), so checkpoints keep it and a resumed run equals 
 one; the transform updates those arrays in place (copying them every step would cost more than
 the update). The state is built at the first step, when the observation size is known.
 
-**Seeding.** A reward transform is told no run's seed: every run of the method draws its
-auxiliary rewards, initial networks and replay batches from ``seed`` (stream
-``STREAMS["attainable_utility"]``), the same for every run, so a run's numbers depend on its own
+**Seeding.** Each run draws its auxiliary rewards, initial networks and replay batches from its
+own seed (stream ``STREAMS["attainable_utility"]``; the trainer hands a transform whose
+``initial_state`` takes ``seeds`` the runs' seeds), so a run's numbers depend on its seed, its own
 transitions and the transform's fields only, alone or in any ensemble. The runs of one ensemble
 that use another reward transform are computed too, and ignored (:class:`agents.rewards.TrainRewards`).
 
@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -65,7 +66,7 @@ from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from agents.step_batch import StepBatch
 from empathy_zoo.grid import NUM_ACTIONS, Action
-from empathy_zoo.randomness import STREAMS, counter_integers, derive_key
+from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
 __all__ = ["NO_OP", "AttainableUtility", "attainable_utility_penalty"]
 
@@ -119,8 +120,6 @@ class AttainableUtility:
     """Auxiliary updates between copies of the auxiliary Q-network into its target."""
     scale_rate: float = 0.001
     """Weight of each training batch's mean ``|Q_Rᵢ(s, ∅)|`` in the running scale."""
-    seed: int = 0
-    """Seed of the auxiliary rewards, initial networks and replay batches (every run's)."""
 
     def __post_init__(self) -> None:
         checks = {
@@ -136,7 +135,7 @@ class AttainableUtility:
             "penalty_starts": self.penalty_starts > self.learning_starts,
             "target_update_interval": self.target_update_interval >= 1,
             "scale_rate": 0.0 < self.scale_rate <= 1.0,
-            "seed": self.seed >= 0,
+           
         }
         wanted = {
             "penalty_weight": "a finite number >= 0", "num_rewards": ">= 1", "discount": "in [0, 1)",
@@ -144,28 +143,32 @@ class AttainableUtility:
             "replay_capacity": f">= batch_size ({self.batch_size})",
             "learning_starts": f">= batch_size ({self.batch_size})", "train_interval": ">= 1",
             "penalty_starts": f"> learning_starts ({self.learning_starts}): the scale needs an update",
-            "target_update_interval": ">= 1", "scale_rate": "in (0, 1]", "seed": ">= 0",
+            "target_update_interval": ">= 1", "scale_rate": "in (0, 1]",
         }
         for field, ok in checks.items():
             if not ok:
                 raise ValueError(f"{field} must be {wanted[field]}, got {getattr(self, field)!r}")
 
     # ------------------------------------------------------------------ state
-    def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
-        """Counters only (transitions seen and updates made by each run, all runs alike; arrays of one
-        value): the learner is built at the first step, when the observation size is known."""
-        return {"seen": np.zeros(1, dtype=np.int64), "updates": np.zeros(1, dtype=np.int64)}
+    def initial_state(self, num_runs: int, envs_per_run: int, seeds: Sequence[int]) -> dict[str, np.ndarray]:
+        """The runs' seeds and two counters (transitions seen and updates made, all runs alike;
+        arrays of one value): the learner is built at the first step, when the observation size is known."""
+        if len(seeds) != num_runs:
+            raise ValueError(f"got {len(seeds)} seeds for {num_runs} runs")
+        return {"seen": np.zeros(1, dtype=np.int64), "updates": np.zeros(1, dtype=np.int64),
+                "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64)}
 
-    def _build(self, runs: int, obs_size: int) -> dict[str, np.ndarray]:
+    def _build(self, seeds: np.ndarray, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's auxiliary rewards, networks, optimiser moments and empty replay."""
-        key = derive_key(self.seed, STREAM, _INIT)
-        generators = [torch.Generator().manual_seed(key >> 1) for _ in range(runs)]
+        seeds, runs = [int(seed) for seed in seeds], len(seeds)
+        generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in seeds]
         sizes = [obs_size, self.hidden_size, self.hidden_size, self.num_rewards * NUM_ACTIONS]
         online = [p.numpy() for p in init_stacked_mlp(sizes, generators, torch.device("cpu"))]
-        rewards = np.random.default_rng(derive_key(self.seed, STREAM, _REWARDS)).random((obs_size, self.num_rewards))
+        rewards = np.stack([np.random.default_rng(derive_key(seed, STREAM, _REWARDS)).random((obs_size, self.num_rewards))
+                            for seed in seeds])
         capacity = self.replay_capacity
         state = {
-            "reward_map": np.repeat(rewards.astype(np.float32)[None], runs, axis=0),
+            "reward_map": rewards.astype(np.float32),
             "obs": np.zeros((runs, capacity, obs_size), dtype=np.float32),
             "next_obs": np.zeros((runs, capacity, obs_size), dtype=np.float32),
             "action": np.zeros((runs, capacity), dtype=np.int64),
@@ -198,7 +201,9 @@ class AttainableUtility:
         obs = np.asarray(batch.obs, dtype=np.float32)
         runs, envs, obs_size = obs.shape
         if "reward_map" not in state:
-            state = {**state, **self._build(runs, obs_size)}
+            if len(state["seeds"]) != runs:
+                raise ValueError(f"this AUP state is for {len(state['seeds'])} runs, not {runs}")
+            state = {**state, **self._build(state["seeds"], obs_size)}
         elif state["reward_map"].shape[:2] != (runs, obs_size):
             raise ValueError(f"this AUP state is for {state['reward_map'].shape[0]} runs of observations of "
                              f"{state['reward_map'].shape[1]} values, not {runs} of {obs_size}")
@@ -244,7 +249,7 @@ class AttainableUtility:
                 optimizer: StackedAdam) -> None:
         runs, capacity, obs_size = state["obs"].shape
         b, n, done = self.batch_size, self.num_rewards, int(state["updates"][0])
-        keys = np.full((runs, 1), derive_key(self.seed, STREAM, _SAMPLE), dtype=np.uint64)
+        keys = np.array([[derive_key(int(seed), STREAM, _SAMPLE)] for seed in state["seeds"]], dtype=np.uint64)
         rows = counter_integers(keys, done * b + np.arange(b)[None, :], min(int(state["seen"][0]), capacity))
         run = np.arange(runs)[:, None]
         obs, next_obs = state["obs"][run, rows], state["next_obs"][run, rows]
@@ -268,3 +273,11 @@ class AttainableUtility:
         if (done + 1) % self.target_update_interval == 0:
             for i in range(2 * _LAYERS):
                 np.copyto(state[f"target_{i}"], state[f"online_{i}"])
+
+
+def _run_seed(seed: int) -> int:
+    """A run's seed, which must be a non-negative int."""
+    checked = check_seed(seed)
+    if checked is None:
+        raise ValueError("every run needs a seed, got None")
+    return checked

@@ -60,7 +60,7 @@ def test_the_penalty_is_the_mean_shift_against_the_no_op_over_each_heads_scale()
 
 
 def test_no_penalty_before_the_warm_up_then_none_for_the_no_op_and_the_formula_for_a_move() -> None:
-    state = SMALL.initial_state(1, 1)
+    state = SMALL.initial_state(1, 1, [0])
     a, b = one_hot(0), one_hot(1)
     for i in range(SMALL.penalty_starts):
         shaped, state = SMALL(step(a if i % 2 else b, [i % 5], b if i % 2 else a), state)
@@ -79,7 +79,7 @@ def test_the_auxiliary_learner_finds_the_q_values_of_its_random_rewards() -> Non
     # two cells: from either, actions 0-3 go to the other and the no-op stays; Rᵢ(s') = wᵢ · o(s') / V
     a, b = one_hot(0), one_hot(1)
     moves = [(s, action, (t if action != NO_OP else s)) for s, t in ((a, b), (b, a)) for action in range(5)]
-    state = SMALL.initial_state(1, 1)
+    state = SMALL.initial_state(1, 1, [0])
     for i in range(1_500):
         s, action, t = moves[i % len(moves)]
         _, state = SMALL(step(s, [action], t), state)
@@ -99,7 +99,7 @@ def test_the_auxiliary_learner_finds_the_q_values_of_its_random_rewards() -> Non
 
 def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs() -> None:
     rng = np.random.default_rng(5)
-    alone, together = TrainRewards([SMALL]), TrainRewards([SMALL, None, SMALL])
+    alone, together = TrainRewards([SMALL], seeds=[7]), TrainRewards([SMALL, None, SMALL], seeds=[7, 8, 9])
     for _ in range(SMALL.penalty_starts + 40):
         obs, next_obs = rng.integers(-1, 2, (2, 3, V)).astype(np.float32)
         actions = rng.integers(0, 5, 3).tolist()
@@ -128,3 +128,13 @@ def test_a_resumed_aup_run_equals_an_uninterrupted_one_and_differs_from_dqn(tmp_
     dqn = RunSpec(env="sharing_v0", method="dqn", steps=600, eval_interval=300, eval_episodes=2, settings=settings)
     plain = json.loads(train_runs([dqn], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
     assert plain["eval"] != whole["eval"]  # the penalty was in force (from step 128), and changed what was learnt
+
+
+def test_each_run_draws_its_own_auxiliary_rewards_and_networks_from_its_seed() -> None:
+    state = SMALL.initial_state(3, 1, [0, 1, 0])
+    _, state = SMALL(step(np.stack([one_hot(0)] * 3), [0, 1, 2], np.stack([one_hot(1)] * 3)), state)
+    rewards, weights = state["reward_map"], state["online_0"]
+    assert not np.array_equal(rewards[0], rewards[1]) and np.array_equal(rewards[0], rewards[2])
+    assert not np.array_equal(weights[0], weights[1]) and np.array_equal(weights[0], weights[2])
+    with pytest.raises(ValueError, match="give TrainRewards the runs' seeds"):
+        TrainRewards([SMALL])

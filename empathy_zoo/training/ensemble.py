@@ -95,7 +95,7 @@ def _train_ensemble(
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
     seeds = [s.seed for s in specs]
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device)
-    train_rewards = TrainRewards([s.method_object().reward for s in specs])
+    train_rewards = TrainRewards([s.method_object().reward for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]

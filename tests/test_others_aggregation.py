@@ -1,0 +1,99 @@
+"""Empathic DQN with several other agents (SPEC §6): the other-term of the closest other (the
+paper's rule, the default), or aggregated over every other agent by mean (utilitarian) or min
+(suffering-focused), a terminal other counting 0."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from agents.empathic_dqn import EmpathicDQN, other_term
+from agents.settings import EmpathicDQNSettings
+from agents.stacked_mlp import StackedMLP
+from agents.step_batch import StepBatch
+
+GAMMA = 0.5
+
+
+def test_mean_and_min_over_every_other_with_a_terminal_one_counting_zero() -> None:
+    # one run, one transition, three others whose best swapped values are 4, 8 and 6; the third is terminal
+    q = torch.tensor([[[[4.0, 1.0], [2.0, 8.0], [6.0, 0.0]]]])  # (K=1, B=1, N=3, A=2)
+    present = torch.tensor([[[True, True, False]]])
+    assert other_term(q, present, GAMMA, "mean").item() == pytest.approx(GAMMA * (4.0 + 8.0 + 0.0) / 3)
+    assert other_term(q, present, GAMMA, "min").item() == 0.0  # harming one of several is never free
+    everyone = torch.ones(1, 1, 3, dtype=torch.bool)
+    assert other_term(q, everyone, GAMMA, "min").item() == GAMMA * 4.0
+    assert other_term(q, everyone, GAMMA, "mean").item() == pytest.approx(GAMMA * 6.0)
+    with pytest.raises(ValueError, match="one swapped value per other agent"):
+        other_term(q[:, :, 0], present[:, :, 0], GAMMA, "mean")
+
+
+def test_others_setting_is_checked() -> None:
+    with pytest.raises(ValueError, match="others must be one of"):
+        EmpathicDQNSettings(others="max")
+
+
+def _batch(rng: np.random.Generator, k: int, n: int, same_swap: bool) -> StepBatch:
+    obs = rng.integers(-1, 2, size=(k, 1, 25)).astype(np.float32)
+    swapped = rng.integers(-1, 2, size=(k, 1, n, 25)).astype(np.float32)
+    if same_swap:
+        swapped[:] = swapped[:, :, :1]
+    present = rng.random((k, 1, n)) < 0.8
+    if same_swap:
+        present[:] = present[:, :, :1]
+    return StepBatch(
+        obs=obs, actions=rng.integers(0, 5, (k, 1)), rewards=rng.random((k, 1)).astype(np.float32),
+        terminated=rng.random((k, 1)) < 0.05, next_obs=rng.integers(-1, 2, size=(k, 1, 25)).astype(np.float32),
+        swapped_next_obs=swapped[:, :, 0], other_present=present[:, :, 0],
+        harmed_other=np.zeros((k, 1), dtype=np.int64), battery_return=np.zeros((k, 1)),
+        other_battery_return=np.zeros((k, 1)), swapped_next_obs_all=swapped, others_present=present,
+    )
+
+
+def _learner(others: str, num_others: int) -> EmpathicDQN:
+    settings = [EmpathicDQNSettings(selfishness=b, others=others, learning_starts=32, replay_capacity=500,
+                                    target_update_interval=7) for b in (0.5, 0.25)]
+    return EmpathicDQN(settings, [0, 1], 25, num_others=num_others)
+
+
+def test_min_over_identical_others_trains_exactly_as_the_closest_rule() -> None:
+    closest, aggregated = _learner("closest", 3), _learner("min", 3)
+    assert not closest.aggregated and aggregated.aggregated
+    rng = np.random.default_rng(0)
+    for _ in range(120):
+        batch = _batch(rng, 2, 3, same_swap=True)
+        closest.observe(batch)
+        aggregated.observe(batch)
+    assert closest.grad_steps > 50
+    for a, b in zip(closest.online, aggregated.online):
+        assert torch.equal(a, b)
+
+
+def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
+    learner, seen = _learner("mean", 3), {}
+    rng = np.random.default_rng(1)
+    for _ in range(40):
+        batch = _batch(rng, 2, 3, same_swap=False)
+        learner.replay.add(batch.obs, batch.next_obs, batch.swapped_next_obs_all, batch.actions, batch.rewards,
+                           batch.terminated, batch.others_present)
+
+    def capture(batch, q_next, target_next, target_swapped):
+        seen.update(batch=batch, target_swapped=target_swapped)
+        return EmpathicDQN.targets(learner, batch, q_next, target_next, target_swapped)
+
+    learner.targets = capture
+    learner.update()
+    swapped = seen["batch"]["swapped_next_obs"]  # (K, B, N, V)
+    assert swapped.shape == (2, 32, 3, 25) and seen["target_swapped"].shape == (2, 32, 3, 5)
+    for j in range(3):
+        expected = StackedMLP.forward(learner.target, swapped[:, :, j])
+        assert torch.allclose(seen["target_swapped"][:, :, j], expected)
+
+
+def test_aggregating_without_every_others_observation_is_refused() -> None:
+    learner = _learner("mean", 2)
+    batch = _batch(np.random.default_rng(2), 2, 2, same_swap=False)
+    batch.swapped_next_obs_all = None
+    with pytest.raises(ValueError, match="needs every other agent's swapped observation"):
+        learner.observe(batch)
