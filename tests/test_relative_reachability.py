@@ -18,6 +18,7 @@ from baselines.shaping import HarmPenalty
 from empathy_zoo import coexistence_v0
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
+from helpers_resume import whole_and_resumed
 
 SIZE = 7
 N = SIZE * SIZE
@@ -191,8 +192,6 @@ def _one_plain_step() -> tuple[np.ndarray, np.ndarray, Any]:
 
 # ---------------------------------------------------------------------------- training
 def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    import empathy_zoo.training.ensemble as ensemble
-    from empathy_zoo.training import RunnerOptions, train_runs
     from empathy_zoo.training.spec import RunSpec
 
     seen: list[tuple[bool, float]] = []
@@ -208,23 +207,10 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
                    eval_episodes=1, env_kwargs={"max_cycles": 40},
                    settings={"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8,
                              "epsilon_decay_steps": 200, "target_update_interval": 50})
-    whole = json.loads(train_runs([spec], tmp_path / "whole", RunnerOptions(progress=False, checkpoint_interval=0))[0]
-                       .read_text())
-    assert len(seen) == 300 and all(filled for filled, _ in seen) and max(p for _, p in seen) > 0.0
+    whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch, checkpoint_interval=120)
+    # every step of the three trainings (whole, killed at its checkpoint at 120, resumed) had its baseline
+    assert len(seen) == 300 + 120 + 180 and all(filled for filled, _ in seen) and max(p for _, p in seen) > 0.0
     assert whole["config"]["reward"] == {"name": "relative_reachability", "weight": 100.0, "discount": 0.99}
-
-    real_save = ensemble.save_checkpoint
-
-    def save_then_die(path, payload):
-        real_save(path, payload)
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
-    options = RunnerOptions(progress=False, checkpoint_interval=120)
-    with pytest.raises(KeyboardInterrupt):
-        train_runs([spec], tmp_path / "resumed", options)
-    monkeypatch.setattr(ensemble, "save_checkpoint", real_save)
-    resumed = json.loads(train_runs([spec], tmp_path / "resumed", options)[0].read_text())
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
 
 
