@@ -16,7 +16,8 @@ under ``config.reward``), with a ``name``, and either
   transform and ensemble, and saves it in checkpoints; the transform resets what it must at the
   end of an episode (``batch.terminated | batch.truncated``).
 
-The rows of the runs that use another transform (or none) are computed and ignored.
+A transform sees only the rows of the runs that use it (:meth:`agents.step_batch.StepBatch.runs`),
+and its state holds those runs only.
 
 Optional capability, **the stepwise inaction baseline**: a transform that declares
 ``needs_inaction_baseline = True`` and codes an engine's states with
@@ -70,20 +71,23 @@ class TrainRewards:
         self.transforms = list(transforms)
         self.distinct = list({id(t): t for t in self.transforms if t is not None}.values())
         """Each transform once, in the order of its first run."""
+        self.rows = [np.array([k for k, t in enumerate(self.transforms) if t is transform]) for transform in self.distinct]
+        """The runs of each distinct transform: it sees only their rows of a step (``StepBatch`` sliced)."""
         if seeds is not None and len(seeds) != len(self.transforms):
             raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")
         self.states: list[dict[str, np.ndarray] | None] = [
-            self._initial_state(t, envs_per_run, seeds) if hasattr(t, "initial_state") else None
-            for t in self.distinct
+            self._initial_state(t, rows, envs_per_run, seeds) if hasattr(t, "initial_state") else None
+            for t, rows in zip(self.distinct, self.rows)
         ]
 
-    def _initial_state(self, transform: RewardTransform, envs_per_run: int,
+    @staticmethod
+    def _initial_state(transform: RewardTransform, rows: np.ndarray, envs_per_run: int,
                        seeds: Sequence[int] | None) -> dict[str, np.ndarray]:
         if "seeds" not in inspect.signature(transform.initial_state).parameters:
-            return transform.initial_state(len(self.transforms), envs_per_run)
+            return transform.initial_state(len(rows), envs_per_run)
         if seeds is None:
             raise ValueError(f"reward transform {transform.name!r} draws random numbers per run: give TrainRewards the runs' seeds")
-        return transform.initial_state(len(self.transforms), envs_per_run, seeds=list(seeds))
+        return transform.initial_state(len(rows), envs_per_run, seeds=[seeds[k] for k in rows])
 
     def __call__(self, batch: StepBatch) -> StepBatch:
         """``batch`` with each run's training rewards (the batch itself is not changed)."""
@@ -92,17 +96,17 @@ class TrainRewards:
         if len(self.transforms) != batch.rewards.shape[0]:
             raise ValueError(f"got {len(self.transforms)} reward transforms for {batch.rewards.shape[0]} runs")
         rewards = batch.rewards.copy()
-        for i, transform in enumerate(self.distinct):
+        for i, (transform, rows) in enumerate(zip(self.distinct, self.rows)):
+            part = batch if len(rows) == len(self.transforms) else batch.runs(rows)
             if self.states[i] is None:
-                shaped = transform(batch)
+                shaped = transform(part)
             else:
-                shaped, self.states[i] = transform(batch, self.states[i])
+                shaped, self.states[i] = transform(part, self.states[i])
             shaped = np.asarray(shaped)
-            if shaped.shape != rewards.shape:
+            if shaped.shape != part.rewards.shape:
                 raise ValueError(f"reward transform {transform.name!r} returned shape {shaped.shape}, "
-                                 f"expected {rewards.shape}")
-            rows = [k for k, t in enumerate(self.transforms) if t is transform]
-            rewards[rows] = shaped[rows]
+                                 f"expected {part.rewards.shape}")
+            rewards[rows] = shaped
         return dataclasses.replace(batch, rewards=rewards)
 
     def state(self) -> list[dict[str, np.ndarray] | None]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -58,3 +58,8 @@ class StepBatch:
     others_present: np.ndarray | None = None
     """(K, M, N) each other agent is present and not terminal at the end of the step (as
     :attr:`other_present` is for the closest); ``None`` when the driver does not say."""
+
+    def runs(self, rows: np.ndarray) -> StepBatch:
+        """The same step for the runs ``rows`` only (every array's first axis indexed)."""
+        return replace(self, **{f.name: getattr(self, f.name)[rows] for f in fields(self)
+                                if getattr(self, f.name) is not None})

@@ -44,8 +44,8 @@ the update). The state is built at the first step, when the observation size is 
 **Seeding.** Each run draws its auxiliary rewards, initial networks and replay batches from its
 own seed (stream ``STREAMS["attainable_utility"]``; the trainer hands a transform whose
 ``initial_state`` takes ``seeds`` the runs' seeds), so a run's numbers depend on its seed, its own
-transitions and the transform's fields only, alone or in any ensemble. The runs of one ensemble
-that use another reward transform are computed too, and ignored (:class:`agents.rewards.TrainRewards`).
+transitions and the transform's fields only, alone or in any ensemble (the transform sees only the
+rows of the runs that use it: :class:`agents.rewards.TrainRewards`).
 
 Cost: per env step, one forward pass on one observation per run, and every 4 steps one TD update
 on 32 transitions: about 0.45 ms per step for 1 to 5 runs beside the DQN learner's 1.1 to 1.4 ms
