@@ -26,7 +26,7 @@ from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES,
 
 __all__ = [
     "HIGHER_IS_BETTER", "Improvement", "probability_of_improvement", "bootstrap_improvement",
-    "interquartile_mean", "is_dqn", "improvements_over_dqn",
+    "interquartile_mean", "is_dqn", "improvements_over_dqn", "improvement_verdict", "VERDICT_MARKS",
 ]
 
 HIGHER_IS_BETTER: dict[str, bool] = {
@@ -51,6 +51,27 @@ class Improvement:
     """Interquartile mean of the method's runs (the mean when fewer than 4 seeds)."""
     n_seeds: int
     n_baseline_seeds: int
+
+    @property
+    def verdict(self) -> str:
+        """``"better"`` than DQN when the whole interval lies above 0.5, ``"worse"`` when it lies
+        below, else ``"no clear difference"`` (also when it cannot be computed)."""
+        return improvement_verdict(self.ci_low, self.ci_high)
+
+
+VERDICT_MARKS = {"better": "▲", "worse": "▼", "no clear difference": ""}
+"""How the tables mark a verdict."""
+
+
+def improvement_verdict(ci_low: float, ci_high: float) -> str:
+    """The rule by which the suite says a method does better or worse than DQN in a metric: the
+    95 % interval of its probability of improvement lies wholly above 0.5 (better) or below it
+    (worse); otherwise, or when the interval is undefined, there is no clear difference."""
+    if ci_low > 0.5:
+        return "better"
+    if ci_high < 0.5:
+        return "worse"
+    return "no clear difference"
 
 
 def probability_of_improvement(x: Sequence[float], y: Sequence[float], higher_is_better: bool = True) -> float:

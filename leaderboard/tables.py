@@ -19,7 +19,7 @@ from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_RESAMPLES, PHASES, Score,
 )
-from leaderboard.improvement import Improvement
+from leaderboard.improvement import VERDICT_MARKS, Improvement
 
 __all__ = [
     "PHASE_TITLES", "SINGLE_SEED_MARK", "CSV_COLUMNS", "Provenance", "format_interval",
@@ -145,8 +145,10 @@ def improvement_sections(
         rows: dict[str, list[str]] = {}
         for cell in mine:
             row = rows.setdefault(cell.method_label, [cell.method_label, str(cell.n_seeds)] + [""] * len(metrics))
+            mark = VERDICT_MARKS[cell.verdict]
             row[2 + metrics.index(cell.metric)] = (
-                f"{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)} · IQM {cell.iqm:.{digits}f}")
+                f"{mark}{' ' if mark else ''}{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)}"
+                f" · IQM {cell.iqm:.{digits}f}")
         if rows:
             sections.append((phase, ["Method", "Seeds", *metrics], list(rows.values())))
     return sections
@@ -155,7 +157,8 @@ def improvement_sections(
 IMPROVEMENT_NOTE = (
     "P(improves on DQN): the probability that a run of the method does better than a run of DQN in that "
     "metric (fewer harms is better; 0.5 is a tie), over every pair of runs, [95% bootstrap interval, each "
-    "method's runs resampled apart]; IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
+    "method's runs resampled apart]; ▲ / ▼: better / worse than DQN (the whole interval above / below 0.5); "
+    "IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
 )
 
 

@@ -9,7 +9,8 @@ import math
 import pytest
 
 from leaderboard.improvement import (
-    bootstrap_improvement, improvements_over_dqn, interquartile_mean, is_dqn, probability_of_improvement,
+    bootstrap_improvement, improvement_verdict, improvements_over_dqn, interquartile_mean, is_dqn,
+    probability_of_improvement,
 )
 
 
@@ -73,3 +74,21 @@ def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
             path.write_text(json.dumps(result))
     markdown = write_leaderboard(tmp_path, command="c")["markdown"].read_text(encoding="utf-8")
     assert markdown.count("### P(improves on DQN)") == 4 and "· IQM" in markdown
+
+
+@pytest.mark.parametrize("low, high, verdict", [
+    (0.55, 1.0, "better"), (0.0, 0.45, "worse"), (0.5, 1.0, "no clear difference"), (0.0, 0.5, "no clear difference"),
+    (0.2, 0.9, "no clear difference"), (math.nan, math.nan, "no clear difference"),
+])
+def test_a_method_is_better_or_worse_than_dqn_only_when_its_whole_interval_says_so(low, high, verdict) -> None:
+    assert improvement_verdict(low, high) == verdict
+
+
+def test_verdicts_on_synthetic_runs_separate_a_clear_gain_from_noise() -> None:
+    dqn = [_run("dqn", s, 100.0 + s) for s in range(5)]
+    better = [_run("empathic_dqn", s, 300.0 + s, 0.5) for s in range(5)]  # every run beats every DQN run
+    mixed = [_run("empathic_dqn", s, 98.0 + 2 * s, 0.25) for s in range(5)]  # interleaved with DQN's
+    cells = improvements_over_dqn(dqn + better + mixed, {"coexistence_v0": ["survival", "harms"]}, n_resamples=500)
+    verdict = {(c.method_label, c.metric, c.phase): c.verdict for c in cells}
+    assert verdict[("empathic_dqn 0.5", "survival", "eval")] == "better"
+    assert verdict[("empathic_dqn 0.25", "survival", "eval")] == "no clear difference"
