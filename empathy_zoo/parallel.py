@@ -59,7 +59,7 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         order = [list(range(count)) for _ in range(count)]
         order += [swap_order(count, v, o).tolist() for v, o in pairs]
         self._view_order = np.array(order, dtype=np.int64)
-        self._viewers = self.engine.views(np.array(list(range(count)) + [v for v, _ in pairs]))
+        self._viewers = self.engine.views(np.array(list(range(count)) + [v for v, _ in pairs]), self._view_order)
         self._view_env = np.zeros(len(order), dtype=np.int64)
         self._swap_row = {(v, o): count + k for k, (v, o) in enumerate(pairs)}
         self._painted: np.ndarray | None = None

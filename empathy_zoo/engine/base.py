@@ -74,6 +74,9 @@ class Views:
     """``K * obs_size``: the index just past the ``K`` pictures in that canvas (its scratch element)."""
     scratch: np.ndarray
     """``size`` as a 0-d array."""
+    draw: np.ndarray | None = None
+    """(K, A) the agents of each view in the order they are drawn, or ``None``: agent order. A
+    swapped view draws each agent in the turn of the situation it holds (see :meth:`GridEngine.views`)."""
 
 
 def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndarray:
@@ -83,6 +86,10 @@ def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndar
     other = np.asarray(other, dtype=np.int64)
     if np.count_nonzero(other == viewer):
         raise ValueError("an agent cannot swap places with itself")
+    if other.ndim == 0:
+        order = np.arange(num_agents, dtype=np.int64)
+        order[viewer], order[other] = other, viewer
+        return order
     order = np.broadcast_to(np.arange(num_agents, dtype=np.int64), (*other.shape, num_agents)).copy()
     order[..., viewer] = other
     np.put_along_axis(order, other[..., None], viewer, axis=-1)
@@ -135,8 +142,10 @@ class GridEngine(HandPlacement):
         self.num_others = int(num_others)
         """How many agents besides the first (the learner) the environment holds."""
         self.num_agents = len(self.agents)
-        self._others = [np.array([j for j in range(self.num_agents) if j != i]) for i in range(self.num_agents)]
-        """``[agent]``: the indices of every other agent, in agent order."""
+        self.other_agents = tuple(np.array([j for j in range(self.num_agents) if j != i]) for i in range(self.num_agents))
+        """``[agent]``: the indices of every agent but ``agent``, in agent order (int arrays, read-only)."""
+        for others in self.other_agents:
+            others.flags.writeable = False
         self.obs_size = self.view * self.view
         self.num_cells = self.size * self.size
         # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups;
@@ -352,14 +361,22 @@ class GridEngine(HandPlacement):
         return {}
 
     # ------------------------------------------------------------------ observations
-    def views(self, viewer: np.ndarray) -> Views:
-        """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices)."""
+    def views(self, viewer: np.ndarray, order: np.ndarray | None = None) -> Views:
+        """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices); for swapped views, the
+        ``(K, A)`` :func:`swap_order` their agents are painted in.
+
+        A swapped view holds the agents in that order (each in the other's situation: cell,
+        inventory, presence); each agent is drawn in the turn of the situation it holds, so where
+        agents share a cell the one on top is the same as without the swap (the swapped view is the
+        other agent's own observation wherever the agents look alike to both)."""
         viewer = np.asarray(viewer, dtype=np.int64)
         k, a = len(viewer), self.num_agents
         own = np.arange(k) * a + viewer
         first = np.repeat(np.arange(k) * self.obs_size, a).reshape(k, a)
         size = k * self.obs_size
-        return Views(viewer, own, np.repeat(own, a).reshape(k, a), first, size, np.array(size))
+        # (with two agents the one besides the viewer is drawn alone: the order cannot matter)
+        draw = None if order is None or a <= 2 else np.ascontiguousarray(np.broadcast_to(order, (k, a)))
+        return Views(viewer, own, np.repeat(own, a).reshape(k, a), first, size, np.array(size), draw)
 
     def paint(
         self, env_ids: np.ndarray, cells: np.ndarray, inventory: np.ndarray, present: np.ndarray, views: Views
@@ -369,7 +386,7 @@ class GridEngine(HandPlacement):
         View ``k`` is environment ``env_ids[k]`` (its batteries) with the agents on flat
         ``cells[k]`` (``(A,)``), holding ``inventory[k]``, present where ``present[k]``, seen by
         agent ``views.viewer[k]``: the window around the viewer, the other present agents drawn over
-        it in agent order, the viewer's own cell drawn last.
+        it in agent order (or in ``views.draw``'s), the viewer's own cell drawn last.
         """
         # (operands of equal shape and 0-d constants: numpy's cheapest calls on the small arrays of
         # the one-environment path)
@@ -385,6 +402,10 @@ class GridEngine(HandPlacement):
         picture = canvas[:-1].reshape(-1, self.obs_size)
         self._paint_background(env_ids, centre[:, 0], picture)
         looks = self._appearance(inventory, views.viewer)
+        if views.draw is not None:  # (a swapped view of three or more agents)
+            slots = np.take_along_axis(slots, views.draw, axis=1)
+            if isinstance(looks, np.ndarray):
+                looks = np.take_along_axis(looks, views.draw, axis=1)
         for agent in range(self.num_agents):
             canvas[slots[:, agent]] = looks[:, agent] if isinstance(looks, np.ndarray) else looks
         picture[:, self.obs_size // 2] = self._self_appearance(inventory.take(views.own), views.viewer)
@@ -405,12 +426,13 @@ class GridEngine(HandPlacement):
         Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
         """
         order = swap_order(self.num_agents, viewer, other)
+        views = self.views(np.full(self.num_envs, viewer), order)
         if order.ndim == 1:
-            cells, inventory, present = self.cells[:, order], self.inventory[:, order], self.present[:, order]
+            cells, inventory, present = (x.take(order, axis=1) for x in (self.cells, self.inventory, self.present))
         else:
-            order += self._agent_base  # into the flattened (N, A) arrays
+            order = order + self._agent_base  # into the flattened (N, A) arrays
             cells, inventory, present = (x.ravel().take(order) for x in (self.cells, self.inventory, self.present))
-        return self.paint(self._rows, cells, inventory, present, self.views(np.full(self.num_envs, viewer)))
+        return self.paint(self._rows, cells, inventory, present, views)
 
     def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
         """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
@@ -421,7 +443,7 @@ class GridEngine(HandPlacement):
     def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
         """Index of the closest other present agent of ``viewer`` (torus Manhattan distance, ties
         to the lowest index) and a mask of environments where such an agent exists."""
-        others = self._others[viewer]
+        others = self.other_agents[viewer]
         if len(others) == 1:
             return np.full(self.num_envs, others[0]), self.present[:, others[0]].copy()
         dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, others, :], self.size).astype(np.float64)
@@ -437,17 +459,22 @@ class GridEngine(HandPlacement):
         ``other_return`` are summed over the others, and ``equality`` compares the learner's
         battery reward with the others' mean (1 when the learner took exactly its share); with one
         other agent each is that agent's own figure."""
-        others = self._others[learner]
+        others = self.other_agents[learner]
+        if len(others) == 1:  # (that agent's own figures, read at once)
+            def of_others(array: np.ndarray) -> np.ndarray:
+                return array[env_ids, others[0]]
+        else:
+            def of_others(array: np.ndarray) -> np.ndarray:
+                return array[env_ids[:, None], others].sum(axis=1)
         own_b = self.episode_battery_return[env_ids, learner]
-        oth_b = self.episode_battery_return[env_ids][:, others].sum(axis=1)
         return {
             "survival": np.where(self.present[env_ids, learner], self.t[env_ids], self.left_at[env_ids, learner]),
             "harms": self.episode_harms[env_ids, learner].copy(),
             "batteries": self.inventory[env_ids, learner].copy(),
-            "other_batteries": self.inventory[env_ids][:, others].sum(axis=1),
-            "equality": equality(own_b, oth_b / len(others)),
+            "other_batteries": of_others(self.inventory),
+            "equality": equality(own_b, of_others(self.episode_battery_return) / len(others)),
             "return": self.episode_return[env_ids, learner].copy(),
-            "other_return": self.episode_return[env_ids][:, others].sum(axis=1),
+            "other_return": of_others(self.episode_return),
             "length": self.t[env_ids].copy(),
         }
 

@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.engine.base import GridEngine, StepEvents
+from empathy_zoo.engine.base import NO_AGENT, GridEngine, StepEvents
 from empathy_zoo.engine.placement import distinct_picks
 from empathy_zoo.grid import MOVES, NUM_ACTIONS, displacement_origin, signed_offset
 
@@ -26,6 +26,15 @@ ROBOT, CAT = 0, 1
 
 NO_HARM, ROBOT_HARMS_CAT, CAT_HARMS_ROBOT = 0, 1, 2
 """The outcomes of a step for one (robot, cat) pair, as :func:`harm_outcome` returns them."""
+
+# What each outcome of the one pair does to (robot, cat) when there is one cat, indexed by outcome
+# (the general bookkeeping of several pairs gives the same, only slower):
+HARMED_BY = np.array([[NO_AGENT, NO_AGENT], [NO_AGENT, ROBOT], [CAT, NO_AGENT]], dtype=np.int64)
+"""Who harmed the robot and who harmed the cat."""
+HARMS_DONE = np.array([[0, 0], [1, 0], [0, 1]], dtype=np.int64)
+"""How many others the robot and the cat harmed."""
+CUT_SHORT = np.array([[False, False], [False, False], [False, True]])
+"""Whose episode is truncated: the cat's when the robot falls."""
 
 
 def harm_outcome(before: np.ndarray, after: np.ndarray, size: int) -> np.ndarray:
@@ -67,6 +76,9 @@ class CoexistenceEngine(GridEngine):
     obs_low = -1.0
     obs_high = 1.0
     count_argument = "num_cats"
+    one_pair_tables: bool = True
+    """With one cat, look the step's effects up in the one-pair tables (:data:`HARMED_BY`, …)
+    rather than through the bookkeeping of several pairs: the same effects, fewer operations."""
 
     def __init__(
         self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *, num_cats: int = 1
@@ -120,20 +132,35 @@ class CoexistenceEngine(GridEngine):
         outcome = self._outcomes.take(self._cat_move.take(moves[:, CAT:]) - self._robot_move.take(moves[:, :CAT]))
         outcome[~(present[:, :CAT] & present[:, CAT:])] = NO_HARM
         if np.count_nonzero(outcome):
-            cats_harmed = outcome == ROBOT_HARMS_CAT
-            harmers = outcome == CAT_HARMS_ROBOT
-            robot_harmed = harmers.any(axis=1)
-            harmed_by = events.harmed_by
-            harmed_by[:, CAT:][cats_harmed] = ROBOT
-            harmed_by[robot_harmed, ROBOT] = CAT + harmers[robot_harmed].argmax(axis=1)  # the first harmer
-            events.terminated = harmed_by >= 0
-            # the robot fell: every cat still standing is cut short
-            events.truncated = robot_harmed[:, None] & present & ~events.terminated
-            events.episode_over = robot_harmed
-            self.episode_harms[:, ROBOT] += cats_harmed.sum(axis=1)
-            self.episode_harms[:, CAT:] += harmed_by[:, ROBOT, None] == self._cat_ids
+            if self.num_others == 1 and self.one_pair_tables:
+                self._one_pair_effects(outcome[:, 0], events)
+            else:
+                self._pair_effects(outcome, events)
             self._leave(events.terminated)
         events.rewards = (self.present & events.present_before).astype(np.float32)
+
+    def _one_pair_effects(self, outcome: np.ndarray, events: StepEvents) -> None:
+        """Fill ``events`` and count the harms from the ``(N,)`` outcomes of the one cat."""
+        events.harmed_by = HARMED_BY[outcome]
+        events.terminated = events.harmed_by >= 0
+        events.truncated = CUT_SHORT[outcome]
+        events.episode_over = outcome == CAT_HARMS_ROBOT
+        self.episode_harms += HARMS_DONE[outcome]
+
+    def _pair_effects(self, outcome: np.ndarray, events: StepEvents) -> None:
+        """Fill ``events`` and count the harms from the ``(N, cats)`` outcomes of every pair."""
+        cats_harmed = outcome == ROBOT_HARMS_CAT
+        harmers = outcome == CAT_HARMS_ROBOT
+        robot_harmed = harmers.any(axis=1)
+        harmed_by = events.harmed_by
+        harmed_by[:, CAT:][cats_harmed] = ROBOT
+        harmed_by[robot_harmed, ROBOT] = CAT + harmers[robot_harmed].argmax(axis=1)  # the first harmer
+        events.terminated = harmed_by >= 0
+        # the robot fell: every cat still standing is cut short
+        events.truncated = robot_harmed[:, None] & self.present & ~events.terminated
+        events.episode_over = robot_harmed
+        self.episode_harms[:, ROBOT] += cats_harmed.sum(axis=1)
+        self.episode_harms[:, CAT:] += harmed_by[:, ROBOT, None] == self._cat_ids
 
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
         return {"harmed_by": None, "harmed": []}

@@ -28,7 +28,7 @@ def distinct_picks(streams: EnvStreams, env_ids: np.ndarray, choices: int, count
     picks = np.empty((len(env_ids), count), dtype=np.int64)
     for k in range(count):
         pick = np.floor(streams.uniform(env_ids) * (choices - k)).astype(np.int64)
-        for earlier in np.sort(picks[:, :k], axis=1).T:  # ascending: the pick skips every taken index
+        for earlier in (picks[:, :k] if k < 2 else np.sort(picks[:, :k], axis=1)).T:  # ascending: skip each taken one
             pick += pick >= earlier
         picks[:, k] = pick
     return picks

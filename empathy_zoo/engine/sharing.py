@@ -97,8 +97,6 @@ class SharingEngine(GridEngine):
         if start == "centre":
             self.start_order = cells_by_distance(self.size, (self.size // 2, self.size // 2))
         self._free_cells = np.flatnonzero(~self.initial_batteries)
-        self._nowhere = -1 - np.arange(self.num_agents)
-        """A distinct negative number per agent: where it reaches no battery (see :meth:`_resolve`)."""
         self.batteries = np.zeros((self.num_envs, self.size * self.size), dtype=bool)
         self._picture = np.zeros(self.batteries.shape, dtype=np.float32)
         """The batteries as observation values (``BATTERY`` or ``FLOOR``), kept in step with
@@ -153,33 +151,32 @@ class SharingEngine(GridEngine):
         collects = self.batteries.take(flat)
         if not np.count_nonzero(collects):
             return
-        # where each agent collects, and a distinct negative number where it does not
-        reached = np.where(collects, flat, self._nowhere)
-        together = reached[:, :, None] == reached[:, None, :]  # (N, A, A): agents on one battery
-        if np.count_nonzero(together) > together.shape[0] * together.shape[1]:  # more than each with itself
-            self._share_out(reached, together, collects)
+        taken = np.sort(flat[collects])  # (flat cells of all environments: distinct across them)
+        together = taken[1:] == taken[:-1]
+        if np.count_nonzero(together):  # a battery several agents reached
+            self._share_out(taken[1:][together], flat, collects)
+            taken = flat[collects]
         self.inventory += collects
         value = np.where(collects, battery_value(self.inventory), 0.0)
         events.rewards = value.astype(np.float32)
         events.collected = collects
         self.episode_battery_return += value
-        taken = flat[collects]
         self.batteries.ravel()[taken] = False
         self._picture.ravel()[taken] = FLOOR
         empty = ~self.batteries.any(axis=1)
         events.terminated[empty] = True
         events.episode_over = empty
 
-    def _share_out(self, reached: np.ndarray, together: np.ndarray, collects: np.ndarray) -> None:
-        """Give every battery several agents reached (``reached``: each agent's battery cell, or a
-        distinct negative number; ``together``: which pairs reached the same one) to one of them,
-        uniformly by the env's generator: clear the others' ``collects``."""
-        crowded = np.count_nonzero(together, axis=(1, 2)) > self.num_agents
-        for env_id in np.flatnonzero(crowded).tolist():
-            row = reached[env_id].tolist()
+    def _share_out(self, crowded: np.ndarray, flat: np.ndarray, collects: np.ndarray) -> None:
+        """Give every battery several agents reached to one of them, uniformly by the env's
+        generator (one number per battery, in the order of each battery's first agent): clear the
+        others' ``collects``. ``crowded``: those batteries' cells, ``flat``: every agent's cell
+        (both counted as in a flattened ``(N, num_cells)`` array)."""
+        for env_id in np.unique(crowded // self.num_cells).tolist():
+            row = np.where(collects[env_id], flat[env_id], -1).tolist()  # (-1: collects nothing)
             for cell in dict.fromkeys(row):  # each battery once, in the order of its first agent
                 contenders = [agent for agent, there in enumerate(row) if there == cell]
-                if len(contenders) > 1:
+                if cell >= 0 and len(contenders) > 1:
                     draw = self.streams.uniform(np.array([env_id])).item()
                     winner = contenders[int(draw * len(contenders))]
                     collects[env_id, contenders] = False
