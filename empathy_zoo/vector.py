@@ -9,7 +9,9 @@ Coexistence environments at once; the learning agents (those not in ``fixed``) a
 trajectories on both faces. An environment whose episode ends is reset in the same step; its
 last observation stays available in :attr:`VectorStep.final_observations`. Keyword arguments
 beyond ``size``, ``view`` and ``max_cycles`` are the environment's own (e.g. Sharing's ``start``
-and ``inventory_encoding``), exactly as the PettingZoo env takes them.
+and ``inventory_encoding``, and ``num_cats`` / ``num_humans``), exactly as the PettingZoo env
+takes them. With several other agents, give each fixed one its policy
+(``fixed={f"cat_{i}": "random_walk" for i in range(3)}``); an agent left out learns.
 
 A fixed policy gets the same context here as through :class:`empathy_zoo.FixedAgents` (see
 :class:`empathy_zoo.policies.FixedPolicy`), and :meth:`VectorEnv.state` saves each one's own state
@@ -60,6 +62,15 @@ class VectorStep:
     swapped_other_terminated: np.ndarray
     """(N, L) bool: that other agent's episode ended for good this step (a harmed cat; the human
     when the last battery is taken). A time-limit truncation is not termination."""
+    swapped_all: np.ndarray
+    """(N, L, O, V) float32: each learner's swapped observation with each of its ``O = A − 1``
+    other agents, in agent order (``VectorEnv.others[l]``), at the end of this step (before
+    autoreset); zeros where the other agent is absent (or out of view, with ``in_view_only``).
+    With one other agent, :attr:`swapped` with an axis of one."""
+    others_present: np.ndarray
+    """(N, L, O) bool: that other agent is present and not terminal at the end of this step (and
+    in view, with ``in_view_only``): the others an empathic target may bootstrap from, as
+    ``swapped_valid & ~swapped_other_terminated`` is for the closest one."""
     rewards: np.ndarray
     """(N, A) float32: the environment's rewards of all agents."""
     terminated: np.ndarray
@@ -126,6 +137,17 @@ class VectorEnv:
         if not self.learners:
             raise ValueError("every agent is fixed; leave at least one agent to learn")
         self.learner_index = [self.agents.index(agent) for agent in self.learners]
+        self.others: list[list[str]] = [
+            [self.agents[o] for o in self.engine.other_agents[index]] for index in self.learner_index
+        ]
+        """``[l]``: the other agents of learner ``l``, in agent order (the ``O`` axis of
+        :attr:`VectorStep.swapped_all`)."""
+        self._other_columns = np.concatenate([self.engine.other_agents[index] for index in self.learner_index])
+        """The ``(L·O,)`` agent indices of every learner's other agents, learner by learner."""
+        self._only_other = {
+            index: np.full(self.num_envs, self.engine.other_agents[index][0]) for index in self.learner_index
+        } if self.engine.num_agents == 2 else {}
+        """Learner index -> its one other agent in every environment (when there are two agents)."""
         self.fixed: dict[int, BatchedPolicy] = {
             self.agents.index(agent): batched(make_policy(policy), self.num_envs, agent) for agent, policy in fixed.items()
         }
@@ -182,8 +204,12 @@ class VectorEnv:
         self._events, self._fresh = events, events.episode_over.copy()
         battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
-        swapped, valid, other = self._swapped_closest()
+        swapped_all, seen, swapped, valid, other = self._swaps()
         other_terminated = np.take_along_axis(events.terminated, other, axis=1)
+        if self._only_other:  # (each learner's one other agent is its closest)
+            others_present = (valid & ~other_terminated)[:, :, None]
+        else:
+            others_present = seen & ~events.terminated[:, self._other_columns].reshape(seen.shape)
         over = events.episode_over
         done_ids = np.flatnonzero(over)
         finished: dict[str, np.ndarray] = {"env": done_ids}
@@ -201,7 +227,7 @@ class VectorEnv:
         learners = self.learner_index
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
-            swapped_other_terminated=other_terminated,
+            swapped_other_terminated=other_terminated, swapped_all=swapped_all, others_present=others_present,
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
             battery_return=battery_return,
@@ -233,21 +259,45 @@ class VectorEnv:
         """``(n, L, V)`` observations of the learners (in ``env_ids``, default all)."""
         return _by_learner([self.engine.observe(viewer, env_ids) for viewer in self.learner_index])
 
-    def _swapped_closest(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Each learner's swapped observation with its closest other agent, ``(N, L, V)``; where
-        that agent exists, ``(N, L)``; and its index, ``(N, L)``."""
+    def _swaps(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Each learner's swapped observations with every other agent, ``(N, L, O, V)`` (zeros
+        where not seen), and where they are seen (present, and in view with ``in_view_only``),
+        ``(N, L, O)``; then the same of its closest other agent, ``(N, L, V)`` and ``(N, L)``, and
+        that agent's index, ``(N, L)``."""
         engine = self.engine
-        swapped, valid, others = [], [], []
+        pictures, seen, swapped, valid, closest = [], [], [], [], []
         for viewer in self.learner_index:
-            other, exists = engine.closest_other(viewer)
-            others.append(other)
-            if self.in_view_only:
-                exists &= engine.in_view(viewer, other)
-            picture = engine.observe_swapped(viewer, other)
-            picture[~exists] = 0.0
-            swapped.append(picture)
-            valid.append(exists)
-        return _by_learner(swapped), np.stack(valid, axis=1), np.stack(others, axis=1)
+            others = engine.other_agents[viewer]
+            each, each_seen = zip(*(self._swap(viewer, other) for other in others.tolist()))
+            if self._only_other:
+                closest.append(self._only_other[viewer])
+                swapped.append(each[0])
+                valid.append(each_seen[0])
+            else:
+                other, _ = engine.closest_other(viewer)
+                closest.append(other)
+                pictures.append(np.stack(each, axis=1))
+                seen.append(np.stack(each_seen, axis=1))
+                column = other - (other > viewer)  # the closest one's place among the others
+                rows = np.arange(self.num_envs)
+                swapped.append(pictures[-1][rows, column])
+                valid.append(seen[-1][rows, column])
+        swapped, valid = _by_learner(swapped), np.stack(valid, axis=1)
+        if self._only_other:
+            return swapped[:, :, None], valid[:, :, None], swapped, valid, np.stack(closest, axis=1)
+        return _by_learner(pictures), _by_learner(seen), swapped, valid, np.stack(closest, axis=1)
+
+    def _swap(self, viewer: int, other: int) -> tuple[np.ndarray, np.ndarray]:
+        """``viewer``'s swapped observation with ``other`` in every environment, ``(N, V)``, zeros
+        where ``other`` is not seen, and where it is seen (present, and in view with
+        ``in_view_only``), ``(N,)``."""
+        engine = self.engine
+        seen = engine.present[:, other].copy()
+        if self.in_view_only:
+            seen &= engine.in_view(viewer, other)
+        picture = engine.observe_swapped(viewer, other)
+        picture[~seen] = 0.0
+        return picture, seen
 
     def swapped_observations(self, viewer: str) -> tuple[np.ndarray, np.ndarray]:
         """``(N, A, V)`` swapped observations of ``viewer`` with every agent, and an ``(N, A)``
@@ -256,14 +306,8 @@ class VectorEnv:
         engine = self.engine
         out = np.zeros((self.num_envs, engine.num_agents, self.obs_size), dtype=np.float32)
         mask = np.zeros((self.num_envs, engine.num_agents), dtype=bool)
-        for o in range(engine.num_agents):
-            if o == v:
-                continue
-            ok = engine.present[:, o].copy()
-            if self.in_view_only:
-                ok &= engine.in_view(v, o)
-            out[:, o] = np.where(ok[:, None], engine.observe_swapped(v, o), np.float32(0))
-            mask[:, o] = ok
+        for o in engine.other_agents[v].tolist():
+            out[:, o], mask[:, o] = self._swap(v, o)
         return out, mask
 
     # ------------------------------------------------------------------ checkpoint
@@ -320,5 +364,5 @@ class VectorEnv:
 
 
 def _by_learner(columns: list[np.ndarray]) -> np.ndarray:
-    """Stack per-learner ``(n, V)`` arrays to ``(n, L, V)`` (without a copy for one learner)."""
-    return columns[0][:, None, :] if len(columns) == 1 else np.stack(columns, axis=1)
+    """Stack per-learner ``(n, ...)`` arrays to ``(n, L, ...)`` (without a copy for one learner)."""
+    return columns[0][:, None] if len(columns) == 1 else np.stack(columns, axis=1)

@@ -114,15 +114,15 @@ def test_fixed_random_walk_depends_on_the_seed_not_on_a_global_rng():
     assert same(a, b)
 
 
-def lockstep(module, fixed: dict | None, seeds: list[int], steps: int, action_seed: int) -> int:
+def lockstep(module, fixed: dict | None, seeds: list[int], steps: int, action_seed: int, **env_kwargs) -> int:
     """Step ``len(seeds)`` ParallelEnvs (in FixedAgents when ``fixed``) and one VectorEnv with the same
     actions and compare everything; returns the number of finished episodes."""
     name = env_name(module)
     n = len(seeds)
-    envs = [module.parallel_env() for _ in seeds]
+    envs = [module.parallel_env(**env_kwargs) for _ in seeds]
     if fixed:
         envs = [FixedAgents(env, fixed) for env in envs]
-    vector = VectorEnv(name, n, fixed=fixed)
+    vector = VectorEnv(name, n, fixed=fixed, **env_kwargs)
     learners = vector.learners
     all_agents = vector.agents
     assert learners == list(envs[0].possible_agents)
@@ -181,6 +181,25 @@ def test_vector_env_equals_parallel_envs_with_fixed_agents(module):
 def test_vector_env_without_fixed_agents_equals_bare_parallel_env(module):
     finished = lockstep(module, None, seeds=[5, 6], steps=2000, action_seed=4)
     assert finished >= 4
+
+
+SEVERAL = [(coexistence_v0, {"num_cats": 3}), (sharing_v0, {"num_humans": 2})]
+"""Each environment with several other agents (SPEC §3b)."""
+
+
+@pytest.mark.parametrize("module, env_kwargs", SEVERAL, ids=IDS)
+def test_vector_env_equals_parallel_envs_with_several_others(module, env_kwargs):
+    (policy,) = DEFAULT_POLICIES[env_name(module)].values()
+    others = module.parallel_env(**env_kwargs).possible_agents[1:]
+    finished = lockstep(module, {agent: policy for agent in others}, seeds=[0, 1, 17], steps=1000, action_seed=9,
+                        **env_kwargs)
+    assert finished >= 3
+
+
+@pytest.mark.parametrize("module, env_kwargs", SEVERAL, ids=IDS)
+def test_vector_env_with_several_learners_equals_bare_parallel_env(module, env_kwargs):
+    finished = lockstep(module, None, seeds=[5, 6], steps=1000, action_seed=4, **env_kwargs)
+    assert finished >= 2
 
 
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
