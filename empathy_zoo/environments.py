@@ -11,14 +11,16 @@ face, the command line) looks environments up here.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import ModuleType
+from typing import Any
 
 from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
 
-__all__ = ["Environment", "ENVIRONMENT_TABLE", "ENGINES", "DEFAULT_POLICIES", "GYM_IDS", "face_module"]
+__all__ = ["Environment", "ENVIRONMENT_TABLE", "ENGINES", "DEFAULT_POLICIES", "GYM_IDS", "face_module", "default_policies"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,19 @@ ENGINES: dict[str, type[GridEngine]] = {name: env.engine for name, env in ENVIRO
 """Engine class of every environment, by name."""
 DEFAULT_POLICIES: dict[str, dict[str, str]] = {name: dict(env.fixed) for name, env in ENVIRONMENT_TABLE.items()}
 """The paper's fixed agents of every environment (a copy of the table's: changing it changes nothing)."""
+
+
+def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """The fixed agents of ``env`` built with ``env_kwargs`` and their default policies: the table's,
+    and with several other agents (``num_cats=3``) every ``cat_i`` gets ``cat_0``'s."""
+    fixed = dict(DEFAULT_POLICIES.get(env, {}))
+    count = ENGINES[env].count_argument if env in ENGINES else None
+    number = int((env_kwargs or {}).get(count, 1)) if count else 1
+    for agent, policy in list(fixed.items()):
+        kind, _, index = agent.rpartition("_")
+        if index == "0":
+            fixed |= {f"{kind}_{i}": policy for i in range(1, number)}
+    return fixed
 GYM_IDS: dict[str, str] = {env.gym_id: name for name, env in ENVIRONMENT_TABLE.items()}
 """Gymnasium id -> environment name."""
 

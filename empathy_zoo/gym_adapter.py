@@ -55,7 +55,7 @@ from gymnasium.utils import EzPickle
 
 from empathy_zoo import ENVIRONMENTS
 from empathy_zoo.fixed_agents import FixedAgents
-from empathy_zoo.environments import DEFAULT_POLICIES, GYM_IDS
+from empathy_zoo.environments import GYM_IDS, default_policies
 from empathy_zoo.policies import FixedPolicy
 
 __all__ = ["SingleAgentEnv", "make_single_agent_env", "GYM_IDS"]
@@ -86,7 +86,7 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         parallel = ENVIRONMENTS[env].parallel_env(
             size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options
         )
-        self.fixed = dict(DEFAULT_POLICIES.get(env, {}) if fixed is None else fixed)
+        self.fixed = default_policies(env, env_options) if fixed is None else dict(fixed)
         self._env = FixedAgents(parallel, self.fixed)
         if len(self._env.possible_agents) != 1:
             raise ValueError(

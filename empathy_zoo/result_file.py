@@ -198,14 +198,14 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
     engine = ENGINES.get(result["env"])
     for name, value in env_kwargs.items() if engine is not None else ():
         field = f"config.env_kwargs.{name}"
-        if name in GRID_ARGUMENTS:
+        if name in GRID_ARGUMENTS or name == engine.count_argument:
             check.positive(value, field)
         elif name in engine.extra_arguments:
             if value not in engine.extra_arguments[name]:
                 raise check.fail(field, f"one of {', '.join(engine.extra_arguments[name])}", value)
         else:
-            raise check.fail(field, f"an argument of {result['env']} ({', '.join((*GRID_ARGUMENTS, *engine.extra_arguments))})",
-                             name)
+            known = (*GRID_ARGUMENTS, *engine.extra_arguments, *filter(None, [engine.count_argument]))
+            raise check.fail(field, f"an argument of {result['env']} ({', '.join(known)})", name)
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.text(policy, f"config.fixed.{agent}")
     _check_optional(check, config, "config.", {

@@ -11,6 +11,7 @@ on its own spec.
 
 from __future__ import annotations
 
+import inspect
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -94,7 +95,9 @@ def _train_ensemble(
     if len(venv.learners) != 1:
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
     seeds = [s.seed for s in specs]
-    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device)
+    others = {"num_others": len(venv.others[0])} if _takes(method.learner, "num_others") else {}
+    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device,
+                             **others)
     train_rewards = TrainRewards([s.method_object().reward for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog() for _ in specs]
@@ -188,7 +191,14 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
         other_battery_return=result.other_battery_return,
         truncated=result.learner_truncated,
         other_rewards=result.other_rewards,
+        swapped_next_obs_all=result.swapped_all,
+        others_present=result.others_present,
     )
+
+
+def _takes(learner: type, keyword: str) -> bool:
+    """The learner class's constructor takes ``keyword`` (optional extras a plug-in need not know)."""
+    return keyword in inspect.signature(learner).parameters
 
 
 def _live(logs: list[_EpisodeLog], learner: Any, steps_per_second: float) -> dict[str, str]:

@@ -14,7 +14,7 @@ from baselines.registry import get_method
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
 from empathy_zoo.names import check_path_name
-from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.environments import default_policies
 from empathy_zoo.policies import PolicyEntry, entry_label, policy_entry
 
 __all__ = ["RunSpec", "group_specs"]
@@ -87,7 +87,7 @@ class RunSpec:
 
     def fixed_policies(self) -> dict[str, PolicyEntry]:
         """The fixed agents' policy entries (what :class:`~empathy_zoo.vector.VectorEnv` builds them from)."""
-        return dict(DEFAULT_POLICIES.get(self.env, {}) if self.fixed is None else self.fixed)
+        return default_policies(self.env, self.env_kwargs) if self.fixed is None else dict(self.fixed)
 
     def display_label(self) -> str:
         return self.label or self.method_object().display_name(self.method_settings())

@@ -24,7 +24,8 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     env = "coexistence_v0"      #   run ids and tables (default env: the variant name)
     size = 9                    # environment arguments: size, view, max_cycles, and the
                                 #   environment's own: sharing_v0 takes start = "random" | "centre"
-                                #   and inventory_encoding = "count_plus_one" | "authors"
+                                #   and inventory_encoding = "count_plus_one" | "authors";
+    num_cats = 2                #   how many other agents: coexistence_v0 num_cats, sharing_v0 num_humans
     fixed = { cat_0 = "random_walk" }  # fixed agents: a registered policy or "package.module:ClassName",
                                 #   or a table to build it with keyword arguments:
                                 #   fixed = { cat_0 = { policy = "pkg.mod:Chaser", speed = 2 } }
@@ -56,7 +57,7 @@ from baselines.registry import get_method
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.names import check_path_name
-from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.environments import default_policies
 from empathy_zoo.policies import make_policy, policy_entry
 from empathy_zoo.training.spec import RunSpec
 
@@ -90,15 +91,20 @@ EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
     name for engine in ENGINES.values() for name in engine.extra_arguments
 ))
 """Environment-specific arguments some registered environment takes (Sharing's ``start``, …)."""
+COUNT_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
+    engine.count_argument for engine in ENGINES.values() if engine.count_argument
+))
+"""How many other agents an environment holds (``num_cats``, ``num_humans``)."""
 ENV_KEYS: dict[str, Any] = {
     "env": str, "size": int, "view": int, "max_cycles": int, **{name: str for name in EXTRA_ENV_ARGUMENTS},
+    **{name: int for name in COUNT_ARGUMENTS},
     "fixed": POLICY_TABLE, "methods": STR_LIST,
 }
 """Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
 METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
 """Keys of a ``[[methods]]`` entry besides the method's settings fields."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
-ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS)
+ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS, *COUNT_ARGUMENTS)
 
 
 class SweepConfigError(ValueError):
@@ -345,17 +351,18 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
         key = "env" if "env" in checked else "variant name (or set env = ...)"
         raise SweepConfigError(f"{where} {key}: unknown environment {env!r}; registered: {sorted(ENGINES)}")
     kwargs = {key: checked[key] for key in ENV_ARGUMENTS if key in checked}
-    for key in EXTRA_ENV_ARGUMENTS:
-        if key in kwargs and key not in ENGINES[env].extra_arguments:
-            own = ", ".join(ENGINES[env].extra_arguments) or "none"
+    own_arguments = (*ENGINES[env].extra_arguments, *filter(None, [ENGINES[env].count_argument]))
+    for key in (*EXTRA_ENV_ARGUMENTS, *COUNT_ARGUMENTS):
+        if key in kwargs and key not in own_arguments:
+            own = ", ".join(own_arguments) or "none"
             raise SweepConfigError(f"{where} {key}: {env} takes no argument {key!r} (its own arguments: {own})")
     try:
-        ENGINES[env](1, **kwargs)
+        engine = ENGINES[env](1, **kwargs)
     except ValueError as error:
         raise SweepConfigError(f"{where}: {error}") from None
     fixed = checked.get("fixed")
     if fixed is not None:
-        agents, entries = list(ENGINES[env].agents), {}
+        agents, entries = list(engine.agents), {}
         for agent, policy in fixed.items():
             if agent not in agents:
                 raise SweepConfigError(f"{where} fixed: unknown agent {agent!r}; agents of {env}: {agents}")
@@ -364,7 +371,7 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
                 make_policy(entries[agent])
             except ValueError as error:
                 raise SweepConfigError(f"{where} fixed.{agent}: {error}") from None
-        fixed = {**DEFAULT_POLICIES.get(env, {}), **entries}
+        fixed = {**default_policies(env, kwargs), **entries}
     names = checked.get("methods")
     if names is not None:
         declared = {m["method"] for m in methods}

@@ -1,0 +1,81 @@
+"""Several other agents through sweep files, the trainer and result files: every cat gets the
+default policy, Empathic DQN aggregates over every other agent when asked, and the methods
+profile expands to its runs."""
+
+from __future__ import annotations
+
+import json
+import textwrap
+
+import pytest
+
+from empathy_zoo.environments import default_policies
+from empathy_zoo.result_file import read_result, result_path
+from empathy_zoo.training import RunnerOptions, load_sweep, train_runs
+from empathy_zoo.training.sweep import SweepConfigError, profile_path
+
+SWEEP = """
+[sweep]
+seeds = 1
+steps = 300
+eval_interval = 300
+eval_episodes = 1
+
+[settings]
+learning_starts = 64
+replay_capacity = 1_000
+epsilon_decay_steps = 100
+target_update_interval = 50
+
+[envs.three_cats]
+env = "coexistence_v0"
+num_cats = 3
+max_cycles = 60
+
+[[methods]]
+method = "empathic_dqn"
+selfishness = 0.5
+others = ["closest", "mean", "min"]
+label = "Empathic DQN, {others}"
+"""
+
+
+def _write(tmp_path, text: str):
+    path = tmp_path / "sweep.toml"
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_every_other_agent_gets_the_default_policy() -> None:
+    assert default_policies("coexistence_v0") == {"cat_0": "random_walk"}
+    assert default_policies("coexistence_v0", {"num_cats": 3}) == {f"cat_{i}": "random_walk" for i in range(3)}
+    humans = default_policies("sharing_v0", {"num_humans": 2})
+    assert list(humans) == ["human_0", "human_1"] and humans["human_1"] == humans["human_0"]
+
+
+def test_a_count_argument_of_another_environment_is_refused(tmp_path) -> None:
+    text = SWEEP.replace('env = "coexistence_v0"\nnum_cats = 3', 'env = "sharing_v0"\nnum_cats = 3')
+    with pytest.raises(SweepConfigError, match="sharing_v0 takes no argument 'num_cats'"):
+        load_sweep(_write(tmp_path, text))
+
+
+def test_aggregating_runs_train_apart_and_learn_otherwise(tmp_path) -> None:
+    specs = load_sweep(_write(tmp_path, SWEEP))
+    assert [s.fixed_policies() for s in specs][0] == {f"cat_{i}": "random_walk" for i in range(3)}
+    train_runs(specs, tmp_path / "out", RunnerOptions(progress=False, checkpoint_interval=0, threads=1))
+    results = [read_result(result_path(tmp_path / "out", s.run_id)) for s in specs]
+    assert [r["config"]["settings"]["others"] for r in results] == ["closest", "mean", "min"]
+    assert all(r["config"]["env_kwargs"]["num_cats"] == 3 for r in results)
+    trains = [json.dumps(r["train"]) for r in results]
+    assert len(set(trains)) == 3  # the same seed, three other-terms
+
+
+def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
+    specs = load_sweep(profile_path("methods"))
+    assert len(specs) == 75
+    methods = {(s.variant, s.method) for s in specs}
+    for method in ("dqn_aup", "dqn_social_value", "dqn_inequity_aversion", "empathic_dqn_silver", "empathic_dqn_in_view"):
+        assert ("coexistence_v0", method) in methods and ("sharing_v0", method) in methods
+    assert ("coexistence_v0", "dqn_relative_reachability") in methods
+    several = {s.method_settings().others for s in specs if s.variant in ("coexistence_3cats", "sharing_2humans")}
+    assert several == {"closest", "mean", "min"}
