@@ -288,3 +288,16 @@ def test_train_takes_sharings_fidelity_options(tmp_path, capsys):
     assert "start" in capsys.readouterr().err
     assert main(["train", "--env", "sharing_v0", "--start", "middle", "--out", str(tmp_path / "y"), *TINY]) == 2
     assert "'middle'" in capsys.readouterr().err
+
+
+def test_train_takes_several_others_and_their_aggregation(tmp_path, capsys):
+    out = tmp_path / "runs"
+    argv = ["train", "--env", "sharing_v0", "--num-humans", "2", "--others", "min", "--selfishness", "0.5",
+            "--out", str(out), *TINY]
+    assert main(argv) == 0
+    (result,) = [json.loads(p.read_text()) for p in (out / "runs").glob("*.json")]
+    assert result["config"]["env_kwargs"]["num_humans"] == 2 and result["config"]["settings"]["others"] == "min"
+    assert set(result["config"]["fixed"]) == {"human_0", "human_1"}
+    capsys.readouterr()
+    assert main(["train", "--env", "sharing_v0", "--num-cats", "2", "--out", str(tmp_path / "x"), *TINY]) == 2
+    assert "num_cats" in capsys.readouterr().err

@@ -24,10 +24,10 @@ RUN_KEYS: dict[str, Any] = {
     "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
     "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
     "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": POLICY_TABLE,
-    "start": str, "inventory_encoding": str, "progress": bool,
+    "start": str, "inventory_encoding": str, "num_cats": int, "num_humans": int, "progress": bool,
 }
 """Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
-ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding")
+ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding", "num_cats", "num_humans")
 """Keys of a run that are environment arguments (the env checks which it takes)."""
 
 
@@ -100,9 +100,9 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
     env_kwargs = {key: run[key] for key in ENV_ARGUMENTS if run.get(key) is not None}
     fixed = None
     if run["fixed"] is not None:
-        from empathy_zoo.environments import DEFAULT_POLICIES
+        from empathy_zoo.environments import default_policies
 
-        fixed = {**DEFAULT_POLICIES.get(run["env"], {}), **run["fixed"]}
+        fixed = {**default_policies(run["env"], env_kwargs), **run["fixed"]}
     specs = [
         RunSpec(env=run["env"], method=run["method"], settings=settings, seed=seed, steps=run["steps"],
                 eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=fixed,
@@ -149,6 +149,8 @@ def add_train(sub: Any, method: str) -> None:
     parser.add_argument("--start", help="Sharing only: start cells, random or centre (default: random)")
     parser.add_argument("--inventory-encoding", metavar="ENCODING",
                         help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)")
+    parser.add_argument("--num-cats", type=int, metavar="N", help="Coexistence only: cats (default: 1)")
+    parser.add_argument("--num-humans", type=int, metavar="N", help="Sharing only: humans (default: 1)")
     parser.add_argument("--fixed", type=agent_policy, action="append", metavar="AGENT=POLICY",
                         help="fixed agent policy, a name or package.module:ClassName (repeatable)")
     add_runner_options(parser, default=argparse.SUPPRESS)
