@@ -227,7 +227,7 @@ def test_vector_swapped_agrees_with_the_parallel_primitive(module, in_view_only)
 
 
 def test_the_swap_permutation_exchanges_exactly_the_two_agents():
-    from empathy_zoo.engine.base import swap_order
+    from empathy_zoo.engine.sight import swap_order
 
     assert swap_order(3, 0, 2).tolist() == [2, 1, 0]
     per_env = swap_order(3, 1, np.array([0, 2, 0]))
