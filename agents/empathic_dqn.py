@@ -63,27 +63,35 @@ def empathic_targets(
     gamma: float,
     selfishness: torch.Tensor,
     others: str = "closest",
+    live: torch.Tensor | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
     ``selfishness`` is β per run, ``(K, 1)``; with several others aggregated (``others`` "mean" or
-    "min"), ``q_swapped_target`` is ``(K, B, N, A)`` and ``other_present`` ``(K, B, N)``."""
+    "min"), ``q_swapped_target`` is ``(K, B, N, A)``, ``other_present`` and ``live`` ``(K, B, N)``
+    (see :func:`other_term`)."""
     y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
-    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma, others)
+    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma, others, live)
     return y, y_emp
 
 
 def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float,
-               others: str = "closest") -> torch.Tensor:
+               others: str = "closest", live: torch.Tensor | None = None) -> torch.Tensor:
     """``γ·other_present·max_a Q̂(s_emp', a)``, ``(K, B)``: the robot's value in the other's place
     at t+1 (0 where that agent is terminal). With ``others`` "mean" or "min", the inputs carry one
-    entry per other agent (``(K, B, N, A)``, ``(K, B, N)``) and the terms are averaged, or the
-    least taken, over all N (a terminal one counting 0)."""
+    entry per other agent (``(K, B, N, A)``, ``(K, B, N)``) and the terms of the others that were
+    ``live`` when the step began (``(K, B, N)``; default all) are averaged, or the least taken: one
+    harmed in this step counts 0, one that had left before does not count (0 when none was live)."""
     terms = gamma * other_present.float() * q_swapped_target.max(dim=-1).values
     if others == "closest":
         return terms
     if terms.dim() != 3:
         raise ValueError(f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {tuple(q_swapped_target.shape)}")
-    return terms.mean(dim=2) if others == "mean" else terms.min(dim=2).values
+    live = torch.ones_like(terms, dtype=torch.bool) if live is None else live
+    anyone = live.any(dim=2)
+    if others == "mean":
+        return (terms * live).sum(dim=2) / live.sum(dim=2).clamp(min=1)
+    least = torch.where(live, terms, torch.full_like(terms, torch.inf)).min(dim=2).values
+    return torch.where(anyone, least, torch.zeros_like(least))
 
 
 class EmpathicDQN:
@@ -180,7 +188,11 @@ class EmpathicDQN:
             if batch.swapped_next_obs_all is None or batch.others_present is None:
                 raise ValueError(f"others={self.config.others!r} needs every other agent's swapped observation "
                                  "(StepBatch.swapped_next_obs_all, others_present)")
-            swapped, present = batch.swapped_next_obs_all, batch.others_present
+            if batch.others_live is None:
+                raise ValueError(f"others={self.config.others!r} needs which other agents were there when the "
+                                 "step began (StepBatch.others_live)")
+            swapped = batch.swapped_next_obs_all
+            present = batch.others_live.astype(np.uint8) + batch.others_present  # codes: see StackedReplay.flags
         self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present)
         m = batch.actions.shape[1]
         for _ in range(m):
@@ -244,7 +256,7 @@ class EmpathicDQN:
         """
         return empathic_targets(
             batch["reward"], batch["terminated"], q_next, target_next, target_swapped,
-            batch["other_present"], self.config.gamma, self.selfishness, self._others_rule(),
+            batch["other_present"], self.config.gamma, self.selfishness, self._others_rule(), batch.get("others_live"),
         )
 
     def _others_rule(self) -> str:

@@ -41,7 +41,9 @@ class StackedReplay:
         self.decode_table = torch.from_numpy(DECODE_TABLE.copy()).to(device)
         """(256,) float32: the observation value of every code."""
         self.flags = torch.zeros((k, c, 2 + others), dtype=torch.uint8, device=device)
-        """(action, terminated, other present) of every transition (one "present" per other agent)."""
+        """(action, terminated, other present) of every transition; with several others, one code
+        per other agent instead of "present": 0 it had left before the step, 1 it was there when the
+        step began but is not at its end (harmed, or done), 2 it is there at the end."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0
@@ -59,7 +61,8 @@ class StackedReplay:
     def add(self, obs: np.ndarray, next_obs: np.ndarray, swapped_next_obs: np.ndarray, action: np.ndarray,
             reward: np.ndarray, terminated: np.ndarray, other_present: np.ndarray) -> None:
         """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``; with several
-        others, ``swapped_next_obs`` is ``(K, m, others, V)`` and ``other_present`` ``(K, m, others)``."""
+        others, ``swapped_next_obs`` is ``(K, m, others, V)`` and ``other_present`` ``(K, m, others)``
+        codes (see :attr:`flags`)."""
         m = action.shape[1]
         rows = (np.arange(m) + self.position) % self.capacity
         if self.others == 1:
@@ -90,13 +93,17 @@ class StackedReplay:
         flags = self.flags.view(k * self.capacity, width).index_select(0, rows).view(k, b, width)
         swapped = SWAPPED_NEXT_OBS if self.others == 1 else slice(SWAPPED_NEXT_OBS, None)
         present = OTHER_PRESENT if self.others == 1 else slice(OTHER_PRESENT, None)
-        return {  # (with several others: swapped_next_obs (K, B, others, V), other_present (K, B, others))
+        sample = {  # (with several others: swapped_next_obs (K, B, others, V), other_present (K, B, others))
             "obs": observations[:, :, OBS], "next_obs": observations[:, :, NEXT_OBS],
             "swapped_next_obs": observations[:, :, swapped],
             "action": flags[:, :, ACTION].long(), "terminated": flags[:, :, TERMINATED].bool(),
-            "other_present": flags[:, :, present].bool(),
             "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
         }
+        if self.others == 1:
+            sample["other_present"] = flags[:, :, present].bool()
+        else:  # (codes: see flags)
+            sample["other_present"], sample["others_live"] = flags[:, :, present] == 2, flags[:, :, present] >= 1
+        return sample
 
     def nbytes_per_run(self) -> int:
         """Bytes of memory each run's buffer holds."""

@@ -44,9 +44,10 @@ class EmpathicDQNSettings:
     """Whose swapped value the other-term takes when the environment has several other agents
     (``num_cats`` / ``num_humans`` > 1): ``"closest"`` (the paper's rule: the closest other agent),
     ``"mean"`` (the average over every other agent: utilitarian) or ``"min"`` (the worst off:
-    suffering-focused). An other agent that is terminal (harmed, or done) counts with 0, as the
-    single other agent does, so harming one of several is never free. With one other agent the
-    three are the same."""
+    suffering-focused), over the others there when the step began: one harmed (or done) in the
+    step counts with 0, as the single other agent does, so harming one of several is never free;
+    one that had left before does not count, so the robot goes on caring for the rest. With one
+    other agent the three are the same."""
 
     def __post_init__(self) -> None:
         checks = {

@@ -58,6 +58,9 @@ class StepBatch:
     others_present: np.ndarray | None = None
     """(K, M, N) each other agent is present and not terminal at the end of the step (as
     :attr:`other_present` is for the closest); ``None`` when the driver does not say."""
+    others_live: np.ndarray | None = None
+    """(K, M, N) each other agent was in the environment when the step began (one harmed in an
+    earlier step has left); ``None`` when the driver does not say."""
 
     def runs(self, rows: np.ndarray) -> StepBatch:
         """The same step for the runs ``rows`` only (every array's first axis indexed)."""

@@ -42,5 +42,6 @@ class SilverRuleDQN(EmpathicDQN):
         self, batch: dict[str, torch.Tensor], q_next: torch.Tensor, target_next: torch.Tensor, target_swapped: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor]:
         y = double_dqn_target(batch["reward"], batch["terminated"], q_next, target_next, self.config.gamma)
-        other = other_term(target_swapped, batch["other_present"], self.config.gamma, self._others_rule())
+        other = other_term(target_swapped, batch["other_present"], self.config.gamma, self._others_rule(),
+                           batch.get("others_live"))
         return y, silver_targets(y, other, self.selfishness)

@@ -71,6 +71,9 @@ class VectorStep:
     """(N, L, O) bool: that other agent is present and not terminal at the end of this step (and
     in view, with ``in_view_only``): the others an empathic target may bootstrap from, as
     ``swapped_valid & ~swapped_other_terminated`` is for the closest one."""
+    others_live: np.ndarray
+    """(N, L, O) bool: that other agent was in the environment when this step began (an agent
+    harmed earlier has left; one harmed in this step was live)."""
     rewards: np.ndarray
     """(N, A) float32: the environment's rewards of all agents."""
     terminated: np.ndarray
@@ -228,6 +231,7 @@ class VectorEnv:
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
             swapped_other_terminated=other_terminated, swapped_all=swapped_all, others_present=others_present,
+            others_live=events.present_before[:, self._other_columns].reshape(seen.shape),
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
             battery_return=battery_return,

@@ -29,6 +29,19 @@ def test_mean_and_min_over_every_other_with_a_terminal_one_counting_zero() -> No
         other_term(q[:, :, 0], present[:, :, 0], GAMMA, "mean")
 
 
+def test_only_the_others_there_when_the_step_began_count() -> None:
+    q = torch.tensor([[[[4.0, 1.0], [2.0, 8.0], [6.0, 0.0]]]])  # best swapped values 4, 8, 6
+    present = torch.tensor([[[True, False, False]]])  # the second harmed in this step, the third gone before
+    live = torch.tensor([[[True, True, False]]])
+    assert other_term(q, present, GAMMA, "mean", live).item() == pytest.approx(GAMMA * (4.0 + 0.0) / 2)
+    assert other_term(q, present, GAMMA, "min", live).item() == 0.0  # the one just harmed is the worst off
+    later = torch.tensor([[[True, False, False]]])  # a step later: only the first is left
+    assert other_term(q, present, GAMMA, "min", later).item() == GAMMA * 4.0  # the robot still cares for it
+    nobody = torch.zeros(1, 1, 3, dtype=torch.bool)
+    assert other_term(q, nobody, GAMMA, "min", nobody).item() == 0.0
+    assert other_term(q, nobody, GAMMA, "mean", nobody).item() == 0.0
+
+
 def test_others_setting_is_checked() -> None:
     with pytest.raises(ValueError, match="others must be one of"):
         EmpathicDQNSettings(others="max")
@@ -48,6 +61,7 @@ def _batch(rng: np.random.Generator, k: int, n: int, same_swap: bool) -> StepBat
         swapped_next_obs=swapped[:, :, 0], other_present=present[:, :, 0],
         harmed_other=np.zeros((k, 1), dtype=np.int64), battery_return=np.zeros((k, 1)),
         other_battery_return=np.zeros((k, 1)), swapped_next_obs_all=swapped, others_present=present,
+        others_live=present | (rng.random((k, 1, n)) < 0.5) if not same_swap else np.ones((k, 1, n), dtype=bool),
     )
 
 
@@ -76,7 +90,7 @@ def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
     for _ in range(40):
         batch = _batch(rng, 2, 3, same_swap=False)
         learner.replay.add(batch.obs, batch.next_obs, batch.swapped_next_obs_all, batch.actions, batch.rewards,
-                           batch.terminated, batch.others_present)
+                           batch.terminated, batch.others_live.astype(np.uint8) + batch.others_present)
 
     def capture(batch, q_next, target_next, target_swapped):
         seen.update(batch=batch, target_swapped=target_swapped)
@@ -85,6 +99,8 @@ def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
     learner.targets = capture
     learner.update()
     swapped = seen["batch"]["swapped_next_obs"]  # (K, B, N, V)
+    assert seen["batch"]["others_live"].shape == (2, 32, 3)
+    assert (seen["batch"]["others_live"] | ~seen["batch"]["other_present"]).all()  # present implies live
     assert swapped.shape == (2, 32, 3, 25) and seen["target_swapped"].shape == (2, 32, 3, 5)
     for j in range(3):
         expected = StackedMLP.forward(learner.target, swapped[:, :, j])

@@ -79,3 +79,23 @@ def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
     assert ("coexistence_v0", "dqn_relative_reachability") in methods
     several = {s.method_settings().others for s in specs if s.variant in ("coexistence_3cats", "sharing_2humans")}
     assert several == {"closest", "mean", "min"}
+
+
+def test_the_vector_env_says_which_others_were_there_when_the_step_began() -> None:
+    import numpy as np
+
+    from empathy_zoo.training.ensemble import learner_batch
+    from empathy_zoo.vector import VectorEnv
+
+    venv = VectorEnv("coexistence_v0", 1, fixed={"cat_0": "stay", "cat_1": "stay"}, num_cats=2)
+    venv.reset(seed=0)
+    venv.engine.reset(np.array([0]), options={"positions": {"robot_0": (2, 4), "cat_0": (3, 3), "cat_1": (6, 0)}})
+    obs = venv._observe_learners()[:, 0]
+    down = np.array([[1]])  # to (3, 4): right of cat_0, which the right one harms
+    step = venv.step(down)
+    batch = learner_batch(obs, down, step)
+    assert step.harmed_by[0, 1] == 0
+    assert batch.others_live[0, 0].tolist() == [True, True]  # both were there when the step began
+    assert batch.others_present[0, 0].tolist() == [False, True]
+    later = venv.step(np.array([[4]]))
+    assert later.others_live[0, 0].tolist() == [False, True]  # cat_0 has left: it no longer counts

@@ -193,6 +193,7 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
         other_rewards=result.other_rewards,
         swapped_next_obs_all=result.swapped_all,
         others_present=result.others_present,
+        others_live=result.others_live,
     )
 
 
