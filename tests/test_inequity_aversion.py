@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers_resume import whole_and_resumed
 
 from agents.base import StepBatch
 from agents.rewards import TrainRewards
@@ -55,27 +56,12 @@ def test_the_trainer_keeps_and_restores_the_state_only_for_the_runs_of_the_trans
 
 
 def test_a_resumed_inequity_averse_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    import empathy_zoo.training.ensemble as ensemble
-    from empathy_zoo.training import RunnerOptions, train_runs
     from empathy_zoo.training.spec import RunSpec
 
     spec = RunSpec(env="sharing_v0", method="dqn_inequity_aversion", steps=600, eval_interval=300, eval_episodes=2,
                    settings={"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300,
                              "target_update_interval": 50})
-    whole = json.loads(train_runs([spec], tmp_path / "whole", RunnerOptions(progress=False, checkpoint_interval=0))[0]
-                       .read_text())
-    real = ensemble.save_checkpoint
-
-    def save_then_die(path, payload):
-        real(path, payload)
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
-    options = RunnerOptions(progress=False, checkpoint_interval=250)
-    with pytest.raises(KeyboardInterrupt):
-        train_runs([spec], tmp_path / "resumed", options)
-    monkeypatch.setattr(ensemble, "save_checkpoint", real)
-    resumed = json.loads(train_runs([spec], tmp_path / "resumed", options)[0].read_text())
+    whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"] == {"name": "inequity_aversion", "disadvantageous": 5.0, "advantageous": 0.05,
                                            "smoothing": pytest.approx(0.9405)}
