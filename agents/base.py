@@ -37,7 +37,8 @@ class Learner(Protocol):
 
     def state_dict(self) -> dict[str, Any]:
         """Everything needed to continue exactly: tensors, numbers, lists (``torch.save``-able,
-        loadable with ``weights_only=True``)."""
+        loadable with ``weights_only=True``). Written to the checkpoint file at once, so tensors
+        may be the live ones (no copy of a large replay memory is needed)."""
 
     def load_state_dict(self, state: dict[str, Any]) -> None: ...
 

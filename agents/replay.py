@@ -110,10 +110,17 @@ class StackedReplay:
         return sum(t.element_size() * t[0].numel() for t in (self.observations, self.flags, self.reward))
 
     def state_dict(self) -> dict[str, torch.Tensor | int]:
-        """The filled part of every buffer plus the write position (for checkpoints)."""
+        """The filled part of every buffer plus the write position (for checkpoints, written at once).
+
+        Full buffers are the live tensors, not copies (as a torch module's ``state_dict``): a copy
+        would double the replay's memory while a checkpoint is written. The filled part of buffers
+        not yet full is copied (``torch.save`` of a slice would write the whole buffer)."""
+        def filled(buffer: torch.Tensor) -> torch.Tensor:
+            return buffer if self.size == self.capacity else buffer[:, : self.size].clone()
+
         return {
-            "observations": self.observations[:, : self.size].clone(), "flags": self.flags[:, : self.size].clone(),
-            "reward": self.reward[:, : self.size].clone(), "position": self.position, "size": self.size,
+            "observations": filled(self.observations), "flags": filled(self.flags), "reward": filled(self.reward),
+            "position": self.position, "size": self.size,
         }
 
     def load_state_dict(self, state: dict) -> None:
