@@ -16,16 +16,13 @@ The ensemble is one env's share of the paper profile (25 runs: β ∈ {0.75, 0.5
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 import torch
+from filled_learners import cpu_ms, filled_learner  # benchmarks/filled_learners.py
 
 from agents.empathic_dqn import EmpathicDQN, double_dqn_target
-from agents.settings import EmpathicDQNSettings
 from agents.stacked_mlp import StackedMLP
-
-BETAS = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
 
 
 def _forward_saving(params: list[torch.Tensor], x: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:
@@ -96,25 +93,6 @@ class ManualBackward(EmpathicDQN):
         return self.last_loss
 
 
-def _filled(cls: type, seed: int = 0) -> EmpathicDQN:
-    settings = [EmpathicDQNSettings(selfishness=b, learning_starts=32, replay_capacity=2_000, target_update_interval=50)
-                for b in BETAS]
-    learner = cls(settings, list(range(len(BETAS))), 25)
-    rng, k = np.random.default_rng(seed), len(BETAS)
-    for _ in range(5):
-        obs = [rng.integers(-1, 2, size=(k, 200, 25)).astype(np.float32) for _ in range(3)]
-        learner.replay.add(*obs, rng.integers(0, 5, (k, 200)), rng.random((k, 200)).astype(np.float32),
-                           rng.random((k, 200)) < 0.05, rng.random((k, 200)) < 0.9)
-    return learner
-
-
-def _cpu_ms(fn, calls: int) -> float:
-    start = time.process_time()
-    for _ in range(calls):
-        fn()
-    return (time.process_time() - start) / calls * 1e3
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--updates", type=int, default=50, help="updates per timing (10 alternations)")
@@ -122,14 +100,14 @@ def main() -> None:
     torch.set_num_threads(1)
     print("command: python benchmarks/update_profile.py" + (f" --updates {args.updates}" if args.updates != 50 else ""))
 
-    ours, manual = _filled(EmpathicDQN), _filled(ManualBackward)
+    ours, manual = filled_learner(EmpathicDQN), filled_learner(ManualBackward)
     for _ in range(120):
         ours.update(), manual.update()
     same = all(torch.equal(a.detach(), b) for a, b in zip(ours.online, manual.online))
     times: dict[str, list[float]] = {"autograd (as trained)": [], "hand-written backward": []}
     for _ in range(10):
-        times["autograd (as trained)"].append(_cpu_ms(ours.update, args.updates))
-        times["hand-written backward"].append(_cpu_ms(manual.update, args.updates))
+        times["autograd (as trained)"].append(cpu_ms(ours.update, args.updates))
+        times["hand-written backward"].append(cpu_ms(manual.update, args.updates))
     print(f"\n1. CPU ms per update (K = 25, paper mix; median of 10 alternations); bit-identical after 120 updates: {same}")
     for name, values in times.items():
         print(f"   {name:24s} {np.median(values):6.2f}  (min {min(values):.2f})")
@@ -146,12 +124,12 @@ def main() -> None:
     shapes = {"forward W2 (40×32×128 @ 128×128)": (torch.randn(40, 32, 128), torch.randn(40, 128, 128)),
               "weight grad W2 (40×128×32 @ 32×128)": (torch.randn(40, 32, 128).transpose(1, 2), torch.randn(40, 32, 128)),
               "target W2 (25×64×128 @ 128×128)": (torch.randn(25, 64, 128), torch.randn(25, 128, 128))}
-    base = _cpu_ms(lambda: flush.add_(1.0), 50)
+    base = cpu_ms(lambda: flush.add_(1.0), 50)
     print("\n3. the update's largest matmuls alone (µs per call, GFLOP/s)")
     for name, (a, b) in shapes.items():
         flops = 2 * a.shape[0] * a.shape[1] * a.shape[2] * b.shape[2]
-        warm = _cpu_ms(lambda: torch.bmm(a, b), 200) * 1e3
-        cold = (_cpu_ms(lambda: (flush.add_(1.0), torch.bmm(a, b)), 50) - base) * 1e3
+        warm = cpu_ms(lambda: torch.bmm(a, b), 200) * 1e3
+        cold = (cpu_ms(lambda: (flush.add_(1.0), torch.bmm(a, b)), 50) - base) * 1e3
         print(f"   {name:38s} warm {warm:6.0f} ({flops / warm / 1e3:5.1f})   after 32 MB streamed {cold:6.0f} "
               f"({flops / cold / 1e3:5.1f})")
 
