@@ -5,12 +5,14 @@ value), its target copy ``Q̂``, and ``Q_emp`` (the empathic value the robot act
 gradient step, on a batch ``(s, a, r, s', done, s_emp', other_present)``:
 
     y     = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))                      (double DQN)
-    y_emp = β·y + (1 − β)·γ·other_present·max_a Q̂(s_emp', a)
+    y_emp = β·y + (1 − β)·γ·other_present·max_a Q̂(s_emp', a)   (y where the other is unseen)
     Q     ← Adam step on mean (Q(s, a) − y)²
     Q_emp ← Adam step on mean (Q_emp(s, a) − y_emp)²
 
-``s_emp'`` is the robot's swapped observation with the closest other agent at t+1; the
-other-term is 0 when that agent is terminal at t+1. Acting is ε-greedy on ``Q_emp``.
+``s_emp'`` is the robot's swapped observation at t+1 with the closest other agent when the step
+began (SPEC §3b); the other-term is 0 when that agent is terminal at t+1. With in-view-only swaps
+an other out of view at t+1 is *unseen*, not harmed: ``y_emp = y`` there (SPEC §4), so the robot
+is neither paid nor charged for keeping it in view. Acting is ε-greedy on ``Q_emp``.
 
 β = 1 is standard DQN (the paper: "1.0 recovers standard DQN"), and it is run as such: one
 network ``Q`` (and its target), acting on ``Q``, no ``Q_emp`` (whose target would equal ``y``).
@@ -39,7 +41,7 @@ from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
 from empathy_zoo.schedules import linear_epsilon
 
-__all__ = ["EmpathicDQN", "double_dqn_target", "empathic_targets", "other_term", "linear_epsilon"]
+__all__ = ["EmpathicDQN", "double_dqn_target", "continuation_value", "empathic_targets", "other_term", "own_where_unseen", "linear_epsilon"]
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
 
@@ -48,9 +50,17 @@ def double_dqn_target(
     reward: torch.Tensor, terminated: torch.Tensor, q_next_online: torch.Tensor, q_next_target: torch.Tensor, gamma: float,
 ) -> torch.Tensor:
     """``y = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))``, ``(K, B)``, from ``(K, B, A)`` values."""
+    return reward + continuation_value(terminated, q_next_online, q_next_target, gamma)
+
+
+def continuation_value(
+    terminated: torch.Tensor, q_next_online: torch.Tensor, q_next_target: torch.Tensor, gamma: float,
+) -> torch.Tensor:
+    """``c = γ·(1 − done)·Q̂(s', argmax_a Q(s', a))``, ``(K, B)``: the robot's target without its
+    immediate reward (``y = r + c``)."""
     best = q_next_online.argmax(dim=2, keepdim=True)
     bootstrap = q_next_target.gather(2, best).squeeze(2)
-    return reward + gamma * (~terminated).float() * bootstrap
+    return gamma * (~terminated).float() * bootstrap
 
 
 def empathic_targets(
@@ -64,29 +74,49 @@ def empathic_targets(
     selfishness: torch.Tensor,
     others: str = "closest",
     live: torch.Tensor | None = None,
+    unseen: torch.Tensor | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """The two TD targets ``(y, y_emp)``, each ``(K, B)``; Q-value inputs are ``(K, B, A)``,
     ``selfishness`` is β per run, ``(K, 1)``; with several others aggregated (``others`` "mean" or
-    "min"), ``q_swapped_target`` is ``(K, B, N, A)``, ``other_present`` and ``live`` ``(K, B, N)``
-    (see :func:`other_term`)."""
+    "min"), ``q_swapped_target`` is ``(K, B, N, A)``, ``other_present``, ``live`` and ``unseen``
+    ``(K, B, N)`` (see :func:`other_term`). Where the other agent is ``unseen`` (in-view-only
+    swaps, out of view; with several others: every one counted is), ``y_emp = y`` (SPEC §4)."""
     y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
-    y_emp = selfishness * y + (1.0 - selfishness) * other_term(q_swapped_target, other_present, gamma, others, live)
-    return y, y_emp
+    term = other_term(q_swapped_target, other_present, gamma, others, live, unseen)
+    y_emp = selfishness * y + (1.0 - selfishness) * term
+    return y, own_where_unseen(y, y_emp, unseen, others, live)
+
+
+def own_where_unseen(y: torch.Tensor, y_emp: torch.Tensor, unseen: torch.Tensor | None, others: str = "closest",
+                     live: torch.Tensor | None = None) -> torch.Tensor:
+    """``y_emp`` with the robot's own target ``y`` where no other agent is seen to care about
+    (SPEC §4): the closest other is unseen; with several others aggregated, every other that was
+    live when the step began is unseen (and at least one was)."""
+    if unseen is None:
+        return y_emp
+    if others != "closest":
+        live = torch.ones_like(unseen) if live is None else live
+        unseen = live.any(dim=2) & ~(live & ~unseen).any(dim=2)
+    return torch.where(unseen, y, y_emp)
 
 
 def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float,
-               others: str = "closest", live: torch.Tensor | None = None) -> torch.Tensor:
+               others: str = "closest", live: torch.Tensor | None = None,
+               unseen: torch.Tensor | None = None) -> torch.Tensor:
     """``γ·other_present·max_a Q̂(s_emp', a)``, ``(K, B)``: the robot's value in the other's place
     at t+1 (0 where that agent is terminal). With ``others`` "mean" or "min", the inputs carry one
     entry per other agent (``(K, B, N, A)``, ``(K, B, N)``) and the terms of the others that were
-    ``live`` when the step began (``(K, B, N)``; default all) are averaged, or the least taken: one
-    harmed in this step counts 0, one that had left before does not count (0 when none was live)."""
+    ``live`` when the step began (``(K, B, N)``; default all) and are not ``unseen`` (default
+    none) are averaged, or the least taken: one harmed in this step counts 0, one that had left
+    before, or is out of view, does not count (0 when none counts)."""
     terms = gamma * other_present.float() * q_swapped_target.max(dim=-1).values
     if others == "closest":
         return terms
     if terms.dim() != 3:
         raise ValueError(f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {tuple(q_swapped_target.shape)}")
     live = torch.ones_like(terms, dtype=torch.bool) if live is None else live
+    if unseen is not None:
+        live = live & ~unseen
     anyone = live.any(dim=2)
     if others == "mean":
         return (terms * live).sum(dim=2) / live.sum(dim=2).clamp(min=1)
@@ -183,7 +213,9 @@ class EmpathicDQN:
 
     # ------------------------------------------------------------------ learning
     def observe(self, batch: StepBatch) -> None:
-        swapped, present = batch.swapped_next_obs, batch.other_present
+        swapped, present = batch.swapped_next_obs, batch.other_present.astype(np.uint8)  # codes: see StackedReplay.flags
+        if batch.other_unseen is not None:
+            present = present + 2 * batch.other_unseen.astype(np.uint8)
         if self.aggregated:
             if batch.swapped_next_obs_all is None or batch.others_present is None:
                 raise ValueError(f"others={self.config.others!r} needs every other agent's swapped observation "
@@ -193,6 +225,8 @@ class EmpathicDQN:
                                  "step began (StepBatch.others_live)")
             swapped = batch.swapped_next_obs_all
             present = batch.others_live.astype(np.uint8) + batch.others_present  # codes: see StackedReplay.flags
+            if batch.others_unseen is not None:
+                present = present + 2 * batch.others_unseen.astype(np.uint8)
         self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present)
         m = batch.actions.shape[1]
         for _ in range(m):
@@ -257,6 +291,7 @@ class EmpathicDQN:
         return empathic_targets(
             batch["reward"], batch["terminated"], q_next, target_next, target_swapped,
             batch["other_present"], self.config.gamma, self.selfishness, self._others_rule(), batch.get("others_live"),
+            batch.get("other_unseen"),
         )
 
     def _others_rule(self) -> str:

@@ -8,7 +8,7 @@ observation is bit for bit the float32 observation that was added, and integers 
 themselves. A value the code cannot hold exactly raises ``ValueError`` when added; nothing is
 rounded. With several other agents whose values a learner aggregates, one swapped observation
 and one presence flag per other agent are kept. Each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
-row), 3 bytes of flags (action, terminated, other present) and 4 bytes of reward: 82 bytes at
+row), 3 bytes of flags (action, terminated, the other's code) and 4 bytes of reward: 82 bytes at
 V = 25, 41 MB per run at the paper's 500,000 transitions. Packing keeps a sample to three
 gathers and one table look-up.
 """
@@ -41,9 +41,12 @@ class StackedReplay:
         self.decode_table = torch.from_numpy(DECODE_TABLE.copy()).to(device)
         """(256,) float32: the observation value of every code."""
         self.flags = torch.zeros((k, c, 2 + others), dtype=torch.uint8, device=device)
-        """(action, terminated, other present) of every transition; with several others, one code
-        per other agent instead of "present": 0 it had left before the step, 1 it was there when the
-        step began but is not at its end (harmed, or done), 2 it is there at the end."""
+        """(action, terminated, other) of every transition. "other" is a code: 0 the other agent is
+        absent or terminal at the end of the step (its term is 0), 1 it is present (its term
+        bootstraps), 2 it is present but unseen (out of view with in-view-only swaps: no other-term
+        at all, SPEC §4). With several others, one code per other agent: 0 it had left before the
+        step, 1 it was there when the step began but is not at its end (harmed, or done), 2 it is
+        there at the end, 3 it is there but unseen."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0
@@ -99,10 +102,11 @@ class StackedReplay:
             "action": flags[:, :, ACTION].long(), "terminated": flags[:, :, TERMINATED].bool(),
             "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
         }
+        codes = flags[:, :, present]  # (see flags)
         if self.others == 1:
-            sample["other_present"] = flags[:, :, present].bool()
-        else:  # (codes: see flags)
-            sample["other_present"], sample["others_live"] = flags[:, :, present] == 2, flags[:, :, present] >= 1
+            sample["other_present"], sample["other_unseen"] = codes == 1, codes == 2
+        else:
+            sample["other_present"], sample["others_live"], sample["other_unseen"] = codes == 2, codes >= 1, codes == 3
         return sample
 
     def nbytes_per_run(self) -> int:

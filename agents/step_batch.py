@@ -25,7 +25,8 @@ class StepBatch:
     next_obs: np.ndarray
     """(K, M, V) observations at the end of the step (before any autoreset)."""
     swapped_next_obs: np.ndarray
-    """(K, M, V) the learner's swapped observation with its closest other agent at the end of the step."""
+    """(K, M, V) the learner's swapped observation at the end of the step with its closest other
+    agent when the step began (SPEC §3b)."""
     other_present: np.ndarray
     """(K, M) that other agent is still in the environment and its episode has not ended for good
     at the end of the step, so its swapped value may bootstrap (SPEC §6: False for a harmed cat,
@@ -61,6 +62,12 @@ class StepBatch:
     others_live: np.ndarray | None = None
     """(K, M, N) each other agent was in the environment when the step began (one harmed in an
     earlier step has left); ``None`` when the driver does not say."""
+    other_unseen: np.ndarray | None = None
+    """(K, M) the closest other agent is present and not terminal at the end of the step but out
+    of the learner's window (in-view-only methods): *unseen*, not harmed, so an in-view empathic
+    target uses no other-term at all (SPEC §4); ``None`` (never unseen) when the driver does not say."""
+    others_unseen: np.ndarray | None = None
+    """(K, M, N) the same for each other agent; ``None`` when the driver does not say."""
 
     def runs(self, rows: np.ndarray) -> StepBatch:
         """The same step for the runs ``rows`` only (every array's first axis indexed)."""

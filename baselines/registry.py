@@ -34,13 +34,13 @@ METHODS: dict[str, Method] = {
         name="empathic_dqn_in_view", learner=EmpathicDQN, settings=EmpathicDQNSettings, in_view_only=True,
         label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
         description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
-                    "the paper's future work)",
+                    "the paper's future work); an unseen other gives the robot's own target",
     ),
     "empathic_dqn_silver": Method(
         name="empathic_dqn_silver", learner=SilverRuleDQN, settings=EmpathicDQNSettings,
         label=lambda s: f"Empathic DQN, silver rule (β={s.selfishness:g})",
-        description="Empathic DQN that counts the other's value only where it falls below the robot's own "
-                    "(the paper's silver rule: empathy with bad outcomes only)",
+        description="Empathic DQN that counts the other's future only where it falls below the robot's own "
+                    "continuation (the paper's silver rule: empathy with bad outcomes only)",
     ),
     **BASELINE_METHODS,
     **SB3_METHODS,

@@ -55,10 +55,16 @@ class VectorStep:
     final_observations: np.ndarray
     """(N, L, V) float32: observations at the end of this step, before any autoreset."""
     swapped: np.ndarray
-    """(N, L, V) float32: each learner's swapped observation with its closest other agent at the
-    end of this step (before autoreset); zeros where :attr:`swapped_valid` is False."""
+    """(N, L, V) float32: each learner's swapped observation at the end of this step (before
+    autoreset) with its closest other agent *when the step began* (SPEC §3b: among the others
+    present then, so one harmed in this step is the one swapped with, and has no picture); zeros
+    where :attr:`swapped_valid` is False."""
     swapped_valid: np.ndarray
     """(N, L) bool: that other agent is still present (and in view, with ``in_view_only``)."""
+    swapped_unseen: np.ndarray
+    """(N, L) bool: that other agent is present and not terminal but out of the learner's window
+    (``in_view_only`` only; always False otherwise): *unseen*, not harmed (SPEC §4), so an
+    in-view empathic target uses no other-term at all."""
     swapped_other_terminated: np.ndarray
     """(N, L) bool: that other agent's episode ended for good this step (a harmed cat; the human
     when the last battery is taken). A time-limit truncation is not termination."""
@@ -74,6 +80,9 @@ class VectorStep:
     others_live: np.ndarray
     """(N, L, O) bool: that other agent was in the environment when this step began (an agent
     harmed earlier has left; one harmed in this step was live)."""
+    others_unseen: np.ndarray
+    """(N, L, O) bool: that other agent is present and not terminal but out of view
+    (``in_view_only`` only), as :attr:`swapped_unseen` is for the closest one."""
     rewards: np.ndarray
     """(N, A) float32: the environment's rewards of all agents."""
     terminated: np.ndarray
@@ -203,16 +212,24 @@ class VectorEnv:
                 full[:, index] = policy.act(observations, engine.t, engine.present[:, index], self._contexts(index, policy))
             else:
                 full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
+        # the closest other agent of each learner, chosen among the others present when the step
+        # begins (SPEC §3b): a cat harmed in the step stays the one swapped with
+        closest = self._closest_others()
         events = engine.step(full)
         self._events, self._fresh = events, events.episode_over.copy()
         battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
-        swapped_all, seen, swapped, valid, other = self._swaps()
+        swapped_all, seen, unseen, swapped, valid, other_unseen = self._swaps(closest)
+        other = closest
         other_terminated = np.take_along_axis(events.terminated, other, axis=1)
+        other_unseen &= ~other_terminated
         if self._only_other:  # (each learner's one other agent is its closest)
             others_present = (valid & ~other_terminated)[:, :, None]
+            others_unseen = other_unseen[:, :, None]
         else:
-            others_present = seen & ~events.terminated[:, self._other_columns].reshape(seen.shape)
+            others_terminated = events.terminated[:, self._other_columns].reshape(seen.shape)
+            others_present = seen & ~others_terminated
+            others_unseen = unseen & ~others_terminated
         over = events.episode_over
         done_ids = np.flatnonzero(over)
         finished: dict[str, np.ndarray] = {"env": done_ids}
@@ -230,8 +247,9 @@ class VectorEnv:
         learners = self.learner_index
         return VectorStep(
             observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
-            swapped_other_terminated=other_terminated, swapped_all=swapped_all, others_present=others_present,
-            others_live=events.present_before[:, self._other_columns].reshape(seen.shape),
+            swapped_unseen=other_unseen, swapped_other_terminated=other_terminated, swapped_all=swapped_all,
+            others_present=others_present,
+            others_live=events.present_before[:, self._other_columns].reshape(seen.shape), others_unseen=others_unseen,
             rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
             episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
             battery_return=battery_return,
@@ -263,45 +281,48 @@ class VectorEnv:
         """``(n, L, V)`` observations of the learners (in ``env_ids``, default all)."""
         return _by_learner([self.engine.observe(viewer, env_ids) for viewer in self.learner_index])
 
-    def _swaps(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Each learner's swapped observations with every other agent, ``(N, L, O, V)`` (zeros
-        where not seen), and where they are seen (present, and in view with ``in_view_only``),
-        ``(N, L, O)``; then the same of its closest other agent, ``(N, L, V)`` and ``(N, L)``, and
-        that agent's index, ``(N, L)``."""
-        engine = self.engine
-        pictures, seen, swapped, valid, closest = [], [], [], [], []
-        for viewer in self.learner_index:
-            others = engine.other_agents[viewer]
-            each, each_seen = zip(*(self._swap(viewer, other) for other in others.tolist()))
-            if self._only_other:
-                closest.append(self._only_other[viewer])
-                swapped.append(each[0])
-                valid.append(each_seen[0])
-            else:
-                other, _ = engine.closest_other(viewer)
-                closest.append(other)
-                pictures.append(np.stack(each, axis=1))
-                seen.append(np.stack(each_seen, axis=1))
-                column = other - (other > viewer)  # the closest one's place among the others
-                rows = np.arange(self.num_envs)
-                swapped.append(pictures[-1][rows, column])
-                valid.append(seen[-1][rows, column])
-        swapped, valid = _by_learner(swapped), np.stack(valid, axis=1)
+    def _closest_others(self) -> np.ndarray:
+        """``(N, L)``: each learner's closest other agent now (among the others present; its one
+        other agent when there are two agents)."""
         if self._only_other:
-            return swapped[:, :, None], valid[:, :, None], swapped, valid, np.stack(closest, axis=1)
-        return _by_learner(pictures), _by_learner(seen), swapped, valid, np.stack(closest, axis=1)
+            return np.stack([self._only_other[viewer] for viewer in self.learner_index], axis=1)
+        return np.stack([self.engine.closest_other(viewer)[0] for viewer in self.learner_index], axis=1)
 
-    def _swap(self, viewer: int, other: int) -> tuple[np.ndarray, np.ndarray]:
+    def _swaps(self, closest: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Each learner's swapped observations with every other agent, ``(N, L, O, V)`` (zeros
+        where not seen), where they are seen (present, and in view with ``in_view_only``) and
+        where they are present but out of view, each ``(N, L, O)``; then the same of its other
+        agent ``closest`` (``(N, L)`` agent indices): ``(N, L, V)``, ``(N, L)`` and ``(N, L)``."""
+        if self._only_other:  # (one other agent: no stacking, no gather)
+            swapped, valid, hidden = (_by_learner(list(x)) for x in zip(*(self._swap(viewer, self._only_other[viewer][0])
+                                                                        for viewer in self.learner_index)))
+            return swapped[:, :, None], valid[:, :, None], hidden[:, :, None], swapped, valid, hidden
+        pictures, seen, unseen = [], [], []
+        for viewer in self.learner_index:
+            each, each_seen, each_unseen = zip(*(self._swap(viewer, other) for other in self.engine.other_agents[viewer].tolist()))
+            pictures.append(np.stack(each, axis=1))
+            seen.append(np.stack(each_seen, axis=1))
+            unseen.append(np.stack(each_unseen, axis=1))
+        pictures, seen, unseen = _by_learner(pictures), np.stack(seen, axis=1), np.stack(unseen, axis=1)
+        learners = np.asarray(self.learner_index)
+        column = closest - (closest > learners[None, :])  # the closest one's place among the others
+        rows, ls = np.arange(self.num_envs)[:, None], np.arange(len(learners))[None, :]
+        return (pictures, seen, unseen, pictures[rows, ls, column], seen[rows, ls, column], unseen[rows, ls, column])
+
+    def _swap(self, viewer: int, other: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``viewer``'s swapped observation with ``other`` in every environment, ``(N, V)``, zeros
-        where ``other`` is not seen, and where it is seen (present, and in view with
-        ``in_view_only``), ``(N,)``."""
+        where ``other`` is not seen; where it is seen (present, and in view with
+        ``in_view_only``), ``(N,)``; and where it is present but out of view (``in_view_only``), ``(N,)``."""
         engine = self.engine
-        seen = engine.present[:, other].copy()
+        present = engine.present[:, other]
+        seen = present.copy()
+        unseen = np.zeros_like(seen)
         if self.in_view_only:
             seen &= engine.in_view(viewer, other)
+            unseen = present & ~seen
         picture = engine.observe_swapped(viewer, other)
         picture[~seen] = 0.0
-        return picture, seen
+        return picture, seen, unseen
 
     def swapped_observations(self, viewer: str) -> tuple[np.ndarray, np.ndarray]:
         """``(N, A, V)`` swapped observations of ``viewer`` with every agent, and an ``(N, A)``
@@ -311,7 +332,7 @@ class VectorEnv:
         out = np.zeros((self.num_envs, engine.num_agents, self.obs_size), dtype=np.float32)
         mask = np.zeros((self.num_envs, engine.num_agents), dtype=bool)
         for o in engine.other_agents[v].tolist():
-            out[:, o], mask[:, o] = self._swap(v, o)
+            out[:, o], mask[:, o], _ = self._swap(v, o)
         return out, mask
 
     # ------------------------------------------------------------------ checkpoint

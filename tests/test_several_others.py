@@ -509,7 +509,7 @@ def fixed_others(name: str, kwargs: dict) -> dict[str, str]:
 @pytest.mark.parametrize("module, kwargs", SEVERAL, ids=SEVERAL_IDS)
 def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
     """Step for step, ``swapped``, ``swapped_all`` and ``others_present`` are what the ParallelEnvs
-    (in FixedAgents) say of the closest other agent and of every other agent."""
+    (in FixedAgents) say of the closest other agent when the step began and of every other agent."""
     name = module.__name__.rsplit(".", 1)[-1]
     fixed = fixed_others(name, kwargs)
     seeds = [0, 1, 2]
@@ -525,6 +525,7 @@ def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
         actions = rng.integers(NUM_ACTIONS, size=(len(seeds), 1))
         out = vector.step(actions)
         for i, env in enumerate(envs):
+            closest = closest_by_hand(env.unwrapped.engine, 0)  # chosen when the step begins (SPEC §3b)
             env.step({ROBOT: int(actions[i, 0])})
             base = env.unwrapped
             engine = base.engine
@@ -535,7 +536,6 @@ def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
                 index = k + 1
                 terminal = bool(out.terminated[i, index])
                 assert out.others_present[i, 0, k] == (swapped is not None and not terminal)
-            closest = closest_by_hand(engine, 0)
             if closest is not None:
                 closest_kinds |= 1 << closest
                 swapped = base.swapped_observation(ROBOT, base.possible_agents[closest], in_view_only=in_view_only)

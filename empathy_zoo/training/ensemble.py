@@ -98,7 +98,7 @@ def _train_ensemble(
     others = {"num_others": len(venv.others[0])} if _takes(method.learner, "num_others") else {}
     learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device,
                              **others)
-    train_rewards = TrainRewards([s.method_object().reward for s in specs], seeds=seeds)
+    train_rewards = TrainRewards([s.reward_transform() for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
@@ -183,7 +183,8 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
     environment's facts, as the vector env reports them for its learner, unshaped. The other-term
     may bootstrap only while the closest other agent is present and not terminal (SPEC §6): a
     harmed cat has left, and the human's episode ends for good when the last battery is taken; a
-    time-limit truncation still bootstraps."""
+    time-limit truncation still bootstraps. With ``in_view_only``, an other out of view is
+    *unseen* (``other_unseen``), not absent: the empathic target is then the robot's own (SPEC §4)."""
     return StepBatch(
         obs=obs[:, None, :],
         actions=actions,
@@ -200,6 +201,8 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
         swapped_next_obs_all=result.swapped_all,
         others_present=result.others_present,
         others_live=result.others_live,
+        other_unseen=result.swapped_unseen,
+        others_unseen=result.others_unseen,
     )
 
 
