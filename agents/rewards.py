@@ -33,14 +33,19 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-from collections.abc import Sequence
+import math
+import typing
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
 from agents.step_batch import StepBatch
 
-__all__ = ["RewardTransform", "TrainRewards", "transform_config", "with_train_rewards"]
+__all__ = [
+    "RewardTransform", "TrainRewards", "configure_transform", "same_transform", "transform_config", "transform_fields",
+    "with_train_rewards",
+]
 
 
 class RewardTransform(Protocol):
@@ -62,6 +67,70 @@ def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None
     return {"name": transform.name, **fields}
 
 
+def transform_fields(transform: RewardTransform | None) -> dict[str, Any]:
+    """``{field: type}`` of a reward transform's parameters (its dataclass fields, annotations
+    resolved; ``Any`` where one cannot be), in declaration order; ``{}`` for ``None`` or a transform
+    that is no dataclass (it has no parameters one could set)."""
+    if transform is None or not dataclasses.is_dataclass(transform):
+        return {}
+    try:
+        hints = typing.get_type_hints(type(transform))
+    except (NameError, TypeError):
+        hints = {}
+    return {f.name: hints.get(f.name, Any) for f in dataclasses.fields(transform) if f.init}
+
+
+def configure_transform(transform: RewardTransform | None, overrides: Mapping[str, Any], owner: str = "") -> Any:
+    """``transform`` with the fields ``overrides`` set (``dataclasses.replace``, so the transform's
+    own checks run), or ``transform`` itself when there are none. An unknown field, a value of
+    the wrong type (an int is taken for a float; a bool is not a number) or a float that is not
+    finite raises ``ValueError`` naming it, and ``owner`` (a method's name) when given."""
+    overrides = dict(overrides)
+    if not overrides:
+        return transform
+    whose = f" of method {owner!r}" if owner else ""
+    kinds = transform_fields(transform)
+    if not kinds:
+        what = "no reward transform" if transform is None else f"a reward transform without fields ({transform.name!r})"
+        raise ValueError(f"{f'method {owner!r}' if owner else 'this method'} has {what}: "
+                         f"{', '.join(sorted(overrides))} cannot be set")
+    unknown = [name for name in overrides if name not in kinds]
+    if unknown:
+        raise ValueError(f"unknown field(s) {unknown} of the reward transform {transform.name!r}{whose}; "
+                         f"its fields: {', '.join(kinds)}")
+    checked = {name: _checked_value(name, value, kinds[name]) for name, value in overrides.items()}
+    return dataclasses.replace(transform, **checked)
+
+
+def _checked_value(name: str, value: Any, kind: Any) -> Any:
+    """``value`` for a field of type ``kind`` (``float``, ``int``, ``bool``, ``str``; other types are
+    the transform's to check), or a ``ValueError`` naming the field."""
+    def fail(wanted: str) -> ValueError:
+        return ValueError(f"{name} must be {wanted}, got {type(value).__name__} {value!r}")
+
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise fail("a number")
+        if not math.isfinite(value):
+            raise fail("a finite number")
+        return float(value)
+    if kind is int and (isinstance(value, bool) or not isinstance(value, int)):
+        raise fail("an int")
+    if kind in (bool, str) and not isinstance(value, kind):
+        raise fail(f"a {kind.__name__}")
+    return value
+
+
+def same_transform(a: RewardTransform | None, b: RewardTransform | None) -> bool:
+    """``a`` and ``b`` are the same transform: one object, or of one class with equal fields
+    (two runs whose transforms are equal share its state and each call, as one object would)."""
+    if a is b:
+        return True
+    if a is None or b is None or type(a) is not type(b) or not dataclasses.is_dataclass(a):
+        return False
+    return repr(transform_config(a)) == repr(transform_config(b))
+
+
 class TrainRewards:
     """The rewards each run of an ensemble trains on: run ``k`` gets ``transforms[k]``'s (``None``:
     the environment's), with the state of every stateful transform kept here."""
@@ -69,9 +138,13 @@ class TrainRewards:
     def __init__(self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1,
                  seeds: Sequence[int] | None = None) -> None:
         self.transforms = list(transforms)
-        self.distinct = list({id(t): t for t in self.transforms if t is not None}.values())
-        """Each transform once, in the order of its first run."""
-        self.rows = [np.array([k for k, t in enumerate(self.transforms) if t is transform]) for transform in self.distinct]
+        self.distinct: list[RewardTransform] = []
+        """Each transform once (equal ones count as one: :func:`same_transform`), in the order of its first run."""
+        for t in self.transforms:
+            if t is not None and not any(same_transform(t, seen) for seen in self.distinct):
+                self.distinct.append(t)
+        self.rows = [np.array([k for k, t in enumerate(self.transforms) if same_transform(t, transform)])
+                     for transform in self.distinct]
         """The runs of each distinct transform: it sees only their rows of a step (``StepBatch`` sliced)."""
         if seeds is not None and len(seeds) != len(self.transforms):
             raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")

@@ -29,6 +29,7 @@ STREAMS: dict[str, int] = {
     "train_env": 20,        # a run's training environments
     "eval_env": 30,         # a run's greedy-evaluation start states (+ the episode)
     "attainable_utility": 40,  # AUP's auxiliary rewards, networks and replay batches (+ which of them)
+    "considerate_value": 41,   # Be Considerate's value network of the other agent and its replay batches (+ which)
 }
 """Every random stream derived from a run's seed, by name: ``derive_key(seed, STREAMS[name], ...)``.
 One id per stream, so no two streams of a run ever coincide; a new stream takes a new id here."""

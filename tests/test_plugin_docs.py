@@ -59,11 +59,14 @@ def test_the_plugin_page_runs_and_its_runs_are_scored(in_tmp: Path) -> None:
     assert rows == {
         ("coexistence_chased", "Tabular Q (ε=0.1)"), ("coexistence_chased", "Tabular Q (ε=0.3)"),
         ("coexistence_chased", "DQN"), ("sharing_v0", "DQN"), ("sharing_v0", "DQN − envy"),
+        ("sharing_v0", "DQN − envy (weight=1)"),  # a reward transform's field swept like a setting
     }
     chased = [r for r in results if r["variant"] == "coexistence_chased"]
     assert {r["config"]["fixed"]["cat_0"] for r in chased} == {"my_plugins:Chaser(eagerness=0.5)"}
     envious = next(r for r in results if r["method_label"] == "DQN − envy")
     assert envious["config"]["reward"] == {"name": "envy", "weight": 0.5}
+    heavier = next(r for r in results if r["method_label"] == "DQN − envy (weight=1)")
+    assert heavier["config"]["reward"] == {"name": "envy", "weight": 1.0} and heavier["run_id"] != envious["run_id"]
     assert set(envious["plugin_sha256"]) == {"my_plugins"}
     assert (in_tmp / "my_results" / "LEADERBOARD.md").read_text(encoding="utf-8").count("Tabular Q") >= 2
 

@@ -6,10 +6,11 @@
     empathy-zoo methods | policies                   # what is registered
     empathy-zoo play --env sharing_v0 --episodes 3 --render ansi
 
-``train`` takes one ``--<field>`` option per field of the method's settings (see
-``empathy-zoo train --method NAME --help``); the method is ``--method``, else ``method`` in the
-``--config`` file. Its precedence: built-in defaults < the ``--config`` TOML file (``[settings]``
-for method settings, top-level keys for the run) < the command line. A bad input prints
+``train`` takes one ``--<field>`` option per field of the method's settings and of its reward
+transform (see ``empathy-zoo train --method NAME --help``); the method is ``--method``, else
+``method`` in the ``--config`` file. Its precedence: built-in defaults < the ``--config`` TOML file
+(``[settings]`` for method settings, ``[reward]`` for the reward transform's fields, top-level keys
+for the run) < the command line. A bad input prints
 ``empathy-zoo: error: <message>`` and exits with status 2, before any training.
 
 One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
@@ -61,8 +62,11 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
             from baselines.registry import get_method
             from empathy_zoo.training.sweep import settings_types
 
-            names = ", ".join(settings_types(get_method(method).settings))
-            message += f" (the settings of method {method!r} are {names}; see {PROG} train --method {method} --help)"
+            chosen = get_method(method)
+            names = ", ".join(settings_types(chosen.settings))
+            fields_of_reward = ", ".join(chosen.reward_fields())
+            reward = f"; the fields of its reward transform are {fields_of_reward}" if fields_of_reward else ""
+            message += f" (the settings of method {method!r} are {names}{reward}; see {PROG} train --method {method} --help)"
         parser.error(message)
     return args
 

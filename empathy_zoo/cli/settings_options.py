@@ -15,6 +15,11 @@ anything else                   no option: set it in ``[settings]`` of ``--confi
 A field whose option would be a run option's (a setting named ``seed``, say) is set in
 ``[settings]`` too. A field the method fixes (``Method.preset``) keeps its option, listed apart:
 another value is refused naming the method, as the same key in a ``--config`` file is.
+
+The fields of the method's reward transform (``Method.reward``) are options too, read the same
+way, in a group of their own: ``--<field>``, or ``--reward-<field>`` where ``--<field>`` is a
+setting's or a run option's (``dqn_aup``'s ``--reward-learning-rate``); in a ``--config`` file
+they are keys of ``[reward]``.
 """
 
 from __future__ import annotations
@@ -32,10 +37,15 @@ from empathy_zoo.cli.common import help_text
 if TYPE_CHECKING:
     from agents.base import Method
 
-__all__ = ["SETTINGS_DEST", "add_settings_options", "field_docs", "given_settings", "option_reading"]
+__all__ = [
+    "REWARD_DEST", "SETTINGS_DEST", "add_reward_options", "add_settings_options", "field_docs", "given_reward",
+    "given_settings", "option_reading",
+]
 
 SETTINGS_DEST = "settings."
 """Prefix of a setting's attribute on the parsed namespace (apart from the run options')."""
+REWARD_DEST = "reward."
+"""Prefix of a reward transform field's attribute on the parsed namespace."""
 _SCALARS = (int, float, str)
 
 
@@ -119,6 +129,43 @@ def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> Non
             in_config_only.append(field.name)
     if in_config_only:
         free.description += f"; in [settings] only: {', '.join(in_config_only)}"
+
+
+def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
+    """One option per field of ``method``'s reward transform, its help the field's docstring:
+    ``--<field>``, or ``--reward-<field>`` where that option is taken (a setting's, a run option's)."""
+    transform = method.reward
+    kinds = method.reward_fields()
+    if not kinds:
+        return
+    docs = field_docs(type(transform))
+    defaults = {f.name: _default(f) for f in fields(transform)}
+    group = parser.add_argument_group(
+        f"reward transform of {method.name}",
+        f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)")
+    in_config_only = []
+    for name, kind in kinds.items():
+        reading = option_reading(kind)
+        if reading is None:
+            in_config_only.append(name)
+            continue
+        text = help_text(f"{docs.get(name, '')} (default: {defaults[name]!r})".strip())
+        for option in ("--" + name.replace("_", "-"), "--reward-" + name.replace("_", "-")):
+            try:
+                group.add_argument(option, dest=REWARD_DEST + name, help=text, **reading)
+                break
+            except argparse.ArgumentError:  # taken by a setting or a run option: the next form
+                continue
+        else:
+            in_config_only.append(name)
+    if in_config_only:
+        group.description += f"; in [reward] only: {', '.join(in_config_only)}"
+
+
+def given_reward(args: argparse.Namespace) -> dict[str, Any]:
+    """The reward transform's fields given as options (the namespace holds only those given)."""
+    given = vars(args)
+    return {key.removeprefix(REWARD_DEST): value for key, value in given.items() if key.startswith(REWARD_DEST)}
 
 
 def given_settings(args: argparse.Namespace) -> dict[str, Any]:

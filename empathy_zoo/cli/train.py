@@ -1,8 +1,9 @@
 """``empathy-zoo train``: runs of one method on one environment.
 
-Its options are the run's (environment, seeds, steps, …) and one per field of the chosen
-method's settings (:mod:`empathy_zoo.cli.settings_options`). The method is known before the
-parser is built: :func:`train_method` reads ``--method``, or ``method`` in the ``--config`` file.
+Its options are the run's (environment, seeds, steps, …), one per field of the chosen method's
+settings and one per field of its reward transform (:mod:`empathy_zoo.cli.settings_options`).
+The method is known before the parser is built: :func:`train_method` reads ``--method``, or
+``method`` in the ``--config`` file.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from typing import Any
 from empathy_zoo.cli.common import (
     PROG, RUN_DEFAULTS, add_runner_options, agent_policy, check_results, run_summary, runner_options,
 )
-from empathy_zoo.cli.settings_options import add_settings_options, given_settings
+from empathy_zoo.cli.settings_options import add_reward_options, add_settings_options, given_reward, given_settings
 from empathy_zoo.training.sweep import POLICY_TABLE, SEEDS
 
 __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
@@ -26,7 +27,10 @@ RUN_KEYS: dict[str, Any] = {
     "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": POLICY_TABLE,
     "start": str, "inventory_encoding": str, "num_cats": int, "num_humans": int, "progress": bool,
 }
-"""Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``)."""
+"""Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``,
+the fields of its reward transform in ``[reward]``)."""
+TABLES = ("settings", "reward")
+"""The tables of a ``train --config`` file."""
 ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding", "num_cats", "num_humans")
 """Keys of a run that are environment arguments (the env checks which it takes)."""
 
@@ -54,30 +58,41 @@ def train_method(argv: Sequence[str]) -> str:
 
 
 def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Run keys and method settings, merged: defaults < config file < command line."""
+    """Run keys and method settings, merged: defaults < config file < command line. The fields of
+    the method's reward transform are ``run["reward"]`` (a table, empty when none is given)."""
     from baselines.registry import get_method
     from empathy_zoo.training.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
 
     given = vars(args)
-    run: dict[str, Any] = dict(RUN_DEFAULTS)
+    run: dict[str, Any] = {**RUN_DEFAULTS, "reward": {}}
     settings: dict[str, Any] = {}
+    reward: dict[str, Any] = {}
     if "config" in given:
         path = given["config"]
         data = read_toml(path)
-        check_keys(data, [*RUN_KEYS, "settings"], f"{path}: top level")
+        check_keys(data, [*RUN_KEYS, *TABLES], f"{path}: top level")
         if "seed" in data and "seeds" in data:
             raise SweepConfigError(f"{path}: give 'seed' or 'seeds', not both")
         for key, value in data.items():
             if key == "seed":
                 run["seeds"] = [check_value(value, int, f"{path}: seed")]
-            elif key != "settings":
+            elif key not in TABLES:
                 run[key] = check_value(value, RUN_KEYS[key], f"{path}: {key}")
+        for name in TABLES:
+            if not isinstance(data.get(name, {}), dict):
+                raise SweepConfigError(f"{path}: [{name}] must be a table")
+        method = get_method(given.get("method", run["method"]))
         table = data.get("settings", {})
-        if not isinstance(table, dict):
-            raise SweepConfigError(f"{path}: [settings] must be a table")
-        types = settings_types(get_method(given.get("method", run["method"])).settings)
+        types = settings_types(method.settings)
         check_keys(table, types, f"{path}: [settings]")
         settings |= {k: check_value(v, types[k], f"{path}: [settings] {k}") for k, v in table.items()}
+        table = data.get("reward", {})
+        kinds = method.reward_fields()
+        if table and not kinds:
+            raise SweepConfigError(f"{path}: [reward]: method {method.name!r} has "
+                                   + ("no reward transform" if method.reward is None else "a reward transform without fields"))
+        check_keys(table, kinds, f"{path}: [reward]")
+        reward |= {k: check_value(v, kinds[k], f"{path}: [reward] {k}") for k, v in table.items()}
     for key in RUN_KEYS.keys() - {"seed", "fixed"}:
         if key in given:
             run[key] = given[key]
@@ -87,6 +102,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
         run["fixed"] = dict(given["fixed"])
     if "no_progress" in given:
         run["progress"] = False
+    run["reward"] = reward | given_reward(args)
     return run, settings | given_settings(args)
 
 
@@ -104,7 +120,7 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
 
         fixed = {**default_policies(run["env"], env_kwargs), **run["fixed"]}
     specs = [
-        RunSpec(env=run["env"], method=run["method"], settings=settings, seed=seed, steps=run["steps"],
+        RunSpec(env=run["env"], method=run["method"], settings=settings, reward=run["reward"], seed=seed, steps=run["steps"],
                 eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=fixed,
                 env_kwargs=env_kwargs, label=run["label"])
         for seed in run["seeds"]
@@ -130,7 +146,8 @@ def add_train(sub: Any, method: str) -> None:
                     "The settings options are the method's: see empathy-zoo train --method NAME --help.",
     )
     parser.add_argument("--config", metavar="FILE.toml",
-                        help="TOML file: top-level run keys (env, method, seed(s), steps, …) and a [settings] table")
+                        help="TOML file: top-level run keys (env, method, seed(s), steps, …), a [settings] table and "
+                             "a [reward] table (the fields of the method's reward transform)")
     parser.add_argument("--env", help=f"environment (default: {RUN_DEFAULTS['env']})")
     parser.add_argument("--method", help=f"registered method or package.module:NAME (default: {RUN_DEFAULTS['method']})")
     seeds = parser.add_mutually_exclusive_group()
@@ -155,4 +172,5 @@ def add_train(sub: Any, method: str) -> None:
                         help="fixed agent policy, a name or package.module:ClassName (repeatable)")
     add_runner_options(parser, default=argparse.SUPPRESS)
     add_settings_options(parser, get_method(method))
+    add_reward_options(parser, get_method(method))
     parser.set_defaults(handler=cmd_train)

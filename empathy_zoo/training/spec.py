@@ -31,6 +31,9 @@ class RunSpec:
     """Registered learning method (see ``empathy-zoo methods``) or ``package.module:NAME``."""
     settings: Mapping[str, Any] = field(default_factory=dict)
     """Overrides of the method's settings (e.g. ``{"selfishness": 0.5}``)."""
+    reward: Mapping[str, Any] = field(default_factory=dict)
+    """Overrides of the fields of the method's reward transform (e.g. ``{"penalty": -10.0}`` for
+    ``dqn_harm_penalty``); recorded, with the fields left at their defaults, in ``config.reward``."""
     seed: int = 0
     """Seed of the run (networks, exploration, replay sampling, environments)."""
     steps: int = 1_000_000
@@ -67,6 +70,9 @@ class RunSpec:
             if name in self.env_kwargs:
                 check_choice(name, self.env_kwargs[name], allowed)
         self.method_settings()  # validates method and settings
+        if not isinstance(self.reward, Mapping):
+            raise ValueError(f"reward must be a table {{field: value}} of the reward transform's fields, got {self.reward!r}")
+        self.reward_transform()  # validates the reward transform's fields
         if self.fixed is not None:
             if not isinstance(self.fixed, Mapping):
                 raise ValueError(f"fixed must be a table {{agent: policy}}, got {self.fixed!r}")
@@ -85,12 +91,17 @@ class RunSpec:
     def method_settings(self) -> Any:
         return self.method_object().make_settings(dict(self.settings))
 
+    def reward_transform(self) -> Any:
+        """The reward transform this run trains with: the method's, with :attr:`reward` set
+        (``None``: the environment's reward)."""
+        return self.method_object().make_reward(dict(self.reward))
+
     def fixed_policies(self) -> dict[str, PolicyEntry]:
         """The fixed agents' policy entries (what :class:`~empathy_zoo.vector.VectorEnv` builds them from)."""
         return default_policies(self.env, self.env_kwargs) if self.fixed is None else dict(self.fixed)
 
     def display_label(self) -> str:
-        return self.label or self.method_object().display_name(self.method_settings())
+        return self.label or self.method_object().display_name(self.method_settings(), self.reward_transform())
 
     def config(self) -> dict[str, Any]:
         """The full configuration, as written into the result file."""
@@ -101,7 +112,7 @@ class RunSpec:
             "fixed": {agent: entry_label(entry) for agent, entry in self.fixed_policies().items()},
             "method": self.method,
             "settings": asdict(self.method_settings()),
-            "reward": transform_config(self.method_object().reward),
+            "reward": transform_config(self.reward_transform()),
             "seed": self.seed,
             "steps": self.steps,
             "eval_interval": self.eval_interval,

@@ -35,12 +35,22 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     method = "empathic_dqn"     # registry name (empathy-zoo methods) or "package.module:NAME"
     envs = ["coexistence_v0"]   # optional: the variants it runs on (default: all)
     label = "..."               # optional table name; may use {field} placeholders of the
-                                #   settings, e.g. "Mine (β={selfishness:g})"; default: the method's
+                                #   settings and of the reward transform's fields, e.g.
+                                #   "Mine (β={selfishness:g})"; default: the method's
     selfishness = [1.0, 0.5]    # any settings field; a list is a grid: one experiment per value
                                 #   (several lists: every combination)
+    disadvantageous = [0.1, 1.0]  # any field of the method's reward transform (here
+                                #   dqn_inequity_aversion's α), a grid as a setting is;
+    reward.smoothing = 0.9      #   also as reward.<field> (TOML's dotted key), which a field
+                                #   named like a setting needs (dqn_aup's reward.learning_rate:
+                                #   learning_rate alone is the learner's)
 
 Every experiment (variant × method entry × grid point) runs once per seed. Precedence of
-settings: the method's defaults < ``[settings]`` < the ``[[methods]]`` entry.
+settings: the method's defaults < ``[settings]`` < the ``[[methods]]`` entry. The reward
+transform's fields are set in ``[[methods]]`` entries only (each method has its own transform);
+the default label of a run shows those it sets to other values than the method's, and a field
+the entry gives a grid of at every value, the default's too: ``"DQN + inequity aversion
+(disadvantageous=0.1)"``.
 """
 
 from __future__ import annotations
@@ -53,6 +63,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any, get_type_hints
 
+from agents.rewards import transform_config
 from baselines.registry import get_method
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import ENGINES
@@ -65,7 +76,7 @@ __all__ = [
     "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "POLICY_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
     "EXTRA_ENV_ARGUMENTS",
     "load_sweep", "parse_sweep", "profile_path", "profiles", "read_toml", "check_keys", "check_value",
-    "settings_types", "describe_type",
+    "settings_types", "describe_type", "label_fields", "REWARD_TABLE",
 ]
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
@@ -102,7 +113,9 @@ ENV_KEYS: dict[str, Any] = {
 }
 """Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
 METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
-"""Keys of a ``[[methods]]`` entry besides the method's settings fields."""
+"""Keys of a ``[[methods]]`` entry besides the method's settings fields and its reward transform's."""
+REWARD_TABLE = "reward"
+"""The key of a ``[[methods]]`` entry that holds reward-transform fields as a table (``reward.<field> = ...``)."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
 ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS, *COUNT_ARGUMENTS)
 
@@ -252,9 +265,11 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
         for entry in chosen:
             for point in entry["grid"]:
                 settings = {k: v for k, v in defaults.items() if k not in entry["preset"]}
-                settings |= point
-                where = f"{entry['where']} on [envs.{variant}]" + (f" with {point}" if point else "")
-                experiment = [_spec(run, env, variant, entry, settings, seed, where) for seed in run["seeds"]]
+                settings |= point["settings"]
+                shown = {**point["settings"], **{f"{REWARD_TABLE}.{k}": v for k, v in point["reward"].items()}}
+                where = f"{entry['where']} on [envs.{variant}]" + (f" with {shown}" if shown else "")
+                experiment = [_spec(run, env, variant, entry, settings, point["reward"], seed, where)
+                              for seed in run["seeds"]]
                 label = experiment[0].display_label()
                 if (variant, label) in labels:
                     raise SweepConfigError(
@@ -294,24 +309,57 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
     except ValueError as error:
         raise SweepConfigError(f"{where} method: {error}") from None
     types = settings_types(method.settings)
-    check_keys(entry, [*METHOD_KEYS, *types], where)
-    axes: list[list[tuple[str, Any]]] = []
-    for key, value in entry.items():
-        if key in METHOD_KEYS:
-            check_value(value, METHOD_KEYS[key], f"{where} {key}")
-            continue
+    reward_types = method.reward_fields()
+    # the transform's fields that are keys of their own (a setting of the same name keeps its key)
+    flat = {key: kind for key, kind in reward_types.items() if key not in types and key not in METHOD_KEYS}
+    has_table = bool(reward_types) and REWARD_TABLE not in types
+    for key in entry:
+        if key not in METHOD_KEYS and key not in types and key not in flat and not (key == REWARD_TABLE and has_table):
+            raise SweepConfigError(f"{where}: unknown key {key!r}; {_method_keys(method, types, reward_types)}")
+    nested = entry.get(REWARD_TABLE, {}) if has_table else {}
+    if not isinstance(nested, dict):
+        raise SweepConfigError(f"{where} {REWARD_TABLE}: expected a table of the reward transform's fields "
+                               f"(reward.<field> = value), got {_type_name(nested)} {nested!r}")
+    for key in nested:
+        if key not in reward_types:
+            raise SweepConfigError(f"{where} {REWARD_TABLE}.{key}: unknown field {key!r} of the reward transform "
+                                   f"{method.reward.name!r}; its fields: {', '.join(reward_types)}")
+        if key in flat and key in entry:
+            raise SweepConfigError(f"{where} {REWARD_TABLE}.{key}: {key} is given twice (as {key} and {REWARD_TABLE}.{key})")
+    given = [("settings", key, value, types[key], key) for key, value in entry.items() if key in types]
+    given += [("reward", key, value, flat[key], key) for key, value in entry.items() if key in flat]
+    given += [("reward", key, value, reward_types[key], f"{REWARD_TABLE}.{key}") for key, value in nested.items()]
+    for key in METHOD_KEYS:
+        if key in entry:
+            check_value(entry[key], METHOD_KEYS[key], f"{where} {key}")
+    axes: list[list[tuple[str, str, Any]]] = []
+    for part, key, value, kind, shown in given:
         values = value if isinstance(value, list) else [value]
         if not values:
-            raise SweepConfigError(f"{where} {key}: empty grid (give at least one value)")
-        checked = [check_value(v, types[key], f"{where} {key}") for v in values]
+            raise SweepConfigError(f"{where} {shown}: empty grid (give at least one value)")
+        checked = [check_value(v, kind, f"{where} {shown}") for v in values]
         if len(set(map(repr, checked))) != len(checked):
-            raise SweepConfigError(f"{where} {key}: value listed twice in the grid {values}")
-        axes.append([(key, v) for v in checked])
+            raise SweepConfigError(f"{where} {shown}: value listed twice in the grid {values}")
+        axes.append([(part, key, v) for v in checked])
+    grid = []
+    for point in itertools.product(*axes):
+        grid.append({part: {key: v for p, key, v in point if p == part} for part in ("settings", "reward")})
+    swept = [axis[0][1] for axis in axes if axis[0][0] == "reward" and len(axis) > 1]
     return {
         "method": name, "where": where, "types": types, "preset": method.preset,
-        "envs": entry.get("envs"), "label": entry.get("label"),
-        "grid": [dict(point) for point in itertools.product(*axes)],
+        "envs": entry.get("envs"), "label": entry.get("label"), "grid": grid, "swept_reward": swept,
     }
+
+
+def _method_keys(method: Any, types: Mapping[str, Any], reward_types: Mapping[str, Any]) -> str:
+    """What a ``[[methods]]`` entry of ``method`` takes, for an error message."""
+    text = f"allowed keys: {', '.join(METHOD_KEYS)}; the settings of {method.name}: {', '.join(types)}"
+    if not reward_types:
+        return text + ("; its reward transform has no fields" if method.reward is not None else "; it has no reward transform")
+    shadowed = [key for key in reward_types if key in types or key in METHOD_KEYS]
+    text += (f"; the fields of its reward transform {method.reward.name!r}: {', '.join(reward_types)} "
+             f"(each also as {REWARD_TABLE}.<field>")
+    return text + (f"; {', '.join(shadowed)} only so: alone it is the setting)" if shadowed else ")")
 
 
 def _settings_table(table: dict[str, Any], methods: list[dict[str, Any]], source: str) -> dict[str, Any]:
@@ -382,20 +430,36 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
 
 
 def _spec(run: dict[str, Any], env: dict[str, Any], variant: str, entry: dict[str, Any],
-          settings: dict[str, Any], seed: int, where: str) -> RunSpec:
+          settings: dict[str, Any], reward: dict[str, Any], seed: int, where: str) -> RunSpec:
     try:
         spec = RunSpec(
-            env=env["env"], method=entry["method"], settings=settings, seed=seed, steps=run["steps"],
+            env=env["env"], method=entry["method"], settings=settings, reward=reward, seed=seed, steps=run["steps"],
             eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=env["fixed"],
             env_kwargs=env["kwargs"], variant=variant,
         )
     except ValueError as error:
         raise SweepConfigError(f"{where}: {error}") from None
     if entry["label"] is None:
-        return spec
+        if not entry["swept_reward"]:
+            return spec
+        # a grid of a transform's field: every run's label shows its value, the default's too
+        label = spec.method_object().display_name(spec.method_settings(), spec.reward_transform(), entry["swept_reward"])
+        return RunSpec(**{**spec.__dict__, "label": label})
     try:
-        label = entry["label"].format_map(asdict(spec.method_settings()))
-    except (KeyError, ValueError, IndexError) as error:
+        label = entry["label"].format_map(label_fields(spec))
+    except (KeyError, ValueError, IndexError, AttributeError) as error:
         raise SweepConfigError(f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
-                               f"placeholders are settings fields") from None
+                               f"placeholders are settings fields and the reward transform's fields") from None
     return RunSpec(**{**spec.__dict__, "label": label})
+
+
+def label_fields(spec: RunSpec) -> dict[str, Any]:
+    """What a ``label`` template of ``spec`` may name: its settings' fields, its reward transform's
+    fields (a field named like a setting as ``{reward.<field>}`` only) and ``{reward.<field>}``."""
+    transform = spec.reward_transform()
+    fields_of_reward = transform_config(transform) or {}
+    fields_of_reward.pop("name", None)
+    values: dict[str, Any] = {**fields_of_reward, **asdict(spec.method_settings())}
+    if transform is not None:
+        values[REWARD_TABLE] = transform
+    return values

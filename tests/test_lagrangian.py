@@ -1,0 +1,121 @@
+"""The Lagrangian constrained DQN, harms as the cost: the dual update λ ← max(0, λ + η·(Ĵ_C − d)) on
+hand-made numbers, the training reward r − λ·harms with the λ from before the episode's update,
+λ rising while episodes harm more than d and falling back to 0 (and staying there) while they harm
+less, each run's λ its own, a state that survives a checkpoint, and the method through ``train``
+(in Sharing, where nobody is harmed, λ stays 0 and it trains as DQN does)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers_cli_method import TINY
+from helpers_resume import whole_and_resumed
+
+from agents.base import StepBatch
+from agents.rewards import TrainRewards
+from baselines.lagrangian import Lagrangian, dual_ascent
+from empathy_zoo.cli import main
+from empathy_zoo.result_file import read_result
+
+
+def step(harms: list[list[int]], ended: list[list[bool]], rewards: float = 1.0) -> StepBatch:
+    """One step of K runs × M environments with the given harms and episode ends."""
+    harmed = np.array(harms, dtype=np.int64)
+    k, m = harmed.shape
+    zeros = np.zeros((k, m))
+    return StepBatch(
+        obs=np.zeros((k, m, 25), dtype=np.float32), actions=np.zeros((k, m), dtype=np.int64),
+        rewards=np.full((k, m), rewards, dtype=np.float32), terminated=np.array(ended, dtype=bool),
+        next_obs=np.zeros((k, m, 25), dtype=np.float32), swapped_next_obs=np.zeros((k, m, 25), dtype=np.float32),
+        other_present=np.ones((k, m), bool), harmed_other=harmed, battery_return=zeros, other_battery_return=zeros,
+        truncated=np.zeros((k, m), bool), other_rewards=zeros.astype(np.float32),
+    )
+
+
+def test_the_dual_update_on_hand_made_numbers() -> None:
+    assert dual_ascent(np.array([0.5]), np.array([2.0]), cost_limit=0.1, learning_rate=0.5).tolist() == [
+        pytest.approx(0.5 + 0.5 * 1.9)]
+    assert dual_ascent(np.array([0.1]), np.array([0.0]), cost_limit=0.5, learning_rate=1.0).tolist() == [0.0]  # projected
+    assert dual_ascent(np.array([3.0, 3.0]), np.array([0.0, 1.0]), 0.25, 2.0).tolist() == [2.5, 4.5]
+
+
+def test_the_reward_is_penalised_with_the_multiplier_from_before_the_episodes_update() -> None:
+    lagrangian = Lagrangian(cost_limit=0.5, lambda_lr=2.0, lambda_init=1.0)
+    state = lagrangian.initial_state(1, 1)
+    shaped, state = lagrangian(step([[1]], [[False]]), state)
+    assert shaped.tolist() == [[0.0]] and state["multiplier"].tolist() == [1.0]  # 1 − 1·1; no update mid-episode
+    shaped, state = lagrangian(step([[2]], [[True]]), state)
+    assert shaped.tolist() == [[-1.0]]  # 1 − 1·2, then the episode (3 harms) updates λ
+    assert state["multiplier"].tolist() == [1.0 + 2.0 * (3 - 0.5)] and state["episode_cost"].tolist() == [[0.0]]
+    shaped, state = lagrangian(step([[0]], [[True]]), state)
+    assert shaped.tolist() == [[1.0]] and state["multiplier"].tolist() == [6.0 - 2.0 * 0.5]
+
+
+def test_lambda_rises_while_harms_exceed_the_limit_and_falls_back_to_zero_while_below() -> None:
+    lagrangian = Lagrangian()  # d = 0.1 harms per episode, η = 1, λ from 0
+    state = lagrangian.initial_state(1, 1)
+    history = []
+    for episode in range(10):  # ten episodes of one harm each, three steps long
+        for t in range(3):
+            _, state = lagrangian(step([[int(t == 1)]], [[t == 2]]), state)
+        history.append(float(state["multiplier"][0]))
+    assert history == pytest.approx([0.9 * (i + 1) for i in range(10)])
+    for episode in range(200):  # harmless episodes: λ falls by η·d each, to 0, and stays there
+        _, state = lagrangian(step([[0]], [[True]]), state)
+        history.append(float(state["multiplier"][0]))
+    assert history[10:100] == pytest.approx([max(0.0, 9.0 - 0.1 * (i + 1)) for i in range(90)], abs=1e-9)
+    assert all(value == 0.0 for value in history[100:])
+    shaped, _ = lagrangian(step([[1]], [[False]]), state)
+    assert shaped.tolist() == [[1.0]]  # λ = 0: a harm costs nothing until an episode exceeds d again
+
+
+def test_each_run_and_each_of_its_environments_counts_its_own_episodes() -> None:
+    lagrangian = Lagrangian(cost_limit=0.0, lambda_lr=1.0)
+    state = lagrangian.initial_state(2, 2)
+    _, state = lagrangian(step([[1, 1], [0, 0]], [[False, True], [True, False]]), state)
+    assert state["multiplier"].tolist() == [1.0, 0.0] and state["episode_cost"].tolist() == [[1.0, 0.0], [0.0, 0.0]]
+    _, state = lagrangian(step([[0, 0], [1, 0]], [[True, True], [True, True]]), state)
+    assert state["multiplier"].tolist() == [2.0, 1.0]  # run 0: episodes of 1 and 0 harms; run 1: 1 and 0
+    alone = TrainRewards([lagrangian], seeds=[0])
+    together = TrainRewards([None, lagrangian, lagrangian], seeds=[0, 1, 2])
+    for harms in ([1], [0], [1], [1], [0]):
+        mine = alone(step([harms], [[True]])).rewards
+        assert np.array_equal(together(step([[0], harms, [0]], [[True]] * 3)).rewards[1], mine[0])
+
+
+@pytest.mark.parametrize("field, value", [("cost_limit", -0.1), ("lambda_lr", float("inf")), ("lambda_init", -1.0)])
+def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=field):
+        Lagrangian(**{field: value})
+
+
+def test_a_resumed_lagrangian_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
+    from empathy_zoo.training.spec import RunSpec
+
+    settings = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50,
+                "hidden_size": 16}
+    spec = RunSpec(env="coexistence_v0", method="dqn_lagrangian", steps=600, eval_interval=300, eval_episodes=2,
+                   settings=settings, reward={"cost_limit": 0.0, "lambda_lr": 5.0}, env_kwargs={"max_cycles": 40})
+    whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
+    assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
+    assert sum(whole["train"]["harms"][:10]) > 0  # λ had something to rise from before the checkpoint
+    assert resumed["config"]["reward"] == {"name": "lagrangian", "cost_limit": 0.0, "lambda_lr": 5.0, "lambda_init": 0.0}
+
+
+def test_the_method_trains_through_the_command_line_and_is_dqn_in_sharing(tmp_path) -> None:
+    out = tmp_path / "out"
+    assert main(["train", "--method", "dqn_lagrangian", "--cost-limit", "0.05", "--lambda-lr", "2", "--out", str(out),
+                 *TINY]) == 0
+    [path] = (out / "runs").glob("*.json")
+    result = read_result(path)
+    assert result["config"]["reward"] == {"name": "lagrangian", "cost_limit": 0.05, "lambda_lr": 2.0, "lambda_init": 0.0}
+    assert result["method_label"] == "DQN-Lagrangian (cost_limit=0.05, lambda_lr=2)"
+    columns = {}
+    for method in ("dqn_lagrangian", "dqn"):
+        target = tmp_path / method
+        assert main(["train", "--method", method, "--env", "sharing_v0", "--out", str(target), *TINY]) == 0
+        [path] = (target / "runs").glob("*.json")
+        columns[method] = json.loads(path.read_text())["train"]
+    assert columns["dqn_lagrangian"] == columns["dqn"]  # nobody is harmed: every episode costs 0, λ stays 0
