@@ -6,6 +6,13 @@ arguments and fixed agents; Empathic DQN at β = 1, 0.75, 0.5, 0.25; the −100 
 equality-scaled baselines) gets paper verdicts; for any other sweep :func:`write_reproduction`
 refuses with :class:`NotThePaperSweep`, naming what is missing. Runs of other variants in the
 same directory (a sensitivity study, a user's own method) are left out of the verdicts.
+
+Beside the harm-free/surviving verdict, which is judged against the exact optimum with evenly
+broken ties, the evidence states what the rule's reference leaves out: the share of the steps
+that the final 10 % of training episodes are (:func:`training_window_share`), the optimum's range
+over every tie-break (:func:`tie_break_range`), and the learners' survival across the training
+phase beside the optimum's at the ε of the same episodes, which separates learning from the ε
+schedule (:func:`survival_rise`).
 """
 
 from __future__ import annotations
@@ -29,6 +36,7 @@ from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_ref
 __all__ = [
     "Claim", "Verdict", "PHASES", "BETAS", "NotThePaperSweep", "paper_runs", "missing_paper_experiments",
     "assess_claims", "reproduction_markdown", "write_reproduction", "training_window_epsilons",
+    "training_window_share", "TieRange", "tie_break_range", "SurvivalRise", "survival_rise",
 ]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
@@ -40,6 +48,8 @@ PENALTY, EQUALITY_SHAPED = "dqn_harm_penalty", "dqn_equality"
 _DEFAULT_MAX_CYCLES = inspect.signature(ENGINES[COEXISTENCE]).parameters["max_cycles"].default
 Reference = Callable[..., Any]
 """``coexistence_optimum(selfishness, epsilon, *, gamma, max_cycles)`` → ``.harms``, ``.survival``."""
+TieRangeOf = Callable[..., "TieRange"]
+"""``tie_break_range(selfishness, epsilons, *, gamma, max_cycles)`` → :class:`TieRange`."""
 
 
 class NotThePaperSweep(ValueError):
@@ -122,6 +132,143 @@ def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float
     return counts
 
 
+def training_window_share(run: dict[str, Any]) -> float:
+    """The fraction of a run's env steps that its final 10 % of training episodes take up (not
+    10 % in general: it depends on the lengths of the episodes); NaN for a run without episodes."""
+    ends = run["train"]["episode_end_step"]
+    if not ends or not ends[-1]:
+        return float("nan")
+    return sum(training_window_epsilons(run).values()) / float(ends[-1])
+
+
+@dataclass(frozen=True)
+class TieRange:
+    """The exact optimum's figures, lowest and highest over every choice among its tied actions."""
+
+    harms: tuple[float, float]
+    survival: tuple[float, float]
+
+
+def _tie_bound(tied: np.ndarray, epsilons: np.ndarray, weights: np.ndarray, metric: str, highest: bool,
+               max_cycles: int, size: int) -> float:
+    """The lowest (or highest) expectation of ``metric`` per episode over every policy that, with
+    probability 1 − ε, takes one of the actions marked in ``tied`` (``(size², 5)``; any choice
+    among them, even a different one at every step), averaged over ``epsilons`` with ``weights``:
+    a finite-horizon dynamic programme over the steps still to go (docs/reference.md's script,
+    with the cat's uniform action averaged into a transition matrix once)."""
+    from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT
+    from empathy_zoo.reference import coexistence_transitions, start_distribution
+
+    outcome, after = coexistence_transitions(size)
+    cells, actions, cat_actions = outcome.shape
+    stays = np.zeros((cells, actions, cells))  # P(no harm and this next displacement | displacement, action)
+    d, a, _ = np.nonzero(outcome == NO_HARM)
+    np.add.at(stays, (d, a, after[outcome == NO_HARM]), 1.0 / cat_actions)
+    stays = stays.reshape(cells * actions, cells).T
+    cat_gone = (outcome == ROBOT_HARMS_CAT).mean(axis=2)
+    robot_harmed = (outcome == CAT_HARMS_ROBOT).mean(axis=2)
+    sign = 1.0 if highest else -1.0
+    eps = epsilons[:, None]
+    togo_value = np.zeros((len(epsilons), cells))  # the metric's expectation over the steps still to go
+    for togo in range(max_cycles):
+        # einsum, not @: for arrays this small BLAS's threads cost more than they save
+        following = np.einsum("ec,ck->ek", togo_value, stays).reshape(len(epsilons), cells, actions)
+        if metric == "harms":
+            per_action = cat_gone + following
+        else:  # survival: 1 per step operative; with the cat gone, every step still to go as well
+            per_action = (1.0 - robot_harmed) + cat_gone * togo + following
+        chosen = sign * np.where(tied, sign * per_action, -np.inf).max(axis=2)
+        togo_value = eps * per_action.mean(axis=2) + (1.0 - eps) * chosen
+    return float(weights @ (togo_value @ start_distribution(size)))
+
+
+def tie_break_range(selfishness: float, epsilons: Mapping[float, int], *, gamma: float = 0.99,
+                    max_cycles: int = _DEFAULT_MAX_CYCLES, size: int = 7) -> TieRange:
+    """The range of the exact optimum's harms and survival per episode over every tie-break.
+
+    ``coexistence_optimum`` takes exactly tied actions with equal probability (``ties="uniform"``,
+    the verdicts' rule) or the lowest index (``ties="first"``); a learner breaks such ties its own
+    way, so a figure is a property of the tie rule, not of the optimum (docs/reference.md, "Read
+    them with the tie rule"). Each bound is computed separately, at every ε of ``epsilons``
+    (``{ε: steps}``, as :func:`training_window_epsilons` gives), and averaged with those weights.
+    """
+    from empathy_zoo.reference import TIE_TOLERANCE, coexistence_values
+
+    if not epsilons:
+        raise ValueError("tie_break_range needs at least one ε")
+    cells = size * size
+    q_emp = coexistence_values(float(selfishness), gamma=float(gamma), size=size)[1][:cells]
+    tied = q_emp >= q_emp.max(axis=1, keepdims=True) - TIE_TOLERANCE
+    values = np.asarray(list(epsilons), dtype=np.float64)
+    weights = np.asarray(list(epsilons.values()), dtype=np.float64)
+    weights = weights / weights.sum()
+
+    def bound(metric: str, highest: bool) -> float:
+        return _tie_bound(tied, values, weights, metric, highest, int(max_cycles), size)
+
+    return TieRange((bound("harms", False), bound("harms", True)), (bound("survival", False), bound("survival", True)))
+
+
+@dataclass(frozen=True)
+class SurvivalRise:
+    """How a group's survival changed across its training phase, beside what the reference's
+    survival does at the ε of the same episodes (the ε schedule alone)."""
+
+    learner: tuple[float, float]
+    """Mean survival over the first and the second half of the final 10 % of training episodes
+    (each run's mean, then the mean over runs)."""
+    reference: tuple[float, float]
+    """The reference's expected survival at the ε of the same episodes, averaged the same way."""
+    widened: int
+    """Runs whose gap to the reference (reference − learner) is larger in the second half."""
+    runs: int
+
+    @property
+    def gap(self) -> tuple[float, float]:
+        return self.reference[0] - self.learner[0], self.reference[1] - self.learner[1]
+
+
+def survival_rise(runs: Sequence[dict[str, Any]], reference: Reference, *, gamma: float,
+                  max_cycles: int, digits: int = 3) -> SurvivalRise:
+    """Separate learning from the ε schedule over the training phase: each run's final 10 % of
+    training episodes is split into halves (by episode), and the mean survival of each half is
+    set beside the reference's at the ε of the same episodes (the schedule's ε at each episode's
+    first step, rounded to ``digits``). The reference's rise is what ε's decay alone gives an
+    unchanging policy; a learner that is still learning closes its gap to it."""
+    cache: dict[tuple[float, float], float] = {}
+
+    def optimum(selfishness: float, epsilon: float) -> float:
+        key = (selfishness, epsilon)
+        if key not in cache:
+            cache[key] = float(reference(selfishness, epsilon, gamma=gamma, max_cycles=max_cycles).survival)
+        return cache[key]
+
+    learner: list[np.ndarray] = []  # per run: mean survival of each half
+    optimal: list[np.ndarray] = []  # per run: the reference's at the ε of the same episodes
+    for run in runs:
+        ends = [int(e) for e in run["train"]["episode_end_step"]]
+        survival = np.asarray(run["train"]["survival"], dtype=np.float64)
+        final = final_episode_count(len(ends))
+        if final < 2:
+            continue
+        first = len(ends) - final
+        settings = SimpleNamespace(**run["config"]["settings"])
+        selfishness = float(run["config"]["settings"].get("selfishness", 1.0))
+        starts = [ends[i - 1] if i > 0 else 0 for i in range(first, len(ends))]
+        expected = np.array([optimum(selfishness, round(linear_epsilon(settings, step), digits)) for step in starts])
+        middle = final // 2
+        learner.append(np.array([survival[first:first + middle].mean(), survival[first + middle:len(ends)].mean()]))
+        optimal.append(np.array([expected[:middle].mean(), expected[middle:].mean()]))
+    if not learner:
+        nan = float("nan")
+        return SurvivalRise((nan, nan), (nan, nan), 0, 0)
+    gaps = np.array(optimal) - np.array(learner)
+    widened = int((gaps[:, 1] > gaps[:, 0]).sum())
+    mean_learner, mean_optimal = np.mean(learner, axis=0), np.mean(optimal, axis=0)
+    return SurvivalRise((float(mean_learner[0]), float(mean_learner[1])),
+                        (float(mean_optimal[0]), float(mean_optimal[1])), widened, len(learner))
+
+
 def _reference_over(reference: Reference, selfishness: float, epsilons: Mapping[float, int], gamma: float,
                     max_cycles: int) -> tuple[float, float]:
     """The reference's harms and survival averaged over an ε schedule (weights: steps at each ε)."""
@@ -167,14 +314,22 @@ def _verdict(ok: bool, cells: Sequence[Cell], evidence: str) -> Verdict:
     return Verdict(ok if all(c.finite for c in cells) else None, evidence)
 
 
-def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None = None) -> list[Claim]:
+def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None = None,
+                  tie_range: TieRangeOf | None = None) -> list[Claim]:
     """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
-    ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing."""
+    ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing.
+
+    ``reference`` is the exact optimum the harm-free/surviving claim is judged against (default
+    ``empathy_zoo.reference.coexistence_optimum``, uniform ties); ``tie_range`` gives the range
+    of the optimum's figures over every tie-break, shown beside it (default
+    :func:`tie_break_range` when ``reference`` is the default one; with another reference and
+    no ``tie_range``, no range is shown)."""
     missing = missing_paper_experiments(results)
     if missing:
         raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
     if reference is None:
         from empathy_zoo.reference import coexistence_optimum as reference
+        tie_range = tie_break_range if tie_range is None else tie_range
     runs = paper_runs(results)
     betas = [f"β={b:g}" for b in BETAS]
     coexistence, sharing = _Table(runs[COEXISTENCE]), _Table(runs[SHARING])
@@ -215,8 +370,24 @@ def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None
             ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
             cells += [h, s]
             mean_epsilon = sum(e * n for e, n in epsilons.items()) / max(sum(epsilons.values()), 1)
-            parts.append(f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
-                         f"mean ε {mean_epsilon:.4f}")
+            part = (f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
+                    f"mean ε {mean_epsilon:.4f}")
+            if phase != "eval":
+                shares = [training_window_share(run) for run in group]
+                part += (f" over the steps of the final 10 % of training episodes "
+                         f"({100 * min(shares):.1f}–{100 * max(shares):.1f} % of each run's steps)")
+            if tie_range is not None:
+                spread = tie_range(float(settings["selfishness"]), epsilons, gamma=float(settings["gamma"]),
+                                   max_cycles=max_cycles)
+                part += (f"; over every tie-break the optimum's harms span {spread.harms[0]:.3f}–{spread.harms[1]:.3f} "
+                         f"and its survival {spread.survival[0]:.1f}–{spread.survival[1]:.1f}")
+            if phase != "eval":
+                rise = survival_rise(group, reference, gamma=float(settings["gamma"]), max_cycles=max_cycles)
+                part += (f"; across the final 10 % of training episodes (first half → second half) survival "
+                         f"{rise.learner[0]:.1f} → {rise.learner[1]:.1f}, the reference at the ε of the same episodes "
+                         f"{rise.reference[0]:.1f} → {rise.reference[1]:.1f} (the ε schedule alone), so the gap to it "
+                         f"went {rise.gap[0]:.1f} → {rise.gap[1]:.1f}, wider in {rise.widened} of {rise.runs} runs")
+            parts.append(part)
         judge(COEXISTENCE, "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
               name, _verdict(ok, cells, "; ".join(parts) + "."))
 
@@ -265,7 +436,7 @@ def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: st
     for c in claims:
         lines += [f"## {c.text} ({c.env}){'' if c.papers else ' — the suite’s own question'}", ""]
         for phase, verdict in c.verdicts.items():
-            where = "last greedy evaluation" if phase == "greedy" else "final 10 % of training"
+            where = "last greedy evaluation" if phase == "greedy" else "final 10 % of training episodes"
             lines += [f"* **{phase}** ({where}) — {verdict.word}: {verdict.evidence}"]
         lines.append("")
     if appendix:
@@ -275,10 +446,11 @@ def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: st
 
 def write_reproduction(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
                        command: str = "empathy-zoo reproduce --profile paper", note: str = "",
-                       appendix: str = "", reference: Reference | None = None) -> Path:
+                       appendix: str = "", reference: Reference | None = None,
+                       tie_range: TieRangeOf | None = None) -> Path:
     """Judge the claims on ``results_dir`` and write the report (``<results_dir>/REPRODUCTION.md``);
     raises :class:`NotThePaperSweep` (writing nothing) when the paper's experiments are not there."""
-    claims = assess_claims(load_results(results_dir), reference)
+    claims = assess_claims(load_results(results_dir), reference, tie_range)
     path = Path(out_path) if out_path else Path(results_dir) / "REPRODUCTION.md"
     write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note, appendix))
     return path

@@ -6,6 +6,11 @@ how an agent's inventory is drawn, the human's policy). A sensitivity sweep
 combination; :func:`sensitivity_markdown` tables the robot/human battery split and equality per
 condition and β, with the verdicts of "fewer batteries as β falls" and "equality peaks at β =
 0.5" in each, by the same rules as REPRODUCTION.md (:mod:`leaderboard.verdicts`).
+
+:func:`fair_split_rows` asks whether equality is set by the robot's mean take: per condition,
+phase and β, the mean take, how far the takes lie from the fair split episode by episode, and
+the mean equality (the β closest to a fair mean take need not be the most equal: equality is a
+mean over episodes, so the spread of the per-episode takes counts too).
 """
 
 from __future__ import annotations
@@ -15,12 +20,19 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from dataclasses import dataclass
+
+import numpy as np
+
 from empathy_zoo.atomic import write_text_atomic
 
-from leaderboard.aggregate import load_results, run_scalars
+from leaderboard.aggregate import final_episode_count, load_results, run_scalars
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
 
-__all__ = ["Condition", "condition_of", "sensitivity_rows", "sensitivity_markdown", "write_sensitivity"]
+__all__ = [
+    "Condition", "condition_of", "sensitivity_rows", "FairSplit", "fair_split_rows", "fair_split_summary",
+    "sensitivity_markdown", "write_sensitivity",
+]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
@@ -65,6 +77,110 @@ def sensitivity_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[
     return rows
 
 
+@dataclass(frozen=True)
+class FairSplit:
+    """One β's battery split in one condition and phase (each run's mean over its episodes, then
+    the mean over runs)."""
+
+    take: float
+    """The robot's batteries per episode."""
+    fair: float
+    """Half of robot + human batteries per episode (the fair take; 4.5 when all 9 are collected)."""
+    distance: float
+    """How far the robot's take lies from the fair split, episode by episode: mean |robot − human| / 2."""
+    equality: float
+    """Mean equality per episode (SPEC §5)."""
+    all_collected: float
+    """Fraction of the episodes in which robot + human collected all 9 batteries."""
+
+
+def _episodes(run: dict[str, Any], phase: str) -> dict[str, np.ndarray]:
+    """The episodes a phase scores (:func:`leaderboard.aggregate.run_scalars`'s): the final 10 %
+    of training episodes, or the last greedy evaluation."""
+    metrics = ("batteries", "other_batteries", "equality")
+    if phase == "eval":
+        source = max(run["eval"], key=lambda e: e["step"]) if run["eval"] else {}
+        return {m: np.asarray(source.get(m, []), dtype=np.float64) for m in metrics}
+    columns = {m: np.asarray(run["train"].get(m, []), dtype=np.float64) for m in metrics}
+    return {m: c[len(c) - final_episode_count(len(c)):] for m, c in columns.items()}
+
+
+def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[float, FairSplit]]]:
+    """``{condition: {phase: {β: FairSplit}}}`` over the Empathic DQN runs of Sharing."""
+    groups: dict[Condition, dict[float, list[dict[str, Any]]]] = {}
+    for run in results:
+        if run["env"] != "sharing_v0" or run["method"] not in ("empathic_dqn", "dqn"):
+            continue
+        beta = float(run["config"]["settings"].get("selfishness", 1.0))
+        groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+    rows: dict[Condition, dict[str, dict[float, FairSplit]]] = {}
+    for condition in sorted(groups, key=lambda c: (c != DEFAULT_CONDITION, c)):
+        rows[condition] = {}
+        for name, phase in PHASES.items():
+            table: dict[float, FairSplit] = {}
+            for beta, runs in sorted(groups[condition].items(), reverse=True):
+                per_run = []
+                for run in runs:
+                    e = _episodes(run, phase)
+                    robot, human = e["batteries"], e["other_batteries"]
+                    if not len(robot) or len(robot) != len(human):
+                        continue
+                    per_run.append((robot.mean(), ((robot + human) / 2).mean(), (np.abs(robot - human) / 2).mean(),
+                                    np.nanmean(e["equality"]) if len(e["equality"]) else np.nan,
+                                    np.isclose(robot + human, 9).mean()))
+                if per_run:
+                    table[beta] = FairSplit(*(float(np.mean(column)) for column in zip(*per_run)))
+            rows[condition][name] = table
+    return rows
+
+
+def fair_split_summary(table: dict[float, FairSplit]) -> tuple[float, float, float]:
+    """``(β whose mean take is closest to its fair split, β whose takes lie closest to it episode
+    by episode, most equal β)`` of one condition and phase."""
+    closest_mean = min(table, key=lambda b: abs(table[b].take - table[b].fair))
+    closest_episodes = min(table, key=lambda b: table[b].distance)
+    most_equal = max(table, key=lambda b: table[b].equality)
+    return closest_mean, closest_episodes, most_equal
+
+
+def _fair_split_markdown(results: Sequence[dict[str, Any]]) -> list[str]:
+    rows = fair_split_rows(results)
+    lines = [
+        "### Is equality set by the robot's mean take?", "",
+        "Robot + human collect all 9 batteries in nearly every episode, so an episode's equality is set by how far "
+        "the robot's take in it lies from the fair split (half of what both collected: 4.5). A β's equality is the "
+        "mean over its episodes, so the spread of its per-episode takes counts as well as its mean take. Per "
+        "condition and phase: the β whose mean take is closest to the fair split (its mean take), the β whose "
+        "takes lie closest to it episode by episode (mean |robot − human| / 2), and the most equal β (its equality); "
+        "computed by `leaderboard.sensitivity.fair_split_rows` from the same episodes as the tables above.", "",
+        "| condition | phase | closest mean take | closest episode by episode | most equal "
+        "| episodes with all 9 collected (fewest over β) |",
+        "|---|---|---|---|---|---|",
+    ]
+    counts = {name: [0, 0, 0] for name in PHASES}  # conditions, mean take ≠ most equal, per episode ≠ most equal
+    for condition, phases in rows.items():
+        for name, table in phases.items():
+            if not table:
+                continue
+            closest_mean, closest_episodes, most_equal = fair_split_summary(table)
+            counts[name][0] += 1
+            counts[name][1] += closest_mean != most_equal
+            counts[name][2] += closest_episodes != most_equal
+            collected = min(t.all_collected for t in table.values())
+            lines.append(
+                f"| {_condition_text(condition)} | {name} | β = {closest_mean:g} ({table[closest_mean].take:.2f}) | "
+                f"β = {closest_episodes:g} ({table[closest_episodes].distance:.2f}) | "
+                f"β = {most_equal:g} ({table[most_equal].equality:.3f}) | {100 * collected:.1f} % |"
+            )
+    lines.append("")
+    summary = "; ".join(
+        f"{name}: in {c[1]} of {c[0]} conditions the β whose mean take is closest to the fair split is not the most "
+        f"equal, and in {c[2]} of {c[0]} the β closest episode by episode is not" for name, c in counts.items() if c[0]
+    )
+    lines += [summary[0].upper() + summary[1:] + ".", ""]
+    return lines
+
+
 def _word(ok: bool | None) -> str:
     return "—" if ok is None else ("reproduced" if ok else "not reproduced")
 
@@ -81,7 +197,7 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
         f"    {command}", "",
     ]
     for name in PHASES:
-        where = "last greedy evaluation" if name == "greedy" else "final 10 % of training"
+        where = "last greedy evaluation" if name == "greedy" else "final 10 % of training episodes"
         lines += [f"### {name} ({where})", "",
                   "| condition | β | robot batteries | human batteries | equality | fewer batteries as β falls | equality peaks at β = 0.5 |",
                   "|---|---|---|---|---|---|---|"]
@@ -98,6 +214,7 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
                     f"{table['other_batteries'][beta]} | {table['equality'][beta]} | {verdicts[0]} | {verdicts[1]} |"
                 )
         lines.append("")
+    lines += _fair_split_markdown(results)
     return "\n".join(lines)
 
 

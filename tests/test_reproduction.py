@@ -96,3 +96,108 @@ def test_runs_outside_the_papers_setting_are_left_out() -> None:
     # a variant with another fixed agent that would break the harm trend is not the paper's
     runs += [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, s, fixed={"cat_0": "stay"}, harms=5.0) for s in range(5)]
     assert _verdicts(runs)["Harms to the cat fall as β falls."] == ("reproduced", "reproduced")
+
+
+# --- the figures beside the verdicts: share of steps, tie-break range, survival against the schedule ---
+
+def test_training_window_share_is_the_steps_of_the_final_episodes_not_ten_percent() -> None:
+    from leaderboard.reproduction import training_window_share
+
+    run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)
+    assert training_window_share(run) == pytest.approx(0.1)  # 40 episodes of 100 steps: 4 of them, 400 steps
+    # the same 40 episodes, the last four 400 steps long: 10 % of the episodes is 1,600 of 5,200 steps
+    run["train"]["episode_end_step"] = list(range(100, 3700, 100)) + [4000, 4400, 4800, 5200]
+    assert training_window_share(run) == pytest.approx(1600 / 5200)
+    assert sum(training_window_epsilons(run).values()) == 1600
+    run["train"]["episode_end_step"] = []
+    assert training_window_share(run) != training_window_share(run)  # NaN without episodes
+
+
+def test_tie_break_bounds_with_one_action_per_state_are_that_policys_figures() -> None:
+    import numpy as np
+
+    from empathy_zoo.reference import coexistence_optimum, coexistence_values, greedy_actions
+    from leaderboard.reproduction import _tie_bound
+
+    epsilons, weights = np.array([0.0, 0.05, 0.3]), np.array([0.2, 0.5, 0.3])
+    for beta in (1.0, 0.5):
+        q_emp = coexistence_values(beta)[1][:49]
+        lowest_index = np.eye(5, dtype=bool)[greedy_actions(q_emp)]
+        for metric in ("harms", "survival"):
+            expected = sum(w * getattr(coexistence_optimum(beta, e, ties="first", max_cycles=60), metric)
+                           for e, w in zip(epsilons, weights))
+            for highest in (False, True):
+                assert _tie_bound(lowest_index, epsilons, weights, metric, highest, 60, 7) == pytest.approx(expected, abs=1e-9)
+
+
+def test_tie_break_range_contains_both_tie_rules() -> None:
+    from empathy_zoo.reference import coexistence_optimum
+    from leaderboard.reproduction import tie_break_range
+
+    schedule = {0.02: 3, 0.1: 1}
+    for beta in (1.0, 0.5):
+        spread = tie_break_range(beta, schedule, max_cycles=80)
+        assert spread.harms[0] < spread.harms[1] and spread.survival[0] < spread.survival[1]
+        for ties in ("uniform", "first"):
+            outcome = [coexistence_optimum(beta, e, ties=ties, max_cycles=80) for e in schedule]
+            harms = sum(o.harms * n for o, n in zip(outcome, schedule.values())) / 4
+            survival = sum(o.survival * n for o, n in zip(outcome, schedule.values())) / 4
+            assert spread.harms[0] - 1e-9 <= harms <= spread.harms[1] + 1e-9
+            assert spread.survival[0] - 1e-9 <= survival <= spread.survival[1] + 1e-9
+    with pytest.raises(ValueError, match="at least one ε"):
+        tie_break_range(0.5, {})
+
+
+def _rising_runs(learner_survival) -> list[dict]:
+    """Coexistence runs whose training survival per episode is ``learner_survival(ε at its first step)``."""
+    from types import SimpleNamespace
+
+    from empathy_zoo.schedules import linear_epsilon
+
+    runs = []
+    for seed in range(3):
+        run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, seed)
+        settings = SimpleNamespace(**run["config"]["settings"])
+        starts = [0] + run["train"]["episode_end_step"][:-1]
+        run["train"]["survival"] = [learner_survival(round(linear_epsilon(settings, s), 3)) for s in starts]
+        runs.append(run)
+    return runs
+
+
+def test_survival_rise_separates_learning_from_the_schedule() -> None:
+    from leaderboard.reproduction import survival_rise
+
+    # the reference survives 480 − 1000·ε: over the final 4 episodes (ε ≈ 0.112 → 0.036) it rises
+    schedule_only = survival_rise(_rising_runs(lambda e: 400 - 1000 * e), fake_reference, gamma=0.99, max_cycles=500)
+    assert schedule_only.reference[1] > schedule_only.reference[0]
+    assert schedule_only.learner[1] - schedule_only.learner[0] == pytest.approx(
+        schedule_only.reference[1] - schedule_only.reference[0])
+    assert schedule_only.gap == pytest.approx((80.0, 80.0)) and schedule_only.widened == 0 and schedule_only.runs == 3
+    # a learner that rises by half as much as the schedule gives the optimum falls behind it
+    lagging = survival_rise(_rising_runs(lambda e: 400 - 500 * e), fake_reference, gamma=0.99, max_cycles=500)
+    assert lagging.learner[1] > lagging.learner[0] and lagging.gap[1] > lagging.gap[0] and lagging.widened == 3
+    # one that rises faster closes the gap
+    learning = survival_rise(_rising_runs(lambda e: 400 - 2000 * e), fake_reference, gamma=0.99, max_cycles=500)
+    assert learning.gap[1] < learning.gap[0] and learning.widened == 0
+
+
+def test_the_evidence_states_the_share_the_range_and_the_rise() -> None:
+    from leaderboard.reproduction import TieRange
+
+    calls = []
+
+    def fake_range(selfishness, epsilons, *, gamma, max_cycles):
+        calls.append((selfishness, sum(epsilons.values())))
+        return TieRange((0.001, 0.9), (150.0, 499.0))
+
+    def evidence(**kwargs) -> dict[str, str]:
+        claim = next(c for c in assess_claims(_paper_like(), reference=fake_reference, **kwargs) if "eventually" in c.text)
+        return {phase: verdict.evidence for phase, verdict in claim.verdicts.items()}
+
+    with_range = evidence(tie_range=fake_range)
+    assert "over every tie-break the optimum's harms span 0.001–0.900 and its survival 150.0–499.0" in with_range["training"]
+    assert "over every tie-break" in with_range["greedy"]
+    assert "(10.0–10.0 % of each run's steps)" in with_range["training"]
+    assert "first half → second half" in with_range["training"] and "first half" not in with_range["greedy"]
+    assert sorted(calls) == [(0.25, 1), (0.25, 2000), (0.5, 1), (0.5, 2000)]  # 5 runs × 400 steps in training
+    assert "tie-break" not in evidence()["training"]  # a reference of one's own and no range: none shown

@@ -50,3 +50,51 @@ def test_sensitivity_command_writes_the_file(tmp_path) -> None:
     assert main(["sensitivity", str(tmp_path), "--produced-by", "empathy-zoo reproduce --profile x"]) == 0
     text = (tmp_path / "SENSITIVITY.md").read_text()
     assert "**The rules**" in text and "empathy-zoo reproduce --profile x" in text and "human `random_walk`" in text
+
+
+def _split_run(beta: float, seed: int, takes: list[int]) -> dict:
+    """A Sharing run whose every scored episode (training and greedy) has these robot takes of 9."""
+    from empathy_zoo.metrics import equality
+
+    def value(n: int) -> float:
+        return sum(1.1 - 0.1 * k for k in range(1, n + 1))
+
+    run = synthetic_result("sharing_v0", "empathic_dqn", beta, seed)
+    robot = [float(t) for t in takes]
+    human = [9.0 - t for t in robot]
+    fair = [float(equality(value(int(r)), value(int(h)))) for r, h in zip(robot, human)]
+    run["train"].update(batteries=robot, other_batteries=human, equality=fair)
+    run["eval"][-1].update(batteries=robot[:4], other_batteries=human[:4], equality=fair[:4])
+    return run
+
+
+def test_the_mean_take_closest_to_half_need_not_be_the_most_equal() -> None:
+    from leaderboard.sensitivity import fair_split_rows, fair_split_summary
+
+    # β = 1 takes 4.5 on average but 2 or 7 in every episode; β = 0.75 takes 4 every time
+    runs = [_split_run(1.0, s, [2, 7] * 20) for s in range(3)] + [_split_run(0.75, s, [4] * 40) for s in range(3)]
+    runs += [_split_run(0.5, s, [3] * 40) for s in range(3)] + [_split_run(0.25, s, [2] * 40) for s in range(3)]
+    rows = fair_split_rows(runs)[DEFAULT_CONDITION]
+    for phase in ("greedy", "training"):
+        table = rows[phase]
+        assert table[1.0].take == pytest.approx(4.5) and table[1.0].distance == pytest.approx(2.5)
+        assert table[0.75].take == pytest.approx(4.0) and table[0.75].distance == pytest.approx(0.5)
+        assert table[1.0].fair == pytest.approx(4.5) and table[1.0].all_collected == 1.0
+        assert table[0.75].equality > table[1.0].equality
+        assert fair_split_summary(table) == (1.0, 0.75, 0.75)
+    text = sensitivity_markdown(runs, "x")
+    assert "### Is equality set by the robot's mean take?" in text
+    row = next(line for line in text.splitlines() if "| training | β = 1 (4.50)" in line)
+    assert "| β = 0.75 (0.50) | β = 0.75 (" in row and row.endswith("| 100.0 % |")
+    assert ("Greedy: in 1 of 1 conditions the β whose mean take is closest to the fair split is not the most equal, "
+            "and in 0 of 1 the β closest episode by episode is not; training: in 1 of 1") in text
+
+
+def test_the_fair_split_counts_episodes_where_not_all_batteries_were_collected() -> None:
+    from leaderboard.sensitivity import fair_split_rows
+
+    run = _split_run(1.0, 0, [4] * 40)
+    run["train"]["other_batteries"] = [3.0] * 40  # 7 collected in every episode: the fair take is 3.5
+    table = fair_split_rows([run])[DEFAULT_CONDITION]["training"]
+    assert table[1.0].fair == pytest.approx(3.5) and table[1.0].distance == pytest.approx(0.5)
+    assert table[1.0].all_collected == 0.0
