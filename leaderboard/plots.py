@@ -1,4 +1,4 @@
-"""Learning-curve figures (PNG): one line per method, a shaded bootstrap band over seeds.
+"""Learning-curve figures (PNG): one line per method, a shaded Student-t band over seeds (the leaderboard's interval of the mean).
 
 Uses matplotlib's object API with the Agg canvas directly (no ``pyplot``, no global backend
 switch), so it is safe headless and in worker processes. Every PNG is written atomically.

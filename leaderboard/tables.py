@@ -17,9 +17,9 @@ from typing import Any
 
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_RESAMPLES, PHASES, Score,
+    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, MEAN_INTERVAL_NOTE, N_RESAMPLES, PHASES, Score, t_level,
 )
-from leaderboard.improvement import VERDICT_MARKS, Improvement
+from leaderboard.improvement import TOO_FEW_SEEDS, VERDICT_MARKS, VERDICT_NOTE, Improvement, smallest_decidable_seeds
 
 __all__ = [
     "PHASE_TITLES", "SINGLE_SEED_MARK", "CSV_COLUMNS", "Provenance", "format_interval",
@@ -60,9 +60,10 @@ class Provenance:
 
     def method_text(self) -> str:
         """One paragraph explaining what a cell means."""
+        measured = f" {MEAN_INTERVAL_NOTE}" if self.confidence == CONFIDENCE else ""
         return (
-            f"Each cell is the mean over seeds [{self.confidence:.0%} percentile-bootstrap interval over "
-            f"seeds, {self.n_resamples} resamples, numpy generator seed {self.random_state}]. "
+            f"Each cell is the mean over seeds [its {self.confidence:.0%} interval over seeds: the Student-t "
+            f"interval mean ± t·s/√n at {t_level(self.confidence):.1%} nominal].{measured} "
             f"'{PHASE_TITLES['eval']}': mean over the episodes of each run's last greedy evaluation. "
             f"'{PHASE_TITLES['train_final10']}': mean over the last {self.final_fraction:.0%} of each run's "
             "training episodes (at least one)."
@@ -70,7 +71,7 @@ class Provenance:
 
 
 def _single_seed_note() -> str:
-    return f"{SINGLE_SEED_MARK} a single seed: its interval is the point itself (no bootstrap)."
+    return f"{SINGLE_SEED_MARK} a single seed: its interval is the point itself (no spread to measure)."
 
 
 def format_interval(mean: float, low: float, high: float, digits: int = 2) -> str:
@@ -156,8 +157,14 @@ def improvement_sections(
 
 IMPROVEMENT_NOTE = (
     "P(improves on DQN): the probability that a run of the method does better than a run of DQN in that "
-    "metric (fewer harms is better; 0.5 is a tie), over every pair of runs, [95% bootstrap interval, each "
-    "method's runs resampled apart]; ▲ / ▼: better / worse than DQN (the whole interval above / below 0.5); "
+    "metric (fewer harms is better; 0.5 is a tie), over every pair of runs. ▲ / ▼: better / worse than DQN "
+    "by the exact two-sided Mann–Whitney permutation test at 5 % (every split of the runs counted, midranks "
+    "for ties); [interval]: the one that inverts that test (P ± the test's critical distance from 0.5), so "
+    f"▲ / ▼ stand exactly where it lies wholly above / below 0.5. {VERDICT_MARKS[TOO_FEW_SEEDS]}: "
+    f"{TOO_FEW_SEEDS} — with n runs against m where 2 / C(n + m, n) > 5 % (3 against 3: p = 0.1), even every "
+    "run of one side beating every run of the other is not rare enough, so no ▲ or ▼ can be given and the "
+    f"interval always contains 0.5; {smallest_decidable_seeds()} against {smallest_decidable_seeds()} (or 5 "
+    f"against 3) is the least that can give one. {VERDICT_NOTE} "
     "IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
 )
 

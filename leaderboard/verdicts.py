@@ -1,9 +1,11 @@
 """The verdict rules of REPRODUCTION.md: pure functions over per-method cells.
 
-A *cell* is one method's figure for one metric in one phase: the mean over seeds with its 95 %
-percentile-bootstrap interval (:func:`leaderboard.aggregate.bootstrap_mean_ci`). Every claim of
-the paper is a rule over cells, written here once, fixed before the runs it judges, and tested on
-synthetic cells (tests/test_verdicts.py) that pass it, fail it, and sit on its boundary.
+A *cell* is one method's figure for one metric in one phase: the mean over seeds with the
+leaderboard's interval for a 95 % claim (:func:`leaderboard.aggregate.mean_ci`: the Student-t
+interval at 97.5 % nominal, whose measured coverage is in
+:data:`leaderboard.aggregate.MEAN_INTERVAL_NOTE`). Every claim of the paper is a rule over cells,
+written here once, fixed before the runs it judges, and tested on synthetic cells
+(tests/test_verdicts.py) that pass it, fail it, and sit on its boundary.
 
 The rules (:data:`RULES` is their text, printed in every REPRODUCTION.md before the numbers):
 
@@ -29,10 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leaderboard.aggregate import bootstrap_mean_ci
+from leaderboard.aggregate import MEAN_INTERVAL_NOTE, mean_ci
 
 __all__ = [
     "Cell", "cell_of", "below", "falls", "peaks", "matches_reference", "HARM_TOLERANCE", "SURVIVAL_TOLERANCE", "RULES",
+    "BELOW_NOTE",
 ]
 
 HARM_TOLERANCE = 0.05
@@ -41,13 +44,22 @@ SURVIVAL_TOLERANCE = 0.05
 """Fraction of ``max_cycles`` a learner may survive less than the exact optimum and still count
 as surviving (25 steps of 500)."""
 
+BELOW_NOTE = (
+    "Where nothing differs, two such intervals were separated in at most 4.2 % of simulated pairs "
+    "(0.1–0.5 % for continuous data; `python benchmarks/interval_coverage.py`), so *below* is a "
+    "strict test: it misses real but modest differences."
+)
+"""The measured false-positive rate of :func:`below` with the leaderboard's intervals."""
+
 RULES = f"""\
 **The rules** (fixed in `leaderboard/verdicts.py` before the runs they judge; tested on synthetic
-results in `tests/test_verdicts.py`). Every figure is a mean over seeds with its 95 % percentile
-bootstrap interval over seeds. Each claim is judged twice, on the last **greedy** evaluation and
-on the final 10 % of **training** episodes, and both verdicts are shown.
+results in `tests/test_verdicts.py`). Every figure is a mean over seeds with its interval over
+seeds: a Student-t interval (mean ± t·s/√n) at 97.5 % nominal, for a 95 % claim. {MEAN_INTERVAL_NOTE}
+Each claim is judged twice, on the last **greedy** evaluation and on the final 10 % of
+**training** episodes, and both verdicts are shown.
 
 * *A below B*: A's interval lies wholly under B's (A.high < B.low; touching is not separated).
+  {BELOW_NOTE}
 * *Falls as β falls*: along β = 1, 0.75, 0.5, 0.25 no step goes significantly up (ties within
   the intervals are allowed anywhere, near zero included) and β = 0.25 is below β = 1.
 * *Peaks at β = 0.5*: β = 0.5 is above both β = 0.75 and β = 0.25 (separated); the highest
@@ -55,7 +67,9 @@ on the final 10 % of **training** episodes, and both verdicts are shown.
 * *Harm-free and surviving* come from an exact reference, not a round number: the optimal
   policy of a fully observing robot with the same β (value iteration, `empathy_zoo.reference`;
   exactly tied actions taken with equal probability), evaluated exactly at the phase's ε (0
-  greedy; in training, averaged over the ε schedule of the final 10 % of the steps). A learner is harm-free when its mean harms are at most the reference's +
+  greedy; in training, averaged over the ε of the steps of the final 10 % of training episodes;
+  the evidence states their share of the steps and the optimum's range over every tie-break).
+  A learner is harm-free when its mean harms are at most the reference's +
   {HARM_TOLERANCE} per episode, and survives when its mean survival is at least the reference's −
   {SURVIVAL_TOLERANCE:.0%} of the episode ({SURVIVAL_TOLERANCE * 500:.0f} steps of 500).
 * *Learns more slowly*: the mean over the whole learning curve (every training episode; every
@@ -84,8 +98,9 @@ class Cell:
 
 
 def cell_of(values: Sequence[float]) -> Cell:
-    """The cell of per-seed values (mean and 95 % bootstrap interval, fixed generator seed)."""
-    mean, low, high = bootstrap_mean_ci(np.asarray(values, dtype=np.float64))
+    """The cell of per-seed values: the mean and the leaderboard's interval for a 95 % claim
+    (:func:`leaderboard.aggregate.mean_ci`)."""
+    mean, low, high = mean_ci(np.asarray(values, dtype=np.float64))
     return Cell(float(mean), float(low), float(high), int(np.isfinite(values).sum()))
 
 

@@ -74,6 +74,12 @@ def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
             path.write_text(json.dumps(result))
     markdown = write_leaderboard(tmp_path, command="c")["markdown"].read_text(encoding="utf-8")
     assert markdown.count("### P(improves on DQN)") == 4 and "· IQM" in markdown
+    # 3 seeds against 3: every cell is marked as too few seeds for a verdict, and the legend says so
+    rows = [line for line in markdown.splitlines() if line.startswith("| ") and "· IQM" in line]
+    assert rows and all("⊘" in row and "▲" not in row and "▼" not in row for row in rows)
+    assert "⊘: too few seeds for a verdict" in markdown and "exact two-sided Mann–Whitney permutation test" in markdown
+    assert "the Student-t interval mean ± t·s/√n at 97.5% nominal" in markdown
+    assert "percentile-bootstrap interval over seeds" not in markdown and "bootstrap interval, each" not in markdown
 
 
 @pytest.mark.parametrize("low, high, verdict", [

@@ -1,4 +1,4 @@
-"""Leaderboard computation on hand-computed data: selection, means, bootstrap intervals, curves."""
+"""Leaderboard computation on hand-computed data: selection, means, intervals, curves."""
 
 from __future__ import annotations
 
@@ -12,9 +12,12 @@ import pytest
 
 from empathy_zoo.metrics import METRIC_NAMES
 from leaderboard.aggregate import (
-    bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results,
-    result_files, rolling_curve, run_scalars, score_runs,
+    bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results, mean_ci,
+    result_files, rolling_curve, run_scalars, score_runs, student_t_interval, student_t_quantile, t_level,
 )
+
+T_9875_2 = 6.205346816570706
+"""t(0.9875, 2 degrees of freedom), from mpmath: the quantile of the leaderboard's 3-seed interval."""
 
 
 def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_survival: list[float] | None = None,
@@ -31,6 +34,14 @@ def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_sur
             "method_label": label, "seed": seed, "steps": steps,
             "config": {"settings": {}, "env_kwargs": {}, "fixed": {}}, "train": train,
             "eval": evaluations, "wall_time_s": 0.0, "version": "0.1.0", "commit": None, "created": "now"}
+
+
+def t_by_hand(values: list[float], quantile: float) -> tuple[float, float]:
+    """mean ± quantile · s / √n, with s the n − 1 standard deviation, in plain Python."""
+    n = len(values)
+    mean = sum(values) / n
+    s = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1))
+    return mean - quantile * s / math.sqrt(n), mean + quantile * s / math.sqrt(n)
 
 
 def bootstrap_by_hand(values: np.ndarray, seed: int, n_resamples: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -101,6 +112,51 @@ def test_bootstrap_rejects_no_seeds() -> None:
         bootstrap_mean_ci([])
 
 
+@pytest.mark.parametrize(("probability", "df", "expected"), [
+    (0.975, 2, 0.95 / math.sqrt(2 * 0.975 * 0.025)),  # df = 2 in closed form: (2p − 1) / √(2p(1 − p))
+    (0.975, 1, math.tan(math.pi * 0.475)),  # Cauchy
+    (0.975, 4, 2.7764451051977935), (0.975, 9, 2.262157162798205), (0.9875, 4, 3.4954059325164416),  # mpmath
+    (0.025, 3, -3.182446305284263), (0.5, 7, 0.0),
+])
+def test_student_t_quantile_matches_closed_forms_and_mpmath(probability: float, df: int, expected: float) -> None:
+    assert student_t_quantile(probability, df) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+def test_student_t_quantile_rejects_bad_input() -> None:
+    for probability, df in ((0.0, 3), (1.0, 3), (0.9, 0), (0.9, 2.5)):
+        with pytest.raises(ValueError):
+            student_t_quantile(probability, df)
+
+
+def test_t_interval_of_one_two_three_by_hand() -> None:
+    t = 0.95 / math.sqrt(2 * 0.975 * 0.025)  # t(0.975, 2), closed form
+    mean, low, high = student_t_interval([1.0, 2.0, 3.0], level=0.95)
+    assert mean == 2.0 and (low, high) == pytest.approx((2.0 - t / math.sqrt(3), 2.0 + t / math.sqrt(3)), rel=1e-12)
+
+
+def test_mean_ci_is_the_t_interval_at_half_the_miss_rate() -> None:
+    assert t_level(0.95) == 0.975 and t_level(0.9) == pytest.approx(0.95)
+    mean, low, high = mean_ci([1.0, 2.0, 3.0])
+    assert (low, high) == pytest.approx(t_by_hand([1.0, 2.0, 3.0], T_9875_2), rel=1e-12)
+    assert np.array_equal(np.array([low, high]), np.array(student_t_interval([1.0, 2.0, 3.0], level=0.975)[1:]))
+
+
+def test_mean_ci_per_column_ignores_nan_and_collapses_on_one_seed() -> None:
+    table = np.array([[1.0, 5.0, np.nan], [2.0, np.nan, np.nan], [3.0, np.nan, np.nan]])
+    mean, low, high = mean_ci(table)
+    assert (low[0], high[0]) == pytest.approx(t_by_hand([1.0, 2.0, 3.0], T_9875_2), rel=1e-12)
+    assert mean[1] == low[1] == high[1] == 5.0  # one finite seed: the point itself
+    assert np.isnan([mean[2], low[2], high[2]]).all()
+    assert mean_ci([3.5, 3.5, 3.5]) == (3.5, 3.5, 3.5)  # every seed equal: zero width
+
+
+def test_mean_ci_rejects_bad_input() -> None:
+    with pytest.raises(ValueError, match="at least one seed"):
+        mean_ci([])
+    with pytest.raises(ValueError, match="strictly between 0 and 1"):
+        mean_ci([1.0, 2.0], confidence=1.0)
+
+
 def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> None:
     runs = [
         make_run("sharing_v0", "Empathic DQN (β=0.5)", 1, [0.0] * 9 + [2.0], eval_survival=[4.0], method="empathic_dqn"),
@@ -116,8 +172,7 @@ def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> N
     assert (single.mean, single.ci_low, single.ci_high, single.n_seeds) == (9.0, 9.0, 9.0, 1)
     shared = by_key[("sharing_v0", "train_final10", "equality")]
     assert shared.method == "empathic_dqn" and shared.n_seeds == 3 and shared.mean == 3.0
-    # runs are ordered by seed before resampling: seeds 0, 1, 2 -> values 6, 2, 1
-    expected = bootstrap_by_hand(np.array([6.0, 2.0, 1.0]), 0, 400)
+    expected = t_by_hand([6.0, 2.0, 1.0], T_9875_2)  # the t interval at 97.5 % nominal, for a 95 % claim
     assert (shared.ci_low, shared.ci_high) == pytest.approx(expected, rel=1e-12)
     evaluated = by_key[("sharing_v0", "eval", "survival")]
     assert evaluated.mean == 4.0
@@ -150,14 +205,14 @@ def test_learning_curves_have_no_gaps_at_a_small_budget() -> None:
     assert curve.mean[-1] == 9.0  # the last tenth of three episodes: the last one
 
 
-def test_learning_curves_average_seeds_per_point_with_bootstrap() -> None:
+def test_learning_curves_average_seeds_per_point_with_t_intervals() -> None:
     runs = [make_run("coexistence_v0", "DQN", seed, values, end_steps=[25, 50, 75, 100])
             for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])]
     runs.append(make_run("sharing_v0", "DQN", 0, [1.0]))
     (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4, random_state=5, n_resamples=200)
     assert curve.steps.tolist() == [25.0, 50.0, 75.0, 100.0]
     assert curve.mean.tolist() == [3.0, 2.0, 5.0, 6.0] and curve.n_seeds == 3
-    expected = bootstrap_by_hand(np.array([2.0, 4.0, 0.0]), 5, 200)
+    expected = t_by_hand([2.0, 4.0, 0.0], T_9875_2)
     assert (curve.ci_low[1], curve.ci_high[1]) == pytest.approx(expected, rel=1e-12)
     assert len(learning_curves(runs, "survival", n_points=4)) == 2
 

@@ -3,6 +3,8 @@ one on its boundary."""
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from leaderboard.verdicts import HARM_TOLERANCE, SURVIVAL_TOLERANCE, Cell, below, cell_of, falls, matches_reference, peaks
@@ -55,8 +57,10 @@ def test_reference_tolerance_and_its_boundary() -> None:
     assert not matches_reference(c(0.0), c(ref_survival - slack - 1e-6), ref_harms, ref_survival, max_cycles)
 
 
-def test_cell_of_is_the_mean_with_a_bootstrap_interval() -> None:
+def test_cell_of_is_the_mean_with_the_leaderboards_t_interval() -> None:
     cell = cell_of([1.0, 2.0, 3.0, 4.0, 5.0])
-    assert cell.mean == 3.0 and 1.0 <= cell.low < 3.0 < cell.high <= 5.0 and cell.n == 5
+    half = 3.4954059325164416 * math.sqrt(2.5) / math.sqrt(5)  # t(0.9875, 4) (mpmath), s² = 2.5
+    assert cell.mean == 3.0 and cell.n == 5
+    assert (cell.low, cell.high) == pytest.approx((3.0 - half, 3.0 + half), rel=1e-12)
     assert cell_of([2.0]) == Cell(2.0, 2.0, 2.0, 1)
     assert not cell_of([float("nan")] * 3).finite
