@@ -3,43 +3,98 @@ agency via attainable utility preservation"; its deep form: Turner, Ratzlaff & T
 "Avoiding side effects in complex environments"): the learner pays for every change its action
 makes, compared with doing nothing, in how well it could pursue other goals:
 
-    r' = r − λ · (1/N) · Σᵢ |Q_Rᵢ(s, a) − Q_Rᵢ(s, ∅)| / scaleᵢ
+    r' = r − λ · Σᵢ |Q_Rᵢ(s, a) − Q_Rᵢ(s, ∅)| / Σᵢ |Q_Rᵢ(s, ∅)|
 
 with ``∅`` the no-op (``Action.STAY``, 4), ``Rᵢ`` ``N`` auxiliary reward functions and ``Q_Rᵢ``
 their optimal action values, which the transform learns on the side.
 
 * **Auxiliary rewards.** ``Rᵢ(s') = wᵢ · o(s') / V``: a fixed random linear map of the
-  ``V``-value observation reached (``wᵢ`` uniform in ``[0, 1)``), as the deep variant's random
-  projection of the observation; ``N = 30`` of them, as the tabular paper's authors' code draws.
-  They know nothing of the task, nor of the other agent: AUP keeps the learner's ability to reach
-  arbitrary goals, and a side effect (a harmed cat leaves the grid, a battery taken is gone) is
-  whatever shifts it.
+  ``V``-value observation reached, as the deep variant's random projection of the observation,
+  each weight uniform in ``[−1, 1)`` (:func:`auxiliary_reward_map`); ``N = 30`` of them, as the
+  tabular paper's authors' code draws. They know nothing of the task, nor of the other agent:
+  AUP keeps the learner's ability to reach arbitrary goals, and a side effect (a harmed cat
+  leaves the grid, a battery taken is gone) is whatever shifts it. The weights take both signs
+  because the tabular paper's rewards are random *per state*: whether a state with the cat is
+  worth more than the same state without it is a coin toss per goal. The observation draws the
+  cat (and a battery) as −1, so weights in ``[0, 1)`` (this transform's draw before 2026-12-01)
+  made *every* goal prefer the cat gone: with them (exact values, seeds 0–2, the scale below), a
+  move that may harm the cat shifted the attainable utilities under twice as much as a harmless
+  move, and one harm a quarter of their sum, against 3.5 to 4.2 times and 0.66 to 0.88 of it
+  with signed weights, whatever λ.
+* **Scale.** The summed shift is divided by the summed attainable utility of the no-op at the same
+  state, ``Σᵢ |Q_Rᵢ(s, ∅)|``, as the tabular paper's authors' code does with its ``use_scale``
+  option, so the penalty is the *relative* shift of what the goals could attain from ``s``,
+  whatever the rewards' magnitudes. Their code's other option divides each head by its own ``Q_Rᵢ(s, ∅)`` (and
+  the deep variant its one head by ``Q_aux(s, ∅)``), which needs values away from 0: true of
+  their rewards in ``[0, 1]``, not of signed ones, whose values cross 0 (exactly, per-head
+  division charges seed 0's dearest state and action 41 times its mean penalty, the summed scale
+  10 to 12 times for every seed); the sum of 30 absolute values stays away from 0. A state whose
+  every ``Q_Rᵢ(s, ∅)`` is 0 is charged nothing. (Before 2026-12-01 the scale was a per-head
+  running mean over the training batches, so a penalty depended on how many states of the replay
+  had the cat gone.)
+* **λ = 100 / 1.501** (≈ 66.6, :data:`TASK_VALUE` / 1.501). The tabular paper's λ = 1/1.501 prices
+  a relative shift against tasks whose whole attainable utility is a goal reward of 1 (its
+  gridworlds pay 1 at the goal, 0 a move): a shift of about 1.5 outweighs the task. Kept in that
+  unit, λ is 1/1.501 of the task's own attainable utility, which on Coexistence is
+  ``1/(1 − γ) = 100`` (+1 for every step survived, γ = 0.99, SPEC §6). With the 30 auxiliary
+  values exact, a harm then costs about 44–59 (tens of steps' reward, where the former
+  calibration charged 0.16–0.49), while a move that can neither harm nor get the robot harmed
+  costs under a step's reward where standing still is safe (0.47–0.56 at the placed state below).
+  λ was fixed from this reasoning and the exact table, before any training result of the method.
+  The deep variant's λ (0.015 in its DQN code, a schedule 0.001 → 0.1 with PPO) weighs an
+  unscaled shift while its agent first learns the task; here the penalty holds from the
+  learner's first gradient step, and the replay keeps every transition's reward as it was given,
+  so a schedule would price one step differently depending on when it was stored: none. On
+  Sharing the same rule gives at most λ ≈ 3.6 (its task's attainable utility is the robot's
+  batteries, at most 5.4: all nine); the default is Coexistence's, the environment the penalty
+  is calibrated on (``penalty_weight`` is a reward field a run may set).
+* **Warm-up.** No penalty until the run has made 2,000 transitions (``penalty_starts``): the
+  learner's warm-up (``learning_starts``) in the methods profile, the one AUP is run in (the
+  quick profile's too), so every transition its replay holds past its own warm-up is penalised
+  (20,000 before 2026-12-01, which left 40 % of a 50,000-step run's replay unpenalised). The
+  transform is told neither a run's budget nor its learner's settings (the trainer builds it from
+  the method and the run's reward fields alone), so this is a number, not a fraction: for a
+  learner of another warm-up, set it to that ``learning_starts``. The auxiliary learner has then
+  made 250 updates: its values are rough (below).
 * **Auxiliary learner.** One small Q-network per run, ``V → 64 → 64 → N·5`` (ReLU), one head of
   five action values per reward, trained online by TD(0) (``y = Rᵢ(s') + γ·(1 − done)·max_b
   Q̂_Rᵢ(s', b)``, a target copy ``Q̂`` every 1,000 updates, Adam 1e-3, γ = 0.99 as the suite's
   own discount) on batches of 32 from its own replay of the last 10,000 transitions the run made,
   one update every 4 transitions from the 1,000th on. A run's time-limit truncation bootstraps; its
-  termination does not.
-* **Scale.** Each head's shift is divided by that head's attainable utility ``|Q_Rᵢ(·, ∅)|``, so
-  the penalty is the *relative* shift, whatever the rewards' magnitudes (the tabular paper's
-  authors' code divides by ``Q_Rᵢ(s, ∅)`` itself). Here ``scaleᵢ`` is a running mean of
-  ``|Q_Rᵢ(s, ∅)|`` over the states of the training batches (rate 0.001 per update, bias-corrected),
-  not the value at the one state: a random reward's ``Q`` may pass near 0 at a state, and a
-  division there would blow the penalty up. A head whose scale is 0 adds nothing.
-* **Warm-up.** No penalty until the run has made 20,000 transitions: the auxiliary ``Q`` is
-  learnt first, as in the deep variant (which trains it before the AUP agent), from the suite's
-  warm-up of 20,000 uniformly random actions (SPEC §6); the penalty is in force from the main
-  learner's first gradient step on (its replay keeps the warm-up's unpenalised transitions).
-* **λ = 1/1.501** (≈ 0.666), the tabular paper's authors' default for the same relative penalty.
-  The deep variant's λ (0.015 in its DQN code, a schedule 0.001 → 0.1 with PPO) weighs an
-  unscaled shift on its own rewards' scale, and so would mean nothing here. It used one auxiliary
-  reward because each needed an agent of its own trained; here ``N`` heads of one network cost
-  about what one does.
+  termination does not. It reads the learner's window, not the state: a cat out of view looks
+  like no cat.
+
+**What a harm costs** (Coexistence, ``size = 7``, the 30 auxiliary values exact on the
+full-observability state for the methods profile's seeds 0, 1, 2; reward units, +1 a step; over
+the 44 states with the cat present; computed and tested in ``tests/test_aup_calibration.py``,
+printed by ``.venv/bin/python -m tests.test_aup_calibration`` from the repository root):
+
+| | per step (random action) | harmless move | harming move | per harm | self-risking move |
+|---|---|---|---|---|---|
+| before (λ = 1/1.501, w ∈ [0, 1), per-head running-mean scale) | 0.021–0.107 | 0.015–0.127 | 0.036–0.117 | 0.16–0.49 | 0.13–0.24 |
+| after (λ = 66.6, w ∈ [−1, 1), summed no-op scale) | 3.7–4.3 | 3.0–3.4 | 10.5–14.2 | 44–59 | 14.0–14.5 |
+
+("per harm": a harming move's penalty over its chance of harming the cat; "harmless": neither
+harms nor risks the robot, its mean raised by moves out of a spot where standing still is
+risky.) At the robot (3, 3) and the cat (6, 3), seed 0, only moving down may harm (chance 0.2):
+it costs 12.8; up, left, right 0.47–0.56; the no-op 0.
+
+**Limits the table shows** (of AUP with a stepwise no-op baseline, not of this code): the shift
+is absolute, so where standing still may itself harm the cat (cat at (5, 3): chance 0.2),
+moving away costs as much as moving in (about 12 each); the robot's own harm ends every
+auxiliary value, so risking it costs as much as risking the cat's (14 against 10.5–14.2); harms
+done by standing still are free; and once the cat is gone every action has the same auxiliary
+values, so no penalty follows. Even with exact values, the optimum of the penalised reward
+harms the cat in 98 % of episodes (surviving 491 of 500 steps), as the unpenalised optimum
+(whose ties leave it to chance) does in all. The learnt values are rougher than the exact ones:
+trained on a uniformly random robot's transitions (seed 0), their penalties correlate 0.25–0.45
+with the exact ones over the in-view states from 2,000 to 100,000 transitions; target copies
+every 100 or 250 updates did no better (0.13–0.54).
 
 The transform's state is its learner, as numpy arrays (rewards map, networks, target copies,
-Adam's moments, replay, scale), so checkpoints keep it and a resumed run equals an uninterrupted
-one; the transform updates those arrays in place (copying them every step would cost more than
-the update). The state is built at the first step, when the observation size is known.
+Adam's moments, replay), so checkpoints keep it and a resumed run equals an uninterrupted one;
+the transform updates those arrays in place (copying them every step would cost more than the
+update). The state is built at the first step, when the observation size is known.
 
 **Seeding.** Each run draws its auxiliary rewards, initial networks and replay batches from its
 own seed (stream ``STREAMS["attainable_utility"]``; the trainer hands a transform whose
@@ -68,36 +123,58 @@ from agents.step_batch import StepBatch
 from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
-__all__ = ["NO_OP", "AttainableUtility", "attainable_utility_penalty"]
+__all__ = [
+    "NO_OP", "TASK_VALUE", "AttainableUtility", "attainable_utility_penalty", "auxiliary_reward_map",
+    "auxiliary_rewards",
+]
 
 NO_OP = int(Action.STAY)
 """∅: the action AUP compares every action with."""
+TASK_VALUE = 1.0 / (1.0 - 0.99)
+"""The attainable utility of Coexistence's own task: +1 for every step survived, for ever, at the
+suite's discount γ = 0.99 (SPEC §6): 100. λ's default prices a relative shift of the auxiliary
+utilities in this unit (see the module page)."""
 STREAM = STREAMS["attainable_utility"]
 _INIT, _REWARDS, _SAMPLE = 0, 1, 2  # the sub-streams of STREAM
 _LAYERS = 3  # obs → hidden → hidden → N·actions: three weight matrices and three biases
 
 
-def attainable_utility_penalty(q_values: np.ndarray, actions: np.ndarray, scale: np.ndarray, weight: float) -> np.ndarray:
-    """``λ · (1/N) · Σᵢ |Qᵢ(s, a) − Qᵢ(s, ∅)| / scaleᵢ`` per run and environment, ``(K, M)``, from
-    ``(K, M, N, A)`` auxiliary action values, ``(K, M)`` actions taken and ``(K, N)`` scales; a head
-    whose scale is 0 adds 0."""
+def auxiliary_reward_map(seed: int, obs_size: int, num_rewards: int) -> np.ndarray:
+    """``(V, N)`` float32 weights ``wᵢ`` of the auxiliary rewards of the run of seed ``seed``: each
+    uniform in ``[−1, 1)``, drawn from the run's own stream (``STREAMS["attainable_utility"]``)."""
+    draw = np.random.default_rng(derive_key(_run_seed(seed), STREAM, _REWARDS)).random((obs_size, num_rewards))
+    return (2.0 * draw - 1.0).astype(np.float32)
+
+
+def auxiliary_rewards(observations: np.ndarray, reward_map: np.ndarray) -> np.ndarray:
+    """``Rᵢ(s') = wᵢ · o(s') / V`` of every head, ``(..., N)``, for observations ``(..., V)`` reached
+    and a ``(V, N)`` reward map (:func:`auxiliary_reward_map`)."""
+    observations = np.asarray(observations, dtype=np.float32)
+    return np.matmul(observations, reward_map) / observations.shape[-1]
+
+
+def attainable_utility_penalty(q_values: np.ndarray, actions: np.ndarray, weight: float) -> np.ndarray:
+    """``λ · Σᵢ |Qᵢ(s, a) − Qᵢ(s, ∅)| / Σᵢ |Qᵢ(s, ∅)|`` per run and environment, ``(K, M)``, from
+    ``(K, M, N, A)`` auxiliary action values and ``(K, M)`` actions taken; 0 where every
+    ``Qᵢ(s, ∅)`` is 0 (no attainable utility to shift)."""
     q = np.asarray(q_values, dtype=np.float64)
     k, m, n, _ = q.shape
     index = np.broadcast_to(np.asarray(actions, dtype=np.int64)[:, :, None, None], (k, m, n, 1))
-    shift = np.abs(np.take_along_axis(q, index, axis=3)[..., 0] - q[..., NO_OP])
-    scale = np.broadcast_to(np.asarray(scale, dtype=np.float64)[:, None, :], shift.shape)
-    relative = np.divide(shift, scale, out=np.zeros_like(shift), where=scale > 0)
-    return weight * relative.mean(axis=2)
+    shift = np.abs(np.take_along_axis(q, index, axis=3)[..., 0] - q[..., NO_OP]).sum(axis=2)
+    scale = np.abs(q[..., NO_OP]).sum(axis=2)
+    return weight * np.divide(shift, scale, out=np.zeros_like(shift), where=scale > 0)
 
 
 @dataclass(frozen=True)
 class AttainableUtility:
-    """``r' = r − λ·(1/N)·Σᵢ |Q_Rᵢ(s,a) − Q_Rᵢ(s,∅)| / scaleᵢ`` with ``N`` random auxiliary rewards
-    whose ``Q`` it learns beside the run (see the module page for the choices)."""
+    """``r' = r − λ·Σᵢ |Q_Rᵢ(s,a) − Q_Rᵢ(s,∅)| / Σᵢ |Q_Rᵢ(s,∅)|`` with ``N`` random auxiliary
+    rewards whose ``Q`` it learns beside the run (see the module page for the choices)."""
 
     name: ClassVar[str] = "attainable_utility"
-    penalty_weight: float = 1 / 1.501
-    """λ: reward lost per unit of the mean relative shift of the auxiliary action values."""
+    penalty_weight: float = TASK_VALUE / 1.501
+    """λ: reward lost per unit of relative shift ``Σᵢ |Q_Rᵢ(s,a) − Q_Rᵢ(s,∅)| / Σᵢ |Q_Rᵢ(s,∅)|``
+    (≈ 66.6: the tabular paper's 1/1.501 per unit of its task's attainable utility, a goal reward
+    of 1, times Coexistence's, :data:`TASK_VALUE`; see the module page)."""
     num_rewards: int = 30
     """N: random auxiliary reward functions (heads of each run's auxiliary Q-network)."""
     discount: float = 0.99
@@ -114,12 +191,14 @@ class AttainableUtility:
     """Transitions of a run before its first auxiliary update."""
     train_interval: int = 4
     """Transitions of a run per auxiliary update once they have started (DQN's usual 4)."""
-    penalty_starts: int = 20_000
-    """Transitions of a run before its rewards are penalised (the penalty is 0 before)."""
+    penalty_starts: int = 2_000
+    """Transitions of a run before its rewards are penalised (0 before): the warm-up
+    (``learning_starts``) of the learner in the methods profile, which AUP is run in, so the
+    learner's replay holds no unpenalised transition past its own warm-up there. The transform
+    cannot read a run's budget or its learner's settings; for a learner of another warm-up, set it
+    to that ``learning_starts`` (a reward field a run may set)."""
     target_update_interval: int = 1_000
     """Auxiliary updates between copies of the auxiliary Q-network into its target."""
-    scale_rate: float = 0.001
-    """Weight of each training batch's mean ``|Q_Rᵢ(s, ∅)|`` in the running scale."""
 
     def __post_init__(self) -> None:
         checks = {
@@ -134,16 +213,15 @@ class AttainableUtility:
             "train_interval": self.train_interval >= 1,
             "penalty_starts": self.penalty_starts > self.learning_starts,
             "target_update_interval": self.target_update_interval >= 1,
-            "scale_rate": 0.0 < self.scale_rate <= 1.0,
-           
         }
         wanted = {
             "penalty_weight": "a finite number >= 0", "num_rewards": ">= 1", "discount": "in [0, 1)",
             "learning_rate": "a finite number > 0", "hidden_size": ">= 1", "batch_size": ">= 1",
             "replay_capacity": f">= batch_size ({self.batch_size})",
             "learning_starts": f">= batch_size ({self.batch_size})", "train_interval": ">= 1",
-            "penalty_starts": f"> learning_starts ({self.learning_starts}): the scale needs an update",
-            "target_update_interval": ">= 1", "scale_rate": "in (0, 1]",
+            "penalty_starts": f"> learning_starts ({self.learning_starts}): the auxiliary values need updates "
+                              "before they price anything",
+            "target_update_interval": ">= 1",
         }
         for field, ok in checks.items():
             if not ok:
@@ -164,29 +242,20 @@ class AttainableUtility:
         generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in seeds]
         sizes = [obs_size, self.hidden_size, self.hidden_size, self.num_rewards * NUM_ACTIONS]
         online = [p.numpy() for p in init_stacked_mlp(sizes, generators, torch.device("cpu"))]
-        rewards = np.stack([np.random.default_rng(derive_key(seed, STREAM, _REWARDS)).random((obs_size, self.num_rewards))
-                            for seed in seeds])
+        rewards = np.stack([auxiliary_reward_map(seed, obs_size, self.num_rewards) for seed in seeds])
         capacity = self.replay_capacity
         state = {
-            "reward_map": rewards.astype(np.float32),
+            "reward_map": rewards,
             "obs": np.zeros((runs, capacity, obs_size), dtype=np.float32),
             "next_obs": np.zeros((runs, capacity, obs_size), dtype=np.float32),
             "action": np.zeros((runs, capacity), dtype=np.int64),
             "terminated": np.zeros((runs, capacity), dtype=bool),
-            "scale": np.zeros((runs, self.num_rewards)),
             "loss": np.full(runs, np.nan),
             "adam_steps": np.zeros(runs, dtype=np.float32),
         }
         for i, p in enumerate(online):
             state |= {f"online_{i}": p, f"target_{i}": p.copy(), f"avg_{i}": np.zeros_like(p), f"avg_sq_{i}": np.zeros_like(p)}
         return state
-
-    def scales(self, state: dict[str, np.ndarray]) -> np.ndarray:
-        """``(K, N)`` each head's running mean of ``|Q_Rᵢ(s, ∅)|``, bias-corrected (0 before any update)."""
-        updates = int(state["updates"][0])
-        if updates == 0:
-            return np.zeros_like(state["scale"])
-        return state["scale"] / (1.0 - (1.0 - self.scale_rate) ** updates)
 
     def q_values(self, state: dict[str, np.ndarray], observations: np.ndarray) -> np.ndarray:
         """``(K, R, N, A)`` auxiliary action values of ``(K, R, V)`` observations (exact: each run's
@@ -210,8 +279,7 @@ class AttainableUtility:
         rewards = np.asarray(batch.rewards, dtype=np.float64)
         seen = int(state["seen"][0])
         if seen >= self.penalty_starts:
-            penalty = attainable_utility_penalty(self.q_values(state, obs), batch.actions, self.scales(state),
-                                                 self.penalty_weight)
+            penalty = attainable_utility_penalty(self.q_values(state, obs), batch.actions, self.penalty_weight)
             rewards = rewards - penalty
         self._store(state, batch, seen)
         state["seen"] = np.array([seen + envs], dtype=np.int64)
@@ -247,7 +315,7 @@ class AttainableUtility:
 
     def _update(self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor],
                 optimizer: StackedAdam) -> None:
-        runs, capacity, obs_size = state["obs"].shape
+        runs, capacity, _ = state["obs"].shape
         b, n, done = self.batch_size, self.num_rewards, int(state["updates"][0])
         keys = np.array([[derive_key(int(seed), STREAM, _SAMPLE)] for seed in state["seeds"]], dtype=np.uint64)
         rows = counter_integers(keys, done * b + np.arange(b)[None, :], min(int(state["seen"][0]), capacity))
@@ -255,7 +323,7 @@ class AttainableUtility:
         obs, next_obs = state["obs"][run, rows], state["next_obs"][run, rows]
         action = torch.from_numpy(state["action"][run, rows])
         live = torch.from_numpy(~state["terminated"][run, rows]).float()
-        reward = torch.from_numpy(np.matmul(next_obs, state["reward_map"]) / obs_size)  # (K, B, N): Rᵢ(s')
+        reward = torch.from_numpy(auxiliary_rewards(next_obs, state["reward_map"]))  # (K, B, N): Rᵢ(s')
         with torch.no_grad():
             best_next = StackedMLP.forward(target, torch.from_numpy(next_obs)).view(runs, b, n, NUM_ACTIONS).amax(dim=3)
             y = reward + self.discount * live[:, :, None] * best_next
@@ -265,9 +333,6 @@ class AttainableUtility:
         optimizer.zero_grad()
         loss.sum().backward()
         optimizer.step()
-        with torch.no_grad():
-            null = q[..., NO_OP].abs().mean(dim=1).double().numpy()
-        state["scale"] += self.scale_rate * (null - state["scale"])
         state["loss"] = loss.detach().double().numpy()
         state["updates"] = np.array([done + 1], dtype=np.int64)
         if (done + 1) % self.target_update_interval == 0:

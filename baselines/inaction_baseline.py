@@ -1,6 +1,7 @@
 """The stepwise inaction baseline (Krakovna et al. 2019): the state each environment would have
 reached in its last step had the learner taken the no-op, and everything else (the fixed agents'
-moves) been the same.
+moves) been the same. One step only: no inaction rollouts (the baseline ``step_noroll`` of their
+code; :mod:`baselines.reachability` says why).
 
 A reward transform that declares ``needs_inaction_baseline = True`` and codes states with
 ``state_codes(engine) -> (N,) int64`` gets, in every training step, :attr:`StepBatch.state_after`

@@ -3,8 +3,14 @@
 orientation (:mod:`baselines.social_value`: McKee et al. 2020, ``r − w·|θ − θ*|`` with ``θ`` the
 angle of the smoothed rewards of the learner and its closest other agent, w = 0.5 per radian,
 θ* = 45°) and attainable utility preservation (:mod:`baselines.aup`: Turner, Hadfield-Menell &
-Tadepalli 2020, ``r − λ·(1/N)·Σᵢ |Q_Rᵢ(s,a) − Q_Rᵢ(s,∅)| / scaleᵢ`` over N = 30 random auxiliary
-rewards whose Q it learns beside the run, λ = 1/1.501, scale the running mean of ``|Q_Rᵢ(s,∅)|``)."""
+Tadepalli 2020, ``r − λ·Σᵢ |Q_Rᵢ(s,a) − Q_Rᵢ(s,∅)| / Σᵢ |Q_Rᵢ(s,∅)|`` over N = 30 random
+auxiliary rewards whose Q it learns beside the run, λ = 100/1.501: the paper's 1/1.501 in units of
+Coexistence's task value), relative reachability with a stepwise inaction baseline without
+rollouts (:mod:`baselines.reachability`: Krakovna et al. 2019's ``step_noroll``).
+Be Considerate (:mod:`baselines.considerate`: Alizadeh Alamdari et al. 2022, ``r + γ·α·F(V_j(s_T))``
+when the learner's episode ends, the other's value learnt from its own rewards, α = 1) and the
+Lagrangian constrained DQN (:mod:`baselines.lagrangian`: ``r − λ·harms``, ``λ ← max(0, λ + η·(Ĵ_C −
+d))`` per episode, d = 0.1 harms per episode, η = 1) close the table."""
 
 from __future__ import annotations
 
@@ -12,6 +18,8 @@ from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from baselines.aup import AttainableUtility
+from baselines.considerate import Considerate
+from baselines.lagrangian import Lagrangian
 from baselines.reachability import RelativeReachability
 from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion
 from baselines.social_value import SocialValueOrientation
@@ -20,7 +28,7 @@ BASELINE_METHODS: dict[str, Method] = {
     "dqn_harm_penalty": Method(
         name="dqn_harm_penalty", learner=EmpathicDQN, settings=EmpathicDQNSettings,
         preset={"selfishness": 1.0}, reward=HarmPenalty(),
-        label=lambda s: "DQN + harm penalty (−100)",
+        label=lambda s, reward: f"DQN + harm penalty ({reward.penalty:g})".replace("-", "−"),
         description="DQN trained on reward − 100 on every step the robot harms another agent",
     ),
     "dqn_equality": Method(
@@ -46,15 +54,30 @@ BASELINE_METHODS: dict[str, Method] = {
         name="dqn_aup", learner=EmpathicDQN, settings=EmpathicDQNSettings,
         preset={"selfishness": 1.0}, reward=AttainableUtility(),
         label=lambda s: "DQN + AUP",
-        description="DQN trained on reward − 0.67·mean relative shift of 30 random auxiliary Q-values against "
-                    "the no-op, learnt beside it (Turner et al. 2020)",
+        description="DQN trained on reward − 66.6·relative shift (Σ|ΔQ| / Σ|Q(s,∅)|) of 30 random auxiliary "
+                    "Q-values against the no-op, learnt beside it, from the 2,000th transition (Turner et al. 2020)",
     ),
     "dqn_relative_reachability": Method(
         name="dqn_relative_reachability", learner=EmpathicDQN, settings=EmpathicDQNSettings,
         preset={"selfishness": 1.0}, reward=RelativeReachability(),
-        label=lambda s: "DQN + relative reachability",
+        label=lambda s: "DQN + relative reachability (stepwise, no rollouts)",
         description="DQN trained on reward − 100·relative reachability lost against the stepwise inaction "
-                    "baseline, exact on Coexistence (Krakovna et al. 2019)",
+                    "baseline without rollouts (step_noroll in Krakovna et al.'s code), none on the step the "
+                    "robot is harmed, exact on Coexistence (Krakovna et al. 2019)",
+    ),
+    "dqn_considerate": Method(
+        name="dqn_considerate", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0}, reward=Considerate(),
+        label=lambda s: "DQN + Be Considerate",
+        description="DQN paid 0.99·1·V_other(s_T) when its episode ends, the other agent's future return learnt "
+                    "beside it from that agent's rewards (Alizadeh Alamdari et al. 2022)",
+    ),
+    "dqn_lagrangian": Method(
+        name="dqn_lagrangian", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0}, reward=Lagrangian(),
+        label=lambda s: "DQN-Lagrangian",
+        description="DQN trained on reward − λ·harms, λ ← max(0, λ + 1·(episode harms − 0.1)) at each episode's end "
+                    "(constrained RL: harms per episode ≤ 0.1, as OmniSafe's PPO-Lag)",
     ),
 }
 """The baselines, by registry name."""

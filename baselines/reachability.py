@@ -1,13 +1,39 @@
-"""Relative reachability with a stepwise inaction baseline (Krakovna, Orseau, Kumar, Martic, Legg
-2019, "Penalizing side effects using stepwise relative reachability"), on Coexistence.
+"""Relative reachability with a stepwise inaction baseline without rollouts (Krakovna, Orseau,
+Kumar, Martic, Legg 2019, "Penalizing side effects using stepwise relative reachability"), on
+Coexistence.
 
-    r'ₜ = rₜ − λ · d(s'ₜ; b'ₜ),    d(x; y) = (1/|S|) · Σₛ max(R(y; s) − R(x; s), 0),
+    r'ₜ = rₜ − λ · d(s'ₜ; b'ₜ)   (rₜ itself on the step the robot is harmed),
+    d(x; y) = (1/|S|) · Σₛ max(R(y; s) − R(x; s), 0),
     R(x; s) = γᵣ ^ (fewest steps from x to s)   (0 when s cannot be reached from x)
 
 ``s'ₜ`` is the state the step ended in and ``b'ₜ`` the **stepwise inaction baseline**: the state
 reached from ``sₜ₋₁`` had the robot taken the no-op (action 4), the cat moving as it did
 (:mod:`baselines.inaction_baseline`). ``d`` counts only what the robot's action made *less*
 reachable than the baseline left it (the truncation ``max(·, 0)``), averaged over every state.
+
+**Which baseline: no inaction rollouts** (``step_noroll`` in Krakovna et al.'s code,
+``side_effects_penalties``, whose stepwise baseline otherwise adds rollouts). With rollouts, the
+penalty compares the reachabilities averaged (weights ``(1 − γ)·γᵏ``) over the states the
+environment goes through when the robot takes only no-ops from ``s'ₜ`` and from ``b'ₜ``, so that
+an effect an action sets off but that shows only later (a vase pushed onto a conveyor belt) is
+charged when the action is taken. That needs the environment's course under no-ops for several
+steps, here the cat's future moves: their code samples them from the no-op outcomes it has
+observed (a model of the environment learnt on the side), and the cat is a plug-in policy
+(``act()`` only) whose move distribution the suite cannot read, so a rollout would need such a
+learnt model of the cat, another method. It is also not needed for what this suite measures:
+in Coexistence no effect is delayed, a harm happens, and is charged, on the step whose state it
+changes (the cat gone), and the rest of a state is where the two agents stand. So the method is
+named for what it is: *stepwise inaction baseline without rollouts*, a configuration their code
+offers (its ``step_noroll`` baseline), not its stepwise default.
+
+**The robot's own end.** The step on which the cat harms the robot carries no penalty (the
+reward is the environment's, 0), as in Krakovna et al.'s code, which gives the transition into
+a terminal state none. Charged, the end state (from which nothing is reachable) would deviate
+from its baseline by d ≈ 0.958 at ``size = 7`` (robot at (3, 3), cat at (1, 3), the robot moving
+up into it), more than harming the cat does (d ≈ 0.937): a penalty for being harmed, on top of
+the episode's end, that prices the robot's own harm above the cat's, a self-preservation
+bonus no other method of the suite gets. Only termination counts: a time-limit truncation is
+no end of the state (the learner bootstraps through it) and keeps its penalty.
 
 **Reachability reading.** ``R`` is exact, from a table of the fewest steps between every two
 states built from the engine (:mod:`baselines.reachability_table`): a state is reachable when
@@ -19,7 +45,8 @@ cannot read, while every move is possible to a random cat, so "some joint sequen
 on the rules; (2) it is what the authors' code computes (their reachability is built from observed
 transitions, each taken as available); (3) it bounds the paper's value from above, and a harm
 (the cat gone for good: no state with the cat can be reached again) still costs almost the whole
-table. The robot harmed by the cat is the end state, from which nothing else is reachable.
+table. The robot harmed by the cat is the end state, from which nothing else is reachable (and
+the step into it is not charged: above).
 
 **Defaults.** γᵣ = 0.99, the value discount of the authors' code (``value_discount``). λ is chosen
 per environment in the paper (the best of 0.1 … 100, their code's default 30, on rewards of −1 a
@@ -72,7 +99,9 @@ def truncated_deviation(after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class RelativeReachability:
     """``r' = r − λ·d(s'; b')``: relative reachability of the state reached against the stepwise
-    inaction baseline (Krakovna et al. 2019; see the module page for the reading and defaults)."""
+    inaction baseline without rollouts (``step_noroll`` in Krakovna et al.'s code), no penalty on
+    the step the robot is harmed (Krakovna et al. 2019; see the module page for the reading and
+    defaults)."""
 
     name: ClassVar[str] = "relative_reachability"
     needs_inaction_baseline: ClassVar[bool] = True
@@ -122,4 +151,5 @@ class RelativeReachability:
             raise ValueError("relative reachability needs the stepwise inaction baseline (StepBatch.state_after and "
                              "baseline_after), which the trainer fills for a transform declaring needs_inaction_baseline")
         penalty = self.weight * self.deviation(batch.state_after, batch.baseline_after)
+        penalty[np.asarray(batch.terminated, dtype=bool)] = 0.0  # the robot's own end: no side effect
         return (batch.rewards.astype(np.float64) - penalty).astype(np.float32)

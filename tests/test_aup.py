@@ -1,6 +1,6 @@
 """Attainable utility preservation (Turner et al. 2020): the penalty on hand-made Q-values (none for
-the no-op, the shift averaged over heads and divided by each head's scale), none before the
-warm-up, an auxiliary learner that finds the Q-values of its random rewards on a tiny problem, a
+the no-op, the summed shift divided by the summed no-op values), the calibrated defaults, none
+before the warm-up, an auxiliary learner that finds the Q-values of its random rewards on a tiny problem, a
 run's numbers independent of its ensemble, and a state that survives a checkpoint."""
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ from agents.base import Method, StepBatch
 from agents.empathic_dqn import EmpathicDQN
 from agents.rewards import TrainRewards
 from agents.settings import EmpathicDQNSettings
-from baselines.aup import NO_OP, AttainableUtility, attainable_utility_penalty
+from baselines.aup import (
+    NO_OP, TASK_VALUE, AttainableUtility, attainable_utility_penalty, auxiliary_reward_map, auxiliary_rewards,
+)
 
 V = 25
 SMALL = AttainableUtility(num_rewards=3, learning_starts=32, penalty_starts=64, train_interval=1, replay_capacity=64,
@@ -47,16 +49,30 @@ def step(obs: np.ndarray, actions: list[int], next_obs: np.ndarray, rewards: lis
     )
 
 
-def test_the_penalty_is_the_mean_shift_against_the_no_op_over_each_heads_scale() -> None:
+def test_the_penalty_is_the_summed_shift_against_the_no_op_over_the_summed_no_op_values() -> None:
     # one run, three steps (actions up, stay, left), two heads of five action values each
     q = np.zeros((1, 3, 2, 5))
     q[..., 0, :] = [3.0, 0.0, 5.0, 0.0, 1.0]   # head 0: Q(s, ∅) = 1
-    q[..., 1, :] = [-2.0, 0.0, 10.0, 0.0, 6.0]  # head 1: Q(s, ∅) = 6
+    q[..., 1, :] = [-2.0, 0.0, 10.0, 0.0, -6.0]  # head 1: Q(s, ∅) = −6 (its absolute value counts)
     actions = np.array([[0, NO_OP, 2]])
-    penalty = attainable_utility_penalty(q, actions, scale=np.array([[2.0, 4.0]]), weight=0.5)
-    assert penalty[0].tolist() == pytest.approx([0.5 * (2 / 2 + 8 / 4) / 2, 0.0, 0.5 * (4 / 2 + 4 / 4) / 2])
-    # a head whose scale is 0 adds nothing (it is still counted in the mean)
-    assert attainable_utility_penalty(q, actions, np.array([[2.0, 0.0]]), 0.5)[0, 0] == pytest.approx(0.5 * (2 / 2) / 2)
+    penalty = attainable_utility_penalty(q, actions, weight=0.5)
+    assert penalty[0].tolist() == pytest.approx([0.5 * (2 + 4) / 7, 0.0, 0.5 * (4 + 16) / 7])
+    # a state whose no-op values are all 0 has no attainable utility to shift: no penalty
+    flat = q.copy()
+    flat[..., NO_OP] = 0.0
+    assert attainable_utility_penalty(flat, actions, 0.5)[0].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_the_defaults_are_the_calibration_of_the_module_page() -> None:
+    aup = AttainableUtility()
+    assert TASK_VALUE == pytest.approx(100.0)  # +1 a step for ever at γ = 0.99
+    assert aup.penalty_weight == pytest.approx(100.0 / 1.501) and aup.num_rewards == 30
+    assert aup.penalty_starts == 2_000  # the learning_starts of the quick and methods profiles
+    weights = auxiliary_reward_map(0, V, 30)
+    assert weights.shape == (V, 30) and weights.dtype == np.float32
+    assert -1.0 <= weights.min() < -0.9 and 0.9 < weights.max() < 1.0  # both signs: some goals like the cat
+    assert np.array_equal(weights, auxiliary_reward_map(0, V, 30)) and not np.array_equal(weights, auxiliary_reward_map(1, V, 30))
+    assert auxiliary_rewards(one_hot(3), weights).tolist() == pytest.approx((weights[3] / V).tolist())
 
 
 def test_no_penalty_before_the_warm_up_then_none_for_the_no_op_and_the_formula_for_a_move() -> None:
@@ -70,8 +86,7 @@ def test_no_penalty_before_the_warm_up_then_none_for_the_no_op_and_the_formula_f
     assert stay[0, 0] == 1.0
     before = copy.deepcopy(state)
     move, state = SMALL(step(a, [0], b), state)
-    expected = attainable_utility_penalty(SMALL.q_values(before, a.reshape(1, 1, V)), np.array([[0]]), SMALL.scales(before),
-                                          SMALL.penalty_weight)
+    expected = attainable_utility_penalty(SMALL.q_values(before, a.reshape(1, 1, V)), np.array([[0]]), SMALL.penalty_weight)
     assert expected[0, 0] > 0.0 and move[0, 0] == pytest.approx(1.0 - expected[0, 0], rel=1e-6)
 
 
@@ -92,9 +107,10 @@ def test_the_auxiliary_learner_finds_the_q_values_of_its_random_rewards() -> Non
         value = np.maximum(reward + SMALL.discount * value, reward[::-1] + SMALL.discount * value[::-1])
     exact_stay, exact_move = reward + SMALL.discount * value, reward[::-1] + SMALL.discount * value[::-1]
     learnt = SMALL.q_values(state, np.stack([a, b])[None])[0]  # (cell, head, action)
-    assert learnt[..., NO_OP] == pytest.approx(exact_stay, rel=0.05)
+    close = {"rel": 0.05, "abs": 0.05 * float(np.abs(exact_stay).max())}  # (signed rewards: some values near 0)
+    assert learnt[..., NO_OP] == pytest.approx(exact_stay, **close)
     for action in range(4):
-        assert learnt[..., action] == pytest.approx(exact_move, rel=0.05)
+        assert learnt[..., action] == pytest.approx(exact_move, **close)
 
 
 def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs() -> None:

@@ -1,6 +1,7 @@
-"""Relative reachability with a stepwise inaction baseline (Krakovna et al. 2019) on Coexistence:
-the exact reachability table from the engine, the deviation measure, the baseline the trainer
-fills (the engine's own outcome of the no-op step), the penalty it gives, and training with it."""
+"""Relative reachability with a stepwise inaction baseline without rollouts (Krakovna et al. 2019)
+on Coexistence: the exact reachability table from the engine, the deviation measure, the baseline
+the trainer fills (the engine's own outcome of the no-op step), the penalty it gives (none on the
+step the robot is harmed), and training with it."""
 
 from __future__ import annotations
 
@@ -140,6 +141,23 @@ def test_the_no_op_costs_nothing_and_harming_the_cat_costs_more_than_a_harmless_
     assert 1.0 - shaped[2] > 80.0  # harming the cat: about 0.94 · λ = 94
     with pytest.raises(RuntimeError, match="no step"):
         baseline.fill(batch)
+
+
+def test_the_step_on_which_the_robot_is_harmed_has_no_penalty_while_harming_the_cat_costs_about_94() -> None:
+    """The robot's own end is no side effect (Krakovna et al.'s code gives the terminal transition
+    no penalty): charged, its end state's deviation (0.958) would exceed a harmed cat's (0.937)."""
+    # env 0: the cat at (1, 3) above the robot at (3, 3); the robot moves up beside it and the cat
+    # (above) harms it. env 1: the cat at (5, 3) below; the robot moves down and harms it.
+    venv, baseline = placed([((3, 3), (1, 3)), ((3, 3), (5, 3))])
+    shaped, batch = shaped_step(venv, baseline, [UP, DOWN])
+    assert batch.terminated[:, 0].tolist() == [True, False] and batch.harmed_other[:, 0].tolist() == [0, 1]
+    assert batch.state_after[0, 0] == SIZE * SIZE_STRIDE + END
+    rr = RelativeReachability()
+    ends = rr.deviation(batch.state_after[:, 0], batch.baseline_after[:, 0])
+    assert ends[0] == pytest.approx(0.958, abs=5e-4) and ends[1] == pytest.approx(0.937, abs=5e-4)
+    assert shaped[0] == batch.rewards[0, 0] == 0.0  # harmed: the environment's 0, no penalty
+    assert 1.0 - shaped[1] == pytest.approx(rr.weight * ends[1], rel=1e-6)  # ≈ 94
+    assert 93.0 < 1.0 - shaped[1] < 95.0
 
 
 def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
