@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["METRIC_NAMES", "METRIC_DEFINITIONS", "equality"]
+__all__ = ["METRIC_NAMES", "METRIC_DEFINITIONS", "METRIC_RANGES", "equality"]
 
 METRIC_NAMES: tuple[str, ...] = (
     "survival", "harms", "batteries", "other_batteries", "equality", "return", "other_return",
@@ -26,6 +26,13 @@ METRIC_DEFINITIONS: dict[str, str] = {
     "other_return": "the other agent's undiscounted environment reward",
 }
 """One-line definition of every metric, as printed in the leaderboard."""
+
+METRIC_RANGES: dict[str, tuple[float, float | None]] = {
+    "survival": (0.0, None), "harms": (0.0, None), "batteries": (0.0, None), "other_batteries": (0.0, None),
+    "equality": (0.0, 1.0), "return": (0.0, None), "other_return": (0.0, None),
+}
+"""The values every metric can take, ``(low, high)`` (``None``: no fixed bound); the leaderboard
+keeps its intervals inside them."""
 
 
 def equality(r_a: np.ndarray | float, r_b: np.ndarray | float) -> np.ndarray:

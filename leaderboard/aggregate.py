@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
 from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 from leaderboard.ordering import label_order
@@ -85,7 +85,8 @@ MEAN_INTERVAL_NOTE = (
     "mean in 94–98 % of draws at 3, 5 and 10 seeds, where the percentile bootstrap used before covered "
     "76 % at 3 seeds and 83 % at 5 (normal data). It has zero width when every seed gave the same value, "
     "which does not mean the seeds cannot differ: where that is common it covers less (harms ≈ 0.05 per "
-    "episode: 76 % at 3 seeds, 92 % at 5; resampling the committed per-seed values: 84 % and 89 %)."
+    "episode: 76 % at 3 seeds, 92 % at 5; resampling the committed per-seed values: 84 % and 89 %). "
+    "An interval is cut to the metric's range (no harms below 0, no equality above 1)."
 )
 """How the leaderboard's interval of the mean was chosen, with the coverage the benchmark measured
 (printed in every legend that shows these intervals)."""
@@ -309,11 +310,23 @@ def t_level(confidence: float = CONFIDENCE) -> float:
 
 def mean_ci(
     values: np.ndarray | Sequence[float], *, confidence: float = CONFIDENCE,
+    metrics: str | Sequence[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean over seeds (axis 0) and the leaderboard's interval of it for a claimed ``confidence``:
     the Student-t interval at the nominal level :func:`t_level` (97.5 % for 95 %), see
-    :func:`student_t_interval`."""
-    return student_t_interval(values, level=t_level(confidence))
+    :func:`student_t_interval`; with ``metrics`` (the metric of the values, or of each column),
+    the interval is kept inside the metric's range (:data:`empathy_zoo.metrics.METRIC_RANGES`:
+    no harms below 0, no equality above 1), which never lowers its coverage."""
+    mean, low, high = student_t_interval(values, level=t_level(confidence))
+    if metrics is None:
+        return mean, low, high
+    names = [metrics] if isinstance(metrics, str) else list(metrics)
+    ranges = [METRIC_RANGES.get(name, (None, None)) for name in names]
+    floor = np.array([-np.inf if r[0] is None else r[0] for r in ranges])
+    ceiling = np.array([np.inf if r[1] is None else r[1] for r in ranges])
+    if isinstance(metrics, str):
+        floor, ceiling = floor[0], ceiling[0]
+    return mean, np.clip(low, floor, ceiling), np.clip(high, floor, ceiling)
 
 
 def student_t_interval(
@@ -363,7 +376,7 @@ def score_runs(
         per_run = [run_scalars(run, metrics, final_fraction) for run in runs]
         for phase in PHASES:
             table = np.array([[scalars[phase][metric] for metric in metrics] for scalars in per_run])
-            mean, low, high = mean_ci(table, confidence=confidence)
+            mean, low, high = mean_ci(table, confidence=confidence, metrics=metrics)
             n_finite = np.isfinite(table).sum(axis=0)
             for j, metric in enumerate(metrics):
                 scores.append(Score(env, label, _method_name(runs), phase, metric,
@@ -420,6 +433,6 @@ def learning_curves(
             ends = run["train"].get("episode_end_step", [])
             size = window if window is not None else max(1, final_episode_count(len(ends)))
             per_run.append(rolling_curve(ends, _column(run["train"], metric), points, size))
-        mean, low, high = mean_ci(np.array(per_run), confidence=confidence)
+        mean, low, high = mean_ci(np.array(per_run), confidence=confidence, metrics=metric)
         curves.append(Curve(group_env, label, metric, points, mean, low, high, len(runs)))
     return curves

@@ -297,10 +297,10 @@ class _Table:
         self.runs = runs
 
     def cell(self, phase: str, metric: str, key: str) -> Cell:
-        return cell_of([run_scalars(run, (metric,))[phase][metric] for run in self.runs[key]])
+        return cell_of([run_scalars(run, (metric,))[phase][metric] for run in self.runs[key]], metric)
 
     def curve(self, phase: str, metric: str, key: str) -> Cell:
-        return cell_of([_curve_mean(run, phase, metric) for run in self.runs[key]])
+        return cell_of([_curve_mean(run, phase, metric) for run in self.runs[key]], metric)
 
     def row(self, phase: str, metric: str, keys: Sequence[str], curve: bool = False) -> list[Cell]:
         return [(self.curve if curve else self.cell)(phase, metric, k) for k in keys]

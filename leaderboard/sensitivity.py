@@ -68,7 +68,7 @@ def sensitivity_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[
         by_beta = groups[condition]
         rows[condition] = {
             name: {
-                metric: {beta: cell_of([run_scalars(r, (metric,))[phase][metric] for r in runs])
+                metric: {beta: cell_of([run_scalars(r, (metric,))[phase][metric] for r in runs], metric)
                          for beta, runs in sorted(by_beta.items(), reverse=True)}
                 for metric in ("batteries", "other_batteries", "equality")
             }

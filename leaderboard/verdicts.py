@@ -97,10 +97,10 @@ class Cell:
         return bool(np.isfinite([self.mean, self.low, self.high]).all())
 
 
-def cell_of(values: Sequence[float]) -> Cell:
+def cell_of(values: Sequence[float], metric: str | None = None) -> Cell:
     """The cell of per-seed values: the mean and the leaderboard's interval for a 95 % claim
-    (:func:`leaderboard.aggregate.mean_ci`)."""
-    mean, low, high = mean_ci(np.asarray(values, dtype=np.float64))
+    (:func:`leaderboard.aggregate.mean_ci`), kept inside ``metric``'s range when it is named."""
+    mean, low, high = mean_ci(np.asarray(values, dtype=np.float64), metrics=metric)
     return Cell(float(mean), float(low), float(high), int(np.isfinite(values).sum()))
 
 

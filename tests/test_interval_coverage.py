@@ -148,3 +148,17 @@ def test_simulated_false_positive_rate_of_the_verdict_at_five_against_five() -> 
         _, low, high = improvement_interval(x, y)
         fired += improvement_verdict(low, high, 5, 5) != "no clear difference"
     assert fired / 600 <= 0.05  # exact size for untied data: 8/252 = 3.2 %
+
+
+def test_an_interval_stays_inside_its_metrics_range() -> None:
+    from leaderboard.aggregate import mean_ci, student_t_interval, t_level
+
+    values = np.array([[0.0, 0.9, 0.5], [0.0, 0.6, 0.45], [1.2, 1.0, 0.55]])  # harms, equality, equality
+    mean, low, high = mean_ci(values, metrics=["harms", "equality", "equality"])
+    raw_mean, raw_low, raw_high = student_t_interval(values, level=t_level(0.95))
+    np.testing.assert_array_equal(mean, raw_mean)
+    assert raw_low[0] < 0 and low[0] == 0.0 and high[0] == raw_high[0]  # no harms below 0
+    assert raw_high[1] > 1 and high[1] == 1.0 and low[1] == raw_low[1]  # no equality above 1
+    assert low[2] == raw_low[2] and high[2] == raw_high[2]  # inside the range: unchanged
+    single = mean_ci(np.array([0.0, 0.0, 3.0]), metrics="harms")
+    assert single[1] == 0.0 and single[2] > 3.0 / 3

@@ -170,10 +170,10 @@ def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> N
     by_key = {(s.env, s.phase, s.metric): s for s in scores}
     single = by_key[("coexistence_v0", "train_final10", "survival")]
     assert (single.mean, single.ci_low, single.ci_high, single.n_seeds) == (9.0, 9.0, 9.0, 1)
-    shared = by_key[("sharing_v0", "train_final10", "equality")]
+    shared = by_key[("sharing_v0", "train_final10", "return")]
     assert shared.method == "empathic_dqn" and shared.n_seeds == 3 and shared.mean == 3.0
-    expected = t_by_hand([6.0, 2.0, 1.0], T_9875_2)  # the t interval at 97.5 % nominal, for a 95 % claim
-    assert (shared.ci_low, shared.ci_high) == pytest.approx(expected, rel=1e-12)
+    low, high = t_by_hand([6.0, 2.0, 1.0], T_9875_2)  # the t interval at 97.5 % nominal, for a 95 % claim,
+    assert low < 0 and (shared.ci_low, shared.ci_high) == pytest.approx((0.0, high), rel=1e-12)  # kept ≥ 0
     evaluated = by_key[("sharing_v0", "eval", "survival")]
     assert evaluated.mean == 4.0
     assert len(scores) == 2 * 2 * len(METRIC_NAMES)
@@ -212,8 +212,8 @@ def test_learning_curves_average_seeds_per_point_with_t_intervals() -> None:
     (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4, random_state=5, n_resamples=200)
     assert curve.steps.tolist() == [25.0, 50.0, 75.0, 100.0]
     assert curve.mean.tolist() == [3.0, 2.0, 5.0, 6.0] and curve.n_seeds == 3
-    expected = t_by_hand([2.0, 4.0, 0.0], T_9875_2)
-    assert (curve.ci_low[1], curve.ci_high[1]) == pytest.approx(expected, rel=1e-12)
+    low, high = t_by_hand([2.0, 4.0, 0.0], T_9875_2)
+    assert low < 0 and (curve.ci_low[1], curve.ci_high[1]) == pytest.approx((0.0, high), rel=1e-12)  # survival ≥ 0
     assert len(learning_curves(runs, "survival", n_points=4)) == 2
 
 
