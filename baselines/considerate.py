@@ -86,6 +86,7 @@ import torch
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from agents.step_batch import StepBatch
+from baselines.side_network import train_side_network
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
 __all__ = ["AGGREGATES", "Considerate", "considerate_bonus"]
@@ -258,20 +259,8 @@ class Considerate:
 
     def _train(self, state: dict[str, np.ndarray], updates: int) -> None:
         """``updates`` TD(0) steps of every run's value network."""
-        online = [torch.from_numpy(state[f"online_{i}"]).requires_grad_() for i in range(2 * _LAYERS)]
-        target = [torch.from_numpy(state[f"target_{i}"]) for i in range(2 * _LAYERS)]
-        optimizer = StackedAdam(online, lr=self.learning_rate)
-        optimizer.load_state_dict({
-            "exp_avg": [torch.from_numpy(state[f"avg_{i}"]) for i in range(2 * _LAYERS)],
-            "exp_avg_sq": [torch.from_numpy(state[f"avg_sq_{i}"]) for i in range(2 * _LAYERS)],
-            "steps": torch.from_numpy(state["adam_steps"]),
-        })
-        for _ in range(updates):
-            self._update(state, online, target, optimizer)
-        for i in range(2 * _LAYERS):
-            np.copyto(state[f"avg_{i}"], optimizer.exp_avg[i].numpy())
-            np.copyto(state[f"avg_sq_{i}"], optimizer.exp_avg_sq[i].numpy())
-        np.copyto(state["adam_steps"], optimizer.step_count.numpy())
+        train_side_network(state, 2 * _LAYERS, self.learning_rate, updates,
+                           lambda online, target, optimizer: self._update(state, online, target, optimizer))
 
     def _update(self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor],
                 optimizer: StackedAdam) -> None:

@@ -53,7 +53,7 @@ sys.path.insert(0, str(ROOT))
 
 from empathy_zoo.atomic import read_json  # noqa: E402
 from leaderboard.aggregate import group_runs, mean_ci, result_files, run_scalars, student_t_interval  # noqa: E402
-from leaderboard.improvement import can_decide, improvement_interval, permutation_test  # noqa: E402
+from leaderboard.improvement import can_decide, improvement_interval  # noqa: E402
 from leaderboard.tables import TABLE_METRICS  # noqa: E402
 from machine import describe_machine  # noqa: E402  (benchmarks/machine.py, this directory is on sys.path)
 

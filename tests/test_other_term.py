@@ -6,26 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from empathy_zoo.training.ensemble import learner_batch
-from empathy_zoo.vector import VectorEnv
+from helpers_placed import placed as _placed
+from helpers_placed import step as _step
 
 ROBOT = 0
 UP, RIGHT, STAY = 0, 3, 4
-
-
-def _placed(env: str, positions: dict, fixed: dict, max_cycles: int = 500, **options) -> VectorEnv:
-    venv = VectorEnv(env, 1, fixed=fixed, max_cycles=max_cycles)
-    venv.reset(seed=0)
-    venv.engine.reset(np.array([0]), options={"positions": positions, **options})
-    venv._observations = venv._observe_learners()
-    return venv
-
-
-def _step(venv: VectorEnv, action: int):
-    obs = venv._observations[:, 0]
-    actions = np.array([[action]])
-    result = venv.step(actions)
-    return result, learner_batch(obs, actions, result)
 
 
 def test_sharing_ends_with_the_human_terminal_and_no_other_term() -> None:

@@ -528,7 +528,6 @@ def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
             closest = closest_by_hand(env.unwrapped.engine, 0)  # chosen when the step begins (SPEC §3b)
             env.step({ROBOT: int(actions[i, 0])})
             base = env.unwrapped
-            engine = base.engine
             for k, other in enumerate(others):
                 swapped = base.swapped_observation(ROBOT, other, in_view_only=in_view_only)
                 expected = np.zeros(VIEW * VIEW, np.float32) if swapped is None else swapped

@@ -12,27 +12,16 @@ import torch
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.reference import coexistence_optimum
-from empathy_zoo.training.ensemble import learner_batch
-from empathy_zoo.vector import VectorEnv
+from helpers_placed import placed
+from helpers_placed import step as _step
 
 ROBOT, DOWN, STAY = 0, 1, 4
 BETA, GAMMA = 0.5, 0.99
 
 
-def _placed(positions: dict, in_view_only: bool, num_cats: int = 1) -> VectorEnv:
+def _placed(positions: dict, in_view_only: bool, num_cats: int = 1):
     fixed = {f"cat_{i}": "stay" for i in range(num_cats)}
-    venv = VectorEnv("coexistence_v0", 1, fixed=fixed, in_view_only=in_view_only, num_cats=num_cats)
-    venv.reset(seed=0)
-    venv.engine.reset(np.array([0]), options={"positions": positions})
-    venv._observations = venv._observe_learners()
-    return venv
-
-
-def _step(venv: VectorEnv, action: int):
-    obs = venv._observations[:, 0]
-    actions = np.array([[action]])
-    result = venv.step(actions)
-    return result, learner_batch(obs, actions, result)
+    return placed("coexistence_v0", positions, fixed, in_view_only=in_view_only, env_kwargs={"num_cats": num_cats})
 
 
 def _learned_targets(batch) -> tuple[float, float]:
