@@ -1,0 +1,69 @@
+"""Every method against DQN in one compact table per environment: for each metric, the mean of the
+last greedy evaluation and of the final 10 % of training episodes, each with its ▲ / ▼ / ⊘ marker
+(:func:`leaderboard.improvement.improvement_verdict`), DQN's own means in the heading.
+
+    python -m leaderboard.versus_dqn docs/results/methods
+
+prints the tables the methods NOTE quotes (a view of the leaderboard's cells, nothing new computed).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from leaderboard.aggregate import group_runs, load_results, score_runs
+from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
+
+__all__ = ["versus_dqn_tables", "DEFAULT_METRICS"]
+
+DEFAULT_METRICS: dict[str, tuple[str, ...]] = {
+    "coexistence_v0": ("harms", "survival", "other_return"),
+    "sharing_v0": ("batteries", "equality", "other_batteries"),
+}
+"""The metrics shown per environment (a variant takes its environment's)."""
+
+
+def _format(value: float, metric: str) -> str:
+    return f"{value:.0f}" if metric in ("survival", "other_return", "return") else f"{value:.2f}"
+
+
+def versus_dqn_tables(results: Sequence[dict[str, Any]],
+                      metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
+    """Markdown: per variant, one row per method, a cell per metric ``▲ greedy / ▼ training``."""
+    groups = group_runs(results)
+    envs = {env: runs[0]["env"] for (env, _), runs in groups.items()}
+    metrics_of = {variant: (metrics_of or DEFAULT_METRICS).get(variant) or DEFAULT_METRICS[env]
+                  for variant, env in envs.items()}
+    scores = {(s.env, s.method_label, s.phase, s.metric): s for s in score_runs(results)}
+    verdicts = {(c.env, c.method_label, c.phase, c.metric): c for c in improvements_over_dqn(results, metrics_of)}
+    lines: list[str] = []
+    for variant, metrics in metrics_of.items():
+        labels = [label for (env, label) in groups if env == variant]
+        dqn = [label for label in labels if all(is_dqn(run) for run in groups[(variant, label)])]
+        seeds = {label: len(groups[(variant, label)]) for label in labels}
+        heading = ", ".join(f"{m} {_format(scores[(variant, dqn[0], 'eval', m)].mean, m)} / "
+                            f"{_format(scores[(variant, dqn[0], 'train_final10', m)].mean, m)}" for m in metrics) if dqn else ""
+        lines += [f"### {variant}", "", f"DQN ({seeds[dqn[0]]} seeds): {heading} (greedy / training)." if dqn else "", "",
+                  "| method | seeds | " + " | ".join(metrics) + " |", "|---|---|" + "---|" * len(metrics)]
+        for label in labels:
+            if label in dqn:
+                continue
+            cells = []
+            for metric in metrics:
+                parts = []
+                for phase in ("eval", "train_final10"):
+                    cell = verdicts.get((variant, label, phase, metric))
+                    mark = VERDICT_MARKS.get(cell.verdict, "") if cell is not None else ""
+                    parts.append(f"{mark} {_format(scores[(variant, label, phase, metric)].mean, metric)}".strip())
+                cells.append(" / ".join(parts))
+            lines.append(f"| {label} | {seeds[label]} | " + " | ".join(cells) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m leaderboard.versus_dqn RESULTS_DIR")
+    print(versus_dqn_tables(load_results(sys.argv[1])))
