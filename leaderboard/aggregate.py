@@ -21,6 +21,7 @@ Nothing here formats text or draws; see :mod:`leaderboard.tables` and :mod:`lead
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 import os
 import warnings
@@ -32,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.engine import GridEngine
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
 from empathy_zoo.result_file import check_one_experiment_per_label, check_result
@@ -41,7 +43,7 @@ __all__ = [
     "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
     "N_POINTS", "Score", "Curve", "table_env", "result_files", "load_results", "group_runs", "final_episode_count",
     "run_scalars", "student_t_quantile", "t_level", "mean_ci", "student_t_interval", "bootstrap_mean_ci",
-    "score_runs", "rolling_curve", "learning_curves", "MEAN_INTERVAL_NOTE",
+    "score_runs", "longest_episode", "rolling_curve", "learning_curves", "MEAN_INTERVAL_NOTE",
 ]
 
 PHASES: tuple[str, ...] = ("eval", "train_final10")
@@ -86,7 +88,7 @@ MEAN_INTERVAL_NOTE = (
     "76 % at 3 seeds and 83 % at 5 (normal data). It has zero width when every seed gave the same value, "
     "which does not mean the seeds cannot differ: where that is common it covers less (harms ≈ 0.05 per "
     "episode: 76 % at 3 seeds, 92 % at 5; resampling the committed per-seed values: 84 % and 89 %). "
-    "An interval is cut to the metric's range (no harms below 0, no equality above 1)."
+    "An interval is cut to the metric's range (no harms below 0, no equality above 1, no survival above max_cycles)."
 )
 """How the leaderboard's interval of the mean was chosen, with the coverage the benchmark measured
 (printed in every legend that shows these intervals)."""
@@ -308,20 +310,29 @@ def t_level(confidence: float = CONFIDENCE) -> float:
     return 1.0 - (1.0 - confidence) / 2.0
 
 
+def longest_episode(runs: Iterable[dict[str, Any]]) -> int:
+    """The most steps an episode of ``runs`` can last (their ``max_cycles``; the engine's default
+    where a run's config does not set it): the bound of ``survival``."""
+    default = inspect.signature(GridEngine.__init__).parameters["max_cycles"].default
+    return max(int((run.get("config") or {}).get("env_kwargs", {}).get("max_cycles", default)) for run in runs)
+
+
 def mean_ci(
     values: np.ndarray | Sequence[float], *, confidence: float = CONFIDENCE,
-    metrics: str | Sequence[str] | None = None,
+    metrics: str | Sequence[str] | None = None, max_cycles: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean over seeds (axis 0) and the leaderboard's interval of it for a claimed ``confidence``:
     the Student-t interval at the nominal level :func:`t_level` (97.5 % for 95 %), see
     :func:`student_t_interval`; with ``metrics`` (the metric of the values, or of each column),
     the interval is kept inside the metric's range (:data:`empathy_zoo.metrics.METRIC_RANGES`:
-    no harms below 0, no equality above 1), which never lowers its coverage."""
+    no harms below 0, no equality above 1; with ``max_cycles``, no survival above it), which
+    never lowers its coverage."""
     mean, low, high = student_t_interval(values, level=t_level(confidence))
     if metrics is None:
         return mean, low, high
     names = [metrics] if isinstance(metrics, str) else list(metrics)
-    ranges = [METRIC_RANGES.get(name, (None, None)) for name in names]
+    ranges = [(0.0, max_cycles) if name == "survival" and max_cycles is not None else METRIC_RANGES.get(name, (None, None))
+              for name in names]
     floor = np.array([-np.inf if r[0] is None else r[0] for r in ranges])
     ceiling = np.array([np.inf if r[1] is None else r[1] for r in ranges])
     if isinstance(metrics, str):
@@ -376,7 +387,7 @@ def score_runs(
         per_run = [run_scalars(run, metrics, final_fraction) for run in runs]
         for phase in PHASES:
             table = np.array([[scalars[phase][metric] for metric in metrics] for scalars in per_run])
-            mean, low, high = mean_ci(table, confidence=confidence, metrics=metrics)
+            mean, low, high = mean_ci(table, confidence=confidence, metrics=metrics, max_cycles=longest_episode(runs))
             n_finite = np.isfinite(table).sum(axis=0)
             for j, metric in enumerate(metrics):
                 scores.append(Score(env, label, _method_name(runs), phase, metric,
@@ -433,6 +444,6 @@ def learning_curves(
             ends = run["train"].get("episode_end_step", [])
             size = window if window is not None else max(1, final_episode_count(len(ends)))
             per_run.append(rolling_curve(ends, _column(run["train"], metric), points, size))
-        mean, low, high = mean_ci(np.array(per_run), confidence=confidence, metrics=metric)
+        mean, low, high = mean_ci(np.array(per_run), confidence=confidence, metrics=metric, max_cycles=longest_episode(runs))
         curves.append(Curve(group_env, label, metric, points, mean, low, high, len(runs)))
     return curves

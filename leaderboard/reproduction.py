@@ -30,7 +30,7 @@ import numpy as np
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES
 from empathy_zoo.schedules import linear_epsilon
-from leaderboard.aggregate import final_episode_count, load_results, run_scalars
+from leaderboard.aggregate import final_episode_count, load_results, longest_episode, run_scalars
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
 __all__ = [
@@ -297,10 +297,12 @@ class _Table:
         self.runs = runs
 
     def cell(self, phase: str, metric: str, key: str) -> Cell:
-        return cell_of([run_scalars(run, (metric,))[phase][metric] for run in self.runs[key]], metric)
+        runs = self.runs[key]
+        return cell_of([run_scalars(run, (metric,))[phase][metric] for run in runs], metric, longest_episode(runs))
 
     def curve(self, phase: str, metric: str, key: str) -> Cell:
-        return cell_of([_curve_mean(run, phase, metric) for run in self.runs[key]], metric)
+        runs = self.runs[key]
+        return cell_of([_curve_mean(run, phase, metric) for run in runs], metric, longest_episode(runs))
 
     def row(self, phase: str, metric: str, keys: Sequence[str], curve: bool = False) -> list[Cell]:
         return [(self.curve if curve else self.cell)(phase, metric, k) for k in keys]

@@ -97,10 +97,11 @@ class Cell:
         return bool(np.isfinite([self.mean, self.low, self.high]).all())
 
 
-def cell_of(values: Sequence[float], metric: str | None = None) -> Cell:
+def cell_of(values: Sequence[float], metric: str | None = None, max_cycles: int | None = None) -> Cell:
     """The cell of per-seed values: the mean and the leaderboard's interval for a 95 % claim
-    (:func:`leaderboard.aggregate.mean_ci`), kept inside ``metric``'s range when it is named."""
-    mean, low, high = mean_ci(np.asarray(values, dtype=np.float64), metrics=metric)
+    (:func:`leaderboard.aggregate.mean_ci`), kept inside ``metric``'s range when it is named
+    (survival also below ``max_cycles`` when it is given)."""
+    mean, low, high = mean_ci(np.asarray(values, dtype=np.float64), metrics=metric, max_cycles=max_cycles)
     return Cell(float(mean), float(low), float(high), int(np.isfinite(values).sum()))
 
 

@@ -162,3 +162,12 @@ def test_an_interval_stays_inside_its_metrics_range() -> None:
     assert low[2] == raw_low[2] and high[2] == raw_high[2]  # inside the range: unchanged
     single = mean_ci(np.array([0.0, 0.0, 3.0]), metrics="harms")
     assert single[1] == 0.0 and single[2] > 3.0 / 3
+
+
+def test_survival_stays_below_the_longest_episode() -> None:
+    from leaderboard.aggregate import longest_episode, mean_ci
+
+    _, low, high = mean_ci(np.array([500.0, 480.0, 200.0]), metrics="survival", max_cycles=500)
+    assert high == 500.0 and 0.0 <= low < 200.0
+    runs = [{"config": {"env_kwargs": {}}}, {"config": {"env_kwargs": {"max_cycles": 40}}}]
+    assert longest_episode(runs) == 500 and longest_episode(runs[1:]) == 40  # the engine's default where unset
