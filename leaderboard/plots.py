@@ -21,6 +21,7 @@ from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE, DEFAULT_SEED, N_POINTS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
 )
+from leaderboard.colours import method_colours
 from leaderboard.reference_curves import reference_curve
 
 __all__ = [
@@ -59,7 +60,7 @@ def render_curves_png(
     figure = Figure(figsize=(7.5, 4.2), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
-    colours = [f"C{i % 10}" for i in range(len(curves))]
+    colours = method_colours(len(curves))
     for curve, colour in zip(curves, colours):
         label = f"{curve.method_label} (n={curve.n_seeds})"
         axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)

@@ -1,6 +1,7 @@
-"""The exact optimum beside the learners: per Empathic DQN curve of Coexistence, what the
-fully observing optimum of the same β (:mod:`empathy_zoo.reference`) would score at the ε the
-run explored with at each point of training. Drawn dashed in the curve's colour."""
+"""The exact optimum beside the learners: per Empathic DQN curve of Coexistence (and of its in-view
+and silver-rule variants, each with its own target), what the fully observing optimum of the same
+β (:mod:`empathy_zoo.reference`) would score at the ε the run explored with at each point of
+training. Drawn dashed in the curve's colour."""
 
 from __future__ import annotations
 
@@ -13,11 +14,15 @@ import numpy as np
 from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.schedules import linear_epsilon
 
-__all__ = ["REFERENCE_METRICS", "reference_curve"]
+__all__ = ["REFERENCE_METRICS", "REFERENCE_TARGETS", "reference_curve"]
 
 REFERENCE_METRICS = ("harms", "survival")
 """Metrics the Coexistence reference gives."""
-_EMPATHIC = ("empathic_dqn", "dqn")
+REFERENCE_TARGETS: dict[str, dict[str, Any]] = {
+    "empathic_dqn": {}, "dqn": {}, "empathic_dqn_in_view": {"in_view_only": True}, "empathic_dqn_silver": {"rule": "silver"},
+}
+"""The methods the reference models, with the target it optimises for each (its ``rule`` /
+``in_view_only`` arguments)."""
 
 
 def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarray) -> np.ndarray | None:
@@ -29,13 +34,14 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
         return None
     first = runs[0]
     config = first.get("config", {})
-    if (first["env"] != "coexistence_v0" or first["method"] not in _EMPATHIC
+    if (first["env"] != "coexistence_v0" or first["method"] not in REFERENCE_TARGETS
             or dict(config.get("fixed") or {}) != DEFAULT_POLICIES["coexistence_v0"]
-            or set(config.get("env_kwargs") or {}) - {"size", "max_cycles"}
+            or set(config.get("env_kwargs") or {}) - {"size", "view", "max_cycles"}
             or any(run.get("config", {}).get("settings") != config.get("settings") for run in runs)):
         return None
     settings = SimpleNamespace(**config["settings"])
-    arguments = {"gamma": settings.gamma, **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()}}
+    arguments = {"gamma": settings.gamma, **REFERENCE_TARGETS[first["method"]],
+                 **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()}}
     values = []
     for step in steps:
         epsilon = round(linear_epsilon(settings, int(step)), 3)

@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
 from leaderboard.aggregate import PHASES, Score
+from leaderboard.colours import method_colours
 from leaderboard.tables import PHASE_TITLES
 
 __all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs",
@@ -86,6 +87,7 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
     """PNG bytes of ``env``'s trade-off, one panel per phase, from the leaderboard's ``scores``."""
     scores = [s for s in scores if s.env == env]
     labels = list(dict.fromkeys(s.method_label for s in scores))
+    colours = method_colours(len(labels))
     figure = Figure(figsize=(11.0, 4.6), layout="constrained")
     FigureCanvasAgg(figure)
     panels = figure.subplots(1, len(PHASES), squeeze=False)[0]
@@ -94,7 +96,7 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
         drawn = [(label, x, y) for label, (x, y) in zip(labels, cells) if x is not None and y is not None]
         front = set(pareto_front([(x.mean, y.mean) for _, x, y in drawn], spec.effect_higher_is_better))
         for i, (label, x, y) in enumerate(drawn):
-            colour = f"C{labels.index(label) % 10}"
+            colour = colours[labels.index(label)]
             on_front = i in front
             axes.errorbar(
                 x.mean, y.mean, xerr=[[x.mean - x.ci_low], [x.ci_high - x.mean]],
@@ -109,7 +111,7 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
         axes.set_ylabel(spec.effect_label)
         axes.grid(True, alpha=0.3)
     seeds = {s.method_label: s.n_seeds for s in scores if s.metric in (spec.task, spec.effect)}
-    handles = [Line2D([], [], marker="s", linestyle="", color=f"C{i % 10}", markersize=8,
+    handles = [Line2D([], [], marker="s", linestyle="", color=colours[i], markersize=8,
                       label=f"{label} (n={seeds[label]})") for i, label in enumerate(labels)]
     handles += [Line2D([], [], marker="o", linestyle="--", color="0.35", markersize=8, label="on the Pareto front"),
                 Line2D([], [], marker="o", linestyle="", color="0.35", markerfacecolor="white", markersize=8,

@@ -41,3 +41,14 @@ def test_figure_with_references_is_written(tmp_path) -> None:
             (("empathic_dqn", 1.0, 0.9), ("empathic_dqn", 0.25, 0.1), ("dqn_harm_penalty", 1.0, 0.2))]
     path = plot_metric(runs, "coexistence_v0", "harms", tmp_path / "harms.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_in_view_and_silver_variants_get_their_own_target() -> None:
+    steps = np.array([10_000.0])  # ε at its floor, 0.01
+    for method, arguments in (("empathic_dqn_in_view", {"in_view_only": True}), ("empathic_dqn_silver", {"rule": "silver"})):
+        runs = [synthetic_result("coexistence_v0", method, 0.25, 0)]
+        harms = reference_curve(runs, "harms", steps)
+        assert harms is not None and harms[0] == coexistence_optimum(0.25, 0.01, **arguments).harms
+    in_view = reference_curve([synthetic_result("coexistence_v0", "empathic_dqn_in_view", 0.25, 0)], "harms", steps)
+    golden = reference_curve([synthetic_result("coexistence_v0", "empathic_dqn", 0.25, 0)], "harms", steps)
+    assert in_view[0] < golden[0]  # an unseen cat no longer counts as harmed: the in-view optimum keeps away

@@ -37,3 +37,13 @@ def test_the_figure_is_a_png(env: str) -> None:
     spec = TRADEOFF_SPECS[env]
     png = render_tradeoff_png(_scores(env, spec, {"A": (1.0, 0.5), "B": (2.0, 0.7), "C": (0.5, 0.1)}), env, spec)
     assert png.startswith(PNG_SIGNATURE) and len(png) > 10_000
+
+
+def test_every_method_of_a_figure_gets_its_own_colour() -> None:
+    from matplotlib.colors import to_rgba
+
+    from leaderboard.colours import method_colours
+
+    for count in (3, 10, 11, 20, 27):
+        colours = {to_rgba(c) for c in method_colours(count)}
+        assert len(colours) == count
