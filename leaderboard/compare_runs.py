@@ -1,0 +1,54 @@
+"""Which runs of two results directories computed the same thing: each run of one is matched with
+the run of the other of the same variant, method, β, aggregation of the others, reward transform
+and seed, and the pair is *same* when their training and evaluation columns are equal value for
+value (what a version that changed nothing a run computes must give).
+
+    python -m leaderboard.compare_runs OLD_DIR NEW_DIR
+
+prints one line per matched pair and the counts; runs without a partner are counted apart.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from leaderboard.aggregate import load_results
+
+__all__ = ["run_key", "compare_runs"]
+
+
+def run_key(run: dict[str, Any]) -> tuple:
+    """What two versions' runs must share to be the same experiment."""
+    config = run.get("config") or {}
+    settings = config.get("settings") or {}
+    reward = (config.get("reward") or {}).get("name")
+    return (config.get("variant") or run["env"], run["method"], settings.get("selfishness"),
+            settings.get("others", "closest"), reward, run["seed"])
+
+
+def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> dict[str, list[tuple]]:
+    """``{"same": [...], "different": [...], "only_old": [...], "only_new": [...]}``: the keys
+    (:func:`run_key`) of the matched pairs by outcome, and of the runs without a partner."""
+    by_key_old = {run_key(run): run for run in old}
+    by_key_new = {run_key(run): run for run in new}
+    outcome: dict[str, list[tuple]] = {"same": [], "different": [], "only_old": [], "only_new": []}
+    for key in sorted(by_key_new, key=repr):
+        if key not in by_key_old:
+            outcome["only_new"].append(key)
+            continue
+        a, b = by_key_old[key], by_key_new[key]
+        outcome["same" if a["train"] == b["train"] and a["eval"] == b["eval"] else "different"].append(key)
+    outcome["only_old"] = sorted((key for key in by_key_old if key not in by_key_new), key=repr)
+    return outcome
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit("usage: python -m leaderboard.compare_runs OLD_DIR NEW_DIR")
+    result = compare_runs(load_results(sys.argv[1]), load_results(sys.argv[2]))
+    for verdict in ("same", "different"):
+        for key in result[verdict]:
+            print(f"{verdict:9s} {key}")
+    print(", ".join(f"{name}: {len(keys)}" for name, keys in result.items()))
