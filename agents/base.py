@@ -128,15 +128,17 @@ def _takes_two(label: Callable[..., str]) -> bool:
     return len(positional) >= 2 or any(p.kind is p.VAR_POSITIONAL for p in parameters)
 
 
-def _changed_fields(default: RewardTransform | None, reward: RewardTransform | None,
-                    shown: Sequence[str] = ()) -> dict[str, Any]:
+def _changed_fields(default: RewardTransform | None, reward: RewardTransform | None, shown: Sequence[str] = ()) -> dict[str, Any]:
     """The fields of ``reward`` whose values differ from ``default``'s, and those in ``shown``, in
     declaration order."""
     if default is None or reward is None or type(default) is not type(reward):
         return {}
     before, after = transform_config(default) or {}, transform_config(reward) or {}
-    return {name: value for name, value in after.items()
-            if name != "name" and (name in shown or repr(before.get(name)) != repr(value))}
+    return {
+        name: value
+        for name, value in after.items()
+        if name != "name" and (name in shown or repr(before.get(name)) != repr(value))
+    }
 
 
 def _shown(value: Any) -> str:

@@ -41,20 +41,35 @@ from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
 from empathy_zoo.schedules import linear_epsilon
 
-__all__ = ["EmpathicDQN", "double_dqn_target", "continuation_value", "empathic_targets", "other_term", "own_where_unseen", "linear_epsilon"]
+__all__ = [
+    "EmpathicDQN",
+    "double_dqn_target",
+    "continuation_value",
+    "empathic_targets",
+    "other_term",
+    "own_where_unseen",
+    "linear_epsilon",
+]
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
 
 
 def double_dqn_target(
-    reward: torch.Tensor, terminated: torch.Tensor, q_next_online: torch.Tensor, q_next_target: torch.Tensor, gamma: float,
+    reward: torch.Tensor,
+    terminated: torch.Tensor,
+    q_next_online: torch.Tensor,
+    q_next_target: torch.Tensor,
+    gamma: float,
 ) -> torch.Tensor:
     """``y = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))``, ``(K, B)``, from ``(K, B, A)`` values."""
     return reward + continuation_value(terminated, q_next_online, q_next_target, gamma)
 
 
 def continuation_value(
-    terminated: torch.Tensor, q_next_online: torch.Tensor, q_next_target: torch.Tensor, gamma: float,
+    terminated: torch.Tensor,
+    q_next_online: torch.Tensor,
+    q_next_target: torch.Tensor,
+    gamma: float,
 ) -> torch.Tensor:
     """``c = γ·(1 − done)·Q̂(s', argmax_a Q(s', a))``, ``(K, B)``: the robot's target without its
     immediate reward (``y = r + c``)."""
@@ -87,8 +102,9 @@ def empathic_targets(
     return y, own_where_unseen(y, y_emp, unseen, others, live)
 
 
-def own_where_unseen(y: torch.Tensor, y_emp: torch.Tensor, unseen: torch.Tensor | None, others: str = "closest",
-                     live: torch.Tensor | None = None) -> torch.Tensor:
+def own_where_unseen(
+    y: torch.Tensor, y_emp: torch.Tensor, unseen: torch.Tensor | None, others: str = "closest", live: torch.Tensor | None = None
+) -> torch.Tensor:
     """``y_emp`` with the robot's own target ``y`` where no other agent is seen to care about
     (SPEC §4): the closest other is unseen; with several others aggregated, every other that was
     live when the step began is unseen (and at least one was)."""
@@ -100,9 +116,14 @@ def own_where_unseen(y: torch.Tensor, y_emp: torch.Tensor, unseen: torch.Tensor 
     return torch.where(unseen, y, y_emp)
 
 
-def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamma: float,
-               others: str = "closest", live: torch.Tensor | None = None,
-               unseen: torch.Tensor | None = None) -> torch.Tensor:
+def other_term(
+    q_swapped_target: torch.Tensor,
+    other_present: torch.Tensor,
+    gamma: float,
+    others: str = "closest",
+    live: torch.Tensor | None = None,
+    unseen: torch.Tensor | None = None,
+) -> torch.Tensor:
     """``γ·other_present·max_a Q̂(s_emp', a)``, ``(K, B)``: the robot's value in the other's place
     at t+1 (0 where that agent is terminal). With ``others`` "mean" or "min", the inputs carry one
     entry per other agent (``(K, B, N, A)``, ``(K, B, N)``) and the terms of the others that were
@@ -113,7 +134,9 @@ def other_term(q_swapped_target: torch.Tensor, other_present: torch.Tensor, gamm
     if others == "closest":
         return terms
     if terms.dim() != 3:
-        raise ValueError(f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {tuple(q_swapped_target.shape)}")
+        raise ValueError(
+            f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {tuple(q_swapped_target.shape)}"
+        )
     live = torch.ones_like(terms, dtype=torch.bool) if live is None else live
     if unseen is not None:
         live = live & ~unseen
@@ -174,8 +197,9 @@ class EmpathicDQN:
         self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
         self.aggregated = self.config.others != "closest" and num_others > 1
         """The other-term aggregates one swapped value per other agent (``num_others`` of them)."""
-        self.replay = StackedReplay(k, self.config.replay_capacity, obs_size, self.device,
-                                    others=num_others if self.aggregated else 1)
+        self.replay = StackedReplay(
+            k, self.config.replay_capacity, obs_size, self.device, others=num_others if self.aggregated else 1
+        )
         self.selfishness = torch.tensor([[s.selfishness] for s in settings], device=self.device)
         self._explore_keys = np.array([derive_key(s, STREAM_EXPLORE) for s in self.seeds], dtype=np.uint64)[:, None]
         self._sample_keys = np.array([derive_key(s, STREAM_SAMPLE) for s in self.seeds], dtype=np.uint64)[:, None]
@@ -218,11 +242,15 @@ class EmpathicDQN:
             present = present + 2 * batch.other_unseen.astype(np.uint8)
         if self.aggregated:
             if batch.swapped_next_obs_all is None or batch.others_present is None:
-                raise ValueError(f"others={self.config.others!r} needs every other agent's swapped observation "
-                                 "(StepBatch.swapped_next_obs_all, others_present)")
+                raise ValueError(
+                    f"others={self.config.others!r} needs every other agent's swapped observation "
+                    "(StepBatch.swapped_next_obs_all, others_present)"
+                )
             if batch.others_live is None:
-                raise ValueError(f"others={self.config.others!r} needs which other agents were there when the "
-                                 "step began (StepBatch.others_live)")
+                raise ValueError(
+                    f"others={self.config.others!r} needs which other agents were there when the "
+                    "step began (StepBatch.others_live)"
+                )
             swapped = batch.swapped_next_obs_all
             present = batch.others_live.astype(np.uint8) + batch.others_present  # codes: see StackedReplay.flags
             if batch.others_unseen is not None:
@@ -289,8 +317,16 @@ class EmpathicDQN:
         :func:`other_term`). Override this to try another way of caring about the other agent.
         """
         return empathic_targets(
-            batch["reward"], batch["terminated"], q_next, target_next, target_swapped,
-            batch["other_present"], self.config.gamma, self.selfishness, self._others_rule(), batch.get("others_live"),
+            batch["reward"],
+            batch["terminated"],
+            q_next,
+            target_next,
+            target_swapped,
+            batch["other_present"],
+            self.config.gamma,
+            self.selfishness,
+            self._others_rule(),
+            batch.get("others_live"),
             batch.get("other_unseen"),
         )
 

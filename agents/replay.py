@@ -61,8 +61,16 @@ class StackedReplay:
                 f"[{MIN_VALUE:g}, {MAX_VALUE:g}] only (one-byte codes); use a smaller env (fewer batteries)"
             )
 
-    def add(self, obs: np.ndarray, next_obs: np.ndarray, swapped_next_obs: np.ndarray, action: np.ndarray,
-            reward: np.ndarray, terminated: np.ndarray, other_present: np.ndarray) -> None:
+    def add(
+        self,
+        obs: np.ndarray,
+        next_obs: np.ndarray,
+        swapped_next_obs: np.ndarray,
+        action: np.ndarray,
+        reward: np.ndarray,
+        terminated: np.ndarray,
+        other_present: np.ndarray,
+    ) -> None:
         """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``; with several
         others, ``swapped_next_obs`` is ``(K, m, others, V)`` and ``other_present`` ``(K, m, others)``
         codes (see :attr:`flags`)."""
@@ -74,8 +82,10 @@ class StackedReplay:
         else:
             expected = (*action.shape, self.others)
             if swapped_next_obs.shape[:3] != expected or other_present.shape != expected:
-                raise ValueError(f"expected swapped observations {(*expected, self.obs_size)} and presence {expected} "
-                                 f"for {self.others} other agents, got {swapped_next_obs.shape} and {other_present.shape}")
+                raise ValueError(
+                    f"expected swapped observations {(*expected, self.obs_size)} and presence {expected} "
+                    f"for {self.others} other agents, got {swapped_next_obs.shape} and {other_present.shape}"
+                )
             packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped_next_obs], axis=2))
             flags = np.concatenate([action[..., None], terminated[..., None], other_present], axis=2).astype(np.uint8)
         self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
@@ -97,9 +107,11 @@ class StackedReplay:
         swapped = SWAPPED_NEXT_OBS if self.others == 1 else slice(SWAPPED_NEXT_OBS, None)
         present = OTHER_PRESENT if self.others == 1 else slice(OTHER_PRESENT, None)
         sample = {  # (with several others: swapped_next_obs (K, B, others, V), other_present (K, B, others))
-            "obs": observations[:, :, OBS], "next_obs": observations[:, :, NEXT_OBS],
+            "obs": observations[:, :, OBS],
+            "next_obs": observations[:, :, NEXT_OBS],
             "swapped_next_obs": observations[:, :, swapped],
-            "action": flags[:, :, ACTION].long(), "terminated": flags[:, :, TERMINATED].bool(),
+            "action": flags[:, :, ACTION].long(),
+            "terminated": flags[:, :, TERMINATED].bool(),
             "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
         }
         codes = flags[:, :, present]  # (see flags)
@@ -119,12 +131,16 @@ class StackedReplay:
         Full buffers are the live tensors, not copies (as a torch module's ``state_dict``): a copy
         would double the replay's memory while a checkpoint is written. The filled part of buffers
         not yet full is copied (``torch.save`` of a slice would write the whole buffer)."""
+
         def filled(buffer: torch.Tensor) -> torch.Tensor:
             return buffer if self.size == self.capacity else buffer[:, : self.size].clone()
 
         return {
-            "observations": filled(self.observations), "flags": filled(self.flags), "reward": filled(self.reward),
-            "position": self.position, "size": self.size,
+            "observations": filled(self.observations),
+            "flags": filled(self.flags),
+            "reward": filled(self.reward),
+            "position": self.position,
+            "size": self.size,
         }
 
     def load_state_dict(self, state: dict) -> None:

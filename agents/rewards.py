@@ -43,7 +43,12 @@ import numpy as np
 from agents.step_batch import StepBatch
 
 __all__ = [
-    "RewardTransform", "TrainRewards", "configure_transform", "same_transform", "transform_config", "transform_fields",
+    "RewardTransform",
+    "TrainRewards",
+    "configure_transform",
+    "same_transform",
+    "transform_config",
+    "transform_fields",
     "with_train_rewards",
 ]
 
@@ -92,12 +97,14 @@ def configure_transform(transform: RewardTransform | None, overrides: Mapping[st
     kinds = transform_fields(transform)
     if not kinds:
         what = "no reward transform" if transform is None else f"a reward transform without fields ({transform.name!r})"
-        raise ValueError(f"{f'method {owner!r}' if owner else 'this method'} has {what}: "
-                         f"{', '.join(sorted(overrides))} cannot be set")
+        raise ValueError(
+            f"{f'method {owner!r}' if owner else 'this method'} has {what}: {', '.join(sorted(overrides))} cannot be set"
+        )
     unknown = [name for name in overrides if name not in kinds]
     if unknown:
-        raise ValueError(f"unknown field(s) {unknown} of the reward transform {transform.name!r}{whose}; "
-                         f"its fields: {', '.join(kinds)}")
+        raise ValueError(
+            f"unknown field(s) {unknown} of the reward transform {transform.name!r}{whose}; its fields: {', '.join(kinds)}"
+        )
     checked = {name: _checked_value(name, value, kinds[name]) for name, value in overrides.items()}
     return dataclasses.replace(transform, **checked)
 
@@ -105,6 +112,7 @@ def configure_transform(transform: RewardTransform | None, overrides: Mapping[st
 def _checked_value(name: str, value: Any, kind: Any) -> Any:
     """``value`` for a field of type ``kind`` (``float``, ``int``, ``bool``, ``str``; other types are
     the transform's to check), or a ``ValueError`` naming the field."""
+
     def fail(wanted: str) -> ValueError:
         return ValueError(f"{name} must be {wanted}, got {type(value).__name__} {value!r}")
 
@@ -135,16 +143,18 @@ class TrainRewards:
     """The rewards each run of an ensemble trains on: run ``k`` gets ``transforms[k]``'s (``None``:
     the environment's), with the state of every stateful transform kept here."""
 
-    def __init__(self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1,
-                 seeds: Sequence[int] | None = None) -> None:
+    def __init__(
+        self, transforms: Sequence[RewardTransform | None], envs_per_run: int = 1, seeds: Sequence[int] | None = None
+    ) -> None:
         self.transforms = list(transforms)
         self.distinct: list[RewardTransform] = []
         """Each transform once (equal ones count as one: :func:`same_transform`), in the order of its first run."""
         for t in self.transforms:
             if t is not None and not any(same_transform(t, seen) for seen in self.distinct):
                 self.distinct.append(t)
-        self.rows = [np.array([k for k, t in enumerate(self.transforms) if same_transform(t, transform)])
-                     for transform in self.distinct]
+        self.rows = [
+            np.array([k for k, t in enumerate(self.transforms) if same_transform(t, transform)]) for transform in self.distinct
+        ]
         """The runs of each distinct transform: it sees only their rows of a step (``StepBatch`` sliced)."""
         if seeds is not None and len(seeds) != len(self.transforms):
             raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")
@@ -154,12 +164,15 @@ class TrainRewards:
         ]
 
     @staticmethod
-    def _initial_state(transform: RewardTransform, rows: np.ndarray, envs_per_run: int,
-                       seeds: Sequence[int] | None) -> dict[str, np.ndarray]:
+    def _initial_state(
+        transform: RewardTransform, rows: np.ndarray, envs_per_run: int, seeds: Sequence[int] | None
+    ) -> dict[str, np.ndarray]:
         if "seeds" not in inspect.signature(transform.initial_state).parameters:
             return transform.initial_state(len(rows), envs_per_run)
         if seeds is None:
-            raise ValueError(f"reward transform {transform.name!r} draws random numbers per run: give TrainRewards the runs' seeds")
+            raise ValueError(
+                f"reward transform {transform.name!r} draws random numbers per run: give TrainRewards the runs' seeds"
+            )
         return transform.initial_state(len(rows), envs_per_run, seeds=[seeds[k] for k in rows])
 
     def __call__(self, batch: StepBatch) -> StepBatch:
@@ -177,8 +190,9 @@ class TrainRewards:
                 shaped, self.states[i] = transform(part, self.states[i])
             shaped = np.asarray(shaped)
             if shaped.shape != part.rewards.shape:
-                raise ValueError(f"reward transform {transform.name!r} returned shape {shaped.shape}, "
-                                 f"expected {part.rewards.shape}")
+                raise ValueError(
+                    f"reward transform {transform.name!r} returned shape {shaped.shape}, expected {part.rewards.shape}"
+                )
             rewards[rows] = shaped
         return dataclasses.replace(batch, rewards=rewards)
 
@@ -190,8 +204,7 @@ class TrainRewards:
         """Continue from :meth:`state`."""
         if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states)):
             raise ValueError("this checkpoint holds the state of other reward transforms; move it away to restart")
-        self.states = [None if state is None else {key: np.array(value) for key, value in state.items()}
-                       for state in states]
+        self.states = [None if state is None else {key: np.array(value) for key, value in state.items()} for state in states]
 
 
 def with_train_rewards(batch: StepBatch, transforms: Sequence[RewardTransform | None]) -> StepBatch:

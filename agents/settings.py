@@ -65,11 +65,18 @@ class EmpathicDQNSettings:
             "others": self.others in OTHERS_RULES,
         }
         expectations = {
-            "selfishness": "in [0, 1]", "gamma": "in [0, 1]", "learning_rate": "> 0",
-            "batch_size": ">= 1", "replay_capacity": f">= batch_size ({self.batch_size})",
-            "learning_starts": f">= batch_size ({self.batch_size})", "target_update_interval": ">= 1",
-            "epsilon_start": "in [0, 1]", "epsilon_end": "in [0, 1]", "epsilon_decay_steps": ">= 1",
-            "hidden_size": ">= 1", "others": f"one of {OTHERS_RULES}",
+            "selfishness": "in [0, 1]",
+            "gamma": "in [0, 1]",
+            "learning_rate": "> 0",
+            "batch_size": ">= 1",
+            "replay_capacity": f">= batch_size ({self.batch_size})",
+            "learning_starts": f">= batch_size ({self.batch_size})",
+            "target_update_interval": ">= 1",
+            "epsilon_start": "in [0, 1]",
+            "epsilon_end": "in [0, 1]",
+            "epsilon_decay_steps": ">= 1",
+            "hidden_size": ">= 1",
+            "others": f"one of {OTHERS_RULES}",
         }
         for name, ok in checks.items():
             if not ok:

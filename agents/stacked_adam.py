@@ -22,7 +22,9 @@ __all__ = ["StackedAdam"]
 class StackedAdam:
     """Adam (β₁ = 0.9, β₂ = 0.999, ε = 1e-8, no weight decay) for tensors with a leading run axis."""
 
-    def __init__(self, params: list[torch.Tensor], lr: float, betas: tuple[float, float] = (0.9, 0.999), eps: float = 1e-8) -> None:
+    def __init__(
+        self, params: list[torch.Tensor], lr: float, betas: tuple[float, float] = (0.9, 0.999), eps: float = 1e-8
+    ) -> None:
         self.params = params
         self.lr, self.betas, self.eps = lr, betas, eps
         self.exp_avg = [torch.zeros_like(p, requires_grad=False) for p in params]
@@ -54,14 +56,42 @@ class StackedAdam:
         if self.fused:
             self._step_table += 1  # the fused kernel reads the step counts; it does not advance them
             torch._fused_adam_(
-                params, grads_v, avg, avg_sq, [], steps, lr=self.lr, beta1=self.betas[0], beta2=self.betas[1],
-                weight_decay=0.0, eps=self.eps, amsgrad=False, maximize=False,
+                params,
+                grads_v,
+                avg,
+                avg_sq,
+                [],
+                steps,
+                lr=self.lr,
+                beta1=self.betas[0],
+                beta2=self.betas[1],
+                weight_decay=0.0,
+                eps=self.eps,
+                amsgrad=False,
+                maximize=False,
             )
         else:
             _reference_adam(  # the reference foreach implementation, same views; it advances the steps
-                params, grads_v, avg, avg_sq, [], steps, foreach=True, capturable=False, differentiable=False,
-                fused=None, grad_scale=None, found_inf=None, has_complex=False, amsgrad=False,
-                beta1=self.betas[0], beta2=self.betas[1], lr=self.lr, weight_decay=0.0, eps=self.eps, maximize=False,
+                params,
+                grads_v,
+                avg,
+                avg_sq,
+                [],
+                steps,
+                foreach=True,
+                capturable=False,
+                differentiable=False,
+                fused=None,
+                grad_scale=None,
+                found_inf=None,
+                has_complex=False,
+                amsgrad=False,
+                beta1=self.betas[0],
+                beta2=self.betas[1],
+                lr=self.lr,
+                weight_decay=0.0,
+                eps=self.eps,
+                maximize=False,
             )
 
     @property

@@ -16,9 +16,7 @@ def init_stacked_mlp(sizes: list[int], generators: list[torch.Generator], device
     params: list[torch.Tensor] = []
     for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
         bound = 1.0 / math.sqrt(fan_in)
-        w = torch.stack([
-            (torch.rand(fan_in, fan_out, generator=g) * 2 - 1) * bound for g in generators
-        ])
+        w = torch.stack([(torch.rand(fan_in, fan_out, generator=g) * 2 - 1) * bound for g in generators])
         b = torch.stack([(torch.rand(1, fan_out, generator=g) * 2 - 1) * bound for g in generators])
         params += [w.to(device), b.to(device)]
     return params

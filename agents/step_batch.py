@@ -71,5 +71,4 @@ class StepBatch:
 
     def runs(self, rows: np.ndarray) -> StepBatch:
         """The same step for the runs ``rows`` only (every array's first axis indexed)."""
-        return replace(self, **{f.name: getattr(self, f.name)[rows] for f in fields(self)
-                                if getattr(self, f.name) is not None})
+        return replace(self, **{f.name: getattr(self, f.name)[rows] for f in fields(self) if getattr(self, f.name) is not None})

@@ -110,8 +110,8 @@ on 32 transitions: about 0.45 ms per step for 1 to 5 runs beside the DQN learner
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -125,7 +125,11 @@ from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
 __all__ = [
-    "NO_OP", "TASK_VALUE", "AttainableUtility", "attainable_utility_penalty", "auxiliary_reward_map",
+    "NO_OP",
+    "TASK_VALUE",
+    "AttainableUtility",
+    "attainable_utility_penalty",
+    "auxiliary_reward_map",
     "auxiliary_rewards",
 ]
 
@@ -216,12 +220,17 @@ class AttainableUtility:
             "target_update_interval": self.target_update_interval >= 1,
         }
         wanted = {
-            "penalty_weight": "a finite number >= 0", "num_rewards": ">= 1", "discount": "in [0, 1)",
-            "learning_rate": "a finite number > 0", "hidden_size": ">= 1", "batch_size": ">= 1",
+            "penalty_weight": "a finite number >= 0",
+            "num_rewards": ">= 1",
+            "discount": "in [0, 1)",
+            "learning_rate": "a finite number > 0",
+            "hidden_size": ">= 1",
+            "batch_size": ">= 1",
             "replay_capacity": f">= batch_size ({self.batch_size})",
-            "learning_starts": f">= batch_size ({self.batch_size})", "train_interval": ">= 1",
+            "learning_starts": f">= batch_size ({self.batch_size})",
+            "train_interval": ">= 1",
             "penalty_starts": f"> learning_starts ({self.learning_starts}): the auxiliary values need updates "
-                              "before they price anything",
+            "before they price anything",
             "target_update_interval": ">= 1",
         }
         for field, ok in checks.items():
@@ -234,8 +243,11 @@ class AttainableUtility:
         arrays of one value): the learner is built at the first step, when the observation size is known."""
         if len(seeds) != num_runs:
             raise ValueError(f"got {len(seeds)} seeds for {num_runs} runs")
-        return {"seen": np.zeros(1, dtype=np.int64), "updates": np.zeros(1, dtype=np.int64),
-                "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64)}
+        return {
+            "seen": np.zeros(1, dtype=np.int64),
+            "updates": np.zeros(1, dtype=np.int64),
+            "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64),
+        }
 
     def _build(self, seeds: np.ndarray, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's auxiliary rewards, networks, optimiser moments and empty replay."""
@@ -275,8 +287,10 @@ class AttainableUtility:
                 raise ValueError(f"this AUP state is for {len(state['seeds'])} runs, not {runs}")
             state = {**state, **self._build(state["seeds"], obs_size)}
         elif state["reward_map"].shape[:2] != (runs, obs_size):
-            raise ValueError(f"this AUP state is for {state['reward_map'].shape[0]} runs of observations of "
-                             f"{state['reward_map'].shape[1]} values, not {runs} of {obs_size}")
+            raise ValueError(
+                f"this AUP state is for {state['reward_map'].shape[0]} runs of observations of "
+                f"{state['reward_map'].shape[1]} values, not {runs} of {obs_size}"
+            )
         rewards = np.asarray(batch.rewards, dtype=np.float64)
         seen = int(state["seen"][0])
         if seen >= self.penalty_starts:
@@ -284,8 +298,9 @@ class AttainableUtility:
             rewards = rewards - penalty
         self._store(state, batch, seen)
         state["seen"] = np.array([seen + envs], dtype=np.int64)
-        due = sum(1 for count in range(seen + 1, seen + envs + 1)
-                  if count >= self.learning_starts and count % self.train_interval == 0)
+        due = sum(
+            1 for count in range(seen + 1, seen + envs + 1) if count >= self.learning_starts and count % self.train_interval == 0
+        )
         if due:
             self._train(state, due)
         return rewards.astype(np.float32), state
@@ -299,11 +314,17 @@ class AttainableUtility:
 
     def _train(self, state: dict[str, np.ndarray], updates: int) -> None:
         """``updates`` TD(0) steps of every run's auxiliary Q-network."""
-        train_side_network(state, 2 * _LAYERS, self.learning_rate, updates,
-                           lambda online, target, optimizer: self._update(state, online, target, optimizer))
+        train_side_network(
+            state,
+            2 * _LAYERS,
+            self.learning_rate,
+            updates,
+            lambda online, target, optimizer: self._update(state, online, target, optimizer),
+        )
 
-    def _update(self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor],
-                optimizer: StackedAdam) -> None:
+    def _update(
+        self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor], optimizer: StackedAdam
+    ) -> None:
         runs, capacity, _ = state["obs"].shape
         b, n, done = self.batch_size, self.num_rewards, int(state["updates"][0])
         keys = np.array([[derive_key(int(seed), STREAM, _SAMPLE)] for seed in state["seeds"]], dtype=np.uint64)

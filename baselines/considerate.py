@@ -98,8 +98,7 @@ _INIT, _SAMPLE = 0, 1  # the sub-streams of STREAM
 _LAYERS = 3  # obs → hidden → hidden → 1: three weight matrices and three biases
 
 
-def considerate_bonus(values: np.ndarray, present: np.ndarray, caring: float, aggregate: str,
-                      discount: float) -> np.ndarray:
+def considerate_bonus(values: np.ndarray, present: np.ndarray, caring: float, aggregate: str, discount: float) -> np.ndarray:
     """``γ · α · F({V_j})`` per run and environment, ``(K, M)``, from ``(K, M, N)`` values of the
     ``N`` other agents and ``(K, M, N)`` whether each is still there (one that is not counts 0:
     a harmed agent has no future return); ``F`` is ``"sum"`` or ``"min"`` over the others."""
@@ -154,9 +153,14 @@ class Considerate:
             "target_update_interval": self.target_update_interval >= 1,
         }
         wanted = {
-            "caring": "a finite number >= 0", "aggregate": f"one of {AGGREGATES}", "discount": "in [0, 1)",
-            "learning_rate": "a finite number > 0", "hidden_size": ">= 1", "batch_size": ">= 1",
-            "replay_capacity": f">= batch_size ({self.batch_size})", "learning_starts": ">= 1",
+            "caring": "a finite number >= 0",
+            "aggregate": f"one of {AGGREGATES}",
+            "discount": "in [0, 1)",
+            "learning_rate": "a finite number > 0",
+            "hidden_size": ">= 1",
+            "batch_size": ">= 1",
+            "replay_capacity": f">= batch_size ({self.batch_size})",
+            "learning_starts": ">= 1",
             "train_interval": ">= 1",
             "bonus_starts": f"> learning_starts ({self.learning_starts}): the value is learnt before it is paid",
             "target_update_interval": ">= 1",
@@ -171,8 +175,11 @@ class Considerate:
         arrays of one value): the learner is built at the first step, when the observation size is known."""
         if len(seeds) != num_runs:
             raise ValueError(f"got {len(seeds)} seeds for {num_runs} runs")
-        return {"seen": np.zeros(1, dtype=np.int64), "updates": np.zeros(1, dtype=np.int64),
-                "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64)}
+        return {
+            "seen": np.zeros(1, dtype=np.int64),
+            "updates": np.zeros(1, dtype=np.int64),
+            "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64),
+        }
 
     def _build(self, seeds: np.ndarray, envs: int, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's value network, optimiser moments, empty replay and no last observation."""
@@ -212,7 +219,8 @@ class Considerate:
             raise ValueError(
                 f"Be Considerate learns the value of one other agent from the reward the environment reports for it "
                 f"(StepBatch.other_rewards, the closest one's); this environment has {batch.swapped_next_obs_all.shape[2]} "
-                "other agents: train it with one (num_cats = 1 / num_humans = 1)")
+                "other agents: train it with one (num_cats = 1 / num_humans = 1)"
+            )
         other_obs = np.asarray(batch.swapped_next_obs, dtype=np.float32)
         runs, envs, obs_size = other_obs.shape
         if "online_0" not in state:
@@ -220,8 +228,10 @@ class Considerate:
                 raise ValueError(f"this Be Considerate state is for {len(state['seeds'])} runs, not {runs}")
             state = {**state, **self._build(state["seeds"], envs, obs_size)}
         elif state["last_obs"].shape != (runs, envs, obs_size):
-            raise ValueError(f"this Be Considerate state is for {state['last_obs'].shape[:2]} runs × environments of "
-                             f"observations of {state['last_obs'].shape[2]} values, not {(runs, envs)} of {obs_size}")
+            raise ValueError(
+                f"this Be Considerate state is for {state['last_obs'].shape[:2]} runs × environments of "
+                f"observations of {state['last_obs'].shape[2]} values, not {(runs, envs)} of {obs_size}"
+            )
         present = np.asarray(batch.other_present, dtype=bool)
         ended = np.asarray(batch.terminated, dtype=bool)
         if batch.truncated is not None:
@@ -229,15 +239,17 @@ class Considerate:
         rewards = np.asarray(batch.rewards, dtype=np.float64)
         seen = int(state["seen"][0])
         if seen >= self.bonus_starts and ended.any():
-            bonus = considerate_bonus(self.values(state, other_obs)[..., None], present[..., None], self.caring,
-                                      self.aggregate, self.discount)
+            bonus = considerate_bonus(
+                self.values(state, other_obs)[..., None], present[..., None], self.caring, self.aggregate, self.discount
+            )
             rewards = rewards + np.where(ended, bonus, 0.0)
         self._store(state, batch, other_obs, present)
         state["last_obs"][...] = other_obs
         state["last_valid"][...] = present & ~ended
         state["seen"] = np.array([seen + envs], dtype=np.int64)
-        due = sum(1 for count in range(seen + 1, seen + envs + 1)
-                  if count >= self.learning_starts and count % self.train_interval == 0)
+        due = sum(
+            1 for count in range(seen + 1, seen + envs + 1) if count >= self.learning_starts and count % self.train_interval == 0
+        )
         if due:
             self._train(state, due)
         return rewards.astype(np.float32), state
@@ -259,11 +271,17 @@ class Considerate:
 
     def _train(self, state: dict[str, np.ndarray], updates: int) -> None:
         """``updates`` TD(0) steps of every run's value network."""
-        train_side_network(state, 2 * _LAYERS, self.learning_rate, updates,
-                           lambda online, target, optimizer: self._update(state, online, target, optimizer))
+        train_side_network(
+            state,
+            2 * _LAYERS,
+            self.learning_rate,
+            updates,
+            lambda online, target, optimizer: self._update(state, online, target, optimizer),
+        )
 
-    def _update(self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor],
-                optimizer: StackedAdam) -> None:
+    def _update(
+        self, state: dict[str, np.ndarray], online: list[torch.Tensor], target: list[torch.Tensor], optimizer: StackedAdam
+    ) -> None:
         runs = state["obs"].shape[0]
         b, done = self.batch_size, int(state["updates"][0])
         filled = np.minimum(state["stored"], self.replay_capacity)  # each run samples its own transitions

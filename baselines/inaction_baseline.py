@@ -85,8 +85,9 @@ class InactionBaseline:
         if None in codings:
             raise ValueError(f"reward transform {needing[0].name!r} needs the inaction baseline but has no state_codes(engine)")
         if len(codings) > 1:
-            raise ValueError(f"reward transforms {sorted({t.name for t in needing})} code states differently; "
-                             "train them in separate ensembles")
+            raise ValueError(
+                f"reward transforms {sorted({t.name for t in needing})} code states differently; train them in separate ensembles"
+            )
         return cls(venv, needing[0].state_codes)
 
     def _step(self, actions: np.ndarray, step: Callable[[np.ndarray], Any]) -> Any:

@@ -53,8 +53,9 @@ __all__ = ["Lagrangian", "dual_ascent"]
 
 def dual_ascent(multiplier: np.ndarray, episode_cost: np.ndarray, cost_limit: float, learning_rate: float) -> np.ndarray:
     """``max(0, λ + η·(Ĵ_C − d))``, elementwise: the multiplier after an episode of cost ``Ĵ_C``."""
-    return np.maximum(0.0, np.asarray(multiplier, dtype=np.float64)
-                      + learning_rate * (np.asarray(episode_cost, dtype=np.float64) - cost_limit))
+    return np.maximum(
+        0.0, np.asarray(multiplier, dtype=np.float64) + learning_rate * (np.asarray(episode_cost, dtype=np.float64) - cost_limit)
+    )
 
 
 @dataclass(frozen=True)
@@ -78,21 +79,20 @@ class Lagrangian:
 
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         """Each run's multiplier ``λ`` and each environment's cost so far in its episode."""
-        return {"multiplier": np.full(num_runs, float(self.lambda_init)),
-                "episode_cost": np.zeros((num_runs, envs_per_run))}
+        return {"multiplier": np.full(num_runs, float(self.lambda_init)), "episode_cost": np.zeros((num_runs, envs_per_run))}
 
     def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         cost = np.asarray(batch.harmed_other, dtype=np.float64)
         multiplier = state["multiplier"]
         if state["episode_cost"].shape != cost.shape:
-            raise ValueError(f"this Lagrangian state is for {state['episode_cost'].shape} runs × environments, "
-                             f"not {cost.shape}")
+            raise ValueError(f"this Lagrangian state is for {state['episode_cost'].shape} runs × environments, not {cost.shape}")
         shaped = np.asarray(batch.rewards, dtype=np.float64) - multiplier[:, None] * cost
         episode_cost = state["episode_cost"] + cost
         ended = np.asarray(batch.terminated, dtype=bool)
         if batch.truncated is not None:
             ended = ended | np.asarray(batch.truncated, dtype=bool)
         for m in range(cost.shape[1]):  # each episode that ended, in environment order
-            multiplier = np.where(ended[:, m], dual_ascent(multiplier, episode_cost[:, m], self.cost_limit,
-                                                           self.lambda_lr), multiplier)
+            multiplier = np.where(
+                ended[:, m], dual_ascent(multiplier, episode_cost[:, m], self.cost_limit, self.lambda_lr), multiplier
+            )
         return shaped.astype(np.float32), {"multiplier": multiplier, "episode_cost": np.where(ended, 0.0, episode_cost)}

@@ -112,8 +112,9 @@ class RelativeReachability:
     """γᵣ: reachability of a state ``k`` steps away is ``γᵣᵏ`` (the authors' ``value_discount``)."""
 
     def __post_init__(self) -> None:
-        if isinstance(self.weight, bool) or not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight)
-                                                 and self.weight >= 0):
+        if isinstance(self.weight, bool) or not (
+            isinstance(self.weight, (int, float)) and math.isfinite(self.weight) and self.weight >= 0
+        ):
             raise ValueError(f"weight (λ) must be a finite number ≥ 0, got {self.weight!r}")
         if isinstance(self.discount, bool) or not (isinstance(self.discount, (int, float)) and 0 < self.discount <= 1):
             raise ValueError(f"discount (γᵣ) must be in (0, 1], got {self.discount!r}")
@@ -126,10 +127,12 @@ class RelativeReachability:
             raise ValueError(
                 f"relative reachability is computed exactly on Coexistence with one cat (coexistence_v0 with "
                 f"robot_0 and cat_0), not on {engine.name} with agents {list(agents)}: Sharing's batteries and "
-                "several cats make the state space too large for an exact reachability table")
+                "several cats make the state space too large for an exact reachability table"
+            )
         if engine.size > MAX_TABLE_SIZE:
-            raise ValueError(f"relative reachability builds an exact table for sizes up to {MAX_TABLE_SIZE}, "
-                             f"not size={engine.size}")
+            raise ValueError(
+                f"relative reachability builds an exact table for sizes up to {MAX_TABLE_SIZE}, not size={engine.size}"
+            )
         coexistence_reachability(engine.size)  # built now, once per process
         return engine.size * SIZE_STRIDE + coexistence_codes(engine.cells, engine.present, engine.size)
 
@@ -143,13 +146,16 @@ class RelativeReachability:
         if len(sizes) != 1:
             raise ValueError(f"state codes of several grid sizes {sizes.tolist()} in one batch")
         table = coexistence_reachability(int(sizes[0]))
-        return truncated_deviation(table.reachability(after % SIZE_STRIDE, self.discount),
-                                   table.reachability(baseline % SIZE_STRIDE, self.discount))
+        return truncated_deviation(
+            table.reachability(after % SIZE_STRIDE, self.discount), table.reachability(baseline % SIZE_STRIDE, self.discount)
+        )
 
     def __call__(self, batch: StepBatch) -> np.ndarray:
         if batch.state_after is None or batch.baseline_after is None:
-            raise ValueError("relative reachability needs the stepwise inaction baseline (StepBatch.state_after and "
-                             "baseline_after), which the trainer fills for a transform declaring needs_inaction_baseline")
+            raise ValueError(
+                "relative reachability needs the stepwise inaction baseline (StepBatch.state_after and "
+                "baseline_after), which the trainer fills for a transform declaring needs_inaction_baseline"
+            )
         penalty = self.weight * self.deviation(batch.state_after, batch.baseline_after)
         penalty[np.asarray(batch.terminated, dtype=bool)] = 0.0  # the robot's own end: no side effect
         return (batch.rewards.astype(np.float64) - penalty).astype(np.float32)

@@ -30,7 +30,11 @@ from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.grid import NUM_ACTIONS
 
 __all__ = [
-    "ReachabilityTable", "coexistence_reachability", "coexistence_codes", "UNREACHABLE", "MAX_TABLE_SIZE",
+    "ReachabilityTable",
+    "coexistence_reachability",
+    "coexistence_codes",
+    "UNREACHABLE",
+    "MAX_TABLE_SIZE",
 ]
 
 ROBOT, CAT = 0, 1
@@ -156,8 +160,10 @@ def coexistence_reachability(size: int) -> ReachabilityTable:
     """The :class:`ReachabilityTable` of Coexistence (one cat) on a ``size × size`` grid, built
     once per process (see the module page)."""
     if size > MAX_TABLE_SIZE:
-        raise ValueError(f"an exact reachability table of Coexistence on size={size} would hold about "
-                         f"{(size ** 2 * (size ** 2 - 5)) ** 2 / 1e6:.0f} MB; it is built for sizes up to {MAX_TABLE_SIZE}")
+        raise ValueError(
+            f"an exact reachability table of Coexistence on size={size} would hold about "
+            f"{(size**2 * (size**2 - 5)) ** 2 / 1e6:.0f} MB; it is built for sizes up to {MAX_TABLE_SIZE}"
+        )
     n = size * size
     codes, successors = _successors(size)
     by_code = np.full((n * n + n + 1, successors.shape[1]), n * n + n, dtype=np.int64)  # the end leads nowhere else

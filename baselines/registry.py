@@ -20,27 +20,36 @@ __all__ = ["METHODS", "get_method"]
 
 METHODS: dict[str, Method] = {
     "empathic_dqn": Method(
-        name="empathic_dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        name="empathic_dqn",
+        learner=EmpathicDQN,
+        settings=EmpathicDQNSettings,
         label=lambda s: f"Empathic DQN (β={s.selfishness:g})",
         description="Empathic DQN: acts on Q_emp, trained on β·own target + (1−β)·the other's swapped value",
     ),
     "dqn": Method(
-        name="dqn", learner=EmpathicDQN, settings=EmpathicDQNSettings,
+        name="dqn",
+        learner=EmpathicDQN,
+        settings=EmpathicDQNSettings,
         preset={"selfishness": 1.0},
         label=lambda s: "DQN",
         description="Double DQN (Empathic DQN at β = 1)",
     ),
     "empathic_dqn_in_view": Method(
-        name="empathic_dqn_in_view", learner=EmpathicDQN, settings=EmpathicDQNSettings, in_view_only=True,
+        name="empathic_dqn_in_view",
+        learner=EmpathicDQN,
+        settings=EmpathicDQNSettings,
+        in_view_only=True,
         label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
         description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
-                    "the paper's future work); an unseen other gives the robot's own target",
+        "the paper's future work); an unseen other gives the robot's own target",
     ),
     "empathic_dqn_silver": Method(
-        name="empathic_dqn_silver", learner=SilverRuleDQN, settings=EmpathicDQNSettings,
+        name="empathic_dqn_silver",
+        learner=SilverRuleDQN,
+        settings=EmpathicDQNSettings,
         label=lambda s: f"Empathic DQN, silver rule (β={s.selfishness:g})",
         description="Empathic DQN that counts the other's future only where it falls below the robot's own "
-                    "continuation (the paper's silver rule: empathy with bad outcomes only)",
+        "continuation (the paper's silver rule: empathy with bad outcomes only)",
     ),
     **BASELINE_METHODS,
     **SB3_METHODS,

@@ -49,8 +49,15 @@ from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.safe_data import from_safe, to_safe
 
 __all__ = [
-    "SB3Settings", "SB3Learner", "SB3_DQN", "SB3_PPO", "SB3_METHODS", "DEFAULT_KWARGS",
-    "make_sb3_model", "sb3_seed", "INSTALL_HINT",
+    "SB3Settings",
+    "SB3Learner",
+    "SB3_DQN",
+    "SB3_PPO",
+    "SB3_METHODS",
+    "DEFAULT_KWARGS",
+    "make_sb3_model",
+    "sb3_seed",
+    "INSTALL_HINT",
 ]
 
 INSTALL_HINT = 'Stable-Baselines3 is not installed; install it with: pip install "empathy-zoo[sb3]"'
@@ -133,9 +140,7 @@ class SB3Settings:
 
     def shared(self) -> tuple:
         """Runs of one ensemble share every setting (each run is its own SB3 model anyway)."""
-        return tuple(
-            json.dumps(getattr(self, f.name), sort_keys=True, default=str) for f in fields(self)
-        )
+        return tuple(json.dumps(getattr(self, f.name), sort_keys=True, default=str) for f in fields(self))
 
 
 def _sb3() -> Any:
@@ -363,8 +368,10 @@ class SB3Learner:
         for r, (run, rng) in enumerate(zip(self._runs, self._randomness)):
             with rng.active():
                 run.observe(
-                    np.asarray(batch.rewards[r], dtype=np.float32), np.asarray(batch.terminated[r], dtype=bool),
-                    np.asarray(truncated[r], dtype=bool), np.asarray(batch.next_obs[r], dtype=np.float32),
+                    np.asarray(batch.rewards[r], dtype=np.float32),
+                    np.asarray(batch.terminated[r], dtype=bool),
+                    np.asarray(truncated[r], dtype=bool),
+                    np.asarray(batch.next_obs[r], dtype=np.float32),
                 )
 
     # ------------------------------------------------------------------ bookkeeping
@@ -387,14 +394,16 @@ class SB3Learner:
         runs = []
         for model, run, rng in zip(self.models, self._runs, self._randomness):
             buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
-            runs.append({
-                "policy": {k: v.detach().clone() for k, v in model.policy.state_dict().items()},
-                "optimizer": copy.deepcopy(model.policy.optimizer.state_dict()),
-                "counters": {name: getattr(model, name) for name in _COUNTERS if hasattr(model, name)},
-                "buffer": to_safe({k: v for k, v in vars(buffer).items() if isinstance(v, (np.ndarray, bool, int, float))}),
-                "driver": to_safe(run.state()),
-                "random": to_safe({**rng.saved, "action_space": model.action_space.np_random.bit_generator.state}),
-            })
+            runs.append(
+                {
+                    "policy": {k: v.detach().clone() for k, v in model.policy.state_dict().items()},
+                    "optimizer": copy.deepcopy(model.policy.optimizer.state_dict()),
+                    "counters": {name: getattr(model, name) for name in _COUNTERS if hasattr(model, name)},
+                    "buffer": to_safe({k: v for k, v in vars(buffer).items() if isinstance(v, (np.ndarray, bool, int, float))}),
+                    "driver": to_safe(run.state()),
+                    "random": to_safe({**rng.saved, "action_space": model.action_space.np_random.bit_generator.state}),
+                }
+            )
         return {"seeds": list(self.seeds), "runs": runs}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -421,14 +430,20 @@ def _nanmean(values: list[float]) -> float:
 
 
 SB3_DQN = Method(
-    name="sb3_dqn", learner=SB3Learner, settings=SB3Settings, preset={"algorithm": "dqn"},
+    name="sb3_dqn",
+    learner=SB3Learner,
+    settings=SB3Settings,
+    preset={"algorithm": "dqn"},
     label=lambda s: "SB3 DQN",
     description="Stable-Baselines3 DQN (its own loss, targets and schedules), paper-sized MLP and replay",
 )
 """Stable-Baselines3 DQN; name it ``baselines.sb3:SB3_DQN``."""
 
 SB3_PPO = Method(
-    name="sb3_ppo", learner=SB3Learner, settings=SB3Settings, preset={"algorithm": "ppo"},
+    name="sb3_ppo",
+    learner=SB3Learner,
+    settings=SB3Settings,
+    preset={"algorithm": "ppo"},
     label=lambda s: "SB3 PPO",
     description="Stable-Baselines3 PPO (SB3's default hyper-parameters), paper-sized MLP",
 )

@@ -72,7 +72,8 @@ class InequityAversion:
             raise ValueError("inequity aversion needs the other agent's rewards (StepBatch.other_rewards)")
         own = self.smoothing * state["own"] + batch.rewards
         other = self.smoothing * state["other"] + batch.other_rewards
-        shaped = (batch.rewards - self.disadvantageous * np.maximum(other - own, 0.0)
-                  - self.advantageous * np.maximum(own - other, 0.0))
+        shaped = (
+            batch.rewards - self.disadvantageous * np.maximum(other - own, 0.0) - self.advantageous * np.maximum(own - other, 0.0)
+        )
         ended = batch.terminated | (batch.truncated if batch.truncated is not None else False)
         return shaped.astype(np.float32), {"own": np.where(ended, 0.0, own), "other": np.where(ended, 0.0, other)}

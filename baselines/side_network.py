@@ -22,19 +22,20 @@ Update = Callable[[list[torch.Tensor], list[torch.Tensor], StackedAdam], None]
 """One gradient step, given the online parameters, the target copy and the optimiser."""
 
 
-def train_side_network(state: dict[str, np.ndarray], tensors: int, learning_rate: float, updates: int,
-                       update: Update) -> None:
+def train_side_network(state: dict[str, np.ndarray], tensors: int, learning_rate: float, updates: int, update: Update) -> None:
     """Run ``update`` ``updates`` times on the network of ``state`` (``tensors`` parameter arrays,
     weights and biases), Adam with ``learning_rate``, and write its moments back into ``state``
     (the parameters are updated in place: the tensors share the arrays' memory)."""
     online = [torch.from_numpy(state[f"online_{i}"]).requires_grad_() for i in range(tensors)]
     target = [torch.from_numpy(state[f"target_{i}"]) for i in range(tensors)]
     optimizer = StackedAdam(online, lr=learning_rate)
-    optimizer.load_state_dict({
-        "exp_avg": [torch.from_numpy(state[f"avg_{i}"]) for i in range(tensors)],
-        "exp_avg_sq": [torch.from_numpy(state[f"avg_sq_{i}"]) for i in range(tensors)],
-        "steps": torch.from_numpy(state["adam_steps"]),
-    })
+    optimizer.load_state_dict(
+        {
+            "exp_avg": [torch.from_numpy(state[f"avg_{i}"]) for i in range(tensors)],
+            "exp_avg_sq": [torch.from_numpy(state[f"avg_sq_{i}"]) for i in range(tensors)],
+            "steps": torch.from_numpy(state["adam_steps"]),
+        }
+    )
     for _ in range(updates):
         update(online, target, optimizer)
     for i in range(tensors):

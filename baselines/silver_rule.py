@@ -46,8 +46,9 @@ from agents.empathic_dqn import EmpathicDQN, continuation_value, other_term, own
 __all__ = ["SilverRuleDQN", "silver_targets"]
 
 
-def silver_targets(reward: torch.Tensor, continuation: torch.Tensor, other: torch.Tensor,
-                   selfishness: torch.Tensor) -> torch.Tensor:
+def silver_targets(
+    reward: torch.Tensor, continuation: torch.Tensor, other: torch.Tensor, selfishness: torch.Tensor
+) -> torch.Tensor:
     """``y_silver = y − (1 − β)·max(c − o, 0)``, ``(K, B)``, from the robot's reward ``r`` and
     continuation ``c`` (``y = r + c``), the other-term ``o`` (:func:`agents.empathic_dqn.other_term`)
     and β per run ``(K, 1)``."""
@@ -65,5 +66,4 @@ class SilverRuleDQN(EmpathicDQN):
         continuation = continuation_value(batch["terminated"], q_next, target_next, self.config.gamma)
         y = batch["reward"] + continuation
         other = other_term(target_swapped, batch["other_present"], self.config.gamma, rule, live, unseen)
-        return y, own_where_unseen(y, silver_targets(batch["reward"], continuation, other, self.selfishness),
-                                   unseen, rule, live)
+        return y, own_where_unseen(y, silver_targets(batch["reward"], continuation, other, self.selfishness), unseen, rule, live)

@@ -45,12 +45,13 @@ def _learner():  # noqa: ANN202 (the tree's own Learner type)
 
     torch.set_num_threads(1)
     betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
-    specs = [RunSpec(env="coexistence_v0", seed=i, settings={"selfishness": beta, "replay_capacity": CAPACITY})
-             for i, beta in enumerate(betas[:RUNS])]
+    specs = [
+        RunSpec(env="coexistence_v0", seed=i, settings={"selfishness": beta, "replay_capacity": CAPACITY})
+        for i, beta in enumerate(betas[:RUNS])
+    ]
     venv = VectorEnv("coexistence_v0", 1)
     method = specs[0].method_object()
-    return method.learner([s.method_settings() for s in specs], [s.seed for s in specs], venv.obs_size,
-                          venv.num_actions, "cpu")
+    return method.learner([s.method_settings() for s in specs], [s.seed for s in specs], venv.obs_size, venv.num_actions, "cpu")
 
 
 def phase(name: str, path: Path) -> None:
@@ -68,14 +69,18 @@ def phase(name: str, path: Path) -> None:
         replay.position, replay.size = 0, replay.capacity
         before = _status("VmRSS")
         save_checkpoint(path, {"learner": learner.state_dict()})
-        print(f"save: resident before {before / MB:,.0f} MB, peak during the write {_status('VmHWM') / MB:,.0f} MB "
-              f"(+{(_status('VmHWM') - before) / MB:,.0f} MB); checkpoint {path.stat().st_size / MB:,.0f} MB")
+        print(
+            f"save: resident before {before / MB:,.0f} MB, peak during the write {_status('VmHWM') / MB:,.0f} MB "
+            f"(+{(_status('VmHWM') - before) / MB:,.0f} MB); checkpoint {path.stat().st_size / MB:,.0f} MB"
+        )
     else:
         before = _status("VmRSS")
         learner.load_state_dict(load_checkpoint(path)["learner"])
         assert replay.size == replay.capacity
-        print(f"load: resident with a fresh learner {before / MB:,.0f} MB, peak while loading "
-              f"{_status('VmHWM') / MB:,.0f} MB (+{(_status('VmHWM') - before) / MB:,.0f} MB)")
+        print(
+            f"load: resident with a fresh learner {before / MB:,.0f} MB, peak while loading "
+            f"{_status('VmHWM') / MB:,.0f} MB (+{(_status('VmHWM') - before) / MB:,.0f} MB)"
+        )
 
 
 def main() -> None:
@@ -94,8 +99,10 @@ def main() -> None:
     from machine import describe_machine
 
     print("\n".join(describe_machine()))
-    print(f"one ensemble of {RUNS} runs (Coexistence, the paper's β mix), replay {CAPACITY:,} transitions per run, "
-          f"tree: {args.tree or 'this checkout'}")
+    print(
+        f"one ensemble of {RUNS} runs (Coexistence, the paper's β mix), replay {CAPACITY:,} transitions per run, "
+        f"tree: {args.tree or 'this checkout'}"
+    )
     with tempfile.TemporaryDirectory(prefix="ez-ckpt-mem-") as tmp:
         path = Path(tmp) / "ensemble.pt"
         for name in ("save", "load"):

@@ -31,7 +31,7 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(1)
     print("\n".join(describe_machine(f"torch {torch.__version__} (1 thread)")))
-    betas = PAPER_BETAS[:args.runs] if args.runs > 1 else [0.5]  # (one run: β = 0.5, both networks)
+    betas = PAPER_BETAS[: args.runs] if args.runs > 1 else [0.5]  # (one run: β = 0.5, both networks)
     eager, compiled = filled_learner(betas=betas), filled_learner(betas=betas)
     # left to eager PyTorch, as dynamo cannot trace them: drawing the replay indices (numpy,
     # 64-bit keys) and the fused Adam step (one kernel already)

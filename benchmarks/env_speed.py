@@ -28,12 +28,12 @@ from collections.abc import Callable
 
 import numpy as np
 import pettingzoo
+from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 from empathy_zoo import ENVIRONMENTS, EmpathyWrapper, FixedAgents
-from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.vector import VectorEnv
-from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 ENVS = ("coexistence_v0", "sharing_v0")
 VECTOR_SIZES = (1, 64, 4096)

@@ -18,14 +18,20 @@ PAPER_BETAS = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
 def filled_learner(cls: type = EmpathicDQN, betas: Sequence[float] = PAPER_BETAS, seed: int = 0) -> EmpathicDQN:
     """A learner of class ``cls`` with one run per β, every replay memory holding the same 1,000
     random transitions for a given ``seed``; Coexistence's sizes (25 inputs, 5 actions)."""
-    settings = [EmpathicDQNSettings(selfishness=b, learning_starts=32, replay_capacity=2_000, target_update_interval=50)
-                for b in betas]
+    settings = [
+        EmpathicDQNSettings(selfishness=b, learning_starts=32, replay_capacity=2_000, target_update_interval=50) for b in betas
+    ]
     learner = cls(settings, list(range(len(betas))), 25)
     rng, k = np.random.default_rng(seed), len(betas)
     for _ in range(5):
         obs = [rng.integers(-1, 2, size=(k, 200, 25)).astype(np.float32) for _ in range(3)]
-        learner.replay.add(*obs, rng.integers(0, 5, (k, 200)), rng.random((k, 200)).astype(np.float32),
-                           rng.random((k, 200)) < 0.05, rng.random((k, 200)) < 0.9)
+        learner.replay.add(
+            *obs,
+            rng.integers(0, 5, (k, 200)),
+            rng.random((k, 200)).astype(np.float32),
+            rng.random((k, 200)) < 0.05,
+            rng.random((k, 200)) < 0.9,
+        )
     return learner
 
 

@@ -51,11 +51,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from machine import describe_machine  # noqa: E402  (benchmarks/machine.py, this directory is on sys.path)
+
 from empathy_zoo.atomic import read_json  # noqa: E402
 from leaderboard.aggregate import group_runs, mean_ci, result_files, run_scalars, student_t_interval  # noqa: E402
 from leaderboard.improvement import can_decide, improvement_interval  # noqa: E402
 from leaderboard.tables import TABLE_METRICS  # noqa: E402
-from machine import describe_machine  # noqa: E402  (benchmarks/machine.py, this directory is on sys.path)
 
 MEAN_SEEDS = (3, 5, 10)
 """Seeds per interval of a mean."""
@@ -96,10 +97,13 @@ def parametric_populations() -> list[Population]:
         Population("gamma k=2", lambda rng, shape: rng.gamma(2.0, 1.0, shape), 2.0, math.sqrt(2.0)),
         Population("10 episodes, p=0.3", _binomial(0.3), 0.3, math.sqrt(0.3 * 0.7 / 10)),
         Population("10 episodes, p=0.05 (harms≈0.05)", _binomial(0.05), 0.05, math.sqrt(0.05 * 0.95 / 10)),
-        Population("survival capped at 500", lambda rng, shape: np.minimum(rng.normal(430.0, 100.0, shape), 500.0),
-                   capped_mean, capped_sd),
-        Population("two outcomes 0/1, p=0.4", lambda rng, shape: rng.binomial(1, 0.4, shape).astype(float),
-                   0.4, math.sqrt(0.24)),
+        Population(
+            "survival capped at 500",
+            lambda rng, shape: np.minimum(rng.normal(430.0, 100.0, shape), 500.0),
+            capped_mean,
+            capped_sd,
+        ),
+        Population("two outcomes 0/1, p=0.4", lambda rng, shape: rng.binomial(1, 0.4, shape).astype(float), 0.4, math.sqrt(0.24)),
     ]
 
 
@@ -135,6 +139,7 @@ def committed_populations(root: Path = ROOT / "docs" / "results") -> list[np.nda
 def committed_population(values: list[np.ndarray], label: str) -> Population:
     """Each draw of a row of seeds picks one committed population at random and resamples it; the
     true mean (and sd) is that population's, so draws are returned centred on it and scaled by it."""
+
     def draw(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
         picks = rng.integers(0, len(values), shape[0])
         out = np.empty(shape)
@@ -142,16 +147,17 @@ def committed_population(values: list[np.ndarray], label: str) -> Population:
             pop = values[k]
             out[i] = (pop[rng.integers(0, pop.size, shape[1:])] - pop.mean()) / pop.std()
         return out
+
     return Population(label, draw, 0.0, 1.0)
 
 
 # --- intervals of a mean: data has shape (replicates, n) --------------------------------------
 
+
 def _counts(rng: np.random.Generator, replicates: int, resamples: int, n: int) -> np.ndarray:
     """How often each seed is drawn in every resample with replacement: shape (replicates, resamples, n)."""
     draws = rng.integers(0, n, (replicates * resamples, n)) + n * np.arange(replicates * resamples)[:, None]
-    return np.bincount(draws.ravel(), minlength=replicates * resamples * n).reshape(
-        replicates, resamples, n).astype(np.float64)
+    return np.bincount(draws.ravel(), minlength=replicates * resamples * n).reshape(replicates, resamples, n).astype(np.float64)
 
 
 def percentile_bootstrap(data: np.ndarray, rng: np.random.Generator, resamples: int) -> tuple[np.ndarray, ...]:
@@ -170,8 +176,8 @@ def bca(data: np.ndarray, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     below = (means < theta[:, None]).mean(axis=1) + 0.5 * (means == theta[:, None]).mean(axis=1)
     jack = (data.sum(axis=1, keepdims=True) - data) / (n - 1)
     d = jack.mean(axis=1, keepdims=True) - jack
-    denominator = 6.0 * (d ** 2).sum(axis=1) ** 1.5
-    accel = np.where(denominator > 0, (d ** 3).sum(axis=1) / np.where(denominator > 0, denominator, 1.0), 0.0)
+    denominator = 6.0 * (d**2).sum(axis=1) ** 1.5
+    accel = np.where(denominator > 0, (d**3).sum(axis=1) / np.where(denominator > 0, denominator, 1.0), 0.0)
     low, high = np.empty(r), np.empty(r)
     sorted_means = np.sort(means, axis=1)
     b = means.shape[1]
@@ -195,7 +201,7 @@ def bootstrap_t(data: np.ndarray, counts: np.ndarray, m: np.ndarray) -> tuple[np
     r, n = data.shape
     centred = data - data.mean(axis=1, keepdims=True)  # s* from the counts, centred for accuracy
     shift = m - data.mean(axis=1)[:, None]
-    squares = np.einsum("rbn,rn->rb", counts, centred ** 2) - n * shift ** 2
+    squares = np.einsum("rbn,rn->rb", counts, centred**2) - n * shift**2
     s = np.sqrt(np.maximum(squares, 0.0) / (n - 1))
     s = np.where(s < 1e-12 * (np.abs(data).max(axis=1, keepdims=True) + 1.0), 0.0, s)
     theta, se = data.mean(axis=1), data.std(axis=1, ddof=1) / math.sqrt(n)
@@ -232,9 +238,14 @@ def mean_coverage(pop: Population, n: int, replicates: int, resamples: int, rng:
         data = pop.draw(rng, (min(chunk, replicates - start), n))
         equal.append(np.all(data == data[:, :1], axis=1))
         low, high, counts, means = percentile_bootstrap(data, rng, resamples)
-        found = {"percentile": (low, high), "BCa": bca(data, means),
-                 "bootstrap-t": bootstrap_t(data, counts, means), "t 95 %": t_interval(data, 0.95),
-                 "t 97.5 % (leaderboard)": leaderboard_interval(data), "t 99 %": t_interval(data, 0.99)}
+        found = {
+            "percentile": (low, high),
+            "BCa": bca(data, means),
+            "bootstrap-t": bootstrap_t(data, counts, means),
+            "t 95 %": t_interval(data, 0.95),
+            "t 97.5 % (leaderboard)": leaderboard_interval(data),
+            "t 99 %": t_interval(data, 0.99),
+        }
         for key, (lo, hi) in found.items():
             hits[key].append((lo <= pop.mean) & (pop.mean <= hi))
             with np.errstate(invalid="ignore"):  # an unbounded bootstrap-t interval has width ∞ (or nan: ∞ − ∞)
@@ -248,14 +259,18 @@ def mean_coverage(pop: Population, n: int, replicates: int, resamples: int, rng:
 
 # --- probability of improvement: x (method) against y (DQN), shape (replicates, n) / (replicates, m) --
 
+
 def _probability(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """P(X > Y) + ½·P(X = Y) over the last two axes' pairs."""
     a, b = x[..., :, None], y[..., None, :]
-    return ((a > b).mean(axis=(-2, -1)) + 0.5 * (a == b).mean(axis=(-2, -1)))
+    return (a > b).mean(axis=(-2, -1)) + 0.5 * (a == b).mean(axis=(-2, -1))
 
 
 def bootstrap_probability(
-    x: np.ndarray, y: np.ndarray, rng: np.random.Generator, resamples: int,
+    x: np.ndarray,
+    y: np.ndarray,
+    rng: np.random.Generator,
+    resamples: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Today's interval: stratified percentile bootstrap of the probability of improvement."""
     (r, n), m = x.shape, y.shape[1]
@@ -295,8 +310,15 @@ def true_probability(pop: Population, shift: float, rng: np.random.Generator) ->
     return float((x > y).mean() + 0.5 * (x == y).mean())
 
 
-def verdict_rates(pop: Population, n: int, m: int, replicates: int, resamples: int, rng: np.random.Generator,
-                  committed: list[np.ndarray] | None = None) -> dict[str, str]:
+def verdict_rates(
+    pop: Population,
+    n: int,
+    m: int,
+    replicates: int,
+    resamples: int,
+    rng: np.random.Generator,
+    committed: list[np.ndarray] | None = None,
+) -> dict[str, str]:
     """False-positive rate under the null, power and interval coverage under a 2-sd shift."""
     chunk = max(1, 200_000 // (resamples * max(n, m)))
     fired: dict[str, list[np.ndarray]] = {k: [] for k in ("today", "Newcombe", "exact")}
@@ -381,8 +403,10 @@ def main(argv: list[str] | None = None) -> None:
     populations = [*parametric_populations(), committed_population(committed, "committed per-seed values")]
 
     print("## Coverage of 95 % intervals for the mean over seeds\n")
-    print("Each cell: coverage (median width in sds of the distribution); 'all seeds equal': the share of "
-          "draws whose seeds all gave one value, where every interval has zero width.\n")
+    print(
+        "Each cell: coverage (median width in sds of the distribution); 'all seeds equal': the share of "
+        "draws whose seeds all gave one value, where every interval has zero width.\n"
+    )
     header = ["distribution", "seeds", "all seeds equal", *MEAN_CANDIDATES]
     rows = []
     for pop in populations:
@@ -392,25 +416,41 @@ def main(argv: list[str] | None = None) -> None:
     print(markdown(header, rows))
 
     print(f"\n## Method vs DQN where nothing differs (FPR), and at a {SHIFT_SDS:g}-sd shift (power, coverage)\n")
-    print("FPR: share of null cells given ▲ or ▼. today: the stratified percentile bootstrap of P(improvement) "
-          "excludes 0.5; Newcombe: his score interval (method 5) excludes 0.5; exact: the exact two-sided "
-          "Mann–Whitney permutation test at 5 % (= its inverted interval excludes 0.5). power: share of shifted "
-          "cells given ▲; cover: share of shifted cells whose interval contains the true P. below: the "
-          "REPRODUCTION rule A.high < B.low either way, with each mean interval.\n")
-    keys = ["FPR today", "FPR Newcombe", "FPR exact", "power today", "power Newcombe", "power exact",
-            "cover today", "cover Newcombe", "cover exact", "FPR below, percentile", "FPR below, t 97.5 %"]
+    print(
+        "FPR: share of null cells given ▲ or ▼. today: the stratified percentile bootstrap of P(improvement) "
+        "excludes 0.5; Newcombe: his score interval (method 5) excludes 0.5; exact: the exact two-sided "
+        "Mann–Whitney permutation test at 5 % (= its inverted interval excludes 0.5). power: share of shifted "
+        "cells given ▲; cover: share of shifted cells whose interval contains the true P. below: the "
+        "REPRODUCTION rule A.high < B.low either way, with each mean interval.\n"
+    )
+    keys = [
+        "FPR today",
+        "FPR Newcombe",
+        "FPR exact",
+        "power today",
+        "power Newcombe",
+        "power exact",
+        "cover today",
+        "cover Newcombe",
+        "cover exact",
+        "FPR below, percentile",
+        "FPR below, t 97.5 %",
+    ]
     rows = []
     for pop in populations:
         for n, m in VERDICT_SEEDS:
-            row = verdict_rates(pop, n, m, args.replicates, args.resamples, rng,
-                                committed if pop.name.startswith("committed") else None)
+            row = verdict_rates(
+                pop, n, m, args.replicates, args.resamples, rng, committed if pop.name.startswith("committed") else None
+            )
             rows.append([pop.name, f"{n} v {m}", *(row[k] for k in keys)])
     print(markdown(["distribution", "seeds", *keys], rows))
     sizes = ", ".join(f"{n} v {m} {100 * exact_size(n, m):.1f} %" for n, m in VERDICT_SEEDS)
     print(f"\nExact size of the exact test for untied data (what its FPR estimates): {sizes}.")
 
-    print(f"\n{len(committed)} committed populations; {args.replicates} replicates per row, {args.resamples} "
-          f"resamples per bootstrap, seed {args.seed}; {time.process_time() - started:.0f} CPU s.")
+    print(
+        f"\n{len(committed)} committed populations; {args.replicates} replicates per row, {args.resamples} "
+        f"resamples per bootstrap, seed {args.seed}; {time.process_time() - started:.0f} CPU s."
+    )
     command = " ".join(shlex.quote(a) for a in ["python", "benchmarks/interval_coverage.py", *sys.argv[1:]])
     print(f"Command: `{command}`")
     for line in describe_machine():

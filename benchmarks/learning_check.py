@@ -21,7 +21,9 @@ from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv
 
 SHORT_SCHEDULE = {
-    "learning_starts": 5_000, "epsilon_decay_steps": 50_000, "target_update_interval": 2_000,
+    "learning_starts": 5_000,
+    "epsilon_decay_steps": 50_000,
+    "target_update_interval": 2_000,
     "replay_capacity": 150_000,
 }
 
@@ -52,9 +54,17 @@ def main() -> None:
     args = parser.parse_args()
     print(f"command: python benchmarks/learning_check.py --steps {args.steps} --seeds {args.seeds} --out {args.out}")
     specs = [
-        RunSpec(env="coexistence_v0", method="empathic_dqn", settings={**SHORT_SCHEDULE, "selfishness": beta},
-                seed=seed, steps=args.steps, eval_interval=args.steps // 5, eval_episodes=20)
-        for beta in (1.0, 0.25) for seed in range(args.seeds)
+        RunSpec(
+            env="coexistence_v0",
+            method="empathic_dqn",
+            settings={**SHORT_SCHEDULE, "selfishness": beta},
+            seed=seed,
+            steps=args.steps,
+            eval_interval=args.steps // 5,
+            eval_episodes=20,
+        )
+        for beta in (1.0, 0.25)
+        for seed in range(args.seeds)
     ]
     start = time.perf_counter()
     paths = train_runs(specs, args.out, RunnerOptions(threads=args.threads))
@@ -68,8 +78,10 @@ def main() -> None:
     for beta, rows in table.items():
         s, h = np.array(rows).T
         name = "DQN (β=1)" if beta == 1.0 else f"Empathic β={beta:g}"
-        print(f"{name:<20} survival {s.mean():6.1f} (per seed {np.round(s, 1).tolist()})   "
-              f"harms/episode {h.mean():.2f} (per seed {np.round(h, 2).tolist()})")
+        print(
+            f"{name:<20} survival {s.mean():6.1f} (per seed {np.round(s, 1).tolist()})   "
+            f"harms/episode {h.mean():.2f} (per seed {np.round(h, 2).tolist()})"
+        )
 
 
 if __name__ == "__main__":

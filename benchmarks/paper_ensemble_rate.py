@@ -33,8 +33,15 @@ def main() -> None:
     torch.set_num_threads(1)
     betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
     specs = [
-        RunSpec(env="coexistence_v0", method="empathic_dqn", seed=i, steps=args.steps, eval_interval=10 * args.steps,
-                eval_episodes=1, settings={"learning_starts": 32, "replay_capacity": 100_000, "selfishness": beta})
+        RunSpec(
+            env="coexistence_v0",
+            method="empathic_dqn",
+            seed=i,
+            steps=args.steps,
+            eval_interval=10 * args.steps,
+            eval_episodes=1,
+            settings={"learning_starts": 32, "replay_capacity": 100_000, "selfishness": beta},
+        )
         for i, beta in enumerate(betas)
     ]
     out = tempfile.mkdtemp(prefix="ez-paper-rate-")

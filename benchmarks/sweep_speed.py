@@ -21,8 +21,8 @@ import time
 from pathlib import Path
 
 import torch
-
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
+
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
 
@@ -51,21 +51,33 @@ def matmul_peak(seconds: float = 2.0) -> float:
     return 2 * 2048**3 * count / (time.perf_counter() - start) / 1e9
 
 
-def ensemble_rate(k: int, steps: int, workers: int = 1, threads: int | None = None,
-                  selfishness: float | list[float] = 0.5) -> float:
+def ensemble_rate(
+    k: int, steps: int, workers: int = 1, threads: int | None = None, selfishness: float | list[float] = 0.5
+) -> float:
     """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on); a list of
     ``k`` selfishness values mixes runs with and without ``Q_emp`` in one ensemble."""
     betas = selfishness if isinstance(selfishness, list) else [selfishness] * k
     specs = [
-        RunSpec(env="coexistence_v0", method="empathic_dqn", seed=w * k + i, steps=steps, eval_interval=10 * steps,
-                eval_episodes=1, settings={"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": betas[i]})
-        for w in range(workers) for i in range(k)
+        RunSpec(
+            env="coexistence_v0",
+            method="empathic_dqn",
+            seed=w * k + i,
+            steps=steps,
+            eval_interval=10 * steps,
+            eval_episodes=1,
+            settings={"learning_starts": BATCH, "replay_capacity": 100_000, "selfishness": betas[i]},
+        )
+        for w in range(workers)
+        for i in range(k)
     ]
     out = Path(tempfile.mkdtemp(prefix="ez-sweep-speed-"))
     try:
         start = time.perf_counter()
-        train_runs(specs, out, RunnerOptions(progress=False, max_parallel_runs=k, workers=workers,
-                                             threads=threads, checkpoint_interval=0))
+        train_runs(
+            specs,
+            out,
+            RunnerOptions(progress=False, max_parallel_runs=k, workers=workers, threads=threads, checkpoint_interval=0),
+        )
         return len(specs) * steps / (time.perf_counter() - start)
     finally:
         shutil.rmtree(out, ignore_errors=True)
@@ -80,8 +92,18 @@ def sb3_rate(steps: int) -> float | None:
         print(f"(SB3 skipped: {error})")
         return None
     env = make_single_agent_env("coexistence_v0")
-    model = DQN("MlpPolicy", env, learning_starts=BATCH, batch_size=BATCH, train_freq=1, gradient_steps=1,
-                buffer_size=100_000, policy_kwargs={"net_arch": [HIDDEN, HIDDEN]}, seed=0, device="cpu")
+    model = DQN(
+        "MlpPolicy",
+        env,
+        learning_starts=BATCH,
+        batch_size=BATCH,
+        train_freq=1,
+        gradient_steps=1,
+        buffer_size=100_000,
+        policy_kwargs={"net_arch": [HIDDEN, HIDDEN]},
+        seed=0,
+        device="cpu",
+    )
     model.learn(200)
     start = time.perf_counter()
     model.learn(steps, reset_num_timesteps=False)
@@ -101,12 +123,17 @@ def main() -> None:
     per_step = flops_per_run_step()
     rows = []
     for k, steps, workers, threads in (
-        (1, 3000, 1, 1), (8, 1200, 1, 1), (32, 500, 1, 1), (32, 500, 1, 2), (64, 300, 1, 2), (25, 800, 2, 1), (32, 700, 2, 1),
+        (1, 3000, 1, 1),
+        (8, 1200, 1, 1),
+        (32, 500, 1, 1),
+        (32, 500, 1, 2),
+        (64, 300, 1, 2),
+        (25, 800, 2, 1),
+        (32, 700, 2, 1),
     ):
         rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers, threads=threads)
         rows.append((k, workers, rate))
-        print(f"(b) K={k:>3} runs × {workers} process(es), {threads} torch thread(s) each: {rate:9.0f} env-steps/s",
-              flush=True)
+        print(f"(b) K={k:>3} runs × {workers} process(es), {threads} torch thread(s) each: {rate:9.0f} env-steps/s", flush=True)
     if sb3:
         print(f"(c) SB3 DQN (same MLP, batch 32, 1 update/step): {sb3:.0f} env-steps/s")
     best = max(rows, key=lambda r: r[2])
@@ -115,19 +142,27 @@ def main() -> None:
         achieved = rate * per_step / 1e9
         print(f"(d,e) K={k:>3} × {workers}: {ratio}; {achieved:6.1f} GFLOP/s = {achieved / peak:5.1%} of peak")
     hours = PAPER_RUNS * PAPER_STEPS / best[2] / 3600
-    print(f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
-          f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations) if every run needed Q_emp")
+    print(
+        f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
+        f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations) if every run needed Q_emp"
+    )
     # the paper's ensembles: per env one ensemble of 25 runs, 15 with β < 1 (Q and Q_emp) and 10
     # DQN-type runs (Q only), one worker process per env
     paper_betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
     paper_rate = ensemble_rate(25, max(50, int(700 * scale)), workers=2, threads=1, selfishness=paper_betas)
     mean_flops = (15 * per_step + 10 * flops_per_run_step(False)) / 25
-    print(f"(f) the paper's ensembles (K = 25: 15 with β < 1 and 10 with β = 1) × 2 processes, 1 thread each: "
-          f"{paper_rate:.0f} env-steps/s ({paper_rate * mean_flops / 1e9 / peak:.1%} of peak)")
-    print(f"(f) projected paper profile: 50 runs × 1M at that rate = {PAPER_RUNS * PAPER_STEPS / paper_rate / 60:.0f} "
-          f"minutes (+ greedy evaluations)")
-    print(f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP with Q_emp, "
-          f"{flops_per_run_step(False) / 1e6:.2f} MFLOP standard DQN")
+    print(
+        f"(f) the paper's ensembles (K = 25: 15 with β < 1 and 10 with β = 1) × 2 processes, 1 thread each: "
+        f"{paper_rate:.0f} env-steps/s ({paper_rate * mean_flops / 1e9 / peak:.1%} of peak)"
+    )
+    print(
+        f"(f) projected paper profile: 50 runs × 1M at that rate = {PAPER_RUNS * PAPER_STEPS / paper_rate / 60:.0f} "
+        f"minutes (+ greedy evaluations)"
+    )
+    print(
+        f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP with Q_emp, "
+        f"{flops_per_run_step(False) / 1e6:.2f} MFLOP standard DQN"
+    )
     sys.stdout.flush()
 
 

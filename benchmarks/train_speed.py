@@ -29,13 +29,13 @@ import time
 
 import numpy as np
 import torch
+from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
-from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 REPLAY = 500_000
 FINAL_EPSILON = 0.01
@@ -75,19 +75,32 @@ class TimedEmpathicDQN(EmpathicDQN):
 
 
 TIMED_EMPATHIC_DQN = Method(
-    name="timed_empathic_dqn", learner=TimedEmpathicDQN, settings=EmpathicDQNSettings,
+    name="timed_empathic_dqn",
+    learner=TimedEmpathicDQN,
+    settings=EmpathicDQNSettings,
     description="Empathic DQN with a stopwatch",
 )
 
 
 def empathic_dqn_rates(warmup: int, settle: int, steps: int) -> tuple[float, float]:
     settings = {
-        "selfishness": 0.5, "batch_size": 32, "learning_starts": warmup, "replay_capacity": REPLAY,
-        "epsilon_end": FINAL_EPSILON, "epsilon_decay_steps": 1,
+        "selfishness": 0.5,
+        "batch_size": 32,
+        "learning_starts": warmup,
+        "replay_capacity": REPLAY,
+        "epsilon_end": FINAL_EPSILON,
+        "epsilon_decay_steps": 1,
     }
     start = warmup + settle
-    spec = RunSpec(env="coexistence_v0", method=f"{__name__}:TIMED_EMPATHIC_DQN", settings=settings, seed=0,
-                   steps=start + steps, eval_interval=10 * (start + steps), eval_episodes=1)
+    spec = RunSpec(
+        env="coexistence_v0",
+        method=f"{__name__}:TIMED_EMPATHIC_DQN",
+        settings=settings,
+        seed=0,
+        steps=start + steps,
+        eval_interval=10 * (start + steps),
+        eval_episodes=1,
+    )
     STOPWATCH.arm(start, start + steps)
     with tempfile.TemporaryDirectory(prefix="ez-train-speed-") as out:
         train_runs([spec], out, RunnerOptions(progress=False, checkpoint_interval=0))
@@ -106,10 +119,20 @@ def sb3_dqn_rates(warmup: int, settle: int, steps: int) -> tuple[float, float]:
             return True
 
     start = warmup + settle
-    settings = SB3Settings(algorithm="dqn", learning_rate=1e-3, batch_size=32, net_arch=(128, 128), algorithm_kwargs={
-        "buffer_size": REPLAY, "learning_starts": warmup, "train_freq": 1, "gradient_steps": 1,
-        "exploration_fraction": warmup / (start + steps), "exploration_final_eps": FINAL_EPSILON,
-    })
+    settings = SB3Settings(
+        algorithm="dqn",
+        learning_rate=1e-3,
+        batch_size=32,
+        net_arch=(128, 128),
+        algorithm_kwargs={
+            "buffer_size": REPLAY,
+            "learning_starts": warmup,
+            "train_freq": 1,
+            "gradient_steps": 1,
+            "exploration_fraction": warmup / (start + steps),
+            "exploration_final_eps": FINAL_EPSILON,
+        },
+    )
     model = make_sb3_model(settings, make_single_agent_env("coexistence_v0"), seed=0)
     STOPWATCH.arm(start, start + steps)
     model.learn(start + steps, callback=Tick())
@@ -120,8 +143,8 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
     """CPU µs per call of the per-step pieces of both, the pieces interleaved round by round
     (median over rounds), so a busy machine slows them alike."""
     from baselines.sb3 import SB3Settings, make_sb3_model
-    from empathy_zoo.gym_adapter import make_single_agent_env
     from empathy_zoo.environments import DEFAULT_POLICIES
+    from empathy_zoo.gym_adapter import make_single_agent_env
     from empathy_zoo.vector import VectorEnv
 
     rng = np.random.default_rng(0)
@@ -133,9 +156,21 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
     add = lambda: learner.replay.add(row, row, row, torch.zeros((1, 1), dtype=torch.long), torch.ones((1, 1)), ~flags, flags)  # noqa: E731
     for _ in range(300):
         add()
-    model = make_sb3_model(SB3Settings(algorithm="dqn", learning_rate=1e-3, batch_size=32, algorithm_kwargs={
-        "buffer_size": REPLAY, "learning_starts": 200, "exploration_fraction": 0.01, "exploration_final_eps": FINAL_EPSILON,
-    }), make_single_agent_env("coexistence_v0"), seed=0)
+    model = make_sb3_model(
+        SB3Settings(
+            algorithm="dqn",
+            learning_rate=1e-3,
+            batch_size=32,
+            algorithm_kwargs={
+                "buffer_size": REPLAY,
+                "learning_starts": 200,
+                "exploration_fraction": 0.01,
+                "exploration_final_eps": FINAL_EPSILON,
+            },
+        ),
+        make_single_agent_env("coexistence_v0"),
+        seed=0,
+    )
     model.learn(400)
     pieces = {
         "Empathic DQN: learner.update (Q and Q_emp gradient steps)": learner.update,
@@ -145,7 +180,9 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
         "SB3 DQN: model.train (one gradient step)": lambda: model.train(gradient_steps=1, batch_size=32),
         "SB3 DQN: _sample_action (ε-greedy predict)": lambda: model._sample_action(0, None, 1),
         "SB3 DQN: VecEnv.step (DummyVecEnv, Monitor, adapter)": lambda: model.env.step(rng.integers(5, size=1)),
-        "SB3 DQN: replay_buffer.add": lambda: model.replay_buffer.add(obs[0], obs[0], np.zeros((1, 1)), np.ones(1), np.zeros(1), [{}]),
+        "SB3 DQN: replay_buffer.add": lambda: model.replay_buffer.add(
+            obs[0], obs[0], np.zeros((1, 1)), np.ones(1), np.zeros(1), [{}]
+        ),
     }
     times: dict[str, list[float]] = {name: [] for name in pieces}
     for _ in range(rounds):
@@ -160,8 +197,9 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
 def machine() -> list[str]:
     import stable_baselines3
 
-    return describe_machine(f"torch {torch.__version__} ({torch.get_num_threads()} thread(s))",
-                            f"stable-baselines3 {stable_baselines3.__version__}")
+    return describe_machine(
+        f"torch {torch.__version__} ({torch.get_num_threads()} thread(s))", f"stable-baselines3 {stable_baselines3.__version__}"
+    )
 
 
 def main() -> None:
@@ -180,13 +218,18 @@ def main() -> None:
     for repeat in range(args.repeats):
         ours.append(empathic_dqn_rates(args.warmup, args.settle, args.steps))
         theirs.append(sb3_dqn_rates(args.warmup, args.settle, args.steps))
-        print(f"repeat {repeat + 1}: Empathic DQN {ours[-1][0]:6.0f}/s wall {ours[-1][1]:6.0f}/s CPU; "
-              f"SB3 DQN {theirs[-1][0]:6.0f}/s wall {theirs[-1][1]:6.0f}/s CPU", flush=True)
+        print(
+            f"repeat {repeat + 1}: Empathic DQN {ours[-1][0]:6.0f}/s wall {ours[-1][1]:6.0f}/s CPU; "
+            f"SB3 DQN {theirs[-1][0]:6.0f}/s wall {theirs[-1][1]:6.0f}/s CPU",
+            flush=True,
+        )
     for clock, i in (("wall-clock", 0), ("CPU", 1)):
         a, b = statistics.median(r[i] for r in ours), statistics.median(r[i] for r in theirs)
-        print(f"per {clock} second (median of {args.repeats}): Empathic DQN (runner, β = 0.5, Q and Q_emp updated) "
-              f"{a:.0f} env-steps/s; SB3 DQN (learn() on the Gymnasium adapter) {b:.0f} env-steps/s; "
-              f"ratio {a / b:.2f}× SB3 per run (target ≥ 3×)")
+        print(
+            f"per {clock} second (median of {args.repeats}): Empathic DQN (runner, β = 0.5, Q and Q_emp updated) "
+            f"{a:.0f} env-steps/s; SB3 DQN (learn() on the Gymnasium adapter) {b:.0f} env-steps/s; "
+            f"ratio {a / b:.2f}× SB3 per run (target ≥ 3×)"
+        )
     if args.breakdown:
         print("per-step pieces, CPU µs per call (interleaved, median of 15 rounds of 100 calls):")
         for name, micros in breakdown().items():

@@ -35,8 +35,14 @@ def _forward_saving(params: list[torch.Tensor], x: torch.Tensor) -> tuple[torch.
     return x, inputs
 
 
-def _backward(params: list[torch.Tensor], inputs: list[torch.Tensor], grad: torch.Tensor, rows: int,
-              grads: list[torch.Tensor], stacks: slice) -> None:
+def _backward(
+    params: list[torch.Tensor],
+    inputs: list[torch.Tensor],
+    grad: torch.Tensor,
+    rows: int,
+    grads: list[torch.Tensor],
+    stacks: slice,
+) -> None:
     for layer in range(len(params) // 2 - 1, -1, -1):
         x = inputs[layer][:, :rows]
         torch.bmm(x.transpose(1, 2), grad, out=grads[2 * layer][stacks])
@@ -58,7 +64,7 @@ class ManualBackward(EmpathicDQN):
         diff = values.gather(2, action.unsqueeze(2)).squeeze(2) - target
         b = diff.shape[1]
         grad = torch.zeros_like(values).scatter_(2, action.unsqueeze(2), (diff * (2.0 / b)).unsqueeze(2))
-        return (diff ** 2).mean(dim=1).sum(), grad
+        return (diff**2).mean(dim=1).sum(), grad
 
     def update(self) -> float:
         k, cfg, emp, b = self.num_runs, self.config, self._emp.size, self.config.batch_size
@@ -75,8 +81,9 @@ class ManualBackward(EmpathicDQN):
             if rows is not None:
                 y_emp = y_emp.index_select(0, rows)
         else:
-            y = double_dqn_target(batch["reward"], batch["terminated"], q_next,
-                                  StackedMLP.forward(self.target, batch["next_obs"]), cfg.gamma)
+            y = double_dqn_target(
+                batch["reward"], batch["terminated"], q_next, StackedMLP.forward(self.target, batch["next_obs"]), cfg.gamma
+            )
         loss, grad = self._loss_grad(out_q[:, :b], action, y)
         _backward(q_params, inputs_q, grad, b, self._grads, slice(0, k))
         if emp:
@@ -113,25 +120,33 @@ def main() -> None:
         print(f"   {name:24s} {np.median(values):6.2f}  (min {min(values):.2f})")
 
     from torch.profiler import ProfilerActivity, profile
+
     with profile(activities=[ProfilerActivity.CPU], record_shapes=True) as prof:
         for _ in range(100):
             ours.update()
     print("\n2. aten calls of 100 updates, by self time and shape")
-    print(prof.key_averages(group_by_input_shape=True).table(
-        sort_by="self_cpu_time_total", row_limit=14, max_name_column_width=22, max_shapes_column_width=70))
+    print(
+        prof.key_averages(group_by_input_shape=True).table(
+            sort_by="self_cpu_time_total", row_limit=14, max_name_column_width=22, max_shapes_column_width=70
+        )
+    )
 
     flush = torch.zeros(8_000_000)
-    shapes = {"forward W2 (40×32×128 @ 128×128)": (torch.randn(40, 32, 128), torch.randn(40, 128, 128)),
-              "weight grad W2 (40×128×32 @ 32×128)": (torch.randn(40, 32, 128).transpose(1, 2), torch.randn(40, 32, 128)),
-              "target W2 (25×64×128 @ 128×128)": (torch.randn(25, 64, 128), torch.randn(25, 128, 128))}
+    shapes = {
+        "forward W2 (40×32×128 @ 128×128)": (torch.randn(40, 32, 128), torch.randn(40, 128, 128)),
+        "weight grad W2 (40×128×32 @ 32×128)": (torch.randn(40, 32, 128).transpose(1, 2), torch.randn(40, 32, 128)),
+        "target W2 (25×64×128 @ 128×128)": (torch.randn(25, 64, 128), torch.randn(25, 128, 128)),
+    }
     base = cpu_ms(lambda: flush.add_(1.0), 50)
     print("\n3. the update's largest matmuls alone (µs per call, GFLOP/s)")
     for name, (a, b) in shapes.items():
         flops = 2 * a.shape[0] * a.shape[1] * a.shape[2] * b.shape[2]
         warm = cpu_ms(lambda: torch.bmm(a, b), 200) * 1e3
         cold = (cpu_ms(lambda: (flush.add_(1.0), torch.bmm(a, b)), 50) - base) * 1e3
-        print(f"   {name:38s} warm {warm:6.0f} ({flops / warm / 1e3:5.1f})   after 32 MB streamed {cold:6.0f} "
-              f"({flops / cold / 1e3:5.1f})")
+        print(
+            f"   {name:38s} warm {warm:6.0f} ({flops / warm / 1e3:5.1f})   after 32 MB streamed {cold:6.0f} "
+            f"({flops / cold / 1e3:5.1f})"
+        )
 
 
 if __name__ == "__main__":

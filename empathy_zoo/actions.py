@@ -49,8 +49,9 @@ def check_joint_action(
     return checked
 
 
-def check_action_array(actions: Any, shape: tuple[int, ...], agents: Sequence[str], present: np.ndarray | None = None,
-                       num_actions: int = NUM_ACTIONS) -> np.ndarray:
+def check_action_array(
+    actions: Any, shape: tuple[int, ...], agents: Sequence[str], present: np.ndarray | None = None, num_actions: int = NUM_ACTIONS
+) -> np.ndarray:
     """``actions`` as an int64 array of ``shape`` (environments × agents, columns named by
     ``agents``) if every action (where ``present``, default everywhere) is valid, else ``ValueError``."""
     array = np.asarray(actions)
@@ -63,6 +64,8 @@ def check_action_array(actions: Any, shape: tuple[int, ...], agents: Sequence[st
         bad &= present
     if bad.any():
         env, column = np.argwhere(bad)[0]
-        raise ValueError(f"invalid action {array[env, column].item()!r} for {agents[column]} in env {env}: "
-                         f"actions are integers in [0, {num_actions})")
+        raise ValueError(
+            f"invalid action {array[env, column].item()!r} for {agents[column]} in env {env}: "
+            f"actions are integers in [0, {num_actions})"
+        )
     return array.astype(np.int64, copy=False)

@@ -16,17 +16,20 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 __all__ = [
-    "write_bytes_atomic", "write_text_atomic", "write_json_atomic", "write_with_atomic", "read_json",
-    "check_output_dir", "remove_stale_temp_files",
+    "write_bytes_atomic",
+    "write_text_atomic",
+    "write_json_atomic",
+    "write_with_atomic",
+    "read_json",
+    "check_output_dir",
+    "remove_stale_temp_files",
 ]
 
 TEMP_SUFFIX = ".tmp"
 """Name suffix of the temporary file of an atomic write in progress (its name starts with ``.``)."""
 PROBE_PREFIX = ".write-probe-"
 """Name prefix of the empty file :func:`check_output_dir` writes (atomically) and removes."""
-_OURS = re.compile(
-    rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^{re.escape(PROBE_PREFIX)}(?P<prober>\d+))$"
-)
+_OURS = re.compile(rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^{re.escape(PROBE_PREFIX)}(?P<prober>\d+))$")
 """The end of a temporary file name this module writes, with the writer's process id."""
 
 
@@ -94,20 +97,25 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
     root = Path(path)
     for directory in (root, *(root / sub for sub in subdirs)):
         if directory.exists() and not directory.is_dir():
-            raise ValueError(f"output directory {directory} is a file, not a directory; "
-                             "choose another output directory (--out) or move the file away")
+            raise ValueError(
+                f"output directory {directory} is a file, not a directory; "
+                "choose another output directory (--out) or move the file away"
+            )
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as error:
-            raise ValueError(f"cannot create output directory {directory} ({error.strerror or error}); "
-                             "choose another output directory (--out)") from None
+            raise ValueError(
+                f"cannot create output directory {directory} ({error.strerror or error}); choose another output directory (--out)"
+            ) from None
         probe = directory / f"{PROBE_PREFIX}{os.getpid()}"
         try:
             write_bytes_atomic(probe, b"")
             probe.unlink()
         except OSError as error:
-            raise ValueError(f"output directory {directory} is not writable ({error.strerror or error}); "
-                             "choose another output directory (--out) or fix its permissions") from None
+            raise ValueError(
+                f"output directory {directory} is not writable ({error.strerror or error}); "
+                "choose another output directory (--out) or fix its permissions"
+            ) from None
     return root
 
 

@@ -38,10 +38,10 @@ class Environment:
 
 
 ENVIRONMENT_TABLE: dict[str, Environment] = {
-    "coexistence_v0": Environment(CoexistenceEngine, "empathy_zoo.coexistence_v0", "empathy_zoo/Coexistence-v0",
-                                  {"cat_0": "random_walk"}),
-    "sharing_v0": Environment(SharingEngine, "empathy_zoo.sharing_v0", "empathy_zoo/Sharing-v0",
-                              {"human_0": "patrol"}),
+    "coexistence_v0": Environment(
+        CoexistenceEngine, "empathy_zoo.coexistence_v0", "empathy_zoo/Coexistence-v0", {"cat_0": "random_walk"}
+    ),
+    "sharing_v0": Environment(SharingEngine, "empathy_zoo.sharing_v0", "empathy_zoo/Sharing-v0", {"human_0": "patrol"}),
 }
 """Every environment, by name."""
 
@@ -62,6 +62,8 @@ def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> d
         if index == "0":
             fixed |= {f"{kind}_{i}": policy for i in range(1, number)}
     return fixed
+
+
 GYM_IDS: dict[str, str] = {env.gym_id: name for name, env in ENVIRONMENT_TABLE.items()}
 """Gymnasium id -> environment name."""
 

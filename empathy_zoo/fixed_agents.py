@@ -41,8 +41,10 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         EzPickle.__init__(self, env, policies)
         engine = getattr(env.unwrapped, "engine", None)
         if not isinstance(engine, GridEngine):
-            raise ValueError(f"FixedAgents drives the fixed agents of the suite's gridworlds (an env with an engine), "
-                             f"got {type(env.unwrapped).__name__}")
+            raise ValueError(
+                f"FixedAgents drives the fixed agents of the suite's gridworlds (an env with an engine), "
+                f"got {type(env.unwrapped).__name__}"
+            )
         self._engine = engine
         all_agents = list(env.possible_agents)
         unknown = [agent for agent in policies if agent not in all_agents]
@@ -79,8 +81,9 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
             if agent in self.policies:
                 observation, info = self._last[agent]
                 policy = self.policies[agent]
-                context = policy_context(self._engine, 0, self._fixed_index[agent], info,
-                                         bool(getattr(policy, "needs_state", False)))
+                context = policy_context(
+                    self._engine, 0, self._fixed_index[agent], info, bool(getattr(policy, "needs_state", False))
+                )
                 merged[agent] = checked_policy_action(policy, agent, policy.act(observation, context), self._num_actions)
         observations, rewards, terminations, truncations, infos = self.env.step(merged)
         self._remember(observations, infos)

@@ -7,8 +7,15 @@ from enum import IntEnum
 import numpy as np
 
 __all__ = [
-    "Action", "MOVES", "NUM_ACTIONS", "window_indices", "spread_ids", "displacement_origin", "window_slot_by_displacement",
-    "signed_offset", "torus_distance",
+    "Action",
+    "MOVES",
+    "NUM_ACTIONS",
+    "window_indices",
+    "spread_ids",
+    "displacement_origin",
+    "window_slot_by_displacement",
+    "signed_offset",
+    "torus_distance",
     "cells_by_distance",
 ]
 

@@ -54,12 +54,11 @@ import numpy as np
 from gymnasium.utils import EzPickle
 
 from empathy_zoo import ENVIRONMENTS
-from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.environments import GYM_IDS, default_policies
+from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.policies import FixedPolicy
 
 __all__ = ["SingleAgentEnv", "make_single_agent_env", "GYM_IDS"]
-
 
 
 class SingleAgentEnv(gymnasium.Env, EzPickle):
@@ -78,9 +77,7 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         render_mode: str | None = None,
         **env_options: Any,
     ) -> None:
-        EzPickle.__init__(
-            self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options
-        )
+        EzPickle.__init__(self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
         if env not in ENVIRONMENTS:
             raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENVIRONMENTS)}")
         parallel = ENVIRONMENTS[env].parallel_env(

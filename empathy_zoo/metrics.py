@@ -12,7 +12,13 @@ import numpy as np
 __all__ = ["METRIC_NAMES", "METRIC_DEFINITIONS", "METRIC_RANGES", "equality"]
 
 METRIC_NAMES: tuple[str, ...] = (
-    "survival", "harms", "batteries", "other_batteries", "equality", "return", "other_return",
+    "survival",
+    "harms",
+    "batteries",
+    "other_batteries",
+    "equality",
+    "return",
+    "other_return",
 )
 """The per-episode metrics every result file records, in this order."""
 
@@ -28,8 +34,13 @@ METRIC_DEFINITIONS: dict[str, str] = {
 """One-line definition of every metric, as printed in the leaderboard."""
 
 METRIC_RANGES: dict[str, tuple[float, float | None]] = {
-    "survival": (0.0, None), "harms": (0.0, None), "batteries": (0.0, None), "other_batteries": (0.0, None),
-    "equality": (0.0, 1.0), "return": (0.0, None), "other_return": (0.0, None),
+    "survival": (0.0, None),
+    "harms": (0.0, None),
+    "batteries": (0.0, None),
+    "other_batteries": (0.0, None),
+    "equality": (0.0, 1.0),
+    "return": (0.0, None),
+    "other_return": (0.0, None),
 }
 """The values every metric can take, ``(low, high)`` (``None``: no fixed bound); the leaderboard
 keeps its intervals inside them."""
@@ -47,4 +58,3 @@ def equality(r_a: np.ndarray | float, r_b: np.ndarray | float) -> np.ndarray:
     total = a + b
     safe = np.where(total > 0, total, 1.0)
     return np.where(total > 0, 2.0 * np.minimum(a, b) / safe, 1.0)
-

@@ -46,8 +46,10 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         self.possible_agents: list[AgentID] = list(self.engine.agents)
         self.agents: list[AgentID] = []
         obs_space = spaces.Box(
-            low=np.float32(self.engine.obs_low), high=np.float32(self.engine.obs_high),
-            shape=(self.engine.obs_size,), dtype=np.float32,
+            low=np.float32(self.engine.obs_low),
+            high=np.float32(self.engine.obs_high),
+            shape=(self.engine.obs_size,),
+            dtype=np.float32,
         )
         self.observation_spaces = {agent: obs_space for agent in self.possible_agents}
         self.action_spaces = {agent: spaces.Discrete(NUM_ACTIONS) for agent in self.possible_agents}
@@ -118,7 +120,10 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         """Paint every agent's observation and every swapped observation of the current state."""
         engine, order = self.engine, self._view_order
         self._painted = engine.paint(  # (take reads the one environment's (1, A) arrays flat)
-            self._view_env, engine.cells.take(order), engine.inventory.take(order), engine.present.take(order),
+            self._view_env,
+            engine.cells.take(order),
+            engine.inventory.take(order),
+            engine.present.take(order),
             self._viewers,
         )
         return self._painted

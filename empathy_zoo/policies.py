@@ -29,18 +29,33 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from empathy_zoo.actions import check_action
-from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.builtin_policies import Patrol, RandomWalk, Stay
+from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.registry import resolve_name
 
 if TYPE_CHECKING:
     from empathy_zoo.engine.base import GridEngine
 
 __all__ = [
-    "FixedPolicy", "BatchedPolicy", "RandomWalk", "Patrol", "Stay", "POLICIES",
-    "CONTEXT_KEYS", "PolicyEntry", "make_policy", "batched", "checked_policy_action",
-    "policy_context", "policy_entry", "entry_label", "policy_name", "unsaved_policy", "policy_state",
-    "load_policy_state", "plain_data_problem",
+    "FixedPolicy",
+    "BatchedPolicy",
+    "RandomWalk",
+    "Patrol",
+    "Stay",
+    "POLICIES",
+    "CONTEXT_KEYS",
+    "PolicyEntry",
+    "make_policy",
+    "batched",
+    "checked_policy_action",
+    "policy_context",
+    "policy_entry",
+    "entry_label",
+    "policy_name",
+    "unsaved_policy",
+    "policy_state",
+    "load_policy_state",
+    "plain_data_problem",
 ]
 
 PolicyEntry = str | Mapping[str, Any]
@@ -127,8 +142,9 @@ class _PolicyCopies:
         for i, seed in zip(env_ids, seeds):
             self.copies[i].reset(seed)
 
-    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray,
-            contexts: Sequence[Mapping[str, Any] | None]) -> np.ndarray:
+    def act(
+        self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray, contexts: Sequence[Mapping[str, Any] | None]
+    ) -> np.ndarray:
         actions = np.full(len(self.copies), int(Action.STAY), dtype=np.int64)
         for i in np.flatnonzero(active):
             policy = self.copies[i]
@@ -141,15 +157,15 @@ class _PolicyCopies:
     def load_state(self, state: Mapping[str, Any]) -> None:
         states = state["copies"]
         if len(states) != len(self.copies):
-            raise ValueError(f"state of {len(states)} copies of {policy_name(self.copies[0])} for "
-                             f"{len(self.copies)} environments")
+            raise ValueError(
+                f"state of {len(states)} copies of {policy_name(self.copies[0])} for {len(self.copies)} environments"
+            )
         for policy, saved in zip(self.copies, states):
             load_policy_state(policy, saved)
 
 
 POLICIES: dict[str, type] = {"random_walk": RandomWalk, "patrol": Patrol, "stay": Stay}
 """Fixed policies by name."""
-
 
 
 # ---------------------------------------------------------------------------- naming and building
@@ -225,8 +241,9 @@ def _check_arguments(spec: str, factory: Any, kwargs: Mapping[str, Any]) -> None
     named = [p.name for p in parameters if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
     for key in kwargs:
         if key not in named:
-            raise ValueError(f"cannot build fixed policy {spec!r}: it takes no argument {key!r} "
-                             f"(its arguments: {', '.join(named) or 'none'})")
+            raise ValueError(
+                f"cannot build fixed policy {spec!r}: it takes no argument {key!r} (its arguments: {', '.join(named) or 'none'})"
+            )
 
 
 def policy_name(policy: Any) -> str:
@@ -251,9 +268,7 @@ def batched(policy: FixedPolicy, num_envs: int, agent: str = "a fixed agent") ->
 
 
 # ---------------------------------------------------------------------------- the context
-def policy_context(
-    engine: GridEngine, env_id: int, agent: int, info: Mapping[str, Any], with_positions: bool
-) -> dict[str, Any]:
+def policy_context(engine: GridEngine, env_id: int, agent: int, info: Mapping[str, Any], with_positions: bool) -> dict[str, Any]:
     """The context (see :class:`FixedPolicy`) of agent index ``agent`` in environment ``env_id``
     of ``engine``, whose ``infos`` entry after the last step is ``info``."""
     context = {**info, "step": int(engine.t[env_id]), "agent": engine.agents[agent], "size": engine.size}
@@ -282,8 +297,10 @@ def policy_state(policy: Any) -> Any:
     """``policy.state()``, checked to be plain data (``{}`` for a stateless policy without one);
     a policy that saves no state raises ``ValueError`` naming it."""
     if unsaved_policy(policy) is not None:
-        raise ValueError(f"fixed policy {policy_name(unsaved_policy(policy))} saves no state: give it state() and "
-                         "load_state(state), or declare stateless = True (see empathy_zoo.policies.FixedPolicy)")
+        raise ValueError(
+            f"fixed policy {policy_name(unsaved_policy(policy))} saves no state: give it state() and "
+            "load_state(state), or declare stateless = True (see empathy_zoo.policies.FixedPolicy)"
+        )
     if not callable(getattr(policy, "state", None)):
         return {}
     state = policy.state()

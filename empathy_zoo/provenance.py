@@ -37,7 +37,12 @@ def checkout_commit(directory: Path) -> str | None:
 def _git(directory: Path, *args: str) -> str | None:
     try:
         completed = subprocess.run(
-            ["git", *args], cwd=directory, capture_output=True, text=True, timeout=10, check=False,
+            ["git", *args],
+            cwd=directory,
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=False,
         )
     except (OSError, subprocess.SubprocessError):
         return None

@@ -18,18 +18,27 @@ from collections.abc import Sequence
 import numpy as np
 from gymnasium.utils import seeding
 
-__all__ = ["STREAMS", "EnvStreams", "check_seed", "counter_bits", "counter_uniform", "counter_integers", "counter_integer", "derive_key"]
+__all__ = [
+    "STREAMS",
+    "EnvStreams",
+    "check_seed",
+    "counter_bits",
+    "counter_uniform",
+    "counter_integers",
+    "counter_integer",
+    "derive_key",
+]
 
 STREAMS: dict[str, int] = {
-    "fixed_agent": 1,       # + the agent's index: a fixed agent's seed from its environment's (policy_seed)
-    "network_init": 11,     # a learner's initial weights (Empathic DQN)
-    "exploration": 12,      # a learner's ε-greedy draws
-    "replay_sample": 13,    # a learner's replay batches
-    "sb3": 15,              # the seed handed to a Stable-Baselines3 algorithm
-    "train_env": 20,        # a run's training environments
-    "eval_env": 30,         # a run's greedy-evaluation start states (+ the episode)
+    "fixed_agent": 1,  # + the agent's index: a fixed agent's seed from its environment's (policy_seed)
+    "network_init": 11,  # a learner's initial weights (Empathic DQN)
+    "exploration": 12,  # a learner's ε-greedy draws
+    "replay_sample": 13,  # a learner's replay batches
+    "sb3": 15,  # the seed handed to a Stable-Baselines3 algorithm
+    "train_env": 20,  # a run's training environments
+    "eval_env": 30,  # a run's greedy-evaluation start states (+ the episode)
     "attainable_utility": 40,  # AUP's auxiliary rewards, networks and replay batches (+ which of them)
-    "considerate_value": 41,   # Be Considerate's value network of the other agent and its replay batches (+ which)
+    "considerate_value": 41,  # Be Considerate's value network of the other agent and its replay batches (+ which)
 }
 """Every random stream derived from a run's seed, by name: ``derive_key(seed, STREAMS[name], ...)``.
 One id per stream, so no two streams of a run ever coincide; a new stream takes a new id here."""

@@ -75,8 +75,17 @@ from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS
 from empathy_zoo.grid import MOVES, NUM_ACTIONS
 
 __all__ = [
-    "ReferenceOutcome", "TIE_TOLERANCE", "coexistence_optimum", "coexistence_transitions",
-    "coexistence_values", "greedy_actions", "greedy_policy", "start_distribution", "TIES", "RULES", "UNSEEN",
+    "ReferenceOutcome",
+    "TIE_TOLERANCE",
+    "coexistence_optimum",
+    "coexistence_transitions",
+    "coexistence_values",
+    "greedy_actions",
+    "greedy_policy",
+    "start_distribution",
+    "TIES",
+    "RULES",
+    "UNSEEN",
 ]
 
 TIE_TOLERANCE = 1e-7
@@ -170,8 +179,15 @@ def _in_view(size: int, view: int) -> np.ndarray:
 
 @lru_cache(maxsize=None)
 def coexistence_values(
-    selfishness: float, *, rule: str = "golden", in_view_only: bool = False, view: int = 5, unseen: str = "own",
-    gamma: float = 0.99, size: int = 7, tolerance: float = 1e-10,
+    selfishness: float,
+    *,
+    rule: str = "golden",
+    in_view_only: bool = False,
+    view: int = 5,
+    unseen: str = "own",
+    gamma: float = 0.99,
+    size: int = 7,
+    tolerance: float = 1e-10,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(Q*, Q_emp)``, each ``(size² + 1, 5)``: rows are the displacement indices of
     :func:`coexistence_transitions`, the last row is *cat gone* (every action alike).
@@ -198,8 +214,7 @@ def coexistence_values(
         q_emp = selfishness * q + (1.0 - selfishness) * other.mean(axis=2)
     else:  # Q* plus the expected difference of the target from the robot's own y = r + c
         reward = (outcome != CAT_HARMS_ROBOT).astype(np.float64)
-        continuation = np.select([outcome == NO_HARM, outcome == ROBOT_HARMS_CAT],
-                                 [gamma * v[after], gamma / (1.0 - gamma)], 0.0)
+        continuation = np.select([outcome == NO_HARM, outcome == ROBOT_HARMS_CAT], [gamma * v[after], gamma / (1.0 - gamma)], 0.0)
         y = reward + continuation
         if rule == "golden":
             change = (1.0 - selfishness) * (other - y)
@@ -253,8 +268,16 @@ def coexistence_optimum(
     selfishness β under full observability, ties split by ``ties`` (see the module documentation);
     ``rule``, ``in_view_only``, ``view`` and ``unseen`` choose the target (:func:`coexistence_values`)."""
     _check(selfishness=selfishness, epsilon=epsilon, gamma=gamma, size=size, max_cycles=max_cycles, tolerance=tolerance)
-    _, q_emp = coexistence_values(float(selfishness), rule=rule, in_view_only=bool(in_view_only), view=view, unseen=unseen,
-                                  gamma=float(gamma), size=int(size), tolerance=float(tolerance))
+    _, q_emp = coexistence_values(
+        float(selfishness),
+        rule=rule,
+        in_view_only=bool(in_view_only),
+        view=view,
+        unseen=unseen,
+        gamma=float(gamma),
+        size=int(size),
+        tolerance=float(tolerance),
+    )
     outcome, after = coexistence_transitions(size)
     cells = size * size
     gone, harmed = cells, cells + 1
@@ -276,7 +299,9 @@ def coexistence_optimum(
 def _check(**arguments: float) -> None:
     """Raise ``ValueError`` naming the first argument out of its range."""
     ranges = {
-        "selfishness": (0.0, 1.0, True), "epsilon": (0.0, 1.0, True), "gamma": (0.0, 1.0, False),
+        "selfishness": (0.0, 1.0, True),
+        "epsilon": (0.0, 1.0, True),
+        "gamma": (0.0, 1.0, False),
     }
     for name, value in arguments.items():
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):

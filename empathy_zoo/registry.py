@@ -29,12 +29,12 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
     if spec in registry:
         return registry[spec]
     if ":" not in spec:
-        raise ValueError(
-            f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')"
-        )
+        raise ValueError(f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')")
     if not PLUGIN_NAME.fullmatch(spec):
-        raise ValueError(f"{spec!r} is not a valid 'package.module:Name' (dotted module path, a colon, a name) "
-                         f"nor a registered {kind}: {sorted(registry)}")
+        raise ValueError(
+            f"{spec!r} is not a valid 'package.module:Name' (dotted module path, a colon, a name) "
+            f"nor a registered {kind}: {sorted(registry)}"
+        )
     module_name, _, attribute = spec.partition(":")
     if os.getcwd() not in sys.path:  # like `python -m`: modules of the working directory resolve
         sys.path.append(os.getcwd())
@@ -43,8 +43,9 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
     except ImportError as error:
         raise ValueError(f"cannot import module {module_name!r} for {kind} {spec!r}: {error}") from error
     except Exception as error:  # noqa: BLE001 - a plug-in's own code failed while it was imported
-        raise ValueError(f"importing module {module_name!r} for {kind} {spec!r} raised "
-                         f"{type(error).__name__}: {error}") from error
+        raise ValueError(
+            f"importing module {module_name!r} for {kind} {spec!r} raised {type(error).__name__}: {error}"
+        ) from error
     try:
         return getattr(module, attribute)
     except AttributeError:

@@ -21,14 +21,21 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
 __all__ = [
-    "SCHEMA", "REQUIRED_FIELDS", "RUNS_DIR", "ResultFileError", "check_result", "read_result", "result_path",
-    "experiment_of", "check_one_experiment_per_label",
+    "SCHEMA",
+    "REQUIRED_FIELDS",
+    "RUNS_DIR",
+    "ResultFileError",
+    "check_result",
+    "read_result",
+    "result_path",
+    "experiment_of",
+    "check_one_experiment_per_label",
 ]
 
 SCHEMA = 2
@@ -102,8 +109,7 @@ class _Checker:
         try:
             return check_path_name(value, "a file-name-safe name")
         except ValueError:
-            raise self.fail(field, "a name of letters, digits, '_', '-' and '.' (it becomes part of file names)",
-                            value) from None
+            raise self.fail(field, "a name of letters, digits, '_', '-' and '.' (it becomes part of file names)", value) from None
 
     def numbers(self, value: Any, field: str, integral: bool = False) -> list:
         if not isinstance(value, list):
@@ -123,8 +129,10 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     if result["schema"] == 1 and not isinstance(result["schema"], bool):
         result = upgrade_schema_1(result, path)
     if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
-        raise ResultFileError(f"{path}: field schema: this suite reads result schemas 1 and {SCHEMA}, "
-                              f"got {_shown(result['schema'])}; move the file away")
+        raise ResultFileError(
+            f"{path}: field schema: this suite reads result schemas 1 and {SCHEMA}, "
+            f"got {_shown(result['schema'])}; move the file away"
+        )
     check.name(result["run_id"], "run_id")
     check.name(result["env"], "env")
     if result.get("variant") is not None:
@@ -176,10 +184,17 @@ def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]
     shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
     penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
     if penalty != 0.0 and scaled is True:
-        raise ResultFileError(f"{path}: field config.settings: a schema-1 run with both a harm penalty and equality "
-                              "shaping has no schema-2 form (no registered method trained one); move the file away")
-    reward = ({"name": "harm_penalty", "penalty": penalty} if penalty != 0.0
-              else {"name": "equality_scaling"} if scaled is True else None)
+        raise ResultFileError(
+            f"{path}: field config.settings: a schema-1 run with both a harm penalty and equality "
+            "shaping has no schema-2 form (no registered method trained one); move the file away"
+        )
+    reward = (
+        {"name": "harm_penalty", "penalty": penalty}
+        if penalty != 0.0
+        else {"name": "equality_scaling"}
+        if scaled is True
+        else None
+    )
     return {**result, "schema": SCHEMA, "config": {**config, "settings": settings, "reward": reward}}
 
 
@@ -208,10 +223,20 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
             raise check.fail(field, f"an argument of {result['env']} ({', '.join(known)})", name)
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.text(policy, f"config.fixed.{agent}")
-    _check_optional(check, config, "config.", {
-        "env": check.name, "method": check.text, "label": check.text, "seed": lambda v, f: check.integer(v, f, 0),
-        "steps": check.positive, "eval_interval": check.positive, "eval_episodes": check.positive,
-    })
+    _check_optional(
+        check,
+        config,
+        "config.",
+        {
+            "env": check.name,
+            "method": check.text,
+            "label": check.text,
+            "seed": lambda v, f: check.integer(v, f, 0),
+            "steps": check.positive,
+            "eval_interval": check.positive,
+            "eval_episodes": check.positive,
+        },
+    )
     if config.get("variant") is not None:
         check.name(config["variant"], "config.variant")
     if config.get("reward") is not None:

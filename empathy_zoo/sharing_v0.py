@@ -125,11 +125,18 @@ class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
     metadata = grid_metadata("sharing_v0")
 
     def __init__(
-        self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None,
-        start: str = "random", inventory_encoding: str = "count_plus_one", num_humans: int = 1,
+        self,
+        size: int = 7,
+        view: int = 5,
+        max_cycles: int = 500,
+        render_mode: str | None = None,
+        start: str = "random",
+        inventory_encoding: str = "count_plus_one",
+        num_humans: int = 1,
     ) -> None:
-        super().__init__(size, view, max_cycles, render_mode, start=start, inventory_encoding=inventory_encoding,
-                         num_humans=num_humans)
+        super().__init__(
+            size, view, max_cycles, render_mode, start=start, inventory_encoding=inventory_encoding, num_humans=num_humans
+        )
 
 
 parallel_env, env = env_constructors(raw_env)

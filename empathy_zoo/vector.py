@@ -29,13 +29,21 @@ import numpy as np
 
 from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine import GridEngine
-from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import StepEvents, check_env_arguments
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import (
-    BatchedPolicy, FixedPolicy, PolicyEntry, batched, load_policy_state, make_policy, policy_context, policy_name,
-    policy_state, unsaved_policy,
+    BatchedPolicy,
+    FixedPolicy,
+    PolicyEntry,
+    batched,
+    load_policy_state,
+    make_policy,
+    policy_context,
+    policy_name,
+    policy_state,
+    unsaved_policy,
 )
 from empathy_zoo.randomness import check_seed
 
@@ -149,16 +157,16 @@ class VectorEnv:
         if not self.learners:
             raise ValueError("every agent is fixed; leave at least one agent to learn")
         self.learner_index = [self.agents.index(agent) for agent in self.learners]
-        self.others: list[list[str]] = [
-            [self.agents[o] for o in self.engine.other_agents[index]] for index in self.learner_index
-        ]
+        self.others: list[list[str]] = [[self.agents[o] for o in self.engine.other_agents[index]] for index in self.learner_index]
         """``[l]``: the other agents of learner ``l``, in agent order (the ``O`` axis of
         :attr:`VectorStep.swapped_all`)."""
         self._other_columns = np.concatenate([self.engine.other_agents[index] for index in self.learner_index])
         """The ``(L·O,)`` agent indices of every learner's other agents, learner by learner."""
-        self._only_other = {
-            index: np.full(self.num_envs, self.engine.other_agents[index][0]) for index in self.learner_index
-        } if self.engine.num_agents == 2 else {}
+        self._only_other = (
+            {index: np.full(self.num_envs, self.engine.other_agents[index][0]) for index in self.learner_index}
+            if self.engine.num_agents == 2
+            else {}
+        )
         """Learner index -> its one other agent in every environment (when there are two agents)."""
         self.fixed: dict[int, BatchedPolicy] = {
             self.agents.index(agent): batched(make_policy(policy), self.num_envs, agent) for agent, policy in fixed.items()
@@ -202,8 +210,9 @@ class VectorEnv:
             actions = actions[:, None]
         engine = self.engine
         # checked before the fixed agents act, so a bad action changes nothing
-        actions = check_action_array(actions, (self.num_envs, len(self.learners)), self.learners,
-                                     engine.present[:, self.learner_index])
+        actions = check_action_array(
+            actions, (self.num_envs, len(self.learners)), self.learners, engine.present[:, self.learner_index]
+        )
         full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.int64)
         full[:, self.learner_index] = actions
         for index, policy in self.fixed.items():
@@ -246,14 +255,25 @@ class VectorEnv:
         self._observations = observations
         learners = self.learner_index
         return VectorStep(
-            observations=observations, final_observations=final, swapped=swapped, swapped_valid=valid,
-            swapped_unseen=other_unseen, swapped_other_terminated=other_terminated, swapped_all=swapped_all,
+            observations=observations,
+            final_observations=final,
+            swapped=swapped,
+            swapped_valid=valid,
+            swapped_unseen=other_unseen,
+            swapped_other_terminated=other_terminated,
+            swapped_all=swapped_all,
             others_present=others_present,
-            others_live=events.present_before[:, self._other_columns].reshape(seen.shape), others_unseen=others_unseen,
-            rewards=events.rewards, terminated=events.terminated, truncated=events.truncated,
-            episode_over=over, harmed_by=events.harmed_by, collected=events.collected,
+            others_live=events.present_before[:, self._other_columns].reshape(seen.shape),
+            others_unseen=others_unseen,
+            rewards=events.rewards,
+            terminated=events.terminated,
+            truncated=events.truncated,
+            episode_over=over,
+            harmed_by=events.harmed_by,
+            collected=events.collected,
             battery_return=battery_return,
-            learner_rewards=events.rewards[:, learners], learner_terminated=events.terminated[:, learners],
+            learner_rewards=events.rewards[:, learners],
+            learner_terminated=events.terminated[:, learners],
             learner_truncated=events.truncated[:, learners],
             learner_harmed=(events.harmed_by[:, None, :] == np.asarray(learners)[None, :, None]).sum(axis=2),
             learner_battery_return=battery_return[:, learners],
@@ -294,12 +314,16 @@ class VectorEnv:
         where they are present but out of view, each ``(N, L, O)``; then the same of its other
         agent ``closest`` (``(N, L)`` agent indices): ``(N, L, V)``, ``(N, L)`` and ``(N, L)``."""
         if self._only_other:  # (one other agent: no stacking, no gather)
-            swapped, valid, hidden = (_by_learner(list(x)) for x in zip(*(self._swap(viewer, self._only_other[viewer][0])
-                                                                        for viewer in self.learner_index)))
+            swapped, valid, hidden = (
+                _by_learner(list(x))
+                for x in zip(*(self._swap(viewer, self._only_other[viewer][0]) for viewer in self.learner_index))
+            )
             return swapped[:, :, None], valid[:, :, None], hidden[:, :, None], swapped, valid, hidden
         pictures, seen, unseen = [], [], []
         for viewer in self.learner_index:
-            each, each_seen, each_unseen = zip(*(self._swap(viewer, other) for other in self.engine.other_agents[viewer].tolist()))
+            each, each_seen, each_unseen = zip(
+                *(self._swap(viewer, other) for other in self.engine.other_agents[viewer].tolist())
+            )
             pictures.append(np.stack(each, axis=1))
             seen.append(np.stack(each_seen, axis=1))
             unseen.append(np.stack(each_unseen, axis=1))
@@ -358,8 +382,11 @@ class VectorEnv:
         policies = {self.agents[index]: policy_state(policy) for index, policy in self.fixed.items()}
         observations = None if self._observations is None else self._observations.copy()
         return {
-            "layout": STATE_LAYOUT, "engine": self.engine.state(), "policies": policies,
-            "events": None if self._events is None else asdict(self._events), "fresh": self._fresh.copy(),
+            "layout": STATE_LAYOUT,
+            "engine": self.engine.state(),
+            "policies": policies,
+            "events": None if self._events is None else asdict(self._events),
+            "fresh": self._fresh.copy(),
             "observations": observations,
         }
 

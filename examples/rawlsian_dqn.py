@@ -1,6 +1,6 @@
 """A new side-effect method in one file: care about whoever is worse off (a Rawlsian twist).
 
-    empathy-zoo train --method examples.rawlsian_dqn:RAWLSIAN_DQN --env sharing_v0 --steps 50000
+empathy-zoo train --method examples.rawlsian_dqn:RAWLSIAN_DQN --env sharing_v0 --steps 50000
 """
 
 import torch
@@ -19,5 +19,10 @@ class RawlsianDQN(EmpathicDQN):
         return y, torch.where(batch["other_present"], torch.minimum(y, other), y)
 
 
-RAWLSIAN_DQN = Method(name="rawlsian_dqn", learner=RawlsianDQN, settings=EmpathicDQNSettings,
-                      label=lambda s: "Rawlsian DQN", description="Q_emp = value of the worse-off agent")
+RAWLSIAN_DQN = Method(
+    name="rawlsian_dqn",
+    learner=RawlsianDQN,
+    settings=EmpathicDQNSettings,
+    label=lambda s: "Rawlsian DQN",
+    description="Q_emp = value of the worse-off agent",
+)

@@ -84,9 +84,11 @@ def main(argv: list[str] | None = None) -> None:
         for iteration in range(1, args.iterations + 1):
             result = algo.train()
             runners = result["env_runners"]
-            print(f"iteration {iteration}: episode_return_mean={runners['episode_return_mean']:.1f} "
-                  f"episode_len_mean={runners['episode_len_mean']:.1f} "
-                  f"env_steps={result['num_env_steps_sampled_lifetime']}")
+            print(
+                f"iteration {iteration}: episode_return_mean={runners['episode_return_mean']:.1f} "
+                f"episode_len_mean={runners['episode_len_mean']:.1f} "
+                f"env_steps={result['num_env_steps_sampled_lifetime']}"
+            )
         scores = greedy_scores(algo.get_module(ROBOT), args.episodes, seed=10_000)
         print(f"greedy, {args.episodes} episodes: survival={scores['survival']:.1f} harms={scores['harms']:.2f}")
     finally:

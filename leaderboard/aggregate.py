@@ -40,10 +40,31 @@ from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 from leaderboard.ordering import label_order
 
 __all__ = [
-    "SCHEMA_VERSION", "PHASES", "FINAL_FRACTION", "N_RESAMPLES", "CONFIDENCE", "DEFAULT_SEED",
-    "N_POINTS", "Score", "Curve", "table_env", "result_files", "load_results", "group_runs", "final_episode_count",
-    "run_scalars", "student_t_quantile", "t_level", "mean_ci", "student_t_interval", "bootstrap_mean_ci",
-    "score_runs", "longest_episode", "rolling_curve", "learning_curves", "MEAN_INTERVAL_NOTE",
+    "SCHEMA_VERSION",
+    "PHASES",
+    "FINAL_FRACTION",
+    "N_RESAMPLES",
+    "CONFIDENCE",
+    "DEFAULT_SEED",
+    "N_POINTS",
+    "Score",
+    "Curve",
+    "table_env",
+    "result_files",
+    "load_results",
+    "group_runs",
+    "final_episode_count",
+    "run_scalars",
+    "student_t_quantile",
+    "t_level",
+    "mean_ci",
+    "student_t_interval",
+    "bootstrap_mean_ci",
+    "score_runs",
+    "longest_episode",
+    "rolling_curve",
+    "learning_curves",
+    "MEAN_INTERVAL_NOTE",
 ]
 
 PHASES: tuple[str, ...] = ("eval", "train_final10")
@@ -200,7 +221,7 @@ def run_scalars(
     scalars: dict[str, dict[str, float]] = {"eval": {}, "train_final10": {}}
     for metric in metrics:
         column = _column(train, metric)
-        final = column[len(column) - final_episode_count(len(column), final_fraction):]
+        final = column[len(column) - final_episode_count(len(column), final_fraction) :]
         scalars["train_final10"][metric] = float(_nanmean(final, axis=0))
         scalars["eval"][metric] = float(_nanmean(_column(last_eval, metric), axis=0))
     return scalars
@@ -318,8 +339,11 @@ def longest_episode(runs: Iterable[dict[str, Any]]) -> int:
 
 
 def mean_ci(
-    values: np.ndarray | Sequence[float], *, confidence: float = CONFIDENCE,
-    metrics: str | Sequence[str] | None = None, max_cycles: int | None = None,
+    values: np.ndarray | Sequence[float],
+    *,
+    confidence: float = CONFIDENCE,
+    metrics: str | Sequence[str] | None = None,
+    max_cycles: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean over seeds (axis 0) and the leaderboard's interval of it for a claimed ``confidence``:
     the Student-t interval at the nominal level :func:`t_level` (97.5 % for 95 %), see
@@ -331,8 +355,10 @@ def mean_ci(
     if metrics is None:
         return mean, low, high
     names = [metrics] if isinstance(metrics, str) else list(metrics)
-    ranges = [(0.0, max_cycles) if name == "survival" and max_cycles is not None else METRIC_RANGES.get(name, (None, None))
-              for name in names]
+    ranges = [
+        (0.0, max_cycles) if name == "survival" and max_cycles is not None else METRIC_RANGES.get(name, (None, None))
+        for name in names
+    ]
     floor = np.array([-np.inf if r[0] is None else r[0] for r in ranges])
     ceiling = np.array([np.inf if r[1] is None else r[1] for r in ranges])
     if isinstance(metrics, str):
@@ -341,7 +367,9 @@ def mean_ci(
 
 
 def student_t_interval(
-    values: np.ndarray | Sequence[float], *, level: float,
+    values: np.ndarray | Sequence[float],
+    *,
+    level: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean over seeds (axis 0) and its Student-t interval at nominal ``level``: ``(mean, low, high)``.
 
@@ -360,9 +388,9 @@ def student_t_interval(
     n_finite = finite.sum(axis=0)
     squares = np.where(finite, (data - mean) ** 2, 0.0).sum(axis=0)
     variance = squares / np.maximum(n_finite - 1, 1)
-    quantiles = np.vectorize(
-        lambda n: student_t_quantile(0.5 + level / 2.0, int(n) - 1) if n > 1 else 0.0, otypes=[float]
-    )(n_finite)
+    quantiles = np.vectorize(lambda n: student_t_quantile(0.5 + level / 2.0, int(n) - 1) if n > 1 else 0.0, otypes=[float])(
+        n_finite
+    )
     half = quantiles * np.sqrt(variance / np.maximum(n_finite, 1))
     single = n_finite <= 1
     return mean, np.where(single, mean, mean - half), np.where(single, mean, mean + half)
@@ -390,13 +418,25 @@ def score_runs(
             mean, low, high = mean_ci(table, confidence=confidence, metrics=metrics, max_cycles=longest_episode(runs))
             n_finite = np.isfinite(table).sum(axis=0)
             for j, metric in enumerate(metrics):
-                scores.append(Score(env, label, _method_name(runs), phase, metric,
-                                    float(mean[j]), float(low[j]), float(high[j]), int(n_finite[j])))
+                scores.append(
+                    Score(
+                        env,
+                        label,
+                        _method_name(runs),
+                        phase,
+                        metric,
+                        float(mean[j]),
+                        float(low[j]),
+                        float(high[j]),
+                        int(n_finite[j]),
+                    )
+                )
     return scores
 
 
-def rolling_curve(end_steps: np.ndarray | Sequence[int], values: np.ndarray | Sequence[float],
-                  points: np.ndarray, window: int) -> np.ndarray:
+def rolling_curve(
+    end_steps: np.ndarray | Sequence[int], values: np.ndarray | Sequence[float], points: np.ndarray, window: int
+) -> np.ndarray:
     """At each of ``points`` (env steps), the mean of ``values`` over the last ``window`` episodes
     that ended at or before it (``end_steps``, ascending); NaN before the first episode ends, and
     where those episodes hold no finite value. Every point averages up to ``window`` episodes, so a

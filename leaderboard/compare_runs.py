@@ -24,8 +24,14 @@ def run_key(run: dict[str, Any]) -> tuple:
     config = run.get("config") or {}
     settings = config.get("settings") or {}
     reward = (config.get("reward") or {}).get("name")
-    return (config.get("variant") or run["env"], run["method"], settings.get("selfishness"),
-            settings.get("others", "closest"), reward, run["seed"])
+    return (
+        config.get("variant") or run["env"],
+        run["method"],
+        settings.get("selfishness"),
+        settings.get("others", "closest"),
+        reward,
+        run["seed"],
+    )
 
 
 def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> dict[str, list[tuple]]:

@@ -39,14 +39,31 @@ import numpy as np
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES, group_runs, run_scalars
 
 __all__ = [
-    "HIGHER_IS_BETTER", "Improvement", "probability_of_improvement", "permutation_test", "improvement_interval",
-    "can_decide", "smallest_decidable_seeds", "bootstrap_improvement", "interquartile_mean", "is_dqn",
-    "improvements_over_dqn", "improvement_verdict", "VERDICT_MARKS", "TOO_FEW_SEEDS", "VERDICT_NOTE",
+    "HIGHER_IS_BETTER",
+    "Improvement",
+    "probability_of_improvement",
+    "permutation_test",
+    "improvement_interval",
+    "can_decide",
+    "smallest_decidable_seeds",
+    "bootstrap_improvement",
+    "interquartile_mean",
+    "is_dqn",
+    "improvements_over_dqn",
+    "improvement_verdict",
+    "VERDICT_MARKS",
+    "TOO_FEW_SEEDS",
+    "VERDICT_NOTE",
 ]
 
 HIGHER_IS_BETTER: dict[str, bool] = {
-    "survival": True, "harms": False, "batteries": True, "other_batteries": True, "equality": True,
-    "return": True, "other_return": True,
+    "survival": True,
+    "harms": False,
+    "batteries": True,
+    "other_batteries": True,
+    "equality": True,
+    "return": True,
+    "other_return": True,
 }
 """Which way each metric is better."""
 
@@ -94,8 +111,9 @@ VERDICT_NOTE = (
 under every probability-of-improvement table)."""
 
 
-def improvement_verdict(ci_low: float, ci_high: float, n_seeds: int | None = None,
-                        n_baseline_seeds: int | None = None, confidence: float = CONFIDENCE) -> str:
+def improvement_verdict(
+    ci_low: float, ci_high: float, n_seeds: int | None = None, n_baseline_seeds: int | None = None, confidence: float = CONFIDENCE
+) -> str:
     """The rule by which the suite says a method does better or worse than DQN in a metric: the
     interval of its probability of improvement (:func:`improvement_interval`, which inverts the
     exact permutation test) lies wholly above 0.5 (better) or below it (worse); otherwise, or when
@@ -144,7 +162,7 @@ def _doubled_midranks(pooled: np.ndarray) -> np.ndarray:
         stop = start
         while stop + 1 < pooled.size and sorted_values[stop + 1] == sorted_values[start]:
             stop += 1
-        ranks[order[start:stop + 1]] = (start + 1) + (stop + 1)
+        ranks[order[start : stop + 1]] = (start + 1) + (stop + 1)
         start = stop + 1
     return ranks
 
@@ -159,7 +177,7 @@ def _null_tails(doubled_ranks: tuple[int, ...], n: int) -> tuple[tuple[int, ...]
     counts = np.zeros((n + 1, total + 1), dtype=np.float64)
     counts[0, 0] = 1.0
     for rank in ranks:
-        counts[1:, rank:] = counts[1:, rank:] + counts[:-1, :total + 1 - rank]
+        counts[1:, rank:] = counts[1:, rank:] + counts[:-1, : total + 1 - rank]
     by_sum = counts[n]
     sums = np.nonzero(by_sum)[0]
     centre = n * (ranks.size + 1)
@@ -179,14 +197,18 @@ def permutation_test(x: Sequence[float], y: Sequence[float], higher_is_better: b
     if a.size == 0 or b.size == 0:
         return math.nan, math.nan
     ranks = _doubled_midranks(np.concatenate([a, b]))
-    observed = abs(int(ranks[:a.size].sum()) - a.size * (a.size + b.size + 1))
+    observed = abs(int(ranks[: a.size].sum()) - a.size * (a.size + b.size + 1))
     support, tails = _null_tails(tuple(sorted(int(r) for r in ranks)), a.size)
-    probability = (int(ranks[:a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
+    probability = (int(ranks[: a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
     return float(probability), tails[support.index(observed)]
 
 
 def improvement_interval(
-    x: Sequence[float], y: Sequence[float], higher_is_better: bool = True, *, confidence: float = CONFIDENCE,
+    x: Sequence[float],
+    y: Sequence[float],
+    higher_is_better: bool = True,
+    *,
+    confidence: float = CONFIDENCE,
 ) -> tuple[float, float, float]:
     """``(probability, low, high)``: the probability of improvement and the interval that inverts
     the exact permutation test at level ``1 − confidence``.
@@ -205,7 +227,7 @@ def improvement_interval(
         return math.nan, math.nan, math.nan
     ranks = _doubled_midranks(np.concatenate([a, b]))
     support, tails = _null_tails(tuple(sorted(int(r) for r in ranks)), a.size)
-    probability = (int(ranks[:a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
+    probability = (int(ranks[: a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
     alpha = 1.0 - confidence + 1e-12
     accepted = [d for d, tail in zip(support, tails) if tail > alpha]
     rejected = [d for d, tail in zip(support, tails) if tail <= alpha]
@@ -232,8 +254,13 @@ def probability_of_improvement(x: Sequence[float], y: Sequence[float], higher_is
 
 
 def bootstrap_improvement(
-    x: Sequence[float], y: Sequence[float], higher_is_better: bool = True, *,
-    random_state: int = DEFAULT_SEED, n_resamples: int = N_RESAMPLES, confidence: float = CONFIDENCE,
+    x: Sequence[float],
+    y: Sequence[float],
+    higher_is_better: bool = True,
+    *,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
 ) -> tuple[float, float, float]:
     """``(probability, low, high)``: the probability of improvement and its percentile-bootstrap
     interval, the runs of ``x`` and of ``y`` resampled apart (stratified). With a single run on
@@ -248,8 +275,10 @@ def bootstrap_improvement(
     if a.size <= 1 or b.size <= 1 or math.isnan(point):
         return point, point, point
     rng = np.random.default_rng(random_state)
-    draws = [probability_of_improvement(a[rng.integers(0, a.size, a.size)], b[rng.integers(0, b.size, b.size)],
-                                        higher_is_better) for _ in range(n_resamples)]
+    draws = [
+        probability_of_improvement(a[rng.integers(0, a.size, a.size)], b[rng.integers(0, b.size, b.size)], higher_is_better)
+        for _ in range(n_resamples)
+    ]
     tail = 100.0 * (1.0 - confidence) / 2.0
     low, high = np.nanpercentile(draws, [tail, 100.0 - tail])
     return point, float(low), float(high)
@@ -263,7 +292,7 @@ def interquartile_mean(values: Sequence[float]) -> float:
     if data.size == 0:
         return math.nan
     cut = data.size // 4
-    return float(data[cut: data.size - cut].mean())
+    return float(data[cut : data.size - cut].mean())
 
 
 def is_dqn(run: Mapping[str, Any]) -> bool:
@@ -271,13 +300,20 @@ def is_dqn(run: Mapping[str, Any]) -> bool:
     config = run.get("config") or {}
     if run["method"] == "dqn":
         return True
-    return (run["method"] == "empathic_dqn" and (config.get("settings") or {}).get("selfishness") == 1.0
-            and config.get("reward") is None)
+    return (
+        run["method"] == "empathic_dqn"
+        and (config.get("settings") or {}).get("selfishness") == 1.0
+        and config.get("reward") is None
+    )
 
 
 def improvements_over_dqn(
-    results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]], *,
-    random_state: int = DEFAULT_SEED, n_resamples: int = N_RESAMPLES, confidence: float = CONFIDENCE,
+    results: Sequence[dict[str, Any]],
+    metrics_of: Mapping[str, Sequence[str]],
+    *,
+    random_state: int = DEFAULT_SEED,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = CONFIDENCE,
 ) -> list[Improvement]:
     """Every method's probability of improving on DQN in its environment, per phase and metric
     (``metrics_of[env]``: the metrics of that env's tables), with the interval that inverts the
@@ -299,7 +335,19 @@ def improvements_over_dqn(
                 y = [scalars[phase][metric] for scalars in theirs]
                 better = HIGHER_IS_BETTER.get(metric, True)
                 p, low, high = improvement_interval(x, y, better, confidence=confidence)
-                cells.append(Improvement(env, label, phase, metric, p, low, high, interquartile_mean(x),
-                                         int(np.isfinite(x).sum()), int(np.isfinite(y).sum()),
-                                         permutation_test(x, y, better)[1]))
+                cells.append(
+                    Improvement(
+                        env,
+                        label,
+                        phase,
+                        metric,
+                        p,
+                        low,
+                        high,
+                        interquartile_mean(x),
+                        int(np.isfinite(x).sum()),
+                        int(np.isfinite(y).sum()),
+                        permutation_test(x, y, better)[1],
+                    )
+                )
     return cells

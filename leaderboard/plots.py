@@ -19,13 +19,24 @@ from matplotlib.figure import Figure
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, N_POINTS, N_RESAMPLES, Curve, group_runs, learning_curves, table_env,
+    CONFIDENCE,
+    DEFAULT_SEED,
+    N_POINTS,
+    N_RESAMPLES,
+    Curve,
+    group_runs,
+    learning_curves,
+    table_env,
 )
 from leaderboard.colours import method_colours
 from leaderboard.reference_curves import reference_curve
 
 __all__ = [
-    "FIGURE_SPECS", "FALLBACK_SPEC", "figure_filename", "render_curves_png", "plot_metric",
+    "FIGURE_SPECS",
+    "FALLBACK_SPEC",
+    "figure_filename",
+    "render_curves_png",
+    "plot_metric",
     "plot_learning_curves",
 ]
 
@@ -78,8 +89,12 @@ def render_curves_png(
     axes.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
     if curves:
         axes.legend(
-            loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False,
-            title=f"method (shaded: {confidence:.0%} CI over seeds)", title_fontsize="small",
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+            fontsize="small",
+            frameon=False,
+            title=f"method (shaded: {confidence:.0%} CI over seeds)",
+            title_fontsize="small",
         )
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
@@ -103,8 +118,13 @@ def plot_metric(
     where it applies: :mod:`leaderboard.reference_curves`) and write the PNG to ``path``."""
     results = list(results)
     curves = learning_curves(
-        results, metric, env=env, n_points=n_points, random_state=random_state,
-        n_resamples=n_resamples, confidence=confidence,
+        results,
+        metric,
+        env=env,
+        n_points=n_points,
+        random_state=random_state,
+        n_resamples=n_resamples,
+        confidence=confidence,
     )
     if not curves:
         raise ValueError(f"no runs on env {env!r} to plot")
@@ -112,7 +132,11 @@ def plot_metric(
     references = [reference_curve(groups[(curve.env, curve.method_label)], metric, curve.steps) for curve in curves]
     ylabel = ylabel or f"{metric} per episode"
     png = render_curves_png(
-        curves, title=title or f"{env}: {ylabel.lower()}", ylabel=ylabel, confidence=confidence, references=references,
+        curves,
+        title=title or f"{env}: {ylabel.lower()}",
+        ylabel=ylabel,
+        confidence=confidence,
+        references=references,
     )
     return write_bytes_atomic(path, png)
 
@@ -138,7 +162,14 @@ def plot_learning_curves(
     for env in envs:
         for metric, ylabel in specs.get(env, specs.get(base_env[env], FALLBACK_SPEC)):
             paths[(env, metric)] = plot_metric(
-                results, env, metric, confined(figures_dir, figure_filename(env, metric)), ylabel=ylabel,
-                n_points=n_points, random_state=random_state, n_resamples=n_resamples, confidence=confidence,
+                results,
+                env,
+                metric,
+                confined(figures_dir, figure_filename(env, metric)),
+                ylabel=ylabel,
+                n_points=n_points,
+                random_state=random_state,
+                n_resamples=n_resamples,
+                confidence=confidence,
             )
     return paths

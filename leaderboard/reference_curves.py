@@ -19,7 +19,10 @@ __all__ = ["REFERENCE_METRICS", "REFERENCE_TARGETS", "reference_curve"]
 REFERENCE_METRICS = ("harms", "survival")
 """Metrics the Coexistence reference gives."""
 REFERENCE_TARGETS: dict[str, dict[str, Any]] = {
-    "empathic_dqn": {}, "dqn": {}, "empathic_dqn_in_view": {"in_view_only": True}, "empathic_dqn_silver": {"rule": "silver"},
+    "empathic_dqn": {},
+    "dqn": {},
+    "empathic_dqn_in_view": {"in_view_only": True},
+    "empathic_dqn_silver": {"rule": "silver"},
 }
 """The methods the reference models, with the target it optimises for each (its ``rule`` /
 ``in_view_only`` arguments)."""
@@ -34,14 +37,20 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
         return None
     first = runs[0]
     config = first.get("config", {})
-    if (first["env"] != "coexistence_v0" or first["method"] not in REFERENCE_TARGETS
-            or dict(config.get("fixed") or {}) != DEFAULT_POLICIES["coexistence_v0"]
-            or set(config.get("env_kwargs") or {}) - {"size", "view", "max_cycles"}
-            or any(run.get("config", {}).get("settings") != config.get("settings") for run in runs)):
+    if (
+        first["env"] != "coexistence_v0"
+        or first["method"] not in REFERENCE_TARGETS
+        or dict(config.get("fixed") or {}) != DEFAULT_POLICIES["coexistence_v0"]
+        or set(config.get("env_kwargs") or {}) - {"size", "view", "max_cycles"}
+        or any(run.get("config", {}).get("settings") != config.get("settings") for run in runs)
+    ):
         return None
     settings = SimpleNamespace(**config["settings"])
-    arguments = {"gamma": settings.gamma, **REFERENCE_TARGETS[first["method"]],
-                 **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()}}
+    arguments = {
+        "gamma": settings.gamma,
+        **REFERENCE_TARGETS[first["method"]],
+        **{k: int(v) for k, v in (config.get("env_kwargs") or {}).items()},
+    }
     values = []
     for step in steps:
         epsilon = round(linear_epsilon(settings, int(step)), 3)

@@ -9,10 +9,17 @@ from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, N_POINTS, N_RESAMPLES, load_results, score_runs, table_env,
+    CONFIDENCE,
+    DEFAULT_SEED,
+    FINAL_FRACTION,
+    N_POINTS,
+    N_RESAMPLES,
+    load_results,
+    score_runs,
+    table_env,
 )
-from leaderboard.plots import plot_learning_curves
 from leaderboard.improvement import improvements_over_dqn
+from leaderboard.plots import plot_learning_curves
 from leaderboard.tables import TRADEOFF, Provenance, csv_text, env_metrics, html_report, markdown_report
 from leaderboard.tradeoff import plot_tradeoffs
 
@@ -44,7 +51,8 @@ def write_leaderboard(
     Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
     ``figures/<env>_<metric>.png`` (learning curves) and ``figures/<env>_tradeoff.png`` (task against
     side effect, :mod:`leaderboard.tradeoff`). Returns ``{"markdown", "csv", "html": path}`` plus
-    ``"figure:<env>:<metric>": path`` for every figure (``<metric>`` is ``tradeoff`` for the trade-off). No result file raises ``ValueError``.
+    ``"figure:<env>:<metric>": path`` for every figure (``<metric>`` is ``tradeoff`` for the trade-off).
+    No result file raises ``ValueError``.
     """
     results = load_results(results_dir)
     out = check_output_dir(results_dir if out_dir is None else out_dir, (FIGURES_DIR,))
@@ -52,26 +60,39 @@ def write_leaderboard(
         remove_stale_temp_files(directory)
     provenance = Provenance(
         command=command if command is not None else f"leaderboard.write_leaderboard({str(results_dir)!r})",
-        version=package_version(), commit=git_commit(), n_resamples=n_resamples, confidence=confidence,
-        random_state=random_state, final_fraction=final_fraction,
+        version=package_version(),
+        commit=git_commit(),
+        n_resamples=n_resamples,
+        confidence=confidence,
+        random_state=random_state,
+        final_fraction=final_fraction,
     )
-    scores = score_runs(results, final_fraction=final_fraction, random_state=random_state,
-                        n_resamples=n_resamples, confidence=confidence)
-    curves = plot_learning_curves(results, out / FIGURES_DIR, n_points=n_points, random_state=random_state,
-                                  n_resamples=n_resamples, confidence=confidence)
+    scores = score_runs(
+        results, final_fraction=final_fraction, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+    )
+    curves = plot_learning_curves(
+        results, out / FIGURES_DIR, n_points=n_points, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+    )
     base_env = {table_env(run): run["env"] for run in results}  # a variant is shown like its env
     improvements = improvements_over_dqn(
-        results, {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env},
-        random_state=random_state, n_resamples=n_resamples, confidence=confidence,
+        results,
+        {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env},
+        random_state=random_state,
+        n_resamples=n_resamples,
+        confidence=confidence,
     )
     tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
     pngs = {key: path.read_bytes() for key, path in figures.items()}
     paths = {
-        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown_report(scores, provenance, links, base_env=base_env, improvements=improvements)),
+        "markdown": write_text_atomic(
+            out / MARKDOWN_NAME, markdown_report(scores, provenance, links, base_env=base_env, improvements=improvements)
+        ),
         "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance)),
-        "html": write_text_atomic(out / HTML_NAME, html_report(scores, provenance, pngs, base_env=base_env, improvements=improvements)),
+        "html": write_text_atomic(
+            out / HTML_NAME, html_report(scores, provenance, pngs, base_env=base_env, improvements=improvements)
+        ),
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     return paths

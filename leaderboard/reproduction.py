@@ -34,9 +34,22 @@ from leaderboard.aggregate import final_episode_count, load_results, longest_epi
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
 __all__ = [
-    "Claim", "Verdict", "PHASES", "BETAS", "NotThePaperSweep", "paper_runs", "missing_paper_experiments",
-    "assess_claims", "reproduction_markdown", "write_reproduction", "training_window_epsilons",
-    "training_window_share", "TieRange", "tie_break_range", "SurvivalRise", "survival_rise",
+    "Claim",
+    "Verdict",
+    "PHASES",
+    "BETAS",
+    "NotThePaperSweep",
+    "paper_runs",
+    "missing_paper_experiments",
+    "assess_claims",
+    "reproduction_markdown",
+    "write_reproduction",
+    "training_window_epsilons",
+    "training_window_share",
+    "TieRange",
+    "tie_break_range",
+    "SurvivalRise",
+    "survival_rise",
 ]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
@@ -94,8 +107,10 @@ def _is_paper_setting(run: dict[str, Any]) -> bool:
     config = run.get("config", {})
     defaults = inspect.signature(ENGINES[run["env"]]).parameters
     arguments = dict(config.get("env_kwargs") or {})
-    return (all(name in defaults and defaults[name].default == value for name, value in arguments.items())
-            and dict(config.get("fixed") or {}) == DEFAULT_POLICIES[run["env"]])
+    return (
+        all(name in defaults and defaults[name].default == value for name, value in arguments.items())
+        and dict(config.get("fixed") or {}) == DEFAULT_POLICIES[run["env"]]
+    )
 
 
 def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
@@ -110,8 +125,9 @@ def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[di
 def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
     """The paper's experiments that ``results`` lack (empty: the paper's sweep is there)."""
     runs = paper_runs(results)
-    needed = {env: [f"β={b:g}" for b in BETAS] + [baseline]
-              for env, baseline in ((COEXISTENCE, PENALTY), (SHARING, EQUALITY_SHAPED))}
+    needed = {
+        env: [f"β={b:g}" for b in BETAS] + [baseline] for env, baseline in ((COEXISTENCE, PENALTY), (SHARING, EQUALITY_SHAPED))
+    }
     return [f"{env} {key}" for env, keys in needed.items() for key in keys if key not in runs[env]]
 
 
@@ -149,8 +165,9 @@ class TieRange:
     survival: tuple[float, float]
 
 
-def _tie_bound(tied: np.ndarray, epsilons: np.ndarray, weights: np.ndarray, metric: str, highest: bool,
-               max_cycles: int, size: int) -> float:
+def _tie_bound(
+    tied: np.ndarray, epsilons: np.ndarray, weights: np.ndarray, metric: str, highest: bool, max_cycles: int, size: int
+) -> float:
     """The lowest (or highest) expectation of ``metric`` per episode over every policy that, with
     probability 1 − ε, takes one of the actions marked in ``tied`` (``(size², 5)``; any choice
     among them, even a different one at every step), averaged over ``epsilons`` with ``weights``:
@@ -182,8 +199,14 @@ def _tie_bound(tied: np.ndarray, epsilons: np.ndarray, weights: np.ndarray, metr
     return float(weights @ (togo_value @ start_distribution(size)))
 
 
-def tie_break_range(selfishness: float, epsilons: Mapping[float, int], *, gamma: float = 0.99,
-                    max_cycles: int = _DEFAULT_MAX_CYCLES, size: int = 7) -> TieRange:
+def tie_break_range(
+    selfishness: float,
+    epsilons: Mapping[float, int],
+    *,
+    gamma: float = 0.99,
+    max_cycles: int = _DEFAULT_MAX_CYCLES,
+    size: int = 7,
+) -> TieRange:
     """The range of the exact optimum's harms and survival per episode over every tie-break.
 
     ``coexistence_optimum`` takes exactly tied actions with equal probability (``ties="uniform"``,
@@ -228,8 +251,9 @@ class SurvivalRise:
         return self.reference[0] - self.learner[0], self.reference[1] - self.learner[1]
 
 
-def survival_rise(runs: Sequence[dict[str, Any]], reference: Reference, *, gamma: float,
-                  max_cycles: int, digits: int = 3) -> SurvivalRise:
+def survival_rise(
+    runs: Sequence[dict[str, Any]], reference: Reference, *, gamma: float, max_cycles: int, digits: int = 3
+) -> SurvivalRise:
     """Separate learning from the ε schedule over the training phase: each run's final 10 % of
     training episodes is split into halves (by episode), and the mean survival of each half is
     set beside the reference's at the ε of the same episodes (the schedule's ε at each episode's
@@ -257,7 +281,7 @@ def survival_rise(runs: Sequence[dict[str, Any]], reference: Reference, *, gamma
         starts = [ends[i - 1] if i > 0 else 0 for i in range(first, len(ends))]
         expected = np.array([optimum(selfishness, round(linear_epsilon(settings, step), digits)) for step in starts])
         middle = final // 2
-        learner.append(np.array([survival[first:first + middle].mean(), survival[first + middle:len(ends)].mean()]))
+        learner.append(np.array([survival[first : first + middle].mean(), survival[first + middle : len(ends)].mean()]))
         optimal.append(np.array([expected[:middle].mean(), expected[middle:].mean()]))
     if not learner:
         nan = float("nan")
@@ -265,12 +289,14 @@ def survival_rise(runs: Sequence[dict[str, Any]], reference: Reference, *, gamma
     gaps = np.array(optimal) - np.array(learner)
     widened = int((gaps[:, 1] > gaps[:, 0]).sum())
     mean_learner, mean_optimal = np.mean(learner, axis=0), np.mean(optimal, axis=0)
-    return SurvivalRise((float(mean_learner[0]), float(mean_learner[1])),
-                        (float(mean_optimal[0]), float(mean_optimal[1])), widened, len(learner))
+    return SurvivalRise(
+        (float(mean_learner[0]), float(mean_learner[1])), (float(mean_optimal[0]), float(mean_optimal[1])), widened, len(learner)
+    )
 
 
-def _reference_over(reference: Reference, selfishness: float, epsilons: Mapping[float, int], gamma: float,
-                    max_cycles: int) -> tuple[float, float]:
+def _reference_over(
+    reference: Reference, selfishness: float, epsilons: Mapping[float, int], gamma: float, max_cycles: int
+) -> tuple[float, float]:
     """The reference's harms and survival averaged over an ε schedule (weights: steps at each ε)."""
     total = sum(epsilons.values())
     harms = survival = 0.0
@@ -316,8 +342,9 @@ def _verdict(ok: bool, cells: Sequence[Cell], evidence: str) -> Verdict:
     return Verdict(ok if all(c.finite for c in cells) else None, evidence)
 
 
-def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None = None,
-                  tie_range: TieRangeOf | None = None) -> list[Claim]:
+def assess_claims(
+    results: Sequence[dict[str, Any]], reference: Reference | None = None, tie_range: TieRangeOf | None = None
+) -> list[Claim]:
     """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
     ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing.
 
@@ -331,6 +358,7 @@ def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None
         raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
     if reference is None:
         from empathy_zoo.reference import coexistence_optimum as reference
+
         tie_range = tie_break_range if tie_range is None else tie_range
     runs = paper_runs(results)
     betas = [f"β={b:g}" for b in BETAS]
@@ -342,17 +370,27 @@ def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None
 
     for name, phase in PHASES.items():
         harms = coexistence.row(phase, "harms", betas)
-        judge(COEXISTENCE, "Harms to the cat fall as β falls.", name,
-              _verdict(falls(harms), harms, f"harms/episode: {_line(betas, harms)}."))
+        judge(
+            COEXISTENCE,
+            "Harms to the cat fall as β falls.",
+            name,
+            _verdict(falls(harms), harms, f"harms/episode: {_line(betas, harms)}."),
+        )
 
         survival = coexistence.row(phase, "survival", betas)
         area = coexistence.row(phase, "survival", betas, curve=True)
         slower = below(area[-1], area[0])
-        judge(COEXISTENCE, "Lower β survives worse and learns more slowly.", name, _verdict(
-            falls(survival) and slower, survival + area,
-            f"steps survived: {_line(betas, survival)} (falls: {'yes' if falls(survival) else 'no'}). "
-            f"Mean over the whole learning curve: {_line(betas, area)} (β=0.25 below β=1: {'yes' if slower else 'no'}).",
-        ))
+        judge(
+            COEXISTENCE,
+            "Lower β survives worse and learns more slowly.",
+            name,
+            _verdict(
+                falls(survival) and slower,
+                survival + area,
+                f"steps survived: {_line(betas, survival)} (falls: {'yes' if falls(survival) else 'no'}). "
+                f"Mean over the whole learning curve: {_line(betas, area)} (β=0.25 below β=1: {'yes' if slower else 'no'}).",
+            ),
+        )
 
         caring = ["β=0.5", "β=0.25"]
         parts, ok, cells = [], True, []
@@ -368,62 +406,98 @@ def assess_claims(results: Sequence[dict[str, Any]], reference: Reference | None
             settings = group[0]["config"]["settings"]
             max_cycles = int(group[0]["config"]["env_kwargs"].get("max_cycles", _DEFAULT_MAX_CYCLES))
             ref_harms, ref_survival = _reference_over(
-                reference, float(settings["selfishness"]), epsilons, float(settings["gamma"]), max_cycles)
+                reference, float(settings["selfishness"]), epsilons, float(settings["gamma"]), max_cycles
+            )
             ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
             cells += [h, s]
             mean_epsilon = sum(e * n for e, n in epsilons.items()) / max(sum(epsilons.values()), 1)
-            part = (f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
-                    f"mean ε {mean_epsilon:.4f}")
+            part = (
+                f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
+                f"mean ε {mean_epsilon:.4f}"
+            )
             if phase != "eval":
                 shares = [training_window_share(run) for run in group]
-                part += (f" over the steps of the final 10 % of training episodes "
-                         f"({100 * min(shares):.1f}–{100 * max(shares):.1f} % of each run's steps)")
+                part += (
+                    f" over the steps of the final 10 % of training episodes "
+                    f"({100 * min(shares):.1f}–{100 * max(shares):.1f} % of each run's steps)"
+                )
             if tie_range is not None:
-                spread = tie_range(float(settings["selfishness"]), epsilons, gamma=float(settings["gamma"]),
-                                   max_cycles=max_cycles)
-                part += (f"; over every tie-break the optimum's harms span {spread.harms[0]:.3f}–{spread.harms[1]:.3f} "
-                         f"and its survival {spread.survival[0]:.1f}–{spread.survival[1]:.1f}")
+                spread = tie_range(
+                    float(settings["selfishness"]), epsilons, gamma=float(settings["gamma"]), max_cycles=max_cycles
+                )
+                part += (
+                    f"; over every tie-break the optimum's harms span {spread.harms[0]:.3f}–{spread.harms[1]:.3f} "
+                    f"and its survival {spread.survival[0]:.1f}–{spread.survival[1]:.1f}"
+                )
             if phase != "eval":
                 rise = survival_rise(group, reference, gamma=float(settings["gamma"]), max_cycles=max_cycles)
-                part += (f"; across the final 10 % of training episodes (first half → second half) survival "
-                         f"{rise.learner[0]:.1f} → {rise.learner[1]:.1f}, the reference at the ε of the same episodes "
-                         f"{rise.reference[0]:.1f} → {rise.reference[1]:.1f} (the ε schedule alone), so the gap to it "
-                         f"went {rise.gap[0]:.1f} → {rise.gap[1]:.1f}, wider in {rise.widened} of {rise.runs} runs")
+                part += (
+                    f"; across the final 10 % of training episodes (first half → second half) survival "
+                    f"{rise.learner[0]:.1f} → {rise.learner[1]:.1f}, the reference at the ε of the same episodes "
+                    f"{rise.reference[0]:.1f} → {rise.reference[1]:.1f} (the ε schedule alone), so the gap to it "
+                    f"went {rise.gap[0]:.1f} → {rise.gap[1]:.1f}, wider in {rise.widened} of {rise.runs} runs"
+                )
             parts.append(part)
-        judge(COEXISTENCE, "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
-              name, _verdict(ok, cells, "; ".join(parts) + "."))
+        judge(
+            COEXISTENCE,
+            "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
+            name,
+            _verdict(ok, cells, "; ".join(parts) + "."),
+        )
 
         pair = [PENALTY, "β=1"]
         penalty = coexistence.row(phase, "harms", pair)
-        judge(COEXISTENCE, "The −100 harm-penalty baseline harms the cat less than DQN.", name,
-              _verdict(below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}."))
+        judge(
+            COEXISTENCE,
+            "The −100 harm-penalty baseline harms the cat less than DQN.",
+            name,
+            _verdict(below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}."),
+        )
 
         batteries = sharing.row(phase, "batteries", betas)
-        judge(SHARING, "The robot collects fewer batteries as β falls.", name,
-              _verdict(falls(batteries), batteries, f"robot batteries/episode: {_line(betas, batteries)}."))
+        judge(
+            SHARING,
+            "The robot collects fewer batteries as β falls.",
+            name,
+            _verdict(falls(batteries), batteries, f"robot batteries/episode: {_line(betas, batteries)}."),
+        )
 
         equality = sharing.row(phase, "equality", betas)
         human = sharing.row(phase, "other_batteries", betas)
-        judge(SHARING, "Equality peaks at β = 0.5.", name, _verdict(
-            peaks(equality[1], equality[2], equality[3]), equality,
-            f"equality: {_line(betas, equality)}; human batteries/episode: {_line(betas, human)}.",
-        ))
+        judge(
+            SHARING,
+            "Equality peaks at β = 0.5.",
+            name,
+            _verdict(
+                peaks(equality[1], equality[2], equality[3]),
+                equality,
+                f"equality: {_line(betas, equality)}; human batteries/episode: {_line(betas, human)}.",
+            ),
+        )
 
         pair = ["β=1", EQUALITY_SHAPED]
         fair = sharing.row(phase, "equality", pair)
-        judge(SHARING, "The equality-scaled DQN baseline is more equal than DQN.", name,
-              _verdict(below(fair[0], fair[1]), fair, f"equality: {_line(pair, fair)}."), papers=False)
+        judge(
+            SHARING,
+            "The equality-scaled DQN baseline is more equal than DQN.",
+            name,
+            _verdict(below(fair[0], fair[1]), fair, f"equality: {_line(pair, fair)}."),
+            papers=False,
+        )
     return [Claim(env, text, verdicts, papers) for (env, text, papers), verdicts in claims.items()]
 
 
-def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: str, note: str = "",
-                          appendix: str = "") -> str:
+def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: str, note: str = "", appendix: str = "") -> str:
     """The report: how it was made, the rules, a verdict table, then the evidence per claim."""
     lines = [
-        "# Reproduction report", "",
-        f"Claims of *Towards Empathic Deep Q-Learning* (SPEC §7), judged on the result files in "
-        f"`{results_dir}`, produced by:", "", f"    {command}", "",
-        f"and checked by `empathy-zoo reproduction {results_dir}` (this file is generated from the result files).", "",
+        "# Reproduction report",
+        "",
+        f"Claims of *Towards Empathic Deep Q-Learning* (SPEC §7), judged on the result files in `{results_dir}`, produced by:",
+        "",
+        f"    {command}",
+        "",
+        f"and checked by `empathy-zoo reproduction {results_dir}` (this file is generated from the result files).",
+        "",
     ]
     if note:
         lines += [note, ""]
@@ -432,8 +506,7 @@ def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: st
         chosen = [c for c in claims if c.papers == papers]
         if heading and chosen:
             lines += [f"| | *{heading}* | | |"]
-        lines += [f"| {c.env} | {c.text} | **{c.verdicts['greedy'].word}** | **{c.verdicts['training'].word}** |"
-                  for c in chosen]
+        lines += [f"| {c.env} | {c.text} | **{c.verdicts['greedy'].word}** | **{c.verdicts['training'].word}** |" for c in chosen]
     lines.append("")
     for c in claims:
         lines += [f"## {c.text} ({c.env}){'' if c.papers else ' — the suite’s own question'}", ""]
@@ -446,14 +519,18 @@ def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: st
     return "\n".join(lines)
 
 
-def write_reproduction(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
-                       command: str = "empathy-zoo reproduce --profile paper", note: str = "",
-                       appendix: str = "", reference: Reference | None = None,
-                       tie_range: TieRangeOf | None = None) -> Path:
+def write_reproduction(
+    results_dir: str | os.PathLike[str],
+    out_path: str | os.PathLike[str] | None = None,
+    command: str = "empathy-zoo reproduce --profile paper",
+    note: str = "",
+    appendix: str = "",
+    reference: Reference | None = None,
+    tie_range: TieRangeOf | None = None,
+) -> Path:
     """Judge the claims on ``results_dir`` and write the report (``<results_dir>/REPRODUCTION.md``);
     raises :class:`NotThePaperSweep` (writing nothing) when the paper's experiments are not there."""
     claims = assess_claims(load_results(results_dir), reference, tie_range)
     path = Path(out_path) if out_path else Path(results_dir) / "REPRODUCTION.md"
     write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note, appendix))
     return path
-

@@ -17,21 +17,25 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-
-from dataclasses import dataclass
 
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
-
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
 
 __all__ = [
-    "Condition", "condition_of", "sensitivity_rows", "FairSplit", "fair_split_rows", "fair_split_summary",
-    "sensitivity_markdown", "write_sensitivity",
+    "Condition",
+    "condition_of",
+    "sensitivity_rows",
+    "FairSplit",
+    "fair_split_rows",
+    "fair_split_summary",
+    "sensitivity_markdown",
+    "write_sensitivity",
 ]
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
@@ -68,8 +72,10 @@ def sensitivity_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[
         by_beta = groups[condition]
         rows[condition] = {
             name: {
-                metric: {beta: cell_of([run_scalars(r, (metric,))[phase][metric] for r in runs], metric)
-                         for beta, runs in sorted(by_beta.items(), reverse=True)}
+                metric: {
+                    beta: cell_of([run_scalars(r, (metric,))[phase][metric] for r in runs], metric)
+                    for beta, runs in sorted(by_beta.items(), reverse=True)
+                }
                 for metric in ("batteries", "other_batteries", "equality")
             }
             for name, phase in PHASES.items()
@@ -102,7 +108,7 @@ def _episodes(run: dict[str, Any], phase: str) -> dict[str, np.ndarray]:
         source = max(run["eval"], key=lambda e: e["step"]) if run["eval"] else {}
         return {m: np.asarray(source.get(m, []), dtype=np.float64) for m in metrics}
     columns = {m: np.asarray(run["train"].get(m, []), dtype=np.float64) for m in metrics}
-    return {m: c[len(c) - final_episode_count(len(c)):] for m, c in columns.items()}
+    return {m: c[len(c) - final_episode_count(len(c)) :] for m, c in columns.items()}
 
 
 def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[float, FairSplit]]]:
@@ -125,9 +131,15 @@ def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[s
                     robot, human = e["batteries"], e["other_batteries"]
                     if not len(robot) or len(robot) != len(human):
                         continue
-                    per_run.append((robot.mean(), ((robot + human) / 2).mean(), (np.abs(robot - human) / 2).mean(),
-                                    np.nanmean(e["equality"]) if len(e["equality"]) else np.nan,
-                                    np.isclose(robot + human, 9).mean()))
+                    per_run.append(
+                        (
+                            robot.mean(),
+                            ((robot + human) / 2).mean(),
+                            (np.abs(robot - human) / 2).mean(),
+                            np.nanmean(e["equality"]) if len(e["equality"]) else np.nan,
+                            np.isclose(robot + human, 9).mean(),
+                        )
+                    )
                 if per_run:
                     table[beta] = FairSplit(*(float(np.mean(column)) for column in zip(*per_run)))
             rows[condition][name] = table
@@ -146,13 +158,15 @@ def fair_split_summary(table: dict[float, FairSplit]) -> tuple[float, float, flo
 def _fair_split_markdown(results: Sequence[dict[str, Any]]) -> list[str]:
     rows = fair_split_rows(results)
     lines = [
-        "### Is equality set by the robot's mean take?", "",
+        "### Is equality set by the robot's mean take?",
+        "",
         "Robot + human collect all 9 batteries in nearly every episode, so an episode's equality is set by how far "
         "the robot's take in it lies from the fair split (half of what both collected: 4.5). A β's equality is the "
         "mean over its episodes, so the spread of its per-episode takes counts as well as its mean take. Per "
         "condition and phase: the β whose mean take is closest to the fair split (its mean take), the β whose "
         "takes lie closest to it episode by episode (mean |robot − human| / 2), and the most equal β (its equality); "
-        "computed by `leaderboard.sensitivity.fair_split_rows` from the same episodes as the tables above.", "",
+        "computed by `leaderboard.sensitivity.fair_split_rows` from the same episodes as the tables above.",
+        "",
         "| condition | phase | closest mean take | closest episode by episode | most equal "
         "| episodes with all 9 collected (fewest over β) |",
         "|---|---|---|---|---|---|",
@@ -175,7 +189,9 @@ def _fair_split_markdown(results: Sequence[dict[str, Any]]) -> list[str]:
     lines.append("")
     summary = "; ".join(
         f"{name}: in {c[1]} of {c[0]} conditions the β whose mean take is closest to the fair split is not the most "
-        f"equal, and in {c[2]} of {c[0]} the β closest episode by episode is not" for name, c in counts.items() if c[0]
+        f"equal, and in {c[2]} of {c[0]} the β closest episode by episode is not"
+        for name, c in counts.items()
+        if c[0]
     )
     lines += [summary[0].upper() + summary[1:] + ".", ""]
     return lines
@@ -191,16 +207,23 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
     if not rows:
         raise ValueError("no Empathic DQN runs of sharing_v0 in these results")
     lines = [
-        "## When does C5 hold? Sharing under the fidelity options", "",
+        "## When does C5 hold? Sharing under the fidelity options",
+        "",
         "Empathic DQN on Sharing under every combination of the env's fidelity options (docs/SPEC.md §3; "
-        "the env's docstring), judged by REPRODUCTION.md's rules (`leaderboard/verdicts.py`), produced by:", "",
-        f"    {command}", "",
+        "the env's docstring), judged by REPRODUCTION.md's rules (`leaderboard/verdicts.py`), produced by:",
+        "",
+        f"    {command}",
+        "",
     ]
     for name in PHASES:
         where = "last greedy evaluation" if name == "greedy" else "final 10 % of training episodes"
-        lines += [f"### {name} ({where})", "",
-                  "| condition | β | robot batteries | human batteries | equality | fewer batteries as β falls | equality peaks at β = 0.5 |",
-                  "|---|---|---|---|---|---|---|"]
+        lines += [
+            f"### {name} ({where})",
+            "",
+            "| condition | β | robot batteries | human batteries | equality "
+            "| fewer batteries as β falls | equality peaks at β = 0.5 |",
+            "|---|---|---|---|---|---|---|",
+        ]
         for condition, phases in rows.items():
             table = phases[name]
             betas = [b for b in BETAS if b in table["equality"]]
@@ -218,11 +241,23 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str
     return "\n".join(lines)
 
 
-def write_sensitivity(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
-                      command: str = "empathy-zoo reproduce --profile sharing_sensitivity", note: str = "") -> Path:
+def write_sensitivity(
+    results_dir: str | os.PathLike[str],
+    out_path: str | os.PathLike[str] | None = None,
+    command: str = "empathy-zoo reproduce --profile sharing_sensitivity",
+    note: str = "",
+) -> Path:
     """Write the sensitivity section as a file of its own (``<results_dir>/SENSITIVITY.md``), with
     the rules it applies."""
-    text = "\n".join(["# Sharing under its fidelity options", "", *([note, ""] if note else []), RULES, "",
-                      sensitivity_markdown(load_results(results_dir), command)])
+    text = "\n".join(
+        [
+            "# Sharing under its fidelity options",
+            "",
+            *([note, ""] if note else []),
+            RULES,
+            "",
+            sensitivity_markdown(load_results(results_dir), command),
+        ]
+    )
     path = Path(out_path) if out_path else Path(results_dir) / "SENSITIVITY.md"
     return write_text_atomic(path, text)

@@ -17,13 +17,28 @@ from typing import Any
 
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
-    CONFIDENCE, DEFAULT_SEED, FINAL_FRACTION, MEAN_INTERVAL_NOTE, N_RESAMPLES, PHASES, Score, t_level,
+    CONFIDENCE,
+    DEFAULT_SEED,
+    FINAL_FRACTION,
+    MEAN_INTERVAL_NOTE,
+    N_RESAMPLES,
+    PHASES,
+    Score,
+    t_level,
 )
 from leaderboard.improvement import TOO_FEW_SEEDS, VERDICT_MARKS, VERDICT_NOTE, Improvement, smallest_decidable_seeds
 
 __all__ = [
-    "PHASE_TITLES", "SINGLE_SEED_MARK", "CSV_COLUMNS", "Provenance", "format_interval",
-    "table_rows", "markdown_table", "markdown_report", "csv_text", "html_report",
+    "PHASE_TITLES",
+    "SINGLE_SEED_MARK",
+    "CSV_COLUMNS",
+    "Provenance",
+    "format_interval",
+    "table_rows",
+    "markdown_table",
+    "markdown_report",
+    "csv_text",
+    "html_report",
 ]
 
 PHASE_TITLES: dict[str, str] = {
@@ -34,8 +49,19 @@ PHASE_TITLES: dict[str, str] = {
 SINGLE_SEED_MARK = "†"
 """Marks a method scored on a single seed, whose interval is the point itself."""
 CSV_COLUMNS: tuple[str, ...] = (
-    "env", "method_label", "method", "phase", "metric", "mean", "ci_low", "ci_high", "n_seeds",
-    "metric_definition", "command", "version", "commit",
+    "env",
+    "method_label",
+    "method",
+    "phase",
+    "metric",
+    "mean",
+    "ci_low",
+    "ci_high",
+    "n_seeds",
+    "metric_definition",
+    "command",
+    "version",
+    "commit",
 )
 """Columns of the long-format CSV, one row per (env, method, phase, metric)."""
 
@@ -125,7 +151,10 @@ def table_rows(
 
 
 def _sections(
-    scores: Sequence[Score], metrics: Sequence[str], digits: int, base_env: Mapping[str, str] | None = None,
+    scores: Sequence[Score],
+    metrics: Sequence[str],
+    digits: int,
+    base_env: Mapping[str, str] | None = None,
 ) -> Iterator[tuple[str, str, list[str], list[list[str]]]]:
     for env in _envs(scores):
         for phase in PHASES:
@@ -134,9 +163,7 @@ def _sections(
                 yield env, phase, header, rows
 
 
-def improvement_sections(
-    cells: Sequence[Improvement], env: str, digits: int = 2
-) -> list[tuple[str, list[str], list[list[str]]]]:
+def improvement_sections(cells: Sequence[Improvement], env: str, digits: int = 2) -> list[tuple[str, list[str], list[list[str]]]]:
     """``[(phase, header, rows)]`` of ``env``'s probability-of-improvement tables: a row per method,
     a column per metric, each cell ``P [interval] · IQM value``."""
     sections = []
@@ -149,7 +176,8 @@ def improvement_sections(
             mark = VERDICT_MARKS[cell.verdict]
             row[2 + metrics.index(cell.metric)] = (
                 f"{mark}{' ' if mark else ''}{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)}"
-                f" · IQM {cell.iqm:.{digits}f}")
+                f" · IQM {cell.iqm:.{digits}f}"
+            )
         if rows:
             sections.append((phase, ["Method", "Seeds", *metrics], list(rows.values())))
     return sections
@@ -204,8 +232,7 @@ def markdown_report(
     lines = [
         "# empathy-zoo leaderboard",
         "",
-        f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, "
-        f"commit `{provenance.commit_text()}`.",
+        f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, commit `{provenance.commit_text()}`.",
         "",
         provenance.method_text(),
     ]
@@ -233,8 +260,7 @@ def _figure_sections(figures: Mapping[tuple[str, str], Any], env: str | None) ->
     mine = [(metric, figure) for (figure_env, metric), figure in figures.items() if figure_env == env]
     tradeoff = [(f"{env}: task against side effect", figure) for metric, figure in mine if metric == TRADEOFF]
     curves = [(f"{env}: {metric} vs training steps", figure) for metric, figure in mine if metric != TRADEOFF]
-    return [(heading, items) for heading, items in
-            (("Task against side effect", tradeoff), ("Learning curves", curves)) if items]
+    return [(heading, items) for heading, items in (("Task against side effect", tradeoff), ("Learning curves", curves)) if items]
 
 
 def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -> list[str]:
@@ -264,11 +290,23 @@ def csv_text(scores: Sequence[Score], provenance: Provenance) -> str:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
     for s in scores:
-        writer.writerow([
-            s.env, s.method_label, s.method, s.phase, s.metric,
-            _csv_number(s.mean), _csv_number(s.ci_low), _csv_number(s.ci_high), s.n_seeds,
-            METRIC_DEFINITIONS.get(s.metric, ""), provenance.command, provenance.version, provenance.commit or "",
-        ])
+        writer.writerow(
+            [
+                s.env,
+                s.method_label,
+                s.method,
+                s.phase,
+                s.metric,
+                _csv_number(s.mean),
+                _csv_number(s.ci_low),
+                _csv_number(s.ci_high),
+                s.n_seeds,
+                METRIC_DEFINITIONS.get(s.metric, ""),
+                provenance.command,
+                provenance.version,
+                provenance.commit or "",
+            ]
+        )
     return buffer.getvalue()
 
 
@@ -328,8 +366,14 @@ def html_report(
     figures = figures or {}
     esc = _text
     lines = [
-        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
-        "<title>empathy-zoo leaderboard</title>", f"<style>{_CSS}</style>", "</head>", "<body>",
+        "<!DOCTYPE html>",
+        '<html lang="en">',
+        "<head>",
+        '<meta charset="utf-8">',
+        "<title>empathy-zoo leaderboard</title>",
+        f"<style>{_CSS}</style>",
+        "</head>",
+        "<body>",
         "<h1>empathy-zoo leaderboard</h1>",
         f"<p>Produced by <code>{esc(provenance.command)}</code> with empathy-zoo {esc(provenance.version)}, "
         f"commit <code>{esc(provenance.commit_text())}</code>.</p>",

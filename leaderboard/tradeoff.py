@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from matplotlib.lines import Line2D
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
@@ -28,8 +28,7 @@ from leaderboard.aggregate import PHASES, Score
 from leaderboard.colours import method_colours
 from leaderboard.tables import PHASE_TITLES
 
-__all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs",
-           "tradeoff_filename"]
+__all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs", "tradeoff_filename"]
 
 
 @dataclass(frozen=True)
@@ -49,10 +48,20 @@ class TradeoffSpec:
 
 
 TRADEOFF_SPECS: dict[str, TradeoffSpec] = {
-    "coexistence_v0": TradeoffSpec("survival", "steps survived per episode (task: higher is better)",
-                                   "harms", "harms per episode (side effect: lower is better)", False),
-    "sharing_v0": TradeoffSpec("batteries", "robot batteries per episode (task: higher is better)",
-                               "equality", "equality of battery rewards (higher is better)", True),
+    "coexistence_v0": TradeoffSpec(
+        "survival",
+        "steps survived per episode (task: higher is better)",
+        "harms",
+        "harms per episode (side effect: lower is better)",
+        False,
+    ),
+    "sharing_v0": TradeoffSpec(
+        "batteries",
+        "robot batteries per episode (task: higher is better)",
+        "equality",
+        "equality of battery rewards (higher is better)",
+        True,
+    ),
 }
 """The trade-off of every environment that has one (a variant is drawn like its environment)."""
 
@@ -99,9 +108,17 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
             colour = colours[labels.index(label)]
             on_front = i in front
             axes.errorbar(
-                x.mean, y.mean, xerr=[[x.mean - x.ci_low], [x.ci_high - x.mean]],
-                yerr=[[y.mean - y.ci_low], [y.ci_high - y.mean]], fmt="o", color=colour, markersize=8,
-                markerfacecolor=colour if on_front else "white", markeredgewidth=1.6, capsize=3, linewidth=1.2,
+                x.mean,
+                y.mean,
+                xerr=[[x.mean - x.ci_low], [x.ci_high - x.mean]],
+                yerr=[[y.mean - y.ci_low], [y.ci_high - y.mean]],
+                fmt="o",
+                color=colour,
+                markersize=8,
+                markerfacecolor=colour if on_front else "white",
+                markeredgewidth=1.6,
+                capsize=3,
+                linewidth=1.2,
             )
         if len(front) > 1:
             ordered = sorted((drawn[i][1].mean, drawn[i][2].mean) for i in front)
@@ -111,21 +128,31 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
         axes.set_ylabel(spec.effect_label)
         axes.grid(True, alpha=0.3)
     seeds = {s.method_label: s.n_seeds for s in scores if s.metric in (spec.task, spec.effect)}
-    handles = [Line2D([], [], marker="s", linestyle="", color=colours[i], markersize=8,
-                      label=f"{label} (n={seeds[label]})") for i, label in enumerate(labels)]
-    handles += [Line2D([], [], marker="o", linestyle="--", color="0.35", markersize=8, label="on the Pareto front"),
-                Line2D([], [], marker="o", linestyle="", color="0.35", markerfacecolor="white", markersize=8,
-                       label="dominated")]
-    figure.legend(handles=handles, loc="outside right upper", fontsize="small", frameon=False,
-                  title="method (bars: 95 % CI over seeds)", title_fontsize="small")
+    handles = [
+        Line2D([], [], marker="s", linestyle="", color=colours[i], markersize=8, label=f"{label} (n={seeds[label]})")
+        for i, label in enumerate(labels)
+    ]
+    handles += [
+        Line2D([], [], marker="o", linestyle="--", color="0.35", markersize=8, label="on the Pareto front"),
+        Line2D([], [], marker="o", linestyle="", color="0.35", markerfacecolor="white", markersize=8, label="dominated"),
+    ]
+    figure.legend(
+        handles=handles,
+        loc="outside right upper",
+        fontsize="small",
+        frameon=False,
+        title="method (bars: 95 % CI over seeds)",
+        title_fontsize="small",
+    )
     figure.suptitle(f"{env}: task against side effect")
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return buffer.getvalue()
 
 
-def plot_tradeoffs(scores: Sequence[Score], figures_dir: str | os.PathLike[str],
-                   base_env: dict[str, str] | None = None) -> dict[str, Path]:
+def plot_tradeoffs(
+    scores: Sequence[Score], figures_dir: str | os.PathLike[str], base_env: dict[str, str] | None = None
+) -> dict[str, Path]:
     """Write the trade-off figure of every env of ``scores`` that has a spec (``base_env`` maps a
     variant to its environment); returns ``{env: path}``, envs sorted."""
     paths: dict[str, Path] = {}

@@ -34,7 +34,15 @@ import numpy as np
 from leaderboard.aggregate import MEAN_INTERVAL_NOTE, mean_ci
 
 __all__ = [
-    "Cell", "cell_of", "below", "falls", "peaks", "matches_reference", "HARM_TOLERANCE", "SURVIVAL_TOLERANCE", "RULES",
+    "Cell",
+    "cell_of",
+    "below",
+    "falls",
+    "peaks",
+    "matches_reference",
+    "HARM_TOLERANCE",
+    "SURVIVAL_TOLERANCE",
+    "RULES",
     "BELOW_NOTE",
 ]
 
@@ -124,8 +132,8 @@ def peaks(left: Cell, peak: Cell, right: Cell) -> bool:
     return below(left, peak) and below(right, peak)
 
 
-def matches_reference(harms: Cell, survival: Cell, reference_harms: float, reference_survival: float,
-                      max_cycles: int) -> bool:
+def matches_reference(harms: Cell, survival: Cell, reference_harms: float, reference_survival: float, max_cycles: int) -> bool:
     """Harm-free and surviving, measured against the exact optimum (see :data:`RULES`)."""
-    return (harms.mean <= reference_harms + HARM_TOLERANCE
-            and survival.mean >= reference_survival - SURVIVAL_TOLERANCE * max_cycles)
+    return (
+        harms.mean <= reference_harms + HARM_TOLERANCE and survival.mean >= reference_survival - SURVIVAL_TOLERANCE * max_cycles
+    )

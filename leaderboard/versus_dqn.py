@@ -29,13 +29,11 @@ def _format(value: float, metric: str) -> str:
     return f"{value:.0f}" if metric in ("survival", "other_return", "return") else f"{value:.2f}"
 
 
-def versus_dqn_tables(results: Sequence[dict[str, Any]],
-                      metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
+def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
     """Markdown: per variant, one row per method, a cell per metric ``▲ greedy / ▼ training``."""
     groups = group_runs(results)
     envs = {env: runs[0]["env"] for (env, _), runs in groups.items()}
-    metrics_of = {variant: (metrics_of or DEFAULT_METRICS).get(variant) or DEFAULT_METRICS[env]
-                  for variant, env in envs.items()}
+    metrics_of = {variant: (metrics_of or DEFAULT_METRICS).get(variant) or DEFAULT_METRICS[env] for variant, env in envs.items()}
     scores = {(s.env, s.method_label, s.phase, s.metric): s for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c for c in improvements_over_dqn(results, metrics_of)}
     lines: list[str] = []
@@ -43,10 +41,23 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]],
         labels = [label for (env, label) in groups if env == variant]
         dqn = [label for label in labels if all(is_dqn(run) for run in groups[(variant, label)])]
         seeds = {label: len(groups[(variant, label)]) for label in labels}
-        heading = ", ".join(f"{m} {_format(scores[(variant, dqn[0], 'eval', m)].mean, m)} / "
-                            f"{_format(scores[(variant, dqn[0], 'train_final10', m)].mean, m)}" for m in metrics) if dqn else ""
-        lines += [f"### {variant}", "", f"DQN ({seeds[dqn[0]]} seeds): {heading} (greedy / training)." if dqn else "", "",
-                  "| method | seeds | " + " | ".join(metrics) + " |", "|---|---|" + "---|" * len(metrics)]
+        heading = (
+            ", ".join(
+                f"{m} {_format(scores[(variant, dqn[0], 'eval', m)].mean, m)} / "
+                f"{_format(scores[(variant, dqn[0], 'train_final10', m)].mean, m)}"
+                for m in metrics
+            )
+            if dqn
+            else ""
+        )
+        lines += [
+            f"### {variant}",
+            "",
+            f"DQN ({seeds[dqn[0]]} seeds): {heading} (greedy / training)." if dqn else "",
+            "",
+            "| method | seeds | " + " | ".join(metrics) + " |",
+            "|---|---|" + "---|" * len(metrics),
+        ]
         for label in labels:
             if label in dqn:
                 continue

@@ -12,9 +12,27 @@ from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 
 TINY = [
-    "--steps", "300", "--eval-interval", "150", "--eval-episodes", "2", "--max-cycles", "50",
-    "--learning-starts", "32", "--batch-size", "32", "--replay-capacity", "300", "--hidden-size", "16",
-    "--target-update-interval", "50", "--epsilon-decay-steps", "200", "--no-progress",
+    "--steps",
+    "300",
+    "--eval-interval",
+    "150",
+    "--eval-episodes",
+    "2",
+    "--max-cycles",
+    "50",
+    "--learning-starts",
+    "32",
+    "--batch-size",
+    "32",
+    "--replay-capacity",
+    "300",
+    "--hidden-size",
+    "16",
+    "--target-update-interval",
+    "50",
+    "--epsilon-decay-steps",
+    "200",
+    "--no-progress",
 ]
 """``train`` options of a run that takes a second or two."""
 
@@ -31,8 +49,14 @@ class AverseSettings(EmpathicDQNSettings):
     """Layer widths of an imagined network."""
 
 
-AVERSE_DQN = Method(name="averse_dqn", learner=EmpathicDQN, settings=AverseSettings, preset={"selfishness": 1.0},
-                    label=lambda s: f"Averse DQN ({s.aversion:g})", description="DQN with an aversion setting")
+AVERSE_DQN = Method(
+    name="averse_dqn",
+    learner=EmpathicDQN,
+    settings=AverseSettings,
+    preset={"selfishness": 1.0},
+    label=lambda s: f"Averse DQN ({s.aversion:g})",
+    description="DQN with an aversion setting",
+)
 """A method whose settings have fields no registered method has; it fixes ``selfishness``."""
 
 

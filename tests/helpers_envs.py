@@ -9,8 +9,17 @@ import numpy as np
 
 from empathy_zoo.vector import VectorEnv
 
-_AEC_FIELDS = ("agents", "agent_selection", "_actions", "terminations", "truncations", "rewards",
-               "_cumulative_rewards", "infos", "_observations")
+_AEC_FIELDS = (
+    "agents",
+    "agent_selection",
+    "_actions",
+    "terminations",
+    "truncations",
+    "rewards",
+    "_cumulative_rewards",
+    "infos",
+    "_observations",
+)
 
 
 def env_state(env: Any) -> Any:
@@ -19,8 +28,11 @@ def env_state(env: Any) -> Any:
         return copy.deepcopy(env.state())
     layers = []
     while True:
-        fields = {key: value for key, value in vars(env).items()
-                  if key in _AEC_FIELDS or key in ("agents", "_step", "_last", "policies", "_painted", "_running", "_np_random")}
+        fields = {
+            key: value
+            for key, value in vars(env).items()
+            if key in _AEC_FIELDS or key in ("agents", "_step", "_last", "policies", "_painted", "_running", "_np_random")
+        }
         layers.append((type(env).__name__, copy.deepcopy(fields)))
         if hasattr(env, "engine"):
             layers.append(("engine", env.engine.state()))

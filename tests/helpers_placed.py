@@ -11,8 +11,15 @@ from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv, VectorStep
 
 
-def placed(env: str, positions: dict, fixed: dict, max_cycles: int = 500, in_view_only: bool = False,
-           env_kwargs: dict[str, Any] | None = None, **options: Any) -> VectorEnv:
+def placed(
+    env: str,
+    positions: dict,
+    fixed: dict,
+    max_cycles: int = 500,
+    in_view_only: bool = False,
+    env_kwargs: dict[str, Any] | None = None,
+    **options: Any,
+) -> VectorEnv:
     """One environment of ``env`` with the agents at ``positions`` (and reset ``options``, e.g. batteries)."""
     venv = VectorEnv(env, 1, fixed=fixed, max_cycles=max_cycles, in_view_only=in_view_only, **(env_kwargs or {}))
     venv.reset(seed=0)

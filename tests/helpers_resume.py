@@ -10,14 +10,16 @@ from typing import Any
 import pytest
 
 
-def whole_and_resumed(spec: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                      checkpoint_interval: int = 250) -> tuple[dict[str, Any], dict[str, Any]]:
+def whole_and_resumed(
+    spec: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, checkpoint_interval: int = 250
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The result of ``spec`` trained without checkpoints, and trained again with one every
     ``checkpoint_interval`` steps, killed just after the first is written, then resumed."""
     from empathy_zoo.training import RunnerOptions, ensemble, train_runs
 
-    whole = json.loads(train_runs([spec], tmp_path / "whole", RunnerOptions(progress=False, checkpoint_interval=0))[0]
-                       .read_text())
+    whole = json.loads(
+        train_runs([spec], tmp_path / "whole", RunnerOptions(progress=False, checkpoint_interval=0))[0].read_text()
+    )
     real = ensemble.save_checkpoint
 
     def save_then_die(path, payload):

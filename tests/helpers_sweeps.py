@@ -23,8 +23,21 @@ method = "dqn"
 """One run of DQN on Coexistence, 200 steps."""
 
 TINY_TRAIN = [
-    "--steps", "200", "--eval-interval", "200", "--eval-episodes", "1", "--max-cycles", "50",
-    "--learning-starts", "32", "--replay-capacity", "200", "--hidden-size", "8", "--no-progress",
+    "--steps",
+    "200",
+    "--eval-interval",
+    "200",
+    "--eval-episodes",
+    "1",
+    "--max-cycles",
+    "50",
+    "--learning-starts",
+    "32",
+    "--replay-capacity",
+    "200",
+    "--hidden-size",
+    "8",
+    "--no-progress",
 ]
 """``train`` flags of the same run."""
 

@@ -17,17 +17,34 @@ from agents.empathic_dqn import EmpathicDQN
 from agents.rewards import TrainRewards
 from agents.settings import EmpathicDQNSettings
 from baselines.aup import (
-    NO_OP, TASK_VALUE, AttainableUtility, attainable_utility_penalty, auxiliary_reward_map, auxiliary_rewards,
+    NO_OP,
+    TASK_VALUE,
+    AttainableUtility,
+    attainable_utility_penalty,
+    auxiliary_reward_map,
+    auxiliary_rewards,
 )
 
 V = 25
-SMALL = AttainableUtility(num_rewards=3, learning_starts=32, penalty_starts=64, train_interval=1, replay_capacity=64,
-                          target_update_interval=50, discount=0.9)
+SMALL = AttainableUtility(
+    num_rewards=3,
+    learning_starts=32,
+    penalty_starts=64,
+    train_interval=1,
+    replay_capacity=64,
+    target_update_interval=50,
+    discount=0.9,
+)
 SMALL_AUP = Method(
-    name="dqn_aup_small", learner=EmpathicDQN, settings=EmpathicDQNSettings, preset={"selfishness": 1.0},
-    reward=AttainableUtility(num_rewards=4, learning_starts=64, penalty_starts=128, train_interval=1,
-                             replay_capacity=500, target_update_interval=50),
-    label=lambda s: "DQN + AUP (small)", description="AUP whose learner starts after 64 transitions",
+    name="dqn_aup_small",
+    learner=EmpathicDQN,
+    settings=EmpathicDQNSettings,
+    preset={"selfishness": 1.0},
+    reward=AttainableUtility(
+        num_rewards=4, learning_starts=64, penalty_starts=128, train_interval=1, replay_capacity=500, target_update_interval=50
+    ),
+    label=lambda s: "DQN + AUP (small)",
+    description="AUP whose learner starts after 64 transitions",
 )
 
 
@@ -41,18 +58,25 @@ def step(obs: np.ndarray, actions: list[int], next_obs: np.ndarray, rewards: lis
     k = len(actions)
     zeros = np.zeros((k, 1))
     return StepBatch(
-        obs=obs.reshape(k, 1, V), actions=np.array(actions, dtype=np.int64)[:, None],
-        rewards=np.array(rewards or [1.0] * k, dtype=np.float32)[:, None], terminated=np.zeros((k, 1), bool),
-        next_obs=next_obs.reshape(k, 1, V), swapped_next_obs=next_obs.reshape(k, 1, V),
-        other_present=np.ones((k, 1), bool), harmed_other=zeros, battery_return=zeros, other_battery_return=zeros,
-        truncated=np.zeros((k, 1), bool), other_rewards=np.zeros((k, 1), dtype=np.float32),
+        obs=obs.reshape(k, 1, V),
+        actions=np.array(actions, dtype=np.int64)[:, None],
+        rewards=np.array(rewards or [1.0] * k, dtype=np.float32)[:, None],
+        terminated=np.zeros((k, 1), bool),
+        next_obs=next_obs.reshape(k, 1, V),
+        swapped_next_obs=next_obs.reshape(k, 1, V),
+        other_present=np.ones((k, 1), bool),
+        harmed_other=zeros,
+        battery_return=zeros,
+        other_battery_return=zeros,
+        truncated=np.zeros((k, 1), bool),
+        other_rewards=np.zeros((k, 1), dtype=np.float32),
     )
 
 
 def test_the_penalty_is_the_summed_shift_against_the_no_op_over_the_summed_no_op_values() -> None:
     # one run, three steps (actions up, stay, left), two heads of five action values each
     q = np.zeros((1, 3, 2, 5))
-    q[..., 0, :] = [3.0, 0.0, 5.0, 0.0, 1.0]   # head 0: Q(s, ∅) = 1
+    q[..., 0, :] = [3.0, 0.0, 5.0, 0.0, 1.0]  # head 0: Q(s, ∅) = 1
     q[..., 1, :] = [-2.0, 0.0, 10.0, 0.0, -6.0]  # head 1: Q(s, ∅) = −6 (its absolute value counts)
     actions = np.array([[0, NO_OP, 2]])
     penalty = attainable_utility_penalty(q, actions, weight=0.5)
@@ -124,8 +148,17 @@ def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs() -> None:
     assert mine < 1.0 or actions[0] == NO_OP
 
 
-@pytest.mark.parametrize("field, value", [("penalty_weight", -0.1), ("num_rewards", 0), ("discount", 1.0),
-                                          ("penalty_starts", 1_000), ("replay_capacity", 8), ("train_interval", 0)])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("penalty_weight", -0.1),
+        ("num_rewards", 0),
+        ("discount", 1.0),
+        ("penalty_starts", 1_000),
+        ("replay_capacity", 8),
+        ("train_interval", 0),
+    ],
+)
 def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=field):
         AttainableUtility(**{field: value})
@@ -136,8 +169,9 @@ def test_a_resumed_aup_run_equals_an_uninterrupted_one_and_differs_from_dqn(tmp_
     from empathy_zoo.training.spec import RunSpec
 
     settings = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50}
-    spec = RunSpec(env="sharing_v0", method="test_aup:SMALL_AUP", steps=600, eval_interval=300, eval_episodes=2,
-                   settings=settings)
+    spec = RunSpec(
+        env="sharing_v0", method="test_aup:SMALL_AUP", steps=600, eval_interval=300, eval_episodes=2, settings=settings
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"]["name"] == "attainable_utility" and resumed["config"]["reward"]["num_rewards"] == 4

@@ -22,7 +22,11 @@ import numpy as np
 import pytest
 
 from baselines.aup import (
-    NO_OP, AttainableUtility, attainable_utility_penalty, auxiliary_reward_map, auxiliary_rewards,
+    NO_OP,
+    AttainableUtility,
+    attainable_utility_penalty,
+    auxiliary_reward_map,
+    auxiliary_rewards,
 )
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT, CoexistenceEngine
 from empathy_zoo.grid import NUM_ACTIONS
@@ -89,8 +93,9 @@ def exact_q_values(reward_map: np.ndarray, gamma: float = GAMMA, tolerance: floa
     alone = auxiliary_rewards(states[GONE], reward_map).astype(np.float64) / (1.0 - gamma)  # V(cat gone)
     value = np.zeros((CELLS, reward_map.shape[1]))
     while True:
-        following = np.where((outcome == NO_HARM)[..., None], value[after],
-                             np.where((outcome == ROBOT_HARMS_CAT)[..., None], alone, 0.0))
+        following = np.where(
+            (outcome == NO_HARM)[..., None], value[after], np.where((outcome == ROBOT_HARMS_CAT)[..., None], alone, 0.0)
+        )
         q = (reward + gamma * following).mean(axis=2)
         best = q.max(axis=1)
         change = float(np.abs(best - value).max())
@@ -102,8 +107,7 @@ def exact_q_values(reward_map: np.ndarray, gamma: float = GAMMA, tolerance: floa
 def live_states() -> np.ndarray:
     """The displacements a step can start from with the cat present (not in contact, not one cell)."""
     outcome, _ = coexistence_transitions(SIZE)
-    return np.array([d for d in range(1, CELLS) if outcome[d, NO_OP, NO_OP] == NO_HARM
-                     and start_distribution(SIZE)[d] > 0])
+    return np.array([d for d in range(1, CELLS) if outcome[d, NO_OP, NO_OP] == NO_HARM and start_distribution(SIZE)[d] > 0])
 
 
 def harm_chances() -> tuple[np.ndarray, np.ndarray]:
@@ -119,8 +123,11 @@ def random_occupancy(max_cycles: int = 500) -> np.ndarray:
     harmed = CELLS + 1
     destination = np.select([outcome == ROBOT_HARMS_CAT, outcome == CAT_HARMS_ROBOT], [GONE, harmed], after)
     step = np.zeros((CELLS + 2, CELLS + 2))
-    np.add.at(step, (np.broadcast_to(np.arange(CELLS)[:, None, None], outcome.shape).ravel(), destination.ravel()),
-              1.0 / (NUM_ACTIONS * NUM_ACTIONS))
+    np.add.at(
+        step,
+        (np.broadcast_to(np.arange(CELLS)[:, None, None], outcome.shape).ravel(), destination.ravel()),
+        1.0 / (NUM_ACTIONS * NUM_ACTIONS),
+    )
     step[GONE, GONE] = step[harmed, harmed] = 1.0
     state, visits = np.concatenate([start_distribution(SIZE), [0.0, 0.0]]), np.zeros(CELLS + 2)
     for _ in range(max_cycles):
@@ -141,7 +148,7 @@ def penalties_before(q: np.ndarray, weight: float = FORMER_WEIGHT) -> np.ndarray
     mean ``|Qᵢ(s, ∅)|`` over the training batches (here the warm-up's state shares,
     :func:`random_occupancy`, where the old running mean had settled when its penalty started)."""
     scale = (random_occupancy()[:, None] * np.abs(q[:, NO_OP, :])).sum(axis=0)
-    return weight * (np.abs(q - q[:, NO_OP:NO_OP + 1, :]) / scale).mean(axis=2)
+    return weight * (np.abs(q - q[:, NO_OP : NO_OP + 1, :]) / scale).mean(axis=2)
 
 
 def former_reward_map(seed: int) -> np.ndarray:
@@ -173,9 +180,13 @@ def costs(penalty: np.ndarray) -> Costs:
     harm, harmed = (x[states] for x in harm_chances())
     move = np.arange(NUM_ACTIONS) != NO_OP
     harming = (harm > 0) & move
-    return Costs(per_step=float(pen.mean()), harmless=float(pen[(harm == 0) & (harmed == 0) & move].mean()),
-                 harming=float(pen[harming].mean()), per_harm=float((pen[harming] / harm[harming]).mean()),
-                 self_risk=float(pen[(harmed > 0) & (harm == 0) & move].mean()))
+    return Costs(
+        per_step=float(pen.mean()),
+        harmless=float(pen[(harm == 0) & (harmed == 0) & move].mean()),
+        harming=float(pen[harming].mean()),
+        per_harm=float((pen[harming] / harm[harming]).mean()),
+        self_risk=float(pen[(harmed > 0) & (harm == 0) & move].mean()),
+    )
 
 
 def shaped_optimum(penalty: np.ndarray, max_cycles: int = 500) -> tuple[float, float]:
@@ -197,8 +208,11 @@ def shaped_optimum(penalty: np.ndarray, max_cycles: int = 500) -> tuple[float, f
     harmed = CELLS + 1
     destination = np.select([outcome == ROBOT_HARMS_CAT, outcome == CAT_HARMS_ROBOT], [GONE, harmed], after)
     step = np.zeros((CELLS + 2, CELLS + 2))
-    np.add.at(step, (np.broadcast_to(np.arange(CELLS)[:, None, None], outcome.shape).ravel(), destination.ravel()),
-              np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, outcome.shape).ravel())
+    np.add.at(
+        step,
+        (np.broadcast_to(np.arange(CELLS)[:, None, None], outcome.shape).ravel(), destination.ravel()),
+        np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, outcome.shape).ravel(),
+    )
     step[GONE, GONE] = step[harmed, harmed] = 1.0
     state, survival = np.concatenate([start_distribution(SIZE), [0.0, 0.0]]), 0.0
     for _ in range(max_cycles):
@@ -215,9 +229,14 @@ def test_the_auxiliary_values_are_the_bellman_optimum_of_the_transforms_own_rewa
     outcome, after = coexistence_transitions(SIZE)
     d = displacement(2, 0)  # the cat two cells below the robot
     # the no-op: the cat moving up walks into the robot's reach (the robot, above, harms it)
-    expected = np.mean([auxiliary_rewards(reached[d, NO_OP, c], reward_map)
-                        + GAMMA * (q[GONE, 0] if outcome[d, NO_OP, c] == ROBOT_HARMS_CAT else q[after[d, NO_OP, c]].max(axis=0))
-                        for c in range(NUM_ACTIONS)], axis=0)
+    expected = np.mean(
+        [
+            auxiliary_rewards(reached[d, NO_OP, c], reward_map)
+            + GAMMA * (q[GONE, 0] if outcome[d, NO_OP, c] == ROBOT_HARMS_CAT else q[after[d, NO_OP, c]].max(axis=0))
+            for c in range(NUM_ACTIONS)
+        ],
+        axis=0,
+    )
     assert q[d, NO_OP] == pytest.approx(expected, rel=1e-9)
     assert outcome[d, NO_OP, 0] == ROBOT_HARMS_CAT
     assert q[GONE, 0] == pytest.approx(auxiliary_rewards(states[GONE], reward_map) / (1 - GAMMA))
@@ -283,8 +302,7 @@ def test_even_exact_the_optimum_of_the_penalised_reward_harms_the_cat() -> None:
 
 # ---------------------------------------------------------------------------- the printed table
 def _row(name: str, c: Costs) -> str:
-    return (f"| {name} | {c.per_step:.3f} | {c.harmless:.3f} | {c.harming:.3f} | {c.per_harm:.2f} | "
-            f"{c.self_risk:.3f} |")
+    return f"| {name} | {c.per_step:.3f} | {c.harmless:.3f} | {c.harming:.3f} | {c.per_harm:.2f} | {c.self_risk:.3f} |"
 
 
 def main() -> None:
@@ -293,11 +311,19 @@ def main() -> None:
     print("| transform, seed | per step | harmless move | harming move | per harm | self-risking move |")
     print("|---|---|---|---|---|---|")
     for seed in SEEDS:
-        print(_row(f"before (λ = 1/1.501, w ∈ [0, 1), per-head running-mean scale), {seed}",
-                   costs(penalties_before(exact_q_values(former_reward_map(seed))))))
+        print(
+            _row(
+                f"before (λ = 1/1.501, w ∈ [0, 1), per-head running-mean scale), {seed}",
+                costs(penalties_before(exact_q_values(former_reward_map(seed)))),
+            )
+        )
     for seed in SEEDS:
-        print(_row(f"after (λ = {AttainableUtility().penalty_weight:.1f}, w ∈ [−1, 1), Σᵢ|Qᵢ(s,∅)|), {seed}",
-                   costs(penalties_after(exact_q_values(auxiliary_reward_map(seed, 25, 30))))))
+        print(
+            _row(
+                f"after (λ = {AttainableUtility().penalty_weight:.1f}, w ∈ [−1, 1), Σᵢ|Qᵢ(s,∅)|), {seed}",
+                costs(penalties_after(exact_q_values(auxiliary_reward_map(seed, 25, 30)))),
+            )
+        )
     harm, harmed = harm_chances()
     before = penalties_before(exact_q_values(former_reward_map(0)))
     after = penalties_after(exact_q_values(auxiliary_reward_map(0, 25, 30)))
@@ -310,9 +336,14 @@ def main() -> None:
     print("\nThe exact optimum of the penalised reward (harms per episode, steps survived of 500):")
     for seed in SEEDS:
         q_before, q_after = exact_q_values(former_reward_map(seed)), exact_q_values(auxiliary_reward_map(seed, 25, 30))
-        shown = {name: "%.3f harms, %.1f steps" % shaped_optimum(penalty) for name, penalty in (
-            ("no penalty", 0.0 * penalties_after(q_after)), ("before", penalties_before(q_before)),
-            ("after", penalties_after(q_after)))}
+        shown = {
+            name: "%.3f harms, %.1f steps" % shaped_optimum(penalty)
+            for name, penalty in (
+                ("no penalty", 0.0 * penalties_after(q_after)),
+                ("before", penalties_before(q_before)),
+                ("after", penalties_after(q_after)),
+            )
+        }
         print(f"  seed {seed}: " + "; ".join(f"{name} {value}" for name, value in shown.items()))
 
 

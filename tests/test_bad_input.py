@@ -146,8 +146,7 @@ def test_vector_env_step_before_reset():
         ({ROBOT: (True, False)}, "pair of ints"),
         ([(0, 0)], "must map agent names"),
     ],
-    ids=["unknown agent", "row off grid", "negative col", "triple", "int", "str", "float", "None", "bools",
-         "list"],
+    ids=["unknown agent", "row off grid", "negative col", "triple", "int", "str", "float", "None", "bools", "list"],
 )
 def test_bad_positions_raise(module, positions, message):
     env = module.parallel_env()
@@ -184,9 +183,7 @@ def test_agent_on_a_battery_raises():
     with pytest.raises(ValueError, match=rf"{ROBOT} is placed on a battery at \(1, 1\)"):
         sharing_v0.parallel_env().reset(seed=0, options={"positions": {ROBOT: (1, 1)}})
     with pytest.raises(ValueError, match=rf"{HUMAN} is placed on a battery at \(0, 0\)"):
-        sharing_v0.parallel_env().reset(
-            seed=0, options={"positions": {HUMAN: (0, 0)}, "batteries": [(0, 0), (2, 2)]}
-        )
+        sharing_v0.parallel_env().reset(seed=0, options={"positions": {HUMAN: (0, 0)}, "batteries": [(0, 0), (2, 2)]})
     # with a custom layout, an odd cell without a battery is a fine start
     env = sharing_v0.parallel_env()
     env.reset(seed=0, options={"positions": {ROBOT: (1, 1)}, "batteries": [(0, 0)]})

@@ -27,8 +27,15 @@ def _filled(capacity: int, adds: int, seed: int = 0) -> StackedReplay:
     replay = StackedReplay(k, capacity, v, torch.device("cpu"))
     for _ in range(adds):
         obs = rng.integers(-1, 11, (k, 1, 3, v)).astype(np.float32)
-        replay.add(obs[:, :, 0], obs[:, :, 1], obs[:, :, 2], rng.integers(0, 5, (k, 1)),
-                   rng.normal(size=(k, 1)), rng.random((k, 1)) < 0.1, rng.random((k, 1)) < 0.9)
+        replay.add(
+            obs[:, :, 0],
+            obs[:, :, 1],
+            obs[:, :, 2],
+            rng.integers(0, 5, (k, 1)),
+            rng.normal(size=(k, 1)),
+            rng.random((k, 1)) < 0.1,
+            rng.random((k, 1)) < 0.9,
+        )
     return replay
 
 
@@ -75,8 +82,14 @@ def test_a_checkpoint_that_fails_mid_write_leaves_the_previous_one_and_no_tempor
 
 def _spec() -> RunSpec:
     """A run whose replay memory (100 transitions) is full long before its checkpoint at step 250."""
-    return RunSpec(env="coexistence_v0", seed=3, steps=500, eval_interval=250, eval_episodes=2,
-                   settings={"selfishness": 0.5, "learning_starts": 32, "replay_capacity": 100})
+    return RunSpec(
+        env="coexistence_v0",
+        seed=3,
+        steps=500,
+        eval_interval=250,
+        eval_episodes=2,
+        settings={"selfishness": 0.5, "learning_starts": 32, "replay_capacity": 100},
+    )
 
 
 def test_a_run_resumed_after_its_replay_memory_filled_ends_as_the_uninterrupted_run(tmp_path, monkeypatch) -> None:

@@ -31,8 +31,24 @@ def test_train_writes_a_result_file_with_the_schema(tmp_path, capsys):
     assert train(out, "--env", "sharing_v0", "--selfishness", "0.5", "--seed", "3") == 0
     [path] = run_files(out)
     result = json.loads(path.read_text())
-    for key in ("schema", "run_id", "env", "variant", "method", "method_label", "seed", "config", "steps",
-                "train", "eval", "memory_bytes", "wall_time_s", "version", "commit", "created"):
+    for key in (
+        "schema",
+        "run_id",
+        "env",
+        "variant",
+        "method",
+        "method_label",
+        "seed",
+        "config",
+        "steps",
+        "train",
+        "eval",
+        "memory_bytes",
+        "wall_time_s",
+        "version",
+        "commit",
+        "created",
+    ):
         assert key in result
     assert (result["env"], result["method"], result["seed"], result["steps"]) == ("sharing_v0", "empathic_dqn", 3, 300)
     assert result["method_label"] == "Empathic DQN (β=0.5)"
@@ -54,7 +70,8 @@ def parsed_values(*argv):
 
 def test_precedence_defaults_then_config_then_command_line(tmp_path):
     config = tmp_path / "run.toml"
-    config.write_text(textwrap.dedent("""
+    config.write_text(
+        textwrap.dedent("""
         env = "sharing_v0"
         steps = 5000
         seeds = [4, 5]
@@ -64,18 +81,25 @@ def test_precedence_defaults_then_config_then_command_line(tmp_path):
         selfishness = 0.25
         learning_rate = 0.002
         hidden_size = 64
-    """))
+    """)
+    )
     run, settings = parsed_values("--config", str(config))
     assert (run["env"], run["steps"], run["seeds"], run["method"]) == ("sharing_v0", 5000, [4, 5], "empathic_dqn")
     assert run["fixed"] == {"human_0": "stay"} and run["eval_interval"] == 50_000
     assert settings == {"selfishness": 0.25, "learning_rate": 0.002, "hidden_size": 64}
-    run, settings = parsed_values("--config", str(config), "--steps", "700", "--seed", "1", "--selfishness", "0.75",
-                                  "--gamma", "0.5")
+    run, settings = parsed_values(
+        "--config", str(config), "--steps", "700", "--seed", "1", "--selfishness", "0.75", "--gamma", "0.5"
+    )
     assert (run["env"], run["steps"], run["seeds"]) == ("sharing_v0", 700, [1])
     assert settings == {"selfishness": 0.75, "learning_rate": 0.002, "hidden_size": 64, "gamma": 0.5}
     run, settings = parsed_values()
     assert (run["env"], run["method"], run["seeds"], run["steps"], settings) == (
-        "coexistence_v0", "empathic_dqn", [0], 1_000_000, {})
+        "coexistence_v0",
+        "empathic_dqn",
+        [0],
+        1_000_000,
+        {},
+    )
 
 
 def test_config_file_is_applied_end_to_end(tmp_path):
@@ -102,14 +126,17 @@ def test_a_config_file_builds_a_fixed_agent_with_arguments(tmp_path, capsys):
     assert "takes no argument 'pace'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize(("content", "expected"), [
-    ("steps = 100\nfoo = 1\n", "top level: unknown key 'foo'; allowed keys: env, method"),
-    ("steps = 'many'\n", "steps: expected int, got str 'many'"),
-    ("[settings]\nselfishness = 'high'\n", "[settings] selfishness: expected float, got str 'high'"),
-    ("[settings]\nlearning_rat = 0.1\n", "[settings]: unknown key 'learning_rat'"),
-    ("seed = 1\nseeds = [2]\n", "give 'seed' or 'seeds', not both"),
-    ("steps = = 1\n", "not valid TOML"),
-])
+@pytest.mark.parametrize(
+    ("content", "expected"),
+    [
+        ("steps = 100\nfoo = 1\n", "top level: unknown key 'foo'; allowed keys: env, method"),
+        ("steps = 'many'\n", "steps: expected int, got str 'many'"),
+        ("[settings]\nselfishness = 'high'\n", "[settings] selfishness: expected float, got str 'high'"),
+        ("[settings]\nlearning_rat = 0.1\n", "[settings]: unknown key 'learning_rat'"),
+        ("seed = 1\nseeds = [2]\n", "give 'seed' or 'seeds', not both"),
+        ("steps = = 1\n", "not valid TOML"),
+    ],
+)
 def test_bad_config_file_exits_2_naming_file_and_key(tmp_path, capsys, content, expected):
     config = tmp_path / "bad.toml"
     config.write_text(content)
@@ -120,18 +147,21 @@ def test_bad_config_file_exits_2_naming_file_and_key(tmp_path, capsys, content, 
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize(("argv", "expected"), [
-    (["train", "--method", "no_such_method"], "unknown method 'no_such_method'"),
-    (["train", "--env", "chess_v0"], "unknown environment 'chess_v0'"),
-    (["train", "--method", "dqn", "--selfishness", "0.5"], "fixes selfishness=1.0"),
-    (["train", "--selfishness", "1.5"], "selfishness must be in [0, 1]"),
-    (["train", "--steps", "0"], "steps must be a positive int"),
-    (["train", "--fixed", "dog_0=stay"], "unknown agent(s) ['dog_0']"),
-    (["train", "--device", "tpu"], "--device 'tpu'"),
-    (["reproduce", "--profile", "no_such_profile"], "unknown profile 'no_such_profile'"),
-    (["leaderboard", "/nonexistent/results"], "does not exist"),
-    (["play", "--env", "chess_v0"], "unknown environment 'chess_v0'"),
-])
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["train", "--method", "no_such_method"], "unknown method 'no_such_method'"),
+        (["train", "--env", "chess_v0"], "unknown environment 'chess_v0'"),
+        (["train", "--method", "dqn", "--selfishness", "0.5"], "fixes selfishness=1.0"),
+        (["train", "--selfishness", "1.5"], "selfishness must be in [0, 1]"),
+        (["train", "--steps", "0"], "steps must be a positive int"),
+        (["train", "--fixed", "dog_0=stay"], "unknown agent(s) ['dog_0']"),
+        (["train", "--device", "tpu"], "--device 'tpu'"),
+        (["reproduce", "--profile", "no_such_profile"], "unknown profile 'no_such_profile'"),
+        (["leaderboard", "/nonexistent/results"], "does not exist"),
+        (["play", "--env", "chess_v0"], "unknown environment 'chess_v0'"),
+    ],
+)
 def test_bad_input_exits_2_with_a_message(tmp_path, capsys, argv, expected):
     argv = [*argv, "--out", str(tmp_path / "out")] if argv[0] in ("train", "reproduce") else argv
     assert main(argv) == 2
@@ -278,8 +308,20 @@ def test_corrupted_result_file_is_a_clear_error_and_left_alone(tmp_path, capsys)
 
 def test_train_takes_sharings_fidelity_options(tmp_path, capsys):
     out = tmp_path / "runs"
-    argv = ["train", "--env", "sharing_v0", "--start", "centre", "--inventory-encoding", "authors",
-            "--selfishness", "0.5", "--out", str(out), *TINY]
+    argv = [
+        "train",
+        "--env",
+        "sharing_v0",
+        "--start",
+        "centre",
+        "--inventory-encoding",
+        "authors",
+        "--selfishness",
+        "0.5",
+        "--out",
+        str(out),
+        *TINY,
+    ]
     assert main(argv) == 0
     (result,) = [json.loads(p.read_text()) for p in (out / "runs").glob("*.json")]
     assert result["config"]["env_kwargs"] == {"max_cycles": 50, "start": "centre", "inventory_encoding": "authors"}
@@ -292,8 +334,20 @@ def test_train_takes_sharings_fidelity_options(tmp_path, capsys):
 
 def test_train_takes_several_others_and_their_aggregation(tmp_path, capsys):
     out = tmp_path / "runs"
-    argv = ["train", "--env", "sharing_v0", "--num-humans", "2", "--others", "min", "--selfishness", "0.5",
-            "--out", str(out), *TINY]
+    argv = [
+        "train",
+        "--env",
+        "sharing_v0",
+        "--num-humans",
+        "2",
+        "--others",
+        "min",
+        "--selfishness",
+        "0.5",
+        "--out",
+        str(out),
+        *TINY,
+    ]
     assert main(argv) == 0
     (result,) = [json.loads(p.read_text()) for p in (out / "runs").glob("*.json")]
     assert result["config"]["env_kwargs"]["num_humans"] == 2 and result["config"]["settings"]["others"] == "min"

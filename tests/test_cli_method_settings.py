@@ -40,8 +40,9 @@ def trained_settings(out):
 
 def test_a_plugin_methods_own_setting_is_an_option(tmp_path):
     out = tmp_path / "out"
-    assert main(["train", "--method", AVERSE, "--aversion", "2", "--cautious", "--widths", "8", "4",
-                 "--out", str(out), *TINY]) == 0
+    assert (
+        main(["train", "--method", AVERSE, "--aversion", "2", "--cautious", "--widths", "8", "4", "--out", str(out), *TINY]) == 0
+    )
     settings = trained_settings(out)
     assert (settings["aversion"], settings["cautious"], settings["widths"]) == (2, True, [8, 4])
 
@@ -111,8 +112,9 @@ def test_another_methods_setting_is_refused_with_the_allowed_ones(tmp_path, caps
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("argv", [["--method", "no_such_method"], ["--method", "no_such_method", "--help"],
-                                  ["--config", "METHOD_FILE"]])
+@pytest.mark.parametrize(
+    "argv", [["--method", "no_such_method"], ["--method", "no_such_method", "--help"], ["--config", "METHOD_FILE"]]
+)
 def test_an_unknown_method_is_a_clean_error(tmp_path, capsys, argv):
     config = tmp_path / "run.toml"
     config.write_text('method = "no_such_method"\n')
@@ -133,7 +135,7 @@ def test_fields_no_option_can_read_are_config_keys(tmp_path, capsys):
     text = help_of(capsys, "--method", ODD)
     assert "in [settings] only: seed, extras" in text and "--rate FLOAT" in text
     config = tmp_path / "run.toml"
-    config.write_text('[settings]\nseed = 4\nextras = { depth = 2 }\n')
+    config.write_text("[settings]\nseed = 4\nextras = { depth = 2 }\n")
     run, settings = values("--method", ODD, "--config", str(config), "--seed", "7", "--rate", "0.5")
     assert run["seeds"] == [7]  # --seed is the run's
     assert settings == {"seed": 4, "extras": {"depth": 2}, "rate": 0.5}
@@ -142,7 +144,11 @@ def test_fields_no_option_can_read_are_config_keys(tmp_path, capsys):
 def test_the_console_script_and_python_dash_m_run_the_command_line():
     [script] = entry_points(group="console_scripts", name="empathy-zoo")
     assert script.load() is main
-    done = subprocess.run([sys.executable, "-m", "empathy_zoo.cli", "train", "--method", "dqn", "--help"],
-                          capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "empathy_zoo.cli", "train", "--method", "dqn", "--help"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr
     assert "settings dqn fixes" in done.stdout and "--selfishness" in done.stdout

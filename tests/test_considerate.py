@@ -23,13 +23,27 @@ from empathy_zoo.cli import main
 from empathy_zoo.result_file import read_result
 
 V = 25
-SMALL = Considerate(caring=2.0, discount=0.5, learning_starts=8, bonus_starts=16, train_interval=1, batch_size=8,
-                    replay_capacity=64, target_update_interval=20, hidden_size=16)
+SMALL = Considerate(
+    caring=2.0,
+    discount=0.5,
+    learning_starts=8,
+    bonus_starts=16,
+    train_interval=1,
+    batch_size=8,
+    replay_capacity=64,
+    target_update_interval=20,
+    hidden_size=16,
+)
 SMALL_CONSIDERATE = Method(
-    name="dqn_considerate_small", learner=EmpathicDQN, settings=EmpathicDQNSettings, preset={"selfishness": 1.0},
-    reward=Considerate(learning_starts=32, bonus_starts=64, train_interval=1, replay_capacity=500,
-                       target_update_interval=50, hidden_size=16),
-    label=lambda s: "DQN + Be Considerate (small)", description="Be Considerate whose value learner starts after 32 steps",
+    name="dqn_considerate_small",
+    learner=EmpathicDQN,
+    settings=EmpathicDQNSettings,
+    preset={"selfishness": 1.0},
+    reward=Considerate(
+        learning_starts=32, bonus_starts=64, train_interval=1, replay_capacity=500, target_update_interval=50, hidden_size=16
+    ),
+    label=lambda s: "DQN + Be Considerate (small)",
+    description="Be Considerate whose value learner starts after 32 steps",
 )
 
 
@@ -39,9 +53,15 @@ def one_hot(index: int) -> np.ndarray:
     return cell
 
 
-def step(other_obs: np.ndarray, *, rewards: list[float] | None = None, other_rewards: list[float] | None = None,
-         present: list[bool] | None = None, terminated: list[bool] | None = None,
-         truncated: list[bool] | None = None) -> StepBatch:
+def step(
+    other_obs: np.ndarray,
+    *,
+    rewards: list[float] | None = None,
+    other_rewards: list[float] | None = None,
+    present: list[bool] | None = None,
+    terminated: list[bool] | None = None,
+    truncated: list[bool] | None = None,
+) -> StepBatch:
     """One step of K runs × 1 environment in which the other agent is seen as ``other_obs`` (K, V)."""
     k = other_obs.shape[0]
 
@@ -50,11 +70,18 @@ def step(other_obs: np.ndarray, *, rewards: list[float] | None = None, other_rew
 
     zeros = np.zeros((k, 1))
     return StepBatch(
-        obs=np.zeros((k, 1, V), dtype=np.float32), actions=np.zeros((k, 1), dtype=np.int64),
-        rewards=column(rewards, 1.0, np.float32), terminated=column(terminated, False, bool),
-        next_obs=np.zeros((k, 1, V), dtype=np.float32), swapped_next_obs=other_obs.reshape(k, 1, V).astype(np.float32),
-        other_present=column(present, True, bool), harmed_other=zeros, battery_return=zeros, other_battery_return=zeros,
-        truncated=column(truncated, False, bool), other_rewards=column(other_rewards, 1.0, np.float32),
+        obs=np.zeros((k, 1, V), dtype=np.float32),
+        actions=np.zeros((k, 1), dtype=np.int64),
+        rewards=column(rewards, 1.0, np.float32),
+        terminated=column(terminated, False, bool),
+        next_obs=np.zeros((k, 1, V), dtype=np.float32),
+        swapped_next_obs=other_obs.reshape(k, 1, V).astype(np.float32),
+        other_present=column(present, True, bool),
+        harmed_other=zeros,
+        battery_return=zeros,
+        other_battery_return=zeros,
+        truncated=column(truncated, False, bool),
+        other_rewards=column(other_rewards, 1.0, np.float32),
     )
 
 
@@ -81,8 +108,7 @@ def test_the_bonus_is_discount_times_caring_times_the_sum_or_the_min_of_the_othe
 def test_the_bonus_is_paid_on_the_last_step_of_an_episode_only_and_only_after_the_warm_up() -> None:
     state = SMALL.initial_state(4, 1, seeds=[0, 1, 2, 3])
     obs = np.stack([one_hot(i) for i in range(4)])
-    ended = dict(terminated=[True, False, True, False], truncated=[False, True, False, False],
-                 present=[True, True, False, True])
+    ended = dict(terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True])
     shaped, state = SMALL(step(obs, **ended), state)
     assert shaped[:, 0].tolist() == [1.0] * 4  # before bonus_starts: the environment's reward
     state["seen"][...] = SMALL.bonus_starts
@@ -96,8 +122,17 @@ def test_the_value_is_learnt_from_the_other_agents_rewards_not_the_robots() -> N
     # the other agent cycles a → b → a …, earning 1 on arriving in b and 0 in a; with γ = 0.5:
     # V(a) = 1 + γ·V(b), V(b) = γ·V(a), so V(a) = 4/3 and V(b) = 2/3
     a, b = one_hot(0), one_hot(1)
-    learner = Considerate(discount=0.5, learning_starts=16, bonus_starts=17, train_interval=1, batch_size=16,
-                          replay_capacity=64, target_update_interval=25, hidden_size=16, learning_rate=3e-3)
+    learner = Considerate(
+        discount=0.5,
+        learning_starts=16,
+        bonus_starts=17,
+        train_interval=1,
+        batch_size=16,
+        replay_capacity=64,
+        target_update_interval=25,
+        hidden_size=16,
+        learning_rate=3e-3,
+    )
     state = learner.initial_state(1, 1, seeds=[3])
     for i in range(1_500):
         into_b = i % 2 == 1
@@ -129,8 +164,12 @@ def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs_and_repeat_with_
         mine = []
         for t in range(SMALL.bonus_starts + 60):
             obs = rng.integers(-1, 2, (3, V)).astype(np.float32)[:rows]
-            batch = step(obs, other_rewards=rng.random(3)[:rows].tolist(), terminated=[t % 7 == 6] * rows,
-                         present=(rng.random(3) > 0.2)[:rows].tolist())
+            batch = step(
+                obs,
+                other_rewards=rng.random(3)[:rows].tolist(),
+                terminated=[t % 7 == 6] * rows,
+                present=(rng.random(3) > 0.2)[:rows].tolist(),
+            )
             mine.append(float(rewards(batch).rewards[0, 0]))
         return mine
 
@@ -149,8 +188,17 @@ def test_several_other_agents_are_refused_naming_the_problem() -> None:
         SMALL(batch, state)
 
 
-@pytest.mark.parametrize("field, value", [("caring", -1.0), ("aggregate", "mean"), ("discount", 1.0),
-                                          ("bonus_starts", 8), ("replay_capacity", 4), ("train_interval", 0)])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("caring", -1.0),
+        ("aggregate", "mean"),
+        ("discount", 1.0),
+        ("bonus_starts", 8),
+        ("replay_capacity", 4),
+        ("train_interval", 0),
+    ],
+)
 def test_bad_parameters_are_refused_naming_them(field: str, value) -> None:
     with pytest.raises(ValueError, match=field):
         Considerate(**{field: value}) if field != "bonus_starts" else Considerate(learning_starts=8, bonus_starts=value)
@@ -160,15 +208,34 @@ def test_a_resumed_considerate_run_equals_an_uninterrupted_one_and_differs_from_
     from empathy_zoo.training import RunnerOptions, train_runs
     from empathy_zoo.training.spec import RunSpec
 
-    settings = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50,
-                "hidden_size": 16}
-    spec = RunSpec(env="coexistence_v0", method="test_considerate:SMALL_CONSIDERATE", steps=600, eval_interval=300,
-                   eval_episodes=2, settings=settings, env_kwargs={"max_cycles": 40})
+    settings = {
+        "learning_starts": 64,
+        "replay_capacity": 1_000,
+        "epsilon_decay_steps": 300,
+        "target_update_interval": 50,
+        "hidden_size": 16,
+    }
+    spec = RunSpec(
+        env="coexistence_v0",
+        method="test_considerate:SMALL_CONSIDERATE",
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings=settings,
+        env_kwargs={"max_cycles": 40},
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"]["name"] == "considerate" and resumed["config"]["reward"]["bonus_starts"] == 64
-    dqn = RunSpec(env="coexistence_v0", method="dqn", steps=600, eval_interval=300, eval_episodes=2, settings=settings,
-                  env_kwargs={"max_cycles": 40})
+    dqn = RunSpec(
+        env="coexistence_v0",
+        method="dqn",
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings=settings,
+        env_kwargs={"max_cycles": 40},
+    )
     plain = json.loads(train_runs([dqn], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
     assert plain["eval"] != whole["eval"]  # the bonus was paid (from step 64), and changed what was learnt
 
@@ -176,11 +243,33 @@ def test_a_resumed_considerate_run_equals_an_uninterrupted_one_and_differs_from_
 @pytest.mark.parametrize("env", ["coexistence_v0", "sharing_v0"])
 def test_the_method_trains_through_the_command_line(tmp_path, env) -> None:
     out = tmp_path / "out"
-    assert main(["train", "--method", "dqn_considerate", "--env", env, "--caring", "0.5", "--bonus-starts", "100",
-                 "--reward-learning-starts", "50", "--reward-replay-capacity", "200", "--out", str(out), *TINY]) == 0
+    assert (
+        main(
+            [
+                "train",
+                "--method",
+                "dqn_considerate",
+                "--env",
+                env,
+                "--caring",
+                "0.5",
+                "--bonus-starts",
+                "100",
+                "--reward-learning-starts",
+                "50",
+                "--reward-replay-capacity",
+                "200",
+                "--out",
+                str(out),
+                *TINY,
+            ]
+        )
+        == 0
+    )
     [path] = (out / "runs").glob("*.json")
     result = read_result(path)
     assert result["config"]["reward"]["caring"] == 0.5 and result["config"]["reward"]["learning_starts"] == 50
-    assert result["method_label"] == ("DQN + Be Considerate (caring=0.5, reward.replay_capacity=200, "
-                                      "reward.learning_starts=50, bonus_starts=100)")  # in the fields' order
+    assert result["method_label"] == (
+        "DQN + Be Considerate (caring=0.5, reward.replay_capacity=200, reward.learning_starts=50, bonus_starts=100)"
+    )  # in the fields' order
     assert result["train"]["survival"] and result["eval"]

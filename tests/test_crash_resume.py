@@ -26,15 +26,28 @@ RUNS = 8
 """2 envs × 2 methods × 2 seeds, in 4 ensembles of 2 runs."""
 HOOKS = {"step": 2600, "checkpoint": 16, "result": 8, "replace": 30, "fsync": 30, "manifest": 4}
 """Where a kill may come, and how many passes there are at most in one uninterrupted sweep."""
-COMPARED = ("run_id", "env", "variant", "method", "method_label", "seed", "steps", "config", "train", "eval",
-            "memory_bytes")
+COMPARED = ("run_id", "env", "variant", "method", "method_label", "seed", "steps", "config", "train", "eval", "memory_bytes")
 """The fields of a result file that must not depend on kills (not its wall time or creation time)."""
 HELPER = Path(__file__).with_name("helpers_crash.py")
 
 
 def argv(sweep: Path, out: Path) -> list[str]:
-    return ["reproduce", "--profile", str(sweep), "--out", str(out), "--no-progress", "--workers", "1",
-            "--threads", "1", "--checkpoint-interval", "50", "--max-parallel-runs", "2"]
+    return [
+        "reproduce",
+        "--profile",
+        str(sweep),
+        "--out",
+        str(out),
+        "--no-progress",
+        "--workers",
+        "1",
+        "--threads",
+        "1",
+        "--checkpoint-interval",
+        "50",
+        "--max-parallel-runs",
+        "2",
+    ]
 
 
 def contents(out: Path) -> dict[str, dict]:
@@ -70,8 +83,13 @@ def crash_and_resume(tmp_path: Path, seed: int, kills: int) -> dict:
     plans = [kill_plan(rng) for _ in range(kills)] + [{}]
     killed = []
     for plan in plans:
-        done = subprocess.run([sys.executable, str(HELPER), json.dumps(plan), *argv(tmp_path / "sweep.toml", out)],
-                              capture_output=True, text=True, cwd=tmp_path, timeout=600)
+        done = subprocess.run(
+            [sys.executable, str(HELPER), json.dumps(plan), *argv(tmp_path / "sweep.toml", out)],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+            timeout=600,
+        )
         if done.returncode == -signal.SIGKILL:
             killed.append(plan)
             continue
@@ -96,8 +114,10 @@ def test_a_sweep_killed_at_seeded_moments_resumes_to_the_uninterrupted_results(t
     outcome = crash_and_resume(tmp_path, seed, kills=4)
     assert outcome["killed"], "no kill fired: the plans miss the sweep"
     check_nothing_lost(outcome["out"], reference)
-    print(f"\ncrash test, seed {seed}: {len(outcome['killed'])} kill(s) {outcome['killed']}, "
-          f"{outcome['attempts']} attempts, {RUNS} result files compared")
+    print(
+        f"\ncrash test, seed {seed}: {len(outcome['killed'])} kill(s) {outcome['killed']}, "
+        f"{outcome['attempts']} attempts, {RUNS} result files compared"
+    )
 
 
 @pytest.mark.slow
@@ -105,5 +125,7 @@ def test_a_sweep_killed_at_seeded_moments_resumes_to_the_uninterrupted_results(t
 def test_a_sweep_killed_at_many_seeded_moments_resumes_to_the_uninterrupted_results(tmp_path, reference, seed):
     outcome = crash_and_resume(tmp_path, seed, kills=8)
     check_nothing_lost(outcome["out"], reference)
-    print(f"\ncrash test, seed {seed}: {len(outcome['killed'])} kill(s) {outcome['killed']}, "
-          f"{outcome['attempts']} attempts, {RUNS} result files compared")
+    print(
+        f"\ncrash test, seed {seed}: {len(outcome['killed'])} kill(s) {outcome['killed']}, "
+        f"{outcome['attempts']} attempts, {RUNS} result files compared"
+    )

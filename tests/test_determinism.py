@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
 
 MODULES = [coexistence_v0, sharing_v0]
@@ -60,8 +60,7 @@ def same(a: list, b: list) -> bool:
         return False
     for x, y in zip(flat_a, flat_b):
         if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-            if not (isinstance(x, np.ndarray) and isinstance(y, np.ndarray) and x.dtype == y.dtype
-                    and np.array_equal(x, y)):
+            if not (isinstance(x, np.ndarray) and isinstance(y, np.ndarray) and x.dtype == y.dtype and np.array_equal(x, y)):
                 return False
         elif x != y or type(x) is not type(y):
             return False
@@ -142,8 +141,7 @@ def lockstep(module, fixed: dict | None, seeds: list[int], steps: int, action_se
         out = vector.step(actions)
         for i, env in enumerate(envs):
             live = list(env.agents)
-            obs, rew, term, trunc, _ = env.step({agent: int(actions[i, k]) for k, agent in enumerate(learners)
-                                                 if agent in live})
+            obs, rew, term, trunc, _ = env.step({agent: int(actions[i, k]) for k, agent in enumerate(learners) if agent in live})
             for k, agent in enumerate(learners):
                 column = columns[k]
                 if agent in live:
@@ -191,8 +189,7 @@ SEVERAL = [(coexistence_v0, {"num_cats": 3}), (sharing_v0, {"num_humans": 2})]
 def test_vector_env_equals_parallel_envs_with_several_others(module, env_kwargs):
     (policy,) = DEFAULT_POLICIES[env_name(module)].values()
     others = module.parallel_env(**env_kwargs).possible_agents[1:]
-    finished = lockstep(module, {agent: policy for agent in others}, seeds=[0, 1, 17], steps=1000, action_seed=9,
-                        **env_kwargs)
+    finished = lockstep(module, {agent: policy for agent in others}, seeds=[0, 1, 17], steps=1000, action_seed=9, **env_kwargs)
     assert finished >= 3
 
 

@@ -10,10 +10,10 @@ import torch
 
 from agents.base import StepBatch
 from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
-from baselines.registry import get_method
 from agents.replay import StackedReplay
-from agents.settings import EmpathicDQNSettings
 from agents.rewards import with_train_rewards
+from agents.settings import EmpathicDQNSettings
+from baselines.registry import get_method
 from baselines.shaping import HARM_PENALTY, EqualityScaling, HarmPenalty
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
@@ -31,7 +31,13 @@ def test_targets_on_a_hand_made_batch() -> None:
     q_swapped_target = torch.tensor([[[1.0, 4.0], [2.0, -1.0], [8.0, 0.0], [100.0, 100.0]]])
     other_present = torch.tensor([[True, True, True, False]])
     y, y_emp = empathic_targets(
-        reward, terminated, q_next_online, q_next_target, q_swapped_target, other_present, gamma,
+        reward,
+        terminated,
+        q_next_online,
+        q_next_target,
+        q_swapped_target,
+        other_present,
+        gamma,
         torch.tensor([[beta]]),
     )
     expected_y = [1.0 + 0.9 * 20.0, 0.0, 1.0 + 0.9 * 50.0, 2.0 + 0.9 * -3.0]
@@ -42,8 +48,9 @@ def test_targets_on_a_hand_made_batch() -> None:
 
 def test_beta_one_target_ignores_the_other() -> None:
     args = [torch.rand(2, 8, 5) for _ in range(3)]
-    y, y_emp = empathic_targets(torch.rand(2, 8), torch.zeros(2, 8, dtype=torch.bool), *args,
-                                torch.ones(2, 8, dtype=torch.bool), 0.99, torch.ones(2, 1))
+    y, y_emp = empathic_targets(
+        torch.rand(2, 8), torch.zeros(2, 8, dtype=torch.bool), *args, torch.ones(2, 8, dtype=torch.bool), 0.99, torch.ones(2, 1)
+    )
     assert torch.equal(y, y_emp)
 
 
@@ -55,12 +62,20 @@ def _random_batches(count: int, k: int, seed: int, swapped_noise: bool = False) 
         obs = np.repeat(rng.integers(-1, 2, (1, 1, 25)).astype(np.float32), k, 0)
         nxt = np.repeat(rng.integers(-1, 2, (1, 1, 25)).astype(np.float32), k, 0)
         swapped = other.integers(-1, 2, (k, 1, 25)).astype(np.float32) if swapped_noise else nxt
-        out.append(StepBatch(
-            obs=obs, actions=np.repeat(rng.integers(0, 5, (1, 1)), k, 0), rewards=np.repeat(rng.random((1, 1)), k, 0),
-            terminated=np.repeat(rng.random((1, 1)) < 0.1, k, 0), next_obs=nxt, swapped_next_obs=swapped,
-            other_present=np.ones((k, 1), bool), harmed_other=np.zeros((k, 1)),
-            battery_return=np.zeros((k, 1)), other_battery_return=np.zeros((k, 1)),
-        ))
+        out.append(
+            StepBatch(
+                obs=obs,
+                actions=np.repeat(rng.integers(0, 5, (1, 1)), k, 0),
+                rewards=np.repeat(rng.random((1, 1)), k, 0),
+                terminated=np.repeat(rng.random((1, 1)) < 0.1, k, 0),
+                next_obs=nxt,
+                swapped_next_obs=swapped,
+                other_present=np.ones((k, 1), bool),
+                harmed_other=np.zeros((k, 1)),
+                battery_return=np.zeros((k, 1)),
+                other_battery_return=np.zeros((k, 1)),
+            )
+        )
     return out
 
 
@@ -108,14 +123,15 @@ def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
     for run, beta in enumerate(betas):
         solo = m.learner([m.make_settings({**TINY, "selfishness": beta})], [run], 25)
         for batch in batches:
-            solo.observe(StepBatch(**{name: (None if value is None else value[run:run + 1])
-                                      for name, value in vars(batch).items()}))
+            solo.observe(
+                StepBatch(**{name: (None if value is None else value[run : run + 1]) for name, value in vars(batch).items()})
+            )
         heads = [run] + ([len(betas) + [1, 3].index(run)] if beta < 1 else [])
         for mine, alone in zip(mixed.online, solo.online):
             assert torch.equal(mine[heads], alone)
-        solo_values = solo.q_values(probe[run:run + 1])[0]
+        solo_values = solo.q_values(probe[run : run + 1])[0]
         assert torch.equal(acting[run], solo_values)
-        own = solo.q_values(probe[run:run + 1], "self")[0]
+        own = solo.q_values(probe[run : run + 1], "self")[0]
         assert torch.equal(solo_values, own) == (beta == 1.0)  # β = 1 acts on Q itself
 
 
@@ -172,10 +188,16 @@ def test_settings_reject_bad_values_and_presets_cannot_be_overridden() -> None:
 def test_reward_transforms_shape_only_the_rows_of_their_runs() -> None:
     k = 3
     batch = StepBatch(
-        obs=np.zeros((k, 1, 25)), actions=np.zeros((k, 1), int), rewards=np.full((k, 1), 0.9, dtype=np.float32),
-        terminated=np.zeros((k, 1), bool), next_obs=np.zeros((k, 1, 25)), swapped_next_obs=np.zeros((k, 1, 25)),
-        other_present=np.ones((k, 1), bool), harmed_other=np.ones((k, 1)),
-        battery_return=np.full((k, 1), 1.9), other_battery_return=np.full((k, 1), 1.0),
+        obs=np.zeros((k, 1, 25)),
+        actions=np.zeros((k, 1), int),
+        rewards=np.full((k, 1), 0.9, dtype=np.float32),
+        terminated=np.zeros((k, 1), bool),
+        next_obs=np.zeros((k, 1, 25)),
+        swapped_next_obs=np.zeros((k, 1, 25)),
+        other_present=np.ones((k, 1), bool),
+        harmed_other=np.ones((k, 1)),
+        battery_return=np.full((k, 1), 1.9),
+        other_battery_return=np.full((k, 1), 1.0),
     )
     shaped = with_train_rewards(batch, [None, HarmPenalty(), EqualityScaling()])
     assert shaped.rewards.dtype == np.float32 and batch.rewards[:, 0].tolist() == [np.float32(0.9)] * 3  # a copy
@@ -188,8 +210,15 @@ def test_reward_transforms_shape_only_the_rows_of_their_runs() -> None:
 
 
 def _spec(**kw) -> RunSpec:
-    base = dict(env="coexistence_v0", method="empathic_dqn", settings={**TINY, "selfishness": 0.5}, seed=0,
-                steps=600, eval_interval=300, eval_episodes=2)
+    base = dict(
+        env="coexistence_v0",
+        method="empathic_dqn",
+        settings={**TINY, "selfishness": 0.5},
+        seed=0,
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+    )
     return RunSpec(**{**base, **kw})
 
 
@@ -240,5 +269,5 @@ def test_exact_forward_is_the_same_alone_or_stacked(rows: int) -> None:
     x = torch.rand(k, rows, 25, generator=torch.Generator().manual_seed(99))
     stacked = StackedMLP.forward_exact(params, x)
     for run in range(k):
-        assert torch.equal(stacked[run], StackedMLP.forward_exact([p[run:run + 1] for p in params], x[run:run + 1])[0])
+        assert torch.equal(stacked[run], StackedMLP.forward_exact([p[run : run + 1] for p in params], x[run : run + 1])[0])
     torch.testing.assert_close(stacked, StackedMLP.forward(params, x), rtol=1e-5, atol=1e-5)

@@ -22,8 +22,9 @@ def test_every_view_agrees_with_the_table(name: str) -> None:
 
 
 def test_the_views_hold_the_table_s_environments_only() -> None:
-    assert set(ENGINES) == set(DEFAULT_POLICIES) == set(GYM_IDS.values()) == set(empathy_zoo.ENVIRONMENTS) == set(
-        ENVIRONMENT_TABLE)
+    assert (
+        set(ENGINES) == set(DEFAULT_POLICIES) == set(GYM_IDS.values()) == set(empathy_zoo.ENVIRONMENTS) == set(ENVIRONMENT_TABLE)
+    )
     with pytest.raises(ValueError, match="unknown environment 'atlantis_v0'"):
         face_module("atlantis_v0")
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from empathy_zoo import ENVIRONMENTS, FixedAgents
-from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.vector import VectorEnv
 
 

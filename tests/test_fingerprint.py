@@ -16,8 +16,7 @@ import pytest
 
 from empathy_zoo.provenance import package_version
 from empathy_zoo.result_file import ResultFileError, check_result, read_result
-from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training import fingerprint, runner
+from empathy_zoo.training import RunnerOptions, fingerprint, runner, train_runs
 from empathy_zoo.training.fingerprint import CodeFingerprint, module_sha256, plugin_names
 from empathy_zoo.training.results import write_result
 from empathy_zoo.training.spec import RunSpec
@@ -108,8 +107,10 @@ def test_an_edited_plugin_method_is_refused_then_retrained_on_request(write_plug
         train_runs([spec], out, OPTIONS)
     message = str(refused.value)
     assert spec.run_id in message
-    assert (f"plug-in module {MODULE} changed since these results were made "
-            f"(source hash {sha256(SOURCE)[:12]}… → {sha256(EDITED)[:12]}…)") in message
+    assert (
+        f"plug-in module {MODULE} changed since these results were made "
+        f"(source hash {sha256(SOURCE)[:12]}… → {sha256(EDITED)[:12]}…)"
+    ) in message
     assert "--out" in message and "delete those result files" in message and "rerun_changed=True" in message
     assert files_below(out) == before, "a refused call changes nothing"
 
@@ -221,12 +222,19 @@ def test_a_set_aside_file_is_put_back_when_its_run_fails(finished_dqn, tmp_path,
 
 
 def test_fixed_policies_by_module_path_are_fingerprinted_in_either_form():
-    spec = types.SimpleNamespace(method="dqn", fixed_policies=lambda: {
-        "cat_0": "helpers_policies:AlwaysLeft", "cat_1": {"policy": "helpers_crash:Crash", "speed": 2},
-        "human_0": "patrol", "human_1": {"policy": "random_walk"},
-    })
-    assert plugin_names(spec) == {"helpers_policies": ("helpers_policies:AlwaysLeft", "fixed policy"),
-                                  "helpers_crash": ("helpers_crash:Crash", "fixed policy")}
+    spec = types.SimpleNamespace(
+        method="dqn",
+        fixed_policies=lambda: {
+            "cat_0": "helpers_policies:AlwaysLeft",
+            "cat_1": {"policy": "helpers_crash:Crash", "speed": 2},
+            "human_0": "patrol",
+            "human_1": {"policy": "random_walk"},
+        },
+    )
+    assert plugin_names(spec) == {
+        "helpers_policies": ("helpers_policies:AlwaysLeft", "fixed policy"),
+        "helpers_crash": ("helpers_crash:Crash", "fixed policy"),
+    }
     spec = types.SimpleNamespace(method="dqn", fixed_policies=lambda: {"cat_0": {"speed": 2}})
     with pytest.raises(ValueError, match="missing key 'policy'"):
         plugin_names(spec)
@@ -241,8 +249,7 @@ def test_a_module_without_a_file_has_no_hash():
 def test_a_plugin_without_a_file_cannot_be_told_and_the_commit_never_counts():
     now = CodeFingerprint("0.1.0", "0123abc", {"built": None, "edited": sha256("new")})
     made = CodeFingerprint("0.1.0", "4567def-dirty", {"built": None, "edited": sha256("new")})
-    assert now.changes_since(made) == ([], ["plug-in module built has no source file to hash: whether it changed "
-                                            "cannot be told"])
+    assert now.changes_since(made) == ([], ["plug-in module built has no source file to hash: whether it changed cannot be told"])
     made = CodeFingerprint("0.1.0", "0123abc", {"built": sha256("old"), "edited": sha256("old")})
     changed, unknown = now.changes_since(made)
     assert [reason.split(" (")[0] for reason in changed] == ["plug-in module edited changed since these results were made"]
@@ -268,9 +275,23 @@ def test_the_command_line_refuses_results_of_other_code_or_retrains_them_with_re
     out, path = copy_of(finished_dqn, tmp_path)
     made = json.loads(path.read_text())
     monkeypatch.setattr(fingerprint, "package_version", lambda: "99.0.0")
-    argv = ["train", "--method", "dqn", "--steps", "300", "--eval-interval", "150", "--eval-episodes", "2",
-            "--out", str(out), "--checkpoint-interval", "0", "--no-progress",
-            *[f"--{key.replace('_', '-')}={value}" for key, value in TINY.items()]]
+    argv = [
+        "train",
+        "--method",
+        "dqn",
+        "--steps",
+        "300",
+        "--eval-interval",
+        "150",
+        "--eval-episodes",
+        "2",
+        "--out",
+        str(out),
+        "--checkpoint-interval",
+        "0",
+        "--no-progress",
+        *[f"--{key.replace('_', '-')}={value}" for key, value in TINY.items()],
+    ]
     assert main(argv) == 2
     assert "made by empathy-zoo" in capsys.readouterr().err and json.loads(path.read_text()) == made
     assert main([*argv, "--rerun-changed"]) == 0

@@ -23,8 +23,10 @@ from empathy_zoo.training.sweep import SweepConfigError, parse_sweep
 from empathy_zoo.vector import VectorEnv
 
 HELPERS = Recorder.__module__  # "helpers_policies", importable because pytest puts tests/ on the path
-FIXED = {"coexistence_v0": ("cat_0", coexistence_v0, {"harmed_by", "harmed"}),
-         "sharing_v0": ("human_0", sharing_v0, {"batteries"})}
+FIXED = {
+    "coexistence_v0": ("cat_0", coexistence_v0, {"harmed_by", "harmed"}),
+    "sharing_v0": ("human_0", sharing_v0, {"batteries"}),
+}
 """Per environment: the fixed agent, the module, and the keys of its ``infos`` entry."""
 RECORDERS = [f"{HELPERS}:Recorder", f"{HELPERS}:RecorderWithState"]
 
@@ -84,8 +86,15 @@ def test_training_gives_the_policy_the_same_contexts_as_fixed_agents(tmp_path, m
 
     monkeypatch.setattr(ensemble, "VectorEnv", Watched)
     policy = f"{HELPERS}:RecorderWithState"
-    spec = RunSpec(settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8}, seed=2, steps=120,
-                   eval_interval=120, eval_episodes=1, fixed={"cat_0": policy}, env_kwargs={"max_cycles": 30})
+    spec = RunSpec(
+        settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8},
+        seed=2,
+        steps=120,
+        eval_interval=120,
+        eval_episodes=1,
+        fixed={"cat_0": policy},
+        env_kwargs={"max_cycles": 30},
+    )
     train_runs([spec], tmp_path, RunnerOptions(progress=False, checkpoint_interval=50))
     [venv] = built
     [trained] = venv.fixed[venv.agents.index("cat_0")].copies
@@ -167,14 +176,17 @@ def test_a_run_spec_with_arguments_keeps_its_id_through_its_record():
     assert RunSpec(**record).run_id == spec.run_id
 
 
-@pytest.mark.parametrize("entry, names", [
-    (f'{{ policy = "{HELPERS}:Chaser", speed = 2 }}', ["takes no argument 'speed'", "its arguments: target, every"]),
-    ("{ every = 2 }", ["missing key 'policy'"]),
-    ("{ policy = 3 }", ["'policy' must be a policy name"]),
-    (f'{{ policy = "{HELPERS}:Chaser", every = 0 }}', ["every must be positive"]),
-    (f'{{ policy = "{HELPERS}:Chaser", every = 1979-05-27 }}', ["argument 'every'", "datetime.date"]),
-    ('{ policy = "teleport", every = 2 }', ["unknown fixed policy 'teleport'"]),
-])
+@pytest.mark.parametrize(
+    "entry, names",
+    [
+        (f'{{ policy = "{HELPERS}:Chaser", speed = 2 }}', ["takes no argument 'speed'", "its arguments: target, every"]),
+        ("{ every = 2 }", ["missing key 'policy'"]),
+        ("{ policy = 3 }", ["'policy' must be a policy name"]),
+        (f'{{ policy = "{HELPERS}:Chaser", every = 0 }}', ["every must be positive"]),
+        (f'{{ policy = "{HELPERS}:Chaser", every = 1979-05-27 }}', ["argument 'every'", "datetime.date"]),
+        ('{ policy = "teleport", every = 2 }', ["unknown fixed policy 'teleport'"]),
+    ],
+)
 def test_bad_arguments_name_file_table_and_key(entry, names):
     with pytest.raises(SweepConfigError) as refused:
         sweep(f"{{ cat_0 = {entry} }}")

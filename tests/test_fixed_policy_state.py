@@ -21,8 +21,13 @@ from empathy_zoo.vector import VectorEnv
 
 HELPERS = Wanderer.__module__  # "helpers_policies", importable because pytest puts tests/ on the path
 CAT = "cat_0"
-SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8, "target_update_interval": 50,
-            "epsilon_decay_steps": 200}
+SETTINGS = {
+    "learning_starts": 32,
+    "replay_capacity": 300,
+    "hidden_size": 8,
+    "target_update_interval": 50,
+    "epsilon_decay_steps": 200,
+}
 UNSTAMPED = ("wall_time_s", "created")
 """Fields of a result file that tell when it was written, not what was trained."""
 
@@ -33,12 +38,15 @@ class Killed(Exception):
 
 def sweep(policy: str = f"{HELPERS}:Wanderer"):
     """Two seeds of Empathic DQN (β = 0.5) on Coexistence with ``policy`` as the cat, built with an argument."""
-    return parse_sweep({
-        "sweep": {"seeds": 2, "steps": 300, "eval_interval": 150, "eval_episodes": 2},
-        "settings": SETTINGS,
-        "envs": {"coexistence_v0": {"max_cycles": 40, "fixed": {CAT: {"policy": policy, "repeat": 0.25}}}},
-        "methods": [{"method": "empathic_dqn", "selfishness": 0.5}],
-    }, source="stateful.toml")
+    return parse_sweep(
+        {
+            "sweep": {"seeds": 2, "steps": 300, "eval_interval": 150, "eval_episodes": 2},
+            "settings": SETTINGS,
+            "envs": {"coexistence_v0": {"max_cycles": 40, "fixed": {CAT: {"policy": policy, "repeat": 0.25}}}},
+            "methods": [{"method": "empathic_dqn", "selfishness": 0.5}],
+        },
+        source="stateful.toml",
+    )
 
 
 def options(checkpoint_interval: int = 100) -> RunnerOptions:
@@ -84,18 +92,25 @@ def test_a_policy_that_saves_no_state_is_refused_with_checkpoints_and_trains_wit
     with pytest.raises(ValueError) as refused:
         train_runs(runs, tmp_path / "with", options(100))
     message = str(refused.value)
-    for part in (f"{HELPERS}:WandererWithoutState", CAT, "state()", "load_state", "stateless = True",
-                 "--checkpoint-interval 0"):
+    for part in (f"{HELPERS}:WandererWithoutState", CAT, "state()", "load_state", "stateless = True", "--checkpoint-interval 0"):
         assert part in message, message
     assert not list((tmp_path / "with").rglob("*.json")) and not list((tmp_path / "with").rglob("*.pt"))
     paths = train_runs(runs, tmp_path / "without", options(0))
     assert len(paths) == 2 and all(p.exists() for p in paths)
 
 
-@pytest.mark.parametrize("policy, checkpointable", [
-    ("random_walk", True), ("patrol", True), ("stay", True), (f"{HELPERS}:Wanderer", True),
-    (f"{HELPERS}:Chaser", True), (f"{HELPERS}:AlwaysLeft", False), (f"{HELPERS}:WandererWithoutState", False),
-])
+@pytest.mark.parametrize(
+    "policy, checkpointable",
+    [
+        ("random_walk", True),
+        ("patrol", True),
+        ("stay", True),
+        (f"{HELPERS}:Wanderer", True),
+        (f"{HELPERS}:Chaser", True),
+        (f"{HELPERS}:AlwaysLeft", False),
+        (f"{HELPERS}:WandererWithoutState", False),
+    ],
+)
 def test_check_checkpointable_knows_which_policies_save_their_state(policy, checkpointable):
     env = "sharing_v0" if policy == "patrol" else "coexistence_v0"
     agent = "human_0" if policy == "patrol" else CAT
@@ -109,10 +124,16 @@ def test_check_checkpointable_knows_which_policies_save_their_state(policy, chec
             venv.state()
 
 
-@pytest.mark.parametrize("env, agent, policy", [
-    ("coexistence_v0", CAT, "random_walk"), ("sharing_v0", "human_0", "patrol"), ("coexistence_v0", CAT, "stay"),
-    ("coexistence_v0", CAT, f"{HELPERS}:Wanderer"), ("sharing_v0", "human_0", f"{HELPERS}:RecorderWithState"),
-])
+@pytest.mark.parametrize(
+    "env, agent, policy",
+    [
+        ("coexistence_v0", CAT, "random_walk"),
+        ("sharing_v0", "human_0", "patrol"),
+        ("coexistence_v0", CAT, "stay"),
+        ("coexistence_v0", CAT, f"{HELPERS}:Wanderer"),
+        ("sharing_v0", "human_0", f"{HELPERS}:RecorderWithState"),
+    ],
+)
 def test_a_vector_env_loaded_from_a_checkpoint_continues_exactly(env, agent, policy):
     rng = np.random.default_rng(3)
     actions = rng.integers(5, size=(120, 3, 1))
@@ -140,8 +161,9 @@ def test_a_per_environment_builtin_policy_continues_exactly_from_its_state(make)
     restored = make()
     restored.reset(12)
     restored.load_state(through_a_checkpoint(policy.state()))
-    assert [restored.act(np.zeros(25, np.float32), {}) for _ in range(30)] == \
-           [policy.act(np.zeros(25, np.float32), {}) for _ in range(30)]
+    assert [restored.act(np.zeros(25, np.float32), {}) for _ in range(30)] == [
+        policy.act(np.zeros(25, np.float32), {}) for _ in range(30)
+    ]
 
 
 def test_a_state_that_is_not_plain_data_is_refused_naming_the_policy():
@@ -155,7 +177,10 @@ def test_a_state_of_the_earlier_layout_is_refused_not_misloaded():
     venv = VectorEnv("coexistence_v0", 2, fixed={CAT: "random_walk"})
     venv.reset(seed=0)
     state = venv.state()
-    earlier = {"engine": state["engine"], "observations": state["observations"],
-               "policies": {"1": {"keys": np.zeros(2, np.uint64), "counts": np.zeros(2, np.uint64)}}}
+    earlier = {
+        "engine": state["engine"],
+        "observations": state["observations"],
+        "policies": {"1": {"keys": np.zeros(2, np.uint64), "counts": np.zeros(2, np.uint64)}},
+    }
     with pytest.raises(ValueError, match="written by an earlier version cannot be resumed"):
         venv.load_state(earlier)

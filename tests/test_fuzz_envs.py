@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.engine.base import MAX_SIZE
-from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.vector import VectorEnv
 
 MODULES = {"coexistence_v0": coexistence_v0, "sharing_v0": sharing_v0}

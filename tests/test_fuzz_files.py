@@ -38,10 +38,14 @@ WRONG = ["x", "../evil", -3, 0, 2.5, True, [], [1, 2], {"a": 1}, 10**6, math.inf
 SWEEP: dict[str, Any] = {
     "sweep": {"name": "fuzz", "seeds": 2, "steps": 300, "eval_interval": 150, "eval_episodes": 2},
     "settings": {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8},
-    "envs": {"coexistence_v0": {"max_cycles": 50, "fixed": {"cat_0": "random_walk"}},
-             "sharing_v0": {"max_cycles": 50, "start": "centre"}},
-    "methods": [{"method": "empathic_dqn", "selfishness": [1.0, 0.5], "label": "E {selfishness:g}"},
-                {"method": "dqn_harm_penalty", "envs": ["coexistence_v0"]}],
+    "envs": {
+        "coexistence_v0": {"max_cycles": 50, "fixed": {"cat_0": "random_walk"}},
+        "sharing_v0": {"max_cycles": 50, "start": "centre"},
+    },
+    "methods": [
+        {"method": "empathic_dqn", "selfishness": [1.0, 0.5], "label": "E {selfishness:g}"},
+        {"method": "dqn_harm_penalty", "envs": ["coexistence_v0"]},
+    ],
 }
 
 
@@ -66,8 +70,11 @@ def _value(value: Any) -> str:
 
 def to_toml(document: dict[str, Any]) -> str:
     """TOML text of ``document``: scalars first, then ``[tables]``, ``[a.b]`` tables and ``[[arrays]]``."""
-    lines = [f"{_key(k)} = {_value(v)}" for k, v in document.items()
-             if not isinstance(v, dict) and not (isinstance(v, list) and v and all(isinstance(i, dict) for i in v))]
+    lines = [
+        f"{_key(k)} = {_value(v)}"
+        for k, v in document.items()
+        if not isinstance(v, dict) and not (isinstance(v, list) and v and all(isinstance(i, dict) for i in v))
+    ]
     for name, value in document.items():
         if isinstance(value, dict):
             inner = [f"{_key(k)} = {_value(v)}" for k, v in value.items() if not (name == "envs" and isinstance(v, dict))]
@@ -158,7 +165,9 @@ def sweep_change(draw: st.DrawFn) -> tuple[str, tuple, str]:
         return text[: draw(st.integers(1, len(text) - 1))], (), "cut"
     path = draw(st.sampled_from(SWEEP_PATHS))
     operation = draw(st.sampled_from(["delete", "replace", "replace", "replace", "add"]))
-    changed = mutate(SWEEP, path, operation, draw(st.sampled_from([v for v in WRONG if v != 10**6])))  # (10**6 seeds: valid, slow)
+    changed = mutate(
+        SWEEP, path, operation, draw(st.sampled_from([v for v in WRONG if v != 10**6]))
+    )  # (10**6 seeds: valid, slow)
     if changed is None:
         changed, operation = mutate(SWEEP, path, "replace", "x"), "replace"
     return to_toml(changed), path, operation
@@ -194,8 +203,17 @@ def test_a_changed_sweep_file_is_refused_in_one_line_naming_file_and_key_long(ch
 @pytest.fixture(scope="module")
 def real_results(tmp_path_factory) -> list[dict[str, Any]]:
     """Two result files of a tiny real run."""
-    specs = [RunSpec(settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8}, seed=seed, steps=200,
-                     eval_interval=100, eval_episodes=2, env_kwargs={"max_cycles": 30}) for seed in (0, 1)]
+    specs = [
+        RunSpec(
+            settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8},
+            seed=seed,
+            steps=200,
+            eval_interval=100,
+            eval_episodes=2,
+            env_kwargs={"max_cycles": 30},
+        )
+        for seed in (0, 1)
+    ]
     out = tmp_path_factory.mktemp("real")
     return [json.loads(path.read_text()) for path in train_runs(specs, out, RunnerOptions(progress=False))]
 
@@ -219,13 +237,18 @@ def result_change(draw: st.DrawFn, base: dict[str, Any]) -> tuple[dict[str, Any]
     names = {"run_id", "env", "variant"}
     if path in {(name,) for name in names} and draw(st.booleans()):
         changed = mutate(base, path, "replace", draw(st.sampled_from(["../x", "/abs", "a/b", ".hidden", ""])))
-    elif isinstance(path[-1], str) and draw(st.integers(0, 3)) == 0 and (len(path) == 1 or path[0] != "config") and (
-            path[0] in REQUIRED_FIELDS and len(path) == 1 or path[0] in ("train", "eval")):
+    elif (
+        isinstance(path[-1], str)
+        and draw(st.integers(0, 3)) == 0
+        and (len(path) == 1 or path[0] != "config")
+        and (path[0] in REQUIRED_FIELDS and len(path) == 1 or path[0] in ("train", "eval"))
+    ):
         changed = mutate(base, path, "delete", None)
     else:
         nullable = path in {("commit",), ("variant",), ("config", "variant")}  # (null is a fine value there)
-        changed = mutate(base, path, "replace",
-                         draw(st.sampled_from([v for v in wrong_for(original) if not (nullable and v is None)])))
+        changed = mutate(
+            base, path, "replace", draw(st.sampled_from([v for v in wrong_for(original) if not (nullable and v is None)]))
+        )
     field = "".join(f"[{key}]" if isinstance(key, int) else f".{key}" for key in path).lstrip(".")
     return changed, field
 

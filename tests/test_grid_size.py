@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from empathy_zoo import coexistence_v0, sharing_v0
-from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import MAX_SIZE, table_bytes
 from empathy_zoo.engine.coexistence import harm_outcome
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.grid import MOVES, NUM_ACTIONS, window_indices
 from empathy_zoo.vector import VectorEnv
 

@@ -12,9 +12,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.gym_adapter import GYM_IDS, SingleAgentEnv, make_single_agent_env
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.vector import VectorEnv
 
 UP, DOWN, STAY = 0, 1, 4
@@ -120,8 +120,14 @@ def test_metrics_when_the_robot_harms_the_cat_then_times_out():
     terminated, truncated, info = run_to_end(env, [STAY] * 10)
     assert (terminated, truncated) == (False, True)
     assert info["episode_metrics"] == {
-        "survival": 5, "harms": 1, "batteries": 0, "other_batteries": 0, "equality": 1.0,
-        "return": 5.0, "other_return": 0.0, "length": 5,
+        "survival": 5,
+        "harms": 1,
+        "batteries": 0,
+        "other_batteries": 0,
+        "equality": 1.0,
+        "return": 5.0,
+        "other_return": 0.0,
+        "length": 5,
     }
 
 

@@ -9,7 +9,11 @@ import math
 import pytest
 
 from leaderboard.improvement import (
-    bootstrap_improvement, improvement_verdict, improvements_over_dqn, interquartile_mean, is_dqn,
+    bootstrap_improvement,
+    improvement_verdict,
+    improvements_over_dqn,
+    interquartile_mean,
+    is_dqn,
     probability_of_improvement,
 )
 
@@ -32,22 +36,31 @@ def test_bootstrap_interval_brackets_the_point_and_collapses_on_one_run() -> Non
     assert again == (p, low, high)  # seeded
 
 
-@pytest.mark.parametrize(("values", "expected"), [
-    ([1, 2, 3], 2.0),  # fewer than 4: the mean
-    ([1, 2, 3, 100], 2.5),  # 4: one dropped each side
-    ([100, 1, 2, 3, -50], 2.0),  # 5 (the paper's seeds): the middle three
-    ([1, 2, 3, 4, 5, 6, 7, 8], 4.5),
-    ([math.nan, 1.0], 1.0),
-])
+@pytest.mark.parametrize(
+    ("values", "expected"),
+    [
+        ([1, 2, 3], 2.0),  # fewer than 4: the mean
+        ([1, 2, 3, 100], 2.5),  # 4: one dropped each side
+        ([100, 1, 2, 3, -50], 2.0),  # 5 (the paper's seeds): the middle three
+        ([1, 2, 3, 4, 5, 6, 7, 8], 4.5),
+        ([math.nan, 1.0], 1.0),
+    ],
+)
 def test_interquartile_mean(values, expected) -> None:
     assert interquartile_mean(values) == expected
 
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0, reward=None, env="coexistence_v0") -> dict:
-    return {"method": method, "method_label": f"{method} {selfishness}", "env": env, "seed": seed, "steps": 10,
-            "config": {"settings": {"selfishness": selfishness}, "reward": reward},
-            "train": {"episode_end_step": [10], "survival": [value], "harms": [1.0 - value / 10]},
-            "eval": [{"step": 10, "survival": [value], "harms": [1.0 - value / 10]}]}
+    return {
+        "method": method,
+        "method_label": f"{method} {selfishness}",
+        "env": env,
+        "seed": seed,
+        "steps": 10,
+        "config": {"settings": {"selfishness": selfishness}, "reward": reward},
+        "train": {"episode_end_step": [10], "survival": [value], "harms": [1.0 - value / 10]},
+        "eval": [{"step": 10, "survival": [value], "harms": [1.0 - value / 10]}],
+    }
 
 
 def test_dqn_is_the_baseline_and_every_other_method_is_compared_with_it() -> None:
@@ -63,8 +76,9 @@ def test_dqn_is_the_baseline_and_every_other_method_is_compared_with_it() -> Non
 
 
 def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
-    from leaderboard import write_leaderboard
     from test_leaderboard_report import write_synthetic_results
+
+    from leaderboard import write_leaderboard
 
     paths = write_synthetic_results(tmp_path / "runs")
     for path in paths:  # make the "DQN" rows standard DQN
@@ -82,10 +96,17 @@ def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
     assert "percentile-bootstrap interval over seeds" not in markdown and "bootstrap interval, each" not in markdown
 
 
-@pytest.mark.parametrize("low, high, verdict", [
-    (0.55, 1.0, "better"), (0.0, 0.45, "worse"), (0.5, 1.0, "no clear difference"), (0.0, 0.5, "no clear difference"),
-    (0.2, 0.9, "no clear difference"), (math.nan, math.nan, "no clear difference"),
-])
+@pytest.mark.parametrize(
+    "low, high, verdict",
+    [
+        (0.55, 1.0, "better"),
+        (0.0, 0.45, "worse"),
+        (0.5, 1.0, "no clear difference"),
+        (0.0, 0.5, "no clear difference"),
+        (0.2, 0.9, "no clear difference"),
+        (math.nan, math.nan, "no clear difference"),
+    ],
+)
 def test_a_method_is_better_or_worse_than_dqn_only_when_its_whole_interval_says_so(low, high, verdict) -> None:
     assert improvement_verdict(low, high) == verdict
 

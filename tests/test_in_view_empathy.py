@@ -9,14 +9,18 @@ import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.training import RunnerOptions, group_specs, train_runs
 from empathy_zoo.training.spec import RunSpec
 
-TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 300, "target_update_interval": 50,
-        "selfishness": 0.5}
+TINY = {
+    "learning_starts": 64,
+    "replay_capacity": 2_000,
+    "epsilon_decay_steps": 300,
+    "target_update_interval": 50,
+    "selfishness": 0.5,
+}
 OPTIONS = RunnerOptions(progress=False, checkpoint_interval=0, threads=1)
 
 
 def spec(method: str, seed: int = 0) -> RunSpec:
-    return RunSpec(env="coexistence_v0", method=method, settings=TINY, seed=seed, steps=1_200, eval_interval=600,
-                   eval_episodes=2)
+    return RunSpec(env="coexistence_v0", method=method, settings=TINY, seed=seed, steps=1_200, eval_interval=600, eval_episodes=2)
 
 
 def test_in_view_runs_train_apart_with_an_in_view_swap_and_learn_otherwise(tmp_path, monkeypatch) -> None:

@@ -18,10 +18,17 @@ def step(own: list[float], other: list[float], ended: list[bool] | None = None) 
     k = len(own)
     zeros = np.zeros((k, 1, 4), dtype=np.float32)
     return StepBatch(
-        obs=zeros, actions=np.zeros((k, 1), dtype=np.int64), rewards=np.array(own, dtype=np.float32)[:, None],
-        terminated=np.array(ended or [False] * k)[:, None], next_obs=zeros, swapped_next_obs=zeros,
-        other_present=np.ones((k, 1), bool), harmed_other=np.zeros((k, 1)), battery_return=np.zeros((k, 1)),
-        other_battery_return=np.zeros((k, 1)), truncated=np.zeros((k, 1), bool),
+        obs=zeros,
+        actions=np.zeros((k, 1), dtype=np.int64),
+        rewards=np.array(own, dtype=np.float32)[:, None],
+        terminated=np.array(ended or [False] * k)[:, None],
+        next_obs=zeros,
+        swapped_next_obs=zeros,
+        other_present=np.ones((k, 1), bool),
+        harmed_other=np.zeros((k, 1)),
+        battery_return=np.zeros((k, 1)),
+        other_battery_return=np.zeros((k, 1)),
+        truncated=np.zeros((k, 1), bool),
         other_rewards=np.array(other, dtype=np.float32)[:, None],
     )
 
@@ -58,10 +65,19 @@ def test_the_trainer_keeps_and_restores_the_state_only_for_the_runs_of_the_trans
 def test_a_resumed_inequity_averse_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
     from empathy_zoo.training.spec import RunSpec
 
-    spec = RunSpec(env="sharing_v0", method="dqn_inequity_aversion", steps=600, eval_interval=300, eval_episodes=2,
-                   settings={"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300,
-                             "target_update_interval": 50})
+    spec = RunSpec(
+        env="sharing_v0",
+        method="dqn_inequity_aversion",
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings={"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50},
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
-    assert resumed["config"]["reward"] == {"name": "inequity_aversion", "disadvantageous": 5.0, "advantageous": 0.05,
-                                           "smoothing": pytest.approx(0.9405)}
+    assert resumed["config"]["reward"] == {
+        "name": "inequity_aversion",
+        "disadvantageous": 5.0,
+        "advantageous": 0.05,
+        "smoothing": pytest.approx(0.9405),
+    }

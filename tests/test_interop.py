@@ -76,8 +76,12 @@ def test_supersuit_black_death_handles_the_cat_leaving(supersuit) -> None:
     pytest.fail("the robot never harmed the cat in 20 random episodes")
 
 
-@pytest.mark.xfail(not _black_death_ends_episodes(), strict=True, raises=RuntimeError,
-                   reason="SuperSuit <= 3.11.0 black_death_v3 never ends an episode (PR #265); stepping on raises")
+@pytest.mark.xfail(
+    not _black_death_ends_episodes(),
+    strict=True,
+    raises=RuntimeError,
+    reason="SuperSuit <= 3.11.0 black_death_v3 never ends an episode (PR #265); stepping on raises",
+)
 def test_supersuit_black_death_ends_coexistence_episodes(supersuit) -> None:
     vec = supersuit.pettingzoo_env_to_vec_env_v1(supersuit.black_death_v3(coexistence_v0.parallel_env()))
     envs = supersuit.concat_vec_envs_v1(vec, 2, num_cpus=0, base_class="gymnasium")

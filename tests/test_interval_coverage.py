@@ -12,8 +12,16 @@ import pytest
 
 from leaderboard.aggregate import bootstrap_mean_ci, mean_ci, student_t_interval
 from leaderboard.improvement import (
-    TOO_FEW_SEEDS, VERDICT_MARKS, Improvement, can_decide, improvement_interval, improvement_verdict,
-    improvements_over_dqn, permutation_test, probability_of_improvement, smallest_decidable_seeds,
+    TOO_FEW_SEEDS,
+    VERDICT_MARKS,
+    Improvement,
+    can_decide,
+    improvement_interval,
+    improvement_verdict,
+    improvements_over_dqn,
+    permutation_test,
+    probability_of_improvement,
+    smallest_decidable_seeds,
 )
 
 
@@ -40,14 +48,17 @@ def test_t_interval_of_one_two_three_is_mean_plus_minus_t_s_over_root_three() ->
     assert (low, high) == pytest.approx((2.0 - half, 2.0 + half), rel=1e-12)
 
 
-@pytest.mark.parametrize(("x", "y"), [
-    ([3.0, 4.0, 5.0], [0.0, 1.0, 2.0]),  # 3 v 3, complete separation: p = 2/20
-    ([5.0, 6.0, 7.0, 8.0], [1.0, 2.0, 3.0, 4.0]),  # 4 v 4: p = 2/70
-    ([0.0, 0.0, 1.0, 0.5, 1.0], [1.0, 1.0, 0.7, 1.0, 0.7]),  # ties across and within groups
-    ([0.0, 0.0, 0.0, 0.1, 0.0], [0.0, 0.3, 0.2, 0.0, 0.0]),  # lumpy, near a boundary
-    ([2.0, 2.0, 2.0], [2.0, 2.0, 2.0, 2.0]),  # every run tied
-    ([1.0, 4.0, 2.0, 8.0, 3.0], [6.0, 5.0, 7.0]),  # 5 v 3
-])
+@pytest.mark.parametrize(
+    ("x", "y"),
+    [
+        ([3.0, 4.0, 5.0], [0.0, 1.0, 2.0]),  # 3 v 3, complete separation: p = 2/20
+        ([5.0, 6.0, 7.0, 8.0], [1.0, 2.0, 3.0, 4.0]),  # 4 v 4: p = 2/70
+        ([0.0, 0.0, 1.0, 0.5, 1.0], [1.0, 1.0, 0.7, 1.0, 0.7]),  # ties across and within groups
+        ([0.0, 0.0, 0.0, 0.1, 0.0], [0.0, 0.3, 0.2, 0.0, 0.0]),  # lumpy, near a boundary
+        ([2.0, 2.0, 2.0], [2.0, 2.0, 2.0, 2.0]),  # every run tied
+        ([1.0, 4.0, 2.0, 8.0, 3.0], [6.0, 5.0, 7.0]),  # 5 v 3
+    ],
+)
 def test_permutation_p_matches_listing_every_split(x: list[float], y: list[float]) -> None:
     probability, p = permutation_test(x, y)
     assert probability == pytest.approx(probability_of_improvement(x, y), abs=1e-12)
@@ -97,10 +108,16 @@ def test_three_seeds_against_three_can_never_give_a_verdict() -> None:
 
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> dict:
-    return {"method": method, "method_label": f"{method} {selfishness}", "env": "coexistence_v0", "seed": seed,
-            "steps": 10, "config": {"settings": {"selfishness": selfishness}, "reward": None},
-            "train": {"episode_end_step": [10], "survival": [value], "harms": [value / 1000]},
-            "eval": [{"step": 10, "survival": [value], "harms": [value / 1000]}]}
+    return {
+        "method": method,
+        "method_label": f"{method} {selfishness}",
+        "env": "coexistence_v0",
+        "seed": seed,
+        "steps": 10,
+        "config": {"settings": {"selfishness": selfishness}, "reward": None},
+        "train": {"episode_end_step": [10], "survival": [value], "harms": [value / 1000]},
+        "eval": [{"step": 10, "survival": [value], "harms": [value / 1000]}],
+    }
 
 
 def _verdicts(method_values: list[float], dqn_values: list[float]) -> dict[str, Improvement]:

@@ -26,17 +26,25 @@ def step(harms: list[list[int]], ended: list[list[bool]], rewards: float = 1.0) 
     k, m = harmed.shape
     zeros = np.zeros((k, m))
     return StepBatch(
-        obs=np.zeros((k, m, 25), dtype=np.float32), actions=np.zeros((k, m), dtype=np.int64),
-        rewards=np.full((k, m), rewards, dtype=np.float32), terminated=np.array(ended, dtype=bool),
-        next_obs=np.zeros((k, m, 25), dtype=np.float32), swapped_next_obs=np.zeros((k, m, 25), dtype=np.float32),
-        other_present=np.ones((k, m), bool), harmed_other=harmed, battery_return=zeros, other_battery_return=zeros,
-        truncated=np.zeros((k, m), bool), other_rewards=zeros.astype(np.float32),
+        obs=np.zeros((k, m, 25), dtype=np.float32),
+        actions=np.zeros((k, m), dtype=np.int64),
+        rewards=np.full((k, m), rewards, dtype=np.float32),
+        terminated=np.array(ended, dtype=bool),
+        next_obs=np.zeros((k, m, 25), dtype=np.float32),
+        swapped_next_obs=np.zeros((k, m, 25), dtype=np.float32),
+        other_present=np.ones((k, m), bool),
+        harmed_other=harmed,
+        battery_return=zeros,
+        other_battery_return=zeros,
+        truncated=np.zeros((k, m), bool),
+        other_rewards=zeros.astype(np.float32),
     )
 
 
 def test_the_dual_update_on_hand_made_numbers() -> None:
     assert dual_ascent(np.array([0.5]), np.array([2.0]), cost_limit=0.1, learning_rate=0.5).tolist() == [
-        pytest.approx(0.5 + 0.5 * 1.9)]
+        pytest.approx(0.5 + 0.5 * 1.9)
+    ]
     assert dual_ascent(np.array([0.1]), np.array([0.0]), cost_limit=0.5, learning_rate=1.0).tolist() == [0.0]  # projected
     assert dual_ascent(np.array([3.0, 3.0]), np.array([0.0, 1.0]), 0.25, 2.0).tolist() == [2.5, 4.5]
 
@@ -94,10 +102,23 @@ def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> Non
 def test_a_resumed_lagrangian_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
     from empathy_zoo.training.spec import RunSpec
 
-    settings = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50,
-                "hidden_size": 16}
-    spec = RunSpec(env="coexistence_v0", method="dqn_lagrangian", steps=600, eval_interval=300, eval_episodes=2,
-                   settings=settings, reward={"cost_limit": 0.0, "lambda_lr": 5.0}, env_kwargs={"max_cycles": 40})
+    settings = {
+        "learning_starts": 64,
+        "replay_capacity": 1_000,
+        "epsilon_decay_steps": 300,
+        "target_update_interval": 50,
+        "hidden_size": 16,
+    }
+    spec = RunSpec(
+        env="coexistence_v0",
+        method="dqn_lagrangian",
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings=settings,
+        reward={"cost_limit": 0.0, "lambda_lr": 5.0},
+        env_kwargs={"max_cycles": 40},
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert sum(whole["train"]["harms"][:10]) > 0  # λ had something to rise from before the checkpoint
@@ -106,8 +127,9 @@ def test_a_resumed_lagrangian_run_equals_an_uninterrupted_one(tmp_path, monkeypa
 
 def test_the_method_trains_through_the_command_line_and_is_dqn_in_sharing(tmp_path) -> None:
     out = tmp_path / "out"
-    assert main(["train", "--method", "dqn_lagrangian", "--cost-limit", "0.05", "--lambda-lr", "2", "--out", str(out),
-                 *TINY]) == 0
+    assert (
+        main(["train", "--method", "dqn_lagrangian", "--cost-limit", "0.05", "--lambda-lr", "2", "--out", str(out), *TINY]) == 0
+    )
     [path] = (out / "runs").glob("*.json")
     result = read_result(path)
     assert result["config"]["reward"] == {"name": "lagrangian", "cost_limit": 0.05, "lambda_lr": 2.0, "lambda_init": 0.0}

@@ -12,16 +12,36 @@ import pytest
 
 from empathy_zoo.metrics import METRIC_NAMES
 from leaderboard.aggregate import (
-    bootstrap_mean_ci, final_episode_count, group_runs, learning_curves, load_results, mean_ci,
-    result_files, rolling_curve, run_scalars, score_runs, student_t_interval, student_t_quantile, t_level,
+    bootstrap_mean_ci,
+    final_episode_count,
+    group_runs,
+    learning_curves,
+    load_results,
+    mean_ci,
+    result_files,
+    rolling_curve,
+    run_scalars,
+    score_runs,
+    student_t_interval,
+    student_t_quantile,
+    t_level,
 )
 
 T_9875_2 = 6.205346816570706
 """t(0.9875, 2 degrees of freedom), from mpmath: the quantile of the leaderboard's 3-seed interval."""
 
 
-def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_survival: list[float] | None = None,
-             end_steps: list[int] | None = None, steps: int = 100, method: str = "dqn") -> dict[str, Any]:
+def make_run(
+    env: str,
+    label: str,
+    seed: int,
+    survival: list[float],
+    *,
+    eval_survival: list[float] | None = None,
+    end_steps: list[int] | None = None,
+    steps: int = 100,
+    method: str = "dqn",
+) -> dict[str, Any]:
     """A result dict whose every metric column equals ``survival`` (train) / ``eval_survival``."""
     n = len(survival)
     end_steps = end_steps if end_steps is not None else [int((i + 1) * steps / n) for i in range(n)]
@@ -30,10 +50,22 @@ def make_run(env: str, label: str, seed: int, survival: list[float], *, eval_sur
     evaluations = []
     if eval_survival is not None:
         evaluations.append({"step": steps, **{metric: list(eval_survival) for metric in METRIC_NAMES}})
-    return {"schema": 1, "run_id": f"{env}__{label}__s{seed}", "env": env, "method": method,
-            "method_label": label, "seed": seed, "steps": steps,
-            "config": {"settings": {}, "env_kwargs": {}, "fixed": {}}, "train": train,
-            "eval": evaluations, "wall_time_s": 0.0, "version": "0.1.0", "commit": None, "created": "now"}
+    return {
+        "schema": 1,
+        "run_id": f"{env}__{label}__s{seed}",
+        "env": env,
+        "method": method,
+        "method_label": label,
+        "seed": seed,
+        "steps": steps,
+        "config": {"settings": {}, "env_kwargs": {}, "fixed": {}},
+        "train": train,
+        "eval": evaluations,
+        "wall_time_s": 0.0,
+        "version": "0.1.0",
+        "commit": None,
+        "created": "now",
+    }
 
 
 def t_by_hand(values: list[float], quantile: float) -> tuple[float, float]:
@@ -112,12 +144,18 @@ def test_bootstrap_rejects_no_seeds() -> None:
         bootstrap_mean_ci([])
 
 
-@pytest.mark.parametrize(("probability", "df", "expected"), [
-    (0.975, 2, 0.95 / math.sqrt(2 * 0.975 * 0.025)),  # df = 2 in closed form: (2p − 1) / √(2p(1 − p))
-    (0.975, 1, math.tan(math.pi * 0.475)),  # Cauchy
-    (0.975, 4, 2.7764451051977935), (0.975, 9, 2.262157162798205), (0.9875, 4, 3.4954059325164416),  # mpmath
-    (0.025, 3, -3.182446305284263), (0.5, 7, 0.0),
-])
+@pytest.mark.parametrize(
+    ("probability", "df", "expected"),
+    [
+        (0.975, 2, 0.95 / math.sqrt(2 * 0.975 * 0.025)),  # df = 2 in closed form: (2p − 1) / √(2p(1 − p))
+        (0.975, 1, math.tan(math.pi * 0.475)),  # Cauchy
+        (0.975, 4, 2.7764451051977935),
+        (0.975, 9, 2.262157162798205),
+        (0.9875, 4, 3.4954059325164416),  # mpmath
+        (0.025, 3, -3.182446305284263),
+        (0.5, 7, 0.0),
+    ],
+)
 def test_student_t_quantile_matches_closed_forms_and_mpmath(probability: float, df: int, expected: float) -> None:
     assert student_t_quantile(probability, df) == pytest.approx(expected, rel=1e-12, abs=1e-15)
 
@@ -165,8 +203,10 @@ def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> N
         make_run("coexistence_v0", "DQN", 0, [5.0, 9.0], eval_survival=[1.0, 2.0]),
     ]
     scores = score_runs(runs, random_state=0, n_resamples=400)
-    assert [(s.env, s.phase, s.metric) for s in scores[:2]] == [("coexistence_v0", "eval", "survival"),
-                                                                 ("coexistence_v0", "eval", "harms")]
+    assert [(s.env, s.phase, s.metric) for s in scores[:2]] == [
+        ("coexistence_v0", "eval", "survival"),
+        ("coexistence_v0", "eval", "harms"),
+    ]
     by_key = {(s.env, s.phase, s.metric): s for s in scores}
     single = by_key[("coexistence_v0", "train_final10", "survival")]
     assert (single.mean, single.ci_low, single.ci_high, single.n_seeds) == (9.0, 9.0, 9.0, 1)
@@ -180,8 +220,11 @@ def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> N
 
 
 def test_group_runs_orders_envs_then_methods_then_labels() -> None:
-    runs = [make_run("sharing_v0", "B", 0, [1.0]), make_run("coexistence_v0", "Z", 0, [1.0], method="a_method"),
-            make_run("coexistence_v0", "A", 0, [1.0], method="z_method")]
+    runs = [
+        make_run("sharing_v0", "B", 0, [1.0]),
+        make_run("coexistence_v0", "Z", 0, [1.0], method="a_method"),
+        make_run("coexistence_v0", "A", 0, [1.0], method="z_method"),
+    ]
     assert list(group_runs(runs)) == [("coexistence_v0", "Z"), ("coexistence_v0", "A"), ("sharing_v0", "B")]
 
 
@@ -206,8 +249,10 @@ def test_learning_curves_have_no_gaps_at_a_small_budget() -> None:
 
 
 def test_learning_curves_average_seeds_per_point_with_t_intervals() -> None:
-    runs = [make_run("coexistence_v0", "DQN", seed, values, end_steps=[25, 50, 75, 100])
-            for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])]
+    runs = [
+        make_run("coexistence_v0", "DQN", seed, values, end_steps=[25, 50, 75, 100])
+        for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])
+    ]
     runs.append(make_run("sharing_v0", "DQN", 0, [1.0]))
     (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4, random_state=5, n_resamples=200)
     assert curve.steps.tolist() == [25.0, 50.0, 75.0, 100.0]
@@ -238,9 +283,14 @@ def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
         load_results(tmp_path)
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    ({"schema": 3}, "schemas 1 and 2, got 3"), ({"env": None, "steps": None}, None), ({"seed": "0"}, "field seed: expected an int"),
-])
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"schema": 3}, "schemas 1 and 2, got 3"),
+        ({"env": None, "steps": None}, None),
+        ({"seed": "0"}, "field seed: expected an int"),
+    ],
+)
 def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, Any], message: str | None) -> None:
     run = make_run("coexistence_v0", "DQN", 0, [1.0])
     run.update(change)

@@ -17,7 +17,14 @@ from empathy_zoo.provenance import package_version
 from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
 from leaderboard.tables import (
-    CSV_COLUMNS, Provenance, csv_text, format_interval, html_report, markdown_report, markdown_table, table_rows,
+    CSV_COLUMNS,
+    Provenance,
+    csv_text,
+    format_interval,
+    html_report,
+    markdown_report,
+    markdown_table,
+    table_rows,
 )
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -25,8 +32,12 @@ PROVENANCE = Provenance(command="empathy-zoo leaderboard out", version="0.1.0", 
 METHODS = {"dqn": "DQN", "empathic_dqn": "Empathic DQN (β=0.5)"}
 
 
-def write_synthetic_results(directory: Path, envs: tuple[str, ...] = ("coexistence_v0", "sharing_v0"),
-                            seeds: tuple[int, ...] = (0, 1, 2), steps: int = 2000) -> list[Path]:
+def write_synthetic_results(
+    directory: Path,
+    envs: tuple[str, ...] = ("coexistence_v0", "sharing_v0"),
+    seeds: tuple[int, ...] = (0, 1, 2),
+    steps: int = 2000,
+) -> list[Path]:
     """Write one plausible schema-1 result file per (env, method, seed) into ``directory``."""
     paths = []
     for env in envs:
@@ -41,19 +52,32 @@ def write_synthetic_results(directory: Path, envs: tuple[str, ...] = ("coexisten
                 def columns(k: int) -> dict[str, list[float]]:
                     base = progress if k == n else np.ones(k)
                     noise = rng.normal(0.0, 0.1, size=k)
-                    return {"survival": (40 * base + m + noise).tolist(), "harms": (1 - base / 2 + noise).tolist(),
-                            "batteries": (3 * base + noise).tolist(), "other_batteries": (4 - base + noise).tolist(),
-                            "equality": (0.5 + base / 4 + noise).tolist(), "return": (base + noise).tolist(),
-                            "other_return": (2 - base + noise).tolist()}
+                    return {
+                        "survival": (40 * base + m + noise).tolist(),
+                        "harms": (1 - base / 2 + noise).tolist(),
+                        "batteries": (3 * base + noise).tolist(),
+                        "other_batteries": (4 - base + noise).tolist(),
+                        "equality": (0.5 + base / 4 + noise).tolist(),
+                        "return": (base + noise).tolist(),
+                        "other_return": (2 - base + noise).tolist(),
+                    }
 
                 run_id = f"{env}__{method}__s{seed}"
                 result: dict[str, Any] = {
-                    "schema": 1, "run_id": run_id, "env": env, "method": method, "method_label": label,
-                    "seed": seed, "steps": steps,
+                    "schema": 1,
+                    "run_id": run_id,
+                    "env": env,
+                    "method": method,
+                    "method_label": label,
+                    "seed": seed,
+                    "steps": steps,
                     "config": {"beta": 0.5, "settings": {}, "env_kwargs": {}, "fixed": {}},
                     "train": {"episode_end_step": end_steps, **columns(n)},
                     "eval": [{"step": s, **columns(5)} for s in (steps // 2, steps)],
-                    "wall_time_s": 1.0, "version": "0.1.0", "commit": None, "created": "2026-01-01T00:00:00Z",
+                    "wall_time_s": 1.0,
+                    "version": "0.1.0",
+                    "commit": None,
+                    "created": "2026-01-01T00:00:00Z",
                 }
                 path = directory / f"{run_id}.json"
                 path.parent.mkdir(parents=True, exist_ok=True)
@@ -67,8 +91,9 @@ def tiny_scores() -> list[Score]:
         Score("coexistence_v0", "DQN", "dqn", "eval", "survival", 12.5, 10.0, 15.0, 3),
         Score("coexistence_v0", "DQN", "dqn", "eval", "harms", 0.5, 0.0, 1.0, 3),
         Score("coexistence_v0", "Empathic DQN (β=0.5)", "empathic_dqn", "eval", "survival", 7.0, 7.0, 7.0, 1),
-        Score("coexistence_v0", "Empathic DQN (β=0.5)", "empathic_dqn", "eval", "harms", float("nan"),
-              float("nan"), float("nan"), 0),
+        Score(
+            "coexistence_v0", "Empathic DQN (β=0.5)", "empathic_dqn", "eval", "harms", float("nan"), float("nan"), float("nan"), 0
+        ),
     ]
 
 
@@ -98,8 +123,7 @@ def test_csv_exact_lines() -> None:
     assert lines[0] == ",".join(CSV_COLUMNS)
     tail = "empathy-zoo leaderboard out,0.1.0,abc1234"
     assert lines[1] == f"coexistence_v0,DQN,dqn,eval,survival,12.5,10.0,15.0,3,{METRIC_DEFINITIONS['survival']},{tail}"
-    assert lines[4] == (f"coexistence_v0,Empathic DQN (β=0.5),empathic_dqn,eval,harms,,,,0,"
-                        f"{METRIC_DEFINITIONS['harms']},{tail}")
+    assert lines[4] == (f"coexistence_v0,Empathic DQN (β=0.5),empathic_dqn,eval,harms,,,,0,{METRIC_DEFINITIONS['harms']},{tail}")
     assert len(lines) == 5
 
 
@@ -122,9 +146,14 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     assert paths["markdown"] == out / "LEADERBOARD.md"
     assert paths["csv"] == out / "leaderboard.csv" and paths["html"] == out / "leaderboard.html"
     figures = {key: path for key, path in paths.items() if key.startswith("figure:")}
-    assert sorted(figures) == ["figure:coexistence_v0:harms", "figure:coexistence_v0:survival",
-                               "figure:coexistence_v0:tradeoff", "figure:sharing_v0:batteries",
-                               "figure:sharing_v0:equality", "figure:sharing_v0:tradeoff"]
+    assert sorted(figures) == [
+        "figure:coexistence_v0:harms",
+        "figure:coexistence_v0:survival",
+        "figure:coexistence_v0:tradeoff",
+        "figure:sharing_v0:batteries",
+        "figure:sharing_v0:equality",
+        "figure:sharing_v0:tradeoff",
+    ]
     for path in paths.values():
         assert path.is_file() and path.stat().st_size > 0
     for path in figures.values():
@@ -141,7 +170,11 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
         assert float(row["ci_low"]) <= float(row["mean"]) <= float(row["ci_high"])
     html = paths["html"].read_text(encoding="utf-8")
     assert html.count('<img alt="') == 6 and "<style>" in html
-    assert markdown.count("### Task against side effect") == 2 and html.count("<h3>Task against side effect</h3>") == 2 and "empathy-zoo leaderboard sweep" in html
+    assert (
+        markdown.count("### Task against side effect") == 2
+        and html.count("<h3>Task against side effect</h3>") == 2
+        and "empathy-zoo leaderboard sweep" in html
+    )
     assert not [p.name for p in out.rglob(".*")], "temporary files left behind"
 
 
@@ -218,7 +251,10 @@ def test_each_environment_s_tables_show_its_own_metrics_a_variant_its_environmen
         if tables:
             headers[env] = tables[0]
     assert headers["coexistence_v0"] == "| Method | Seeds | survival | harms | other_return |"
-    assert headers["sharing_v0"] == headers["sharing_centre"] == (
-        "| Method | Seeds | batteries | other_batteries | equality | return | other_return |")
+    assert (
+        headers["sharing_v0"]
+        == headers["sharing_centre"]
+        == ("| Method | Seeds | batteries | other_batteries | equality | return | other_return |")
+    )
     csv_metrics = {row.split(",")[4] for row in (tmp_path / "sweep" / "leaderboard.csv").read_text().splitlines()[1:]}
     assert csv_metrics == set(METRIC_NAMES)  # the CSV keeps every metric

@@ -33,8 +33,9 @@ def test_a_policy_choosing_a_float_is_refused_on_every_path_not_truncated():
         single.step(4)
 
 
-@pytest.mark.parametrize("actions", [np.full((2, 1), 1.0), np.full((2, 1), True), np.full((2, 1), 1.5)],
-                         ids=["float", "bool", "fraction"])
+@pytest.mark.parametrize(
+    "actions", [np.full((2, 1), 1.0), np.full((2, 1), True), np.full((2, 1), 1.5)], ids=["float", "bool", "fraction"]
+)
 def test_the_vector_env_refuses_actions_that_are_not_integers(actions):
     vector = VectorEnv("coexistence_v0", 2, fixed={CAT: "random_walk"})
     vector.reset(seed=0)
@@ -54,11 +55,16 @@ def test_vector_seeds_are_not_truncated(seed):
         VectorEnv("coexistence_v0", 2).reset(seed=seed)
 
 
-@pytest.mark.parametrize("method, name, value", [
-    ("empathic_dqn", "learning_rate", float("inf")), ("empathic_dqn", "learning_rate", float("nan")),
-    ("dqn", "gamma", float("nan")), ("empathic_dqn", "epsilon_end", float("-inf")),
-    ("baselines.sb3:SB3_DQN", "learning_rate", float("inf")),
-])
+@pytest.mark.parametrize(
+    "method, name, value",
+    [
+        ("empathic_dqn", "learning_rate", float("inf")),
+        ("empathic_dqn", "learning_rate", float("nan")),
+        ("dqn", "gamma", float("nan")),
+        ("empathic_dqn", "epsilon_end", float("-inf")),
+        ("baselines.sb3:SB3_DQN", "learning_rate", float("inf")),
+    ],
+)
 def test_a_setting_must_be_a_finite_number(method, name, value):
     with pytest.raises(ValueError, match=f"{name} must be a finite number"):
         RunSpec(method=method, settings={name: value})
@@ -85,15 +91,18 @@ def test_a_position_that_is_no_cell_names_the_option(cell):
         coexistence_v0.parallel_env().reset(seed=0, options={"positions": {ROBOT: cell}})
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("..x:Y", "'..x:Y' is not a valid 'package.module:Name'"),
-    (".x:Y", "is not a valid 'package.module:Name'"),
-    ("x:", "is not a valid 'package.module:Name'"),
-    (":Y", "is not a valid 'package.module:Name'"),
-    ("a b:C", "is not a valid 'package.module:Name'"),
-    ("x:Y:Z", "is not a valid 'package.module:Name'"),
-    ("helpers_broken_module:X", "importing module 'helpers_broken_module' .* raised RuntimeError: this module is broken"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("..x:Y", "'..x:Y' is not a valid 'package.module:Name'"),
+        (".x:Y", "is not a valid 'package.module:Name'"),
+        ("x:", "is not a valid 'package.module:Name'"),
+        (":Y", "is not a valid 'package.module:Name'"),
+        ("a b:C", "is not a valid 'package.module:Name'"),
+        ("x:Y:Z", "is not a valid 'package.module:Name'"),
+        ("helpers_broken_module:X", "importing module 'helpers_broken_module' .* raised RuntimeError: this module is broken"),
+    ],
+)
 def test_a_bad_plugin_name_is_a_clear_error(spec, message):
     with pytest.raises(ValueError, match=message):
         resolve_name(spec, {}, "method")

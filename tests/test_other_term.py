@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from helpers_placed import placed as _placed
 from helpers_placed import step as _step
 

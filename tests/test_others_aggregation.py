@@ -56,18 +56,27 @@ def _batch(rng: np.random.Generator, k: int, n: int, same_swap: bool) -> StepBat
     if same_swap:
         present[:] = present[:, :, :1]
     return StepBatch(
-        obs=obs, actions=rng.integers(0, 5, (k, 1)), rewards=rng.random((k, 1)).astype(np.float32),
-        terminated=rng.random((k, 1)) < 0.05, next_obs=rng.integers(-1, 2, size=(k, 1, 25)).astype(np.float32),
-        swapped_next_obs=swapped[:, :, 0], other_present=present[:, :, 0],
-        harmed_other=np.zeros((k, 1), dtype=np.int64), battery_return=np.zeros((k, 1)),
-        other_battery_return=np.zeros((k, 1)), swapped_next_obs_all=swapped, others_present=present,
+        obs=obs,
+        actions=rng.integers(0, 5, (k, 1)),
+        rewards=rng.random((k, 1)).astype(np.float32),
+        terminated=rng.random((k, 1)) < 0.05,
+        next_obs=rng.integers(-1, 2, size=(k, 1, 25)).astype(np.float32),
+        swapped_next_obs=swapped[:, :, 0],
+        other_present=present[:, :, 0],
+        harmed_other=np.zeros((k, 1), dtype=np.int64),
+        battery_return=np.zeros((k, 1)),
+        other_battery_return=np.zeros((k, 1)),
+        swapped_next_obs_all=swapped,
+        others_present=present,
         others_live=present | (rng.random((k, 1, n)) < 0.5) if not same_swap else np.ones((k, 1, n), dtype=bool),
     )
 
 
 def _learner(others: str, num_others: int) -> EmpathicDQN:
-    settings = [EmpathicDQNSettings(selfishness=b, others=others, learning_starts=32, replay_capacity=500,
-                                    target_update_interval=7) for b in (0.5, 0.25)]
+    settings = [
+        EmpathicDQNSettings(selfishness=b, others=others, learning_starts=32, replay_capacity=500, target_update_interval=7)
+        for b in (0.5, 0.25)
+    ]
     return EmpathicDQN(settings, [0, 1], 25, num_others=num_others)
 
 
@@ -89,8 +98,15 @@ def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
     rng = np.random.default_rng(1)
     for _ in range(40):
         batch = _batch(rng, 2, 3, same_swap=False)
-        learner.replay.add(batch.obs, batch.next_obs, batch.swapped_next_obs_all, batch.actions, batch.rewards,
-                           batch.terminated, batch.others_live.astype(np.uint8) + batch.others_present)
+        learner.replay.add(
+            batch.obs,
+            batch.next_obs,
+            batch.swapped_next_obs_all,
+            batch.actions,
+            batch.rewards,
+            batch.terminated,
+            batch.others_live.astype(np.uint8) + batch.others_present,
+        )
 
     def capture(batch, q_next, target_next, target_swapped):
         seen.update(batch=batch, target_swapped=target_swapped)

@@ -12,7 +12,6 @@ from helpers_sweeps import TINY_SWEEP
 from empathy_zoo.atomic import write_bytes_atomic, write_text_atomic
 from empathy_zoo.cli import main
 
-
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="POSIX permissions")
 
 

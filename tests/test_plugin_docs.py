@@ -57,8 +57,11 @@ def test_the_plugin_page_runs_and_its_runs_are_scored(in_tmp: Path) -> None:
     results = [read_result(path) for path in sorted((in_tmp / "my_results" / RUNS_DIR).glob("*.json"))]
     rows = {(r["variant"], r["method_label"]) for r in results}
     assert rows == {
-        ("coexistence_chased", "Tabular Q (ε=0.1)"), ("coexistence_chased", "Tabular Q (ε=0.3)"),
-        ("coexistence_chased", "DQN"), ("sharing_v0", "DQN"), ("sharing_v0", "DQN − envy (weight=0.5)"),
+        ("coexistence_chased", "Tabular Q (ε=0.1)"),
+        ("coexistence_chased", "Tabular Q (ε=0.3)"),
+        ("coexistence_chased", "DQN"),
+        ("sharing_v0", "DQN"),
+        ("sharing_v0", "DQN − envy (weight=0.5)"),
         ("sharing_v0", "DQN − envy (weight=1)"),  # a reward transform's field swept like a setting
     }
     chased = [r for r in results if r["variant"] == "coexistence_chased"]

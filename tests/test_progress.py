@@ -13,9 +13,13 @@ SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8}
 
 
 def specs():
-    return [RunSpec(env=env, settings=SETTINGS, seed=seed, steps=1000, eval_interval=1000, eval_episodes=1,
-                    env_kwargs={"max_cycles": 40})
-            for env in ("coexistence_v0", "sharing_v0") for seed in (0, 1)]
+    return [
+        RunSpec(
+            env=env, settings=SETTINGS, seed=seed, steps=1000, eval_interval=1000, eval_episodes=1, env_kwargs={"max_cycles": 40}
+        )
+        for env in ("coexistence_v0", "sharing_v0")
+        for seed in (0, 1)
+    ]
 
 
 class Recorder:

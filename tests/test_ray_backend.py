@@ -11,15 +11,23 @@ from pathlib import Path
 
 import pytest
 
-from empathy_zoo.training.ray_backend import train_with_ray
 from empathy_zoo.training import RunnerOptions, train_runs
+from empathy_zoo.training.ray_backend import train_with_ray
 from empathy_zoo.training.spec import RunSpec, group_specs
 
 TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 200, "target_update_interval": 50}
 SPECS = [
-    RunSpec(env=env, method="empathic_dqn", settings={**TINY, "selfishness": 0.5}, seed=seed, steps=300,
-            eval_interval=150, eval_episodes=2)
-    for env in ("coexistence_v0", "sharing_v0") for seed in (0, 1)
+    RunSpec(
+        env=env,
+        method="empathic_dqn",
+        settings={**TINY, "selfishness": 0.5},
+        seed=seed,
+        steps=300,
+        eval_interval=150,
+        eval_episodes=2,
+    )
+    for env in ("coexistence_v0", "sharing_v0")
+    for seed in (0, 1)
 ]
 OPTIONS = RunnerOptions(progress=False, threads=1)
 RAY = replace(OPTIONS, backend="ray")
@@ -48,8 +56,7 @@ def _scores(path: Path) -> dict:
 
 def test_ray_gives_the_local_backends_result_files(local_ray, local_results, tmp_path) -> None:
     seen: list[str] = []
-    paths = train_runs(SPECS, tmp_path, RAY,
-                       on_result=lambda result: seen.append(result["run_id"]))
+    paths = train_runs(SPECS, tmp_path, RAY, on_result=lambda result: seen.append(result["run_id"]))
     assert sorted(seen) == sorted(spec.run_id for spec in SPECS)
     assert {path.name: _scores(path) for path in paths} == local_results
     assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == sorted(local_results)
@@ -74,14 +81,17 @@ def _kill_worker_once(marker: str):
     return inject
 
 
-def test_a_task_whose_worker_dies_is_retried_without_lost_or_duplicated_runs(
-    local_ray, local_results, tmp_path
-) -> None:
+def test_a_task_whose_worker_dies_is_retried_without_lost_or_duplicated_runs(local_ray, local_results, tmp_path) -> None:
     marker = tmp_path / "killed"
     seen: list[str] = []
     chunks = group_specs(SPECS, 32)
-    train_with_ray(chunks, tmp_path / "out", RAY, lambda result: seen.append(result["run_id"]),
-                   fault_injection=_kill_worker_once(str(marker)))
+    train_with_ray(
+        chunks,
+        tmp_path / "out",
+        RAY,
+        lambda result: seen.append(result["run_id"]),
+        fault_injection=_kill_worker_once(str(marker)),
+    )
     killed = marker.read_text()
     assert killed in {spec.run_id for spec in SPECS}, "the fault was injected"
     assert sorted(seen) == sorted(spec.run_id for spec in SPECS), "each run written exactly once"
@@ -99,9 +109,7 @@ def _fail_on(env: str):
     return inject
 
 
-def test_a_task_failing_every_retry_is_reported_after_the_others_are_written(
-    local_ray, local_results, tmp_path
-) -> None:
+def test_a_task_failing_every_retry_is_reported_after_the_others_are_written(local_ray, local_results, tmp_path) -> None:
     with pytest.raises(RuntimeError, match=r"1 ensemble task\(s\) failed after 3 retries.*sharing_v0") as caught:
         train_with_ray(group_specs(SPECS, 32), tmp_path, RAY, fault_injection=_fail_on("sharing_v0"))
     assert "injected failure on sharing_v0" in str(caught.value.__cause__)
@@ -121,7 +129,6 @@ def test_a_result_whose_file_exists_is_not_written_again(local_ray, local_result
     assert existing.read_text() == "written by someone else"
 
 
-
 def test_without_ray_the_error_says_how_to_install_it(monkeypatch, tmp_path) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # makes ``import ray`` fail, installed or not
     with pytest.raises(ImportError, match=r'pip install "empathy-zoo\[ray\]"'):
@@ -129,12 +136,15 @@ def test_without_ray_the_error_says_how_to_install_it(monkeypatch, tmp_path) -> 
     assert not (tmp_path / "runs").exists()
 
 
-@pytest.mark.parametrize("address, expected", [
-    ("ray://127.0.0.1:1", "cannot reach the Ray cluster at ray://127.0.0.1:1"),
-    ("127.0.0.1:1", "cannot reach the Ray cluster at 127.0.0.1:1"),
-    ("ray://192.0.2.1:10001", "cannot reach the Ray cluster at ray://192.0.2.1:10001"),  # TEST-NET: never answers
-    ("ray://no-port", "expected auto, ray://HOST:PORT"),
-])
+@pytest.mark.parametrize(
+    "address, expected",
+    [
+        ("ray://127.0.0.1:1", "cannot reach the Ray cluster at ray://127.0.0.1:1"),
+        ("127.0.0.1:1", "cannot reach the Ray cluster at 127.0.0.1:1"),
+        ("ray://192.0.2.1:10001", "cannot reach the Ray cluster at ray://192.0.2.1:10001"),  # TEST-NET: never answers
+        ("ray://no-port", "expected auto, ray://HOST:PORT"),
+    ],
+)
 def test_an_unreachable_cluster_fails_at_once_naming_the_address(tmp_path, monkeypatch, address, expected) -> None:
     ray = pytest.importorskip("ray")
     if ray.is_initialized():

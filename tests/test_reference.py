@@ -10,7 +10,12 @@ import torch
 from empathy_zoo import coexistence_v0
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT, CoexistenceEngine
 from empathy_zoo.reference import (
-    TIE_TOLERANCE, coexistence_optimum, coexistence_transitions, coexistence_values, greedy_actions, greedy_policy,
+    TIE_TOLERANCE,
+    coexistence_optimum,
+    coexistence_transitions,
+    coexistence_values,
+    greedy_actions,
+    greedy_policy,
     start_distribution,
 )
 from empathy_zoo.vector import VectorEnv
@@ -220,11 +225,18 @@ def assert_matches(exact, harms: np.ndarray, survival: np.ndarray) -> None:
 @pytest.mark.parametrize(
     ("kwargs", "name"),
     [
-        ({"selfishness": -0.1}, "selfishness"), ({"selfishness": 1.5}, "selfishness"),
-        ({"selfishness": float("nan")}, "selfishness"), ({"epsilon": -1e-9}, "epsilon"),
-        ({"epsilon": 2.0}, "epsilon"), ({"gamma": 1.0}, "gamma"), ({"gamma": -0.5}, "gamma"),
-        ({"size": 4}, "size"), ({"size": 7.0}, "size"), ({"max_cycles": 0}, "max_cycles"),
-        ({"tolerance": 0.0}, "tolerance"), ({"selfishness": "0.5"}, "selfishness"),
+        ({"selfishness": -0.1}, "selfishness"),
+        ({"selfishness": 1.5}, "selfishness"),
+        ({"selfishness": float("nan")}, "selfishness"),
+        ({"epsilon": -1e-9}, "epsilon"),
+        ({"epsilon": 2.0}, "epsilon"),
+        ({"gamma": 1.0}, "gamma"),
+        ({"gamma": -0.5}, "gamma"),
+        ({"size": 4}, "size"),
+        ({"size": 7.0}, "size"),
+        ({"max_cycles": 0}, "max_cycles"),
+        ({"tolerance": 0.0}, "tolerance"),
+        ({"selfishness": "0.5"}, "selfishness"),
     ],
 )
 def test_bad_arguments_raise(kwargs, name):

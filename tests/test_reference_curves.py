@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from helpers_results import synthetic_result
 
 from empathy_zoo.reference import coexistence_optimum
 from leaderboard.plots import plot_metric
-from helpers_results import synthetic_result
 from leaderboard.reference_curves import reference_curve
 
 
@@ -36,9 +36,11 @@ def test_no_reference_where_it_does_not_apply() -> None:
 
 
 def test_figure_with_references_is_written(tmp_path) -> None:
-    runs = [synthetic_result("coexistence_v0", method, beta, seed, harms=harms, survival=400)
-            for seed in range(2) for method, beta, harms in
-            (("empathic_dqn", 1.0, 0.9), ("empathic_dqn", 0.25, 0.1), ("dqn_harm_penalty", 1.0, 0.2))]
+    runs = [
+        synthetic_result("coexistence_v0", method, beta, seed, harms=harms, survival=400)
+        for seed in range(2)
+        for method, beta, harms in (("empathic_dqn", 1.0, 0.9), ("empathic_dqn", 0.25, 0.1), ("dqn_harm_penalty", 1.0, 0.2))
+    ]
     path = plot_metric(runs, "coexistence_v0", "harms", tmp_path / "harms.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

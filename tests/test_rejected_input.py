@@ -32,8 +32,10 @@ def test_fixed_agents_reject_a_bad_action_before_the_fixed_agents_act(bad, wrap)
     assert same(env_state(env), before)
 
 
-@pytest.mark.parametrize("actions, message", [({}, "no action given"), ({"dog_0": 1, ROBOT: 1}, "unknown agent"),
-                                              ({ROBOT: 1, CAT: 1}, "fixed agent"), ([1], "dict")])
+@pytest.mark.parametrize(
+    "actions, message",
+    [({}, "no action given"), ({"dog_0": 1, ROBOT: 1}, "unknown agent"), ({ROBOT: 1, CAT: 1}, "fixed agent"), ([1], "dict")],
+)
 def test_fixed_agents_reject_bad_action_dicts_before_the_fixed_agents_act(actions, message):
     env = fixed_coexistence()
     env.reset(seed=3)
@@ -52,11 +54,20 @@ FACES = {
 
 
 def bad_options(other):
-    options = [{"positions": {ROBOT: (9, 9)}}, {"positions": {"dog_0": (0, 0)}}, {"positions": {ROBOT: (0, 0), other: (0, 0)}},
-               {"positions": {ROBOT: (float("inf"), 0)}}, {"positions": {ROBOT: (float("nan"), 0)}}, {"positions": []},
-               "positions"]
-    return options + ([{"batteries": []}, {"batteries": [(0, 0), (0, 0)]}, {"batteries": [(0, 0)], "positions": {ROBOT: (0, 0)}}]
-                      if other == "human_0" else [])
+    options = [
+        {"positions": {ROBOT: (9, 9)}},
+        {"positions": {"dog_0": (0, 0)}},
+        {"positions": {ROBOT: (0, 0), other: (0, 0)}},
+        {"positions": {ROBOT: (float("inf"), 0)}},
+        {"positions": {ROBOT: (float("nan"), 0)}},
+        {"positions": []},
+        "positions",
+    ]
+    return options + (
+        [{"batteries": []}, {"batteries": [(0, 0), (0, 0)]}, {"batteries": [(0, 0)], "positions": {ROBOT: (0, 0)}}]
+        if other == "human_0"
+        else []
+    )
 
 
 @pytest.mark.parametrize("face", sorted(FACES))

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from helpers_resume import whole_and_resumed
 
 from agents.rewards import TrainRewards
 from baselines.inaction_baseline import InactionBaseline
@@ -19,7 +20,6 @@ from baselines.shaping import HarmPenalty
 from empathy_zoo import coexistence_v0
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
-from helpers_resume import whole_and_resumed
 
 SIZE = 7
 N = SIZE * SIZE
@@ -178,8 +178,7 @@ def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
         for i in np.flatnonzero(present.all(axis=1)):
             expected = []
             for robot_action in (STAY, int(actions[i])):
-                env.reset(options={"positions": {"robot_0": tuple(before[i, 0].tolist()),
-                                                 "cat_0": tuple(before[i, 1].tolist())}})
+                env.reset(options={"positions": {"robot_0": tuple(before[i, 0].tolist()), "cat_0": tuple(before[i, 1].tolist())}})
                 env.step({"robot_0": robot_action, "cat_0": Cycle.ACTIONS[steps[i] % 5]})
                 expected.append(int(rr.state_codes(env.unwrapped.engine)[0]))
             assert [batch.baseline_after[i, 0], batch.state_after[i, 0]] == expected
@@ -221,10 +220,21 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
         return shaped
 
     monkeypatch.setattr(RelativeReachability, "__call__", spy)
-    spec = RunSpec(env="coexistence_v0", method="dqn_relative_reachability", steps=300, eval_interval=150,
-                   eval_episodes=1, env_kwargs={"max_cycles": 40},
-                   settings={"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8,
-                             "epsilon_decay_steps": 200, "target_update_interval": 50})
+    spec = RunSpec(
+        env="coexistence_v0",
+        method="dqn_relative_reachability",
+        steps=300,
+        eval_interval=150,
+        eval_episodes=1,
+        env_kwargs={"max_cycles": 40},
+        settings={
+            "learning_starts": 32,
+            "replay_capacity": 300,
+            "hidden_size": 8,
+            "epsilon_decay_steps": 200,
+            "target_update_interval": 50,
+        },
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch, checkpoint_interval=120)
     # every step of the three trainings (whole, killed at its checkpoint at 120, resumed) had its baseline
     assert len(seen) == 300 + 120 + 180 and all(filled for filled, _ in seen) and max(p for _, p in seen) > 0.0
@@ -237,10 +247,15 @@ def test_a_run_beside_a_relative_reachability_run_is_unchanged_by_its_baseline(t
     from empathy_zoo.training.spec import RunSpec
 
     def spec(method: str) -> RunSpec:
-        return RunSpec(env="coexistence_v0", method=method, steps=200, eval_interval=100, eval_episodes=1,
-                       env_kwargs={"max_cycles": 40},
-                       settings={"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8,
-                                 "epsilon_decay_steps": 100})
+        return RunSpec(
+            env="coexistence_v0",
+            method=method,
+            steps=200,
+            eval_interval=100,
+            eval_episodes=1,
+            env_kwargs={"max_cycles": 40},
+            settings={"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8, "epsilon_decay_steps": 100},
+        )
 
     options = RunnerOptions(progress=False, checkpoint_interval=0)
     together = train_runs([spec("dqn"), spec("dqn_relative_reachability")], tmp_path / "together", options)

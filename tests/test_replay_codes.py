@@ -76,8 +76,15 @@ def test_a_sampled_batch_is_exactly_what_was_added() -> None:
     replay = StackedReplay(k, 64, v, torch.device("cpu"))
     obs, nxt, swapped, action, reward, terminated, present = _transitions(rng, k, m, v)
     for j in range(m):  # one transition per run per add, as the learner adds them
-        replay.add(obs[:, j:j + 1], nxt[:, j:j + 1], swapped[:, j:j + 1], action[:, j:j + 1], reward[:, j:j + 1],
-                   terminated[:, j:j + 1], present[:, j:j + 1])
+        replay.add(
+            obs[:, j : j + 1],
+            nxt[:, j : j + 1],
+            swapped[:, j : j + 1],
+            action[:, j : j + 1],
+            reward[:, j : j + 1],
+            terminated[:, j : j + 1],
+            present[:, j : j + 1],
+        )
     index = torch.from_numpy(rng.integers(0, m, (k, 32)))
     batch = replay.sample(index)
     rows = index.numpy()
@@ -97,8 +104,7 @@ def test_integer_batches_equal_the_old_int8_decoding() -> None:
     k, m, v = 2, 16, 25
     replay = StackedReplay(k, m, v, torch.device("cpu"))
     obs = rng.integers(-1, 11, (3, k, m, v)).astype(np.float32)
-    replay.add(obs[0], obs[1], obs[2], np.zeros((k, m), int), np.zeros((k, m)), np.zeros((k, m), bool),
-               np.ones((k, m), bool))
+    replay.add(obs[0], obs[1], obs[2], np.zeros((k, m), int), np.zeros((k, m)), np.zeros((k, m), bool), np.ones((k, m), bool))
     index = torch.from_numpy(rng.integers(0, m, (k, 8)))
     batch = replay.sample(index)
     old = torch.from_numpy(obs.astype(np.int8))[:, torch.arange(k)[:, None], index].float()
@@ -117,8 +123,15 @@ def test_replay_of_an_authors_env_keeps_its_observations() -> None:
         observations, *_ = env.step({"robot_0": int(rng.integers(5)), "human_0": int(rng.integers(5))})
         swapped = env.unwrapped.swapped_observation("robot_0", "human_0")
         added.append((before, observations["robot_0"], swapped))
-        replay.add(before[None, None], observations["robot_0"][None, None], swapped[None, None], np.zeros((1, 1), int),
-                   np.zeros((1, 1)), np.zeros((1, 1), bool), np.ones((1, 1), bool))
+        replay.add(
+            before[None, None],
+            observations["robot_0"][None, None],
+            swapped[None, None],
+            np.zeros((1, 1), int),
+            np.zeros((1, 1)),
+            np.zeros((1, 1), bool),
+            np.ones((1, 1), bool),
+        )
         if not env.agents:
             break
     assert any(0 < value < 1 for row in added for value in row[0]), "the robot should be drawn at least once"
@@ -167,8 +180,14 @@ def test_training_an_env_the_codes_cannot_hold_is_refused_before_it_starts(tmp_p
     from empathy_zoo.training.spec import RunSpec
 
     # Sharing on 9×9 holds 16 batteries: an agent can be drawn as 17, beyond the codes' 11.75
-    spec = RunSpec(env="sharing_v0", env_kwargs={"size": 9}, steps=50, eval_interval=50, eval_episodes=1,
-                   settings={"learning_starts": 32, "replay_capacity": 100})
+    spec = RunSpec(
+        env="sharing_v0",
+        env_kwargs={"size": 9},
+        steps=50,
+        eval_interval=50,
+        eval_episodes=1,
+        settings={"learning_starts": 32, "replay_capacity": 100},
+    )
     with pytest.raises(ValueError, match=r"observations range over \[-1, 17\]"):
         train_ensemble([spec], tmp_path, RunnerOptions(progress=False))
     assert not list(tmp_path.rglob("*.json"))

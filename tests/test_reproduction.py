@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import pytest
+from helpers_results import synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
-from helpers_results import synthetic_result
 from leaderboard.reproduction import NotThePaperSweep, assess_claims, training_window_epsilons, write_reproduction
 
 
@@ -30,15 +30,19 @@ def _paper_like(harm_for_low_beta: float = 0.0, equality_at_half: float = 0.95) 
             runs.append(synthetic_result("coexistence_v0", "empathic_dqn", beta, seed, harms=harms, survival=survival))
         runs.append(synthetic_result("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470))
         for beta, batteries, eq in ((1.0, 6, 0.5), (0.75, 5, 0.8), (0.5, 4.5, equality_at_half), (0.25, 3, 0.85)):
-            runs.append(synthetic_result("sharing_v0", "empathic_dqn", beta, seed, batteries=batteries,
-                                other_batteries=9 - batteries, equality=eq))
+            runs.append(
+                synthetic_result(
+                    "sharing_v0", "empathic_dqn", beta, seed, batteries=batteries, other_batteries=9 - batteries, equality=eq
+                )
+            )
         runs.append(synthetic_result("sharing_v0", "dqn_equality", 1.0, seed, batteries=4.5, equality=0.97))
     return runs
 
 
 def _verdicts(runs: list[dict]) -> dict[str, tuple[str, str]]:
-    return {c.text: (c.verdicts["greedy"].word, c.verdicts["training"].word)
-            for c in assess_claims(runs, reference=fake_reference)}
+    return {
+        c.text: (c.verdicts["greedy"].word, c.verdicts["training"].word) for c in assess_claims(runs, reference=fake_reference)
+    }
 
 
 def test_claims_that_hold_are_reproduced_in_both_phases() -> None:
@@ -73,9 +77,11 @@ def test_survival_is_judged_against_the_reference_at_the_phase_epsilon() -> None
     # the final 10 % of training is steps 3600-4000, where ε falls from ≈ 0.112 to 0.01
     schedule = training_window_epsilons(next(r for r in runs if r["env"] == "coexistence_v0"))
     assert sum(schedule.values()) == 400 and min(schedule) == 0.01 and 0.11 < max(schedule) < 0.12
+
     # a reference that asks for more survival than the runs show fails the claim in training only
     def strict(selfishness: float, epsilon: float, *, gamma: float, max_cycles: int) -> FakeOutcome:
         return FakeOutcome(harms=0.01, survival=500.0 if epsilon > 0 else 400.0)
+
     claim = next(c for c in assess_claims(runs, reference=strict) if "eventually survive" in c.text)
     assert (claim.verdicts["greedy"].word, claim.verdicts["training"].word) == ("reproduced", "not reproduced")
 
@@ -99,6 +105,7 @@ def test_runs_outside_the_papers_setting_are_left_out() -> None:
 
 
 # --- the figures beside the verdicts: share of steps, tie-break range, survival against the schedule ---
+
 
 def test_training_window_share_is_the_steps_of_the_final_episodes_not_ten_percent() -> None:
     from leaderboard.reproduction import training_window_share
@@ -124,8 +131,9 @@ def test_tie_break_bounds_with_one_action_per_state_are_that_policys_figures() -
         q_emp = coexistence_values(beta)[1][:49]
         lowest_index = np.eye(5, dtype=bool)[greedy_actions(q_emp)]
         for metric in ("harms", "survival"):
-            expected = sum(w * getattr(coexistence_optimum(beta, e, ties="first", max_cycles=60), metric)
-                           for e, w in zip(epsilons, weights))
+            expected = sum(
+                w * getattr(coexistence_optimum(beta, e, ties="first", max_cycles=60), metric) for e, w in zip(epsilons, weights)
+            )
             for highest in (False, True):
                 assert _tie_bound(lowest_index, epsilons, weights, metric, highest, 60, 7) == pytest.approx(expected, abs=1e-9)
 
@@ -171,7 +179,8 @@ def test_survival_rise_separates_learning_from_the_schedule() -> None:
     schedule_only = survival_rise(_rising_runs(lambda e: 400 - 1000 * e), fake_reference, gamma=0.99, max_cycles=500)
     assert schedule_only.reference[1] > schedule_only.reference[0]
     assert schedule_only.learner[1] - schedule_only.learner[0] == pytest.approx(
-        schedule_only.reference[1] - schedule_only.reference[0])
+        schedule_only.reference[1] - schedule_only.reference[0]
+    )
     assert schedule_only.gap == pytest.approx((80.0, 80.0)) and schedule_only.widened == 0 and schedule_only.runs == 3
     # a learner that rises by half as much as the schedule gives the optimum falls behind it
     lagging = survival_rise(_rising_runs(lambda e: 400 - 500 * e), fake_reference, gamma=0.99, max_cycles=500)

@@ -82,6 +82,7 @@ def _set(path, value):
             del result[last]
         else:
             result[last] = value
+
     return mutate
 
 
@@ -99,7 +100,10 @@ MALFORMED = {
     "no config": (_set(["config"], DELETE), "config: missing"),
     "config not an object": (_set(["config"], "paper"), "config: expected an object"),
     "config without settings": (_set(["config", "settings"], DELETE), "config.settings: missing"),
-    "a setting of the wrong type": (_set(["config", "settings", "selfishness"], "half"), "config.settings: expected settings of dqn"),
+    "a setting of the wrong type": (
+        _set(["config", "settings", "selfishness"], "half"),
+        "config.settings: expected settings of dqn",
+    ),
     "an unknown setting": (_set(["config", "settings", "speed"], 2), "config.settings: expected settings of dqn"),
     "a fixed policy not a string": (_set(["config", "fixed", "cat_0"], 3), "config.fixed.cat_0"),
     "seed as a string": (_set(["seed"], "0"), "seed: expected an int >= 0"),
@@ -226,8 +230,11 @@ def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() ->
     from empathy_zoo.result_file import SCHEMA, read_result
 
     runs = Path(__file__).resolve().parents[1] / "docs" / "results" / "paper" / "runs"  # made by 0.1.0
-    expected = {"dqn_harm_penalty": {"name": "harm_penalty", "penalty": -100.0},
-                "dqn_equality": {"name": "equality_scaling"}, "empathic_dqn": None}
+    expected = {
+        "dqn_harm_penalty": {"name": "harm_penalty", "penalty": -100.0},
+        "dqn_equality": {"name": "equality_scaling"},
+        "empathic_dqn": None,
+    }
     seen = set()
     for path in sorted(runs.glob("*__s0.json")):
         raw = read_json(path)

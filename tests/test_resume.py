@@ -15,14 +15,28 @@ from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.resume import CHECKPOINT_DIR
 from empathy_zoo.training.spec import RunSpec
 
-SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8, "target_update_interval": 50,
-            "epsilon_decay_steps": 200}
+SETTINGS = {
+    "learning_starts": 32,
+    "replay_capacity": 300,
+    "hidden_size": 8,
+    "target_update_interval": 50,
+    "epsilon_decay_steps": 200,
+}
 
 
 def specs(seeds=(0, 1, 2), betas=(0.5,)):
-    return [RunSpec(settings={**SETTINGS, "selfishness": beta}, seed=seed, steps=300, eval_interval=150,
-                    eval_episodes=1, env_kwargs={"max_cycles": 40})
-            for beta in betas for seed in seeds]
+    return [
+        RunSpec(
+            settings={**SETTINGS, "selfishness": beta},
+            seed=seed,
+            steps=300,
+            eval_interval=150,
+            eval_episodes=1,
+            env_kwargs={"max_cycles": 40},
+        )
+        for beta in betas
+        for seed in seeds
+    ]
 
 
 def options(k=3):
@@ -141,8 +155,11 @@ def test_a_checkpoint_of_finished_runs_is_removed(tmp_path, monkeypatch):
 def test_temporary_files_of_killed_writes_are_removed_on_the_next_run(tmp_path):
     out = tmp_path / "out"
     dead = 2**22 + 12345  # above Linux's default pid_max: no such process
-    stale = [out / "runs" / f".x.json.{dead}.abcd1234.tmp", out / CHECKPOINT_DIR / f".c.pt.{dead}.0badc0de.tmp",
-             out / "runs" / ".x.json.k3j4h5.tmp"]  # the last: a name from before temporary files carried a pid
+    stale = [
+        out / "runs" / f".x.json.{dead}.abcd1234.tmp",
+        out / CHECKPOINT_DIR / f".c.pt.{dead}.0badc0de.tmp",
+        out / "runs" / ".x.json.k3j4h5.tmp",
+    ]  # the last: a name from before temporary files carried a pid
     live = out / "runs" / f".y.json.{os.getpid()}.feedbeef.tmp"  # a write in progress in a live process
     for path in [*stale, live]:
         write_bytes_atomic(path, b"half")
@@ -159,8 +176,11 @@ def test_temporary_files_beside_the_leaderboard_are_removed_when_it_is_written(t
     from leaderboard.report import write_leaderboard
 
     write_json_atomic(tmp_path / "runs" / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
-    stale = [tmp_path / ".LEADERBOARD.md.4194305.0badc0de.tmp", tmp_path / "figures" / ".x.png.4194305.0badc0de.tmp",
-             tmp_path / ".write-probe-4194305"]
+    stale = [
+        tmp_path / ".LEADERBOARD.md.4194305.0badc0de.tmp",
+        tmp_path / "figures" / ".x.png.4194305.0badc0de.tmp",
+        tmp_path / ".write-probe-4194305",
+    ]
     for path in stale:
         write_bytes_atomic(path, b"half")
     write_leaderboard(tmp_path)

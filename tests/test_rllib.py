@@ -22,8 +22,11 @@ from empathy_zoo import FixedAgents, RandomWalk, coexistence_v0, sharing_v0
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.grid import MOVES
 
-pettingzoo_env = pytest.importorskip("ray.rllib.env.wrappers.pettingzoo_env", exc_type=ImportError,
-                                     reason='RLlib is not installed (pip install -e ".[test-rllib]")')
+pettingzoo_env = pytest.importorskip(
+    "ray.rllib.env.wrappers.pettingzoo_env",
+    exc_type=ImportError,
+    reason='RLlib is not installed (pip install -e ".[test-rllib]")',
+)
 pytestmark = pytest.mark.rllib
 ParallelPettingZooEnv = pettingzoo_env.ParallelPettingZooEnv
 
@@ -188,7 +191,8 @@ def test_rllib_leaves_the_cat_to_its_random_walk(greedy_episodes) -> None:
     for seed, episode in greedy_episodes.items():
         replay = replay_in_the_suite(episode["actions"], seed)
         assert np.array_equal(np.stack(episode["positions"]), np.stack(replay["positions"])), (
-            "same seed and robot actions: the same trajectory as the suite's own FixedAgents run")
+            "same seed and robot actions: the same trajectory as the suite's own FixedAgents run"
+        )
         walk = RandomWalk()
         walk.reset(policy_seed(seed, cat))
         positions = np.stack(episode["positions"])[:, cat]
@@ -197,7 +201,8 @@ def test_rllib_leaves_the_cat_to_its_random_walk(greedy_episodes) -> None:
                 break  # harmed on this step: it moved, then left
             expected = MOVES[walk.act(np.zeros(0), {})]
             assert np.array_equal((positions[step + 1] - positions[step]) % size, expected % size), (
-                f"seed {seed}, step {step}: the cat takes its own random walk's move")
+                f"seed {seed}, step {step}: the cat takes its own random walk's move"
+            )
             moved += int(expected.any())
     assert moved > 0
 

@@ -28,8 +28,16 @@ OPTIONS = RunnerOptions(progress=False, checkpoint_interval=0)
 
 
 def spec(method: str, settings: dict, seed: int = 0, env: str = "coexistence_v0", steps: int = 300) -> RunSpec:
-    return RunSpec(env=env, method=method, settings=settings, seed=seed, steps=steps, eval_interval=150,
-                   eval_episodes=2, env_kwargs={"max_cycles": 60})
+    return RunSpec(
+        env=env,
+        method=method,
+        settings=settings,
+        seed=seed,
+        steps=steps,
+        eval_interval=150,
+        eval_episodes=2,
+        env_kwargs={"max_cycles": 60},
+    )
 
 
 def read(path) -> dict:
@@ -37,13 +45,18 @@ def read(path) -> dict:
 
 
 @needs_sb3
-@pytest.mark.parametrize("method, settings, env", [
-    ("baselines.sb3:SB3_DQN", DQN_SMALL, "coexistence_v0"),
-    ("baselines.sb3:SB3_PPO", PPO_SMALL, "sharing_v0"),
-])
+@pytest.mark.parametrize(
+    "method, settings, env",
+    [
+        ("baselines.sb3:SB3_DQN", DQN_SMALL, "coexistence_v0"),
+        ("baselines.sb3:SB3_PPO", PPO_SMALL, "sharing_v0"),
+    ],
+)
 def test_runner_trains_it_and_the_suite_scores_it(tmp_path, method, settings, env):
     reference = {"learning_starts": 50, "replay_capacity": 1_000, "selfishness": 0.5}
-    sb3_path, edqn_path = train_runs([spec(method, settings, env=env), spec("empathic_dqn", reference, env=env)], tmp_path, OPTIONS)
+    sb3_path, edqn_path = train_runs(
+        [spec(method, settings, env=env), spec("empathic_dqn", reference, env=env)], tmp_path, OPTIONS
+    )
     sb3, edqn = read(sb3_path), read(edqn_path)
     assert sb3["method_label"] == ("SB3 DQN" if "DQN" in method else "SB3 PPO")
     assert set(sb3["train"]) == set(edqn["train"]) == {"episode_end_step", *METRIC_NAMES}
@@ -65,21 +78,33 @@ def drive(learner: SB3Learner, env, steps: int, seed: int) -> np.ndarray:
     for _ in range(steps):
         action = learner.act(obs[None, None])
         next_obs, reward, terminated, truncated, _ = env.step(action[0, 0])
-        learner.observe(StepBatch(
-            obs=obs[None, None], actions=action, rewards=np.array([[reward]]), terminated=np.array([[terminated]]),
-            next_obs=next_obs[None, None], swapped_next_obs=np.zeros_like(obs)[None, None],
-            other_present=zero.astype(bool), harmed_other=zero, battery_return=zero, other_battery_return=zero,
-            truncated=np.array([[truncated]]),
-        ))
+        learner.observe(
+            StepBatch(
+                obs=obs[None, None],
+                actions=action,
+                rewards=np.array([[reward]]),
+                terminated=np.array([[terminated]]),
+                next_obs=next_obs[None, None],
+                swapped_next_obs=np.zeros_like(obs)[None, None],
+                other_present=zero.astype(bool),
+                harmed_other=zero,
+                battery_return=zero,
+                other_battery_return=zero,
+                truncated=np.array([[truncated]]),
+            )
+        )
         obs = env.reset()[0] if terminated or truncated else next_obs
     return obs
 
 
 @needs_sb3
-@pytest.mark.parametrize("algorithm, kwargs, steps", [
-    ("dqn", DQN_SMALL["algorithm_kwargs"], 250),
-    ("ppo", PPO_SMALL["algorithm_kwargs"], 256),  # 4 rollouts, episodes truncated at 30 steps
-])
+@pytest.mark.parametrize(
+    "algorithm, kwargs, steps",
+    [
+        ("dqn", DQN_SMALL["algorithm_kwargs"], 250),
+        ("ppo", PPO_SMALL["algorithm_kwargs"], 256),  # 4 rollouts, episodes truncated at 30 steps
+    ],
+)
 def test_learns_bit_identically_to_sb3_learn_on_the_gym_adapter(algorithm, kwargs, steps):
     settings = SB3Settings(algorithm=algorithm, algorithm_kwargs=kwargs, batch_size=32, schedule_steps=steps)
     model = make_sb3_model(settings, make_single_agent_env("sharing_v0", max_cycles=30), sb3_seed(7))

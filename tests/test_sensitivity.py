@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import pytest
-
 from helpers_results import synthetic_result
+
 from leaderboard.sensitivity import DEFAULT_CONDITION, condition_of, sensitivity_markdown, sensitivity_rows
 
 
@@ -12,8 +12,16 @@ def _condition_runs(start: str, encoding: str, human: str, equality_at_half: flo
     runs = []
     for seed in range(3):
         for beta, robot, eq in ((1.0, 6, 0.75), (0.75, 5, 0.9), (0.5, 4.5, equality_at_half), (0.25, 3, 0.75)):
-            run = synthetic_result("sharing_v0", "empathic_dqn", beta, seed, fixed={"human_0": human},
-                                   batteries=robot, other_batteries=9 - robot, equality=eq)
+            run = synthetic_result(
+                "sharing_v0",
+                "empathic_dqn",
+                beta,
+                seed,
+                fixed={"human_0": human},
+                batteries=robot,
+                other_batteries=9 - robot,
+                equality=eq,
+            )
             run["config"]["env_kwargs"] = {"start": start, "inventory_encoding": encoding}
             if (start, encoding, human) == DEFAULT_CONDITION:
                 run["config"]["env_kwargs"] = {}
@@ -86,8 +94,10 @@ def test_the_mean_take_closest_to_half_need_not_be_the_most_equal() -> None:
     assert "### Is equality set by the robot's mean take?" in text
     row = next(line for line in text.splitlines() if "| training | β = 1 (4.50)" in line)
     assert "| β = 0.75 (0.50) | β = 0.75 (" in row and row.endswith("| 100.0 % |")
-    assert ("Greedy: in 1 of 1 conditions the β whose mean take is closest to the fair split is not the most equal, "
-            "and in 0 of 1 the β closest episode by episode is not; training: in 1 of 1") in text
+    assert (
+        "Greedy: in 1 of 1 conditions the β whose mean take is closest to the fair split is not the most equal, "
+        "and in 0 of 1 the β closest episode by episode is not; training: in 1 of 1"
+    ) in text
 
 
 def test_the_fair_split_counts_episodes_where_not_all_batteries_were_collected() -> None:

@@ -15,7 +15,7 @@ import pytest
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
-from empathy_zoo.engine import CoexistenceEngine, SharingEngine
+from empathy_zoo.engine import CoexistenceEngine
 from empathy_zoo.engine.sharing import agent_value, battery_value
 from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.grid import NUM_ACTIONS, Action, torus_distance
@@ -30,28 +30,44 @@ SEVERAL_IDS = ["coexistence_v0-3-cats", "sharing_v0-2-humans"]
 # ---------------------------------------------------------------------------- the defaults, pinned
 STEPS = 400
 VECTOR_FIELDS = (
-    "observations", "final_observations", "swapped", "swapped_valid", "swapped_other_terminated", "rewards",
-    "terminated", "truncated", "episode_over", "harmed_by", "collected", "battery_return", "learner_rewards",
-    "learner_terminated", "learner_truncated", "learner_harmed", "learner_battery_return", "other_battery_return",
-    "other_rewards", "finished",
+    "observations",
+    "final_observations",
+    "swapped",
+    "swapped_valid",
+    "swapped_other_terminated",
+    "rewards",
+    "terminated",
+    "truncated",
+    "episode_over",
+    "harmed_by",
+    "collected",
+    "battery_return",
+    "learner_rewards",
+    "learner_terminated",
+    "learner_truncated",
+    "learner_harmed",
+    "learner_battery_return",
+    "other_battery_return",
+    "other_rewards",
+    "finished",
 )
 """The :class:`~empathy_zoo.vector.VectorStep` fields every version has."""
 
 DEFAULT_DIGESTS = {
-    'coexistence_v0 empathy': '007fef7d3c18e858bc186c092b0e44c25f6c9d5f5387afb6c5dbbbc694b64f99',
-    'coexistence_v0 empathy in view': 'ad2e8aa0d0a4f849c3a760c37c8c9d9084c79011d4274e9823207a0ba8659f22',
-    'coexistence_v0 fixed': '3836eec4270f6e37d3c9ab194d3d9f5db9b87b47880c82f2b3565d316dc89c8e',
-    'coexistence_v0 vector': '68b4b2d2a8a017a24c744734e5a88bf58bc33a272917328e4e0cf98467141901',
-    'coexistence_v0 vector in view': '274e840480f88a5c189fa9f525c626e2af93e78425719e4d51f3e1d2b0111efb',
-    'coexistence_v0 vector two learners': '4fbf0565bd6df4cd4b8550f413369d2bb27bff49baf7d20442f2d11a3812966f',
-    'sharing_v0 empathy': 'f435595cda5e622cfe2736b70f110e02284ddccb288a58b9e047e1d0bccb1c6a',
-    'sharing_v0 empathy in view': '76e8df8d5f0a44fe02590880aff93793ef7ba234c26d8775e9794a5352fee9f3',
-    'sharing_v0 fixed': '79bb438e7be83d0ae4fe519fe59b33684656d038c524e1ff01db9cabb1d888d1',
-    'sharing_v0 vector': 'a8078e30dfa329727ec436e253b59da4bcc66f885f620d78c4dc3d598b918012',
-    'sharing_v0 vector in view': 'bed2ecff78a8ee80ca1f5395646f667f02f96db03df3c00b33da866e6a393101',
-    'sharing_v0 vector two learners': '3eb44c867ecb2826e9f547c99f736b65ca432c6af28482a08a81998af63202ef',
-    'sharing_v0 ties': 'dee75ff820960f7472088e68aaf39e9786a29ded8241b9a6f641705d7c1f8502',
-    'sharing_v0 centre authors': '60e54e7f5e2cac55f477644a816adaac6d6efda484caa37ce7ef5ea653ad7e3e',
+    "coexistence_v0 empathy": "007fef7d3c18e858bc186c092b0e44c25f6c9d5f5387afb6c5dbbbc694b64f99",
+    "coexistence_v0 empathy in view": "ad2e8aa0d0a4f849c3a760c37c8c9d9084c79011d4274e9823207a0ba8659f22",
+    "coexistence_v0 fixed": "3836eec4270f6e37d3c9ab194d3d9f5db9b87b47880c82f2b3565d316dc89c8e",
+    "coexistence_v0 vector": "68b4b2d2a8a017a24c744734e5a88bf58bc33a272917328e4e0cf98467141901",
+    "coexistence_v0 vector in view": "274e840480f88a5c189fa9f525c626e2af93e78425719e4d51f3e1d2b0111efb",
+    "coexistence_v0 vector two learners": "4fbf0565bd6df4cd4b8550f413369d2bb27bff49baf7d20442f2d11a3812966f",
+    "sharing_v0 empathy": "f435595cda5e622cfe2736b70f110e02284ddccb288a58b9e047e1d0bccb1c6a",
+    "sharing_v0 empathy in view": "76e8df8d5f0a44fe02590880aff93793ef7ba234c26d8775e9794a5352fee9f3",
+    "sharing_v0 fixed": "79bb438e7be83d0ae4fe519fe59b33684656d038c524e1ff01db9cabb1d888d1",
+    "sharing_v0 vector": "a8078e30dfa329727ec436e253b59da4bcc66f885f620d78c4dc3d598b918012",
+    "sharing_v0 vector in view": "bed2ecff78a8ee80ca1f5395646f667f02f96db03df3c00b33da866e6a393101",
+    "sharing_v0 vector two learners": "3eb44c867ecb2826e9f547c99f736b65ca432c6af28482a08a81998af63202ef",
+    "sharing_v0 ties": "dee75ff820960f7472088e68aaf39e9786a29ded8241b9a6f641705d7c1f8502",
+    "sharing_v0 centre authors": "60e54e7f5e2cac55f477644a816adaac6d6efda484caa37ce7ef5ea653ad7e3e",
 }
 """What :func:`default_digests` gave at the last commit before ``num_cats`` / ``num_humans``."""
 
@@ -123,16 +139,20 @@ def default_digests(coexistence: dict | None = None, sharing: dict | None = None
         fixed = DEFAULT_POLICIES[name]
         out[f"{name} empathy"] = parallel_digest(EmpathyWrapper(module.parallel_env(**kwargs)), seed=3, action_seed=1)
         out[f"{name} empathy in view"] = parallel_digest(
-            EmpathyWrapper(module.parallel_env(**kwargs), in_view_only=True), seed=4, action_seed=2)
-        out[f"{name} fixed"] = parallel_digest(EmpathyWrapper(FixedAgents(module.parallel_env(**kwargs), fixed)), seed=5,
-                                               action_seed=3)
+            EmpathyWrapper(module.parallel_env(**kwargs), in_view_only=True), seed=4, action_seed=2
+        )
+        out[f"{name} fixed"] = parallel_digest(
+            EmpathyWrapper(FixedAgents(module.parallel_env(**kwargs), fixed)), seed=5, action_seed=3
+        )
         out[f"{name} vector"] = vector_digest(name, fixed, False, seed=6, action_seed=4, **kwargs)
         out[f"{name} vector in view"] = vector_digest(name, fixed, True, seed=7, action_seed=5, **kwargs)
         out[f"{name} vector two learners"] = vector_digest(name, None, False, seed=8, action_seed=6, **kwargs)
     out["sharing_v0 ties"] = tie_digest(**(sharing or {}))
     out["sharing_v0 centre authors"] = parallel_digest(
         EmpathyWrapper(sharing_v0.parallel_env(start="centre", inventory_encoding="authors", **(sharing or {}))),
-        seed=9, action_seed=7)
+        seed=9,
+        action_seed=7,
+    )
     return out
 
 
@@ -168,7 +188,7 @@ def test_parallel_api_and_seed(module, kwargs):
 
 @pytest.mark.parametrize("module, kwargs", SEVERAL, ids=SEVERAL_IDS)
 def test_agents_are_the_robot_and_numbered_others(module, kwargs):
-    (argument, count), = kwargs.items()
+    ((argument, count),) = kwargs.items()
     env = module.parallel_env(**kwargs)
     kind = "cat" if argument == "num_cats" else "human"
     assert env.possible_agents == [ROBOT] + [f"{kind}_{i}" for i in range(count)]
@@ -308,8 +328,11 @@ def test_cats_pass_through_each_other():
     env = cats(3, {ROBOT: (5, 5), "cat_0": (0, 0), "cat_1": (0, 1), "cat_2": (1, 0)})
     # cat_0 and cat_1 exchange cells while cat_2 steps onto cat_1's new one; then they stand side
     # by side and on one cell, then cat_0 steps down next to them: nobody is harmed
-    for actions in ({"cat_0": RIGHT, "cat_1": LEFT, "cat_2": UP}, {"cat_0": STAY, "cat_1": STAY, "cat_2": STAY},
-                    {"cat_0": DOWN, "cat_1": STAY, "cat_2": STAY}):
+    for actions in (
+        {"cat_0": RIGHT, "cat_1": LEFT, "cat_2": UP},
+        {"cat_0": STAY, "cat_1": STAY, "cat_2": STAY},
+        {"cat_0": DOWN, "cat_1": STAY, "cat_2": STAY},
+    ):
         observations, rewards, terminations, _, infos = env.step({ROBOT: STAY, **actions})
         assert not any(terminations.values()) and set(rewards.values()) == {1.0}
         assert all(info == {"harmed_by": None, "harmed": []} for info in infos.values())
@@ -333,8 +356,11 @@ def test_observations_draw_every_other_agent():
 def closest_by_hand(engine: Any, viewer: int) -> int | None:
     """The present agent at the least torus distance from ``viewer``, ties to the lower index."""
     pos, present = engine.pos[0].tolist(), engine.present[0].tolist()
-    candidates = [(int(torus_distance(np.array(pos[viewer]), np.array(pos[o]), engine.size)), o)
-                  for o in range(engine.num_agents) if o != viewer and present[o]]
+    candidates = [
+        (int(torus_distance(np.array(pos[viewer]), np.array(pos[o]), engine.size)), o)
+        for o in range(engine.num_agents)
+        if o != viewer and present[o]
+    ]
     return min(candidates)[1] if candidates else None
 
 
@@ -426,8 +452,13 @@ def test_in_view_only_swaps_with_the_others_in_view(module, kwargs):
             _, infos = env.reset()
         for agent, info in infos.items():
             v = env.possible_agents.index(agent)
-            expected = [o for o in env.possible_agents if o != agent and engine.present[0, env.possible_agents.index(o)]
-                        and engine.in_view(v, env.possible_agents.index(o))[0]]
+            expected = [
+                o
+                for o in env.possible_agents
+                if o != agent
+                and engine.present[0, env.possible_agents.index(o)]
+                and engine.in_view(v, env.possible_agents.index(o))[0]
+            ]
             assert list(info["swapped_obs"]) == expected
             kinds.add(len(expected))
         infos = env.step({agent: int(rng.integers(NUM_ACTIONS)) for agent in env.agents})[4]
@@ -473,8 +504,10 @@ def test_the_same_seed_gives_the_same_winners():
 
 def test_sharing_metrics_sum_over_the_others_and_compare_with_their_mean():
     env = sharing_v0.parallel_env(num_humans=2)
-    env.reset(seed=0, options={"positions": {ROBOT: (0, 1), "human_0": (0, 3), "human_1": (5, 5)},
-                               "batteries": [(1, 1), (1, 3), (2, 3)]})
+    env.reset(
+        seed=0,
+        options={"positions": {ROBOT: (0, 1), "human_0": (0, 3), "human_1": (5, 5)}, "batteries": [(1, 1), (1, 3), (2, 3)]},
+    )
     env.step({ROBOT: DOWN, "human_0": DOWN, "human_1": STAY})  # robot (1, 1), human_0 (1, 3)
     _, _, terminations, _, infos = env.step({ROBOT: STAY, "human_0": DOWN, "human_1": STAY})  # human_0 (2, 3)
     assert all(terminations.values())

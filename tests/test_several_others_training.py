@@ -74,8 +74,14 @@ def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
     specs = load_sweep(profile_path("methods"))
     assert len(specs) == 140 and {s.seed for s in specs} == set(range(5))
     methods = {(s.variant, s.method) for s in specs}
-    for method in ("dqn_aup", "dqn_social_value", "dqn_inequity_aversion", "empathic_dqn_silver", "empathic_dqn_in_view",
-                   "dqn_considerate"):
+    for method in (
+        "dqn_aup",
+        "dqn_social_value",
+        "dqn_inequity_aversion",
+        "empathic_dqn_silver",
+        "empathic_dqn_in_view",
+        "dqn_considerate",
+    ):
         assert ("coexistence_v0", method) in methods and ("sharing_v0", method) in methods
     assert ("coexistence_v0", "dqn_relative_reachability") in methods and ("coexistence_v0", "dqn_lagrangian") in methods
     several = {s.method_settings().others for s in specs if s.variant in ("coexistence_3cats", "sharing_2humans")}

@@ -13,17 +13,22 @@ from pettingzoo.test import api_test, parallel_api_test
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.engine.sharing import BATTERY, FLOOR, INVENTORY_ENCODINGS, STARTS
-from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.training import RunnerOptions, train_ensemble
 from empathy_zoo.training.spec import RunSpec
-from empathy_zoo.vector import VectorEnv
 from empathy_zoo.training.sweep import SweepConfigError, load_sweep
+from empathy_zoo.vector import VectorEnv
 
 ROBOT, HUMAN = "robot_0", "human_0"
 OPTIONS = {"start": "centre", "inventory_encoding": "authors"}
-TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 500, "target_update_interval": 50,
-        "hidden_size": 16}
+TINY = {
+    "learning_starts": 64,
+    "replay_capacity": 2_000,
+    "epsilon_decay_steps": 500,
+    "target_update_interval": 50,
+    "hidden_size": 16,
+}
 
 
 def authors(n: int) -> np.float32:
@@ -37,12 +42,15 @@ def positions(env) -> dict[str, tuple[int, int]]:
 
 
 # ---------------------------------------------------------------------------- start = "centre"
-@pytest.mark.parametrize(("size", "robot", "human"), [
-    (7, (2, 3), (3, 2)),  # the middle cell (3, 3) holds a battery: its nearest free cells, row-major
-    (9, (4, 4), (3, 4)),  # the middle cell is free: the robot on it, the human on the first neighbour
-    (8, (4, 4), (3, 4)),
-    (5, (2, 2), (1, 2)),
-])
+@pytest.mark.parametrize(
+    ("size", "robot", "human"),
+    [
+        (7, (2, 3), (3, 2)),  # the middle cell (3, 3) holds a battery: its nearest free cells, row-major
+        (9, (4, 4), (3, 4)),  # the middle cell is free: the robot on it, the human on the first neighbour
+        (8, (4, 4), (3, 4)),
+        (5, (2, 2), (1, 2)),
+    ],
+)
 def test_centre_start_cells(size, robot, human):
     env = sharing_v0.parallel_env(size=size, view=3, start="centre")
     for seed in (0, 1, 12345):
@@ -95,8 +103,7 @@ def test_centre_start_in_the_vector_env_and_after_autoreset():
 def test_authors_values_in_observations_and_swapped_observations():
     env = EmpathyWrapper(sharing_v0.parallel_env(inventory_encoding="authors"))
     # robot at (1, 0) walks right over the batteries at (1, 1) and (1, 2); the human waits at (3, 1)
-    obs, infos = env.reset(seed=0, options={"positions": {ROBOT: (1, 0), HUMAN: (3, 1)},
-                                            "batteries": [(1, 1), (1, 2), (5, 5)]})
+    obs, infos = env.reset(seed=0, options={"positions": {ROBOT: (1, 0), HUMAN: (3, 1)}, "batteries": [(1, 1), (1, 2), (5, 5)]})
     space = env.observation_space(ROBOT)
     assert space.high.max() == authors(9) and space.low.min() == BATTERY  # bounds: up to the 9 batteries of 7×7
     for n in range(3):
@@ -233,16 +240,22 @@ def test_each_option_changes_the_trajectory():
 
 
 # ---------------------------------------------------------------------------- bad values
-@pytest.mark.parametrize(("kwargs", "named"), [
-    ({"start": "middle"}, "start must be one of 'random', 'centre'; got 'middle'"),
-    ({"start": None}, "start must be one of"),
-    ({"inventory_encoding": "count"}, "inventory_encoding must be one of 'count_plus_one', 'authors'; got 'count'"),
-    ({"inventory_encoding": 1}, "inventory_encoding must be one of"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "named"),
+    [
+        ({"start": "middle"}, "start must be one of 'random', 'centre'; got 'middle'"),
+        ({"start": None}, "start must be one of"),
+        ({"inventory_encoding": "count"}, "inventory_encoding must be one of 'count_plus_one', 'authors'; got 'count'"),
+        ({"inventory_encoding": 1}, "inventory_encoding must be one of"),
+    ],
+)
 def test_bad_values_raise_naming_the_argument_and_the_choices(kwargs, named):
-    for make in (lambda: sharing_v0.parallel_env(**kwargs), lambda: sharing_v0.env(**kwargs),
-                 lambda: VectorEnv("sharing_v0", 2, **kwargs),
-                 lambda: make_single_agent_env("sharing_v0", **kwargs)):
+    for make in (
+        lambda: sharing_v0.parallel_env(**kwargs),
+        lambda: sharing_v0.env(**kwargs),
+        lambda: VectorEnv("sharing_v0", 2, **kwargs),
+        lambda: make_single_agent_env("sharing_v0", **kwargs),
+    ):
         with pytest.raises(ValueError) as caught:
             make()
         assert named in str(caught.value)
@@ -253,9 +266,12 @@ def test_bad_values_raise_naming_the_argument_and_the_choices(kwargs, named):
 @pytest.mark.parametrize("name", ["start", "inventory_encoding"])
 def test_coexistence_takes_no_fidelity_argument(name):
     value = {"start": "centre", "inventory_encoding": "authors"}[name]
-    for make in (lambda: coexistence_v0.parallel_env(**{name: value}), lambda: coexistence_v0.env(**{name: value}),
-                 lambda: VectorEnv("coexistence_v0", 2, **{name: value}),
-                 lambda: make_single_agent_env("coexistence_v0", **{name: value})):
+    for make in (
+        lambda: coexistence_v0.parallel_env(**{name: value}),
+        lambda: coexistence_v0.env(**{name: value}),
+        lambda: VectorEnv("coexistence_v0", 2, **{name: value}),
+        lambda: make_single_agent_env("coexistence_v0", **{name: value}),
+    ):
         with pytest.raises(TypeError, match=f"coexistence_v0 takes no argument.*'{name}'"):
             make()
     with pytest.raises(ValueError, match=f"coexistence_v0 takes no argument.*'{name}'"):
@@ -312,12 +328,15 @@ def test_sweep_file_carries_the_options_into_the_run_specs(tmp_path):
     assert centre[0].ensemble_key() != plain[0].ensemble_key()  # never trained in one ensemble
 
 
-@pytest.mark.parametrize(("table", "message"), [
-    ('[envs.c]\nenv = "coexistence_v0"\nstart = "centre"', "[envs.c] start: coexistence_v0 takes no argument 'start'"),
-    ('[envs.s]\nenv = "sharing_v0"\nstart = "middle"', "start must be one of 'random', 'centre'; got 'middle'"),
-    ('[envs.s]\nenv = "sharing_v0"\ninventory_encoding = "x"', "inventory_encoding must be one of"),
-    ('[envs.s]\nenv = "sharing_v0"\nstart = 1', "[envs.s] start: expected str"),
-])
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ('[envs.c]\nenv = "coexistence_v0"\nstart = "centre"', "[envs.c] start: coexistence_v0 takes no argument 'start'"),
+        ('[envs.s]\nenv = "sharing_v0"\nstart = "middle"', "start must be one of 'random', 'centre'; got 'middle'"),
+        ('[envs.s]\nenv = "sharing_v0"\ninventory_encoding = "x"', "inventory_encoding must be one of"),
+        ('[envs.s]\nenv = "sharing_v0"\nstart = 1', "[envs.s] start: expected str"),
+    ],
+)
 def test_sweep_file_rejects_bad_options(tmp_path, table, message):
     path = _sweep(tmp_path, SWEEP.replace("[envs.sharing_v0]", table))
     with pytest.raises(SweepConfigError) as caught:
@@ -326,12 +345,21 @@ def test_sweep_file_rejects_bad_options(tmp_path, table, message):
 
 
 def test_training_with_the_authors_encoding(tmp_path):
-    specs = [RunSpec(env="sharing_v0", method="empathic_dqn", settings={**TINY, "selfishness": b}, seed=s, steps=400,
-                     eval_interval=200, eval_episodes=2, fixed={HUMAN: "random_walk"},
-                     env_kwargs={**OPTIONS, "max_cycles": 100})
-             for s, b in ((0, 0.5), (1, 0.25))]
-    results = train_ensemble(specs, tmp_path, RunnerOptions(progress=False, checkpoint_interval=0),
-                             write_results=False)
+    specs = [
+        RunSpec(
+            env="sharing_v0",
+            method="empathic_dqn",
+            settings={**TINY, "selfishness": b},
+            seed=s,
+            steps=400,
+            eval_interval=200,
+            eval_episodes=2,
+            fixed={HUMAN: "random_walk"},
+            env_kwargs={**OPTIONS, "max_cycles": 100},
+        )
+        for s, b in ((0, 0.5), (1, 0.25))
+    ]
+    results = train_ensemble(specs, tmp_path, RunnerOptions(progress=False, checkpoint_interval=0), write_results=False)
     assert [r["run_id"] for r in results] == [s.run_id for s in specs]
     for result in results:
         assert result["config"]["env_kwargs"] == {**OPTIONS, "max_cycles": 100}

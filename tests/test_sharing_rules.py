@@ -92,9 +92,7 @@ def test_diminishing_returns_per_agent():
 
 
 def test_battery_values_down_to_the_ninth():
-    assert [float(battery_value(n)) for n in range(1, 10)] == pytest.approx(
-        [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2]
-    )
+    assert [float(battery_value(n)) for n in range(1, 10)] == pytest.approx([1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2])
 
 
 def test_both_collect_different_batteries_in_one_step():

@@ -13,8 +13,8 @@ import torch
 from agents.empathic_dqn import empathic_targets
 from baselines.registry import get_method
 from baselines.silver_rule import SilverRuleDQN
-from empathy_zoo.reference import coexistence_optimum, coexistence_transitions, coexistence_values
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT
+from empathy_zoo.reference import coexistence_optimum, coexistence_transitions, coexistence_values
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.spec import RunSpec
@@ -34,17 +34,31 @@ class _Learner:
     _others_rule = SilverRuleDQN._others_rule
 
 
-def _targets(rule: str, other_value: float, present: bool, beta: float, reward: float = 1.0,
-             terminated: bool = False, unseen: bool = False):
+def _targets(
+    rule: str, other_value: float, present: bool, beta: float, reward: float = 1.0, terminated: bool = False, unseen: bool = False
+):
     # Q(s') prefers action 0 and Q̂(s', 0) = 4: the continuation c = 0.5·4 = 2, y = r + 2
     q_next_online = torch.tensor([[[1.0, 0.0]]])
     q_next_target = torch.tensor([[[4.0, 9.0]]])
     q_swapped = torch.tensor([[[other_value, other_value - 1.0]]])
-    batch = {"reward": torch.tensor([[reward]]), "terminated": torch.tensor([[terminated]]),
-             "other_present": torch.tensor([[present]]), "other_unseen": torch.tensor([[unseen]])}
+    batch = {
+        "reward": torch.tensor([[reward]]),
+        "terminated": torch.tensor([[terminated]]),
+        "other_present": torch.tensor([[present]]),
+        "other_unseen": torch.tensor([[unseen]]),
+    }
     if rule == "golden":
-        return empathic_targets(batch["reward"], batch["terminated"], q_next_online, q_next_target, q_swapped,
-                                batch["other_present"], GAMMA, torch.tensor([[beta]]), unseen=batch["other_unseen"])
+        return empathic_targets(
+            batch["reward"],
+            batch["terminated"],
+            q_next_online,
+            q_next_target,
+            q_swapped,
+            batch["other_present"],
+            GAMMA,
+            torch.tensor([[beta]]),
+            unseen=batch["other_unseen"],
+        )
     return _Learner(beta).targets(batch, q_next_online, q_next_target, q_swapped)
 
 
@@ -128,10 +142,26 @@ def test_reference_refuses_an_unknown_rule() -> None:
 
 def test_silver_rule_trains_through_the_runner_and_learns_otherwise(tmp_path) -> None:
     assert get_method("empathic_dqn_silver").learner is SilverRuleDQN
-    settings = {"learning_starts": 64, "replay_capacity": 2_000, "selfishness": 0.25, "target_update_interval": 20,
-                "epsilon_decay_steps": 200}
-    specs = [RunSpec(env="coexistence_v0", method=m, seed=3, steps=400, eval_interval=400, eval_episodes=1,
-                     settings=settings, env_kwargs={"max_cycles": 40}) for m in ("empathic_dqn", "empathic_dqn_silver")]
+    settings = {
+        "learning_starts": 64,
+        "replay_capacity": 2_000,
+        "selfishness": 0.25,
+        "target_update_interval": 20,
+        "epsilon_decay_steps": 200,
+    }
+    specs = [
+        RunSpec(
+            env="coexistence_v0",
+            method=m,
+            seed=3,
+            steps=400,
+            eval_interval=400,
+            eval_episodes=1,
+            settings=settings,
+            env_kwargs={"max_cycles": 40},
+        )
+        for m in ("empathic_dqn", "empathic_dqn_silver")
+    ]
     train_runs(specs, tmp_path, RunnerOptions(progress=False, checkpoint_interval=0))
     golden, silver = (json.loads(result_path(tmp_path, s.run_id).read_text()) for s in specs)
     assert silver["config"]["method"] == "empathic_dqn_silver"

@@ -59,8 +59,9 @@ def test_it_reads_the_others_environment_reward_and_smooths_the_unshaped_own_rew
         svo(StepBatch(**{**step([0.0], [0.0]).__dict__, "other_rewards": None}), svo.initial_state(1, 1))
 
 
-@pytest.mark.parametrize("field, value", [("weight", -1.0), ("weight", float("nan")), ("target_angle_degrees", 270.0),
-                                          ("smoothing", 1.0)])
+@pytest.mark.parametrize(
+    "field, value", [("weight", -1.0), ("weight", float("nan")), ("target_angle_degrees", 270.0), ("smoothing", 1.0)]
+)
 def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=field):
         SocialValueOrientation(**{field: value})
@@ -69,10 +70,19 @@ def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> Non
 def test_a_resumed_social_value_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
     from empathy_zoo.training.spec import RunSpec
 
-    spec = RunSpec(env="sharing_v0", method="dqn_social_value", steps=600, eval_interval=300, eval_episodes=2,
-                   settings={"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300,
-                             "target_update_interval": 50})
+    spec = RunSpec(
+        env="sharing_v0",
+        method="dqn_social_value",
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings={"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50},
+    )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
-    assert resumed["config"]["reward"] == {"name": "social_value_orientation", "weight": 0.5,
-                                           "target_angle_degrees": 45.0, "smoothing": pytest.approx(0.9405)}
+    assert resumed["config"]["reward"] == {
+        "name": "social_value_orientation",
+        "weight": 0.5,
+        "target_angle_degrees": 45.0,
+        "smoothing": pytest.approx(0.9405),
+    }

@@ -7,8 +7,8 @@ import pytest
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.engine.sharing import agent_value
-from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.vector import VectorEnv
 
 MODULES = [coexistence_v0, sharing_v0]

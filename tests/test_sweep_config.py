@@ -59,9 +59,16 @@ def test_base_sweep_expands_grid_times_envs_times_seeds(tmp_path):
 
 
 def test_two_grids_give_every_combination(tmp_path):
-    specs = load_sweep(write(tmp_path, BASE.replace('selfishness = [1.0, 0.5]',
-                                                    'selfishness = [1.0, 0.5]\nlearning_rate = [1e-3, 5e-4, 1e-4]\n'
-                                                    'label = "E (β={selfishness:g}, lr={learning_rate:g})"')))
+    specs = load_sweep(
+        write(
+            tmp_path,
+            BASE.replace(
+                "selfishness = [1.0, 0.5]",
+                "selfishness = [1.0, 0.5]\nlearning_rate = [1e-3, 5e-4, 1e-4]\n"
+                'label = "E (β={selfishness:g}, lr={learning_rate:g})"',
+            ),
+        )
+    )
     assert len(specs) == 2 * (2 * 3) * 2
     assert len({(s.variant, s.display_label()) for s in specs}) == 12
     assert {s.display_label() for s in specs if s.variant == "sharing_v0" and s.seed == 0} == {
@@ -70,7 +77,9 @@ def test_two_grids_give_every_combination(tmp_path):
 
 
 def test_settings_precedence_and_presets(tmp_path):
-    text = BASE + """
+    text = (
+        BASE
+        + """
 [settings]
 learning_rate = 0.002
 selfishness = 0.75
@@ -81,6 +90,7 @@ method = "dqn_harm_penalty"
 envs = ["coexistence_v0"]
 hidden_size = 32
 """
+    )
     specs = load_sweep(write(tmp_path, text))
     empathic = [s for s in specs if s.method == "empathic_dqn"]
     assert {s.method_settings().learning_rate for s in specs} == {0.002}
@@ -91,11 +101,15 @@ hidden_size = 32
     settings = penalty[0].method_settings()
     assert (settings.hidden_size, settings.selfishness) == (32, 1.0)  # preset kept
     assert penalty[0].method_object().reward == HarmPenalty(-100.0) and penalty[0].config()["reward"] == {
-        "name": "harm_penalty", "penalty": -100.0}
+        "name": "harm_penalty",
+        "penalty": -100.0,
+    }
 
 
 def test_env_variant_fixed_policy_and_methods_filter(tmp_path):
-    text = BASE + """
+    text = (
+        BASE
+        + """
 [envs.big]
 env = "coexistence_v0"
 size = 9
@@ -107,6 +121,7 @@ methods = ["dqn"]
 method = "dqn"
 envs = ["big"]
 """
+    )
     specs = load_sweep(write(tmp_path, text))
     big = [s for s in specs if s.variant == "big"]
     assert len(big) == 2 and {s.method for s in big} == {"dqn"}
@@ -143,7 +158,8 @@ def test_paper_profile_is_the_papers_protocol():
     labels = {(s.variant, s.display_label()) for s in specs}
     assert labels == {
         *((env, f"Empathic DQN (β={b:g})") for env in ("coexistence_v0", "sharing_v0") for b in (1.0, 0.75, 0.5, 0.25)),
-        ("coexistence_v0", "DQN + harm penalty (−100)"), ("sharing_v0", "DQN × equality"),
+        ("coexistence_v0", "DQN + harm penalty (−100)"),
+        ("sharing_v0", "DQN × equality"),
     }
 
 
@@ -195,19 +211,27 @@ def test_unknown_key_in_settings(tmp_path):
     assert "[settings]" in message and "'lr'" in message and "learning_rate" in message
 
 
-@pytest.mark.parametrize(("old", "new", "where", "expected"), [
-    ("steps = 1000", 'steps = "many"', "[sweep] steps", "expected int, got str 'many'"),
-    ("steps = 1000", "steps = 1000.0", "[sweep] steps", "expected int, got float"),
-    ("eval_episodes = 2", "eval_episodes = true", "[sweep] eval_episodes", "expected int, got bool"),
-    ("seeds = 2", 'seeds = "3"', "[sweep] seeds", "expected int (number of seeds) or list"),
-    ("selfishness = [1.0, 0.5]", 'selfishness = "high"', "[[methods]] #1 (empathic_dqn) selfishness", "expected float"),
-    ("selfishness = [1.0, 0.5]", "hidden_size = 1.5", "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
-    ("selfishness = [1.0, 0.5]", 'hidden_size = "big"', "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
-    ("selfishness = [1.0, 0.5]", "selfishness = [1.0, \"x\"]", "selfishness", "expected float, got str 'x'"),
-    ("selfishness = [1.0, 0.5]", 'envs = "sharing_v0"', "envs", "expected list of strings"),
-    ("[envs.sharing_v0]", '[envs.sharing_v0]\nsize = "9"', "[envs.sharing_v0] size", "expected int"),
-    ("[envs.sharing_v0]", "[envs.sharing_v0]\nfixed = { human_0 = 3 }", "[envs.sharing_v0] fixed", "expected table of strings"),
-])
+@pytest.mark.parametrize(
+    ("old", "new", "where", "expected"),
+    [
+        ("steps = 1000", 'steps = "many"', "[sweep] steps", "expected int, got str 'many'"),
+        ("steps = 1000", "steps = 1000.0", "[sweep] steps", "expected int, got float"),
+        ("eval_episodes = 2", "eval_episodes = true", "[sweep] eval_episodes", "expected int, got bool"),
+        ("seeds = 2", 'seeds = "3"', "[sweep] seeds", "expected int (number of seeds) or list"),
+        ("selfishness = [1.0, 0.5]", 'selfishness = "high"', "[[methods]] #1 (empathic_dqn) selfishness", "expected float"),
+        ("selfishness = [1.0, 0.5]", "hidden_size = 1.5", "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
+        ("selfishness = [1.0, 0.5]", 'hidden_size = "big"', "[[methods]] #1 (empathic_dqn) hidden_size", "expected int"),
+        ("selfishness = [1.0, 0.5]", 'selfishness = [1.0, "x"]', "selfishness", "expected float, got str 'x'"),
+        ("selfishness = [1.0, 0.5]", 'envs = "sharing_v0"', "envs", "expected list of strings"),
+        ("[envs.sharing_v0]", '[envs.sharing_v0]\nsize = "9"', "[envs.sharing_v0] size", "expected int"),
+        (
+            "[envs.sharing_v0]",
+            "[envs.sharing_v0]\nfixed = { human_0 = 3 }",
+            "[envs.sharing_v0] fixed",
+            "expected table of strings",
+        ),
+    ],
+)
 def test_wrong_types_name_key_and_expected_type(tmp_path, old, new, where, expected):
     assert old in BASE
     message = error_of(tmp_path, BASE.replace(old, new, 1))
@@ -237,7 +261,9 @@ def test_unknown_method_env_and_policy(tmp_path):
     assert "[envs.sharing_v0] fixed.human_0" in message and "unknown fixed policy 'sleepy'" in message
     message = error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { cat_0 = "stay" }'))
     assert "unknown agent 'cat_0'" in message and "human_0" in message
-    message = error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { human_0 = "empathy_zoo.policies:Nobody" }'))
+    message = error_of(
+        tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { human_0 = "empathy_zoo.policies:Nobody" }')
+    )
     assert "has no 'Nobody'" in message
 
 
@@ -246,8 +272,12 @@ def test_cross_references(tmp_path):
     assert "[[methods]] #1 (empathic_dqn) envs" in message and "unknown variant(s) ['coexistence']" in message
     message = error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nmethods = ["dqn"]'))
     assert "[envs.sharing_v0] methods" in message and "['dqn'] not declared" in message
-    message = error_of(tmp_path, BASE + '\n[[methods]]\nmethod = "dqn"\nenvs = ["sharing_v0"]\n'
-                       + '\n[envs.other]\nenv = "sharing_v0"\nmethods = ["dqn"]\n')
+    message = error_of(
+        tmp_path,
+        BASE
+        + '\n[[methods]]\nmethod = "dqn"\nenvs = ["sharing_v0"]\n'
+        + '\n[envs.other]\nenv = "sharing_v0"\nmethods = ["dqn"]\n',
+    )
     assert "[envs.other] has no method to run" in message
 
 
@@ -260,7 +290,7 @@ def test_grids_and_duplicates(tmp_path):
     assert "[[methods]] #2 (empathic_dqn)" in message and "#1 (empathic_dqn)" in message and "same label" in message
     message = error_of(tmp_path, BASE + '\n[[methods]]\nmethod = "empathic_dqn"\nselfishness = 0.5\nlabel = "Other"\n')
     assert "[[methods]] #2 (empathic_dqn)" in message and "duplicates" in message and "[[methods]] #1" in message
-    message = error_of(tmp_path, BASE.replace('selfishness = [1.0, 0.5]', 'selfishness = [1.0, 0.5]\nlabel = "Mine"'))
+    message = error_of(tmp_path, BASE.replace("selfishness = [1.0, 0.5]", 'selfishness = [1.0, 0.5]\nlabel = "Mine"'))
     assert "same label 'Mine'" in message and "placeholders" in message
     message = error_of(tmp_path, BASE + "\n[settings]\nlearning_rate = [0.1, 0.2]\n")
     assert "[settings] learning_rate" in message and "grid" in message
@@ -269,14 +299,15 @@ def test_grids_and_duplicates(tmp_path):
 def test_presets_and_placeholders(tmp_path):
     message = error_of(tmp_path, BASE + '\n[[methods]]\nmethod = "dqn"\nselfishness = 0.5\n')
     assert "[[methods]] #2 (dqn)" in message and "fixes selfishness=1.0" in message
-    message = error_of(tmp_path, BASE.replace('selfishness = [1.0, 0.5]', 'selfishness = [1.0, 0.5]\nlabel = "E {beta}"'))
+    message = error_of(tmp_path, BASE.replace("selfishness = [1.0, 0.5]", 'selfishness = [1.0, 0.5]\nlabel = "E {beta}"'))
     assert "[[methods]] #1 (empathic_dqn) on [envs.coexistence_v0]" in message and "label" in message and "'beta'" in message
 
 
 def test_structure_errors(tmp_path):
     assert "at least one [[methods]]" in error_of(tmp_path, BASE.split("[[methods]]")[0])
     assert "at least one [envs.<variant>]" in error_of(
-        tmp_path, BASE.replace("[envs.coexistence_v0]", "").replace("[envs.sharing_v0]", ""))
+        tmp_path, BASE.replace("[envs.coexistence_v0]", "").replace("[envs.sharing_v0]", "")
+    )
     assert "missing key 'method'" in error_of(tmp_path, BASE.replace('method = "empathic_dqn"', ""))
     assert "[envs.size]: must be a table" in error_of(tmp_path, BASE.replace("[envs.coexistence_v0]", "[envs]\nsize = 9"))
     assert "[envs.bad name]" in error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs."bad name"]\nenv = "sharing_v0"'))
@@ -288,13 +319,14 @@ def test_structure_errors(tmp_path):
 def test_variants_of_one_env_are_tabled_apart():
     from leaderboard.aggregate import group_runs
 
-    runs = [{"env": "coexistence_v0", "variant": variant, "method": "dqn", "method_label": "DQN", "seed": 0}
-            for variant in ("coexistence_v0", "coexistence_9x9")]
+    runs = [
+        {"env": "coexistence_v0", "variant": variant, "method": "dqn", "method_label": "DQN", "seed": 0}
+        for variant in ("coexistence_v0", "coexistence_9x9")
+    ]
     assert list(group_runs(runs)) == [("coexistence_9x9", "DQN"), ("coexistence_v0", "DQN")]
 
 
-@pytest.mark.parametrize("key, value", [("learning_starts", "100"), ("replay_capacity", "500"),
-                                        ("epsilon_decay_steps", "900")])
+@pytest.mark.parametrize("key, value", [("learning_starts", "100"), ("replay_capacity", "500"), ("epsilon_decay_steps", "900")])
 def test_a_shared_setting_a_method_does_not_take_is_refused_not_dropped(tmp_path, key, value):
     """[settings] are defaults for every method: one a method has no field for is an error."""
     text = BASE + f'\n[settings]\n{key} = {value}\n\n[[methods]]\nmethod = "baselines.sb3:SB3_DQN"\n'
@@ -313,7 +345,7 @@ def test_a_shared_setting_every_method_takes_is_applied_to_every_method(tmp_path
 def test_a_train_config_setting_an_sb3_method_does_not_take_is_refused(tmp_path, capsys):
     from empathy_zoo.cli import main
 
-    config = write(tmp_path, '[settings]\nlearning_starts = 100\n', "run.toml")
+    config = write(tmp_path, "[settings]\nlearning_starts = 100\n", "run.toml")
     argv = ["train", "--config", str(config), "--method", "baselines.sb3:SB3_DQN", "--out", str(tmp_path / "out")]
     assert main(argv) == 2
     err = capsys.readouterr().err

@@ -64,16 +64,18 @@ def test_a_grid_of_a_transform_field_gives_one_experiment_per_value(tmp_path):
     rewards = {json.dumps(s.config()["reward"], sort_keys=True) for s in specs}
     assert [json.loads(r)["disadvantageous"] for r in sorted(rewards)] == [0.1, 0.3, 1.0]
     assert all(json.loads(r)["advantageous"] == 0.05 and json.loads(r)["name"] == "inequity_aversion" for r in rewards)
-    assert {s.display_label() for s in specs} == {
-        f"DQN + inequity aversion (disadvantageous={v})" for v in ("0.1", "0.3", "1")}
-    assert all(s.settings == {} and s.reward_transform() == InequityAversion(disadvantageous=s.reward["disadvantageous"])
-               for s in specs)
+    assert {s.display_label() for s in specs} == {f"DQN + inequity aversion (disadvantageous={v})" for v in ("0.1", "0.3", "1")}
+    assert all(
+        s.settings == {} and s.reward_transform() == InequityAversion(disadvantageous=s.reward["disadvantageous"]) for s in specs
+    )
 
 
 def test_a_grid_shows_its_default_value_in_the_label_too(tmp_path):
     specs = load_sweep(sweep(tmp_path, "dqn_considerate", "caring = [0.3, 1.0]\nbonus_starts = 5000\n"))
-    assert {s.display_label() for s in specs} == {"DQN + Be Considerate (caring=0.3, bonus_starts=5000)",
-                                                  "DQN + Be Considerate (caring=1, bonus_starts=5000)"}
+    assert {s.display_label() for s in specs} == {
+        "DQN + Be Considerate (caring=0.3, bonus_starts=5000)",
+        "DQN + Be Considerate (caring=1, bonus_starts=5000)",
+    }
     assert sorted({s.config()["reward"]["caring"] for s in specs}) == [0.3, 1.0]
 
 
@@ -87,10 +89,16 @@ def test_a_field_is_also_a_reward_dot_key_which_a_field_named_like_a_setting_nee
 
 
 def test_label_templates_may_name_the_transforms_fields(tmp_path):
-    specs = load_sweep(sweep(tmp_path, "dqn_inequity_aversion", """\
+    specs = load_sweep(
+        sweep(
+            tmp_path,
+            "dqn_inequity_aversion",
+            """\
         label = "IA (α={disadvantageous:g}, γλ={reward.smoothing:.2f}, γ={gamma})"
         disadvantageous = [0.3, 1.0]
-        """))
+        """,
+        )
+    )
     assert {s.display_label() for s in specs} == {"IA (α=0.3, γλ=0.94, γ=0.99)", "IA (α=1, γλ=0.94, γ=0.99)"}
     message = error_of(tmp_path, "dqn_inequity_aversion", 'label = "{alpha}"\n')
     assert "bad placeholder" in message and "reward transform's fields" in message
@@ -109,15 +117,18 @@ def test_an_unknown_key_is_refused_naming_the_settings_and_the_transforms_fields
     assert "its reward transform has no fields" in error_of(tmp_path, "dqn_equality", "penalty = 1.0\n")
 
 
-@pytest.mark.parametrize(("entry", "expected"), [
-    ('disadvantageous = "high"\n', "disadvantageous: expected float, got str 'high'"),
-    ("disadvantageous = [0.1, true]\n", "disadvantageous: expected float, got bool True"),
-    ('reward.smoothing = "x"\n', "reward.smoothing: expected float, got str 'x'"),
-    ("disadvantageous = []\n", "disadvantageous: empty grid"),
-    ("disadvantageous = [1.0, 1]\n", "disadvantageous: value listed twice"),
-    ("disadvantageous = 1.0\nreward.disadvantageous = 2.0\n", "disadvantageous is given twice"),
-    ("reward.penalty_weight = -1.0\n", "penalty_weight must be a finite number >= 0"),
-])
+@pytest.mark.parametrize(
+    ("entry", "expected"),
+    [
+        ('disadvantageous = "high"\n', "disadvantageous: expected float, got str 'high'"),
+        ("disadvantageous = [0.1, true]\n", "disadvantageous: expected float, got bool True"),
+        ('reward.smoothing = "x"\n', "reward.smoothing: expected float, got str 'x'"),
+        ("disadvantageous = []\n", "disadvantageous: empty grid"),
+        ("disadvantageous = [1.0, 1]\n", "disadvantageous: value listed twice"),
+        ("disadvantageous = 1.0\nreward.disadvantageous = 2.0\n", "disadvantageous is given twice"),
+        ("reward.penalty_weight = -1.0\n", "penalty_weight must be a finite number >= 0"),
+    ],
+)
 def test_a_bad_value_is_refused_naming_the_key(tmp_path, entry, expected):
     method = "dqn_aup" if "penalty_weight" in entry else "dqn_inequity_aversion"
     assert expected in error_of(tmp_path, method, entry)
@@ -127,8 +138,11 @@ def test_an_int_is_taken_for_a_float_field_and_a_default_value_changes_nothing(t
     [given, _] = load_sweep(sweep(tmp_path, "dqn_inequity_aversion", "disadvantageous = 5\n"))
     [plain, _] = load_sweep(sweep(tmp_path, "dqn_inequity_aversion", ""))
     assert given.config()["reward"]["disadvantageous"] == 5.0
-    assert (given.run_id, given.display_label()) == (plain.run_id, plain.display_label()) == (
-        plain.run_id, "DQN + inequity aversion")
+    assert (
+        (given.run_id, given.display_label())
+        == (plain.run_id, plain.display_label())
+        == (plain.run_id, "DQN + inequity aversion")
+    )
 
 
 # ---------------------------------------------------------------------------- train
@@ -149,8 +163,9 @@ def test_the_harm_penalty_is_a_train_option(tmp_path):
 
 
 def test_a_field_named_like_a_setting_is_a_reward_option_and_a_config_table_sets_fields(tmp_path):
-    run, settings = values("--method", "dqn_aup", "--learning-rate", "0.01", "--reward-learning-rate", "0.0001",
-                           "--num-rewards", "4")
+    run, settings = values(
+        "--method", "dqn_aup", "--learning-rate", "0.01", "--reward-learning-rate", "0.0001", "--num-rewards", "4"
+    )
     assert settings == {"learning_rate": 0.01} and run["reward"] == {"learning_rate": 0.0001, "num_rewards": 4}
     config = tmp_path / "run.toml"
     config.write_text('method = "dqn_inequity_aversion"\n[reward]\ndisadvantageous = 2\nsmoothing = 0.5\n')
@@ -167,10 +182,14 @@ def test_bad_transform_options_are_clean_errors(tmp_path, capsys):
     assert "the fields of its reward transform are disadvantageous, advantageous, smoothing" in err
     config = tmp_path / "run.toml"
     for text, expected in [
-        ('method = "dqn_inequity_aversion"\n[reward]\nalpha = 1.0\n',
-         "[reward]: unknown key 'alpha'; allowed keys: disadvantageous, advantageous, smoothing"),
-        ('method = "dqn_inequity_aversion"\n[reward]\ndisadvantageous = "x"\n',
-         "[reward] disadvantageous: expected float, got str 'x'"),
+        (
+            'method = "dqn_inequity_aversion"\n[reward]\nalpha = 1.0\n',
+            "[reward]: unknown key 'alpha'; allowed keys: disadvantageous, advantageous, smoothing",
+        ),
+        (
+            'method = "dqn_inequity_aversion"\n[reward]\ndisadvantageous = "x"\n',
+            "[reward] disadvantageous: expected float, got str 'x'",
+        ),
         ('method = "dqn"\n[reward]\npenalty = 1.0\n', "[reward]: method 'dqn' has no reward transform"),
     ]:
         config.write_text(text)
@@ -216,13 +235,31 @@ def test_shipped_result_files_still_load_and_record_the_defaults_a_run_records_n
 
 # ---------------------------------------------------------------------------- the leaderboard's order
 def test_labels_sort_by_their_numbers_values():
-    labels = ["DQN + IA (disadvantageous=1)", "DQN + IA (disadvantageous=0.3)", "DQN + IA (disadvantageous=10)",
-              "DQN + IA", "DQN + IA (disadvantageous=0.1)", "DQN + harm penalty (−20)", "DQN + harm penalty (−100)",
-              "lr 1e-05", "lr 0.001", "coexistence_v10", "coexistence_v9"]
+    labels = [
+        "DQN + IA (disadvantageous=1)",
+        "DQN + IA (disadvantageous=0.3)",
+        "DQN + IA (disadvantageous=10)",
+        "DQN + IA",
+        "DQN + IA (disadvantageous=0.1)",
+        "DQN + harm penalty (−20)",
+        "DQN + harm penalty (−100)",
+        "lr 1e-05",
+        "lr 0.001",
+        "coexistence_v10",
+        "coexistence_v9",
+    ]
     assert sorted(labels, key=label_order) == [
-        "DQN + IA", "DQN + IA (disadvantageous=0.1)", "DQN + IA (disadvantageous=0.3)", "DQN + IA (disadvantageous=1)",
-        "DQN + IA (disadvantageous=10)", "DQN + harm penalty (−100)", "DQN + harm penalty (−20)",
-        "coexistence_v10", "coexistence_v9", "lr 1e-05", "lr 0.001",
+        "DQN + IA",
+        "DQN + IA (disadvantageous=0.1)",
+        "DQN + IA (disadvantageous=0.3)",
+        "DQN + IA (disadvantageous=1)",
+        "DQN + IA (disadvantageous=10)",
+        "DQN + harm penalty (−100)",
+        "DQN + harm penalty (−20)",
+        "coexistence_v10",
+        "coexistence_v9",
+        "lr 1e-05",
+        "lr 0.001",
     ]
 
 
@@ -230,7 +267,15 @@ def test_the_leaderboard_puts_alpha_one_after_alpha_point_three():
     def run(label: str, method: str = "dqn_inequity_aversion") -> dict:
         return {"env": "sharing_v0", "method": method, "method_label": label, "seed": 0}
 
-    runs = [run("DQN + IA (disadvantageous=1)"), run("DQN + IA (disadvantageous=0.3)"), run("DQN", "dqn"),
-            run("DQN + IA (disadvantageous=0.1)")]
+    runs = [
+        run("DQN + IA (disadvantageous=1)"),
+        run("DQN + IA (disadvantageous=0.3)"),
+        run("DQN", "dqn"),
+        run("DQN + IA (disadvantageous=0.1)"),
+    ]
     assert [label for _, label in group_runs(runs)] == [
-        "DQN", "DQN + IA (disadvantageous=0.1)", "DQN + IA (disadvantageous=0.3)", "DQN + IA (disadvantageous=1)"]
+        "DQN",
+        "DQN + IA (disadvantageous=0.1)",
+        "DQN + IA (disadvantageous=0.3)",
+        "DQN + IA (disadvantageous=1)",
+    ]

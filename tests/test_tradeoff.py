@@ -13,23 +13,29 @@ from leaderboard.tradeoff import TRADEOFF_SPECS, pareto_front, render_tradeoff_p
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.mark.parametrize(("points", "higher_is_better", "front"), [
-    # (survival, harms): more survival and fewer harms win
-    ([(450, 0.9), (300, 0.1), (250, 0.2), (460, 0.95), (300, 0.5)], False, [0, 1, 3]),
-    # (batteries, equality): both higher is better
-    ([(3.2, 0.68), (2.2, 0.57), (4.5, 1.0), (1.8, 0.49)], True, [2]),
-    ([(1, 1), (1, 1), (0, 0)], True, [0, 1]),  # equal points are all on the front
-    ([(1, math.nan), (0, 0)], True, [1]),  # a NaN is never on it and never dominates
-    ([], True, []),
-])
+@pytest.mark.parametrize(
+    ("points", "higher_is_better", "front"),
+    [
+        # (survival, harms): more survival and fewer harms win
+        ([(450, 0.9), (300, 0.1), (250, 0.2), (460, 0.95), (300, 0.5)], False, [0, 1, 3]),
+        # (batteries, equality): both higher is better
+        ([(3.2, 0.68), (2.2, 0.57), (4.5, 1.0), (1.8, 0.49)], True, [2]),
+        ([(1, 1), (1, 1), (0, 0)], True, [0, 1]),  # equal points are all on the front
+        ([(1, math.nan), (0, 0)], True, [1]),  # a NaN is never on it and never dominates
+        ([], True, []),
+    ],
+)
 def test_pareto_front(points, higher_is_better, front) -> None:
     assert pareto_front(points, higher_is_better) == front
 
 
 def _scores(env: str, spec, values: dict[str, tuple[float, float]]) -> list[Score]:
-    return [Score(env, label, "m", phase, metric, mean, mean - 0.1, mean + 0.1, 3)
-            for label, pair in values.items() for phase in PHASES
-            for metric, mean in zip((spec.task, spec.effect), pair)]
+    return [
+        Score(env, label, "m", phase, metric, mean, mean - 0.1, mean + 0.1, 3)
+        for label, pair in values.items()
+        for phase in PHASES
+        for metric, mean in zip((spec.task, spec.effect), pair)
+    ]
 
 
 @pytest.mark.parametrize("env", sorted(TRADEOFF_SPECS))

@@ -28,10 +28,18 @@ class Recorder:
 
 def _step(k: int) -> StepBatch:
     zeros = np.zeros((k, 1))
-    return StepBatch(obs=np.zeros((k, 1, 25)), actions=zeros.astype(int), rewards=np.arange(k, dtype=np.float32)[:, None],
-                     terminated=zeros.astype(bool), next_obs=np.zeros((k, 1, 25)), swapped_next_obs=np.zeros((k, 1, 25)),
-                     other_present=zeros.astype(bool), harmed_other=zeros.astype(int), battery_return=zeros,
-                     other_battery_return=zeros)
+    return StepBatch(
+        obs=np.zeros((k, 1, 25)),
+        actions=zeros.astype(int),
+        rewards=np.arange(k, dtype=np.float32)[:, None],
+        terminated=zeros.astype(bool),
+        next_obs=np.zeros((k, 1, 25)),
+        swapped_next_obs=np.zeros((k, 1, 25)),
+        other_present=zeros.astype(bool),
+        harmed_other=zeros.astype(int),
+        battery_return=zeros,
+        other_battery_return=zeros,
+    )
 
 
 def test_a_transform_sees_and_keeps_state_for_its_own_runs_only() -> None:

@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from helpers_placed import placed
+from helpers_placed import step as _step
 
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.reference import coexistence_optimum
-from helpers_placed import placed
-from helpers_placed import step as _step
 
 ROBOT, DOWN, STAY = 0, 1, 4
 BETA, GAMMA = 0.5, 0.99

@@ -53,7 +53,7 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
     command = next((i for i, arg in enumerate(argv) if not arg.startswith("-")), None)
     method = RUN_DEFAULTS["method"]
     if command is not None and argv[command] == "train":
-        method = train_method(argv[command + 1:])
+        method = train_method(argv[command + 1 :])
     parser = build_parser(method)
     args, unknown = parser.parse_known_args(argv)
     if unknown:

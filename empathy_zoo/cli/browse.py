@@ -41,8 +41,8 @@ def cmd_policies(args: argparse.Namespace, command: str) -> int:
 def cmd_play(args: argparse.Namespace, command: str) -> int:
     """Episodes of a uniformly random robot beside the fixed agents."""
     from empathy_zoo import ENVIRONMENTS, FixedAgents
-    from empathy_zoo.metrics import METRIC_NAMES
     from empathy_zoo.environments import DEFAULT_POLICIES
+    from empathy_zoo.metrics import METRIC_NAMES
 
     if args.env not in ENVIRONMENTS:
         raise ValueError(f"unknown environment {args.env!r}; registered: {sorted(ENVIRONMENTS)}")
@@ -61,8 +61,11 @@ def cmd_play(args: argparse.Namespace, command: str) -> int:
             if args.render:
                 print(env.render())
         metrics = engine.episode_metrics(np.array([0]), engine.agents.index(learner))
-        print(f"episode {episode} (seed {args.seed + episode}): "
-              + ", ".join(f"{name} {float(metrics[name][0]):g}" for name in METRIC_NAMES), flush=True)
+        print(
+            f"episode {episode} (seed {args.seed + episode}): "
+            + ", ".join(f"{name} {float(metrics[name][0]):g}" for name in METRIC_NAMES),
+            flush=True,
+        )
     return 0
 
 
@@ -76,6 +79,11 @@ def add_browse_commands(sub: Any) -> None:
     play.add_argument("--episodes", type=int, default=1, help="episodes (default: 1)")
     play.add_argument("--seed", type=int, default=0, help="seed of the first episode (default: 0)")
     play.add_argument("--render", choices=["ansi"], default=None, help="print the grid every step")
-    play.add_argument("--fixed", type=agent_policy, action="append", metavar="AGENT=POLICY",
-                      help="fixed agent policy, a name or package.module:ClassName (repeatable)")
+    play.add_argument(
+        "--fixed",
+        type=agent_policy,
+        action="append",
+        metavar="AGENT=POLICY",
+        help="fixed agent policy, a name or package.module:ClassName (repeatable)",
+    )
     play.set_defaults(handler=cmd_play)

@@ -12,17 +12,39 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "PROG", "RUN_DEFAULTS", "SUMMARY_METRICS", "add_runner_options", "agent_policy", "check_device", "check_results",
-    "help_text", "positive", "print_written", "run_summary", "runner_options",
+    "PROG",
+    "RUN_DEFAULTS",
+    "SUMMARY_METRICS",
+    "add_runner_options",
+    "agent_policy",
+    "check_device",
+    "check_results",
+    "help_text",
+    "positive",
+    "print_written",
+    "run_summary",
+    "runner_options",
 ]
 
 PROG = "empathy-zoo"
 SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 
 RUN_DEFAULTS: dict[str, Any] = {
-    "env": "coexistence_v0", "method": "empathic_dqn", "seeds": [0], "steps": 1_000_000, "out": "runs",
-    "device": "cpu", "eval_interval": 50_000, "eval_episodes": 10, "checkpoint_interval": 50_000,
-    "max_parallel_runs": 32, "workers": 1, "threads": 1, "label": None, "fixed": None, "progress": True,
+    "env": "coexistence_v0",
+    "method": "empathic_dqn",
+    "seeds": [0],
+    "steps": 1_000_000,
+    "out": "runs",
+    "device": "cpu",
+    "eval_interval": 50_000,
+    "eval_episodes": 10,
+    "checkpoint_interval": 50_000,
+    "max_parallel_runs": 32,
+    "workers": 1,
+    "threads": 1,
+    "label": None,
+    "fixed": None,
+    "progress": True,
 }
 """What a ``train`` run does when neither the config file nor the command line says otherwise."""
 
@@ -50,8 +72,10 @@ def check_device(device: str) -> str:
         raise ValueError(f"--device {device!r} is not a torch device ({error}); use cpu or cuda") from None
     if parsed.type == "cuda":
         if not torch.cuda.is_available():
-            raise ValueError(f"--device {device}: CUDA is not available on this machine (torch {torch.__version__}); "
-                             "use --device cpu or install a CUDA build of torch")
+            raise ValueError(
+                f"--device {device}: CUDA is not available on this machine (torch {torch.__version__}); "
+                "use --device cpu or install a CUDA build of torch"
+            )
         if parsed.index is not None and parsed.index >= torch.cuda.device_count():
             raise ValueError(f"--device {device}: only {torch.cuda.device_count()} CUDA device(s) here")
     elif parsed.type == "mps":
@@ -101,8 +125,9 @@ def run_summary(result: dict[str, Any]) -> str:
     train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in SUMMARY_METRICS)
     evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in SUMMARY_METRICS)
     last = max((e["step"] for e in result["eval"]), default=None)
-    return (f"{result['run_id']} [{result['method_label']}]: final 10% of training: {train} | "
-            f"last eval (step {last}): {evaluation}")
+    return (
+        f"{result['run_id']} [{result['method_label']}]: final 10% of training: {train} | last eval (step {last}): {evaluation}"
+    )
 
 
 def print_written(paths: dict[str, Path]) -> None:
@@ -119,9 +144,11 @@ def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
         device=check_device(values["device"]),
         max_parallel_runs=positive("max_parallel_runs", values["max_parallel_runs"]),
         checkpoint_interval=positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
-        progress=values["progress"], workers=positive("workers", values["workers"]),
+        progress=values["progress"],
+        workers=positive("workers", values["workers"]),
         threads=positive("threads", values["threads"]),
-        backend=getattr(args, "backend", None) or "local", address=_ray_address(args),
+        backend=getattr(args, "backend", None) or "local",
+        address=_ray_address(args),
         rerun_changed=bool(getattr(args, "rerun_changed", False)),
     )
 
@@ -135,27 +162,57 @@ def _ray_address(args: argparse.Namespace) -> str | None:
 
 def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> None:
     """The options of how runs train (device, parallelism, checkpoints, progress, backend)."""
+
     def d(key: str) -> str:
         return f" (default: {RUN_DEFAULTS[key]})"
 
     parser.add_argument("--device", default=default, help="torch device: cpu, cuda, cuda:N" + d("device"))
-    parser.add_argument("--max-parallel-runs", type=int, default=default, metavar="K",
-                        help="most runs trained in lockstep in one ensemble" + d("max_parallel_runs"))
-    parser.add_argument("--workers", type=int, default=default, metavar="N",
-                        help="processes training ensembles side by side" + (
-                            d("workers") if default is not None else " (default: one per ensemble, at most the CPUs)"))
-    parser.add_argument("--threads", type=int, default=default, metavar="N",
-                        help="torch CPU threads per process; these small networks gain nothing from more, and "
-                             "extra threads are much slower on a busy machine" + d("threads"))
-    parser.add_argument("--checkpoint-interval", type=int, default=default, metavar="N",
-                        help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"))
+    parser.add_argument(
+        "--max-parallel-runs",
+        type=int,
+        default=default,
+        metavar="K",
+        help="most runs trained in lockstep in one ensemble" + d("max_parallel_runs"),
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=default,
+        metavar="N",
+        help="processes training ensembles side by side"
+        + (d("workers") if default is not None else " (default: one per ensemble, at most the CPUs)"),
+    )
+    parser.add_argument(
+        "--threads",
+        type=int,
+        default=default,
+        metavar="N",
+        help="torch CPU threads per process; these small networks gain nothing from more, and "
+        "extra threads are much slower on a busy machine" + d("threads"),
+    )
+    parser.add_argument(
+        "--checkpoint-interval",
+        type=int,
+        default=default,
+        metavar="N",
+        help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"),
+    )
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
-    parser.add_argument("--rerun-changed", action="store_true",
-                        help="retrain (over their files) the finished runs made by another empathy-zoo version or "
-                             "an edited plug-in; without it such runs are refused, never silently reused")
-    parser.add_argument("--backend", choices=["local", "ray"], default=default,
-                        help="where ensembles train: this machine, or Ray tasks (pip install \"empathy-zoo[ray]\")"
-                        " (default: local)")
-    parser.add_argument("--address", default=default, metavar="ADDR",
-                        help="with --backend ray: the cluster to join (auto, ray://host:10001); "
-                        "default: start Ray on this machine")
+    parser.add_argument(
+        "--rerun-changed",
+        action="store_true",
+        help="retrain (over their files) the finished runs made by another empathy-zoo version or "
+        "an edited plug-in; without it such runs are refused, never silently reused",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=["local", "ray"],
+        default=default,
+        help='where ensembles train: this machine, or Ray tasks (pip install "empathy-zoo[ray]") (default: local)',
+    )
+    parser.add_argument(
+        "--address",
+        default=default,
+        metavar="ADDR",
+        help="with --backend ray: the cluster to join (auto, ray://host:10001); default: start Ray on this machine",
+    )

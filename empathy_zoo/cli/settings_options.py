@@ -38,8 +38,14 @@ if TYPE_CHECKING:
     from agents.base import Method
 
 __all__ = [
-    "REWARD_DEST", "SETTINGS_DEST", "add_reward_options", "add_settings_options", "field_docs", "given_reward",
-    "given_settings", "option_reading",
+    "REWARD_DEST",
+    "SETTINGS_DEST",
+    "add_reward_options",
+    "add_settings_options",
+    "field_docs",
+    "given_reward",
+    "given_settings",
+    "option_reading",
 ]
 
 SETTINGS_DEST = "settings."
@@ -58,8 +64,13 @@ def field_docs(cls: type) -> dict[str, str]:
     body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
     docs = {}
     for node, after in zip(body, body[1:]):
-        if (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and isinstance(after, ast.Expr)
-                and isinstance(after.value, ast.Constant) and isinstance(after.value.value, str)):
+        if (
+            isinstance(node, ast.AnnAssign)
+            and isinstance(node.target, ast.Name)
+            and isinstance(after, ast.Expr)
+            and isinstance(after.value, ast.Constant)
+            and isinstance(after.value.value, str)
+        ):
             docs[node.target.id] = " ".join(after.value.value.split())
     return docs
 
@@ -71,8 +82,9 @@ class _StoreAs(argparse.Action):
         super().__init__(*args, **kwargs)
         self.sequence = sequence  # (argparse gives every action a ``container``: its parser or group)
 
-    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
-                 option_string: str | None = None) -> None:
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any, option_string: str | None = None
+    ) -> None:
         setattr(namespace, self.dest, self.sequence(values))
 
 
@@ -89,8 +101,13 @@ def option_reading(kind: Any) -> dict[str, Any] | None:
     container = get_origin(kind)
     if container is tuple and len(arguments) == 2 and arguments[1] is Ellipsis or container is list and arguments:
         if arguments[0] in _SCALARS:
-            return {"type": arguments[0], "nargs": "+", "metavar": arguments[0].__name__.upper(),
-                    "action": _StoreAs, "sequence": container}
+            return {
+                "type": arguments[0],
+                "nargs": "+",
+                "metavar": arguments[0].__name__.upper(),
+                "action": _StoreAs,
+                "sequence": container,
+            }
     return None
 
 
@@ -108,8 +125,9 @@ def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> Non
     if not (isinstance(settings, type) and is_dataclass(settings)):
         raise ValueError(f"method {method.name!r}: its settings {settings!r} is not a dataclass")
     docs, kinds = field_docs(settings), settings_types(settings)
-    free = parser.add_argument_group(f"settings of {method.name}",
-                                     f"the fields of {settings.__name__} (also keys of [settings] in --config)")
+    free = parser.add_argument_group(
+        f"settings of {method.name}", f"the fields of {settings.__name__} (also keys of [settings] in --config)"
+    )
     fixed = None
     in_config_only = []
     for field in fields(settings):
@@ -123,8 +141,9 @@ def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> Non
         else:
             group, text = free, f"{docs.get(field.name, '')} (default: {_default(field)!r})"
         try:
-            group.add_argument("--" + field.name.replace("_", "-"), dest=SETTINGS_DEST + field.name,
-                               help=help_text(text.strip()), **reading)
+            group.add_argument(
+                "--" + field.name.replace("_", "-"), dest=SETTINGS_DEST + field.name, help=help_text(text.strip()), **reading
+            )
         except argparse.ArgumentError:  # its option is a run option's (a setting named ``seed``, say)
             in_config_only.append(field.name)
     if in_config_only:
@@ -142,7 +161,8 @@ def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
     defaults = {f.name: _default(f) for f in fields(transform)}
     group = parser.add_argument_group(
         f"reward transform of {method.name}",
-        f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)")
+        f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)",
+    )
     in_config_only = []
     for name, kind in kinds.items():
         reading = option_reading(kind)

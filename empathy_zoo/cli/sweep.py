@@ -10,7 +10,13 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.cli.common import (
-    PROG, RUN_DEFAULTS, add_runner_options, check_results, positive, print_written, runner_options,
+    PROG,
+    RUN_DEFAULTS,
+    add_runner_options,
+    check_results,
+    positive,
+    print_written,
+    runner_options,
 )
 
 __all__ = ["add_sweep_commands", "cmd_leaderboard", "cmd_reproduce", "cmd_reproduction", "cmd_sensitivity"]
@@ -40,14 +46,19 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     options = runner_options(args, values)
     done = check_results(specs, out, others=True)  # the leaderboard reads them all: refuse now, not after training
     experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
-    print(f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
-          f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",
-          flush=True)
+    print(
+        f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
+        f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",
+        flush=True,
+    )
     ours = {f"{spec.run_id}.json" for spec in specs}
     others = sorted(p.name for p in (out / RUNS_DIR).glob("*.json") if p.name not in ours) if (out / RUNS_DIR).is_dir() else []
     if others:
-        print(f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
-              f"(e.g. {others[0]}); the leaderboard includes them", flush=True)
+        print(
+            f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
+            f"(e.g. {others[0]}); the leaderboard includes them",
+            flush=True,
+        )
     train_runs(specs, out, options)
     print_written(write_leaderboard(out, command=command))
     try:
@@ -71,8 +82,7 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
     note = Path(args.note).read_text() if args.note else ""
-    written = write_reproduction(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note,
-                                 appendix=appendix)
+    written = write_reproduction(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix)
     print(f"{PROG}: wrote {written}")
     return 0
 
@@ -97,8 +107,12 @@ def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
 def add_sweep_commands(sub: Any) -> None:
     """The ``reproduce``, ``leaderboard``, ``reproduction`` and ``sensitivity`` subcommands."""
     reproduce = sub.add_parser("reproduce", help="train a sweep (resumable) and write its leaderboard")
-    reproduce.add_argument("--profile", required=True, metavar="quick|paper|PATH.toml",
-                           help="a shipped sweep (empathy_zoo/profiles/<name>.toml) or a sweep file")
+    reproduce.add_argument(
+        "--profile",
+        required=True,
+        metavar="quick|paper|PATH.toml",
+        help="a shipped sweep (empathy_zoo/profiles/<name>.toml) or a sweep file",
+    )
     reproduce.add_argument("--seeds", type=int, metavar="N", help="replace the sweep's seeds with 0..N-1")
     reproduce.add_argument("--out", metavar="DIR", help="output directory (default: results/<profile>)")
     add_runner_options(reproduce)
@@ -111,8 +125,11 @@ def add_sweep_commands(sub: Any) -> None:
 
     report = sub.add_parser("reproduction", help="check the paper's claims on existing results (REPRODUCTION.md)")
     _add_report_options(report, "a reproduce sweep", "REPRODUCTION.md")
-    report.add_argument("--sensitivity", metavar="DIR",
-                        help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition")
+    report.add_argument(
+        "--sensitivity",
+        metavar="DIR",
+        help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition",
+    )
     report.set_defaults(handler=cmd_reproduction)
 
     sensitivity = sub.add_parser("sensitivity", help="Sharing's claims per fidelity condition (SENSITIVITY.md)")
@@ -124,5 +141,4 @@ def _add_report_options(parser: argparse.ArgumentParser, sweep: str, report: str
     parser.add_argument("results", metavar="DIR", help=f"results directory of {sweep}")
     parser.add_argument("--out", metavar="PATH", help=f"where to write (default: DIR/{report})")
     parser.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
-    parser.add_argument("--note", metavar="FILE.md",
-                        help="prose placed before the rules (how the run was made, what it shows)")
+    parser.add_argument("--note", metavar="FILE.md", help="prose placed before the rules (how the run was made, what it shows)")

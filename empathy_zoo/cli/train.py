@@ -14,7 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.cli.common import (
-    PROG, RUN_DEFAULTS, add_runner_options, agent_policy, check_results, run_summary, runner_options,
+    PROG,
+    RUN_DEFAULTS,
+    add_runner_options,
+    agent_policy,
+    check_results,
+    run_summary,
+    runner_options,
 )
 from empathy_zoo.cli.settings_options import add_reward_options, add_settings_options, given_reward, given_settings
 from empathy_zoo.training.sweep import POLICY_TABLE, SEEDS
@@ -22,10 +28,29 @@ from empathy_zoo.training.sweep import POLICY_TABLE, SEEDS
 __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
 
 RUN_KEYS: dict[str, Any] = {
-    "env": str, "method": str, "seed": int, "seeds": SEEDS, "steps": int, "out": str, "device": str,
-    "eval_interval": int, "eval_episodes": int, "checkpoint_interval": int, "max_parallel_runs": int,
-    "workers": int, "threads": int, "label": str, "size": int, "view": int, "max_cycles": int, "fixed": POLICY_TABLE,
-    "start": str, "inventory_encoding": str, "num_cats": int, "num_humans": int, "progress": bool,
+    "env": str,
+    "method": str,
+    "seed": int,
+    "seeds": SEEDS,
+    "steps": int,
+    "out": str,
+    "device": str,
+    "eval_interval": int,
+    "eval_episodes": int,
+    "checkpoint_interval": int,
+    "max_parallel_runs": int,
+    "workers": int,
+    "threads": int,
+    "label": str,
+    "size": int,
+    "view": int,
+    "max_cycles": int,
+    "fixed": POLICY_TABLE,
+    "start": str,
+    "inventory_encoding": str,
+    "num_cats": int,
+    "num_humans": int,
+    "progress": bool,
 }
 """Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``,
 the fields of its reward transform in ``[reward]``)."""
@@ -89,8 +114,10 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
         table = data.get("reward", {})
         kinds = method.reward_fields()
         if table and not kinds:
-            raise SweepConfigError(f"{path}: [reward]: method {method.name!r} has "
-                                   + ("no reward transform" if method.reward is None else "a reward transform without fields"))
+            raise SweepConfigError(
+                f"{path}: [reward]: method {method.name!r} has "
+                + ("no reward transform" if method.reward is None else "a reward transform without fields")
+            )
         check_keys(table, kinds, f"{path}: [reward]")
         reward |= {k: check_value(v, kinds[k], f"{path}: [reward] {k}") for k, v in table.items()}
     for key in RUN_KEYS.keys() - {"seed", "fixed"}:
@@ -120,16 +147,30 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
 
         fixed = {**default_policies(run["env"], env_kwargs), **run["fixed"]}
     specs = [
-        RunSpec(env=run["env"], method=run["method"], settings=settings, reward=run["reward"], seed=seed, steps=run["steps"],
-                eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=fixed,
-                env_kwargs=env_kwargs, label=run["label"])
+        RunSpec(
+            env=run["env"],
+            method=run["method"],
+            settings=settings,
+            reward=run["reward"],
+            seed=seed,
+            steps=run["steps"],
+            eval_interval=run["eval_interval"],
+            eval_episodes=run["eval_episodes"],
+            fixed=fixed,
+            env_kwargs=env_kwargs,
+            label=run["label"],
+        )
         for seed in run["seeds"]
     ]
     options = runner_options(args, run)
     out = Path(run["out"])
     done = check_results(specs, out)
-    print(f"{PROG}: {len(specs)} run(s) of {specs[0].display_label()} on {run['env']}, {run['steps']:,} steps each"
-          + (f" ({done} already finished)" if done else "") + f"; results in {out / 'runs'}", flush=True)
+    print(
+        f"{PROG}: {len(specs)} run(s) of {specs[0].display_label()} on {run['env']}, {run['steps']:,} steps each"
+        + (f" ({done} already finished)" if done else "")
+        + f"; results in {out / 'runs'}",
+        flush=True,
+    )
     paths = train_runs(specs, out, options)
     for path in paths:
         print(run_summary(read_result(path)))
@@ -141,13 +182,18 @@ def add_train(sub: Any, method: str) -> None:
     from baselines.registry import get_method
 
     parser = sub.add_parser(
-        "train", help="train one run (or several seeds as one ensemble)", argument_default=argparse.SUPPRESS,
+        "train",
+        help="train one run (or several seeds as one ensemble)",
+        argument_default=argparse.SUPPRESS,
         description="Train runs of one method on one environment. Precedence: defaults < --config file < command line. "
-                    "The settings options are the method's: see empathy-zoo train --method NAME --help.",
+        "The settings options are the method's: see empathy-zoo train --method NAME --help.",
     )
-    parser.add_argument("--config", metavar="FILE.toml",
-                        help="TOML file: top-level run keys (env, method, seed(s), steps, …), a [settings] table and "
-                             "a [reward] table (the fields of the method's reward transform)")
+    parser.add_argument(
+        "--config",
+        metavar="FILE.toml",
+        help="TOML file: top-level run keys (env, method, seed(s), steps, …), a [settings] table and "
+        "a [reward] table (the fields of the method's reward transform)",
+    )
     parser.add_argument("--env", help=f"environment (default: {RUN_DEFAULTS['env']})")
     parser.add_argument("--method", help=f"registered method or package.module:NAME (default: {RUN_DEFAULTS['method']})")
     seeds = parser.add_mutually_exclusive_group()
@@ -155,21 +201,37 @@ def add_train(sub: Any, method: str) -> None:
     seeds.add_argument("--seeds", type=int, nargs="+", metavar="S", help="several seeds, trained as one ensemble")
     parser.add_argument("--steps", type=int, help=f"env steps per run (default: {RUN_DEFAULTS['steps']})")
     parser.add_argument("--out", metavar="DIR", help=f"output directory (default: {RUN_DEFAULTS['out']})")
-    parser.add_argument("--eval-interval", type=int, metavar="N",
-                        help=f"env steps between greedy evaluations (default: {RUN_DEFAULTS['eval_interval']})")
-    parser.add_argument("--eval-episodes", type=int, metavar="N",
-                        help=f"episodes per greedy evaluation (default: {RUN_DEFAULTS['eval_episodes']})")
+    parser.add_argument(
+        "--eval-interval",
+        type=int,
+        metavar="N",
+        help=f"env steps between greedy evaluations (default: {RUN_DEFAULTS['eval_interval']})",
+    )
+    parser.add_argument(
+        "--eval-episodes",
+        type=int,
+        metavar="N",
+        help=f"episodes per greedy evaluation (default: {RUN_DEFAULTS['eval_episodes']})",
+    )
     parser.add_argument("--label", help="display name in tables (default: the method's)")
     parser.add_argument("--size", type=int, help="side of the torus (default: 7)")
     parser.add_argument("--view", type=int, help="side of the observation window (default: 5)")
     parser.add_argument("--max-cycles", type=int, help="steps before truncation (default: 500)")
     parser.add_argument("--start", help="Sharing only: start cells, random or centre (default: random)")
-    parser.add_argument("--inventory-encoding", metavar="ENCODING",
-                        help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)")
+    parser.add_argument(
+        "--inventory-encoding",
+        metavar="ENCODING",
+        help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)",
+    )
     parser.add_argument("--num-cats", type=int, metavar="N", help="Coexistence only: cats (default: 1)")
     parser.add_argument("--num-humans", type=int, metavar="N", help="Sharing only: humans (default: 1)")
-    parser.add_argument("--fixed", type=agent_policy, action="append", metavar="AGENT=POLICY",
-                        help="fixed agent policy, a name or package.module:ClassName (repeatable)")
+    parser.add_argument(
+        "--fixed",
+        type=agent_policy,
+        action="append",
+        metavar="AGENT=POLICY",
+        help="fixed agent policy, a name or package.module:ClassName (repeatable)",
+    )
     add_runner_options(parser, default=argparse.SUPPRESS)
     add_settings_options(parser, get_method(method))
     add_reward_options(parser, get_method(method))

@@ -9,8 +9,15 @@ from typing import Any, Protocol
 import numpy as np
 
 __all__ = [
-    "GRID_ARGUMENTS", "MAX_SIZE", "MAX_TABLE_BYTES", "table_bytes", "check_grid_arguments", "check_choice",
-    "check_agent_count", "check_env_arguments", "TakesArguments",
+    "GRID_ARGUMENTS",
+    "MAX_SIZE",
+    "MAX_TABLE_BYTES",
+    "table_bytes",
+    "check_grid_arguments",
+    "check_choice",
+    "check_agent_count",
+    "check_env_arguments",
+    "TakesArguments",
 ]
 
 GRID_ARGUMENTS = ("size", "view", "max_cycles")
@@ -86,9 +93,7 @@ def check_agent_count(name: str, value: Any, most: int, room: str) -> int:
     return int(value)
 
 
-def check_env_arguments(
-    engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError
-) -> None:
+def check_env_arguments(engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError) -> None:
     """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
     ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
     count = () if engine.count_argument is None else (engine.count_argument,)

@@ -17,19 +17,36 @@ import numpy as np
 
 from empathy_zoo.actions import check_action_array
 from empathy_zoo.engine.arguments import (
-    GRID_ARGUMENTS, MAX_SIZE, check_agent_count, check_choice, check_env_arguments, check_grid_arguments, table_bytes,
+    GRID_ARGUMENTS,
+    MAX_SIZE,
+    check_agent_count,
+    check_choice,
+    check_env_arguments,
+    check_grid_arguments,
+    table_bytes,
 )
 from empathy_zoo.engine.placement import HandPlacement
 from empathy_zoo.engine.sight import OUTSIDE, Sight
 from empathy_zoo.grid import (
-    MOVES, NUM_ACTIONS, Action, displacement_origin, spread_ids, window_slot_by_displacement,
+    MOVES,
+    NUM_ACTIONS,
+    Action,
+    displacement_origin,
+    spread_ids,
+    window_slot_by_displacement,
 )
 from empathy_zoo.metrics import equality
 from empathy_zoo.randomness import EnvStreams, check_seed
 
 __all__ = [
-    "GridEngine", "StepEvents", "GRID_ARGUMENTS", "MAX_SIZE", "check_grid_arguments", "check_choice",
-    "check_env_arguments", "table_bytes",
+    "GridEngine",
+    "StepEvents",
+    "GRID_ARGUMENTS",
+    "MAX_SIZE",
+    "check_grid_arguments",
+    "check_choice",
+    "check_env_arguments",
+    "table_bytes",
 ]
 
 NO_AGENT = -1
@@ -80,9 +97,7 @@ class GridEngine(HandPlacement, Sight):
     """The constructor keyword giving how many other agents (after the first) the environment
     holds, default 1 (``num_cats``), or ``None`` when the number is fixed."""
 
-    def __init__(
-        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, num_others: int = 1
-    ) -> None:
+    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, num_others: int = 1) -> None:
         check_grid_arguments(size, view, max_cycles, self.min_size)
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
@@ -330,11 +345,14 @@ class GridEngine(HandPlacement, Sight):
         other agent each is that agent's own figure."""
         others = self.other_agents[learner]
         if len(others) == 1:  # (that agent's own figures, read at once)
+
             def of_others(array: np.ndarray) -> np.ndarray:
                 return array[env_ids, others[0]]
         else:
+
             def of_others(array: np.ndarray) -> np.ndarray:
                 return array[env_ids[:, None], others].sum(axis=1)
+
         own_b = self.episode_battery_return[env_ids, learner]
         return {
             "survival": np.where(self.present[env_ids, learner], self.t[env_ids], self.left_at[env_ids, learner]),
@@ -360,6 +378,13 @@ class GridEngine(HandPlacement, Sight):
 
     def _state_keys(self) -> tuple[str, ...]:
         return (
-            "cells", "present", "inventory", "t", "running", "episode_return",
-            "episode_battery_return", "episode_harms", "left_at",
+            "cells",
+            "present",
+            "inventory",
+            "t",
+            "running",
+            "episode_return",
+            "episode_battery_return",
+            "episode_harms",
+            "left_at",
         )

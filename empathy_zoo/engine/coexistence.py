@@ -56,11 +56,7 @@ def harm_outcome(before: np.ndarray, after: np.ndarray, size: int) -> np.ndarray
         | ((dr == 0) & (dc == size - 1))  # robot directly right of the cat
         | (same & (robot_was_above | (level & (before[:, 1] < 0))))
     )
-    cat_harms = (
-        ((dr == size - 1) & (dc == 0))
-        | ((dr == 0) & (dc == 1))
-        | (same & (cat_was_above | (level & (before[:, 1] > 0))))
-    )
+    cat_harms = ((dr == size - 1) & (dc == 0)) | ((dr == 0) & (dc == 1)) | (same & (cat_was_above | (level & (before[:, 1] > 0))))
     return np.select([robot_harms, cat_harms], [ROBOT_HARMS_CAT, CAT_HARMS_ROBOT], NO_HARM)
 
 
@@ -80,9 +76,7 @@ class CoexistenceEngine(GridEngine):
     """With one cat, look the step's effects up in the one-pair tables (:data:`HARMED_BY`, …)
     rather than through the bookkeeping of several pairs: the same effects, fewer operations."""
 
-    def __init__(
-        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *, num_cats: int = 1
-    ) -> None:
+    def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *, num_cats: int = 1) -> None:
         super().__init__(num_envs, size, view, max_cycles, num_others=num_cats)
         dr, dc = (d.ravel() for d in np.indices((self.size, self.size)))
         contact = np.abs(signed_offset(dr, self.size)) + np.abs(signed_offset(dc, self.size)) <= 1
@@ -95,10 +89,13 @@ class CoexistenceEngine(GridEngine):
         dr, dc = np.divmod(np.arange(2 * origin + 1) - origin + (self.size - 1), 2 * self.size)
         before = np.stack([dr, dc - (self.size - 1)], axis=1)  # every (dr, dc) with |dr|, |dc| < size, and unused ones
         robot_action, cat_action = (a.ravel() for a in np.indices((NUM_ACTIONS, NUM_ACTIONS)))
-        self._outcomes = np.stack([
-            harm_outcome(before, before + MOVES[c] - MOVES[r], self.size).astype(np.int8)
-            for r, c in zip(robot_action, cat_action)
-        ], axis=1).ravel()
+        self._outcomes = np.stack(
+            [
+                harm_outcome(before, before + MOVES[c] - MOVES[r], self.size).astype(np.int8)
+                for r, c in zip(robot_action, cat_action)
+            ],
+            axis=1,
+        ).ravel()
         """``[displacement · 25 + robot action · 5 + cat action]``: the step's outcome."""
         moves = np.arange(self.num_cells * NUM_ACTIONS)
         cell, action = np.divmod(moves, NUM_ACTIONS)

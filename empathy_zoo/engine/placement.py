@@ -91,9 +91,7 @@ class HandPlacement:
         for index, cell in placed.items():
             self.cells[env_id, index] = self.flat_cell(*cell)
 
-    def _ordered_start(
-        self, env_id: int, placed: Mapping[int, np.ndarray], missing: Iterable[int]
-    ) -> dict[int, np.ndarray]:
+    def _ordered_start(self, env_id: int, placed: Mapping[int, np.ndarray], missing: Iterable[int]) -> dict[int, np.ndarray]:
         """``placed`` (agent index -> (row, col)) plus a cell for every agent in ``missing``, in
         turn: the first cell of :attr:`start_order` that is not blocked in ``env_id`` and neither
         taken by nor in conflict with an agent placed before it."""

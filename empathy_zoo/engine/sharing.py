@@ -28,8 +28,15 @@ from empathy_zoo.grid import cells_by_distance, window_indices
 from empathy_zoo.observation_codes import step_value
 
 __all__ = [
-    "SharingEngine", "battery_value", "agent_value", "authors_agent_value", "battery_cells", "FLOOR", "BATTERY",
-    "STARTS", "INVENTORY_ENCODINGS",
+    "SharingEngine",
+    "battery_value",
+    "agent_value",
+    "authors_agent_value",
+    "battery_cells",
+    "FLOOR",
+    "BATTERY",
+    "STARTS",
+    "INVENTORY_ENCODINGS",
 ]
 
 FLOOR = 0.0
@@ -79,8 +86,15 @@ class SharingEngine(GridEngine):
     count_argument = "num_humans"
 
     def __init__(
-        self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, *,
-        start: str = "random", inventory_encoding: str = "count_plus_one", num_humans: int = 1,
+        self,
+        num_envs: int = 1,
+        size: int = 7,
+        view: int = 5,
+        max_cycles: int = 500,
+        *,
+        start: str = "random",
+        inventory_encoding: str = "count_plus_one",
+        num_humans: int = 1,
     ) -> None:
         self.start = check_choice("start", start, STARTS)
         self.inventory_encoding = check_choice("inventory_encoding", inventory_encoding, INVENTORY_ENCODINGS)
@@ -104,7 +118,10 @@ class SharingEngine(GridEngine):
 
     def _room_for_others(self) -> tuple[int, str]:
         free = int(np.count_nonzero(~battery_cells(self.size)))
-        return free - 1, f"the robot and the humans start on distinct cells without a battery: {free} on a {self.size}x{self.size} grid"
+        return (
+            free - 1,
+            f"the robot and the humans start on distinct cells without a battery: {free} on a {self.size}x{self.size} grid",
+        )
 
     def _draw_batteries(self, env_ids: np.ndarray) -> None:
         self._picture[env_ids] = np.where(self.batteries[env_ids], BATTERY, FLOOR)

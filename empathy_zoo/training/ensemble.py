@@ -26,11 +26,11 @@ from baselines.inaction_baseline import InactionBaseline
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
+from empathy_zoo.result_file import result_path
 from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import Report, SweepProgress
-from empathy_zoo.result_file import result_path
 from empathy_zoo.training.results import build_result, empty_columns, write_result
 from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, write_manifest
 from empathy_zoo.training.spec import RunSpec
@@ -51,7 +51,9 @@ class _EpisodeLog:
         self.columns["episode_end_step"].append(int(end_step))
         for name in METRIC_NAMES:
             value = metrics[name][row]
-            self.columns[name].append(int(value) if name in ("survival", "harms", "batteries", "other_batteries") else round(float(value), 6))
+            self.columns[name].append(
+                int(value) if name in ("survival", "harms", "batteries", "other_batteries") else round(float(value), 6)
+            )
 
     def recent(self, name: str, count: int = 100) -> float:
         values = self.columns[name][-count:]
@@ -59,8 +61,12 @@ class _EpisodeLog:
 
 
 def train_ensemble(
-    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(), write_results: bool = True,
-    report: Callable[[Report], None] | None = None, ensemble: int = 0,
+    specs: Sequence[RunSpec],
+    out_dir: str | Path,
+    options: RunnerOptions = RunnerOptions(),
+    write_results: bool = True,
+    report: Callable[[Report], None] | None = None,
+    ensemble: int = 0,
 ) -> list[dict[str, Any]]:
     """Train the compatible runs ``specs`` in lockstep and return their results; write them
     (atomically) unless ``write_results`` is False (a remote worker hands them to the driver).
@@ -70,16 +76,21 @@ def train_ensemble(
     git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
     own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
     try:
-        return _train_ensemble(specs, Path(out_dir), options, write_results,
-                               (own.update if own else report) if options.progress else None, ensemble)
+        return _train_ensemble(
+            specs, Path(out_dir), options, write_results, (own.update if own else report) if options.progress else None, ensemble
+        )
     finally:
         if own is not None:
             own.close()
 
 
 def _train_ensemble(
-    specs: Sequence[RunSpec], out_dir: Path, options: RunnerOptions, write_results: bool,
-    report: Callable[[Report], None] | None, ensemble: int,
+    specs: Sequence[RunSpec],
+    out_dir: Path,
+    options: RunnerOptions,
+    write_results: bool,
+    report: Callable[[Report], None] | None,
+    ensemble: int,
 ) -> list[dict[str, Any]]:
     if len({s.ensemble_key() for s in specs}) != 1:
         raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
@@ -96,8 +107,9 @@ def _train_ensemble(
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
     seeds = [s.seed for s in specs]
     others = {"num_others": len(venv.others[0])} if _takes(method.learner, "num_others") else {}
-    learner = method.learner([s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device,
-                             **others)
+    learner = method.learner(
+        [s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device, **others
+    )
     train_rewards = TrainRewards([s.reward_transform() for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog() for _ in specs]
@@ -109,17 +121,28 @@ def _train_ensemble(
         obs, evaluations, step, elapsed = _restore(ckpt, specs, learner, train_rewards, venv, logs)
     if hasattr(learner, "replay") and hasattr(learner.replay, "check_range"):  # fail now, not mid-run
         learner.replay.check_range(venv.engine.obs_low, venv.engine.obs_high)
-    memory = {"replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
-              "learner_per_run": learner.memory_bytes_per_run()}
+    memory = {
+        "replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
+        "learner_per_run": learner.memory_bytes_per_run(),
+    }
     total = first.steps
     label = f"{first.env} ×{k} runs"
     if report is not None:
         mb = 2**20
-        report(Report(ensemble, step, total, k, label, line=(
-            f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
-            f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
-            f"total {k * memory['learner_per_run'] / mb:.0f} MB"
-        )))
+        report(
+            Report(
+                ensemble,
+                step,
+                total,
+                k,
+                label,
+                line=(
+                    f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
+                    f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
+                    f"total {k * memory['learner_per_run'] / mb:.0f} MB"
+                ),
+            )
+        )
     started = time.perf_counter() - elapsed
     first_step = step
     rows = np.arange(k)
@@ -141,13 +164,20 @@ def _train_ensemble(
                 evaluations[r].append({"step": step, **per_run[r]})
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
             write_manifest(ckpt, specs)
-            save_checkpoint(ckpt, {
-                "run_ids": [s.run_id for s in specs], "step": step, "elapsed": time.perf_counter() - started,
-                "learner": learner.state_dict(), "vector": to_safe(venv.state()),
-                "obs": to_safe(obs),
-                "logs": [log.columns for log in logs], "evaluations": evaluations,
-                "rewards": to_safe(train_rewards.state()),
-            })
+            save_checkpoint(
+                ckpt,
+                {
+                    "run_ids": [s.run_id for s in specs],
+                    "step": step,
+                    "elapsed": time.perf_counter() - started,
+                    "learner": learner.state_dict(),
+                    "vector": to_safe(venv.state()),
+                    "obs": to_safe(obs),
+                    "logs": [log.columns for log in logs],
+                    "evaluations": evaluations,
+                    "rewards": to_safe(train_rewards.state()),
+                },
+            )
         if report is not None and (step % 500 == 0 or step == total):
             rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
             report(Report(ensemble, step, total, k, label, stats=_live(logs, learner, rate), done=step == total))
@@ -162,8 +192,9 @@ def _train_ensemble(
     return results
 
 
-def _restore(ckpt: Path, specs: Sequence[RunSpec], learner: Any, train_rewards: TrainRewards, venv: VectorEnv,
-             logs: list[_EpisodeLog]) -> tuple[np.ndarray, list[list[dict[str, Any]]], int, float]:
+def _restore(
+    ckpt: Path, specs: Sequence[RunSpec], learner: Any, train_rewards: TrainRewards, venv: VectorEnv, logs: list[_EpisodeLog]
+) -> tuple[np.ndarray, list[list[dict[str, Any]]], int, float]:
     """Continue from checkpoint ``ckpt``: restore the learner, reward transforms, environments and
     logs; return the observations, evaluations, step and elapsed seconds. The loaded checkpoint
     is dropped on return (in the paper profile it is ≈ 1 GB: the replay memories)."""

@@ -41,7 +41,4 @@ def evaluate_greedy(
         for name in METRIC_NAMES:
             columns[name][fresh] = step.finished[name][mask]
         done[fresh] = True
-    return [
-        {name: columns[name][r * episodes : (r + 1) * episodes].tolist() for name in METRIC_NAMES}
-        for r in range(k)
-    ]
+    return [{name: columns[name][r * episodes : (r + 1) * episodes].tolist() for name in METRIC_NAMES} for r in range(k)]

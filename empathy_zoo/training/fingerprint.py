@@ -49,8 +49,14 @@ if TYPE_CHECKING:
     from empathy_zoo.training.spec import RunSpec
 
 __all__ = [
-    "CodeFingerprint", "run_fingerprint", "recorded_fingerprint", "plugin_names", "module_sha256", "code_changes",
-    "listing", "SHOWN_RUNS",
+    "CodeFingerprint",
+    "run_fingerprint",
+    "recorded_fingerprint",
+    "plugin_names",
+    "module_sha256",
+    "code_changes",
+    "listing",
+    "SHOWN_RUNS",
 ]
 
 SHOWN_RUNS = 3
@@ -86,16 +92,22 @@ class CodeFingerprint:
             changed.append(f"made by empathy-zoo {recorded.version}, this is {self.version}")
         for module, digest in sorted((self.plugins or {}).items()):
             if recorded.plugins is None:
-                unknown.append(f"made before result files recorded plug-in source hashes: whether plug-in module "
-                               f"{module} changed cannot be told")
+                unknown.append(
+                    f"made before result files recorded plug-in source hashes: whether plug-in module "
+                    f"{module} changed cannot be told"
+                )
                 continue
             before = recorded.plugins.get(module)
             if digest is None or before is None:
-                unknown.append(f"plug-in module {module} {'has' if digest is None else 'had'} no source file to hash: "
-                               "whether it changed cannot be told")
+                unknown.append(
+                    f"plug-in module {module} {'has' if digest is None else 'had'} no source file to hash: "
+                    "whether it changed cannot be told"
+                )
             elif digest != before:
-                changed.append(f"plug-in module {module} changed since these results were made (source hash "
-                               f"{before[:_SHOWN_HASH]}… → {digest[:_SHOWN_HASH]}…)")
+                changed.append(
+                    f"plug-in module {module} changed since these results were made (source hash "
+                    f"{before[:_SHOWN_HASH]}… → {digest[:_SHOWN_HASH]}…)"
+                )
         return changed, unknown
 
 
@@ -138,7 +150,8 @@ def module_sha256(module: ModuleType) -> str | None:
 
 
 def code_changes(
-    specs: Iterable[RunSpec], results: Mapping[str, Mapping[str, Any]],
+    specs: Iterable[RunSpec],
+    results: Mapping[str, Mapping[str, Any]],
 ) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     """Fingerprint every run of ``specs`` (so its plug-ins are hashed before it trains) and compare
     it with the one recorded by its result file in ``results`` (by run id; runs without one are

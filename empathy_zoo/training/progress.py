@@ -53,8 +53,16 @@ class SweepProgress:
         self.bars: dict[int, tqdm] = {}
         self.steps: dict[int, int] = {}
         total = sum(runs * steps for runs, steps in ensembles)
-        self.sweep = tqdm(total=total, unit="step", unit_scale=True, desc="sweep", dynamic_ncols=True, position=0,
-                          disable=not enabled or len(ensembles) < 2, mininterval=1.0)
+        self.sweep = tqdm(
+            total=total,
+            unit="step",
+            unit_scale=True,
+            desc="sweep",
+            dynamic_ncols=True,
+            position=0,
+            disable=not enabled or len(ensembles) < 2,
+            mininterval=1.0,
+        )
         """Env steps of every run still to train here (a resumed ensemble's steps are left out)."""
 
     def update(self, report: Report) -> None:
@@ -72,8 +80,16 @@ class SweepProgress:
                 taken = {b.pos for b in self.bars.values()}
                 position = next(p for p in range(1 if not self.sweep.disable else 0, 1 << 16) if p not in taken)
                 bar = self.bars[report.ensemble] = tqdm(
-                    total=report.total, initial=report.step, unit="step", unit_scale=True, desc=report.label,
-                    dynamic_ncols=True, leave=False, position=position, disable=not self.enabled, mininterval=1.0,
+                    total=report.total,
+                    initial=report.step,
+                    unit="step",
+                    unit_scale=True,
+                    desc=report.label,
+                    dynamic_ncols=True,
+                    leave=False,
+                    position=position,
+                    disable=not self.enabled,
+                    mininterval=1.0,
                 )
             if bar is not None:
                 bar.set_postfix(report.stats, refresh=False)

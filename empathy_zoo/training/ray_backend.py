@@ -39,9 +39,9 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.result_file import result_path
-from empathy_zoo.training.results import write_result
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.training.results import write_result
 from empathy_zoo.training.resume import CHECKPOINT_DIR
 from empathy_zoo.training.spec import RunSpec
 
@@ -119,17 +119,29 @@ def train_with_ray(
 
 
 def _run_tasks(
-    ray: Any, chunks: list[list[RunSpec]], out_dir: Path, options: RunnerOptions,
-    on_result: Callable[[dict[str, Any]], None] | None, fault_injection: Callable[[Sequence[RunSpec]], None] | None,
+    ray: Any,
+    chunks: list[list[RunSpec]],
+    out_dir: Path,
+    options: RunnerOptions,
+    on_result: Callable[[dict[str, Any]], None] | None,
+    fault_injection: Callable[[Sequence[RunSpec]], None] | None,
 ) -> None:
     gpu = options.device.startswith("cuda")
     threads = options.threads or 1
     worker_options = replace(
-        options, backend="local", address=None, workers=1, progress=False, threads=threads,
+        options,
+        backend="local",
+        address=None,
+        workers=1,
+        progress=False,
+        threads=threads,
         device="cuda" if gpu else options.device,  # Ray hands each task its own GPU as cuda:0
     )
     task = ray.remote(_train_chunk).options(
-        num_cpus=threads, num_gpus=1 if gpu else 0, max_retries=MAX_RETRIES, retry_exceptions=True,
+        num_cpus=threads,
+        num_gpus=1 if gpu else 0,
+        max_retries=MAX_RETRIES,
+        retry_exceptions=True,
     )
     pending = {task.remote(chunk, str(out_dir), worker_options, fault_injection): chunk for chunk in chunks}
     failures: list[tuple[list[RunSpec], BaseException]] = []
@@ -168,7 +180,9 @@ def _run_tasks(
 
 
 def _train_chunk(
-    chunk: list[RunSpec], out_dir: str, options: RunnerOptions,
+    chunk: list[RunSpec],
+    out_dir: str,
+    options: RunnerOptions,
     fault_injection: Callable[[Sequence[RunSpec]], None] | None,
 ) -> list[dict[str, Any]]:
     """One Ray task: train an ensemble and return its results (the driver writes them)."""

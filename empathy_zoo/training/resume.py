@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
-from empathy_zoo.training.checkpoint import load_checkpoint
 from empathy_zoo.result_file import result_path
+from empathy_zoo.training.checkpoint import load_checkpoint
 from empathy_zoo.training.spec import RunSpec, group_specs
 
 __all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]
@@ -108,9 +108,11 @@ def plan_ensembles(
             claimed.update({run_id: checkpoint for run_id in ids})
             others = [run_id for run_id in ids if run_id not in pending and run_id not in finished]
             if ids not in usual:  # a plain resume goes without saying
-                on_note(f"resuming {len(ids)} run(s) together from checkpoint {checkpoint}, as they were checkpointed"
-                        + (f"; {len(finished)} of them already finished are recomputed, not written again" if finished else "")
-                        + (f"; not asked for here, but finished and written too: {', '.join(others)}" if others else ""))
+                on_note(
+                    f"resuming {len(ids)} run(s) together from checkpoint {checkpoint}, as they were checkpointed"
+                    + (f"; {len(finished)} of them already finished are recomputed, not written again" if finished else "")
+                    + (f"; not asked for here, but finished and written too: {', '.join(others)}" if others else "")
+                )
             continue
         if not asked and len(finished) == len(ids):
             remove_checkpoint(checkpoint)
@@ -121,7 +123,9 @@ def plan_ensembles(
             why = f"it overlaps the newer checkpoint {claimed[overlap[0]]}" if overlap else reason
             remove_checkpoint(checkpoint)
             restart = [run_id for run_id in asked if run_id not in claimed]
-            on_note(f"removed checkpoint {checkpoint}: {why}"
-                    + (f"; these runs start again from scratch: {', '.join(restart)}" if restart else ""))
+            on_note(
+                f"removed checkpoint {checkpoint}: {why}"
+                + (f"; these runs start again from scratch: {', '.join(restart)}" if restart else "")
+            )
     rest = [spec for spec in todo if spec.run_id not in claimed]
     return chunks + group_specs(rest, max_parallel_runs)

@@ -15,20 +15,20 @@ import os
 import sys
 import threading
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
+from empathy_zoo.result_file import RUNS_DIR, check_one_experiment_per_label, read_result, result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
-from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
-from empathy_zoo.result_file import RUNS_DIR, check_one_experiment_per_label, read_result, result_path
+from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
 from empathy_zoo.training.spec import RunSpec
 
@@ -39,8 +39,11 @@ SUPERSEDED_SUFFIX = ".superseded"
 
 
 def train_runs(
-    specs: Sequence[RunSpec], out_dir: str | Path, options: RunnerOptions = RunnerOptions(),
-    on_result: Callable[[dict[str, Any]], None] | None = None, on_note: Callable[[str], None] | None = None,
+    specs: Sequence[RunSpec],
+    out_dir: str | Path,
+    options: RunnerOptions = RunnerOptions(),
+    on_result: Callable[[dict[str, Any]], None] | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """Train every run not finished yet; returns the result files of all ``specs``.
 
@@ -77,11 +80,15 @@ def train_runs(
         if not import_ray().is_initialized():  # (missing Ray, or no cluster there, is said before anything is written)
             check_ray_address(options.address)
     finished = _finished_results(out_dir)
-    check_one_experiment_per_label([
-        *((result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path))
-          for path, result in finished.items()),
-        *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
-    ])
+    check_one_experiment_per_label(
+        [
+            *(
+                (result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path))
+                for path, result in finished.items()
+            ),
+            *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
+        ]
+    )
     redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
@@ -95,13 +102,17 @@ def train_runs(
 
 
 def _runs_to_redo(
-    specs: Sequence[RunSpec], out_dir: Path, finished: dict[Path, dict[str, Any]], rerun_changed: bool,
+    specs: Sequence[RunSpec],
+    out_dir: Path,
+    finished: dict[Path, dict[str, Any]],
+    rerun_changed: bool,
     note: Callable[[str], None],
 ) -> set[str]:
     """The finished runs of ``specs`` to retrain because other code made them (``rerun_changed``);
     without ``rerun_changed``, ``ValueError`` when there are any (see :func:`train_runs`)."""
-    changed, unknown = code_changes(specs, {s.run_id: finished[path] for s in specs
-                                            if (path := result_path(out_dir, s.run_id)) in finished})
+    changed, unknown = code_changes(
+        specs, {s.run_id: finished[path] for s in specs if (path := result_path(out_dir, s.run_id)) in finished}
+    )
     if changed and not rerun_changed:
         count = len({run_id for run_ids in changed.values() for run_id in run_ids})
         raise ValueError(
@@ -110,18 +121,25 @@ def _runs_to_redo(
             "delete those result files, or retrain them over their files (rerun_changed=True, --rerun-changed)"
         )
     if unknown and not rerun_changed:
-        note(f"reusing finished runs whose code cannot be checked: {listing(unknown)}; "
-             "rerun_changed=True (--rerun-changed) retrains them")
+        note(
+            f"reusing finished runs whose code cannot be checked: {listing(unknown)}; "
+            "rerun_changed=True (--rerun-changed) retrains them"
+        )
     if not rerun_changed or not (changed or unknown):
         return set()
-    note(f"retraining finished runs made by other code, or by code that cannot be checked: "
-         f"{listing({**changed, **unknown})}; their result files are replaced when the new ones are written")
+    note(
+        f"retraining finished runs made by other code, or by code that cannot be checked: "
+        f"{listing({**changed, **unknown})}; their result files are replaced when the new ones are written"
+    )
     return {run_id for groups in (changed, unknown) for run_ids in groups.values() for run_id in run_ids}
 
 
 def _train_todo(
-    specs: Sequence[RunSpec], out_dir: Path, options: RunnerOptions,
-    on_result: Callable[[dict[str, Any]], None] | None, note: Callable[[str], None],
+    specs: Sequence[RunSpec],
+    out_dir: Path,
+    options: RunnerOptions,
+    on_result: Callable[[dict[str, Any]], None] | None,
+    note: Callable[[str], None],
 ) -> None:
     """Train the runs of ``specs`` that have no result file (``train_runs`` checked everything)."""
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
@@ -170,9 +188,7 @@ def _settle_superseded(runs_dir: Path, restore: Iterable[Path] = ()) -> None:
             old.rename(new)
 
 
-def _counting(
-    on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress
-) -> Callable[[dict[str, Any]], None]:
+def _counting(on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress) -> Callable[[dict[str, Any]], None]:
     def counted(result: dict[str, Any]) -> None:
         progress.sweep.update(result["steps"])
         if on_result is not None:
@@ -205,8 +221,11 @@ def _exit_with_parent(parent: int) -> None:
 
 
 def _train_in_processes(
-    chunks: list[list[RunSpec]], out_dir: Path, options: RunnerOptions,
-    on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress,
+    chunks: list[list[RunSpec]],
+    out_dir: Path,
+    options: RunnerOptions,
+    on_result: Callable[[dict[str, Any]], None] | None,
+    progress: SweepProgress,
 ) -> None:
     """Spread ensembles over ``options.workers`` processes (one torch thread each by default);
     their progress comes back through a queue and is drawn here."""
@@ -216,11 +235,11 @@ def _train_in_processes(
     drain = QueueDrain(manager.Queue(), progress) if manager is not None else None
     reporter = QueueReporter(drain.source) if drain is not None else None
     try:
-        with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent,
-                                 initargs=(os.getpid(),)) as pool:
+        with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
             futures = [
-                pool.submit(train_ensemble, chunk, out_dir, replace(options, workers=1, threads=options.threads or 1),
-                            True, reporter, i)
+                pool.submit(
+                    train_ensemble, chunk, out_dir, replace(options, workers=1, threads=options.threads or 1), True, reporter, i
+                )
                 for i, chunk in enumerate(chunks)
             ]
             try:
@@ -236,5 +255,3 @@ def _train_in_processes(
         if drain is not None:
             drain.stop()
             manager.shutdown()
-
-

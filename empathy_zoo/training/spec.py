@@ -11,10 +11,9 @@ from typing import Any
 from agents.base import Method
 from agents.rewards import transform_config
 from baselines.registry import get_method
-from empathy_zoo.environments import ENGINES
 from empathy_zoo.engine.base import check_choice, check_env_arguments
+from empathy_zoo.environments import ENGINES, default_policies
 from empathy_zoo.names import check_path_name
-from empathy_zoo.environments import default_policies
 from empathy_zoo.policies import PolicyEntry, entry_label, policy_entry
 
 __all__ = ["RunSpec", "group_specs"]
@@ -136,8 +135,14 @@ class RunSpec:
         """Runs with equal keys can train in one lockstep ensemble."""
         method = self.method_object()
         return (
-            self.env, json.dumps(dict(self.env_kwargs), sort_keys=True), json.dumps(self.fixed_policies(), sort_keys=True),
-            method.learner, method.in_view_only, _shared(self.method_settings()), self.steps, self.eval_interval,
+            self.env,
+            json.dumps(dict(self.env_kwargs), sort_keys=True),
+            json.dumps(self.fixed_policies(), sort_keys=True),
+            method.learner,
+            method.in_view_only,
+            _shared(self.method_settings()),
+            self.steps,
+            self.eval_interval,
             self.eval_episodes,
         )
 

@@ -64,19 +64,36 @@ from pathlib import Path
 from typing import Any, get_type_hints
 
 from agents.rewards import transform_config
-from baselines.registry import get_method
 from agents.settings import EmpathicDQNSettings
-from empathy_zoo.environments import ENGINES
+from baselines.registry import get_method
+from empathy_zoo.environments import ENGINES, default_policies
 from empathy_zoo.names import check_path_name
-from empathy_zoo.environments import default_policies
 from empathy_zoo.policies import make_policy, policy_entry
 from empathy_zoo.training.spec import RunSpec
 
 __all__ = [
-    "SweepConfigError", "CONFIG_DIR", "SEEDS", "STR_LIST", "STR_TABLE", "POLICY_TABLE", "SWEEP_KEYS", "ENV_KEYS", "METHOD_KEYS", "DEFAULT_SEEDS",
+    "SweepConfigError",
+    "CONFIG_DIR",
+    "SEEDS",
+    "STR_LIST",
+    "STR_TABLE",
+    "POLICY_TABLE",
+    "SWEEP_KEYS",
+    "ENV_KEYS",
+    "METHOD_KEYS",
+    "DEFAULT_SEEDS",
     "EXTRA_ENV_ARGUMENTS",
-    "load_sweep", "parse_sweep", "profile_path", "profiles", "read_toml", "check_keys", "check_value",
-    "settings_types", "describe_type", "label_fields", "REWARD_TABLE",
+    "load_sweep",
+    "parse_sweep",
+    "profile_path",
+    "profiles",
+    "read_toml",
+    "check_keys",
+    "check_value",
+    "settings_types",
+    "describe_type",
+    "label_fields",
+    "REWARD_TABLE",
 ]
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
@@ -95,21 +112,30 @@ POLICY_TABLE = "table of strings (policy names) or of tables { policy = name, <a
 """Type tag: a table whose values are policy names or tables ``{ policy = name, ... }``."""
 
 SWEEP_KEYS: dict[str, Any] = {
-    "name": str, "seeds": SEEDS, "steps": int, "eval_interval": int, "eval_episodes": int,
+    "name": str,
+    "seeds": SEEDS,
+    "steps": int,
+    "eval_interval": int,
+    "eval_episodes": int,
 }
 """Keys of ``[sweep]`` and their types."""
-EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
-    name for engine in ENGINES.values() for name in engine.extra_arguments
-))
+EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(
+    dict.fromkeys(name for engine in ENGINES.values() for name in engine.extra_arguments)
+)
 """Environment-specific arguments some registered environment takes (Sharing's ``start``, …)."""
-COUNT_ARGUMENTS: tuple[str, ...] = tuple(dict.fromkeys(
-    engine.count_argument for engine in ENGINES.values() if engine.count_argument
-))
+COUNT_ARGUMENTS: tuple[str, ...] = tuple(
+    dict.fromkeys(engine.count_argument for engine in ENGINES.values() if engine.count_argument)
+)
 """How many other agents an environment holds (``num_cats``, ``num_humans``)."""
 ENV_KEYS: dict[str, Any] = {
-    "env": str, "size": int, "view": int, "max_cycles": int, **{name: str for name in EXTRA_ENV_ARGUMENTS},
+    "env": str,
+    "size": int,
+    "view": int,
+    "max_cycles": int,
+    **{name: str for name in EXTRA_ENV_ARGUMENTS},
     **{name: int for name in COUNT_ARGUMENTS},
-    "fixed": POLICY_TABLE, "methods": STR_LIST,
+    "fixed": POLICY_TABLE,
+    "methods": STR_LIST,
 }
 """Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
 METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
@@ -139,6 +165,7 @@ def check_value(value: Any, expected: Any, where: str) -> Any:
     ``expected`` is ``int``, ``float``, ``bool``, ``str``, one of the tags :data:`SEEDS`,
     ``STR_LIST``, ``STR_TABLE``, ``POLICY_TABLE``, or any other type (not checked: the settings class checks it).
     """
+
     def fail() -> SweepConfigError:
         return SweepConfigError(f"{where}: expected {describe_type(expected)}, got {_type_name(value)} {value!r}")
 
@@ -154,9 +181,7 @@ def check_value(value: Any, expected: Any, where: str) -> Any:
         return float(value)
     elif expected == SEEDS:
         seeds = [value] if isinstance(value, int) and not isinstance(value, bool) else value
-        if not isinstance(seeds, list) or not seeds or any(
-            isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds
-        ):
+        if not isinstance(seeds, list) or not seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds):
             raise fail()
         if isinstance(value, int):
             if value < 1:
@@ -242,7 +267,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
         run["seeds"] = list(range(seeds))
     entries = data.get("methods")
     if not isinstance(entries, list) or not entries or not all(isinstance(e, dict) for e in entries):
-        raise SweepConfigError(f"{source}: declare at least one [[methods]] table (method = \"empathic_dqn\", …)")
+        raise SweepConfigError(f'{source}: declare at least one [[methods]] table (method = "empathic_dqn", …)')
     methods = [_method_entry(entry, i, source) for i, entry in enumerate(entries)]
     defaults = _settings_table(data.get("settings", {}), methods, source)
     envs = data.get("envs", {})
@@ -258,8 +283,11 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
     origin: dict[str, str] = {}  # what a run trains (its config but the label) -> where declared
     labels: dict[tuple[str, str], str] = {}
     for variant, env in variants.items():
-        chosen = [m for m in methods if (m["envs"] is None or variant in m["envs"])
-                  and (env["methods"] is None or m["method"] in env["methods"])]
+        chosen = [
+            m
+            for m in methods
+            if (m["envs"] is None or variant in m["envs"]) and (env["methods"] is None or m["method"] in env["methods"])
+        ]
         if not chosen:
             raise SweepConfigError(f"{source}: [envs.{variant}] has no method to run (check `methods`/`envs` lists)")
         for entry in chosen:
@@ -268,8 +296,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
                 settings |= point["settings"]
                 shown = {**point["settings"], **{f"{REWARD_TABLE}.{k}": v for k, v in point["reward"].items()}}
                 where = f"{entry['where']} on [envs.{variant}]" + (f" with {shown}" if shown else "")
-                experiment = [_spec(run, env, variant, entry, settings, point["reward"], seed, where)
-                              for seed in run["seeds"]]
+                experiment = [_spec(run, env, variant, entry, settings, point["reward"], seed, where) for seed in run["seeds"]]
                 label = experiment[0].display_label()
                 if (variant, label) in labels:
                     raise SweepConfigError(
@@ -289,8 +316,13 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
 def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
     where = f"{source}: [sweep]"
     check_keys(table, SWEEP_KEYS, where)
-    run = {"name": Path(source).stem, "seeds": list(range(DEFAULT_SEEDS)), "steps": RunSpec.steps,
-           "eval_interval": RunSpec.eval_interval, "eval_episodes": RunSpec.eval_episodes}
+    run = {
+        "name": Path(source).stem,
+        "seeds": list(range(DEFAULT_SEEDS)),
+        "steps": RunSpec.steps,
+        "eval_interval": RunSpec.eval_interval,
+        "eval_episodes": RunSpec.eval_episodes,
+    }
     for key, value in table.items():
         run[key] = check_value(value, SWEEP_KEYS[key], f"{where} {key}")
         if SWEEP_KEYS[key] is int and value < 1:
@@ -318,12 +350,16 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
             raise SweepConfigError(f"{where}: unknown key {key!r}; {_method_keys(method, types, reward_types)}")
     nested = entry.get(REWARD_TABLE, {}) if has_table else {}
     if not isinstance(nested, dict):
-        raise SweepConfigError(f"{where} {REWARD_TABLE}: expected a table of the reward transform's fields "
-                               f"(reward.<field> = value), got {_type_name(nested)} {nested!r}")
+        raise SweepConfigError(
+            f"{where} {REWARD_TABLE}: expected a table of the reward transform's fields "
+            f"(reward.<field> = value), got {_type_name(nested)} {nested!r}"
+        )
     for key in nested:
         if key not in reward_types:
-            raise SweepConfigError(f"{where} {REWARD_TABLE}.{key}: unknown field {key!r} of the reward transform "
-                                   f"{method.reward.name!r}; its fields: {', '.join(reward_types)}")
+            raise SweepConfigError(
+                f"{where} {REWARD_TABLE}.{key}: unknown field {key!r} of the reward transform "
+                f"{method.reward.name!r}; its fields: {', '.join(reward_types)}"
+            )
         if key in flat and key in entry:
             raise SweepConfigError(f"{where} {REWARD_TABLE}.{key}: {key} is given twice (as {key} and {REWARD_TABLE}.{key})")
     given = [("settings", key, value, types[key], key) for key, value in entry.items() if key in types]
@@ -346,8 +382,14 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         grid.append({part: {key: v for p, key, v in point if p == part} for part in ("settings", "reward")})
     swept = [axis[0][1] for axis in axes if axis[0][0] == "reward" and len(axis) > 1]
     return {
-        "method": name, "where": where, "types": types, "preset": method.preset,
-        "envs": entry.get("envs"), "label": entry.get("label"), "grid": grid, "swept_reward": swept,
+        "method": name,
+        "where": where,
+        "types": types,
+        "preset": method.preset,
+        "envs": entry.get("envs"),
+        "label": entry.get("label"),
+        "grid": grid,
+        "swept_reward": swept,
     }
 
 
@@ -357,8 +399,10 @@ def _method_keys(method: Any, types: Mapping[str, Any], reward_types: Mapping[st
     if not reward_types:
         return text + ("; its reward transform has no fields" if method.reward is not None else "; it has no reward transform")
     shadowed = [key for key in reward_types if key in types or key in METHOD_KEYS]
-    text += (f"; the fields of its reward transform {method.reward.name!r}: {', '.join(reward_types)} "
-             f"(each also as {REWARD_TABLE}.<field>")
+    text += (
+        f"; the fields of its reward transform {method.reward.name!r}: {', '.join(reward_types)} "
+        f"(each also as {REWARD_TABLE}.<field>"
+    )
     return text + (f"; {', '.join(shadowed)} only so: alone it is the setting)" if shadowed else ")")
 
 
@@ -429,13 +473,29 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
     return {"env": env, "kwargs": kwargs, "fixed": fixed, "methods": names}
 
 
-def _spec(run: dict[str, Any], env: dict[str, Any], variant: str, entry: dict[str, Any],
-          settings: dict[str, Any], reward: dict[str, Any], seed: int, where: str) -> RunSpec:
+def _spec(
+    run: dict[str, Any],
+    env: dict[str, Any],
+    variant: str,
+    entry: dict[str, Any],
+    settings: dict[str, Any],
+    reward: dict[str, Any],
+    seed: int,
+    where: str,
+) -> RunSpec:
     try:
         spec = RunSpec(
-            env=env["env"], method=entry["method"], settings=settings, reward=reward, seed=seed, steps=run["steps"],
-            eval_interval=run["eval_interval"], eval_episodes=run["eval_episodes"], fixed=env["fixed"],
-            env_kwargs=env["kwargs"], variant=variant,
+            env=env["env"],
+            method=entry["method"],
+            settings=settings,
+            reward=reward,
+            seed=seed,
+            steps=run["steps"],
+            eval_interval=run["eval_interval"],
+            eval_episodes=run["eval_episodes"],
+            fixed=env["fixed"],
+            env_kwargs=env["kwargs"],
+            variant=variant,
         )
     except ValueError as error:
         raise SweepConfigError(f"{where}: {error}") from None
@@ -448,8 +508,10 @@ def _spec(run: dict[str, Any], env: dict[str, Any], variant: str, entry: dict[st
     try:
         label = entry["label"].format_map(label_fields(spec))
     except (KeyError, ValueError, IndexError, AttributeError) as error:
-        raise SweepConfigError(f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
-                               f"placeholders are settings fields and the reward transform's fields") from None
+        raise SweepConfigError(
+            f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
+            f"placeholders are settings fields and the reward transform's fields"
+        ) from None
     return RunSpec(**{**spec.__dict__, "label": label})
 
 
