@@ -11,7 +11,7 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Protocol
 
 import numpy as np
@@ -82,7 +82,7 @@ class Method:
         clash = sorted(k for k in overrides if k in self.preset and overrides[k] != self.preset[k])
         if clash:
             raise ValueError(f"method {self.name!r} fixes {', '.join(f'{k}={self.preset[k]!r}' for k in clash)}")
-        known = set(self.settings.__dataclass_fields__)
+        known = {f.name for f in fields(self.settings)}
         unknown = sorted(set(overrides) - known)
         if unknown:
             raise ValueError(f"unknown setting(s) {unknown} for method {self.name!r}; known: {sorted(known)}")

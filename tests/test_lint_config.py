@@ -1,4 +1,4 @@
-"""The ruff version is the same wherever it is named: the lint extra, CI, and the pre-commit hook."""
+"""The lint tools' versions are the same wherever they are named: the lint extra, CI, and the pre-commit hook."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_one_ruff_version_everywhere() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    (pin,) = project["project"]["optional-dependencies"]["lint"]
-    version = pin.removeprefix("ruff==")
-    assert re.fullmatch(r"\d+\.\d+\.\d+", version), pin
-    assert f'pip install "ruff=={version}"' in (ROOT / ".ci" / "run").read_text()
-    assert f"rev: v{version}" in (ROOT / ".pre-commit-config.yaml").read_text()
+    pins = dict(pin.split("==") for pin in project["project"]["optional-dependencies"]["lint"])
+    assert set(pins) == {"ruff", "mypy"} and all(re.fullmatch(r"\d+\.\d+\.\d+", v) for v in pins.values()), pins
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert f'pip install "ruff=={pins["ruff"]}" "mypy=={pins["mypy"]}"' in ci
+    assert f"rev: v{pins['ruff']}" in (ROOT / ".pre-commit-config.yaml").read_text()
 
 
 def test_every_package_ships_its_type_marker() -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -37,6 +37,22 @@ def distinct_picks(streams: EnvStreams, env_ids: np.ndarray, choices: int, count
 class HandPlacement:
     """Placing agents by hand at reset (mixed into :class:`~empathy_zoo.engine.base.GridEngine`,
     whose state and hooks it uses)."""
+
+    if TYPE_CHECKING:  # what the host engine provides (GridEngine.__init__ and its hooks)
+        name: ClassVar[str]
+        agents: tuple[str, ...]
+        size: int
+        num_agents: int
+        num_cells: int
+        cells: np.ndarray
+        start_order: np.ndarray | None
+        streams: EnvStreams
+        _cell_rc: np.ndarray
+
+        def flat_cell(self, row: int, col: int) -> int: ...
+        def _blocked_start_cells(self, env_id: int) -> np.ndarray: ...
+        def _start_conflict(self, agent: int, cell: np.ndarray, other_agent: int, other: np.ndarray) -> bool: ...
+        def _apply_options(self, env_id: int, options: Mapping[str, Any]) -> set[str]: ...
 
     def _reset_with_options(self, env_id: int, options: Mapping[str, Any]) -> None:
         if not isinstance(options, Mapping):
@@ -95,10 +111,13 @@ class HandPlacement:
         """``placed`` (agent index -> (row, col)) plus a cell for every agent in ``missing``, in
         turn: the first cell of :attr:`start_order` that is not blocked in ``env_id`` and neither
         taken by nor in conflict with an agent placed before it."""
+        if self.start_order is None:
+            raise RuntimeError(f"{self.name}: no start order (GridEngine.__init__ sets it)")
         blocked = set(self._blocked_start_cells(env_id).tolist())
         placed = dict(placed)
+        order = self.start_order.tolist()
         for index in missing:
-            for flat in self.start_order.tolist():
+            for flat in order:
                 cell = self._cell_rc[flat]
                 if flat in blocked or self._taken(index, cell, placed):
                     continue

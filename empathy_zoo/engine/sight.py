@@ -10,6 +10,7 @@ state and lookup tables and calls its hooks ``_paint_background``, ``_appearance
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -64,6 +65,27 @@ def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndar
 class Sight:
     """Painting views (mixed into :class:`~empathy_zoo.engine.base.GridEngine`, whose state,
     tables and hooks it uses)."""
+
+    if TYPE_CHECKING:  # what the host engine provides (GridEngine.__init__ and its hooks)
+        num_envs: int
+        num_agents: int
+        size: int
+        obs_size: int
+        other_agents: tuple[np.ndarray, ...]
+        cells: np.ndarray
+        present: np.ndarray
+        inventory: np.ndarray
+        _rows: np.ndarray
+        _agent_base: np.ndarray
+        _spread: np.ndarray
+        _spread_centre: np.ndarray
+        _window_slot: np.ndarray
+
+        @property
+        def pos(self) -> np.ndarray: ...
+        def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None: ...
+        def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float: ...
+        def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float: ...
 
     def views(self, viewer: np.ndarray, order: np.ndarray | None = None) -> Views:
         """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices); for swapped views, the
