@@ -10,7 +10,7 @@ run's update exactly what it would be alone, at fused speed. Without the fused k
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import Any, cast
 
 import torch
 
@@ -51,7 +51,10 @@ class StackedAdam:
 
     @torch.no_grad()
     def step(self) -> None:
-        grads_v = self._views([p.grad for p in self.params])
+        grads = [p.grad for p in self.params]
+        if any(grad is None for grad in grads):
+            raise RuntimeError("StackedAdam.step() before backward(): a parameter has no gradient")
+        grads_v = self._views(cast(list[torch.Tensor], grads))
         params, avg, avg_sq, steps = self._param_views, self._avg_views, self._avg_sq_views, self._step_views
         if self.fused:
             self._step_table += 1  # the fused kernel reads the step counts; it does not advance them

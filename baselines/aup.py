@@ -251,11 +251,11 @@ class AttainableUtility:
 
     def _build(self, seeds: np.ndarray, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's auxiliary rewards, networks, optimiser moments and empty replay."""
-        seeds, runs = [int(seed) for seed in seeds], len(seeds)
-        generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in seeds]
+        run_seeds, runs = [int(seed) for seed in seeds], len(seeds)
+        generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in run_seeds]
         sizes = [obs_size, self.hidden_size, self.hidden_size, self.num_rewards * NUM_ACTIONS]
         online = [p.numpy() for p in init_stacked_mlp(sizes, generators, torch.device("cpu"))]
-        rewards = np.stack([auxiliary_reward_map(seed, obs_size, self.num_rewards) for seed in seeds])
+        rewards = np.stack([auxiliary_reward_map(seed, obs_size, self.num_rewards) for seed in run_seeds])
         capacity = self.replay_capacity
         state = {
             "reward_map": rewards,

@@ -183,8 +183,8 @@ class Considerate:
 
     def _build(self, seeds: np.ndarray, envs: int, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's value network, optimiser moments, empty replay and no last observation."""
-        seeds, runs = [int(seed) for seed in seeds], len(seeds)
-        generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in seeds]
+        run_seeds, runs = [int(seed) for seed in seeds], len(seeds)
+        generators = [torch.Generator().manual_seed(derive_key(seed, STREAM, _INIT) >> 1) for seed in run_seeds]
         sizes = [obs_size, self.hidden_size, self.hidden_size, 1]
         online = [p.numpy() for p in init_stacked_mlp(sizes, generators, torch.device("cpu"))]
         capacity = self.replay_capacity

@@ -33,7 +33,7 @@ _OURS = re.compile(rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^
 """The end of a temporary file name this module writes, with the writer's process id."""
 
 
-def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], None]) -> Path:
+def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], object]) -> Path:
     """Call ``write(file)`` on a temporary file beside ``path``, fsync it, then rename it over ``path``.
 
     The file gets the permissions an ordinary write would give it: a new file ``0666 & ~umask``

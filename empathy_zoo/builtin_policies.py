@@ -37,6 +37,7 @@ class RandomWalk:
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         if self._key is None:
             self.reset()
+        assert self._key is not None  # reset() draws one
         action = counter_integer(self._key, self._count, NUM_ACTIONS)
         self._count += 1
         return action

@@ -13,10 +13,14 @@ class EpsilonSchedule(Protocol):
     """The settings the schedule reads (``EmpathicDQNSettings`` has them, as does any object
     built from a result file's ``config.settings``)."""
 
-    learning_starts: int
-    epsilon_start: float
-    epsilon_end: float
-    epsilon_decay_steps: int
+    @property
+    def learning_starts(self) -> int: ...
+    @property
+    def epsilon_start(self) -> float: ...
+    @property
+    def epsilon_end(self) -> float: ...
+    @property
+    def epsilon_decay_steps(self) -> int: ...
 
 
 def linear_epsilon(settings: EpsilonSchedule, env_step: int) -> float:

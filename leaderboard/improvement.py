@@ -239,7 +239,9 @@ def improvement_interval(
     return float(probability), max(0.0, probability - half), min(1.0, probability + half)
 
 
-def probability_of_improvement(x: Sequence[float], y: Sequence[float], higher_is_better: bool = True) -> float:
+def probability_of_improvement(
+    x: Sequence[float] | np.ndarray, y: Sequence[float] | np.ndarray, higher_is_better: bool = True
+) -> float:
     """``P(X > Y) + ½·P(X = Y)`` over all pairs of the finite values of ``x`` and ``y`` ("greater"
     meaning better); NaN when either has no finite value."""
     a = np.asarray(x, dtype=np.float64)

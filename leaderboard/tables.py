@@ -122,7 +122,7 @@ def env_metrics(env: str, base_env: Mapping[str, str] | None, metrics: Sequence[
     metric (the default), else exactly ``metrics``."""
     if tuple(metrics) != METRIC_NAMES:
         return metrics
-    return TABLE_METRICS.get(env) or TABLE_METRICS.get((base_env or {}).get(env, ""), metrics)
+    return TABLE_METRICS.get(env) or TABLE_METRICS.get((base_env or {}).get(env, "")) or metrics
 
 
 def _envs(scores: Sequence[Score]) -> list[str]:
@@ -144,8 +144,8 @@ def table_rows(
         seeds = f"{n_seeds}{SINGLE_SEED_MARK}" if n_seeds == 1 else str(n_seeds)
         row = [label, seeds]
         for metric in metrics:
-            score = by_metric.get(metric)
-            row.append("n/a" if score is None else format_interval(score.mean, score.ci_low, score.ci_high, digits))
+            cell = by_metric.get(metric)
+            row.append("n/a" if cell is None else format_interval(cell.mean, cell.ci_low, cell.ci_high, digits))
         rows.append(row)
     return header, rows
 

@@ -254,4 +254,5 @@ def _train_in_processes(
     finally:
         if drain is not None:
             drain.stop()
+        if manager is not None:
             manager.shutdown()
