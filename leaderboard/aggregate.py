@@ -28,7 +28,7 @@ import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 
@@ -82,7 +82,7 @@ DEFAULT_SEED = 0
 N_POINTS = 50
 """Points (equally spaced training env steps) per learning curve."""
 
-RandomState = np.random.Generator | int
+RandomState: TypeAlias = np.random.Generator | int
 
 
 @dataclass(frozen=True)
