@@ -1,4 +1,4 @@
-"""The per-run result file: where it lives, its schema (1), and reading it back.
+"""The per-run result file: where it lives, its schema (:data:`SCHEMA`, 2; schema 1 is read too), and reading it back.
 
 A sweep writes one JSON file per finished run, ``<out_dir>/runs/<run id>.json`` (the schema is
 documented field by field in ``docs/formats.md``); everything that reads results (the leaderboard,
