@@ -16,6 +16,12 @@ Its Lagrangian ``J_R − λ·(J_C − d)`` is maximised over the policy and mini
 ``λ`` is kept per run in the transform's state (so a checkpoint keeps it) and rises while the
 runs' episodes harm more than ``d`` on average, falls back towards 0 while they harm less.
 
+A reward transform's reward is fixed when the step is stored, so the replay holds each step
+penalised with the ``λ`` of its time, not today's: an off-policy approximation (OmniSafe's PPO-Lag
+is on-policy, each batch priced afresh). With a replay of the methods profile's 50,000 steps and
+``λ`` moving by at most ``η`` per episode, the prices in one replay differ by what about a hundred
+episodes move ``λ``.
+
 Defaults, and how they differ from OmniSafe's (``cost_limit = 25``, ``lagrangian_multiplier_init
 = 0.001``, ``lambda_lr = 0.035`` with Adam on λ, updated once per epoch from the mean cost of its
 episodes): OmniSafe's costs are hazards touched per 1,000-step Safety-Gymnasium episode, ours are
