@@ -160,8 +160,8 @@ def _train_ensemble(
         obs = result.observations[:, 0]
         if step % first.eval_interval == 0 or step == total:
             per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)
-            for r in rows:
-                evaluations[r].append({"step": step, **per_run[r]})
+            for row in rows:
+                evaluations[row].append({"step": step, **per_run[row]})
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
             write_manifest(ckpt, specs)
             save_checkpoint(

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.policies import PolicyEntry
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.vector import VectorEnv
 
@@ -17,7 +18,7 @@ STREAM_EVAL = STREAMS["eval_env"]
 
 
 def evaluate_greedy(
-    learner: Any, env: str, seeds: Sequence[int], episodes: int, fixed: dict[str, str], env_kwargs: dict[str, Any]
+    learner: Any, env: str, seeds: Sequence[int], episodes: int, fixed: Mapping[str, PolicyEntry], env_kwargs: dict[str, Any]
 ) -> list[dict[str, list]]:
     """Play ``episodes`` greedy episodes per run; returns per run a dict of metric columns.
 

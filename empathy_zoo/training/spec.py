@@ -97,7 +97,8 @@ class RunSpec:
 
     def fixed_policies(self) -> dict[str, PolicyEntry]:
         """The fixed agents' policy entries (what :class:`~empathy_zoo.vector.VectorEnv` builds them from)."""
-        return default_policies(self.env, self.env_kwargs) if self.fixed is None else dict(self.fixed)
+        policies: dict[str, PolicyEntry] = dict(default_policies(self.env, self.env_kwargs) if self.fixed is None else self.fixed)
+        return policies
 
     def display_label(self) -> str:
         return self.label or self.method_object().display_name(self.method_settings(), self.reward_transform())
