@@ -323,10 +323,10 @@ def improvements_over_dqn(
     has none. The intervals draw nothing: ``random_state`` and ``n_resamples`` are accepted for
     older callers and unused."""
     groups = group_runs(results)
-    baselines = {env: runs for (env, _), runs in groups.items() if all(is_dqn(run) for run in runs)}
+    dqn_runs = {env: runs for (env, _), runs in groups.items() if all(is_dqn(run) for run in runs)}
     cells: list[Improvement] = []
     for (env, label), runs in groups.items():
-        baseline = baselines.get(env)
+        baseline = dqn_runs.get(env)
         if baseline is None or baseline is runs:
             continue
         mine = [run_scalars(run) for run in runs]

@@ -33,3 +33,30 @@ def whole_and_resumed(
     monkeypatch.setattr(ensemble, "save_checkpoint", real)
     resumed = json.loads(train_runs([spec], tmp_path / "resumed", options)[0].read_text())
     return whole, resumed
+
+
+SMALL_SETTINGS = {
+    "learning_starts": 64,
+    "replay_capacity": 1_000,
+    "epsilon_decay_steps": 300,
+    "target_update_interval": 50,
+    "hidden_size": 16,
+}
+"""A learner small enough for a 600-step run that still learns something."""
+
+
+def small_run(method: str, env: str = "coexistence_v0", **spec: Any) -> Any:
+    """The ``RunSpec`` of a 600-step run of ``method`` (greedy evaluations at 300 and 600, episodes
+    of 40 steps, :data:`SMALL_SETTINGS`); ``spec`` sets other fields (``reward=...``)."""
+    from empathy_zoo.training.spec import RunSpec
+
+    return RunSpec(
+        env=env,
+        method=method,
+        steps=600,
+        eval_interval=300,
+        eval_episodes=2,
+        settings=SMALL_SETTINGS,
+        env_kwargs={"max_cycles": 40},
+        **spec,
+    )

@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 from helpers_cli_method import TINY
-from helpers_resume import whole_and_resumed
+from helpers_resume import small_run, whole_and_resumed
 
 from agents.base import Method, StepBatch
 from agents.empathic_dqn import EmpathicDQN
@@ -206,37 +206,12 @@ def test_bad_parameters_are_refused_naming_them(field: str, value) -> None:
 
 def test_a_resumed_considerate_run_equals_an_uninterrupted_one_and_differs_from_dqn(tmp_path, monkeypatch) -> None:
     from empathy_zoo.training import RunnerOptions, train_runs
-    from empathy_zoo.training.spec import RunSpec
 
-    settings = {
-        "learning_starts": 64,
-        "replay_capacity": 1_000,
-        "epsilon_decay_steps": 300,
-        "target_update_interval": 50,
-        "hidden_size": 16,
-    }
-    spec = RunSpec(
-        env="coexistence_v0",
-        method="test_considerate:SMALL_CONSIDERATE",
-        steps=600,
-        eval_interval=300,
-        eval_episodes=2,
-        settings=settings,
-        env_kwargs={"max_cycles": 40},
-    )
+    spec = small_run("test_considerate:SMALL_CONSIDERATE")
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"]["name"] == "considerate" and resumed["config"]["reward"]["bonus_starts"] == 64
-    dqn = RunSpec(
-        env="coexistence_v0",
-        method="dqn",
-        steps=600,
-        eval_interval=300,
-        eval_episodes=2,
-        settings=settings,
-        env_kwargs={"max_cycles": 40},
-    )
-    plain = json.loads(train_runs([dqn], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
+    plain = json.loads(train_runs([small_run("dqn")], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
     assert plain["eval"] != whole["eval"]  # the bonus was paid (from step 64), and changed what was learnt
 
 

@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 from helpers_cli_method import TINY
-from helpers_resume import whole_and_resumed
+from helpers_resume import small_run, whole_and_resumed
 
 from agents.base import StepBatch
 from agents.rewards import TrainRewards
@@ -100,25 +100,7 @@ def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> Non
 
 
 def test_a_resumed_lagrangian_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    from empathy_zoo.training.spec import RunSpec
-
-    settings = {
-        "learning_starts": 64,
-        "replay_capacity": 1_000,
-        "epsilon_decay_steps": 300,
-        "target_update_interval": 50,
-        "hidden_size": 16,
-    }
-    spec = RunSpec(
-        env="coexistence_v0",
-        method="dqn_lagrangian",
-        steps=600,
-        eval_interval=300,
-        eval_episodes=2,
-        settings=settings,
-        reward={"cost_limit": 0.0, "lambda_lr": 5.0},
-        env_kwargs={"max_cycles": 40},
-    )
+    spec = small_run("dqn_lagrangian", reward={"cost_limit": 0.0, "lambda_lr": 5.0})
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert sum(whole["train"]["harms"][:10]) > 0  # λ had something to rise from before the checkpoint
