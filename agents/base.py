@@ -18,14 +18,28 @@ import numpy as np
 
 from agents.rewards import RewardTransform, configure_transform, transform_config, transform_fields
 from agents.step_batch import StepBatch
+from empathy_zoo.method_description import check_description, default_description
 
-__all__ = ["StepBatch", "Learner", "Method"]
+__all__ = ["StepBatch", "Learner", "Method", "SETTINGS_DESCRIBE"]
+
+SETTINGS_DESCRIBE = ("selfishness", "gamma", "exploration")
+"""The description fields a settings class may give through its ``describe()`` (:meth:`Method.describe`)."""
 
 
 class Learner(Protocol):
-    """What the runner needs of a learning method (see :mod:`agents.empathic_dqn` for one)."""
+    """What the runner needs of a learning method (see :mod:`agents.empathic_dqn` for one).
 
-    def __init__(self, settings: Sequence[Any], seeds: Sequence[int], obs_size: int, num_actions: int, device: str) -> None: ...
+    The methods whose docstrings begin "Optional" may be left out: the trainer calls them where
+    the learner has them, and does without them elsewhere (as each one says)."""
+
+    def __init__(
+        self, settings: Sequence[Any], seeds: Sequence[int], obs_size: int, num_actions: int, device: str, *, num_others: int
+    ) -> None:
+        """``K`` runs: one settings object and one seed per run, the size of an observation, the
+        number of actions and a torch device name, positional; and the keyword ``num_others``, how
+        many other agents the environment holds (``num_cats`` / ``num_humans``: the length of the
+        ``O`` axis of :class:`StepBatch`'s ``others_*`` fields). The trainer always passes it; a
+        learner that cares only about the closest other agent may ignore it."""
 
     def act(self, observations: np.ndarray, greedy: bool = False) -> np.ndarray:
         """``(K, M)`` actions for ``(K, M, V)`` observations (exploring unless ``greedy``)."""
@@ -45,6 +59,28 @@ class Learner(Protocol):
 
     def memory_bytes_per_run(self) -> int:
         """Bytes each run holds (replay and networks)."""
+
+    def replay_bytes_per_run(self) -> int:
+        """Optional: the part of :meth:`memory_bytes_per_run` that is each run's replay memory, as
+        the result file's ``memory.replay_per_run`` reports it (0 without this method)."""
+
+    def check_observation_range(self, low: float, high: float) -> None:
+        """Optional: raise ``ValueError`` if observations with values in ``[low, high]`` (the
+        environment's range, told once before training) are ones the learner cannot take, e.g.
+        because its replay memory could not store them exactly (without this method, any range is
+        taken)."""
+
+    def agent_state(self, run: int) -> dict[str, Any]:
+        """Optional: run ``run``'s trained agent, kept after training as its agent file
+        (:mod:`empathy_zoo.agent_file`; a learner without it trains as well, and keeps no agent).
+
+        Plain data: ``{"heads": {name: [W₁, b₁, …, Wₙ, bₙ]}, "acting": name}``: every value head the
+        method has (Empathic DQN: ``"q"`` and ``"q_emp"``), each an MLP with ReLU between its
+        layers, as float32 tensors or numpy arrays ``W: (in, out)`` (applied as ``x·W + b``) and
+        ``b: (out,)``; ``acting`` names the head whose largest value (the first, as ``argmax``) is
+        the greedy action. No replay memory or optimiser; tensors may be live (they are copied).
+        A learner whose agent is a library's model offers ``save_agent(run, file)`` instead, which
+        writes the library's own format (:class:`baselines.sb3.SB3Learner`)."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +102,7 @@ class Method:
     in_view_only: bool = False
     """Swap with the other agent only while it stands in the learner's window: elsewhere
     ``StepBatch.other_present`` is False, ``other_unseen`` is True (the other is unseen, not
-    harmed: Empathic DQN's target is then the robot's own, SPEC §4) and ``swapped_next_obs`` is
+    harmed: Empathic DQN's target is then the robot's own, SPEC §4) and ``other_swapped`` is
     zeros. The paper's swap is omniscient (seeing through walls is its future work)."""
     label: Callable[..., str] | None = None
     """Display name of a run from its settings (defaults to the name). A label that takes two
@@ -76,6 +112,42 @@ class Method:
     ``reward.<field>=…``; :meth:`display_name`)."""
     description: str = ""
     """One line for ``empathy-zoo methods``."""
+    family: str | None = None
+    """The algorithm its runs are a case of, as the result file's description records it
+    (``"empathic_dqn"``, ``"dqn"``, ``"sb3"``, a plug-in's own; ``None``: the method's name)."""
+    target: str | None = None
+    """The empathic target it learns, as :mod:`empathy_zoo.reference` names its rules
+    (``"golden"``: Empathic DQN's, plain DQN at β = 1; ``"silver"``: the silver rule's); the
+    leaderboard draws the exact reference beside its Coexistence runs on the environment's
+    reward. ``None``: none."""
+    dqn_reference: bool = False
+    """Its runs on the environment's reward (no reward transform), at β = 1 where its settings
+    have a β, are plain DQN: the reference the leaderboard compares every other method with."""
+
+    def describe(self, settings: Any, reward: RewardTransform | None) -> dict[str, Any]:
+        """What a run of this method with ``settings`` and ``reward`` (its transform, as
+        :meth:`make_reward` gives it) is, as plain JSON data: the result file's
+        ``config.description``, which the leaderboard reads instead of the method's name
+        (:mod:`empathy_zoo.method_description` documents the fields). :attr:`family`,
+        :attr:`target`, :attr:`dqn_reference` and :attr:`in_view_only` come from this entry;
+        ``selfishness``, ``gamma`` and ``exploration`` from ``settings.describe()`` where the
+        settings class has one (:class:`agents.settings.EmpathicDQNSettings` does), else ``None``.
+        An unknown or malformed field raises ``ValueError`` naming the method."""
+        described = settings.describe() if callable(getattr(settings, "describe", None)) else {}
+        unknown = sorted(set(described) - set(SETTINGS_DESCRIBE))
+        if unknown:
+            raise ValueError(
+                f"method {self.name!r}: its settings describe {unknown}; a settings class describes only "
+                f"{list(SETTINGS_DESCRIBE)}"
+            )
+        description = default_description(self.family or self.name)
+        description |= {"target": self.target, "in_view_only": self.in_view_only, **described}
+        description["reward"] = transform_config(reward)
+        description["dqn_reference"] = self.dqn_reference and reward is None and description["selfishness"] in (None, 1.0)
+        try:
+            return check_description(description)
+        except ValueError as error:
+            raise ValueError(f"method {self.name!r}: {error}") from None
 
     def make_settings(self, overrides: dict[str, Any]) -> Any:
         """The method's settings with ``overrides``; overriding a preset raises ``ValueError``."""

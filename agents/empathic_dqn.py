@@ -160,7 +160,7 @@ class EmpathicDQN:
         obs_size: int,
         num_actions: int = 5,
         device: str = "cpu",
-        envs_per_run: int = 1,
+        *,
         num_others: int = 1,
     ) -> None:
         if len(settings) != len(seeds) or not settings:
@@ -172,7 +172,6 @@ class EmpathicDQN:
         self.config = settings[0]
         self.seeds = [int(s) for s in seeds]
         self.num_runs = k = len(seeds)
-        self.envs_per_run = envs_per_run
         self.num_actions = num_actions
         self.device = torch.device(device)
         generators = [torch.Generator().manual_seed(derive_key(s, STREAM_INIT) >> 1) for s in self.seeds]
@@ -196,7 +195,8 @@ class EmpathicDQN:
         self.target = [p[:k].detach().clone() for p in self.online]
         self.optimizer = StackedAdam(self.online, lr=self.config.learning_rate)
         self.aggregated = self.config.others != "closest" and num_others > 1
-        """The other-term aggregates one swapped value per other agent (``num_others`` of them)."""
+        """The other-term aggregates one swapped value per other agent (``num_others`` of them);
+        else it is the closest other agent's, the one kept in the replay memory."""
         self.replay = StackedReplay(
             k, self.config.replay_capacity, obs_size, self.device, others=num_others if self.aggregated else 1
         )
@@ -237,25 +237,11 @@ class EmpathicDQN:
 
     # ------------------------------------------------------------------ learning
     def observe(self, batch: StepBatch) -> None:
-        swapped, present = batch.swapped_next_obs, batch.other_present.astype(np.uint8)  # codes: see StackedReplay.flags
-        if batch.other_unseen is not None:
-            present = present + 2 * batch.other_unseen.astype(np.uint8)
-        if self.aggregated:
-            if batch.swapped_next_obs_all is None or batch.others_present is None:
-                raise ValueError(
-                    f"others={self.config.others!r} needs every other agent's swapped observation "
-                    "(StepBatch.swapped_next_obs_all, others_present)"
-                )
-            if batch.others_live is None:
-                raise ValueError(
-                    f"others={self.config.others!r} needs which other agents were there when the "
-                    "step began (StepBatch.others_live)"
-                )
-            swapped = batch.swapped_next_obs_all
-            present = batch.others_live.astype(np.uint8) + batch.others_present  # codes: see StackedReplay.flags
-            if batch.others_unseen is not None:
-                present = present + 2 * batch.others_unseen.astype(np.uint8)
-        self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present)
+        swapped, present, live, unseen = (
+            x if self.aggregated or x.shape[2] == 1 else batch.of_closest(x)[:, :, None]  # (else the closest one's only)
+            for x in (batch.others_swapped, batch.others_present, batch.others_live, batch.others_unseen)
+        )
+        self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present, live, unseen)
         m = batch.actions.shape[1]
         for _ in range(m):
             self.env_steps += 1
@@ -269,15 +255,30 @@ class EmpathicDQN:
         index = counter_integers(self._sample_keys, counter, self.replay.size)
         return torch.as_tensor(index, device=self.device)
 
+    def sample_batch(self, index: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """The transitions at ``index`` ``(K, B)`` of every run's replay memory (default
+        :meth:`sample_indices`: the next gradient step's), as :meth:`targets` gets them: ``obs``,
+        ``next_obs`` ``(K, B, V)``, ``action``, ``terminated``, ``reward`` ``(K, B)``; aggregating,
+        ``others_swapped`` ``(K, B, O, V)``, ``others_present``, ``others_live`` and
+        ``others_unseen`` ``(K, B, O)``; else the closest other agent's ``other_swapped``
+        ``(K, B, V)``, ``other_present`` and ``other_unseen`` ``(K, B)`` (the names of
+        :class:`agents.step_batch.StepBatch`)."""
+        batch = self.replay.sample(self.sample_indices() if index is None else index)
+        if not self.aggregated:  # (the one other agent kept: the closest)
+            for name in ("swapped", "present", "unseen"):
+                batch[f"other_{name}"] = batch.pop(f"others_{name}")[:, :, 0]
+            del batch["others_live"]
+        return batch
+
     def update(self) -> float:
         """One gradient step of every run's ``Q`` (and ``Q_emp``); returns the mean loss."""
         k, cfg, emp = self.num_runs, self.config, self._emp.size
-        batch = self.replay.sample(self.sample_indices())
+        batch = self.sample_batch()
         with torch.no_grad():
             q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
             if emp:
-                swapped, b = batch["swapped_next_obs"], cfg.batch_size
-                if self.aggregated:  # (K, B, N, V) -> rows other by other, and back to (K, B, N, A)
+                swapped, b = batch["others_swapped" if self.aggregated else "other_swapped"], cfg.batch_size
+                if self.aggregated:  # (K, B, O, V) -> rows other by other, and back to (K, B, O, A)
                     swapped = swapped.transpose(1, 2).reshape(k, -1, swapped.shape[-1])
                 target_both = StackedMLP.forward(self.target, torch.cat([batch["next_obs"], swapped], dim=1))
                 target_swapped = target_both[:, b:]
@@ -312,23 +313,34 @@ class EmpathicDQN:
         """The TD targets ``(y, y_emp)`` of ``Q`` and ``Q_emp`` for a sampled batch, ``(K, B)`` each.
 
         ``q_next = Q(s')``, ``target_next = Q̂(s')``, ``target_swapped = Q̂(s_emp')``, all
-        ``(K, B, actions)`` (with several others aggregated, ``target_swapped`` is
-        ``(K, B, others, actions)`` and ``batch["other_present"]`` ``(K, B, others)``: see
+        ``(K, B, actions)``; ``batch`` holds the closest other agent's ``other_present`` and
+        ``other_unseen``, ``(K, B)``. Aggregating several others, ``target_swapped`` is
+        ``(K, B, others, actions)`` and ``batch`` holds ``others_present``, ``others_live`` and
+        ``others_unseen``, ``(K, B, others)`` (:meth:`other_inputs` gives either; see
         :func:`other_term`). Override this to try another way of caring about the other agent.
         """
+        present, live, unseen = self.other_inputs(batch)
         return empathic_targets(
             batch["reward"],
             batch["terminated"],
             q_next,
             target_next,
             target_swapped,
-            batch["other_present"],
+            present,
             self.config.gamma,
             self.selfishness,
             self._others_rule(),
-            batch.get("others_live"),
-            batch.get("other_unseen"),
+            live,
+            unseen,
         )
+
+    def other_inputs(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor | None]:
+        """``(present, live, unseen)`` of a sampled batch as :func:`other_term` takes them: each
+        other agent's ``(K, B, O)`` when aggregating, else the closest one's ``(K, B)`` (``live``
+        ``None``); ``unseen`` is ``None`` where the batch holds none (a hand-made one)."""
+        if self.aggregated:
+            return batch["others_present"], batch.get("others_live"), batch.get("others_unseen")
+        return batch["other_present"], None, batch.get("other_unseen")
 
     def _others_rule(self) -> str:
         """How :func:`other_term` treats the other agents (``closest`` unless aggregating)."""
@@ -349,6 +361,15 @@ class EmpathicDQN:
         params = sum(p[0].numel() * p.element_size() for p in self.online) * heads
         params += sum(p[0].numel() * p.element_size() for p in self.target)
         return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments
+
+    def replay_bytes_per_run(self) -> int:
+        """Bytes of each run's replay memory (part of :meth:`memory_bytes_per_run`)."""
+        return self.replay.nbytes_per_run()
+
+    def check_observation_range(self, low: float, high: float) -> None:
+        """Refuse, before any training, observations in ``[low, high]`` that the replay memory's
+        one-byte codes cannot hold (``ValueError``)."""
+        self.replay.check_range(low, high)
 
     def state_dict(self) -> dict[str, Any]:
         return {
@@ -378,3 +399,19 @@ class EmpathicDQN:
         self.optimizer.load_state_dict(state["optimizer"])
         self.replay.load_state_dict(state["replay"])
         self.env_steps, self.grad_steps = int(state["env_steps"]), int(state["grad_steps"])
+
+    # ------------------------------------------------------------------ keeping a trained agent
+    def agent_state(self, run: int) -> dict[str, Any]:
+        """Run ``run``'s acting networks for its agent file (:meth:`agents.base.Learner.agent_state`):
+        ``{"heads": {"q": Q, "q_emp": Q_emp}, "acting": "q_emp"}``, each head the list
+        ``[W₁, b₁, W₂, b₂, W₃, b₃]`` of its rows of :attr:`online` (``W: (in, out)``, ``b: (1, out)``;
+        live views, which the writer copies). ``Q`` of run ``r`` is row ``r``, its ``Q_emp`` the row after
+        the ``K`` rows of ``Q`` at its place among the runs that have one; a run without ``Q_emp``
+        (β = 1, DQN) has the head ``q`` alone and acts on it, as :meth:`act` does."""
+        if not 0 <= run < self.num_runs:
+            raise ValueError(f"run must be in [0, {self.num_runs}), got {run!r}")
+        heads = {"q": [p[run].detach() for p in self.online]}
+        if self.empathic_runs[run]:
+            row = self.num_runs + int(np.flatnonzero(self._emp == run)[0])
+            heads["q_emp"] = [p[row].detach() for p in self.online]
+        return {"heads": heads, "acting": "q_emp" if self.empathic_runs[run] else "q"}

@@ -6,8 +6,10 @@ stored as a uint8 code and decoded exactly by a 256-entry float32 table
 (:mod:`empathy_zoo.observation_codes`, the arithmetic the engine draws them with): a sampled
 observation is bit for bit the float32 observation that was added, and integers decode to
 themselves. A value the code cannot hold exactly raises ``ValueError`` when added; nothing is
-rounded. With several other agents whose values a learner aggregates, one swapped observation
-and one presence flag per other agent are kept. Each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
+rounded. Each transition keeps ``others`` swapped observations and a one-byte code per other
+agent of what is known of it (:attr:`StackedReplay.flags`): one, the closest other agent's, for
+a learner that cares about the closest; one per other agent for a learner that aggregates them.
+With one, each transition costs 3·V bytes of observations (s, s', s_emp' packed in one uint8
 row), 3 bytes of flags (action, terminated, the other's code) and 4 bytes of reward: 82 bytes at
 V = 25, 41 MB per run at the paper's 500,000 transitions. Packing keeps a sample to three
 gathers and one table look-up.
@@ -20,14 +22,22 @@ import torch
 
 from empathy_zoo.observation_codes import DECODE_TABLE, MAX_VALUE, MIN_VALUE, encode
 
-__all__ = ["StackedReplay"]
+__all__ = ["StackedReplay", "REPLAY_LAYOUT"]
 
-OBS, NEXT_OBS, SWAPPED_NEXT_OBS = 0, 1, 2
-ACTION, TERMINATED, OTHER_PRESENT = 0, 1, 2
+OBS, NEXT_OBS, SWAPPED = 0, 1, 2
+ACTION, TERMINATED, OTHERS = 0, 1, 2
+GONE, LEFT_IN_STEP, PRESENT, UNSEEN = 0, 1, 2, 3
+"""The codes of an other agent (see :attr:`StackedReplay.flags`)."""
+
+REPLAY_LAYOUT = 2
+"""Layout of :meth:`StackedReplay.state_dict` (1, unmarked: with one other agent stored, its code
+was 0 absent or terminal, 1 present, 2 unseen; 2: the codes of :attr:`StackedReplay.flags` for any
+number, which a layout-1 checkpoint is converted to)."""
 
 
 class StackedReplay:
-    """``K`` ring buffers of ``capacity`` transitions, filled in lockstep (one row per run per add)."""
+    """``K`` ring buffers of ``capacity`` transitions, filled in lockstep (one row per run per add);
+    each keeps the swapped observation and the code of ``others`` other agents per transition."""
 
     def __init__(self, num_runs: int, capacity: int, obs_size: int, device: torch.device, others: int = 1) -> None:
         k, c = num_runs, capacity
@@ -36,17 +46,14 @@ class StackedReplay:
         self.num_runs, self.capacity, self.obs_size, self.others = k, c, obs_size, others
         self.device = device
         self.observations = torch.zeros((k, c, 2 + others, obs_size), dtype=torch.uint8, device=device)
-        """(s, s', s_emp') of every transition, as codes (see :attr:`decode_table`); with
-        ``others`` > 1, one swapped observation per other agent (``s_emp'₁ … s_emp'ₙ``)."""
+        """(s, s', s_emp'₁ … s_emp'ₒ) of every transition, as codes (see :attr:`decode_table`)."""
         self.decode_table = torch.from_numpy(DECODE_TABLE.copy()).to(device)
         """(256,) float32: the observation value of every code."""
         self.flags = torch.zeros((k, c, 2 + others), dtype=torch.uint8, device=device)
-        """(action, terminated, other) of every transition. "other" is a code: 0 the other agent is
-        absent or terminal at the end of the step (its term is 0), 1 it is present (its term
-        bootstraps), 2 it is present but unseen (out of view with in-view-only swaps: no other-term
-        at all, SPEC §4). With several others, one code per other agent: 0 it had left before the
-        step, 1 it was there when the step began but is not at its end (harmed, or done), 2 it is
-        there at the end, 3 it is there but unseen."""
+        """(action, terminated, code₁ … codeₒ) of every transition. An other agent's code: 0 it had
+        left before the step, 1 it was there when the step began but is not at its end (harmed, or
+        done: its term is 0), 2 it is there at the end (its term bootstraps), 3 it is there but
+        unseen (out of view with in-view-only swaps: it counts for no other-term, SPEC §4)."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0
@@ -65,29 +72,30 @@ class StackedReplay:
         self,
         obs: np.ndarray,
         next_obs: np.ndarray,
-        swapped_next_obs: np.ndarray,
+        swapped: np.ndarray,
         action: np.ndarray,
         reward: np.ndarray,
         terminated: np.ndarray,
-        other_present: np.ndarray,
+        present: np.ndarray,
+        live: np.ndarray,
+        unseen: np.ndarray,
     ) -> None:
-        """Append ``m`` transitions per run: arrays ``(K, m, V)`` / ``(K, m)``; with several
-        others, ``swapped_next_obs`` is ``(K, m, others, V)`` and ``other_present`` ``(K, m, others)``
-        codes (see :attr:`flags`)."""
+        """Append ``m`` transitions per run: ``obs``, ``next_obs`` ``(K, m, V)``; ``action``,
+        ``reward``, ``terminated`` ``(K, m)``; and of the ``others`` other agents kept,
+        ``swapped`` ``(K, m, others, V)`` and ``present``, ``live``, ``unseen`` ``(K, m, others)``
+        bool (as :class:`agents.step_batch.StepBatch` names them; coded as :attr:`flags` says)."""
         m = action.shape[1]
+        expected = (*action.shape, self.others)
+        shapes = [np.shape(x) for x in (present, live, unseen)]
+        if swapped.shape[:3] != expected or any(shape != expected for shape in shapes):
+            raise ValueError(
+                f"expected swapped observations {(*expected, self.obs_size)} and present/live/unseen {expected} "
+                f"for {self.others} other agent(s), got {swapped.shape} and {shapes}"
+            )
         rows = (np.arange(m) + self.position) % self.capacity
-        if self.others == 1:
-            packed = encode(np.stack([obs, next_obs, swapped_next_obs], axis=2))  # raises unless exact
-            flags = np.stack([action, terminated, other_present], axis=2).astype(np.uint8)
-        else:
-            expected = (*action.shape, self.others)
-            if swapped_next_obs.shape[:3] != expected or other_present.shape != expected:
-                raise ValueError(
-                    f"expected swapped observations {(*expected, self.obs_size)} and presence {expected} "
-                    f"for {self.others} other agents, got {swapped_next_obs.shape} and {other_present.shape}"
-                )
-            packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped_next_obs], axis=2))
-            flags = np.concatenate([action[..., None], terminated[..., None], other_present], axis=2).astype(np.uint8)
+        packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped], axis=2))  # raises unless exact
+        codes = np.where(present, PRESENT, np.where(unseen, UNSEEN, np.where(live, LEFT_IN_STEP, GONE)))
+        flags = np.concatenate([action[..., None], terminated[..., None], codes], axis=2).astype(np.uint8)
         self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
         self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
         self.reward[:, rows] = torch.from_numpy(np.asarray(reward, dtype=np.float32)).to(self.device)
@@ -96,7 +104,10 @@ class StackedReplay:
 
     def sample(self, index: torch.Tensor) -> dict[str, torch.Tensor]:
         """Transitions at ``index`` ``(K, B)`` (one row of indices per run), observations as float32
-        (decoded by a look-up in :attr:`decode_table`: exactly the values that were added)."""
+        (decoded by a look-up in :attr:`decode_table`: exactly the values that were added):
+        ``obs``, ``next_obs`` ``(K, B, V)``, ``action``, ``terminated``, ``reward`` ``(K, B)``,
+        ``others_swapped`` ``(K, B, others, V)`` and ``others_present``, ``others_live``,
+        ``others_unseen`` ``(K, B, others)``, as they were added."""
         rows = index + self._first_row  # (index_select on flat rows: the cheapest gathers)
         k, b = rows.shape
         rows = rows.reshape(-1)
@@ -104,22 +115,18 @@ class StackedReplay:
         width = 2 + self.others
         observations = self.decode_table.index_select(0, codes.view(-1).int()).view(k, b, width, self.obs_size)
         flags = self.flags.view(k * self.capacity, width).index_select(0, rows).view(k, b, width)
-        swapped = SWAPPED_NEXT_OBS if self.others == 1 else slice(SWAPPED_NEXT_OBS, None)
-        present = OTHER_PRESENT if self.others == 1 else slice(OTHER_PRESENT, None)
-        sample = {  # (with several others: swapped_next_obs (K, B, others, V), other_present (K, B, others))
+        others = flags[:, :, OTHERS:]  # (see flags)
+        return {
             "obs": observations[:, :, OBS],
             "next_obs": observations[:, :, NEXT_OBS],
-            "swapped_next_obs": observations[:, :, swapped],
+            "others_swapped": observations[:, :, SWAPPED:],
             "action": flags[:, :, ACTION].long(),
             "terminated": flags[:, :, TERMINATED].bool(),
             "reward": self.reward.view(-1).index_select(0, rows).view(k, b),
+            "others_present": others == PRESENT,
+            "others_live": others >= LEFT_IN_STEP,
+            "others_unseen": others == UNSEEN,
         }
-        codes = flags[:, :, present]  # (see flags)
-        if self.others == 1:
-            sample["other_present"], sample["other_unseen"] = codes == 1, codes == 2
-        else:
-            sample["other_present"], sample["others_live"], sample["other_unseen"] = codes == 2, codes >= 1, codes == 3
-        return sample
 
     def nbytes_per_run(self) -> int:
         """Bytes of memory each run's buffer holds."""
@@ -141,12 +148,26 @@ class StackedReplay:
             "reward": filled(self.reward),
             "position": self.position,
             "size": self.size,
+            "layout": REPLAY_LAYOUT,
         }
 
     def load_state_dict(self, state: dict) -> None:
         """Continue from :meth:`state_dict`. A checkpoint written before the codes (int8 integer
-        observations) is converted: integer ``v`` becomes code ``20·v + 20``, the same value."""
+        observations) is converted: integer ``v`` becomes code ``20·v + 20``, the same value; so
+        is one of layout 1 keeping one other agent (its codes 0, 1, 2 become 0, 2, 3: the same
+        facts, see :data:`REPLAY_LAYOUT`)."""
         size = int(state["size"])
+        layout = int(state.get("layout", 1))
+        if layout not in (1, REPLAY_LAYOUT):
+            raise ValueError(f"replay checkpoint of layout {layout}; this version reads layouts 1 and {REPLAY_LAYOUT}")
+        flags = state["flags"]
+        if flags.shape[2:] != self.flags.shape[2:]:
+            raise ValueError(
+                f"replay checkpoint keeps {flags.shape[2] - 2} other agent(s) per transition, this memory {self.others}"
+            )
+        if layout == 1 and self.others == 1:
+            flags = flags.clone()
+            flags[:, :, OTHERS] = torch.tensor([GONE, PRESENT, UNSEEN], dtype=flags.dtype)[flags[:, :, OTHERS].long()]
         observations = state["observations"]
         if observations.dtype == torch.int8:  # the old format: the values themselves
             observations = torch.from_numpy(encode(observations.cpu().numpy()))
@@ -155,6 +176,6 @@ class StackedReplay:
                 f"replay checkpoint holds observations of dtype {observations.dtype}; expected uint8 codes (or int8 values)"
             )
         self.observations[:, :size] = observations
-        for name in ("flags", "reward"):
-            getattr(self, name)[:, :size] = state[name]
+        self.flags[:, :size] = flags
+        self.reward[:, :size] = state["reward"]
         self.position, self.size = int(state["position"]), size

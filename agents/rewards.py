@@ -19,14 +19,15 @@ under ``config.reward``), with a ``name``, and either
 A transform sees only the rows of the runs that use it (:meth:`agents.step_batch.StepBatch.runs`),
 and its state holds those runs only.
 
-Optional capability, **the stepwise inaction baseline**: a transform that declares
-``needs_inaction_baseline = True`` and codes an engine's states with
+Optional capability, **the stepwise inaction baseline** (:class:`InactionBaselineTransform`): a
+transform that declares ``needs_inaction_baseline = True`` and codes an engine's states with
 ``state_codes(engine) -> (N,) int64`` (raising ``ValueError`` for an environment it cannot code)
 gets, in training, :attr:`StepBatch.state_after` and :attr:`StepBatch.baseline_after`: the code of
 the state each step ended in, and of the state it would have ended in had the learner taken the
 no-op, the other agents acting as they did (:mod:`baselines.inaction_baseline` computes them with
-the engine's ``state()``/``load_state()``; relative reachability, :mod:`baselines.reachability`,
-reads them). Without the declaration both fields are ``None``.
+the engine's ``state()``/``load_state()``, watching the vector env's engine steps; relative
+reachability, :mod:`baselines.reachability`, reads them). Without the declaration both fields are
+``None``; transforms of one ensemble that declare it must code states alike (one ``state_codes``).
 """
 
 from __future__ import annotations
@@ -36,20 +37,23 @@ import inspect
 import math
 import typing
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from agents.step_batch import StepBatch
 
+if TYPE_CHECKING:
+    from empathy_zoo.engine import GridEngine
+
 __all__ = [
+    "InactionBaselineTransform",
     "RewardTransform",
     "TrainRewards",
     "configure_transform",
     "same_transform",
     "transform_config",
     "transform_fields",
-    "with_train_rewards",
 ]
 
 
@@ -62,6 +66,21 @@ class RewardTransform(Protocol):
     def __call__(self, batch: StepBatch, *state: Any) -> Any:
         """``(K, M)`` training rewards for every run of ``batch`` (``batch.rewards`` holds the
         environment's); a stateful transform also takes its state and returns ``(rewards, state)``."""
+
+
+class InactionBaselineTransform(RewardTransform, Protocol):
+    """A reward transform that compares each step with the stepwise inaction baseline (see the
+    module page; :class:`baselines.reachability.RelativeReachability` is one)."""
+
+    needs_inaction_baseline: ClassVar[bool]
+    """``True``: in training, :attr:`StepBatch.state_after` and :attr:`StepBatch.baseline_after`
+    hold the codes of each step's outcome and of its baseline (a transform without this
+    declaration, or with ``False``, gets ``None`` in both)."""
+
+    def state_codes(self, engine: GridEngine) -> np.ndarray:
+        """``(N,)`` int64 codes of the states of ``engine``'s ``N`` environments (equal states,
+        equal codes); ``ValueError`` for an environment it cannot code (asked once before
+        training)."""
 
 
 def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None:
@@ -205,8 +224,3 @@ class TrainRewards:
         if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states)):
             raise ValueError("this checkpoint holds the state of other reward transforms; move it away to restart")
         self.states = [None if state is None else {key: np.array(value) for key, value in state.items()} for state in states]
-
-
-def with_train_rewards(batch: StepBatch, transforms: Sequence[RewardTransform | None]) -> StepBatch:
-    """``batch`` with each run's rewards replaced by its stateless transform's (one step on its own)."""
-    return TrainRewards(transforms, batch.rewards.shape[1])(batch)

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import Any
+
+from empathy_zoo.schedules import linear_schedule
 
 __all__ = ["EmpathicDQNSettings", "OTHERS_RULES", "PER_RUN_FIELDS"]
 
@@ -81,6 +84,11 @@ class EmpathicDQNSettings:
         for name, ok in checks.items():
             if not ok:
                 raise ValueError(f"{name} must be {expectations[name]}, got {getattr(self, name)!r}")
+
+    def describe(self) -> dict[str, Any]:
+        """What a result file's description records of these settings (:meth:`agents.base.Method.describe`):
+        β, γ and the ε schedule as data (:func:`empathy_zoo.schedules.linear_schedule`)."""
+        return {"selfishness": self.selfishness, "gamma": self.gamma, "exploration": linear_schedule(self)}
 
     def shared(self) -> tuple:
         """The settings runs must share to train in one ensemble (all but the per-run ones)."""

@@ -6,12 +6,20 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from empathy_zoo.closest_other import ClosestOther
+
 __all__ = ["StepBatch"]
 
 
 @dataclass
-class StepBatch:
-    """One env step of every run, as arrays ``(K, M, ...)``."""
+class StepBatch(ClosestOther):
+    """One env step of every run, as arrays ``(K, M, ...)``.
+
+    The learner's other agents lie on one axis ``O``, in agent order (``VectorEnv.others``; with
+    one other agent, an axis of one), as in :class:`empathy_zoo.vector.VectorStep`, whose fields
+    of the same names these are: the ``others_*`` fields hold one entry per other agent,
+    :attr:`closest` is a place on that axis, and each ``other_*`` property is its ``others_*``
+    field there (:meth:`of_closest`)."""
 
     obs: np.ndarray
     """(K, M, V) observations the actions were chosen on."""
@@ -24,26 +32,37 @@ class StepBatch:
     """(K, M) the learner's episode ended for good (truncation is not termination)."""
     next_obs: np.ndarray
     """(K, M, V) observations at the end of the step (before any autoreset)."""
-    swapped_next_obs: np.ndarray
-    """(K, M, V) the learner's swapped observation at the end of the step with its closest other
-    agent when the step began (SPEC §3b)."""
-    other_present: np.ndarray
-    """(K, M) that other agent is still in the environment and its episode has not ended for good
-    at the end of the step, so its swapped value may bootstrap (SPEC §6: False for a harmed cat,
-    and for the human once the last battery is taken; a time-limit truncation keeps it True)."""
-    harmed_other: np.ndarray
+    closest: np.ndarray
+    """(K, M) int: the learner's closest other agent when the step began (SPEC §3b), as its
+    place on the ``O`` axis."""
+    others_swapped: np.ndarray
+    """(K, M, O, V) the learner's swapped observation with each other agent at the end of the
+    step (zeros for one that has left, or is out of view with in-view-only swaps)."""
+    others_present: np.ndarray
+    """(K, M, O) that other agent is still in the environment and its episode has not ended for
+    good at the end of the step (and it is in view, with in-view-only swaps), so its swapped value
+    may bootstrap (SPEC §6: False for a harmed cat, and for the human once the last battery is
+    taken; a time-limit truncation keeps it True)."""
+    others_live: np.ndarray
+    """(K, M, O) that other agent was in the environment when the step began (one harmed in an
+    earlier step has left; one harmed in this step was live)."""
+    others_unseen: np.ndarray
+    """(K, M, O) that other agent is present and not terminal at the end of the step but out of
+    the learner's window (in-view-only methods; else always False): *unseen*, not harmed, so an
+    in-view empathic target uses no other-term for it (SPEC §4)."""
+    harms: np.ndarray
     """(K, M) number of agents the learner harmed this step."""
     battery_return: np.ndarray
     """(K, M) the learner's battery reward so far this episode, this step included."""
-    other_battery_return: np.ndarray
-    """(K, M) the other agent's battery reward so far this episode, this step included."""
+    others_battery_return: np.ndarray
+    """(K, M, O) each other agent's battery reward so far this episode, this step included."""
     truncated: np.ndarray | None = None
     """(K, M) the learner's episode was cut short this step (time limit); ``None`` when the driver
     does not say. Learners that bootstrap through time-outs (SB3's PPO) need it."""
-    other_rewards: np.ndarray | None = None
-    """(K, M) the environment's reward of the closest other agent this step (what a method that
-    weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when the
-    driver does not say."""
+    others_rewards: np.ndarray | None = None
+    """(K, M, O) the environment's reward of each other agent this step (what a method that
+    weighs the other's reward reads: inequity aversion, social value orientation); ``None`` when
+    the driver does not say."""
     state_after: np.ndarray | None = None
     """(K, M) int64: the state each environment is in at the end of the step (before any
     autoreset), as the code of the run's reward transform (``state_codes``); filled only for a
@@ -52,23 +71,12 @@ class StepBatch:
     """(K, M) int64: the same code of the stepwise inaction baseline: the state the step would
     have ended in had the learner taken the no-op (action 4) and every other agent done what it
     did; filled with :attr:`state_after`."""
-    swapped_next_obs_all: np.ndarray | None = None
-    """(K, M, N, V) the learner's swapped observation with each of the N other agents, in agent
-    order, at the end of the step (zeros for one that has left); ``None`` when the driver does not
-    say. What a learner aggregating over every other agent reads (``others="mean"`` / ``"min"``)."""
-    others_present: np.ndarray | None = None
-    """(K, M, N) each other agent is present and not terminal at the end of the step (as
-    :attr:`other_present` is for the closest); ``None`` when the driver does not say."""
-    others_live: np.ndarray | None = None
-    """(K, M, N) each other agent was in the environment when the step began (one harmed in an
-    earlier step has left); ``None`` when the driver does not say."""
-    other_unseen: np.ndarray | None = None
-    """(K, M) the closest other agent is present and not terminal at the end of the step but out
-    of the learner's window (in-view-only methods): *unseen*, not harmed, so an in-view empathic
-    target uses no other-term at all (SPEC §4); ``None`` (never unseen) when the driver does not say."""
-    others_unseen: np.ndarray | None = None
-    """(K, M, N) the same for each other agent; ``None`` when the driver does not say."""
 
     def runs(self, rows: np.ndarray) -> StepBatch:
         """The same step for the runs ``rows`` only (every array's first axis indexed)."""
         return replace(self, **{f.name: getattr(self, f.name)[rows] for f in fields(self) if getattr(self, f.name) is not None})
+
+    @property
+    def other_rewards(self) -> np.ndarray | None:
+        """(K, M) :attr:`others_rewards` of the closest other agent (``None`` without them)."""
+        return None if self.others_rewards is None else self.of_closest(self.others_rewards)

@@ -121,7 +121,7 @@ from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from agents.step_batch import StepBatch
 from baselines.side_network import train_side_network
-from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
 __all__ = [

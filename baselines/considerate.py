@@ -32,7 +32,7 @@ place and asks its own value function.
   batches of 32 from a replay of the last 10,000 transitions of the other agent, one update every
   4 env steps from the 1,000th, a target copy every 1,000 updates, γ = 0.99 as the suite's own).
 * **Its input: the other agent's own observation.** ``o_j`` is the swapped observation
-  (``StepBatch.swapped_next_obs``), which in both environments equals the other's own window
+  (``StepBatch.other_swapped``), which in both environments equals the other's own window
   (SPEC §4): where it stands, and the robot when the robot is near. The robot's own observation
   would not do: a cat outside the robot's window and a cat that has left look the same there.
   The transition of step ``t`` pairs the swapped observation of step ``t − 1`` with that of step
@@ -215,13 +215,13 @@ class Considerate:
     def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         if batch.other_rewards is None:
             raise ValueError("Be Considerate needs the other agent's rewards (StepBatch.other_rewards)")
-        if batch.swapped_next_obs_all is not None and batch.swapped_next_obs_all.shape[2] > 1:
+        if batch.others_swapped.shape[2] > 1:
             raise ValueError(
                 f"Be Considerate learns the value of one other agent from the reward the environment reports for it "
-                f"(StepBatch.other_rewards, the closest one's); this environment has {batch.swapped_next_obs_all.shape[2]} "
+                f"(StepBatch.other_rewards, the closest one's); this environment has {batch.others_swapped.shape[2]} "
                 "other agents: train it with one (num_cats = 1 / num_humans = 1)"
             )
-        other_obs = np.asarray(batch.swapped_next_obs, dtype=np.float32)
+        other_obs = np.asarray(batch.other_swapped, dtype=np.float32)
         runs, envs, obs_size = other_obs.shape
         if "online_0" not in state:
             if len(state["seeds"]) != runs:

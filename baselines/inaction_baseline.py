@@ -4,15 +4,16 @@ moves) been the same. One step only: no inaction rollouts (the baseline ``step_n
 code; :mod:`baselines.reachability` says why).
 
 A reward transform that declares ``needs_inaction_baseline = True`` and codes states with
-``state_codes(engine) -> (N,) int64`` gets, in every training step, :attr:`StepBatch.state_after`
-(the code of the state the step ended in) and :attr:`StepBatch.baseline_after` (the code of the
-baseline state). The trainer attaches an :class:`InactionBaseline` to its vector env
-(:meth:`InactionBaseline.for_transforms`), which watches the joint actions the vector env gives
-its engine: just before each engine step it keeps the engine's state (``state()``); after it, it
-codes the state reached (before any autoreset), loads the kept state into a copy of the engine
-and steps that copy with the same joint action except the learner's, replaced by the no-op. The
-outcome of both steps is the engine's; nothing of the rules is repeated here. The fixed agents
-act once (in the real step), so the baseline sees exactly their actions.
+``state_codes(engine) -> (N,) int64`` (:class:`agents.rewards.InactionBaselineTransform`) gets,
+in every training step, :attr:`StepBatch.state_after` (the code of the state the step ended in)
+and :attr:`StepBatch.baseline_after` (the code of the baseline state). The trainer builds an
+:class:`InactionBaseline` for its vector env (:meth:`InactionBaseline.for_transforms`), which
+watches the vector env's engine steps (:meth:`empathy_zoo.vector.VectorEnv.watch_engine`): just
+before each engine step it keeps the engine's state (``state()``); after it, it codes the state
+reached (before any autoreset), loads the kept state into a copy of the engine and steps that
+copy with the same joint action except the learner's, replaced by the no-op. The outcome of both
+steps is the engine's; nothing of the rules is repeated here. The fixed agents act once (in the
+real step), so the baseline sees exactly their actions.
 """
 
 from __future__ import annotations
@@ -20,13 +21,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
+from agents.rewards import InactionBaselineTransform, RewardTransform
 from agents.step_batch import StepBatch
-from empathy_zoo.engine import GridEngine
-from empathy_zoo.grid import Action
+from empathy_zoo.actions import Action
+from empathy_zoo.engine import GridEngine, StepEvents
 from empathy_zoo.vector import VectorEnv
 
 __all__ = ["InactionBaseline"]
@@ -35,50 +37,33 @@ StateCodes = Callable[[GridEngine], np.ndarray]
 """``(N,)`` int64 codes of the states of an engine's ``N`` environments."""
 
 
-class _WatchedEngine:
-    """``engine`` itself to whoever uses it (every attribute is the engine's), except that each of
-    its steps goes through ``on_step(actions, step)``, which calls ``step(actions)`` and returns
-    its events."""
-
-    def __init__(self, engine: GridEngine, on_step: Callable[[np.ndarray, Callable[[np.ndarray], Any]], Any]) -> None:
-        object.__setattr__(self, "_engine", engine)
-        object.__setattr__(self, "_on_step", on_step)
-
-    def __getattr__(self, name: str) -> Any:
-        if name in ("_engine", "_on_step"):  # (not set yet: a half-built copy)
-            raise AttributeError(name)
-        return getattr(self._engine, name)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        setattr(self._engine, name, value)
-
-    def step(self, actions: np.ndarray) -> Any:
-        return self._on_step(actions, self._engine.step)
-
-    def step_checked(self, actions: np.ndarray) -> Any:
-        return self._on_step(actions, self._engine.step_checked)
-
-
 class InactionBaseline:
     """The stepwise inaction baseline of every environment of ``venv`` (see the module page),
-    coded by ``codes``; attaching it makes ``venv.engine`` a watched view of the same engine."""
+    coded by ``codes``; it watches ``venv``'s engine steps from its construction on
+    (:meth:`empathy_zoo.vector.VectorEnv.watch_engine`)."""
 
     def __init__(self, venv: VectorEnv, codes: StateCodes) -> None:
         codes(venv.engine)  # an environment the coding refuses is refused before any step
         self._codes = codes
         self._learners = list(venv.learner_index)
-        self._engine = venv.engine
         self._copy: GridEngine = copy.deepcopy(venv.engine)
         """Where the baseline step runs: loaded with the state the real step started from."""
+        self._before: dict[str, Any] | None = None
+        """The engine's state just before the step being taken (between the two calls of the watch)."""
         self._last: tuple[np.ndarray, np.ndarray] | None = None
         """Codes of the last step's outcome and baseline, until :meth:`fill` takes them."""
-        venv.engine = _WatchedEngine(venv.engine, self._step)
+        venv.watch_engine(self)
 
     @classmethod
-    def for_transforms(cls, venv: VectorEnv, transforms: Sequence[Any]) -> InactionBaseline | None:
+    def for_transforms(cls, venv: VectorEnv, transforms: Sequence[RewardTransform | None]) -> InactionBaseline | None:
         """The baseline the reward transforms ``transforms`` need (``None`` when none declares
-        ``needs_inaction_baseline``); transforms of one ensemble that need it must code states alike."""
-        needing = [t for t in transforms if t is not None and getattr(t, "needs_inaction_baseline", False)]
+        ``needs_inaction_baseline``, :class:`agents.rewards.InactionBaselineTransform`); transforms
+        of one ensemble that need it must code states alike."""
+        needing = [
+            cast(InactionBaselineTransform, t)
+            for t in transforms
+            if t is not None and getattr(t, "needs_inaction_baseline", False)
+        ]
         if not needing:
             return None
         codings = {getattr(type(t), "state_codes", None) for t in needing}
@@ -90,16 +75,22 @@ class InactionBaseline:
             )
         return cls(venv, needing[0].state_codes)
 
-    def _step(self, actions: np.ndarray, step: Callable[[np.ndarray], Any]) -> Any:
-        before = self._engine.state()
-        events = step(actions)
-        after = self._codes(self._engine)
+    def before_engine_step(self, engine: GridEngine, actions: np.ndarray) -> None:
+        """Keep the state the engine steps from (:class:`empathy_zoo.vector.EngineWatcher`)."""
+        self._before = engine.state()
+
+    def after_engine_step(self, engine: GridEngine, actions: np.ndarray, events: StepEvents) -> None:
+        """Code the state the step ended in, and the state the copy of the engine ends in from the
+        kept one with the learner's action replaced by the no-op."""
+        if self._before is None:
+            raise RuntimeError("the inaction baseline saw the end of an engine step but not its start")
+        after = self._codes(engine)
         inaction = np.array(actions, dtype=np.int64, copy=True)
         inaction[:, self._learners] = int(Action.STAY)
-        self._copy.load_state(before)
+        self._copy.load_state(self._before)
+        self._before = None
         self._copy.step(inaction)
         self._last = (after, self._codes(self._copy))
-        return events
 
     def fill(self, batch: StepBatch) -> StepBatch:
         """``batch`` (the last step of every environment) with :attr:`StepBatch.state_after` and

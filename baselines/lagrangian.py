@@ -3,7 +3,7 @@ OmniSafe's PPO-Lag (``omnisafe/common/lagrange.py``) and of Safety-Gymnasium exp
 
 The problem is the constrained MDP ``max_π J_R(π)`` subject to ``J_C(π) ≤ d``, with ``J_C`` the
 expected cost per episode and the cost of a step the number of agents the learner harmed in it
-(``StepBatch.harmed_other``); so ``d`` is the harms per episode the learner may cause on average.
+(``StepBatch.harms``); so ``d`` is the harms per episode the learner may cause on average.
 Its Lagrangian ``J_R − λ·(J_C − d)`` is maximised over the policy and minimised over ``λ ≥ 0``:
 
 * the policy (plain DQN) trains on the penalised reward ``r' = r − λ·c`` of every step, with the
@@ -88,7 +88,7 @@ class Lagrangian:
         return {"multiplier": np.full(num_runs, float(self.lambda_init)), "episode_cost": np.zeros((num_runs, envs_per_run))}
 
     def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        cost = np.asarray(batch.harmed_other, dtype=np.float64)
+        cost = np.asarray(batch.harms, dtype=np.float64)
         multiplier = state["multiplier"]
         if state["episode_cost"].shape != cost.shape:
             raise ValueError(f"this Lagrangian state is for {state['episode_cost'].shape} runs × environments, not {cost.shape}")

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.coexistence import CoexistenceEngine
-from empathy_zoo.grid import NUM_ACTIONS
 
 __all__ = [
     "ReachabilityTable",

@@ -14,7 +14,7 @@ from agents.settings import EmpathicDQNSettings
 from baselines.methods import BASELINE_METHODS
 from baselines.sb3 import SB3_METHODS
 from baselines.silver_rule import SilverRuleDQN
-from empathy_zoo.registry import resolve_name
+from empathy_zoo.import_names import resolve_name
 
 __all__ = ["METHODS", "get_method"]
 
@@ -23,6 +23,9 @@ METHODS: dict[str, Method] = {
         name="empathic_dqn",
         learner=EmpathicDQN,
         settings=EmpathicDQNSettings,
+        family="empathic_dqn",
+        target="golden",
+        dqn_reference=True,
         label=lambda s: f"Empathic DQN (β={s.selfishness:g})",
         description="Empathic DQN: acts on Q_emp, trained on β·own target + (1−β)·the other's swapped value",
     ),
@@ -31,6 +34,9 @@ METHODS: dict[str, Method] = {
         learner=EmpathicDQN,
         settings=EmpathicDQNSettings,
         preset={"selfishness": 1.0},
+        family="dqn",
+        target="golden",
+        dqn_reference=True,
         label=lambda s: "DQN",
         description="Double DQN (Empathic DQN at β = 1)",
     ),
@@ -39,6 +45,8 @@ METHODS: dict[str, Method] = {
         learner=EmpathicDQN,
         settings=EmpathicDQNSettings,
         in_view_only=True,
+        family="empathic_dqn",
+        target="golden",
         label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
         description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
         "the paper's future work); an unseen other gives the robot's own target",
@@ -47,6 +55,8 @@ METHODS: dict[str, Method] = {
         name="empathic_dqn_silver",
         learner=SilverRuleDQN,
         settings=EmpathicDQNSettings,
+        family="empathic_dqn",
+        target="silver",
         label=lambda s: f"Empathic DQN, silver rule (β={s.selfishness:g})",
         description="Empathic DQN that counts the other's future only where it falls below the robot's own "
         "continuation (the paper's silver rule: empathy with bad outcomes only)",

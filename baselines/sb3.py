@@ -257,7 +257,9 @@ class _OnPolicyRun:
     def __init__(self, model: Any, schedule_steps: int) -> None:
         self.model, self.schedule_steps = model, schedule_steps
         self.episode_starts = np.ones(model.n_envs, dtype=bool)
-        self._pending: tuple | None = None
+        self._pending: tuple[np.ndarray, np.ndarray, torch.Tensor, torch.Tensor] | None = None
+        """What :meth:`act` chose and :meth:`observe` stores: observations, actions ``(n, 1)``,
+        values and log-probabilities (``None`` before the first act)."""
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         from stable_baselines3.common.utils import obs_as_tensor
@@ -279,6 +281,8 @@ class _OnPolicyRun:
 
     def observe(self, reward: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, next_obs: np.ndarray) -> None:
         model = self.model
+        if self._pending is None:
+            raise RuntimeError("observe() before act(): no step of the rollout to store")
         obs, actions, values, log_probs = self._pending
         reward = reward.astype(np.float32)
         for i in np.flatnonzero(truncated & ~terminated):  # bootstrap a time-out, as SB3 does (same float32 arithmetic)
@@ -316,6 +320,8 @@ class SB3Learner:
         num_actions: int = 5,
         device: str = "cpu",
         envs_per_run: int = 1,
+        *,
+        num_others: int = 1,  # (every learner is told it; SB3's agents see only the robot's observation)
     ) -> None:
         if len(settings) != len(seeds) or not settings:
             raise ValueError("give one settings object per seed, and at least one run")
@@ -423,6 +429,29 @@ class SB3Learner:
             model.action_space.np_random.bit_generator.state = randomness.pop("action_space")
             rng.saved = randomness
 
+    # ------------------------------------------------------------------ keeping a trained agent
+    def save_agent(self, run: int, file: Any) -> dict[str, Any]:
+        """Write run ``run``'s model to the binary ``file`` in SB3's own format (``model.save``: its
+        zip, with the policy's networks and optimiser, without the replay or rollout buffer) and
+        return what :func:`empathy_zoo.load_agent` needs to read it back with SB3's ``load``: the
+        library, the SB3 class, its policy, the sizes, and the value heads (DQN: ``["q"]``, its
+        ``q_net``, which it acts on; PPO: none, it acts on its policy). The writer,
+        :func:`empathy_zoo.agent_file.write_agent_file`, names the file ``<run id>.agent.zip``."""
+        if not 0 <= run < len(self.models):
+            raise ValueError(f"run must be in [0, {len(self.models)}), got {run!r}")
+        model = self.models[run]
+        model.save(file)
+        dqn = hasattr(model.policy, "q_net")
+        return {
+            "library": "stable_baselines3",
+            "algorithm": type(model).__name__,
+            "policy": "MlpPolicy",
+            "obs_size": int(model.observation_space.shape[0]),
+            "num_actions": int(model.action_space.n),
+            "heads": ["q"] if dqn else [],
+            "acting": "q" if dqn else "policy",
+        }
+
 
 def _nanmean(values: list[float]) -> float:
     finite = [v for v in values if not math.isnan(v)]
@@ -434,6 +463,7 @@ SB3_DQN = Method(
     learner=SB3Learner,
     settings=SB3Settings,
     preset={"algorithm": "dqn"},
+    family="sb3",
     label=lambda s: "SB3 DQN",
     description="Stable-Baselines3 DQN (its own loss, targets and schedules), paper-sized MLP and replay",
 )
@@ -444,6 +474,7 @@ SB3_PPO = Method(
     learner=SB3Learner,
     settings=SB3Settings,
     preset={"algorithm": "ppo"},
+    family="sb3",
     label=lambda s: "SB3 PPO",
     description="Stable-Baselines3 PPO (SB3's default hyper-parameters), paper-sized MLP",
 )

@@ -29,7 +29,7 @@ class HarmPenalty:
     """Added to the reward once per agent harmed (the paper's baseline: −100)."""
 
     def __call__(self, batch: StepBatch) -> np.ndarray:
-        return (batch.rewards.astype(np.float64) + self.penalty * batch.harmed_other).astype(np.float32)
+        return (batch.rewards.astype(np.float64) + self.penalty * batch.harms).astype(np.float32)
 
 
 @dataclass(frozen=True)

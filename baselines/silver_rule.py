@@ -62,8 +62,8 @@ class SilverRuleDQN(EmpathicDQN):
     def targets(
         self, batch: dict[str, torch.Tensor], q_next: torch.Tensor, target_next: torch.Tensor, target_swapped: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        rule, live, unseen = self._others_rule(), batch.get("others_live"), batch.get("other_unseen")
+        rule, (present, live, unseen) = self._others_rule(), self.other_inputs(batch)
         continuation = continuation_value(batch["terminated"], q_next, target_next, self.config.gamma)
         y = batch["reward"] + continuation
-        other = other_term(target_swapped, batch["other_present"], self.config.gamma, rule, live, unseen)
+        other = other_term(target_swapped, present, self.config.gamma, rule, live, unseen)
         return y, own_where_unseen(y, silver_targets(batch["reward"], continuation, other, self.selfishness), unseen, rule, live)

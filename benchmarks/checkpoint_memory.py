@@ -40,13 +40,13 @@ def _status(field: str) -> int:
 def _learner():  # noqa: ANN202 (the tree's own Learner type)
     import torch
 
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
     from empathy_zoo.vector import VectorEnv
 
     torch.set_num_threads(1)
     betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
     specs = [
-        RunSpec(env="coexistence_v0", seed=i, settings={"selfishness": beta, "replay_capacity": CAPACITY})
+        RunSpec.of(env="coexistence_v0", seed=i, settings={"selfishness": beta, "replay_capacity": CAPACITY})
         for i, beta in enumerate(betas[:RUNS])
     ]
     venv = VectorEnv("coexistence_v0", 1)

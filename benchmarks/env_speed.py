@@ -31,8 +31,8 @@ import pettingzoo
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 from empathy_zoo import ENVIRONMENTS, EmpathyWrapper, FixedAgents
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.vector import VectorEnv
 
 ENVS = ("coexistence_v0", "sharing_v0")

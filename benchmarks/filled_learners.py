@@ -26,11 +26,15 @@ def filled_learner(cls: type = EmpathicDQN, betas: Sequence[float] = PAPER_BETAS
     for _ in range(5):
         obs = [rng.integers(-1, 2, size=(k, 200, 25)).astype(np.float32) for _ in range(3)]
         learner.replay.add(
-            *obs,
+            obs[0],
+            obs[1],
+            obs[2][:, :, None],  # one other agent
             rng.integers(0, 5, (k, 200)),
             rng.random((k, 200)).astype(np.float32),
             rng.random((k, 200)) < 0.05,
-            rng.random((k, 200)) < 0.9,
+            rng.random((k, 200, 1)) < 0.9,
+            np.ones((k, 200, 1), dtype=bool),
+            np.zeros((k, 200, 1), dtype=bool),
         )
     return learner
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv
 
 SHORT_SCHEDULE = {
@@ -54,7 +54,7 @@ def main() -> None:
     args = parser.parse_args()
     print(f"command: python benchmarks/learning_check.py --steps {args.steps} --seeds {args.seeds} --out {args.out}")
     specs = [
-        RunSpec(
+        RunSpec.of(
             env="coexistence_v0",
             method="empathic_dqn",
             settings={**SHORT_SCHEDULE, "selfishness": beta},
@@ -72,7 +72,7 @@ def main() -> None:
     table: dict[float, list[tuple[float, float]]] = {}
     for spec, path in zip(specs, paths):
         last = json.loads(Path(path).read_text())["eval"][-1]
-        table.setdefault(spec.settings["selfishness"], []).append((np.mean(last["survival"]), np.mean(last["harms"])))
+        table.setdefault(spec.method_settings().selfishness, []).append((np.mean(last["survival"]), np.mean(last["harms"])))
     baseline = random_robot()
     print(f"random robot:        survival {baseline['survival']:6.1f}   harms/episode {baseline['harms']:.2f}")
     for beta, rows in table.items():

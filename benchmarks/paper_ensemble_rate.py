@@ -27,13 +27,13 @@ def main() -> None:
         sys.path.insert(0, args.tree)
     import torch
 
+    from empathy_zoo.experiment.model import RunSpec
     from empathy_zoo.training import RunnerOptions, train_runs
-    from empathy_zoo.training.spec import RunSpec
 
     torch.set_num_threads(1)
     betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
     specs = [
-        RunSpec(
+        RunSpec.of(
             env="coexistence_v0",
             method="empathic_dqn",
             seed=i,

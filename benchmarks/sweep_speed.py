@@ -23,8 +23,8 @@ from pathlib import Path
 import torch
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 OBS, HIDDEN, ACTIONS, BATCH = 25, 128, 5, 32
 PAPER_RUNS, PAPER_STEPS = 50, 1_000_000
@@ -58,7 +58,7 @@ def ensemble_rate(
     ``k`` selfishness values mixes runs with and without ``Q_emp`` in one ensemble."""
     betas = selfishness if isinstance(selfishness, list) else [selfishness] * k
     specs = [
-        RunSpec(
+        RunSpec.of(
             env="coexistence_v0",
             method="empathic_dqn",
             seed=w * k + i,

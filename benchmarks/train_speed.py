@@ -34,8 +34,8 @@ from machine import describe_machine  # benchmarks/machine.py (this directory is
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 REPLAY = 500_000
 FINAL_EPSILON = 0.01
@@ -92,7 +92,7 @@ def empathic_dqn_rates(warmup: int, settle: int, steps: int) -> tuple[float, flo
         "epsilon_decay_steps": 1,
     }
     start = warmup + settle
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="coexistence_v0",
         method=f"{__name__}:TIMED_EMPATHIC_DQN",
         settings=settings,
@@ -153,7 +153,9 @@ def breakdown(rounds: int = 15, calls: int = 100) -> dict[str, float]:
     learner = EmpathicDQN([EmpathicDQNSettings(selfishness=0.5, learning_starts=64, replay_capacity=REPLAY)], [0], venv.obs_size)
     row = torch.as_tensor(obs)
     flags = torch.ones((1, 1), dtype=torch.bool)
-    add = lambda: learner.replay.add(row, row, row, torch.zeros((1, 1), dtype=torch.long), torch.ones((1, 1)), ~flags, flags)  # noqa: E731
+    one = torch.ones((1, 1, 1), dtype=torch.bool)  # one other agent, present
+    step = torch.zeros((1, 1), dtype=torch.long), torch.ones((1, 1)), ~flags  # action, reward, terminated
+    add = lambda: learner.replay.add(row, row, row[:, :, None], *step, one, one, ~one)  # noqa: E731
     for _ in range(300):
         add()
     model = make_sb3_model(

@@ -68,7 +68,7 @@ class ManualBackward(EmpathicDQN):
 
     def update(self) -> float:
         k, cfg, emp, b = self.num_runs, self.config, self._emp.size, self.config.batch_size
-        batch = self.replay.sample(self.sample_indices())
+        batch = self.sample_batch()
         obs, action = batch["obs"], batch["action"]
         q_params, e_params = [p[:k] for p in self.online], [p[k:] for p in self.online]
         out_q, inputs_q = _forward_saving(q_params, torch.cat([obs, batch["next_obs"]], dim=1))
@@ -76,7 +76,7 @@ class ManualBackward(EmpathicDQN):
         if emp:
             rows = None if emp == k else self._emp_rows
             out_e, inputs_e = _forward_saving(e_params, obs if rows is None else obs.index_select(0, rows))
-            target_both = StackedMLP.forward(self.target, torch.cat([batch["next_obs"], batch["swapped_next_obs"]], dim=1))
+            target_both = StackedMLP.forward(self.target, torch.cat([batch["next_obs"], batch["other_swapped"]], dim=1))
             y, y_emp = self.targets(batch, q_next, target_both[:, :b], target_both[:, b:])
             if rows is not None:
                 y_emp = y_emp.index_select(0, rows)

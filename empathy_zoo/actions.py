@@ -1,18 +1,38 @@
-"""One validation of actions for every face (PettingZoo parallel and AEC, FixedAgents, the vector
-env, the Gymnasium adapter, fixed policies inside the training path): an action is an integer in
-``[0, 5)`` (a Python ``int``, a numpy integer, or a 0-d integer array), never a float, a bool or
-anything truncated; anything else raises ``ValueError`` naming the agent."""
+"""The five actions every agent has, and their one validation for every face (PettingZoo parallel
+and AEC, FixedAgents, the vector env, the Gymnasium adapter, fixed policies inside the training
+path): an action is an integer in ``[0, 5)`` (a Python ``int``, a numpy integer, or a 0-d integer
+array), never a float, a bool or anything truncated; anything else raises ``ValueError`` naming
+the agent."""
 
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
+from enum import IntEnum
 from typing import Any
 
 import numpy as np
 
-from empathy_zoo.grid import NUM_ACTIONS
+__all__ = ["Action", "NUM_ACTIONS", "check_action", "check_joint_action", "check_action_array"]
 
-__all__ = ["check_action", "check_joint_action", "check_action_array"]
+
+class Action(IntEnum):
+    """The five actions every agent has (``Discrete(5)``); :data:`empathy_zoo.grid.MOVES` gives
+    each one's displacement."""
+
+    UP = 0
+    """row - 1"""
+    DOWN = 1
+    """row + 1"""
+    LEFT = 2
+    """col - 1"""
+    RIGHT = 3
+    """col + 1"""
+    STAY = 4
+    """no-op"""
+
+
+NUM_ACTIONS = len(Action)
+"""How many actions every agent has (5)."""
 
 
 def check_action(agent: str, action: Any, num_actions: int = NUM_ACTIONS) -> int:

@@ -12,17 +12,16 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 
-__all__ = ["RandomWalk", "Patrol", "Stay"]
+__all__ = ["CounterStream", "CounterStreamBatch", "RandomWalk", "Patrol", "Stay"]
 
 
-class RandomWalk:
-    """Uniformly random over the five actions (the cat). Counter-based, so it is reproducible
-    per environment whether it acts alone or batched."""
-
-    needs_observation = False
+class CounterStream:
+    """A policy's own counter-based random stream (:func:`~empathy_zoo.randomness.counter_uniform`):
+    ``reset(seed)`` keys it from the episode's seed (a fresh random key without one), and each
+    :meth:`_take` gives the key and the number of the next draw; its state is plain data."""
 
     def __init__(self) -> None:
         self._key: int | None = None
@@ -34,13 +33,14 @@ class RandomWalk:
         elif self._key is None:
             self._key = secrets.randbits(64)
 
-    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+    def _take(self) -> tuple[int, int]:
+        """The key and the number of this step's draw (the next one after it)."""
         if self._key is None:
             self.reset()
         assert self._key is not None  # reset() draws one
-        action = counter_integer(self._key, self._count, NUM_ACTIONS)
+        count = self._count
         self._count += 1
-        return action
+        return self._key, count
 
     def state(self) -> dict[str, Any]:
         return {"key": self._key, "count": self._count}
@@ -49,12 +49,13 @@ class RandomWalk:
         self._key = None if state["key"] is None else int(state["key"])
         self._count = int(state["count"])
 
-    def batched(self, num_envs: int) -> _RandomWalkBatch:
-        return _RandomWalkBatch(num_envs)
 
+class CounterStreamBatch:
+    """:class:`CounterStream` for ``num_envs`` environments at once: one key and one count each,
+    a count advancing only where its environment's agent is active."""
 
-class _RandomWalkBatch:
-    needs_observation = False
+    state_name = "counter stream"
+    """What a state error calls the policy."""
 
     def __init__(self, num_envs: int) -> None:
         self.keys = np.array([secrets.randbits(64) for _ in range(num_envs)], dtype=np.uint64)
@@ -65,10 +66,11 @@ class _RandomWalkBatch:
             if seed is not None:
                 self.keys[i], self.counts[i] = derive_key(seed), 0
 
-    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
-        actions = counter_integers(self.keys, self.counts, NUM_ACTIONS)
+    def _take(self, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The keys and the numbers of this step's draws (the counts of the active ones advance)."""
+        counts = self.counts.copy()
         self.counts += active.astype(np.uint64)
-        return actions
+        return self.keys, counts
 
     def state(self) -> dict[str, Any]:
         return {"keys": self.keys.copy(), "counts": self.counts.copy()}
@@ -78,8 +80,31 @@ class _RandomWalkBatch:
             value = np.asarray(state[name])
             current = getattr(self, name)
             if value.shape != current.shape:
-                raise ValueError(f"random walk state {name!r} has shape {value.shape}, expected {current.shape}")
+                raise ValueError(f"{self.state_name} state {name!r} has shape {value.shape}, expected {current.shape}")
             current[...] = value.astype(np.uint64)
+
+
+class RandomWalk(CounterStream):
+    """Uniformly random over the five actions (the cat). Counter-based, so it is reproducible
+    per environment whether it acts alone or batched."""
+
+    needs_observation = False
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        key, count = self._take()
+        return counter_integer(key, count, NUM_ACTIONS)
+
+    def batched(self, num_envs: int) -> _RandomWalkBatch:
+        return _RandomWalkBatch(num_envs)
+
+
+class _RandomWalkBatch(CounterStreamBatch):
+    needs_observation = False
+    state_name = "random walk"
+
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
+        keys, counts = self._take(active)
+        return counter_integers(keys, counts, NUM_ACTIONS)
 
 
 class Patrol:

@@ -56,7 +56,7 @@ or the robot placed in contact with a cat raise `ValueError` (cats may be placed
 observe had it exchanged places with `other` (here: `other`'s own observation); `None` once
 `other` has left. With several cats the swap exchanges that pair only; every other agent stays.
 Wrap with `empathy_zoo.EmpathyWrapper` to get it in `infos`. The closest other agent (the one
-`empathy_zoo.vector.VectorEnv` swaps with in `VectorStep.swapped`) is chosen when the step
+`empathy_zoo.vector.VectorEnv` points at in `VectorStep.closest`) is chosen when the step
 begins, among the others present then, at the least torus (Manhattan) distance, ties to the lower
 agent index (SPEC §3b): one harmed in the step is the one swapped with.
 

@@ -20,7 +20,16 @@ from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
 
-__all__ = ["Environment", "ENVIRONMENT_TABLE", "ENGINES", "DEFAULT_POLICIES", "GYM_IDS", "face_module", "default_policies"]
+__all__ = [
+    "Environment",
+    "ENVIRONMENT_TABLE",
+    "ENGINES",
+    "DEFAULT_POLICIES",
+    "DEFAULT_ARGUMENTS",
+    "GYM_IDS",
+    "face_module",
+    "default_policies",
+]
 
 
 @dataclass(frozen=True)
@@ -35,13 +44,27 @@ class Environment:
     """Its id in Gymnasium's registry (the single-agent face, :mod:`empathy_zoo.gym_adapter`)."""
     fixed: dict[str, str] = field(default_factory=dict)
     """The paper's fixed agents and their policies; the other agents learn."""
+    arguments: dict[str, Any] = field(default_factory=dict)
+    """Every constructor argument of the engine (but ``num_envs``) at its default: the paper's
+    setting, as data (a test holds it equal to the engine's signature), so that a reader of result
+    files knows which arguments a run left at their defaults."""
 
 
 ENVIRONMENT_TABLE: dict[str, Environment] = {
     "coexistence_v0": Environment(
-        CoexistenceEngine, "empathy_zoo.coexistence_v0", "empathy_zoo/Coexistence-v0", {"cat_0": "random_walk"}
+        CoexistenceEngine,
+        "empathy_zoo.coexistence_v0",
+        "empathy_zoo/Coexistence-v0",
+        {"cat_0": "random_walk"},
+        {"size": 7, "view": 5, "max_cycles": 500, "num_cats": 1},
     ),
-    "sharing_v0": Environment(SharingEngine, "empathy_zoo.sharing_v0", "empathy_zoo/Sharing-v0", {"human_0": "patrol"}),
+    "sharing_v0": Environment(
+        SharingEngine,
+        "empathy_zoo.sharing_v0",
+        "empathy_zoo/Sharing-v0",
+        {"human_0": "patrol"},
+        {"size": 7, "view": 5, "max_cycles": 500, "start": "random", "inventory_encoding": "count_plus_one", "num_humans": 1},
+    ),
 }
 """Every environment, by name."""
 
@@ -49,6 +72,8 @@ ENGINES: dict[str, type[GridEngine]] = {name: env.engine for name, env in ENVIRO
 """Engine class of every environment, by name."""
 DEFAULT_POLICIES: dict[str, dict[str, str]] = {name: dict(env.fixed) for name, env in ENVIRONMENT_TABLE.items()}
 """The paper's fixed agents of every environment (a copy of the table's: changing it changes nothing)."""
+DEFAULT_ARGUMENTS: dict[str, dict[str, Any]] = {name: dict(env.arguments) for name, env in ENVIRONMENT_TABLE.items()}
+"""Every environment's arguments at their defaults (a copy of the table's: changing it changes nothing)."""
 
 
 def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> dict[str, str]:

@@ -1,15 +1,12 @@
-"""Torus geometry shared by every environment: actions, moves and observation windows."""
+"""Torus geometry shared by every environment: moves, displacements and observation windows (the
+actions themselves: :mod:`empathy_zoo.actions`)."""
 
 from __future__ import annotations
-
-from enum import IntEnum
 
 import numpy as np
 
 __all__ = [
-    "Action",
     "MOVES",
-    "NUM_ACTIONS",
     "window_indices",
     "spread_ids",
     "displacement_origin",
@@ -20,25 +17,8 @@ __all__ = [
 ]
 
 
-class Action(IntEnum):
-    """The five actions every agent has (``Discrete(5)``)."""
-
-    UP = 0
-    """row - 1"""
-    DOWN = 1
-    """row + 1"""
-    LEFT = 2
-    """col - 1"""
-    RIGHT = 3
-    """col + 1"""
-    STAY = 4
-    """no-op"""
-
-
-NUM_ACTIONS = len(Action)
-
 MOVES = np.array([(-1, 0), (1, 0), (0, -1), (0, 1), (0, 0)], dtype=np.int64)
-"""``MOVES[action]`` is the (row, col) displacement of an action."""
+"""``MOVES[action]`` is the (row, col) displacement of an action (:class:`empathy_zoo.actions.Action`)."""
 
 
 def window_indices(size: int, view: int) -> np.ndarray:

@@ -47,7 +47,7 @@ the reward.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium
 import numpy as np
@@ -64,7 +64,7 @@ __all__ = ["SingleAgentEnv", "make_single_agent_env", "GYM_IDS"]
 class SingleAgentEnv(gymnasium.Env, EzPickle):
     """One learner's view of an environment of the suite (see the module documentation)."""
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["ansi", "rgb_array"], "render_fps": 5}
+    metadata: dict[str, Any] = {"render_modes": ["ansi", "rgb_array"], "render_fps": 5}
 
     def __init__(
         self,

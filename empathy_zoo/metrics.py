@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["METRIC_NAMES", "METRIC_DEFINITIONS", "METRIC_RANGES", "equality"]
+__all__ = ["METRIC_NAMES", "METRIC_DEFINITIONS", "METRIC_RANGES", "INTEGER_METRICS", "equality"]
 
 METRIC_NAMES: tuple[str, ...] = (
     "survival",
@@ -44,6 +44,10 @@ METRIC_RANGES: dict[str, tuple[float, float | None]] = {
 }
 """The values every metric can take, ``(low, high)`` (``None``: no fixed bound); the leaderboard
 keeps its intervals inside them."""
+
+INTEGER_METRICS: frozenset[str] = frozenset({"survival", "harms", "batteries", "other_batteries"})
+"""The metrics that count things (whole numbers): a training episode records them as integers,
+the others as floats rounded to 6 decimals."""
 
 
 def equality(r_a: np.ndarray | float, r_b: np.ndarray | float) -> np.ndarray:

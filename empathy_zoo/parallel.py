@@ -12,10 +12,9 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.env import AECEnv
 
-from empathy_zoo.actions import check_action, check_joint_action
+from empathy_zoo.actions import NUM_ACTIONS, Action, check_action, check_joint_action
 from empathy_zoo.engine.base import GridEngine, check_env_arguments
 from empathy_zoo.engine.sight import swap_order
-from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.render import render_rgb, render_text
 

@@ -28,15 +28,16 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from empathy_zoo.actions import check_action
+from empathy_zoo.actions import NUM_ACTIONS, Action, check_action
 from empathy_zoo.builtin_policies import Patrol, RandomWalk, Stay
-from empathy_zoo.grid import NUM_ACTIONS, Action
-from empathy_zoo.registry import resolve_name
+from empathy_zoo.import_names import resolve_name
+from empathy_zoo.partner_policies import Chase, KeepAway, NearestBattery, SlowWalk
 
 if TYPE_CHECKING:
     from empathy_zoo.engine.base import GridEngine
 
 __all__ = [
+    "parse_entry_label",
     "FixedPolicy",
     "BatchedPolicy",
     "RandomWalk",
@@ -143,12 +144,22 @@ class _PolicyCopies:
             self.copies[i].reset(seed)
 
     def act(
-        self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray, contexts: Sequence[Mapping[str, Any] | None]
+        self,
+        observations: np.ndarray | None,
+        steps: np.ndarray,
+        active: np.ndarray,
+        contexts: Sequence[Mapping[str, Any] | None] | None = None,
     ) -> np.ndarray:
+        """Each active environment's copy acts on its observation and context (``needs_observation``
+        and ``needs_context`` are true: both are required, ``None`` only where the agent is absent)."""
+        if observations is None or contexts is None:
+            raise ValueError(f"the per-environment copies of {self.agent}'s policy act on observations and contexts, got None")
         actions = np.full(len(self.copies), int(Action.STAY), dtype=np.int64)
-        for i in np.flatnonzero(active):
-            policy = self.copies[i]
-            actions[i] = checked_policy_action(policy, self.agent, policy.act(observations[i], contexts[i]))
+        for i in np.flatnonzero(active).tolist():
+            policy, context = self.copies[i], contexts[i]
+            if context is None:
+                raise ValueError(f"no context for {self.agent} in environment {i}, where it is present")
+            actions[i] = checked_policy_action(policy, self.agent, policy.act(observations[i], context))
         return actions
 
     def state(self) -> dict[str, Any]:
@@ -164,7 +175,15 @@ class _PolicyCopies:
             load_policy_state(policy, saved)
 
 
-POLICIES: dict[str, type] = {"random_walk": RandomWalk, "patrol": Patrol, "stay": Stay}
+POLICIES: dict[str, type] = {
+    "random_walk": RandomWalk,
+    "patrol": Patrol,
+    "stay": Stay,
+    "slow_walk": SlowWalk,
+    "chase": Chase,
+    "keep_away": KeepAway,
+    "nearest_battery": NearestBattery,
+}
 """Fixed policies by name."""
 
 
@@ -342,3 +361,37 @@ def plain_data_problem(value: Any, arrays: bool, where: str = "the value") -> st
         return None
     allowed = "numbers, strings, booleans, None, lists and tables" + (", numeric numpy arrays" if arrays else "")
     return f"{where} is a {type(value).__module__}.{type(value).__qualname__} (plain data is {allowed})"
+
+
+def parse_entry_label(label: str) -> PolicyEntry:
+    """The policy entry whose :func:`~empathy_zoo.policies.entry_label` is ``label`` (what a result
+    file's ``config.fixed`` records): ``"patrol"`` → ``"patrol"``, ``"patrol(period=3)"`` →
+    ``{"policy": "patrol", "period": 3}``; ``ValueError`` for a label no entry gives."""
+    if not isinstance(label, str) or not label:
+        raise ValueError(f"a fixed policy's label is a non-empty string, got {label!r}")
+    if not label.endswith(")"):
+        if "(" in label or ")" in label:
+            raise ValueError(f"{label!r} is not a fixed policy's label (name or name(argument=value, ...))")
+        return policy_entry(label)
+    name, bracket, body = label[:-1].partition("(")
+    if not bracket or not name:
+        raise ValueError(f"{label!r} is not a fixed policy's label (name or name(argument=value, ...))")
+    decoder = json.JSONDecoder()
+    entry: dict[str, Any] = {"policy": name}
+    position = 0
+    while position < len(body):
+        key, equals, _ = body[position:].partition("=")
+        if not equals or not key.isidentifier():
+            raise ValueError(f"{label!r} is not a fixed policy's label: expected argument=value at {body[position:]!r}")
+        try:
+            value, end = decoder.raw_decode(body, position + len(key) + 1)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{label!r} is not a fixed policy's label: the value of {key!r} is not JSON ({error})") from None
+        entry[key] = value
+        if end < len(body) and not body.startswith(", ", end):
+            raise ValueError(f"{label!r} is not a fixed policy's label: expected ', ' after the value of {key!r}")
+        position = end + 2 if end < len(body) else end
+    parsed = policy_entry(entry)
+    if entry_label(parsed) != label:
+        raise ValueError(f"{label!r} is not a fixed policy's label (it reads back as {entry_label(parsed)!r})")
+    return parsed

@@ -37,6 +37,7 @@ STREAMS: dict[str, int] = {
     "sb3": 15,  # the seed handed to a Stable-Baselines3 algorithm
     "train_env": 20,  # a run's training environments
     "eval_env": 30,  # a run's greedy-evaluation start states (+ the episode)
+    "heldout_eval": 31,  # a trained agent's held-out evaluation start states, every scenario alike (+ the episode)
     "attainable_utility": 40,  # AUP's auxiliary rewards, networks and replay batches (+ which of them)
     "considerate_value": 41,  # Be Considerate's value network of the other agent and its replay batches (+ which)
 }

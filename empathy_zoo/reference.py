@@ -71,8 +71,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT, CoexistenceEngine, harm_outcome
-from empathy_zoo.grid import MOVES, NUM_ACTIONS
+from empathy_zoo.grid import MOVES
 
 __all__ = [
     "ReferenceOutcome",

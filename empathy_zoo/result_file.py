@@ -1,4 +1,4 @@
-"""The per-run result file: where it lives, its schema (:data:`SCHEMA`, 2; schema 1 is read too), and reading it back.
+"""The per-run result file: where it lives, its schema (:data:`SCHEMA`, 3; schemas 1 and 2 are read too), and reading it back.
 
 A sweep writes one JSON file per finished run, ``<out_dir>/runs/<run id>.json`` (the schema is
 documented field by field in ``docs/formats.md``); everything that reads results (the leaderboard,
@@ -10,6 +10,11 @@ raises one ``ValueError`` line naming the file and the field, e.g.
 ``runs/x.json: field eval[2].step: expected an int >= 1, got 'late'``. A result file is data, so
 checking it never imports a plug-in: the settings of a registered method are checked by its
 settings class, those of a ``package.module:NAME`` method only for their shape.
+
+Since schema 3, ``config.description`` says what the run was, as its method describes it
+(:mod:`empathy_zoo.method_description`): the leaderboard reads that, never a method's name. A file
+of schema 1 or 2 gets its description when it is read (:func:`upgrade_schema_2`): the one place
+that knows the methods built in at schema 2 (:data:`SCHEMA_2_METHODS`).
 """
 
 from __future__ import annotations
@@ -23,10 +28,12 @@ from typing import Any
 from empathy_zoo.atomic import read_json
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS
 from empathy_zoo.environments import ENGINES
+from empathy_zoo.method_description import DescriptionError, check_description, default_description
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
 __all__ = [
+    "AGENT_SUFFIXES",
     "SCHEMA",
     "REQUIRED_FIELDS",
     "RUNS_DIR",
@@ -38,14 +45,14 @@ __all__ = [
     "check_one_experiment_per_label",
 ]
 
-SCHEMA = 2
-"""The result-file schema this suite writes. Schema 1 files (empathy-zoo 0.1) are read too, upgraded
-in memory by :func:`upgrade_schema_1`."""
+SCHEMA = 3
+"""The result-file schema this suite writes. Files of schema 1 (empathy-zoo 0.1) and 2 (0.2, 0.3) are
+read too, upgraded in memory by :func:`upgrade_schema_1` and :func:`upgrade_schema_2`."""
 REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
-``version``, ``commit``, ``plugin_sha256`` and ``created`` are written too, and checked when present, as are the
+``version``, ``commit``, ``plugin_sha256``, ``agent`` and ``created`` are written too, and checked when present, as are the
 fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
-CONFIG_TABLES = ("settings", "env_kwargs", "fixed")
+CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
 """Tables of ``config`` every result file has."""
 _SHOWN = 60
 """Characters of a bad value quoted in a message."""
@@ -124,13 +131,15 @@ class _Checker:
 def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     """``document`` (a parsed result file) if it follows the schema, else :class:`ResultFileError`."""
     check = _Checker(Path(path))
-    result = check.table(document, "(the whole file)")
+    result = dict(check.table(document, "(the whole file)"))
     check.has(result, REQUIRED_FIELDS, "")
     if result["schema"] == 1 and not isinstance(result["schema"], bool):
         result = upgrade_schema_1(result, path)
+    if result["schema"] == 2 and not isinstance(result["schema"], bool):
+        result = upgrade_schema_2(result)
     if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
         raise ResultFileError(
-            f"{path}: field schema: this suite reads result schemas 1 and {SCHEMA}, "
+            f"{path}: field schema: this suite reads result schemas 1, 2 and {SCHEMA}, "
             f"got {_shown(result['schema'])}; move the file away"
         )
     check.name(result["run_id"], "run_id")
@@ -150,6 +159,7 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
             raise check.fail(f"plugin_sha256.{module}", "a SHA-256 (64 lowercase hex digits) or null", digest)
     for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
         check.integer(count, f"memory_bytes.{name}", 0)
+    _check_agent(check, result)
     train = check.table(result["train"], "train")
     check.has(train, ("episode_end_step", *METRIC_NAMES), "train.")
     for name, column in train.items():
@@ -169,17 +179,38 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     return result
 
 
+AGENT_SUFFIXES = (".agent.pt", ".agent.zip")
+"""How the name of a run's agent file ends (:mod:`empathy_zoo.agent_file`)."""
+
+
+def _check_agent(check: _Checker, result: Mapping[str, Any]) -> None:
+    """``agent``: the agent file the run kept beside its result file, ``{"file": "<run id>.agent.pt",
+    "sha256": ...}``, or null when its method keeps none (absent in files made before runs kept
+    their agents)."""
+    agent = result.get("agent")
+    if agent is None:
+        return
+    entry = check.table(agent, "agent")
+    check.has(entry, ("file", "sha256"), "agent.")
+    name = check.name(check.text(entry["file"], "agent.file"), "agent.file")
+    if name not in {result["run_id"] + suffix for suffix in AGENT_SUFFIXES}:
+        raise check.fail("agent.file", f"the run's agent file, {result['run_id']} + one of {AGENT_SUFFIXES}", name)
+    if not (isinstance(entry["sha256"], str) and _SHA256.fullmatch(entry["sha256"])):
+        raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", entry["sha256"])
+
+
 LEGACY_SHAPING = {"harm_penalty": 0.0, "equality_shaping": False}
 """Settings of schema 1 that are reward transforms since schema 2, with their "no shaping" values."""
 
 
 def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]:
-    """A schema-1 result as schema 2: the settings ``harm_penalty`` and ``equality_shaping`` become
-    ``config.reward`` (``{"name": "harm_penalty", "penalty": p}``, ``{"name": "equality_scaling"}``
-    or ``None``), as the method's reward transform records it now. The run id stays as written."""
+    """A schema-1 result as schema 2 (:func:`upgrade_schema_2` takes it on to 3): the settings
+    ``harm_penalty`` and ``equality_shaping`` become ``config.reward`` (``{"name": "harm_penalty",
+    "penalty": p}``, ``{"name": "equality_scaling"}`` or ``None``), as the method's reward transform
+    records it now. The run id stays as written."""
     config = result.get("config")
     if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
-        return {**result, "schema": SCHEMA}  # (the checks that follow say what is wrong)
+        return {**result, "schema": 2}  # (the checks that follow say what is wrong)
     settings = dict(config["settings"])
     shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
     penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
@@ -195,7 +226,86 @@ def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]
         if scaled is True
         else None
     )
-    return {**result, "schema": SCHEMA, "config": {**config, "settings": settings, "reward": reward}}
+    return {**result, "schema": 2, "config": {**config, "settings": settings, "reward": reward}}
+
+
+SCHEMA_2_METHODS: dict[str, tuple[str, str | None, bool, bool]] = {
+    **{
+        name: ("empathic_dqn", rule, in_view_only, name == "empathic_dqn")
+        for name, rule, in_view_only in (
+            ("empathic_dqn", "golden", False),
+            ("empathic_dqn_in_view", "golden", True),
+            ("empathic_dqn_silver", "silver", False),
+        )
+    },
+    "dqn": ("dqn", "golden", False, True),
+    **{
+        f"dqn_{name}": ("dqn", "golden", False, False)
+        for name in (
+            "harm_penalty",
+            "equality",
+            "inequity_aversion",
+            "social_value",
+            "aup",
+            "relative_reachability",
+            "considerate",
+            "lagrangian",
+        )
+    },
+    "sb3_dqn": ("sb3", None, False, False),
+    "sb3_ppo": ("sb3", None, False, False),
+}
+"""The methods built in at schema 2, as their descriptions have them: ``{name: (family, target,
+in_view_only, dqn_reference at β = 1 on the environment's reward)}``. Those of family
+``empathic_dqn`` and ``dqn`` take β, γ and the ε schedule from the file's settings."""
+SCHEMA_2_SETTINGS = {
+    "selfishness": 1.0,
+    "gamma": 0.99,
+    "learning_starts": 20_000,
+    "epsilon_start": 1.0,
+    "epsilon_end": 0.01,
+    "epsilon_decay_steps": 980_000,
+}
+"""The Empathic DQN settings a schema-2 description reads, at their defaults of that schema (where
+a file's ``config.settings`` leaves one out, the run had the default)."""
+
+
+def schema_2_description(method: str, config: Mapping[str, Any]) -> dict[str, Any]:
+    """The description of a schema-2 run of ``method`` with ``config``: what its method's
+    :meth:`~agents.base.Method.describe` gives a run of that config now, from the file's own values
+    for a method of :data:`SCHEMA_2_METHODS`; for any other (a ``package.module:NAME`` plug-in
+    of then), the description of a method that declares nothing, with the file's reward."""
+    settings: Mapping[str, Any] = config["settings"] if isinstance(config.get("settings"), dict) else {}
+    reward = config.get("reward")
+    if method not in SCHEMA_2_METHODS:
+        return {**default_description(method), "reward": reward}
+    family, target, in_view_only, reference = SCHEMA_2_METHODS[method]
+    description = {**default_description(family), "target": target, "in_view_only": in_view_only, "reward": reward}
+    if family == "sb3":
+        return description
+    value = {**SCHEMA_2_SETTINGS, **{k: v for k, v in settings.items() if k in SCHEMA_2_SETTINGS}}
+    return {
+        **description,
+        "dqn_reference": reference and reward is None and value["selfishness"] == 1.0,
+        "selfishness": value["selfishness"],
+        "gamma": value["gamma"],
+        "exploration": {
+            "kind": "linear",
+            "start": value["epsilon_start"],
+            "end": value["epsilon_end"],
+            "warmup": value["learning_starts"],
+            "decay_steps": value["epsilon_decay_steps"],
+        },
+    }
+
+
+def upgrade_schema_2(result: dict[str, Any]) -> dict[str, Any]:
+    """A schema-2 result as schema 3: ``config.description`` (:func:`schema_2_description`) added.
+    The run id stays as written (the description is no part of a run's identity)."""
+    config = result.get("config")
+    if not isinstance(config, dict) or not isinstance(result.get("method"), str):
+        return {**result, "schema": SCHEMA}  # (the checks that follow say what is wrong)
+    return {**result, "schema": SCHEMA, "config": {**config, "description": schema_2_description(result["method"], config)}}
 
 
 def _check_optional(check: _Checker, table: Mapping[str, Any], prefix: str, checks: Mapping[str, Any]) -> None:
@@ -212,6 +322,7 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
     env_kwargs = check.table(config["env_kwargs"], "config.env_kwargs")
     engine = ENGINES.get(result["env"])
     for name, value in env_kwargs.items() if engine is not None else ():
+        assert engine is not None
         field = f"config.env_kwargs.{name}"
         if name in GRID_ARGUMENTS or name == engine.count_argument:
             check.positive(value, field)
@@ -249,6 +360,12 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
             method.settings(**settings)
         except (TypeError, ValueError) as error:
             raise check.fail("config.settings", f"settings of {result['method']} ({error})", settings) from None
+    try:
+        check_description(config["description"])
+    except DescriptionError as error:
+        raise check.fail(
+            "config.description" + ("" if error.field.startswith("(") else f".{error.field}"), error.expected, error.value
+        ) from None
 
 
 RUNS_DIR = "runs"

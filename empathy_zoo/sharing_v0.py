@@ -48,7 +48,7 @@ cell, a battery listed twice, an empty battery list or a battery under an agent 
 `env.unwrapped.swapped_observation(viewer, other, in_view_only=False)` exchanges cells *and*
 battery counts (here: `other`'s own observation); with several humans, that pair only. Wrap with
 `empathy_zoo.EmpathyWrapper` to get it in `infos`. The closest other agent (the one
-`empathy_zoo.vector.VectorEnv` swaps with in `VectorStep.swapped`) is chosen when the step
+`empathy_zoo.vector.VectorEnv` points at in `VectorStep.closest`) is chosen when the step
 begins, among the others present then, at the least torus (Manhattan) distance, ties to the lower
 agent index (SPEC §3b): one harmed in the step is the one swapped with.
 

@@ -21,13 +21,14 @@ says up front which policy could not be saved.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from empathy_zoo.actions import check_action_array
+from empathy_zoo.closest_other import ClosestOther
 from empathy_zoo.engine import GridEngine
 from empathy_zoo.engine.base import StepEvents, check_env_arguments
 from empathy_zoo.environments import ENGINES
@@ -47,7 +48,7 @@ from empathy_zoo.policies import (
 )
 from empathy_zoo.randomness import check_seed
 
-__all__ = ["STATE_LAYOUT", "VectorEnv", "VectorStep"]
+__all__ = ["STATE_LAYOUT", "EngineWatcher", "VectorEnv", "VectorStep"]
 
 STATE_LAYOUT = 2
 """Layout of :meth:`VectorEnv.state` (1, unmarked: policies' numeric attributes by agent index;
@@ -55,42 +56,45 @@ STATE_LAYOUT = 2
 
 
 @dataclass
-class VectorStep:
-    """One step of every environment, as arrays."""
+class VectorStep(ClosestOther):
+    """One step of every environment, as arrays.
+
+    Each learner's other agents lie on one axis ``O``, in agent order (``VectorEnv.others[l]``;
+    with one other agent, an axis of one): the ``others_*`` fields hold one entry per other agent.
+    :attr:`closest` is a place on that axis, and each ``other_*`` property is its ``others_*``
+    field there (:meth:`of_closest`): what is said of the closest other agent is said of that one
+    entry, never stored twice."""
 
     observations: np.ndarray
     """(N, L, V) float32: observations to act on next (after any autoreset)."""
     final_observations: np.ndarray
     """(N, L, V) float32: observations at the end of this step, before any autoreset."""
-    swapped: np.ndarray
-    """(N, L, V) float32: each learner's swapped observation at the end of this step (before
-    autoreset) with its closest other agent *when the step began* (SPEC §3b: among the others
-    present then, so one harmed in this step is the one swapped with, and has no picture); zeros
-    where :attr:`swapped_valid` is False."""
-    swapped_valid: np.ndarray
-    """(N, L) bool: that other agent is still present (and in view, with ``in_view_only``)."""
-    swapped_unseen: np.ndarray
-    """(N, L) bool: that other agent is present and not terminal but out of the learner's window
-    (``in_view_only`` only; always False otherwise): *unseen*, not harmed (SPEC §4), so an
-    in-view empathic target uses no other-term at all."""
-    swapped_other_terminated: np.ndarray
-    """(N, L) bool: that other agent's episode ended for good this step (a harmed cat; the human
-    when the last battery is taken). A time-limit truncation is not termination."""
-    swapped_all: np.ndarray
-    """(N, L, O, V) float32: each learner's swapped observation with each of its ``O = A − 1``
-    other agents, in agent order (``VectorEnv.others[l]``), at the end of this step (before
-    autoreset); zeros where the other agent is absent (or out of view, with ``in_view_only``).
-    With one other agent, :attr:`swapped` with an axis of one."""
-    others_present: np.ndarray
-    """(N, L, O) bool: that other agent is present and not terminal at the end of this step (and
-    in view, with ``in_view_only``): the others an empathic target may bootstrap from, as
-    ``swapped_valid & ~swapped_other_terminated`` is for the closest one."""
+    closest: np.ndarray
+    """(N, L) int64: each learner's closest other agent *when the step began*, as its place on the
+    ``O`` axis (SPEC §3b: among the others present then, at the least torus distance, ties to the
+    lower index; the first other agent when none was present), so one harmed in this step is the
+    one swapped with, and has no picture."""
+    others_swapped: np.ndarray
+    """(N, L, O, V) float32: each learner's swapped observation with each of its other agents at
+    the end of this step (before autoreset); zeros where :attr:`others_seen` is False."""
+    others_seen: np.ndarray
+    """(N, L, O) bool: that other agent is present at the end of this step (and in view, with
+    ``in_view_only``): :attr:`others_swapped` holds its picture."""
+    others_terminated: np.ndarray
+    """(N, L, O) bool: that other agent's episode ended for good this step (a harmed cat; the
+    human when the last battery is taken). A time-limit truncation is not termination."""
     others_live: np.ndarray
     """(N, L, O) bool: that other agent was in the environment when this step began (an agent
     harmed earlier has left; one harmed in this step was live)."""
     others_unseen: np.ndarray
-    """(N, L, O) bool: that other agent is present and not terminal but out of view
-    (``in_view_only`` only), as :attr:`swapped_unseen` is for the closest one."""
+    """(N, L, O) bool: that other agent is present and not terminal but out of the learner's
+    window (``in_view_only`` only; always False otherwise): *unseen*, not harmed (SPEC §4), so an
+    in-view empathic target uses no other-term for it."""
+    others_rewards: np.ndarray
+    """(N, L, O) float32: the environment's reward of each other agent this step."""
+    others_battery_return: np.ndarray
+    """(N, L, O) float64: each other agent's battery reward so far in the episode, this step
+    included (taken before any autoreset)."""
     rewards: np.ndarray
     """(N, A) float32: the environment's rewards of all agents."""
     terminated: np.ndarray
@@ -112,18 +116,48 @@ class VectorStep:
     """(N, L) bool: the learners' episodes ended for good this step."""
     learner_truncated: np.ndarray
     """(N, L) bool: the learners' episodes were cut short this step (time limit, or the episode ended)."""
-    learner_harmed: np.ndarray
+    harms: np.ndarray
     """(N, L) int64: how many agents each learner harmed this step."""
     learner_battery_return: np.ndarray
     """(N, L) float64: each learner's battery reward so far in the episode, this step included."""
-    other_battery_return: np.ndarray
-    """(N, L) float64: the same of each learner's closest other agent (the one it swaps with)."""
-    other_rewards: np.ndarray
-    """(N, L) float32: the environment's reward of each learner's closest other agent this step."""
     finished: dict[str, np.ndarray]
     """The episodes that ended this step: ``"env"`` (``(F,)`` environment indices), each SPEC §5
     metric of the first learner (``survival``, ``harms``, …, as :data:`empathy_zoo.metrics.METRIC_NAMES`)
     and ``"length"`` (steps), each an ``(F,)`` array."""
+
+    @property
+    def others_present(self) -> np.ndarray:
+        """(N, L, O) bool: that other agent is present and not terminal at the end of this step
+        (and in view, with ``in_view_only``): the others an empathic target may bootstrap from
+        (``others_seen & ~others_terminated``)."""
+        return self.others_seen & ~self.others_terminated
+
+    @property
+    def other_seen(self) -> np.ndarray:
+        """(N, L) bool: :attr:`others_seen` of the closest other agent."""
+        return self.of_closest(self.others_seen)
+
+    @property
+    def other_terminated(self) -> np.ndarray:
+        """(N, L) bool: :attr:`others_terminated` of the closest other agent."""
+        return self.of_closest(self.others_terminated)
+
+    @property
+    def other_rewards(self) -> np.ndarray:
+        """(N, L) float32: :attr:`others_rewards` of the closest other agent."""
+        return self.of_closest(self.others_rewards)
+
+
+class EngineWatcher(Protocol):
+    """What watches the engine steps of a :class:`VectorEnv` (:meth:`VectorEnv.watch_engine`)."""
+
+    def before_engine_step(self, engine: GridEngine, actions: np.ndarray) -> None:
+        """Called just before ``engine`` steps with the ``(N, A)`` joint actions (the learners'
+        and the fixed agents'; read them, do not change them)."""
+
+    def after_engine_step(self, engine: GridEngine, actions: np.ndarray, events: StepEvents) -> None:
+        """Called just after that step, before any autoreset: ``engine`` holds the states the step
+        ended in, ``events`` what happened in it."""
 
 
 class VectorEnv:
@@ -158,16 +192,16 @@ class VectorEnv:
             raise ValueError("every agent is fixed; leave at least one agent to learn")
         self.learner_index = [self.agents.index(agent) for agent in self.learners]
         self.others: list[list[str]] = [[self.agents[o] for o in self.engine.other_agents[index]] for index in self.learner_index]
-        """``[l]``: the other agents of learner ``l``, in agent order (the ``O`` axis of
-        :attr:`VectorStep.swapped_all`)."""
+        """``[l]``: the other agents of learner ``l``, in agent order (the ``O`` axis of the
+        :class:`VectorStep` fields ``others_*``)."""
         self._other_columns = np.concatenate([self.engine.other_agents[index] for index in self.learner_index])
         """The ``(L·O,)`` agent indices of every learner's other agents, learner by learner."""
-        self._only_other = (
-            {index: np.full(self.num_envs, self.engine.other_agents[index][0]) for index in self.learner_index}
+        self._only_other: dict[int, int] = (
+            {index: int(self.engine.other_agents[index][0]) for index in self.learner_index}
             if self.engine.num_agents == 2
             else {}
         )
-        """Learner index -> its one other agent in every environment (when there are two agents)."""
+        """Learner index -> its one other agent (when there are two agents; else empty)."""
         self.fixed: dict[int, BatchedPolicy] = {
             self.agents.index(agent): batched(make_policy(policy), self.num_envs, agent) for agent, policy in fixed.items()
         }
@@ -179,6 +213,8 @@ class VectorEnv:
         """The last step's events (the fixed agents' contexts tell them), or ``None`` before a step."""
         self._fresh = np.ones(self.num_envs, dtype=bool)
         """(N,) bool: the environment was reset after :attr:`_events` (its context is the reset's)."""
+        self._watchers: list[EngineWatcher] = []
+        """What :meth:`watch_engine` was given, in order."""
 
     # ------------------------------------------------------------------ episode
     def reset(self, seed: int | Sequence[int] | None = None) -> np.ndarray:
@@ -186,7 +222,8 @@ class VectorEnv:
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [int(check_seed(seed)) + i for i in range(self.num_envs)]
+            check_seed(seed)
+            seeds = [int(seed) + i for i in range(self.num_envs)]
         else:
             if isinstance(seed, (str, bytes, bool)) or not hasattr(seed, "__len__"):
                 raise ValueError(f"seed must be a non-negative int or a list of them, got {seed!r}")
@@ -218,27 +255,25 @@ class VectorEnv:
         for index, policy in self.fixed.items():
             observations = engine.observe(index) if policy.needs_observation else None
             if getattr(policy, "needs_context", False):
-                full[:, index] = policy.act(observations, engine.t, engine.present[:, index], self._contexts(index, policy))
+                act_in_context: Callable[..., np.ndarray] = policy.act  # (with a fourth argument, the contexts)
+                full[:, index] = act_in_context(observations, engine.t, engine.present[:, index], self._contexts(index, policy))
             else:
                 full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
         # the closest other agent of each learner, chosen among the others present when the step
         # begins (SPEC §3b): a cat harmed in the step stays the one swapped with
-        closest = self._closest_others()
+        closest = self._closest_places()
+        for watcher in self._watchers:
+            watcher.before_engine_step(engine, full)
         events = engine.step(full)
+        for watcher in self._watchers:
+            watcher.after_engine_step(engine, full, events)
         self._events, self._fresh = events, events.episode_over.copy()
         battery_return = engine.episode_battery_return.copy()
         final = self._observe_learners()
-        swapped_all, seen, unseen, swapped, valid, other_unseen = self._swaps(closest)
-        other = closest
-        other_terminated = np.take_along_axis(events.terminated, other, axis=1)
-        other_unseen &= ~other_terminated
-        if self._only_other:  # (each learner's one other agent is its closest)
-            others_present = (valid & ~other_terminated)[:, :, None]
-            others_unseen = other_unseen[:, :, None]
-        else:
-            others_terminated = events.terminated[:, self._other_columns].reshape(seen.shape)
-            others_present = seen & ~others_terminated
-            others_unseen = unseen & ~others_terminated
+        swapped, seen, unseen = self._swaps()
+        columns, shape = self._other_columns, seen.shape
+        others_terminated = events.terminated[:, columns].reshape(shape)
+        unseen &= ~others_terminated
         over = events.episode_over
         done_ids = np.flatnonzero(over)
         finished: dict[str, np.ndarray] = {"env": done_ids}
@@ -257,14 +292,14 @@ class VectorEnv:
         return VectorStep(
             observations=observations,
             final_observations=final,
-            swapped=swapped,
-            swapped_valid=valid,
-            swapped_unseen=other_unseen,
-            swapped_other_terminated=other_terminated,
-            swapped_all=swapped_all,
-            others_present=others_present,
-            others_live=events.present_before[:, self._other_columns].reshape(seen.shape),
-            others_unseen=others_unseen,
+            closest=closest,
+            others_swapped=swapped,
+            others_seen=seen,
+            others_terminated=others_terminated,
+            others_live=events.present_before[:, columns].reshape(shape),
+            others_unseen=unseen,
+            others_rewards=events.rewards[:, columns].reshape(shape),
+            others_battery_return=battery_return[:, columns].reshape(shape),
             rewards=events.rewards,
             terminated=events.terminated,
             truncated=events.truncated,
@@ -275,12 +310,22 @@ class VectorEnv:
             learner_rewards=events.rewards[:, learners],
             learner_terminated=events.terminated[:, learners],
             learner_truncated=events.truncated[:, learners],
-            learner_harmed=(events.harmed_by[:, None, :] == np.asarray(learners)[None, :, None]).sum(axis=2),
+            harms=(events.harmed_by[:, None, :] == np.asarray(learners)[None, :, None]).sum(axis=2),
             learner_battery_return=battery_return[:, learners],
-            other_battery_return=np.take_along_axis(battery_return, other, axis=1),
-            other_rewards=np.take_along_axis(events.rewards, other, axis=1),
             finished=finished,
         )
+
+    def watch_engine(self, watcher: EngineWatcher) -> None:
+        """Have ``watcher`` see every engine step of :meth:`step` from now on: its
+        ``before_engine_step(engine, actions)`` is called just before the engine steps with the
+        ``(N, A)`` joint actions, and ``after_engine_step(engine, actions, events)`` just after,
+        before any autoreset (see :class:`EngineWatcher`; the stepwise inaction baseline,
+        :class:`baselines.inaction_baseline.InactionBaseline`, is one). Watchers are called in the
+        order they were given; a watcher must not change the engine's state."""
+        for method in ("before_engine_step", "after_engine_step"):
+            if not callable(getattr(watcher, method, None)):
+                raise TypeError(f"an engine watcher needs a method {method}(...); {type(watcher).__name__} has none")
+        self._watchers.append(watcher)
 
     def _contexts(self, index: int, policy: BatchedPolicy) -> list[dict[str, Any] | None]:
         """Each environment's context of fixed agent ``index`` (``None`` where it is absent), as
@@ -301,24 +346,24 @@ class VectorEnv:
         """``(n, L, V)`` observations of the learners (in ``env_ids``, default all)."""
         return _by_learner([self.engine.observe(viewer, env_ids) for viewer in self.learner_index])
 
-    def _closest_others(self) -> np.ndarray:
-        """``(N, L)``: each learner's closest other agent now (among the others present; its one
-        other agent when there are two agents)."""
-        if self._only_other:
-            return np.stack([self._only_other[viewer] for viewer in self.learner_index], axis=1)
-        return np.stack([self.engine.closest_other(viewer)[0] for viewer in self.learner_index], axis=1)
+    def _closest_places(self) -> np.ndarray:
+        """``(N, L)`` int64: each learner's closest other agent now (among the others present; the
+        first when none is), as its place among the learner's other agents (:attr:`others`)."""
+        if self._only_other:  # (each learner's one other agent)
+            return np.zeros((self.num_envs, len(self.learner_index)), dtype=np.int64)
+        closest = np.stack([self.engine.closest_other(viewer)[0] for viewer in self.learner_index], axis=1)
+        return closest - (closest > np.asarray(self.learner_index)[None, :])  # (the learner is not among its others)
 
-    def _swaps(self, closest: np.ndarray) -> tuple[np.ndarray, ...]:
+    def _swaps(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Each learner's swapped observations with every other agent, ``(N, L, O, V)`` (zeros
         where not seen), where they are seen (present, and in view with ``in_view_only``) and
-        where they are present but out of view, each ``(N, L, O)``; then the same of its other
-        agent ``closest`` (``(N, L)`` agent indices): ``(N, L, V)``, ``(N, L)`` and ``(N, L)``."""
-        if self._only_other:  # (one other agent: no stacking, no gather)
+        where they are present but out of view, each ``(N, L, O)``."""
+        if self._only_other:  # (one other agent: no stacking)
             swapped, valid, hidden = (
                 _by_learner(list(x))
-                for x in zip(*(self._swap(viewer, self._only_other[viewer][0]) for viewer in self.learner_index))
+                for x in zip(*(self._swap(viewer, self._only_other[viewer]) for viewer in self.learner_index))
             )
-            return swapped[:, :, None], valid[:, :, None], hidden[:, :, None], swapped, valid, hidden
+            return swapped[:, :, None], valid[:, :, None], hidden[:, :, None]
         pictures, seen, unseen = [], [], []
         for viewer in self.learner_index:
             each, each_seen, each_unseen = zip(
@@ -327,11 +372,7 @@ class VectorEnv:
             pictures.append(np.stack(each, axis=1))
             seen.append(np.stack(each_seen, axis=1))
             unseen.append(np.stack(each_unseen, axis=1))
-        pictures, seen, unseen = _by_learner(pictures), np.stack(seen, axis=1), np.stack(unseen, axis=1)
-        learners = np.asarray(self.learner_index)
-        column = closest - (closest > learners[None, :])  # the closest one's place among the others
-        rows, ls = np.arange(self.num_envs)[:, None], np.arange(len(learners))[None, :]
-        return (pictures, seen, unseen, pictures[rows, ls, column], seen[rows, ls, column], unseen[rows, ls, column])
+        return _by_learner(pictures), np.stack(seen, axis=1), np.stack(unseen, axis=1)
 
     def _swap(self, viewer: int, other: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``viewer``'s swapped observation with ``other`` in every environment, ``(N, V)``, zeros

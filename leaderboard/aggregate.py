@@ -21,7 +21,6 @@ Nothing here formats text or draws; see :mod:`leaderboard.tables` and :mod:`lead
 from __future__ import annotations
 
 import functools
-import inspect
 import math
 import os
 import warnings
@@ -33,11 +32,11 @@ from typing import Any, TypeAlias
 import numpy as np
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.engine import GridEngine
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
 from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 from leaderboard.ordering import label_order
+from leaderboard.run_facts import env_argument
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -52,6 +51,8 @@ __all__ = [
     "table_env",
     "result_files",
     "load_results",
+    "load_result_files",
+    "check_runs",
     "group_runs",
     "final_episode_count",
     "run_scalars",
@@ -155,24 +156,36 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     ``ValueError`` naming it and the field
     (:func:`empathy_zoo.result_file.check_result`); so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
-    with one ``(env, method_label)``, which would be mixed in one row.
+    with one ``(env, method_label)``, which would be mixed in one row. Several directories are
+    read into one leaderboard by :func:`leaderboard.sources.load_results_dirs`.
     """
-    results: list[dict[str, Any]] = []
-    seen: dict[tuple[str, str, Any], Path] = {}
+    return [result for _, result in load_result_files(results_dir)]
+
+
+def load_result_files(results_dir: str | os.PathLike[str]) -> list[tuple[Path, dict[str, Any]]]:
+    """``(path, result)`` of every result file of ``results_dir``, read and checked as
+    :func:`load_results` reads them."""
     paths = result_files(results_dir)
     if not paths:
         raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
-    for path in paths:
-        results.append(check_result(read_json(path), path))
+    read = [(path, check_result(read_json(path), path)) for path in paths]
+    check_runs(read)
+    return read
+
+
+def check_runs(runs: Sequence[tuple[str | os.PathLike[str], dict[str, Any]]]) -> None:
+    """``ValueError`` when two of ``runs`` (``(where it is, result)``) are one row's runs from two
+    experiments (:func:`empathy_zoo.result_file.check_one_experiment_per_label`) or are the same
+    run, ``(env, method_label, seed)``, which would be counted twice."""
     check_one_experiment_per_label(
-        (table_env(result), result["method_label"], result["run_id"], str(path)) for result, path in zip(results, paths)
+        (table_env(result), result["method_label"], result["run_id"], str(where)) for where, result in runs
     )
-    for path, result in zip(paths, results):
+    seen: dict[tuple[str, str, Any], str] = {}
+    for where, result in runs:
         key = (table_env(result), result["method_label"], result["seed"])
         if key in seen:
-            raise ValueError(f"{seen[key]} and {path} are the same run {key}; move one away")
-        seen[key] = path
-    return results
+            raise ValueError(f"{seen[key]} and {where} are the same run {key}; move one away")
+        seen[key] = str(where)
 
 
 def group_runs(results: Iterable[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, Any]]]:
@@ -332,10 +345,9 @@ def t_level(confidence: float = CONFIDENCE) -> float:
 
 
 def longest_episode(runs: Iterable[dict[str, Any]]) -> int:
-    """The most steps an episode of ``runs`` can last (their ``max_cycles``; the engine's default
+    """The most steps an episode of ``runs`` can last (their ``max_cycles``; the environment's default
     where a run's config does not set it): the bound of ``survival``."""
-    default = inspect.signature(GridEngine.__init__).parameters["max_cycles"].default
-    return max(int((run.get("config") or {}).get("env_kwargs", {}).get("max_cycles", default)) for run in runs)
+    return max(int(env_argument(run, "max_cycles")) for run in runs)
 
 
 def mean_ci(

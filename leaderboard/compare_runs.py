@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from leaderboard.aggregate import load_results
+from leaderboard.run_facts import description_of
 
 __all__ = ["run_key", "compare_runs"]
 
@@ -27,7 +28,7 @@ def run_key(run: dict[str, Any]) -> tuple:
     return (
         config.get("variant") or run["env"],
         run["method"],
-        settings.get("selfishness"),
+        description_of(run)["selfishness"],
         settings.get("others", "closest"),
         reward,
         run["seed"],

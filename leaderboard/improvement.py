@@ -22,8 +22,14 @@ for comparison) gave a ▲ or ▼ in 19 % of 3-against-3 cells where nothing dif
 The interquartile mean (:func:`interquartile_mean`), the same paper's robust centre, is shown
 beside it (with four or more seeds it trims a quarter on each side; with fewer it is the mean).
 
-DQN is the run group of method ``dqn``, or of ``empathic_dqn`` at β = 1 without a reward
-transform (what the paper calls standard DQN), in the same environment (variant).
+DQN is the run group whose runs are all plain DQN on the environment's reward, as their result
+files' descriptions say (``dqn_reference``: method ``dqn``, or ``empathic_dqn`` at β = 1, or a
+plug-in method that declares it; what the paper calls standard DQN), in the same environment
+(variant) and of the same training budget (:class:`leaderboard.budgets.RunBudget`): a row is never
+compared with DQN runs of another budget, and one with no DQN row of its variant and budget has no
+cell. Where several DQN rows share a variant and a budget (two directories' DQN, say), a row is
+compared with each of them, one cell per DQN row, none pooled; every cell names its DQN row
+(:attr:`Improvement.baseline_label`).
 """
 
 from __future__ import annotations
@@ -37,6 +43,8 @@ from typing import Any
 import numpy as np
 
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES, group_runs, run_scalars
+from leaderboard.budgets import RunBudget, budgets_of
+from leaderboard.run_facts import is_dqn_reference
 
 __all__ = [
     "HIGHER_IS_BETTER",
@@ -49,6 +57,8 @@ __all__ = [
     "bootstrap_improvement",
     "interquartile_mean",
     "is_dqn",
+    "dqn_rows",
+    "uncompared_rows",
     "improvements_over_dqn",
     "improvement_verdict",
     "VERDICT_MARKS",
@@ -85,6 +95,8 @@ class Improvement:
     n_baseline_seeds: int
     p_value: float = math.nan
     """Two-sided p of the exact permutation test (:func:`permutation_test`); NaN when undefined."""
+    baseline_label: str = ""
+    """The label of the DQN row compared with (of the same variant and budget)."""
 
     @property
     def verdict(self) -> str:
@@ -298,15 +310,29 @@ def interquartile_mean(values: Sequence[float]) -> float:
 
 
 def is_dqn(run: Mapping[str, Any]) -> bool:
-    """Whether ``run`` is standard DQN: method ``dqn``, or Empathic DQN at β = 1 with no reward transform."""
-    config = run.get("config") or {}
-    if run["method"] == "dqn":
-        return True
-    return (
-        run["method"] == "empathic_dqn"
-        and (config.get("settings") or {}).get("selfishness") == 1.0
-        and config.get("reward") is None
-    )
+    """Whether ``run`` is standard DQN, as its description says (:func:`leaderboard.run_facts.is_dqn_reference`)."""
+    return is_dqn_reference(run)
+
+
+def dqn_rows(results: Sequence[dict[str, Any]]) -> dict[tuple[str, tuple[RunBudget, ...]], list[str]]:
+    """The labels of the DQN rows (:func:`is_dqn`) per ``(variant, budgets of the row's runs)``, in
+    row order (:func:`leaderboard.aggregate.group_runs`)."""
+    rows: dict[tuple[str, tuple[RunBudget, ...]], list[str]] = {}
+    for (env, label), runs in group_runs(results).items():
+        if all(is_dqn(run) for run in runs):
+            rows.setdefault((env, budgets_of(runs)), []).append(label)
+    return rows
+
+
+def uncompared_rows(results: Sequence[dict[str, Any]]) -> list[tuple[str, str]]:
+    """The ``(variant, label)`` rows other than DQN's that no DQN row of their variant and budget
+    is compared with (:func:`improvements_over_dqn` gives them no cell), in row order."""
+    baselines = dqn_rows(results)
+    return [
+        row
+        for row, runs in group_runs(results).items()
+        if not all(is_dqn(run) for run in runs) and not baselines.get((row[0], budgets_of(runs)))
+    ]
 
 
 def improvements_over_dqn(
@@ -319,37 +345,39 @@ def improvements_over_dqn(
 ) -> list[Improvement]:
     """Every method's probability of improving on DQN in its environment, per phase and metric
     (``metrics_of[env]``: the metrics of that env's tables), with the interval that inverts the
-    exact permutation test (:func:`improvement_interval`) and the test's p. An env without DQN runs
-    has none. The intervals draw nothing: ``random_state`` and ``n_resamples`` are accepted for
-    older callers and unused."""
+    exact permutation test (:func:`improvement_interval`) and the test's p; a row is compared with
+    every other DQN row of its variant and budget (:func:`dqn_rows`), one cell each, in row order.
+    A row without such a DQN row has none. The intervals draw nothing: ``random_state`` and
+    ``n_resamples`` are accepted for older callers and unused."""
     groups = group_runs(results)
-    dqn_runs = {env: runs for (env, _), runs in groups.items() if all(is_dqn(run) for run in runs)}
+    baselines = dqn_rows(results)
+    scalars = {key: [run_scalars(run) for run in runs] for key, runs in groups.items()}
     cells: list[Improvement] = []
     for (env, label), runs in groups.items():
-        baseline = dqn_runs.get(env)
-        if baseline is None or baseline is runs:
-            continue
-        mine = [run_scalars(run) for run in runs]
-        theirs = [run_scalars(run) for run in baseline]
-        for phase in PHASES:
-            for metric in metrics_of.get(env, ()):
-                x = [scalars[phase][metric] for scalars in mine]
-                y = [scalars[phase][metric] for scalars in theirs]
-                better = HIGHER_IS_BETTER.get(metric, True)
-                p, low, high = improvement_interval(x, y, better, confidence=confidence)
-                cells.append(
-                    Improvement(
-                        env,
-                        label,
-                        phase,
-                        metric,
-                        p,
-                        low,
-                        high,
-                        interquartile_mean(x),
-                        int(np.isfinite(x).sum()),
-                        int(np.isfinite(y).sum()),
-                        permutation_test(x, y, better)[1],
+        for baseline in baselines.get((env, budgets_of(runs)), []):
+            if baseline == label:
+                continue
+            mine, theirs = scalars[(env, label)], scalars[(env, baseline)]
+            for phase in PHASES:
+                for metric in metrics_of.get(env, ()):
+                    x = [values[phase][metric] for values in mine]
+                    y = [values[phase][metric] for values in theirs]
+                    better = HIGHER_IS_BETTER.get(metric, True)
+                    p, low, high = improvement_interval(x, y, better, confidence=confidence)
+                    cells.append(
+                        Improvement(
+                            env,
+                            label,
+                            phase,
+                            metric,
+                            p,
+                            low,
+                            high,
+                            interquartile_mean(x),
+                            int(np.isfinite(x).sum()),
+                            int(np.isfinite(y).sum()),
+                            permutation_test(x, y, better)[1],
+                            baseline,
+                        )
                     )
-                )
     return cells

@@ -2,10 +2,14 @@
 of :mod:`leaderboard.verdicts`, on greedy evaluations and on the final 10 % of training.
 
 Only a sweep that contains the paper's experiments (both environments with their default
-arguments and fixed agents; Empathic DQN at β = 1, 0.75, 0.5, 0.25; the −100 penalty and the
-equality-scaled baselines) gets paper verdicts; for any other sweep :func:`write_reproduction`
+arguments and fixed agents; Empathic DQN at β = 1, 0.75, 0.5, 0.25; the −100 harm-penalty and the
+equality-scaled DQN) gets paper verdicts; for any other sweep :func:`write_reproduction`
 refuses with :class:`NotThePaperSweep`, naming what is missing. Runs of other variants in the
-same directory (a sensitivity study, a user's own method) are left out of the verdicts.
+same directory (a sensitivity study, a user's own method) are left out of the verdicts. Which runs
+are Empathic DQN at which β, and with which γ and ε schedule, their result files' descriptions say
+(:mod:`leaderboard.run_facts`): a plug-in method that declares Empathic DQN's target is judged
+with it; the penalty and equality-scaled runs are those of the paper sweep's methods :data:`PENALTY` and
+:data:`EQUALITY_SHAPED`.
 
 Beside the harm-free/surviving verdict, which is judged against the exact optimum with evenly
 broken ties, the evidence states what the rule's reference leaves out: the share of the steps
@@ -17,20 +21,18 @@ schedule (:func:`survival_rise`).
 
 from __future__ import annotations
 
-import inspect
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
-from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES
-from empathy_zoo.schedules import linear_epsilon
+from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from leaderboard.aggregate import final_episode_count, load_results, longest_episode, run_scalars
+from leaderboard.run_facts import description_of, empathic_selfishness, env_argument, exploration_of, in_paper_setting
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
 __all__ = [
@@ -56,9 +58,9 @@ BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
 """Verdict phase → the leaderboard phase it reads."""
 COEXISTENCE, SHARING = "coexistence_v0", "sharing_v0"
-EMPATHIC = ("empathic_dqn", "dqn")
 PENALTY, EQUALITY_SHAPED = "dqn_harm_penalty", "dqn_equality"
-_DEFAULT_MAX_CYCLES = inspect.signature(ENGINES[COEXISTENCE]).parameters["max_cycles"].default
+"""The paper sweep's baseline methods (``empathy_zoo/profiles/paper.toml``), by the name its runs record."""
+_DEFAULT_MAX_CYCLES: int = DEFAULT_ARGUMENTS[COEXISTENCE]["max_cycles"]
 Reference = Callable[..., Any]
 """``coexistence_optimum(selfishness, epsilon, *, gamma, max_cycles)`` → ``.harms``, ``.survival``."""
 TieRangeOf = Callable[..., "TieRange"]
@@ -95,29 +97,18 @@ class Claim:
 
 
 def _key(run: dict[str, Any]) -> str:
-    if run["method"] in EMPATHIC:
-        return f"β={float(run['config']['settings'].get('selfishness', 1.0)):g}"
-    return str(run["method"])
-
-
-def _is_paper_setting(run: dict[str, Any]) -> bool:
-    """The run's env is one of the paper's with every argument at its default and the default fixed agents."""
-    if run["env"] not in (COEXISTENCE, SHARING):
-        return False
-    config = run.get("config", {})
-    defaults = inspect.signature(ENGINES[run["env"]]).parameters
-    arguments = dict(config.get("env_kwargs") or {})
-    return (
-        all(name in defaults and defaults[name].default == value for name, value in arguments.items())
-        and dict(config.get("fixed") or {}) == DEFAULT_POLICIES[run["env"]]
-    )
+    """``β=…`` for a run of Empathic DQN's target (:func:`leaderboard.run_facts.empathic_selfishness`),
+    else the method's name."""
+    beta = empathic_selfishness(run)
+    return str(run["method"]) if beta is None else f"β={beta:g}"
 
 
 def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
-    """``{env: {method key: runs}}`` of the runs made in the paper's setting."""
+    """``{env: {method key: runs}}`` of the runs made in the paper's setting
+    (:func:`leaderboard.run_facts.in_paper_setting`)."""
     out: dict[str, dict[str, list[dict[str, Any]]]] = {COEXISTENCE: {}, SHARING: {}}
     for run in results:
-        if _is_paper_setting(run):
+        if run["env"] in out and in_paper_setting(run):
             out[run["env"]].setdefault(_key(run), []).append(run)
     return out
 
@@ -133,17 +124,17 @@ def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
 
 def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float, int]:
     """The ε schedule over the env steps of a run's final 10 % of training episodes, as
-    ``{ε rounded to digits: steps}`` (its settings' schedule, read before each step)."""
+    ``{ε rounded to digits: steps}`` (the schedule its description records, read before each step)."""
 
     ends = run["train"]["episode_end_step"]
     if not ends:
         return {}
     first = len(ends) - final_episode_count(len(ends))
     start = int(ends[first - 1]) if first > 0 else 0
-    settings = SimpleNamespace(**run["config"]["settings"])
+    epsilon_at = exploration_of(run)
     counts: dict[float, int] = {}
     for step in range(start, int(ends[-1])):
-        epsilon = round(linear_epsilon(settings, step), digits)
+        epsilon = round(epsilon_at(step), digits)
         counts[epsilon] = counts.get(epsilon, 0) + 1
     return counts
 
@@ -178,10 +169,10 @@ def _tie_bound(
 
     outcome, after = coexistence_transitions(size)
     cells, actions, cat_actions = outcome.shape
-    stays = np.zeros((cells, actions, cells))  # P(no harm and this next displacement | displacement, action)
+    kept = np.zeros((cells, actions, cells))  # P(no harm and this next displacement | displacement, action)
     d, a, _ = np.nonzero(outcome == NO_HARM)
-    np.add.at(stays, (d, a, after[outcome == NO_HARM]), 1.0 / cat_actions)
-    stays = stays.reshape(cells * actions, cells).T
+    np.add.at(kept, (d, a, after[outcome == NO_HARM]), 1.0 / cat_actions)
+    stays = kept.reshape(cells * actions, cells).T
     cat_gone = (outcome == ROBOT_HARMS_CAT).mean(axis=2)
     robot_harmed = (outcome == CAT_HARMS_ROBOT).mean(axis=2)
     sign = 1.0 if highest else -1.0
@@ -276,10 +267,10 @@ def survival_rise(
         if final < 2:
             continue
         first = len(ends) - final
-        settings = SimpleNamespace(**run["config"]["settings"])
-        selfishness = float(run["config"]["settings"].get("selfishness", 1.0))
+        epsilon_at = exploration_of(run)
+        selfishness = float(description_of(run)["selfishness"])
         starts = [ends[i - 1] if i > 0 else 0 for i in range(first, len(ends))]
-        expected = np.array([optimum(selfishness, round(linear_epsilon(settings, step), digits)) for step in starts])
+        expected = np.array([optimum(selfishness, round(epsilon_at(step), digits)) for step in starts])
         middle = final // 2
         learner.append(np.array([survival[first : first + middle].mean(), survival[first + middle : len(ends)].mean()]))
         optimal.append(np.array([expected[:middle].mean(), expected[middle:].mean()]))
@@ -357,9 +348,11 @@ def assess_claims(
     if missing:
         raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
     if reference is None:
-        from empathy_zoo.reference import coexistence_optimum as reference
+        from empathy_zoo.reference import coexistence_optimum
 
+        reference = coexistence_optimum
         tie_range = tie_break_range if tie_range is None else tie_range
+    optimum: Reference = reference
     runs = paper_runs(results)
     betas = [f"β={b:g}" for b in BETAS]
     coexistence, sharing = _Table(runs[COEXISTENCE]), _Table(runs[SHARING])
@@ -403,11 +396,10 @@ def assess_claims(
                 for run in group:
                     for epsilon, steps in training_window_epsilons(run).items():
                         epsilons[epsilon] = epsilons.get(epsilon, 0) + steps
-            settings = group[0]["config"]["settings"]
-            max_cycles = int(group[0]["config"]["env_kwargs"].get("max_cycles", _DEFAULT_MAX_CYCLES))
-            ref_harms, ref_survival = _reference_over(
-                reference, float(settings["selfishness"]), epsilons, float(settings["gamma"]), max_cycles
-            )
+            described = description_of(group[0])
+            beta, gamma = float(described["selfishness"]), float(described["gamma"])
+            max_cycles = int(env_argument(group[0], "max_cycles"))
+            ref_harms, ref_survival = _reference_over(optimum, beta, epsilons, gamma, max_cycles)
             ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
             cells += [h, s]
             mean_epsilon = sum(e * n for e, n in epsilons.items()) / max(sum(epsilons.values()), 1)
@@ -422,15 +414,13 @@ def assess_claims(
                     f"({100 * min(shares):.1f}–{100 * max(shares):.1f} % of each run's steps)"
                 )
             if tie_range is not None:
-                spread = tie_range(
-                    float(settings["selfishness"]), epsilons, gamma=float(settings["gamma"]), max_cycles=max_cycles
-                )
+                spread = tie_range(beta, epsilons, gamma=gamma, max_cycles=max_cycles)
                 part += (
                     f"; over every tie-break the optimum's harms span {spread.harms[0]:.3f}–{spread.harms[1]:.3f} "
                     f"and its survival {spread.survival[0]:.1f}–{spread.survival[1]:.1f}"
                 )
             if phase != "eval":
-                rise = survival_rise(group, reference, gamma=float(settings["gamma"]), max_cycles=max_cycles)
+                rise = survival_rise(group, optimum, gamma=gamma, max_cycles=max_cycles)
                 part += (
                     f"; across the final 10 % of training episodes (first half → second half) survival "
                     f"{rise.learner[0]:.1f} → {rise.learner[1]:.1f}, the reference at the ε of the same episodes "

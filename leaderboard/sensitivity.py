@@ -24,7 +24,9 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
+from leaderboard.run_facts import empathic_selfishness
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
 
 __all__ = [
@@ -40,17 +42,37 @@ __all__ = [
 
 BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
+SHARING = "sharing_v0"
 Condition = tuple[str, str, str]
 """(start cells, inventory encoding, human policy)."""
-DEFAULT_CONDITION: Condition = ("random", "count_plus_one", "patrol")
+DEFAULT_CONDITION: Condition = (
+    DEFAULT_ARGUMENTS[SHARING]["start"],
+    DEFAULT_ARGUMENTS[SHARING]["inventory_encoding"],
+    DEFAULT_POLICIES[SHARING]["human_0"],
+)
+"""Sharing's defaults (the paper's setting)."""
 
 
 def condition_of(run: dict[str, Any]) -> Condition:
-    """The fidelity condition a Sharing run was trained under."""
+    """The fidelity condition a Sharing run was trained under (its env's default where it sets none)."""
     config = run.get("config", {})
     kwargs = config.get("env_kwargs") or {}
-    human = (config.get("fixed") or {}).get("human_0", "patrol")
-    return (str(kwargs.get("start", "random")), str(kwargs.get("inventory_encoding", "count_plus_one")), str(human))
+    human = (config.get("fixed") or {}).get("human_0", DEFAULT_CONDITION[2])
+    start, encoding = (
+        str(kwargs.get(name, default)) for name, default in zip(("start", "inventory_encoding"), DEFAULT_CONDITION)
+    )
+    return start, encoding, str(human)
+
+
+def _empathic_sharing_runs(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[float, list[dict[str, Any]]]]:
+    """``{condition: {β: runs}}`` of the Sharing runs that learn Empathic DQN's target
+    (:func:`leaderboard.run_facts.empathic_selfishness`)."""
+    groups: dict[Condition, dict[float, list[dict[str, Any]]]] = {}
+    for run in results:
+        beta = empathic_selfishness(run) if run["env"] == SHARING else None
+        if beta is not None:
+            groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+    return groups
 
 
 def _condition_text(condition: Condition) -> str:
@@ -61,12 +83,7 @@ def _condition_text(condition: Condition) -> str:
 
 def sensitivity_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[str, dict[float, Cell]]]]:
     """``{condition: {phase: {metric: {β: cell}}}}`` over the Empathic DQN runs of Sharing."""
-    groups: dict[Condition, dict[float, list[dict[str, Any]]]] = {}
-    for run in results:
-        if run["env"] != "sharing_v0" or run["method"] not in ("empathic_dqn", "dqn"):
-            continue
-        beta = float(run["config"]["settings"].get("selfishness", 1.0))
-        groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+    groups = _empathic_sharing_runs(results)
     rows: dict[Condition, dict[str, dict[str, dict[float, Cell]]]] = {}
     for condition in sorted(groups, key=lambda c: (c != DEFAULT_CONDITION, c)):
         by_beta = groups[condition]
@@ -113,12 +130,7 @@ def _episodes(run: dict[str, Any], phase: str) -> dict[str, np.ndarray]:
 
 def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[float, FairSplit]]]:
     """``{condition: {phase: {β: FairSplit}}}`` over the Empathic DQN runs of Sharing."""
-    groups: dict[Condition, dict[float, list[dict[str, Any]]]] = {}
-    for run in results:
-        if run["env"] != "sharing_v0" or run["method"] not in ("empathic_dqn", "dqn"):
-            continue
-        beta = float(run["config"]["settings"].get("selfishness", 1.0))
-        groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+    groups = _empathic_sharing_runs(results)
     rows: dict[Condition, dict[str, dict[float, FairSplit]]] = {}
     for condition in sorted(groups, key=lambda c: (c != DEFAULT_CONDITION, c)):
         rows[condition] = {}

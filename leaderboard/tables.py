@@ -26,15 +26,22 @@ from leaderboard.aggregate import (
     Score,
     t_level,
 )
+from leaderboard.budgets import RunBudget, shows_evaluation
 from leaderboard.improvement import TOO_FEW_SEEDS, VERDICT_MARKS, VERDICT_NOTE, Improvement, smallest_decidable_seeds
+from leaderboard.sources import BUDGET_SEPARATOR, ResultsDir
 
 __all__ = [
     "PHASE_TITLES",
     "SINGLE_SEED_MARK",
     "CSV_COLUMNS",
+    "COMPARISON_CSV_COLUMNS",
+    "RowFacts",
     "Provenance",
     "format_interval",
     "table_rows",
+    "improvement_sections",
+    "names_baselines",
+    "uncompared_note",
     "markdown_table",
     "markdown_report",
     "csv_text",
@@ -64,6 +71,19 @@ CSV_COLUMNS: tuple[str, ...] = (
     "commit",
 )
 """Columns of the long-format CSV, one row per (env, method, phase, metric)."""
+COMPARISON_CSV_COLUMNS: tuple[str, ...] = ("steps", "eval_interval", "eval_episodes", "results_dirs")
+"""Columns added after :data:`CSV_COLUMNS` in a leaderboard of several results directories or
+budgets: the row's training budget and the directories its runs were read from (``;``-joined)."""
+
+
+@dataclass(frozen=True)
+class RowFacts:
+    """What a leaderboard of several directories or budgets says of one row beyond its scores."""
+
+    budget: RunBudget
+    """The training budget of the row's runs."""
+    directories: tuple[str, ...]
+    """The results directories its runs were read from."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +100,11 @@ class Provenance:
     confidence: float = CONFIDENCE
     random_state: int = DEFAULT_SEED
     final_fraction: float = FINAL_FRACTION
+    directories: tuple[ResultsDir, ...] = ()
+    """The results directories read, where the leaderboard names them: one of several directories
+    or budgets, or with prefixed labels (empty: one directory, as it is)."""
+    budgets: tuple[RunBudget, ...] = ()
+    """The training budgets of every run, ascending (named with :attr:`directories`)."""
 
     def commit_text(self) -> str:
         return self.commit if self.commit else "unknown"
@@ -94,6 +119,40 @@ class Provenance:
             f"'{PHASE_TITLES['train_final10']}': mean over the last {self.final_fraction:.0%} of each run's "
             "training episodes (at least one)."
         )
+
+    def comparison(self) -> bool:
+        """Whether this leaderboard names its directories and budgets (:attr:`directories`)."""
+        return bool(self.directories)
+
+    def source_lines(self) -> tuple[str, list[str], str]:
+        """``(heading, [one line per directory], budget sentence)``, in Markdown (code spans in backticks)."""
+        with_evaluation = shows_evaluation(self.budgets)
+        lines = []
+        for directory in self.directories:
+            prefix = f", labels prefixed `{directory.prefix}`" if directory.prefix else ""
+            budgets = "; ".join(budget.text(with_evaluation) for budget in directory.budgets)
+            versions = ", ".join(directory.versions) or "not recorded"
+            commits = ", ".join(f"`{commit}`" for commit in directory.commits) or "not recorded"
+            lines.append(
+                f"`{directory.path}`{prefix}: {directory.runs} runs, {budgets}; empathy-zoo {versions}, commit {commits}"
+            )
+        evaluation = " (`eval 10,000 × 10`: a greedy evaluation of 10 episodes every 10,000 steps)"
+        if len(self.budgets) > 1:
+            budget = (
+                f"The runs have {len(self.budgets)} training budgets: each row's label ends with its budget "
+                f"(`{BUDGET_SEPARATOR.strip()} {self.budgets[0].text(with_evaluation)}`), rows of different budgets are "
+                "never merged, and P(improves on DQN) compares a row only with the DQN rows of its variant and budget"
+                f"{evaluation if with_evaluation else ''}."
+            )
+        elif self.budgets:
+            budget = f"Every run has the same training budget: {self.budgets[0].text(True)}{evaluation}."
+        else:
+            budget = ""
+        heading = (
+            f"Read from {len(self.directories)} results director{'y' if len(self.directories) == 1 else 'ies'} "
+            "(with the versions and commits their result files record):"
+        )
+        return heading, lines, budget
 
 
 def _single_seed_note() -> str:
@@ -163,24 +222,49 @@ def _sections(
                 yield env, phase, header, rows
 
 
-def improvement_sections(cells: Sequence[Improvement], env: str, digits: int = 2) -> list[tuple[str, list[str], list[list[str]]]]:
-    """``[(phase, header, rows)]`` of ``env``'s probability-of-improvement tables: a row per method,
-    a column per metric, each cell ``P [interval] · IQM value``."""
+def improvement_sections(
+    cells: Sequence[Improvement], env: str, digits: int = 2, against: bool = False
+) -> list[tuple[str, list[str], list[list[str]]]]:
+    """``[(phase, header, rows)]`` of ``env``'s probability-of-improvement tables: a row per method
+    (and DQN row compared with), a column per metric, each cell ``P [interval] · IQM value``; with
+    ``against``, a column ``Against`` names the DQN row and its seeds."""
     sections = []
     for phase in PHASES:
         mine = [c for c in cells if c.env == env and c.phase == phase]
         metrics = list(dict.fromkeys(c.metric for c in mine))
-        rows: dict[str, list[str]] = {}
+        rows: dict[tuple[str, str], list[str]] = {}
+        first = 3 if against else 2
         for cell in mine:
-            row = rows.setdefault(cell.method_label, [cell.method_label, str(cell.n_seeds)] + [""] * len(metrics))
+            named = [f"{cell.baseline_label} ({cell.n_baseline_seeds} seeds)"] if against else []
+            row = rows.setdefault(
+                (cell.method_label, cell.baseline_label),
+                [cell.method_label, *named, str(cell.n_seeds)] + [""] * len(metrics),
+            )
             mark = VERDICT_MARKS[cell.verdict]
-            row[2 + metrics.index(cell.metric)] = (
+            row[first + metrics.index(cell.metric)] = (
                 f"{mark}{' ' if mark else ''}{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)}"
                 f" · IQM {cell.iqm:.{digits}f}"
             )
         if rows:
-            sections.append((phase, ["Method", "Seeds", *metrics], list(rows.values())))
+            sections.append((phase, ["Method", *(["Against"] if against else []), "Seeds", *metrics], list(rows.values())))
     return sections
+
+
+def names_baselines(provenance: Provenance, cells: Sequence[Improvement]) -> bool:
+    """Whether the probability-of-improvement tables name each row's DQN row (column ``Against``):
+    in a leaderboard of several directories or budgets, or where a row is compared with more than one."""
+    compared: dict[tuple[str, str], set[str]] = {}
+    for cell in cells:
+        compared.setdefault((cell.env, cell.method_label), set()).add(cell.baseline_label)
+    return provenance.comparison() or any(len(baselines) > 1 for baselines in compared.values())
+
+
+def uncompared_note(uncompared: Sequence[tuple[str, str]], env: str | None) -> str:
+    """The sentence naming ``env``'s rows that no DQN row of their variant and budget is compared with."""
+    labels = [label for row_env, label in uncompared if row_env == env]
+    if not labels:
+        return ""
+    return "Not compared with DQN (no DQN row of their variant and budget): " + ", ".join(labels) + "."
 
 
 IMPROVEMENT_NOTE = (
@@ -223,27 +307,34 @@ def markdown_report(
     digits: int = 2,
     base_env: Mapping[str, str] | None = None,
     improvements: Sequence[Improvement] = (),
+    uncompared: Sequence[tuple[str, str]] = (),
 ) -> str:
     """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
 
-    ``figures`` maps ``(env, metric)`` to a link (a path relative to the page).
+    ``figures`` maps ``(env, metric)`` to a link (a path relative to the page); ``uncompared``
+    names the ``(env, label)`` rows no DQN row is compared with (:func:`uncompared_note`).
     """
     figures = figures or {}
+    against = names_baselines(provenance, improvements)
     lines = [
         "# empathy-zoo leaderboard",
         "",
         f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, commit `{provenance.commit_text()}`.",
-        "",
-        provenance.method_text(),
     ]
+    if provenance.comparison():
+        heading, directories, budget = provenance.source_lines()
+        lines += ["", heading, "", *(f"- {line}" for line in directories), *(["", budget] if budget else [])]
+    lines += ["", provenance.method_text()]
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
-            lines += _markdown_improvements(improvements, current_env, digits) + _markdown_figures(figures, current_env)
+            lines += _markdown_improvements(improvements, current_env, digits, against, uncompared)
+            lines += _markdown_figures(figures, current_env)
             lines += ["", f"## {env}"]
             current_env = env
         lines += ["", f"### {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
-    lines += _markdown_improvements(improvements, current_env, digits) + _markdown_figures(figures, current_env)
+    lines += _markdown_improvements(improvements, current_env, digits, against, uncompared)
+    lines += _markdown_figures(figures, current_env)
     if _has_single_seed(scores):
         lines += ["", _single_seed_note()]
     lines += ["", "## Metric definitions", ""]
@@ -273,23 +364,28 @@ def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -
     return lines
 
 
-def _markdown_improvements(cells: Sequence[Improvement], env: str | None, digits: int) -> list[str]:
+def _markdown_improvements(
+    cells: Sequence[Improvement], env: str | None, digits: int, against: bool, uncompared: Sequence[tuple[str, str]]
+) -> list[str]:
     lines = []
-    for phase, header, rows in improvement_sections(cells, env, digits) if env is not None else []:
+    for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
         lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
-    return lines + (["", IMPROVEMENT_NOTE] if lines else [])
+    note = uncompared_note(uncompared, env)
+    return lines + (["", IMPROVEMENT_NOTE] if lines else []) + (["", note] if note else [])
 
 
 def _csv_number(value: float) -> str:
     return repr(float(value)) if math.isfinite(value) else ""
 
 
-def csv_text(scores: Sequence[Score], provenance: Provenance) -> str:
-    """Long-format CSV (:data:`CSV_COLUMNS`), one row per score; NaN is an empty cell."""
+def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tuple[str, str], RowFacts] | None = None) -> str:
+    """Long-format CSV (:data:`CSV_COLUMNS`), one row per score; NaN is an empty cell. With
+    ``rows`` (the facts of every ``(env, method_label)``), :data:`COMPARISON_CSV_COLUMNS` follow."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(CSV_COLUMNS)
+    writer.writerow(CSV_COLUMNS + (COMPARISON_CSV_COLUMNS if rows is not None else ()))
     for s in scores:
+        facts = [] if rows is None else _facts_cells(rows[(s.env, s.method_label)])
         writer.writerow(
             [
                 s.env,
@@ -305,9 +401,15 @@ def csv_text(scores: Sequence[Score], provenance: Provenance) -> str:
                 provenance.command,
                 provenance.version,
                 provenance.commit or "",
+                *facts,
             ]
         )
     return buffer.getvalue()
+
+
+def _facts_cells(facts: RowFacts) -> list[Any]:
+    budget = facts.budget
+    return [budget.steps, budget.eval_interval or "", budget.eval_episodes or "", ";".join(facts.directories)]
 
 
 _CSS = """
@@ -343,11 +445,24 @@ def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> 
     return lines
 
 
-def _html_improvements(cells: Sequence[Improvement], env: str | None, digits: int) -> list[str]:
+def _html_improvements(
+    cells: Sequence[Improvement], env: str | None, digits: int, against: bool, uncompared: Sequence[tuple[str, str]]
+) -> list[str]:
     lines = []
-    for phase, header, rows in improvement_sections(cells, env, digits) if env is not None else []:
+    for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
         lines += [f"<h3>{_text('P(improves on DQN): ' + PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
-    return lines + ([f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>'] if lines else [])
+    note = uncompared_note(uncompared, env)
+    return (
+        lines
+        + ([f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>'] if lines else [])
+        + ([f'<p class="note">{_text(note)}</p>'] if note else [])
+    )
+
+
+def _html_code(markdown: str) -> str:
+    """``markdown``'s text with its `code spans` as ``<code>``, escaped."""
+    pieces = markdown.split("`")
+    return "".join(f"<code>{_text(piece)}</code>" if i % 2 else _text(piece) for i, piece in enumerate(pieces))
 
 
 def html_report(
@@ -358,13 +473,15 @@ def html_report(
     digits: int = 2,
     base_env: Mapping[str, str] | None = None,
     improvements: Sequence[Improvement] = (),
+    uncompared: Sequence[tuple[str, str]] = (),
 ) -> str:
     """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
 
-    ``figures`` maps ``(env, metric)`` to the PNG bytes.
+    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` as :func:`markdown_report`.
     """
     figures = figures or {}
     esc = _text
+    against = names_baselines(provenance, improvements)
     lines = [
         "<!DOCTYPE html>",
         '<html lang="en">',
@@ -377,16 +494,22 @@ def html_report(
         "<h1>empathy-zoo leaderboard</h1>",
         f"<p>Produced by <code>{esc(provenance.command)}</code> with empathy-zoo {esc(provenance.version)}, "
         f"commit <code>{esc(provenance.commit_text())}</code>.</p>",
-        f'<p class="note">{esc(provenance.method_text())}</p>',
     ]
+    if provenance.comparison():
+        heading, directories, budget = provenance.source_lines()
+        lines += [f"<p>{esc(heading)}</p>", "<ul>", *(f"<li>{_html_code(line)}</li>" for line in directories), "</ul>"]
+        lines += [f"<p>{_html_code(budget)}</p>"] if budget else []
+    lines.append(f'<p class="note">{esc(provenance.method_text())}</p>')
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
-            lines += _html_improvements(improvements, current_env, digits) + _html_figures(figures, current_env)
+            lines += _html_improvements(improvements, current_env, digits, against, uncompared)
+            lines += _html_figures(figures, current_env)
             lines.append(f"<h2>{esc(env)}</h2>")
             current_env = env
         lines += [f"<h3>{esc(PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
-    lines += _html_improvements(improvements, current_env, digits) + _html_figures(figures, current_env)
+    lines += _html_improvements(improvements, current_env, digits, against, uncompared)
+    lines += _html_figures(figures, current_env)
     if _has_single_seed(scores):
         lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
     lines += ["<h2>Metric definitions</h2>", "<dl>"]

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.grid import Action
+from empathy_zoo.actions import Action
 
 
 class AlwaysLeft:

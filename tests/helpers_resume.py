@@ -48,9 +48,9 @@ SMALL_SETTINGS = {
 def small_run(method: str, env: str = "coexistence_v0", **spec: Any) -> Any:
     """The ``RunSpec`` of a 600-step run of ``method`` (greedy evaluations at 300 and 600, episodes
     of 40 steps, :data:`SMALL_SETTINGS`); ``spec`` sets other fields (``reward=...``)."""
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
 
-    return RunSpec(
+    return RunSpec.of(
         env=env,
         method=method,
         steps=600,

@@ -10,8 +10,8 @@ import pytest
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test
 
 from empathy_zoo import ENVIRONMENTS, EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.grid import NUM_ACTIONS
 
 MODULES = [coexistence_v0, sharing_v0]
 IDS = [module.__name__.rsplit(".", 1)[-1] for module in MODULES]

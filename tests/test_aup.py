@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers_batches import one_other
 from helpers_resume import whole_and_resumed
 
 from agents.base import Method, StepBatch
@@ -63,13 +64,10 @@ def step(obs: np.ndarray, actions: list[int], next_obs: np.ndarray, rewards: lis
         rewards=np.array(rewards or [1.0] * k, dtype=np.float32)[:, None],
         terminated=np.zeros((k, 1), bool),
         next_obs=next_obs.reshape(k, 1, V),
-        swapped_next_obs=next_obs.reshape(k, 1, V),
-        other_present=np.ones((k, 1), bool),
-        harmed_other=zeros,
+        harms=zeros,
         battery_return=zeros,
-        other_battery_return=zeros,
         truncated=np.zeros((k, 1), bool),
-        other_rewards=np.zeros((k, 1), dtype=np.float32),
+        **one_other(next_obs.reshape(k, 1, V), np.ones((k, 1), bool), zeros, rewards=np.zeros((k, 1), dtype=np.float32)),
     )
 
 
@@ -165,17 +163,17 @@ def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> Non
 
 
 def test_a_resumed_aup_run_equals_an_uninterrupted_one_and_differs_from_dqn(tmp_path, monkeypatch) -> None:
+    from empathy_zoo.experiment.model import RunSpec
     from empathy_zoo.training import RunnerOptions, train_runs
-    from empathy_zoo.training.spec import RunSpec
 
     settings = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300, "target_update_interval": 50}
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="sharing_v0", method="test_aup:SMALL_AUP", steps=600, eval_interval=300, eval_episodes=2, settings=settings
     )
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"]["name"] == "attainable_utility" and resumed["config"]["reward"]["num_rewards"] == 4
-    dqn = RunSpec(env="sharing_v0", method="dqn", steps=600, eval_interval=300, eval_episodes=2, settings=settings)
+    dqn = RunSpec.of(env="sharing_v0", method="dqn", steps=600, eval_interval=300, eval_episodes=2, settings=settings)
     plain = json.loads(train_runs([dqn], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
     assert plain["eval"] != whole["eval"]  # the penalty was in force (from step 128), and changed what was learnt
 

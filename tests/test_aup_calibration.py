@@ -28,8 +28,8 @@ from baselines.aup import (
     auxiliary_reward_map,
     auxiliary_rewards,
 )
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT, CoexistenceEngine
-from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.reference import coexistence_transitions, start_distribution
 
 SIZE = 7

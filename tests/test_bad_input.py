@@ -1,5 +1,8 @@
-"""Bad input raises ``ValueError`` naming the problem (SPEC §1): actions, reset options,
-constructor arguments, the fixed-policy registry; and the equality metric's values (SPEC §5)."""
+"""Bad input is refused with an error naming the problem (SPEC §1; a ``ValueError``, or the
+``RuntimeError`` of a step out of turn), the same on every path that takes it: the PettingZoo env,
+FixedAgents, the vector env, the Gymnasium adapter and the training path (fixed policies inside
+it, method settings, plug-in names, the command line). That a refused call changes nothing is
+tests/test_refused_calls_change_nothing.py."""
 
 from __future__ import annotations
 
@@ -8,8 +11,11 @@ import pytest
 from helpers_policies import AlwaysLeft
 
 from empathy_zoo import FixedAgents, coexistence_v0, make_policy, sharing_v0
-from empathy_zoo.grid import NUM_ACTIONS, Action
-from empathy_zoo.metrics import equality
+from empathy_zoo.actions import NUM_ACTIONS, Action
+from empathy_zoo.cli import main
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.gym_adapter import make_single_agent_env
+from empathy_zoo.import_names import resolve_name
 from empathy_zoo.policies import POLICIES
 from empathy_zoo.vector import VectorEnv
 
@@ -17,9 +23,10 @@ MODULES = [coexistence_v0, sharing_v0]
 IDS = [module.__name__.rsplit(".", 1)[-1] for module in MODULES]
 ROBOT, CAT, HUMAN = "robot_0", "cat_0", "human_0"
 HELPERS = AlwaysLeft.__module__  # "helpers_policies", importable because pytest puts tests/ on the path
+FLOAT_POLICY = f"{HELPERS}:ReturnsAFloat"
 
 
-# ------------------------------------------------------------------ actions
+# ------------------------------------------------------------------ actions on the PettingZoo env
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
 @pytest.mark.parametrize(
     "action, message",
@@ -56,6 +63,14 @@ def test_valid_integer_kinds_are_accepted(module):
     env.step({ROBOT: np.int64(1), other: np.int32(2)})
     env.step({ROBOT: np.array(3), other: np.uint8(4)})
     assert env.unwrapped.engine.pos[0].tolist() == [[1, 1], [4, 3]]
+
+
+@pytest.mark.parametrize("actions", [[0, 0], (0, 0), np.array([0, 0]), 3, None], ids=["list", "tuple", "array", "int", "None"])
+def test_a_joint_action_must_be_a_dict(actions):
+    env = coexistence_v0.parallel_env()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"actions must be a dict \{agent: action\}"):
+        env.step(actions)
 
 
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
@@ -99,6 +114,7 @@ def test_step_before_reset_and_after_the_end_raises(module):
         env.step({ROBOT: 4})
 
 
+# ------------------------------------------------------------------ actions on the other faces, and a fixed policy's
 def test_fixed_agents_refuses_an_action_for_the_fixed_agent():
     env = FixedAgents(coexistence_v0.parallel_env(), {CAT: "random_walk"})
     env.reset(seed=0)
@@ -111,12 +127,14 @@ def test_fixed_agents_refuses_an_action_for_the_fixed_agent():
     [
         (np.full((3, 1), 5), "invalid action 5 for robot_0 in env 0"),
         (np.full((3, 1), -2), "invalid action -2 for robot_0"),
-        (np.full((3, 1), 1.5), "integers"),
+        (np.full((3, 1), 1.0), "actions must be integers"),
+        (np.full((3, 1), True), "actions must be integers"),
+        (np.full((3, 1), 1.5), "actions must be integers"),
         (np.full((3, 1), "a"), "integers"),
         (np.full((3, 2), 1), "shape"),
         (np.full((2, 1), 1), "shape"),
     ],
-    ids=["5", "-2", "1.5", "str", "too many columns", "too few envs"],
+    ids=["5", "-2", "float", "bool", "fraction", "str", "too many columns", "too few envs"],
 )
 def test_vector_env_invalid_actions(actions, message):
     vector = VectorEnv("coexistence_v0", 3, fixed={CAT: "random_walk"})
@@ -130,7 +148,23 @@ def test_vector_env_step_before_reset():
         VectorEnv("sharing_v0", 2, fixed={HUMAN: "patrol"}).step(np.zeros((2, 1), dtype=np.int64))
 
 
-# ------------------------------------------------------------------ reset options
+def test_a_policy_choosing_a_float_is_refused_on_every_path_not_truncated():
+    message = r"fixed policy helpers_policies:ReturnsAFloat of cat_0 chose an invalid action: .*got 2\.7"
+    env = FixedAgents(coexistence_v0.parallel_env(), {CAT: FLOAT_POLICY})
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step({ROBOT: 4})
+    vector = VectorEnv("coexistence_v0", 2, fixed={CAT: FLOAT_POLICY})
+    vector.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        vector.step(np.full((2, 1), 4))
+    single = make_single_agent_env("coexistence_v0", fixed={CAT: FLOAT_POLICY})
+    single.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        single.step(4)
+
+
+# ------------------------------------------------------------------ reset options and seeds
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
 @pytest.mark.parametrize(
     "positions, message",
@@ -157,6 +191,12 @@ def test_bad_positions_raise(module, positions, message):
         env.step({ROBOT: 4})
     env.reset(seed=0)  # a good reset works again
     assert env.agents == env.possible_agents
+
+
+@pytest.mark.parametrize("cell", [(float("inf"), 0), (0, float("-inf")), (float("nan"), 1), (10**30, 0)])
+def test_a_position_that_is_no_cell_names_the_option(cell):
+    with pytest.raises(ValueError, match=r"options\['positions'\]\['robot_0'\]"):
+        coexistence_v0.parallel_env().reset(seed=0, options={"positions": {ROBOT: cell}})
 
 
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
@@ -213,6 +253,13 @@ def test_a_layout_leaving_no_start_cell_is_refused():
         sharing_v0.parallel_env().reset(seed=0, options={"batteries": every_cell})
 
 
+def test_a_battery_layout_larger_than_the_default_is_refused() -> None:
+    env = sharing_v0.parallel_env()
+    cells = [(r, c) for r in range(7) for c in range(7) if (r, c) not in ((0, 0), (0, 1))][:10]
+    with pytest.raises(ValueError, match="at most 9"):
+        env.reset(seed=0, options={"batteries": cells, "positions": {"robot_0": (0, 0), "human_0": (0, 1)}})
+
+
 def test_batteries_option_in_coexistence_is_ignored_with_a_warning():
     env = coexistence_v0.parallel_env()
     with pytest.warns(UserWarning, match=r"ignoring unknown reset option\(s\) \['batteries'\] for coexistence_v0"):
@@ -231,6 +278,12 @@ def test_options_must_be_a_mapping(module):
 def test_bad_seed_raises(seed):
     with pytest.raises(ValueError, match="seed"):
         coexistence_v0.parallel_env().reset(seed=seed)
+
+
+@pytest.mark.parametrize("seed", [2.5, [1.5, 2], [-1, 2], ["1", 2], True])
+def test_vector_seeds_are_not_truncated(seed):
+    with pytest.raises(ValueError, match="seed"):
+        VectorEnv("coexistence_v0", 2).reset(seed=seed)
 
 
 # ------------------------------------------------------------------ constructor arguments
@@ -269,7 +322,6 @@ def test_coexistence_needs_size_five():
     "kwargs, message",
     [
         ({"env": "nope_v0", "num_envs": 2}, "unknown environment 'nope_v0'"),
-        ({"env": "coexistence_v0", "num_envs": 0}, "num_envs must be a positive int"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {"dog_0": "stay"}}, "unknown agent"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {ROBOT: "stay", CAT: "stay"}}, "every agent is fixed"),
         ({"env": "coexistence_v0", "num_envs": 2, "fixed": {CAT: "nope"}}, "unknown fixed policy 'nope'"),
@@ -281,7 +333,22 @@ def test_bad_vector_env_arguments_raise(kwargs, message):
         VectorEnv(**kwargs)
 
 
-# ------------------------------------------------------------------ the policy registry
+@pytest.mark.parametrize("num_envs", [2.5, "2", True, 0, -1])
+def test_the_number_of_environments_is_a_positive_int(num_envs):
+    with pytest.raises(ValueError, match="num_envs must be a positive int"):
+        VectorEnv("coexistence_v0", num_envs)
+
+
+def test_fixed_agents_with_an_unknown_or_every_agent_raises():
+    with pytest.raises(ValueError, match="unknown agent.*dog_0"):
+        FixedAgents(coexistence_v0.parallel_env(), {"dog_0": "random_walk"})
+    with pytest.raises(ValueError, match="every agent is fixed"):
+        FixedAgents(coexistence_v0.parallel_env(), {ROBOT: "stay", CAT: "stay"})
+    with pytest.raises(ValueError, match="unknown fixed policy"):
+        FixedAgents(coexistence_v0.parallel_env(), {CAT: "teleport"})
+
+
+# ------------------------------------------------------------------ fixed policies and plug-in names
 def test_unknown_policy_name_lists_the_registered_ones():
     with pytest.raises(ValueError, match="unknown fixed policy 'teleport'") as error:
         make_policy("teleport")
@@ -347,45 +414,49 @@ def test_user_policy_gives_the_same_trajectories_on_both_faces():
                 np.testing.assert_array_equal(env.reset()[0][ROBOT], out.observations[i, 0])
 
 
-def test_fixed_agents_with_an_unknown_or_every_agent_raises():
-    with pytest.raises(ValueError, match="unknown agent.*dog_0"):
-        FixedAgents(coexistence_v0.parallel_env(), {"dog_0": "random_walk"})
-    with pytest.raises(ValueError, match="every agent is fixed"):
-        FixedAgents(coexistence_v0.parallel_env(), {ROBOT: "stay", CAT: "stay"})
-    with pytest.raises(ValueError, match="unknown fixed policy"):
-        FixedAgents(coexistence_v0.parallel_env(), {CAT: "teleport"})
-
-
-# ------------------------------------------------------------------ equality (SPEC §5)
 @pytest.mark.parametrize(
-    "robot, other, expected",
+    "spec, message",
     [
-        (0.0, 0.0, 1.0),
-        (1.0, 1.0, 1.0),
-        (1.0, 0.0, 0.0),
-        (0.0, 2.5, 0.0),
-        (3.0, 1.0, 0.5),  # 2·1 / 4
-        (1.9, 1.0, 2.0 / 2.9),  # robot 1.0 + 0.9, other 1.0
-        (4.5, 0.9 + 1.0 + 0.8, 2 * 2.7 / 7.2),
+        ("..x:Y", "'..x:Y' is not a valid 'package.module:Name'"),
+        (".x:Y", "is not a valid 'package.module:Name'"),
+        ("x:", "is not a valid 'package.module:Name'"),
+        (":Y", "is not a valid 'package.module:Name'"),
+        ("a b:C", "is not a valid 'package.module:Name'"),
+        ("x:Y:Z", "is not a valid 'package.module:Name'"),
+        ("helpers_broken_module:X", "importing module 'helpers_broken_module' .* raised RuntimeError: this module is broken"),
     ],
 )
-def test_equality_values(robot, other, expected):
-    assert float(equality(robot, other)) == pytest.approx(expected)
-    assert float(equality(other, robot)) == pytest.approx(expected)  # symmetric
+def test_a_bad_plugin_name_is_a_clear_error(spec, message):
+    with pytest.raises(ValueError, match=message):
+        resolve_name(spec, {}, "method")
 
 
-def test_equality_on_arrays_and_negative_rewards():
-    np.testing.assert_allclose(equality(np.array([0.0, 1.0, 3.0]), np.array([0.0, 1.0, 1.0])), [1.0, 1.0, 0.5])
-    with pytest.raises(ValueError, match="non-negative"):
-        equality(-0.1, 1.0)
-    with pytest.raises(ValueError, match="non-negative"):
-        equality(np.array([1.0, 2.0]), np.array([1.0, -2.0]))
+@pytest.mark.parametrize("option", ["--method", "--fixed"])
+def test_the_command_line_refuses_a_bad_plugin_name(tmp_path, capsys, option):
+    value = "..x:Y" if option == "--method" else "cat_0=..x:Y"
+    assert main(["train", option, value, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "is not a valid 'package.module:Name'" in err and "Traceback" not in err, err
 
 
-def test_a_battery_layout_larger_than_the_default_is_refused() -> None:
-    from empathy_zoo import sharing_v0
+# ------------------------------------------------------------------ method settings
+@pytest.mark.parametrize(
+    "method, name, value",
+    [
+        ("empathic_dqn", "learning_rate", float("inf")),
+        ("empathic_dqn", "learning_rate", float("nan")),
+        ("dqn", "gamma", float("nan")),
+        ("empathic_dqn", "epsilon_end", float("-inf")),
+        ("baselines.sb3:SB3_DQN", "learning_rate", float("inf")),
+    ],
+)
+def test_a_setting_must_be_a_finite_number(method, name, value):
+    with pytest.raises(ValueError, match=f"{name} must be a finite number"):
+        RunSpec.of(method=method, settings={name: value})
 
-    env = sharing_v0.parallel_env()
-    cells = [(r, c) for r in range(7) for c in range(7) if (r, c) not in ((0, 0), (0, 1))][:10]
-    with pytest.raises(ValueError, match="at most 9"):
-        env.reset(seed=0, options={"batteries": cells, "positions": {"robot_0": (0, 0), "human_0": (0, 1)}})
+
+def test_the_command_line_refuses_an_infinite_learning_rate(tmp_path, capsys):
+    assert main(["train", "--learning-rate", "inf", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "learning_rate must be a finite number" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()

@@ -16,9 +16,9 @@ import torch
 from helpers_resume import whole_and_resumed
 
 from agents.replay import StackedReplay
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, ensemble, train_runs
 from empathy_zoo.training.checkpoint import load_checkpoint, save_checkpoint
-from empathy_zoo.training.spec import RunSpec
 
 
 def _filled(capacity: int, adds: int, seed: int = 0) -> StackedReplay:
@@ -30,11 +30,13 @@ def _filled(capacity: int, adds: int, seed: int = 0) -> StackedReplay:
         replay.add(
             obs[:, :, 0],
             obs[:, :, 1],
-            obs[:, :, 2],
+            obs[:, :, 2:],
             rng.integers(0, 5, (k, 1)),
             rng.normal(size=(k, 1)),
             rng.random((k, 1)) < 0.1,
-            rng.random((k, 1)) < 0.9,
+            rng.random((k, 1, 1)) < 0.9,
+            np.ones((k, 1, 1), bool),
+            np.zeros((k, 1, 1), bool),
         )
     return replay
 
@@ -82,7 +84,7 @@ def test_a_checkpoint_that_fails_mid_write_leaves_the_previous_one_and_no_tempor
 
 def _spec() -> RunSpec:
     """A run whose replay memory (100 transitions) is full long before its checkpoint at step 250."""
-    return RunSpec(
+    return RunSpec.of(
         env="coexistence_v0",
         seed=3,
         steps=500,

@@ -18,7 +18,7 @@ from baselines.registry import METHODS
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.settings_options import option_reading
 from empathy_zoo.cli.train import train_values
-from empathy_zoo.training.sweep import settings_types
+from empathy_zoo.experiment.values import field_types
 
 AVERSE = "helpers_cli_method:AVERSE_DQN"
 ODD = "helpers_cli_method:ODD"
@@ -79,7 +79,7 @@ def test_help_shows_the_chosen_methods_settings_with_their_docs(capsys):
 def test_help_of_every_registered_method_offers_each_of_its_settings(capsys, name):
     method = METHODS[name]
     text = help_of(capsys, "--method", name)
-    kinds = settings_types(method.settings)
+    kinds = field_types(method.settings)
     for field in fields(method.settings):
         if option_reading(kinds[field.name]) is None:
             assert field.name in text.split("in [settings] only: ")[1], field.name

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from empathy_zoo import coexistence_v0
+from empathy_zoo.actions import Action
 from empathy_zoo.engine.coexistence import FLOOR, OTHER_AGENT, OWN_CELL
-from empathy_zoo.grid import Action, torus_distance
+from empathy_zoo.grid import torus_distance
 
 ROBOT, CAT = "robot_0", "cat_0"
 UP, DOWN, LEFT, RIGHT, STAY = Action.UP, Action.DOWN, Action.LEFT, Action.RIGHT, Action.STAY

@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers_batches import one_other
 from helpers_cli_method import TINY
 from helpers_resume import small_run, whole_and_resumed
 
@@ -75,13 +76,15 @@ def step(
         rewards=column(rewards, 1.0, np.float32),
         terminated=column(terminated, False, bool),
         next_obs=np.zeros((k, 1, V), dtype=np.float32),
-        swapped_next_obs=other_obs.reshape(k, 1, V).astype(np.float32),
-        other_present=column(present, True, bool),
-        harmed_other=zeros,
+        harms=zeros,
         battery_return=zeros,
-        other_battery_return=zeros,
         truncated=column(truncated, False, bool),
-        other_rewards=column(other_rewards, 1.0, np.float32),
+        **one_other(
+            other_obs.reshape(k, 1, V).astype(np.float32),
+            column(present, True, bool),
+            zeros,
+            rewards=column(other_rewards, 1.0, np.float32),
+        ),
     )
 
 
@@ -183,7 +186,7 @@ def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs_and_repeat_with_
 def test_several_other_agents_are_refused_naming_the_problem() -> None:
     state = SMALL.initial_state(1, 1, seeds=[0])
     batch = step(one_hot(0)[None])
-    batch.swapped_next_obs_all = np.zeros((1, 1, 2, V), dtype=np.float32)
+    batch.others_swapped = np.zeros((1, 1, 2, V), dtype=np.float32)
     with pytest.raises(ValueError, match="this environment has 2 other agents.*num_cats = 1"):
         SMALL(batch, state)
 

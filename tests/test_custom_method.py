@@ -7,8 +7,8 @@ import json
 import torch
 
 from baselines.registry import get_method
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 300}
 
@@ -16,7 +16,7 @@ TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 
 def test_the_rawlsian_example_trains_and_is_scored(tmp_path) -> None:
     method = get_method("examples.rawlsian_dqn:RAWLSIAN_DQN")
     assert method.name == "rawlsian_dqn"
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="sharing_v0",
         method="examples.rawlsian_dqn:RAWLSIAN_DQN",
         settings=TINY,

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.grid import NUM_ACTIONS
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.vector import VectorEnv
 

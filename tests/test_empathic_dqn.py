@@ -7,16 +7,17 @@ import json
 import numpy as np
 import pytest
 import torch
+from helpers_batches import one_other
 
 from agents.base import StepBatch
 from agents.empathic_dqn import EmpathicDQN, empathic_targets, linear_epsilon
 from agents.replay import StackedReplay
-from agents.rewards import with_train_rewards
+from agents.rewards import TrainRewards
 from agents.settings import EmpathicDQNSettings
 from baselines.registry import get_method
 from baselines.shaping import HARM_PENALTY, EqualityScaling, HarmPenalty
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 500, "target_update_interval": 50}
 
@@ -69,11 +70,9 @@ def _random_batches(count: int, k: int, seed: int, swapped_noise: bool = False) 
                 rewards=np.repeat(rng.random((1, 1)), k, 0),
                 terminated=np.repeat(rng.random((1, 1)) < 0.1, k, 0),
                 next_obs=nxt,
-                swapped_next_obs=swapped,
-                other_present=np.ones((k, 1), bool),
-                harmed_other=np.zeros((k, 1)),
+                harms=np.zeros((k, 1)),
                 battery_return=np.zeros((k, 1)),
-                other_battery_return=np.zeros((k, 1)),
+                **one_other(swapped, np.ones((k, 1), bool), np.zeros((k, 1))),
             )
         )
     return out
@@ -170,7 +169,8 @@ def test_replay_rejects_observations_it_cannot_store_exactly() -> None:
     replay = StackedReplay(1, 10, 2, torch.device("cpu"))
     bad = np.array([[[0.025, 1.0]]], dtype=np.float32)  # not a multiple of 1/20 (0.5 would be stored)
     with pytest.raises(ValueError, match="cannot be stored exactly"):
-        replay.add(bad, bad, bad, np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1), bool), np.ones((1, 1), bool))
+        one = np.ones((1, 1, 1), bool)  # one other agent, present
+        replay.add(bad, bad, bad[:, :, None], np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1), bool), one, one, ~one)
     assert replay.size == 0
 
 
@@ -193,20 +193,18 @@ def test_reward_transforms_shape_only_the_rows_of_their_runs() -> None:
         rewards=np.full((k, 1), 0.9, dtype=np.float32),
         terminated=np.zeros((k, 1), bool),
         next_obs=np.zeros((k, 1, 25)),
-        swapped_next_obs=np.zeros((k, 1, 25)),
-        other_present=np.ones((k, 1), bool),
-        harmed_other=np.ones((k, 1)),
+        harms=np.ones((k, 1)),
         battery_return=np.full((k, 1), 1.9),
-        other_battery_return=np.full((k, 1), 1.0),
+        **one_other(np.zeros((k, 1, 25)), np.ones((k, 1), bool), np.full((k, 1), 1.0)),
     )
-    shaped = with_train_rewards(batch, [None, HarmPenalty(), EqualityScaling()])
+    shaped = TrainRewards([None, HarmPenalty(), EqualityScaling()])(batch)
     assert shaped.rewards.dtype == np.float32 and batch.rewards[:, 0].tolist() == [np.float32(0.9)] * 3  # a copy
     assert shaped.rewards[0, 0] == np.float32(0.9)
     assert shaped.rewards[1, 0] == pytest.approx(0.9 + HARM_PENALTY)
     assert shaped.rewards[2, 0] == pytest.approx(0.9 * 2 * 1.0 / 2.9)
-    assert with_train_rewards(batch, [None] * k) is batch
+    assert TrainRewards([None] * k)(batch) is batch
     with pytest.raises(ValueError, match="3 runs"):
-        with_train_rewards(batch, [HarmPenalty()])
+        TrainRewards([HarmPenalty()])(batch)
 
 
 def _spec(**kw) -> RunSpec:
@@ -219,7 +217,7 @@ def _spec(**kw) -> RunSpec:
         eval_interval=300,
         eval_episodes=2,
     )
-    return RunSpec(**{**base, **kw})
+    return RunSpec.of(**{**base, **kw})
 
 
 def _scores(path) -> dict:

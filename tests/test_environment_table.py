@@ -35,3 +35,14 @@ def test_changing_a_view_does_not_change_the_table() -> None:
         assert ENVIRONMENT_TABLE["coexistence_v0"].fixed == {"cat_0": "random_walk"}
     finally:
         DEFAULT_POLICIES["coexistence_v0"]["cat_0"] = "random_walk"
+
+
+@pytest.mark.parametrize("name", sorted(ENVIRONMENT_TABLE))
+def test_the_table_s_default_arguments_are_the_engine_s(name: str) -> None:
+    import inspect
+
+    from empathy_zoo.environments import DEFAULT_ARGUMENTS
+
+    parameters = inspect.signature(ENGINES[name]).parameters
+    signature = {key: p.default for key, p in parameters.items() if key != "num_envs"}
+    assert ENVIRONMENT_TABLE[name].arguments == DEFAULT_ARGUMENTS[name] == signature

@@ -14,12 +14,12 @@ from pathlib import Path
 
 import pytest
 
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.provenance import package_version
 from empathy_zoo.result_file import ResultFileError, check_result, read_result
 from empathy_zoo.training import RunnerOptions, fingerprint, runner, train_runs
 from empathy_zoo.training.fingerprint import CodeFingerprint, module_sha256, plugin_names
 from empathy_zoo.training.results import write_result
-from empathy_zoo.training.spec import RunSpec
 
 MODULE = "fingerprint_user_method"
 """The user's own method module, written to a test's directory."""
@@ -42,7 +42,7 @@ def sha256(text: str) -> str:
 
 
 def run(method: str) -> RunSpec:
-    return RunSpec(env="coexistence_v0", method=method, settings=TINY, steps=300, eval_interval=150, eval_episodes=2)
+    return RunSpec.of(env="coexistence_v0", method=method, settings=TINY, steps=300, eval_interval=150, eval_episodes=2)
 
 
 def files_below(path: Path) -> dict[str, bytes]:
@@ -118,7 +118,8 @@ def test_an_edited_plugin_method_is_refused_then_retrained_on_request(write_plug
     assert train_runs([spec], out, RERUN, on_note=notes.append) == [path]
     assert json.loads(path.read_text())["plugin_sha256"] == {MODULE: sha256(EDITED)}
     assert any(note.startswith("retraining") and spec.run_id in note for note in notes), notes
-    assert sorted(p.name for p in path.parent.iterdir()) == [path.name], "the old file is gone, nothing set aside"
+    kept = [path.with_name(spec.run_id + ".agent.pt").name, path.name]
+    assert sorted(p.name for p in path.parent.iterdir()) == kept, "the old files are gone, nothing set aside"
 
 
 def test_an_unchanged_plugin_reuses_its_result_even_at_another_commit(write_plugin, tmp_path, monkeypatch):
@@ -203,7 +204,7 @@ def test_the_ray_backend_is_checked_and_retrains_alike(finished_dqn, tmp_path, m
     train_runs([run("dqn")], out, replace(ray, rerun_changed=True), on_result=lambda r: written.append(r["run_id"]))
     assert dispatched == [[run("dqn").run_id]] and written == [run("dqn").run_id]
     assert json.loads(path.read_text())["version"] == package_version()
-    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
+    assert sorted(p.name for p in path.parent.iterdir()) == [path.with_name(path.stem + ".agent.pt").name, path.name]
 
 
 def test_a_set_aside_file_is_put_back_when_its_run_fails(finished_dqn, tmp_path, monkeypatch):

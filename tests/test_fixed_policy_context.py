@@ -14,12 +14,13 @@ from helpers_policies import Recorder
 
 import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo import FixedAgents, coexistence_v0, sharing_v0
-from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.actions import NUM_ACTIONS, Action
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.sweep_file import parse_sweep
+from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.policies import CONTEXT_KEYS, make_policy
 from empathy_zoo.randomness import derive_key
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
-from empathy_zoo.training.sweep import SweepConfigError, parse_sweep
 from empathy_zoo.vector import VectorEnv
 
 HELPERS = Recorder.__module__  # "helpers_policies", importable because pytest puts tests/ on the path
@@ -86,7 +87,7 @@ def test_training_gives_the_policy_the_same_contexts_as_fixed_agents(tmp_path, m
 
     monkeypatch.setattr(ensemble, "VectorEnv", Watched)
     policy = f"{HELPERS}:RecorderWithState"
-    spec = RunSpec(
+    spec = RunSpec.of(
         settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8},
         seed=2,
         steps=120,
@@ -166,14 +167,14 @@ def test_a_string_entry_and_an_entry_without_arguments_are_the_same_run():
     [table] = sweep('{ cat_0 = { policy = "random_walk" } }')
     [default] = sweep("{}")
     assert named.config()["fixed"] == {"cat_0": "random_walk"} == table.config()["fixed"]
-    assert named.fixed == table.fixed == {"cat_0": "random_walk"}
+    assert named.variant.fixed == table.variant.fixed == {"cat_0": "random_walk"}
     assert named.run_id == table.run_id == default.run_id
 
 
 def test_a_run_spec_with_arguments_keeps_its_id_through_its_record():
-    spec = RunSpec(fixed={"cat_0": {"policy": f"{HELPERS}:Chaser", "every": 2}})
-    record = json.loads(json.dumps({**spec.__dict__, "fixed": dict(spec.fixed)}))
-    assert RunSpec(**record).run_id == spec.run_id
+    spec = RunSpec.of(fixed={"cat_0": {"policy": f"{HELPERS}:Chaser", "every": 2}})
+    record = json.loads(json.dumps(spec.request()))
+    assert RunSpec.of(**record).run_id == spec.run_id
 
 
 @pytest.mark.parametrize(

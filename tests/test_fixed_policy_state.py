@@ -13,10 +13,10 @@ import torch
 from helpers_policies import Wanderer
 
 import empathy_zoo.training.ensemble as ensemble
+from empathy_zoo.experiment.sweep_file import parse_sweep
 from empathy_zoo.policies import Patrol, RandomWalk
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.checkpoint import from_safe, to_safe
-from empathy_zoo.training.sweep import parse_sweep
 from empathy_zoo.vector import VectorEnv
 
 HELPERS = Wanderer.__module__  # "helpers_policies", importable because pytest puts tests/ on the path

@@ -24,9 +24,9 @@ from hypothesis import strategies as st
 
 import empathy_zoo.cli as cli
 import empathy_zoo.training.runner as runner
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.result_file import REQUIRED_FIELDS
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 TALLY: Counter[str] = Counter()
 """What the attack tried (printed at the end of the module with ``-s``)."""
@@ -204,7 +204,7 @@ def test_a_changed_sweep_file_is_refused_in_one_line_naming_file_and_key_long(ch
 def real_results(tmp_path_factory) -> list[dict[str, Any]]:
     """Two result files of a tiny real run."""
     specs = [
-        RunSpec(
+        RunSpec.of(
             settings={"learning_starts": 32, "replay_capacity": 200, "hidden_size": 8},
             seed=seed,
             steps=200,

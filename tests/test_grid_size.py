@@ -1,26 +1,73 @@
-"""Grid size: the engines' lookup tables grow with the number of cells (not its square), sizes up
-to :data:`MAX_SIZE` work and give the rules' exact outcomes, larger ones are refused up front
-with the memory they would need."""
+"""Grid size: the engines' lookup tables grow with the number of cells (not its square) and
+:func:`table_bytes` bounds what they measure, sizes up to :data:`MAX_SIZE` work and give the
+rules' exact outcomes, larger ones are refused up front with the memory they would need."""
 
 from __future__ import annotations
 
 import tracemalloc
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
 
 from empathy_zoo import coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.base import MAX_SIZE, table_bytes
 from empathy_zoo.engine.coexistence import harm_outcome
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.grid import MOVES, NUM_ACTIONS, window_indices
+from empathy_zoo.grid import MOVES, window_indices
 from empathy_zoo.vector import VectorEnv
+
+TABLE_BYTES_SLACK = 3
+""":func:`table_bytes` is at most this many times the bytes of the arrays of the engine that needs
+the most (an upper bound, not a guess from far above)."""
+
+
+def held_arrays(value: Any, seen: set[int]) -> Iterator[np.ndarray]:
+    """Every numpy array ``value`` holds (an engine: its tables and the state of its environments),
+    through its attributes, containers, the suite's own objects and arrays' bound methods, each once."""
+    if id(value) in seen:
+        return
+    seen.add(id(value))
+    if isinstance(value, np.ndarray):
+        yield value
+    elif isinstance(value, (tuple, list)):
+        for item in value:
+            yield from held_arrays(item, seen)
+    elif isinstance(value, dict):
+        for item in value.values():
+            yield from held_arrays(item, seen)
+    elif type(value).__module__.startswith("empathy_zoo"):
+        yield from held_arrays(vars(value), seen)
+    elif isinstance(getattr(value, "__self__", None), np.ndarray):  # (a lookup kept as ``table.take``)
+        yield from held_arrays(value.__self__, seen)
+
+
+def used_engine(engine_class, size: int, view: int):
+    """An engine of one environment after a reset and each kind of observation (tables built on
+    first use are built)."""
+    engine = engine_class(1, size=size, view=view)
+    engine.reset(seeds=[0])
+    engine.observe(0)
+    engine.observe_swapped(0, 1)
+    engine.in_view(0, 1)
+    return engine
+
+
+@pytest.mark.parametrize("size, view", [(7, 5), (31, 5), (61, 15), (101, 3)])
+def test_table_bytes_is_a_close_upper_bound_of_the_arrays_an_engine_holds(size, view):
+    held = {name: sum(array.nbytes for array in held_arrays(used_engine(ENGINES[name], size, view), set())) for name in ENGINES}
+    for name, nbytes in held.items():
+        assert nbytes <= table_bytes(size, view), (name, nbytes)
+    assert table_bytes(size, view) <= TABLE_BYTES_SLACK * max(held.values()), held
 
 
 def construction_peak(engine_class, size: int, view: int) -> int:
+    """Most memory (``tracemalloc``) taken while an engine is built and first observed."""
     tracemalloc.start()
     try:
-        engine_class(1, size=size, view=view)
+        used_engine(engine_class, size, view)
         return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -28,7 +75,6 @@ def construction_peak(engine_class, size: int, view: int) -> int:
 
 @pytest.mark.parametrize("name", sorted(ENGINES))
 def test_building_an_engine_takes_memory_in_proportion_to_its_cells(name):
-    """Quadratic tables took 40 bytes per pair of cells: 550 MB at size 61, 4.1 GB at 101."""
     for size, view in ((31, 5), (61, 5), (61, 15)):
         peak = construction_peak(ENGINES[name], size, view)
         assert peak <= table_bytes(size, view), (size, view, peak)

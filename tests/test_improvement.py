@@ -7,6 +7,7 @@ import json
 import math
 
 import pytest
+from helpers_results import described
 
 from leaderboard.improvement import (
     bootstrap_improvement,
@@ -51,16 +52,18 @@ def test_interquartile_mean(values, expected) -> None:
 
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0, reward=None, env="coexistence_v0") -> dict:
-    return {
-        "method": method,
-        "method_label": f"{method} {selfishness}",
-        "env": env,
-        "seed": seed,
-        "steps": 10,
-        "config": {"settings": {"selfishness": selfishness}, "reward": reward},
-        "train": {"episode_end_step": [10], "survival": [value], "harms": [1.0 - value / 10]},
-        "eval": [{"step": 10, "survival": [value], "harms": [1.0 - value / 10]}],
-    }
+    return described(
+        {
+            "method": method,
+            "method_label": f"{method} {selfishness}",
+            "env": env,
+            "seed": seed,
+            "steps": 10,
+            "config": {"settings": {"selfishness": selfishness}, "reward": reward},
+            "train": {"episode_end_step": [10], "survival": [value], "harms": [1.0 - value / 10]},
+            "eval": [{"step": 10, "survival": [value], "harms": [1.0 - value / 10]}],
+        }
+    )
 
 
 def test_dqn_is_the_baseline_and_every_other_method_is_compared_with_it() -> None:

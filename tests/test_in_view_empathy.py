@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 
 import empathy_zoo.training.ensemble as ensemble
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, group_specs, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 TINY = {
     "learning_starts": 64,
@@ -20,7 +20,9 @@ OPTIONS = RunnerOptions(progress=False, checkpoint_interval=0, threads=1)
 
 
 def spec(method: str, seed: int = 0) -> RunSpec:
-    return RunSpec(env="coexistence_v0", method=method, settings=TINY, seed=seed, steps=1_200, eval_interval=600, eval_episodes=2)
+    return RunSpec.of(
+        env="coexistence_v0", method=method, settings=TINY, seed=seed, steps=1_200, eval_interval=600, eval_episodes=2
+    )
 
 
 def test_in_view_runs_train_apart_with_an_in_view_swap_and_learn_otherwise(tmp_path, monkeypatch) -> None:

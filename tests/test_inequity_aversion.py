@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers_batches import one_other
 from helpers_resume import whole_and_resumed
 
 from agents.base import StepBatch
@@ -23,13 +24,10 @@ def step(own: list[float], other: list[float], ended: list[bool] | None = None) 
         rewards=np.array(own, dtype=np.float32)[:, None],
         terminated=np.array(ended or [False] * k)[:, None],
         next_obs=zeros,
-        swapped_next_obs=zeros,
-        other_present=np.ones((k, 1), bool),
-        harmed_other=np.zeros((k, 1)),
+        harms=np.zeros((k, 1)),
         battery_return=np.zeros((k, 1)),
-        other_battery_return=np.zeros((k, 1)),
         truncated=np.zeros((k, 1), bool),
-        other_rewards=np.array(other, dtype=np.float32)[:, None],
+        **one_other(zeros, np.ones((k, 1), bool), np.zeros((k, 1)), rewards=np.array(other, dtype=np.float32)[:, None]),
     )
 
 
@@ -46,7 +44,7 @@ def test_both_inequities_are_penalised_on_smoothed_rewards_and_reset_at_the_epis
     shaped, _ = ia(step([0.0, 0.0], [0.0, 0.0]), state)
     assert shaped[1, 0] == 0.0 and shaped[0, 0] == pytest.approx(-5.0 * 0.25)  # run 1 started afresh
     with pytest.raises(ValueError, match="other_rewards"):
-        ia(StepBatch(**{**step([0.0], [0.0]).__dict__, "other_rewards": None}), ia.initial_state(1, 1))
+        ia(StepBatch(**{**step([0.0], [0.0]).__dict__, "others_rewards": None}), ia.initial_state(1, 1))
 
 
 def test_the_trainer_keeps_and_restores_the_state_only_for_the_runs_of_the_transform() -> None:
@@ -63,9 +61,9 @@ def test_the_trainer_keeps_and_restores_the_state_only_for_the_runs_of_the_trans
 
 
 def test_a_resumed_inequity_averse_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
 
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="sharing_v0",
         method="dqn_inequity_aversion",
         steps=600,

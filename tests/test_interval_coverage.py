@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers_results import described
 
 from leaderboard.aggregate import bootstrap_mean_ci, mean_ci, student_t_interval
 from leaderboard.improvement import (
@@ -108,16 +109,18 @@ def test_three_seeds_against_three_can_never_give_a_verdict() -> None:
 
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> dict:
-    return {
-        "method": method,
-        "method_label": f"{method} {selfishness}",
-        "env": "coexistence_v0",
-        "seed": seed,
-        "steps": 10,
-        "config": {"settings": {"selfishness": selfishness}, "reward": None},
-        "train": {"episode_end_step": [10], "survival": [value], "harms": [value / 1000]},
-        "eval": [{"step": 10, "survival": [value], "harms": [value / 1000]}],
-    }
+    return described(
+        {
+            "method": method,
+            "method_label": f"{method} {selfishness}",
+            "env": "coexistence_v0",
+            "seed": seed,
+            "steps": 10,
+            "config": {"settings": {"selfishness": selfishness}, "reward": None},
+            "train": {"episode_end_step": [10], "survival": [value], "harms": [value / 1000]},
+            "eval": [{"step": 10, "survival": [value], "harms": [value / 1000]}],
+        }
+    )
 
 
 def _verdicts(method_values: list[float], dqn_values: list[float]) -> dict[str, Improvement]:
@@ -186,5 +189,8 @@ def test_survival_stays_below_the_longest_episode() -> None:
 
     _, low, high = mean_ci(np.array([500.0, 480.0, 200.0]), metrics="survival", max_cycles=500)
     assert high == 500.0 and 0.0 <= low < 200.0
-    runs = [{"config": {"env_kwargs": {}}}, {"config": {"env_kwargs": {"max_cycles": 40}}}]
-    assert longest_episode(runs) == 500 and longest_episode(runs[1:]) == 40  # the engine's default where unset
+    runs = [
+        {"env": "coexistence_v0", "config": {"env_kwargs": {}}},
+        {"env": "sharing_v0", "config": {"env_kwargs": {"max_cycles": 40}}},
+    ]
+    assert longest_episode(runs) == 500 and longest_episode(runs[1:]) == 40  # the environment's default where unset

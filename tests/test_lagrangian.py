@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers_batches import one_other
 from helpers_cli_method import TINY
 from helpers_resume import small_run, whole_and_resumed
 
@@ -31,13 +32,10 @@ def step(harms: list[list[int]], ended: list[list[bool]], rewards: float = 1.0) 
         rewards=np.full((k, m), rewards, dtype=np.float32),
         terminated=np.array(ended, dtype=bool),
         next_obs=np.zeros((k, m, 25), dtype=np.float32),
-        swapped_next_obs=np.zeros((k, m, 25), dtype=np.float32),
-        other_present=np.ones((k, m), bool),
-        harmed_other=harmed,
+        harms=harmed,
         battery_return=zeros,
-        other_battery_return=zeros,
         truncated=np.zeros((k, m), bool),
-        other_rewards=zeros.astype(np.float32),
+        **one_other(np.zeros((k, m, 25), dtype=np.float32), np.ones((k, m), bool), zeros, rewards=zeros.astype(np.float32)),
     )
 
 

@@ -286,7 +286,7 @@ def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        ({"schema": 3}, "schemas 1 and 2, got 3"),
+        ({"schema": 4}, "schemas 1, 2 and 3, got 4"),
         ({"env": None, "steps": None}, None),
         ({"seed": "0"}, "field seed: expected an int"),
     ],

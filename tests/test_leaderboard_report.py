@@ -71,7 +71,11 @@ def write_synthetic_results(
                     "method_label": label,
                     "seed": seed,
                     "steps": steps,
-                    "config": {"beta": 0.5, "settings": {}, "env_kwargs": {}, "fixed": {}},
+                    "config": {
+                        "settings": {"selfishness": 0.5} if method == "empathic_dqn" else {},
+                        "env_kwargs": {},
+                        "fixed": {},
+                    },
                     "train": {"episode_end_step": end_steps, **columns(n)},
                     "eval": [{"step": s, **columns(5)} for s in (steps // 2, steps)],
                     "wall_time_s": 1.0,

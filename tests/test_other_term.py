@@ -17,8 +17,8 @@ def test_sharing_ends_with_the_human_terminal_and_no_other_term() -> None:
     venv = _placed("sharing_v0", {"robot_0": (0, 0), "human_0": (4, 4)}, {"human_0": "stay"}, batteries=[(0, 1)])
     result, batch = _step(venv, RIGHT)
     assert result.episode_over[0] and result.terminated[0].all()
-    assert result.swapped_valid[0, 0]  # the human is still in the grid: its picture exists ...
-    assert result.swapped_other_terminated[0, 0]  # ... but its episode is over for good
+    assert result.other_seen[0, 0]  # the human is still in the grid: its picture exists ...
+    assert result.other_terminated[0, 0]  # ... but its episode is over for good
     assert not batch.other_present[0, 0]
     assert batch.terminated[0, 0]
 
@@ -42,7 +42,7 @@ def test_harmed_cat_gives_no_other_term() -> None:
     venv = _placed("coexistence_v0", {"robot_0": (2, 4), "cat_0": (3, 3)}, {"cat_0": "stay"})
     result, batch = _step(venv, 1)  # down to (3, 4)
     assert result.harmed_by[0, 1] == ROBOT
-    assert result.swapped_other_terminated[0, 0] and not result.swapped_valid[0, 0]
+    assert result.other_terminated[0, 0] and not result.other_seen[0, 0]
     assert not batch.other_present[0, 0]
     assert not batch.terminated[0, 0]
 
@@ -53,7 +53,7 @@ def test_cat_truncated_by_the_robot_falling_keeps_the_other_term() -> None:
     result, batch = _step(venv, 1)  # down to (3, 3)
     assert result.harmed_by[0, 0] == 1
     assert batch.terminated[0, 0]
-    assert result.truncated[0, 1] and not result.swapped_other_terminated[0, 0]
+    assert result.truncated[0, 1] and not result.other_terminated[0, 0]
     assert batch.other_present[0, 0]
 
 
@@ -76,4 +76,4 @@ def test_the_vector_env_reports_each_learner_s_events_the_runner_passes_on(env: 
         assert np.array_equal(step.learner_battery_return[:, 0], step.battery_return[:, human])
         assert np.array_equal(step.other_battery_return[:, 0], step.battery_return[:, robot])
         assert np.array_equal(step.other_rewards[:, 0], step.rewards[:, robot])
-        assert np.array_equal(step.learner_harmed[:, 0], (step.harmed_by == human).sum(axis=1))
+        assert np.array_equal(step.harms[:, 0], (step.harmed_by == human).sum(axis=1))

@@ -61,14 +61,14 @@ def _batch(rng: np.random.Generator, k: int, n: int, same_swap: bool) -> StepBat
         rewards=rng.random((k, 1)).astype(np.float32),
         terminated=rng.random((k, 1)) < 0.05,
         next_obs=rng.integers(-1, 2, size=(k, 1, 25)).astype(np.float32),
-        swapped_next_obs=swapped[:, :, 0],
-        other_present=present[:, :, 0],
-        harmed_other=np.zeros((k, 1), dtype=np.int64),
-        battery_return=np.zeros((k, 1)),
-        other_battery_return=np.zeros((k, 1)),
-        swapped_next_obs_all=swapped,
+        closest=np.zeros((k, 1), dtype=np.int64),
+        others_swapped=swapped,
         others_present=present,
         others_live=present | (rng.random((k, 1, n)) < 0.5) if not same_swap else np.ones((k, 1, n), dtype=bool),
+        others_unseen=np.zeros((k, 1, n), dtype=bool),
+        harms=np.zeros((k, 1), dtype=np.int64),
+        battery_return=np.zeros((k, 1)),
+        others_battery_return=np.zeros((k, 1, n)),
     )
 
 
@@ -101,11 +101,13 @@ def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
         learner.replay.add(
             batch.obs,
             batch.next_obs,
-            batch.swapped_next_obs_all,
+            batch.others_swapped,
             batch.actions,
             batch.rewards,
             batch.terminated,
-            batch.others_live.astype(np.uint8) + batch.others_present,
+            batch.others_present,
+            batch.others_live,
+            batch.others_unseen,
         )
 
     def capture(batch, q_next, target_next, target_swapped):
@@ -114,18 +116,29 @@ def test_each_others_value_comes_from_its_own_swapped_observation() -> None:
 
     learner.targets = capture
     learner.update()
-    swapped = seen["batch"]["swapped_next_obs"]  # (K, B, N, V)
+    swapped = seen["batch"]["others_swapped"]  # (K, B, O, V)
     assert seen["batch"]["others_live"].shape == (2, 32, 3)
-    assert (seen["batch"]["others_live"] | ~seen["batch"]["other_present"]).all()  # present implies live
+    assert (seen["batch"]["others_live"] | ~seen["batch"]["others_present"]).all()  # present implies live
     assert swapped.shape == (2, 32, 3, 25) and seen["target_swapped"].shape == (2, 32, 3, 5)
     for j in range(3):
         expected = StackedMLP.forward(learner.target, swapped[:, :, j])
         assert torch.allclose(seen["target_swapped"][:, :, j], expected)
 
 
-def test_aggregating_without_every_others_observation_is_refused() -> None:
-    learner = _learner("mean", 2)
+def test_aggregating_over_another_number_of_others_is_refused() -> None:
+    learner = _learner("mean", 3)
     batch = _batch(np.random.default_rng(2), 2, 2, same_swap=False)
-    batch.swapped_next_obs_all = None
-    with pytest.raises(ValueError, match="needs every other agent's swapped observation"):
+    with pytest.raises(ValueError, match="for 3 other agent"):
         learner.observe(batch)
+
+
+def test_the_closest_rule_keeps_the_closest_others_entries() -> None:
+    """With several others and the closest rule, the replay keeps the entries at ``closest``."""
+    learner = _learner("closest", 3)
+    batch = _batch(np.random.default_rng(3), 2, 3, same_swap=False)
+    batch.closest = np.array([[2], [1]])
+    learner.observe(batch)
+    kept = learner.sample_batch(torch.zeros((2, 1), dtype=torch.long))
+    for run, place in enumerate((2, 1)):
+        assert torch.equal(kept["other_swapped"][run, 0], torch.from_numpy(batch.others_swapped[run, 0, place]))
+        assert bool(kept["other_present"][run, 0]) == batch.others_present[run, 0, place]

@@ -11,8 +11,8 @@ from helpers_sweeps import TINY_SWEEP, TINY_TRAIN
 import empathy_zoo.training.runner as runner
 from empathy_zoo import atomic
 from empathy_zoo.cli import main
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 
 @pytest.fixture
@@ -66,7 +66,7 @@ def test_train_runs_refuses_a_directory_it_cannot_write(tmp_path, monkeypatch, n
         return real(path, data)
 
     monkeypatch.setattr(atomic, "write_bytes_atomic", read_only)
-    spec = RunSpec(steps=200, eval_interval=200, eval_episodes=1, settings={"learning_starts": 32})
+    spec = RunSpec.of(steps=200, eval_interval=200, eval_episodes=1, settings={"learning_starts": 32})
     with pytest.raises(ValueError, match="not writable.*Permission denied.*choose another") as error:
         train_runs([spec], tmp_path / "out", RunnerOptions(progress=False))
     assert str(tmp_path / "out") in str(error.value)
@@ -80,7 +80,7 @@ def test_a_read_only_directory_is_refused(tmp_path, no_training):
     out.mkdir()
     out.chmod(0o500)
     try:
-        spec = RunSpec(steps=200, eval_interval=200, eval_episodes=1, settings={"learning_starts": 32})
+        spec = RunSpec.of(steps=200, eval_interval=200, eval_episodes=1, settings={"learning_starts": 32})
         with pytest.raises(ValueError, match=str(out)):
             train_runs([spec], out, RunnerOptions(progress=False))
     finally:

@@ -6,15 +6,15 @@ from __future__ import annotations
 import pytest
 
 import empathy_zoo.training.runner as runner
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 SETTINGS = {"learning_starts": 32, "replay_capacity": 300, "hidden_size": 8}
 
 
 def specs():
     return [
-        RunSpec(
+        RunSpec.of(
             env=env, settings=SETTINGS, seed=seed, steps=1000, eval_interval=1000, eval_episodes=1, env_kwargs={"max_cycles": 40}
         )
         for env in ("coexistence_v0", "sharing_v0")

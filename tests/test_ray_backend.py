@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
@@ -11,13 +12,13 @@ from pathlib import Path
 
 import pytest
 
+from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.ray_backend import train_with_ray
-from empathy_zoo.training.spec import RunSpec, group_specs
 
 TINY = {"learning_starts": 64, "replay_capacity": 1_000, "epsilon_decay_steps": 200, "target_update_interval": 50}
 SPECS = [
-    RunSpec(
+    RunSpec.of(
         env=env,
         method="empathic_dqn",
         settings={**TINY, "selfishness": 0.5},
@@ -59,7 +60,11 @@ def test_ray_gives_the_local_backends_result_files(local_ray, local_results, tmp
     paths = train_runs(SPECS, tmp_path, RAY, on_result=lambda result: seen.append(result["run_id"]))
     assert sorted(seen) == sorted(spec.run_id for spec in SPECS)
     assert {path.name: _scores(path) for path in paths} == local_results
-    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == sorted(local_results)
+    agents = [f"{spec.run_id}.agent.pt" for spec in SPECS]
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == sorted([*local_results, *agents])
+    for path in paths:  # each agent file, written by the driver, is the one its result file names
+        entry = json.loads(path.read_text())["agent"]
+        assert hashlib.sha256(path.with_name(entry["file"]).read_bytes()).hexdigest() == entry["sha256"]
     assert not list((tmp_path / "checkpoints").glob("*.pt")), "finished ensembles leave no checkpoint"
     # a second call finds every run written and starts no task
     assert train_runs(SPECS, tmp_path, RAY, on_result=lambda result: seen.append(result["run_id"])) == paths

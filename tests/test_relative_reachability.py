@@ -134,7 +134,7 @@ def test_the_no_op_costs_nothing_and_harming_the_cat_costs_more_than_a_harmless_
     # the cat sits at (5, 3) below the robot at (3, 3): down harms it, up is harmless, stay is the baseline
     venv, baseline = placed([((3, 3), (5, 3))] * 3)
     shaped, batch = shaped_step(venv, baseline, [STAY, UP, DOWN])
-    assert batch.harmed_other[:, 0].tolist() == [0, 0, 1]
+    assert batch.harms[:, 0].tolist() == [0, 0, 1]
     assert (batch.baseline_after == SIZE * SIZE_STRIDE + both((3, 3), (5, 3))).all()
     assert shaped[0] == batch.rewards[0, 0] == 1.0  # the no-op: the state is the baseline, d = 0
     assert 0.0 < 1.0 - shaped[1] < 1.0  # a harmless move: a small price
@@ -150,7 +150,7 @@ def test_the_step_on_which_the_robot_is_harmed_has_no_penalty_while_harming_the_
     # (above) harms it. env 1: the cat at (5, 3) below; the robot moves down and harms it.
     venv, baseline = placed([((3, 3), (1, 3)), ((3, 3), (5, 3))])
     shaped, batch = shaped_step(venv, baseline, [UP, DOWN])
-    assert batch.terminated[:, 0].tolist() == [True, False] and batch.harmed_other[:, 0].tolist() == [0, 1]
+    assert batch.terminated[:, 0].tolist() == [True, False] and batch.harms[:, 0].tolist() == [0, 1]
     assert batch.state_after[0, 0] == SIZE * SIZE_STRIDE + END
     rr = RelativeReachability()
     ends = rr.deviation(batch.state_after[:, 0], batch.baseline_after[:, 0])
@@ -174,7 +174,7 @@ def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
         before, present, steps = venv.engine.pos.copy(), venv.engine.present.copy(), venv.engine.t.copy()
         actions = rng.integers(0, 5, size=8)
         _, batch = shaped_step(venv, baseline, actions.tolist())
-        harms += int(batch.harmed_other.sum())
+        harms += int(batch.harms.sum())
         for i in np.flatnonzero(present.all(axis=1)):
             expected = []
             for robot_action in (STAY, int(actions[i])):
@@ -209,7 +209,7 @@ def _one_plain_step() -> tuple[np.ndarray, np.ndarray, Any]:
 
 # ---------------------------------------------------------------------------- training
 def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
 
     seen: list[tuple[bool, float]] = []
     real_call = RelativeReachability.__call__
@@ -220,7 +220,7 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
         return shaped
 
     monkeypatch.setattr(RelativeReachability, "__call__", spy)
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="coexistence_v0",
         method="dqn_relative_reachability",
         steps=300,
@@ -243,11 +243,11 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
 
 
 def test_a_run_beside_a_relative_reachability_run_is_unchanged_by_its_baseline(tmp_path) -> None:
+    from empathy_zoo.experiment.model import RunSpec
     from empathy_zoo.training import RunnerOptions, train_runs
-    from empathy_zoo.training.spec import RunSpec
 
     def spec(method: str) -> RunSpec:
-        return RunSpec(
+        return RunSpec.of(
             env="coexistence_v0",
             method=method,
             steps=200,

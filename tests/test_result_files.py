@@ -12,8 +12,8 @@ from helpers_results import synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.result_file import result_path
-from empathy_zoo.training.spec import RunSpec
 from leaderboard.plots import plot_learning_curves
 from leaderboard.report import write_leaderboard
 
@@ -56,7 +56,7 @@ def test_plots_confine_figures_to_their_directory(tmp_path):
 @pytest.mark.parametrize("variant", ["../x", "/tmp/x", "a/b", ".x"])
 def test_a_run_spec_refuses_a_variant_that_is_not_a_file_name(variant):
     with pytest.raises(ValueError, match=f"variant {variant!r} cannot be part of a file name"):
-        RunSpec(variant=variant)
+        RunSpec.of(variant=variant)
 
 
 @pytest.mark.parametrize("run_id", ["../x", "/abs", "a/b", os.sep.join(["..", "..", "x"])])
@@ -112,7 +112,7 @@ MALFORMED = {
     "label not a string": (_set(["method_label"], 3), "method_label: expected a non-empty one-line string"),
     "eval not an array": (_set(["eval"], {}), "eval: expected an array"),
     "train not an object": (_set(["train"], []), "train: expected an object"),
-    "another schema": (_set(["schema"], 3), "schema: this suite reads result schemas 1 and 2, got 3"),
+    "another schema": (_set(["schema"], 4), "schema: this suite reads result schemas 1, 2 and 3, got 4"),
     "a list, not an object": (lambda result: None, None),
 }
 
@@ -193,7 +193,7 @@ def test_a_second_train_differing_only_in_a_setting_is_refused_when_it_starts(tm
 def test_train_runs_refuses_two_experiments_with_one_label_in_one_call(tmp_path):
     from empathy_zoo.training import RunnerOptions, train_runs
 
-    specs = [RunSpec(steps=100, settings={"learning_rate": lr, "learning_starts": 32}) for lr in (1e-3, 2e-3)]
+    specs = [RunSpec.of(steps=100, settings={"learning_rate": lr, "learning_starts": 32}) for lr in (1e-3, 2e-3)]
     with pytest.raises(ValueError, match="same label 'Empathic DQN"):
         train_runs(specs, tmp_path, RunnerOptions(progress=False))
     assert not (tmp_path / "runs").exists()
@@ -223,7 +223,7 @@ def test_a_directory_without_result_files_is_refused_alike(tmp_path, capsys, com
 
 
 def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() -> None:
-    """Files of empathy-zoo 0.1 (schema 1) carried shaping as settings; they read as schema 2."""
+    """Files of empathy-zoo 0.1 (schema 1) carried shaping as settings; they read as schema 3."""
     from pathlib import Path
 
     from empathy_zoo.atomic import read_json
@@ -240,7 +240,7 @@ def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() ->
         raw = read_json(path)
         assert raw["schema"] == 1 and "harm_penalty" in raw["config"]["settings"]
         result = read_result(path)
-        assert result["schema"] == SCHEMA == 2 and result["run_id"] == raw["run_id"]
+        assert result["schema"] == SCHEMA == 3 and result["run_id"] == raw["run_id"]
         assert "harm_penalty" not in result["config"]["settings"] and "equality_shaping" not in result["config"]["settings"]
         assert result["config"]["reward"] == expected[result["method"]]
         seen.add(result["method"])

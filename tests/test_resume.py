@@ -11,9 +11,9 @@ import pytest
 
 import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.resume import CHECKPOINT_DIR
-from empathy_zoo.training.spec import RunSpec
 
 SETTINGS = {
     "learning_starts": 32,
@@ -26,7 +26,7 @@ SETTINGS = {
 
 def specs(seeds=(0, 1, 2), betas=(0.5,)):
     return [
-        RunSpec(
+        RunSpec.of(
             settings={**SETTINGS, "selfishness": beta},
             seed=seed,
             steps=300,

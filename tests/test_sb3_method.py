@@ -11,12 +11,13 @@ import sys
 import numpy as np
 import pytest
 import torch
+from helpers_batches import one_other
 
 from agents.base import StepBatch
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 from baselines.sb3 import INSTALL_HINT, SB3_DQN, SB3_PPO, SB3Learner, SB3Settings, make_sb3_model, sb3_seed  # isort: skip
 
@@ -28,7 +29,7 @@ OPTIONS = RunnerOptions(progress=False, checkpoint_interval=0)
 
 
 def spec(method: str, settings: dict, seed: int = 0, env: str = "coexistence_v0", steps: int = 300) -> RunSpec:
-    return RunSpec(
+    return RunSpec.of(
         env=env,
         method=method,
         settings=settings,
@@ -85,12 +86,10 @@ def drive(learner: SB3Learner, env, steps: int, seed: int) -> np.ndarray:
                 rewards=np.array([[reward]]),
                 terminated=np.array([[terminated]]),
                 next_obs=next_obs[None, None],
-                swapped_next_obs=np.zeros_like(obs)[None, None],
-                other_present=zero.astype(bool),
-                harmed_other=zero,
+                harms=zero,
                 battery_return=zero,
-                other_battery_return=zero,
                 truncated=np.array([[truncated]]),
+                **one_other(np.zeros_like(obs)[None, None], zero.astype(bool), zero),
             )
         )
         obs = env.reset()[0] if terminated or truncated else next_obs

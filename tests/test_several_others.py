@@ -15,10 +15,11 @@ import pytest
 from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.engine import CoexistenceEngine
 from empathy_zoo.engine.sharing import agent_value, battery_value
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.grid import NUM_ACTIONS, Action, torus_distance
+from empathy_zoo.grid import torus_distance
 from empathy_zoo.vector import VectorEnv
 
 UP, DOWN, LEFT, RIGHT, STAY = (int(a) for a in (Action.UP, Action.DOWN, Action.LEFT, Action.RIGHT, Action.STAY))
@@ -32,9 +33,9 @@ STEPS = 400
 VECTOR_FIELDS = (
     "observations",
     "final_observations",
-    "swapped",
-    "swapped_valid",
-    "swapped_other_terminated",
+    "other_swapped",
+    "other_seen",
+    "other_terminated",
     "rewards",
     "terminated",
     "truncated",
@@ -45,13 +46,14 @@ VECTOR_FIELDS = (
     "learner_rewards",
     "learner_terminated",
     "learner_truncated",
-    "learner_harmed",
+    "harms",
     "learner_battery_return",
     "other_battery_return",
     "other_rewards",
     "finished",
 )
-"""The :class:`~empathy_zoo.vector.VectorStep` fields every version has."""
+"""What every version's :class:`~empathy_zoo.vector.VectorStep` says, by today's names (the
+closest other agent's ``other_*`` read through its properties: each version's digest is the same)."""
 
 DEFAULT_DIGESTS = {
     "coexistence_v0 empathy": "007fef7d3c18e858bc186c092b0e44c25f6c9d5f5387afb6c5dbbbc694b64f99",
@@ -378,8 +380,9 @@ def test_closest_other_is_the_nearest_on_the_torus_ties_to_the_lower_index():
 
 
 def test_vector_swaps_with_the_closest_and_with_every_other():
-    """A hand-placed state stepped with everyone staying: ``swapped`` is the swap with the
-    closest cat (a tie, to the lower index), ``swapped_all`` the swap with each cat."""
+    """A hand-placed state stepped with everyone staying: ``others_swapped`` holds the swap with
+    each cat, ``closest`` points at the closest cat (a tie, to the lower index) and
+    ``other_swapped`` is its swap."""
     env = coexistence_v0.parallel_env(num_cats=3)
     env.reset(seed=0, options={"positions": {ROBOT: (0, 0), "cat_0": (3, 3), "cat_1": (6, 6), "cat_2": (0, 2)}})
     env.step({agent: STAY for agent in env.agents})
@@ -388,11 +391,12 @@ def test_vector_swaps_with_the_closest_and_with_every_other():
     vector.engine.load_state(env.unwrapped.engine.state())
     out = vector.step(np.full((1, 4), STAY))
     assert vector.others[0] == ["cat_0", "cat_1", "cat_2"]
-    np.testing.assert_array_equal(out.swapped[0, 0], env.swapped_observation(ROBOT, "cat_1"))
+    assert out.closest[0, 0] == 1  # cat_1
+    np.testing.assert_array_equal(out.other_swapped[0, 0], env.swapped_observation(ROBOT, "cat_1"))
     for k, cat in enumerate(["cat_0", "cat_1", "cat_2"]):
-        np.testing.assert_array_equal(out.swapped_all[0, 0, k], env.swapped_observation(ROBOT, cat))
-    assert out.others_present[0, 0].tolist() == [True, True, True] and out.swapped_valid[0, 0]
-    assert out.swapped_all.shape == (1, 4, 3, VIEW * VIEW) and out.others_present.shape == (1, 4, 3)
+        np.testing.assert_array_equal(out.others_swapped[0, 0, k], env.swapped_observation(ROBOT, cat))
+    assert out.others_present[0, 0].tolist() == [True, True, True] and out.other_seen[0, 0]
+    assert out.others_swapped.shape == (1, 4, 3, VIEW * VIEW) and out.others_present.shape == (1, 4, 3)
 
 
 def test_the_swap_exchanges_the_chosen_pair_only():
@@ -541,8 +545,9 @@ def fixed_others(name: str, kwargs: dict) -> dict[str, str]:
 @pytest.mark.parametrize("in_view_only", [False, True], ids=["omniscient", "in-view"])
 @pytest.mark.parametrize("module, kwargs", SEVERAL, ids=SEVERAL_IDS)
 def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
-    """Step for step, ``swapped``, ``swapped_all`` and ``others_present`` are what the ParallelEnvs
-    (in FixedAgents) say of the closest other agent when the step began and of every other agent."""
+    """Step for step, ``others_swapped``, ``others_present`` and the closest other agent's
+    ``other_*`` are what the ParallelEnvs (in FixedAgents) say of every other agent and of the
+    closest other agent when the step began."""
     name = module.__name__.rsplit(".", 1)[-1]
     fixed = fixed_others(name, kwargs)
     seeds = [0, 1, 2]
@@ -564,19 +569,20 @@ def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
             for k, other in enumerate(others):
                 swapped = base.swapped_observation(ROBOT, other, in_view_only=in_view_only)
                 expected = np.zeros(VIEW * VIEW, np.float32) if swapped is None else swapped
-                np.testing.assert_array_equal(out.swapped_all[i, 0, k], expected)
+                np.testing.assert_array_equal(out.others_swapped[i, 0, k], expected)
                 index = k + 1
                 terminal = bool(out.terminated[i, index])
                 assert out.others_present[i, 0, k] == (swapped is not None and not terminal)
             if closest is not None:
                 closest_kinds |= 1 << closest
                 swapped = base.swapped_observation(ROBOT, base.possible_agents[closest], in_view_only=in_view_only)
-                assert out.swapped_valid[i, 0] == (swapped is not None)
+                assert out.closest[i, 0] == closest - 1  # (its place among the others: the robot is agent 0)
+                assert out.other_seen[i, 0] == (swapped is not None)
                 if swapped is not None:
-                    np.testing.assert_array_equal(out.swapped[i, 0], swapped)
-                assert out.swapped_other_terminated[i, 0] == out.terminated[i, closest]
+                    np.testing.assert_array_equal(out.other_swapped[i, 0], swapped)
+                assert out.other_terminated[i, 0] == out.terminated[i, closest]
             else:
-                assert not out.swapped_valid[i, 0]
+                assert not out.other_seen[i, 0]
             if not env.agents:
                 ended += 1
                 env.reset()
@@ -591,8 +597,11 @@ def test_vector_fields_with_one_other_are_the_closest_ones(module):
     rng = np.random.default_rng(0)
     for _ in range(100):
         out = vector.step(rng.integers(NUM_ACTIONS, size=(4, 1)))
-        np.testing.assert_array_equal(out.swapped_all[:, :, 0], out.swapped)
-        np.testing.assert_array_equal(out.others_present[:, :, 0], out.swapped_valid & ~out.swapped_other_terminated)
+        assert out.closest.tolist() == [[0]] * 4 and out.others_swapped.shape == (4, 1, 1, VIEW * VIEW)
+        np.testing.assert_array_equal(out.others_swapped[:, :, 0], out.other_swapped)
+        np.testing.assert_array_equal(out.others_present[:, :, 0], out.other_seen & ~out.other_terminated)
+        np.testing.assert_array_equal(out.others_rewards[:, :, 0], out.rewards[:, 1:])
+        np.testing.assert_array_equal(out.other_battery_return, out.battery_return[:, 1:])
 
 
 if __name__ == "__main__":

@@ -10,9 +10,10 @@ import textwrap
 import pytest
 
 from empathy_zoo.environments import default_policies
+from empathy_zoo.experiment.sweep_file import profile_path
+from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.result_file import read_result, result_path
 from empathy_zoo.training import RunnerOptions, load_sweep, train_runs
-from empathy_zoo.training.sweep import SweepConfigError, profile_path
 
 SWEEP = """
 [sweep]
@@ -73,7 +74,7 @@ def test_aggregating_runs_train_apart_and_learn_otherwise(tmp_path) -> None:
 def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
     specs = load_sweep(profile_path("methods"))
     assert len(specs) == 140 and {s.seed for s in specs} == set(range(5))
-    methods = {(s.variant, s.method) for s in specs}
+    methods = {(s.variant.label, s.method) for s in specs}
     for method in (
         "dqn_aup",
         "dqn_social_value",
@@ -84,7 +85,7 @@ def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
     ):
         assert ("coexistence_v0", method) in methods and ("sharing_v0", method) in methods
     assert ("coexistence_v0", "dqn_relative_reachability") in methods and ("coexistence_v0", "dqn_lagrangian") in methods
-    several = {s.method_settings().others for s in specs if s.variant in ("coexistence_3cats", "sharing_2humans")}
+    several = {s.method_settings().others for s in specs if s.variant.label in ("coexistence_3cats", "sharing_2humans")}
     assert several == {"closest", "mean", "min"}
 
 

@@ -12,12 +12,13 @@ from gymnasium.utils import seeding
 from pettingzoo.test import api_test, parallel_api_test
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.engine.sharing import BATTERY, FLOOR, INVENTORY_ENCODINGS, STARTS
-from empathy_zoo.grid import NUM_ACTIONS, Action
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.sweep_file import load_sweep
+from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.training import RunnerOptions, train_ensemble
-from empathy_zoo.training.spec import RunSpec
-from empathy_zoo.training.sweep import SweepConfigError, load_sweep
 from empathy_zoo.vector import VectorEnv
 
 ROBOT, HUMAN = "robot_0", "human_0"
@@ -170,7 +171,7 @@ def test_vector_env_equals_parallel_envs_with_the_options_on():
             where = f"env {i} step {t}"
             np.testing.assert_array_equal(out.final_observations[i, 0], obs[ROBOT], err_msg=where)
             swapped = env.unwrapped.swapped_observation(ROBOT, HUMAN)
-            np.testing.assert_array_equal(out.swapped[i, 0], swapped, err_msg=where)
+            np.testing.assert_array_equal(out.other_swapped[i, 0], swapped, err_msg=where)
             assert out.rewards[i, 0] == np.float32(rew[ROBOT]), where
             assert (bool(out.terminated[i, 0]), bool(out.truncated[i, 0])) == (term[ROBOT], trunc[ROBOT]), where
             assert bool(out.episode_over[i]) == (not env.agents), where
@@ -260,7 +261,7 @@ def test_bad_values_raise_naming_the_argument_and_the_choices(kwargs, named):
             make()
         assert named in str(caught.value)
     with pytest.raises(ValueError, match=named.split(" must")[0]):
-        RunSpec(env="sharing_v0", env_kwargs=kwargs, steps=10, eval_interval=10, eval_episodes=1)
+        RunSpec.of(env="sharing_v0", env_kwargs=kwargs, steps=10, eval_interval=10, eval_episodes=1)
 
 
 @pytest.mark.parametrize("name", ["start", "inventory_encoding"])
@@ -275,7 +276,7 @@ def test_coexistence_takes_no_fidelity_argument(name):
         with pytest.raises(TypeError, match=f"coexistence_v0 takes no argument.*'{name}'"):
             make()
     with pytest.raises(ValueError, match=f"coexistence_v0 takes no argument.*'{name}'"):
-        RunSpec(env="coexistence_v0", env_kwargs={name: value}, steps=10, eval_interval=10, eval_episodes=1)
+        RunSpec.of(env="coexistence_v0", env_kwargs={name: value}, steps=10, eval_interval=10, eval_episodes=1)
 
 
 def test_unknown_keywords_still_raise():
@@ -315,14 +316,14 @@ def _sweep(tmp_path, text: str):
 
 def test_sweep_file_carries_the_options_into_the_run_specs(tmp_path):
     specs = load_sweep(_sweep(tmp_path, SWEEP))
-    centre = [s for s in specs if s.variant == "sharing_centre"]
+    centre = [s for s in specs if s.variant.label == "sharing_centre"]
     assert len(centre) == 4 and len(specs) == 8
     for spec in centre:
         assert dict(spec.env_kwargs) == {"start": "centre", "inventory_encoding": "authors"}
         assert spec.fixed_policies() == {HUMAN: "random_walk"}
         assert spec.config()["env_kwargs"] == {"start": "centre", "inventory_encoding": "authors"}
         assert spec.run_id.startswith("sharing_centre__empathic_dqn-")
-    plain = [s for s in specs if s.variant == "sharing_v0"]
+    plain = [s for s in specs if s.variant.label == "sharing_v0"]
     assert all(dict(s.env_kwargs) == {} and s.fixed_policies() == {HUMAN: "patrol"} for s in plain)
     assert {s.experiment_hash() for s in centre}.isdisjoint({s.experiment_hash() for s in plain})
     assert centre[0].ensemble_key() != plain[0].ensemble_key()  # never trained in one ensemble
@@ -346,7 +347,7 @@ def test_sweep_file_rejects_bad_options(tmp_path, table, message):
 
 def test_training_with_the_authors_encoding(tmp_path):
     specs = [
-        RunSpec(
+        RunSpec.of(
             env="sharing_v0",
             method="empathic_dqn",
             settings={**TINY, "selfishness": b},

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from empathy_zoo import FixedAgents, sharing_v0
+from empathy_zoo.actions import Action
 from empathy_zoo.engine.sharing import BATTERY, FLOOR, agent_value, battery_value
-from empathy_zoo.grid import Action
 from empathy_zoo.policies import Patrol
 
 ROBOT, HUMAN = "robot_0", "human_0"

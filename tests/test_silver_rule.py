@@ -14,10 +14,10 @@ from agents.empathic_dqn import empathic_targets
 from baselines.registry import get_method
 from baselines.silver_rule import SilverRuleDQN
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.reference import coexistence_optimum, coexistence_transitions, coexistence_values
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training import RunnerOptions, train_runs
-from empathy_zoo.training.spec import RunSpec
 
 GAMMA = 0.5
 
@@ -31,6 +31,7 @@ class _Learner:
         self.aggregated = False
 
     targets = SilverRuleDQN.targets
+    other_inputs = SilverRuleDQN.other_inputs
     _others_rule = SilverRuleDQN._others_rule
 
 
@@ -150,7 +151,7 @@ def test_silver_rule_trains_through_the_runner_and_learns_otherwise(tmp_path) ->
         "epsilon_decay_steps": 200,
     }
     specs = [
-        RunSpec(
+        RunSpec.of(
             env="coexistence_v0",
             method=m,
             seed=3,

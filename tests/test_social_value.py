@@ -56,7 +56,7 @@ def test_it_reads_the_others_environment_reward_and_smooths_the_unshaped_own_rew
     # the trace holds the environment's rewards (1 + 0.5·1), never the shaped ones
     assert rewards.states[0]["own"][0, 0] == pytest.approx(1.5) and rewards.states[0]["other"][0, 0] == pytest.approx(0.5)
     with pytest.raises(ValueError, match="other_rewards"):
-        svo(StepBatch(**{**step([0.0], [0.0]).__dict__, "other_rewards": None}), svo.initial_state(1, 1))
+        svo(StepBatch(**{**step([0.0], [0.0]).__dict__, "others_rewards": None}), svo.initial_state(1, 1))
 
 
 @pytest.mark.parametrize(
@@ -68,9 +68,9 @@ def test_bad_parameters_are_refused_naming_them(field: str, value: float) -> Non
 
 
 def test_a_resumed_social_value_run_equals_an_uninterrupted_one(tmp_path, monkeypatch) -> None:
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
 
-    spec = RunSpec(
+    spec = RunSpec.of(
         env="sharing_v0",
         method="dqn_social_value",
         steps=600,

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
+from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.engine.sharing import agent_value
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.grid import NUM_ACTIONS, Action
 from empathy_zoo.vector import VectorEnv
 
 MODULES = [coexistence_v0, sharing_v0]
@@ -210,13 +210,13 @@ def test_vector_swapped_agrees_with_the_parallel_primitive(module, in_view_only)
         for i, env in enumerate(envs):
             env.step({ROBOT: int(actions[i, 0])})
             expected = env.unwrapped.swapped_observation(ROBOT, other, in_view_only=in_view_only)
-            assert bool(out.swapped_valid[i, 0]) == (expected is not None)
+            assert bool(out.other_seen[i, 0]) == (expected is not None)
             if expected is None:
                 invalid_seen += 1
-                np.testing.assert_array_equal(out.swapped[i, 0], 0.0)
+                np.testing.assert_array_equal(out.other_swapped[i, 0], 0.0)
             else:
                 valid_seen += 1
-                np.testing.assert_array_equal(out.swapped[i, 0], expected)
+                np.testing.assert_array_equal(out.other_swapped[i, 0], expected)
             if not env.agents:
                 env.reset()
         all_swaps, mask = vector.swapped_observations(ROBOT)

@@ -1,4 +1,4 @@
-"""Sweep files (empathy_zoo/training/sweep.py): every validation error names file, table and key; grids,
+"""Sweep files (empathy_zoo/experiment/sweep_file.py): every validation error names file, table and key; grids,
 seeds and the shipped profiles expand to the expected runs."""
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import pytest
 from agents.empathic_dqn import linear_epsilon
 from agents.settings import PER_RUN_FIELDS, EmpathicDQNSettings
 from baselines.shaping import HarmPenalty
-from empathy_zoo.training.sweep import SweepConfigError, load_sweep, profile_path, profiles
+from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
+from empathy_zoo.experiment.values import SweepConfigError
 
 BASE = """
 [sweep]
@@ -49,13 +50,13 @@ def error_of(tmp_path, text: str) -> str:
 def test_base_sweep_expands_grid_times_envs_times_seeds(tmp_path):
     specs = load_sweep(write(tmp_path, BASE))
     assert len(specs) == 2 * 2 * 2
-    assert {(s.variant, s.settings["selfishness"], s.seed) for s in specs} == {
+    assert {(s.variant.label, s.method_settings().selfishness, s.seed) for s in specs} == {
         (v, b, seed) for v in ("coexistence_v0", "sharing_v0") for b in (1.0, 0.5) for seed in (0, 1)
     }
-    spec = next(s for s in specs if s.settings["selfishness"] == 0.5)
-    assert spec.label is None and spec.display_label() == "Empathic DQN (β=0.5)"
+    spec = next(s for s in specs if s.method_settings().selfishness == 0.5)
+    assert spec.entry.label is None and spec.display_label() == "Empathic DQN (β=0.5)"
     assert (spec.steps, spec.eval_interval, spec.eval_episodes) == (1000, 500, 2)
-    assert spec.fixed is None and dict(spec.env_kwargs) == {}
+    assert spec.variant.fixed is None and dict(spec.env_kwargs) == {}
 
 
 def test_two_grids_give_every_combination(tmp_path):
@@ -70,8 +71,8 @@ def test_two_grids_give_every_combination(tmp_path):
         )
     )
     assert len(specs) == 2 * (2 * 3) * 2
-    assert len({(s.variant, s.display_label()) for s in specs}) == 12
-    assert {s.display_label() for s in specs if s.variant == "sharing_v0" and s.seed == 0} == {
+    assert len({(s.variant.label, s.display_label()) for s in specs}) == 12
+    assert {s.display_label() for s in specs if s.variant.label == "sharing_v0" and s.seed == 0} == {
         f"E (β={b:g}, lr={lr:g})" for b in (1.0, 0.5) for lr in (1e-3, 5e-4, 1e-4)
     }
 
@@ -97,7 +98,7 @@ hidden_size = 32
     assert {s.method_settings().hidden_size for s in empathic} == {64}
     assert {s.method_settings().selfishness for s in empathic} == {1.0, 0.5}  # the entry's grid wins
     penalty = [s for s in specs if s.method == "dqn_harm_penalty"]
-    assert len(penalty) == 2 and {s.variant for s in penalty} == {"coexistence_v0"}
+    assert len(penalty) == 2 and {s.variant.label for s in penalty} == {"coexistence_v0"}
     settings = penalty[0].method_settings()
     assert (settings.hidden_size, settings.selfishness) == (32, 1.0)  # preset kept
     assert penalty[0].method_object().reward == HarmPenalty(-100.0) and penalty[0].config()["reward"] == {
@@ -123,7 +124,7 @@ envs = ["big"]
 """
     )
     specs = load_sweep(write(tmp_path, text))
-    big = [s for s in specs if s.variant == "big"]
+    big = [s for s in specs if s.variant.label == "big"]
     assert len(big) == 2 and {s.method for s in big} == {"dqn"}
     assert dict(big[0].env_kwargs) == {"size": 9, "max_cycles": 100}
     assert big[0].fixed_policies() == {"cat_0": "empathy_zoo.policies:Stay"}
@@ -155,7 +156,7 @@ def test_paper_profile_is_the_papers_protocol():
         settings = spec.method_settings()
         assert linear_epsilon(settings, spec.steps) == pytest.approx(0.01, abs=1e-12)
         assert linear_epsilon(settings, spec.steps - 1000) > 0.01 + 1e-6
-    labels = {(s.variant, s.display_label()) for s in specs}
+    labels = {(s.variant.label, s.display_label()) for s in specs}
     assert labels == {
         *((env, f"Empathic DQN (β={b:g})") for env in ("coexistence_v0", "sharing_v0") for b in (1.0, 0.75, 0.5, 0.25)),
         ("coexistence_v0", "DQN + harm penalty (−100)"),
@@ -169,7 +170,7 @@ def test_quick_and_example_profiles_parse():
     assert len(quick) == 2 * 5 * 3
     assert {s.method_settings().learning_starts for s in quick} == {2_000}
     example = load_sweep(profile_path("example_custom"))
-    nine = [s for s in example if s.variant == "coexistence_9x9"]
+    nine = [s for s in example if s.variant.label == "coexistence_9x9"]
     assert nine and {s.env_kwargs["size"] for s in nine} == {9}
     assert {s.fixed_policies()["cat_0"] for s in nine} == {"empathy_zoo.policies:Stay"}
 
@@ -260,7 +261,7 @@ def test_unknown_method_env_and_policy(tmp_path):
     message = error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { human_0 = "sleepy" }'))
     assert "[envs.sharing_v0] fixed.human_0" in message and "unknown fixed policy 'sleepy'" in message
     message = error_of(tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { cat_0 = "stay" }'))
-    assert "unknown agent 'cat_0'" in message and "human_0" in message
+    assert "unknown agent(s) ['cat_0']" in message and "human_0" in message
     message = error_of(
         tmp_path, BASE.replace("[envs.sharing_v0]", '[envs.sharing_v0]\nfixed = { human_0 = "empathy_zoo.policies:Nobody" }')
     )

@@ -19,9 +19,10 @@ from baselines.registry import get_method
 from baselines.shaping import HarmPenalty, InequityAversion
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.train import train_values
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.sweep_file import load_sweep
+from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.result_file import read_result
-from empathy_zoo.training.spec import RunSpec
-from empathy_zoo.training.sweep import SweepConfigError, load_sweep
 from leaderboard.aggregate import group_runs
 from leaderboard.ordering import label_order
 
@@ -59,14 +60,16 @@ def error_of(tmp_path, method: str, entry: str) -> str:
 def test_a_grid_of_a_transform_field_gives_one_experiment_per_value(tmp_path):
     specs = load_sweep(sweep(tmp_path, "dqn_inequity_aversion", "disadvantageous = [0.1, 0.3, 1.0]\n"))
     assert len(specs) == 3 * 2  # three values × two seeds
-    experiments = {s.run_id.rsplit("__s", 1)[0] for s in specs}
+    experiments = {s.experiment_id for s in specs}
     assert len(experiments) == 3
     rewards = {json.dumps(s.config()["reward"], sort_keys=True) for s in specs}
     assert [json.loads(r)["disadvantageous"] for r in sorted(rewards)] == [0.1, 0.3, 1.0]
     assert all(json.loads(r)["advantageous"] == 0.05 and json.loads(r)["name"] == "inequity_aversion" for r in rewards)
     assert {s.display_label() for s in specs} == {f"DQN + inequity aversion (disadvantageous={v})" for v in ("0.1", "0.3", "1")}
     assert all(
-        s.settings == {} and s.reward_transform() == InequityAversion(disadvantageous=s.reward["disadvantageous"]) for s in specs
+        s.entry.changed_settings() == {}
+        and s.reward_transform() == InequityAversion(disadvantageous=s.entry.changed_reward()["disadvantageous"])
+        for s in specs
     )
 
 
@@ -208,13 +211,13 @@ def test_help_lists_the_transforms_fields(capsys):
 # ---------------------------------------------------------------------------- Python and result files
 def test_a_runspec_checks_its_reward_fields():
     with pytest.raises(ValueError, match=r"unknown field\(s\) \['alpha'\].*its fields: disadvantageous, advantageous"):
-        RunSpec(method="dqn_inequity_aversion", reward={"alpha": 1.0})
+        RunSpec.of(method="dqn_inequity_aversion", reward={"alpha": 1.0})
     with pytest.raises(ValueError, match="disadvantageous must be a number, got str 'x'"):
-        RunSpec(method="dqn_inequity_aversion", reward={"disadvantageous": "x"})
+        RunSpec.of(method="dqn_inequity_aversion", reward={"disadvantageous": "x"})
     with pytest.raises(ValueError, match="must be a finite number, got float nan"):
-        RunSpec(method="dqn_harm_penalty", reward={"penalty": float("nan")})
+        RunSpec.of(method="dqn_harm_penalty", reward={"penalty": float("nan")})
     with pytest.raises(ValueError, match="method 'dqn' has no reward transform"):
-        RunSpec(method="dqn", reward={"penalty": 1.0})
+        RunSpec.of(method="dqn", reward={"penalty": 1.0})
 
 
 def test_runs_with_equal_transforms_share_one_state_and_call():
@@ -228,7 +231,7 @@ def test_runs_with_equal_transforms_share_one_state_and_call():
 def test_shipped_result_files_still_load_and_record_the_defaults_a_run_records_now(method):
     paths = sorted(SHIPPED.glob(f"*__{method}-*.json"))
     assert paths
-    spec = RunSpec(method=method)
+    spec = RunSpec.of(method=method)
     for path in paths:
         assert read_result(path)["config"]["reward"] == spec.config()["reward"]
 

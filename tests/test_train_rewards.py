@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from helpers_batches import one_other
 
 from agents.rewards import TrainRewards
 from agents.step_batch import StepBatch
@@ -34,11 +35,9 @@ def _step(k: int) -> StepBatch:
         rewards=np.arange(k, dtype=np.float32)[:, None],
         terminated=zeros.astype(bool),
         next_obs=np.zeros((k, 1, 25)),
-        swapped_next_obs=np.zeros((k, 1, 25)),
-        other_present=zeros.astype(bool),
-        harmed_other=zeros.astype(int),
+        harms=zeros.astype(int),
         battery_return=zeros,
-        other_battery_return=zeros,
+        **one_other(np.zeros((k, 1, 25)), zeros.astype(bool), zeros),
     )
 
 

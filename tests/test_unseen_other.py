@@ -29,7 +29,7 @@ def _learned_targets(batch) -> tuple[float, float]:
     its replay and sampling it back, with every Q-value set by hand (Q̂(s') = 10, Q̂(s_emp') = 4)."""
     learner = EmpathicDQN([EmpathicDQNSettings(selfishness=BETA, learning_starts=10_000)], [0], obs_size=25)
     learner.observe(batch)
-    sample = learner.replay.sample(torch.zeros((1, 1), dtype=torch.long))
+    sample = learner.sample_batch(torch.zeros((1, 1), dtype=torch.long))
     ones = torch.ones((1, 1, 5))
     y, y_emp = learner.targets(sample, ones, 10.0 * ones, 4.0 * ones)
     return float(y), float(y_emp)
@@ -39,7 +39,7 @@ def test_an_unseen_cat_gives_the_robots_own_target() -> None:
     # (0, 0) and (3, 3) on the 7 × 7 torus: 3 rows and 3 columns apart, outside the 5 × 5 window
     result, batch = _step(_placed({"robot_0": (0, 0), "cat_0": (3, 3)}, in_view_only=True), STAY)
     assert not batch.other_present[0, 0] and batch.other_unseen[0, 0]
-    assert not result.swapped[0, 0].any()  # no picture of an unseen cat
+    assert not result.other_swapped[0, 0].any()  # no picture of an unseen cat
     y, y_emp = _learned_targets(batch)
     assert y == pytest.approx(1.0 + GAMMA * 10.0) and y_emp == y  # the rule before gave β·y: this failed
 
@@ -69,7 +69,7 @@ def test_the_closest_cat_is_chosen_when_the_step_begins() -> None:
     venv = _placed({"robot_0": (2, 4), "cat_0": (3, 3), "cat_1": (5, 6)}, in_view_only=False, num_cats=2)
     result, batch = _step(venv, DOWN)
     assert result.harmed_by[0, 1] == ROBOT and result.harmed_by[0, 2] == -1
-    assert result.swapped_other_terminated[0, 0] and not result.swapped_valid[0, 0]
+    assert result.closest[0, 0] == 0 and result.other_terminated[0, 0] and not result.other_seen[0, 0]
     assert not batch.other_present[0, 0]
     assert batch.other_rewards[0, 0] == 0.0  # the harmed cat's reward, not the other cat's 1
     np.testing.assert_array_equal(result.others_present[0, 0], [False, True])
@@ -81,8 +81,8 @@ def test_the_next_step_swaps_with_the_cat_still_there() -> None:
     venv = _placed({"robot_0": (2, 4), "cat_0": (3, 3), "cat_1": (5, 6)}, in_view_only=False, num_cats=2)
     _step(venv, DOWN)
     result, batch = _step(venv, STAY)
-    assert result.swapped_valid[0, 0] and batch.other_present[0, 0]
-    np.testing.assert_array_equal(result.swapped[0, 0], venv.engine.observe_swapped(0, 2)[0])
+    assert result.closest[0, 0] == 1 and result.other_seen[0, 0] and batch.other_present[0, 0]
+    np.testing.assert_array_equal(result.other_swapped[0, 0], venv.engine.observe_swapped(0, 2)[0])
 
 
 # ---------------------------------------------------------------------------- the exact optimum

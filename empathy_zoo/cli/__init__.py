@@ -5,6 +5,8 @@
     empathy-zoo leaderboard results/quick [--out DIR]
     empathy-zoo methods | policies                   # what is registered
     empathy-zoo play --env sharing_v0 --episodes 3 --render ansi
+    empathy-zoo watch RUN_ID [--dir runs] [--gif episode.gif]   # a trained agent's greedy episodes
+    empathy-zoo evaluate results/quick                # kept agents beside partners they never met
 
 ``train`` takes one ``--<field>`` option per field of the method's settings and of its reward
 transform (see ``empathy-zoo train --method NAME --help``); the method is ``--method``, else
@@ -16,7 +18,8 @@ for the run) < the command line. A bad input prints
 One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.settings_options`, a method's settings as options),
 :mod:`~empathy_zoo.cli.sweep` (reproduce, leaderboard, reproduction, sensitivity),
-:mod:`~empathy_zoo.cli.browse` (methods, policies, play); what they share is in
+:mod:`~empathy_zoo.cli.browse` (methods, policies, play), :mod:`~empathy_zoo.cli.watch` (watch),
+:mod:`~empathy_zoo.cli.evaluate` (evaluate); what they share is in
 :mod:`~empathy_zoo.cli.common`.
 """
 
@@ -29,8 +32,10 @@ from collections.abc import Sequence
 
 from empathy_zoo.cli.browse import add_browse_commands
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS
+from empathy_zoo.cli.evaluate import add_evaluate
 from empathy_zoo.cli.sweep import add_sweep_commands
 from empathy_zoo.cli.train import RUN_KEYS, add_train, train_method
+from empathy_zoo.cli.watch import add_watch
 
 __all__ = ["main", "build_parser", "parse_args", "RUN_KEYS", "RUN_DEFAULTS"]
 
@@ -42,6 +47,8 @@ def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParse
     add_train(sub, method)
     add_sweep_commands(sub)
     add_browse_commands(sub)
+    add_watch(sub)
+    add_evaluate(sub)
     return parser
 
 
@@ -60,10 +67,10 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
         message = f"unrecognized arguments: {' '.join(unknown)}"
         if args.command == "train":
             from baselines.registry import get_method
-            from empathy_zoo.training.sweep import settings_types
+            from empathy_zoo.experiment.values import field_types
 
             chosen = get_method(method)
-            names = ", ".join(settings_types(chosen.settings))
+            names = ", ".join(field_types(chosen.settings))
             fields_of_reward = ", ".join(chosen.reward_fields())
             reward = f"; the fields of its reward transform are {fields_of_reward}" if fields_of_reward else ""
             message += f" (the settings of method {method!r} are {names}{reward}; see {PROG} train --method {method} --help)"

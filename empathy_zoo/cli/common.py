@@ -18,7 +18,7 @@ __all__ = [
     "add_runner_options",
     "agent_policy",
     "check_device",
-    "check_results",
+    "read_results",
     "help_text",
     "positive",
     "print_written",
@@ -29,24 +29,33 @@ __all__ = [
 PROG = "empathy-zoo"
 SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 
-RUN_DEFAULTS: dict[str, Any] = {
-    "env": "coexistence_v0",
-    "method": "empathic_dqn",
-    "seeds": [0],
-    "steps": 1_000_000,
-    "out": "runs",
-    "device": "cpu",
-    "eval_interval": 50_000,
-    "eval_episodes": 10,
-    "checkpoint_interval": 50_000,
-    "max_parallel_runs": 32,
-    "workers": 1,
-    "threads": 1,
-    "label": None,
-    "fixed": None,
-    "progress": True,
-}
-"""What a ``train`` run does when neither the config file nor the command line says otherwise."""
+RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers")
+"""The fields of :class:`~empathy_zoo.training.options.RunnerOptions` that ``train`` options and
+its ``--config`` file set (the others have options of their own: ``--backend``, ``--address``,
+``--rerun-changed``)."""
+
+
+def _run_defaults() -> dict[str, Any]:
+    from empathy_zoo.experiment.model import DEFAULT_METHOD, Budget, EnvVariant
+    from empathy_zoo.training.options import RunnerOptions
+
+    runner = RunnerOptions()
+    return {
+        "env": EnvVariant.env,
+        "method": DEFAULT_METHOD,
+        "seeds": [0],
+        **{name: getattr(Budget, name) for name in ("steps", "eval_interval", "eval_episodes")},
+        "out": "runs",
+        **{name: getattr(runner, name) for name in RUNNER_KEYS},
+        "label": None,
+        "fixed": None,
+    }
+
+
+RUN_DEFAULTS: dict[str, Any] = _run_defaults()
+"""What a ``train`` run does when neither the config file nor the command line says otherwise: the
+defaults of :class:`~empathy_zoo.experiment.Budget`, :class:`~empathy_zoo.experiment.EnvVariant`
+and :class:`~empathy_zoo.training.options.RunnerOptions`, with one seed and ``runs/`` as output."""
 
 
 def help_text(text: str) -> str:
@@ -93,24 +102,14 @@ def positive(name: str, value: int, allow_zero: bool = False) -> int:
     return value
 
 
-def check_results(specs: Sequence[Any], out: Path, others: bool = False) -> int:
-    """Read every result file the runs already have, and with ``others`` every other one in
-    ``out/runs`` (a corrupted or malformed one raises, untouched); count the runs' files."""
-    from empathy_zoo.result_file import RUNS_DIR, read_result, result_path
+def read_results(specs: Sequence[Any], out: Path) -> tuple[dict[Path, dict[str, Any]], int]:
+    """Every result file in ``out/runs``, read once (a corrupted or malformed one raises,
+    untouched), and how many of the runs ``specs`` have one."""
+    from empathy_zoo.result_file import result_path
+    from empathy_zoo.training.runner import read_finished
 
-    done = 0
-    ours = set()
-    for spec in specs:
-        path = result_path(out, spec.run_id)
-        ours.add(path.name)
-        if path.exists():
-            read_result(path)
-            done += 1
-    if others and (out / RUNS_DIR).is_dir():
-        for path in sorted((out / RUNS_DIR).glob("*.json")):
-            if path.name not in ours and not path.name.startswith("."):
-                read_result(path)
-    return done
+    finished = read_finished(out)
+    return finished, sum(result_path(out, spec.run_id) in finished for spec in specs)
 
 
 def _fmt(value: float) -> str:

@@ -119,15 +119,14 @@ def _default(field: Field) -> Any:
 
 def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> None:
     """One option per field of ``method``'s settings dataclass, its help the field's docstring."""
-    from empathy_zoo.training.sweep import settings_types
+    from empathy_zoo.experiment.values import field_types
 
     settings = method.settings
     if not (isinstance(settings, type) and is_dataclass(settings)):
         raise ValueError(f"method {method.name!r}: its settings {settings!r} is not a dataclass")
-    docs, kinds = field_docs(settings), settings_types(settings)
-    free = parser.add_argument_group(
-        f"settings of {method.name}", f"the fields of {settings.__name__} (also keys of [settings] in --config)"
-    )
+    docs, kinds = field_docs(settings), field_types(settings)
+    description = f"the fields of {settings.__name__} (also keys of [settings] in --config)"
+    free = parser.add_argument_group(f"settings of {method.name}", description)
     fixed = None
     in_config_only = []
     for field in fields(settings):
@@ -147,7 +146,7 @@ def add_settings_options(parser: argparse.ArgumentParser, method: Method) -> Non
         except argparse.ArgumentError:  # its option is a run option's (a setting named ``seed``, say)
             in_config_only.append(field.name)
     if in_config_only:
-        free.description += f"; in [settings] only: {', '.join(in_config_only)}"
+        free.description = f"{description}; in [settings] only: {', '.join(in_config_only)}"
 
 
 def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
@@ -155,14 +154,12 @@ def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
     ``--<field>``, or ``--reward-<field>`` where that option is taken (a setting's, a run option's)."""
     transform = method.reward
     kinds = method.reward_fields()
-    if not kinds:
+    if transform is None or not kinds or not is_dataclass(transform):  # (a transform with fields is a dataclass)
         return
     docs = field_docs(type(transform))
     defaults = {f.name: _default(f) for f in fields(transform)}
-    group = parser.add_argument_group(
-        f"reward transform of {method.name}",
-        f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)",
-    )
+    description = f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)"
+    group = parser.add_argument_group(f"reward transform of {method.name}", description)
     in_config_only = []
     for name, kind in kinds.items():
         reading = option_reading(kind)
@@ -179,7 +176,7 @@ def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
         else:
             in_config_only.append(name)
     if in_config_only:
-        group.description += f"; in [reward] only: {', '.join(in_config_only)}"
+        group.description = f"{description}; in [reward] only: {', '.join(in_config_only)}"
 
 
 def given_reward(args: argparse.Namespace) -> dict[str, Any]:

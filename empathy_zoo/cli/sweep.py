@@ -13,9 +13,9 @@ from empathy_zoo.cli.common import (
     PROG,
     RUN_DEFAULTS,
     add_runner_options,
-    check_results,
     positive,
     print_written,
+    read_results,
     runner_options,
 )
 
@@ -27,10 +27,10 @@ PRODUCED_BY = "(the command that trained these runs is in each result file's con
 
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md."""
+    from empathy_zoo.experiment.model import group_specs
+    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path
     from empathy_zoo.result_file import RUNS_DIR
     from empathy_zoo.training.runner import train_runs
-    from empathy_zoo.training.spec import group_specs
-    from empathy_zoo.training.sweep import load_sweep, profile_path
     from leaderboard.report import write_leaderboard
     from leaderboard.reproduction import NotThePaperSweep, write_reproduction
 
@@ -44,22 +44,22 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
         values["workers"] = max(1, min(os.cpu_count() or 1, ensembles))
     workers = values["workers"]
     options = runner_options(args, values)
-    done = check_results(specs, out, others=True)  # the leaderboard reads them all: refuse now, not after training
-    experiments = len({spec.run_id.rsplit("__s", 1)[0] for spec in specs})
+    finished, done = read_results(specs, out)  # the leaderboard reads them all: refuse now, not after training
+    experiments = len({spec.experiment_id for spec in specs})
     print(
         f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
         f"in {ensembles} ensemble(s) on {workers} worker process(es); {done} already finished; results in {out}",
         flush=True,
     )
     ours = {f"{spec.run_id}.json" for spec in specs}
-    others = sorted(p.name for p in (out / RUNS_DIR).glob("*.json") if p.name not in ours) if (out / RUNS_DIR).is_dir() else []
+    others = sorted(p.name for p in finished if p.name not in ours)
     if others:
         print(
             f"{PROG}: note: {len(others)} result file(s) in {out / RUNS_DIR} are not part of this sweep "
             f"(e.g. {others[0]}); the leaderboard includes them",
             flush=True,
         )
-    train_runs(specs, out, options)
+    train_runs(specs, out, options, finished=finished)
     print_written(write_leaderboard(out, command=command))
     try:
         print(f"{PROG}: wrote {write_reproduction(out, command=command)}")
@@ -97,10 +97,24 @@ def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
 
 
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
-    """Write the leaderboard (Markdown, CSV, HTML) of existing results."""
+    """Write the leaderboard (Markdown, CSV, HTML) of existing results: one directory, or several
+    into one leaderboard (``--out`` required; ``--label DIR=PREFIX`` prefixes a directory's labels)."""
     from leaderboard.report import write_leaderboard
+    from leaderboard.sources import parse_label_option
 
-    print_written(write_leaderboard(args.results, args.out, command=command))
+    if len(args.results) > 1 and args.out is None:
+        raise ValueError(
+            f"{len(args.results)} results directories: name the output directory with --out OUT "
+            "(the leaderboard of several is written into none of them unless asked)"
+        )
+    labels: dict[str | os.PathLike[str], str] = {}
+    for option in args.label or ():
+        directory, prefix = parse_label_option(option)
+        if directory in labels:
+            raise ValueError(f"--label {directory}= is given twice ({labels[directory]!r} and {prefix!r})")
+        labels[directory] = prefix
+    results = args.results[0] if len(args.results) == 1 else args.results
+    print_written(write_leaderboard(results, args.out, command=command, labels=labels or None))
     return 0
 
 
@@ -118,9 +132,21 @@ def add_sweep_commands(sub: Any) -> None:
     add_runner_options(reproduce)
     reproduce.set_defaults(handler=cmd_reproduce)
 
-    board = sub.add_parser("leaderboard", help="write the leaderboard of existing results")
-    board.add_argument("results", metavar="DIR", help="results directory (with runs/ or *.json)")
-    board.add_argument("--out", metavar="OUT", help="where to write (default: DIR)")
+    board = sub.add_parser("leaderboard", help="write the leaderboard of existing results (one directory, or several into one)")
+    board.add_argument(
+        "results",
+        metavar="DIR",
+        nargs="+",
+        help="results directory (with runs/ or *.json); several are read into one leaderboard, "
+        "rows of different training budgets kept apart",
+    )
+    board.add_argument("--out", metavar="OUT", help="where to write (default: DIR; required with several DIRs)")
+    board.add_argument(
+        "--label",
+        metavar="DIR=PREFIX",
+        action="append",
+        help="put PREFIX before every label of DIR's runs (repeatable): tells apart two directories' rows of one label",
+    )
     board.set_defaults(handler=cmd_leaderboard)
 
     report = sub.add_parser("reproduction", help="check the paper's claims on existing results (REPRODUCTION.md)")

@@ -16,55 +16,49 @@ from typing import Any
 from empathy_zoo.cli.common import (
     PROG,
     RUN_DEFAULTS,
+    RUNNER_KEYS,
     add_runner_options,
     agent_policy,
-    check_results,
+    read_results,
     run_summary,
     runner_options,
 )
 from empathy_zoo.cli.settings_options import add_reward_options, add_settings_options, given_reward, given_settings
-from empathy_zoo.training.sweep import POLICY_TABLE, SEEDS
+from empathy_zoo.engine.arguments import argument_defaults, argument_help, argument_types
+from empathy_zoo.environments import ENGINES
+from empathy_zoo.experiment.model import Budget
+from empathy_zoo.experiment.values import PolicyTable, Seeds, field_types
+from empathy_zoo.training.options import RunnerOptions
 
 __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
 
+ENV_ARGUMENTS: dict[str, Any] = {name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()}
+"""The environment arguments some registered environment declares, and their types (each
+environment checks which it takes)."""
+_RUNNER_TYPES = field_types(RunnerOptions)
 RUN_KEYS: dict[str, Any] = {
     "env": str,
     "method": str,
     "seed": int,
-    "seeds": SEEDS,
-    "steps": int,
+    "seeds": Seeds,
+    **field_types(Budget),
     "out": str,
-    "device": str,
-    "eval_interval": int,
-    "eval_episodes": int,
-    "checkpoint_interval": int,
-    "max_parallel_runs": int,
-    "workers": int,
-    "threads": int,
+    **{name: _RUNNER_TYPES[name] for name in RUNNER_KEYS},
     "label": str,
-    "size": int,
-    "view": int,
-    "max_cycles": int,
-    "fixed": POLICY_TABLE,
-    "start": str,
-    "inventory_encoding": str,
-    "num_cats": int,
-    "num_humans": int,
-    "progress": bool,
+    **ENV_ARGUMENTS,
+    "fixed": PolicyTable,
 }
-"""Top-level keys of a ``train --config`` file and their types (method settings go in ``[settings]``,
-the fields of its reward transform in ``[reward]``)."""
+"""Top-level keys of a ``train --config`` file and their types, from the dataclasses they fill
+(method settings go in ``[settings]``, the fields of its reward transform in ``[reward]``)."""
 TABLES = ("settings", "reward")
 """The tables of a ``train --config`` file."""
-ENV_ARGUMENTS = ("size", "view", "max_cycles", "start", "inventory_encoding", "num_cats", "num_humans")
-"""Keys of a run that are environment arguments (the env checks which it takes)."""
 
 
 def train_method(argv: Sequence[str]) -> str:
     """The method ``train``'s arguments ``argv`` name: ``--method``, else ``method`` in the
     ``--config`` file, else the default. Other arguments are left to the full parser (so is a
     malformed ``--method`` or ``--config``: the default is returned and that parser reports it)."""
-    from empathy_zoo.training.sweep import check_value, read_toml
+    from empathy_zoo.experiment.values import check_value, read_toml
 
     first = argparse.ArgumentParser(add_help=False, argument_default=argparse.SUPPRESS, exit_on_error=False)
     first.add_argument("--method")
@@ -86,7 +80,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
     """Run keys and method settings, merged: defaults < config file < command line. The fields of
     the method's reward transform are ``run["reward"]`` (a table, empty when none is given)."""
     from baselines.registry import get_method
-    from empathy_zoo.training.sweep import SweepConfigError, check_keys, check_value, read_toml, settings_types
+    from empathy_zoo.experiment.values import SweepConfigError, check_keys, check_value, field_types, read_toml
 
     given = vars(args)
     run: dict[str, Any] = {**RUN_DEFAULTS, "reward": {}}
@@ -108,7 +102,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
                 raise SweepConfigError(f"{path}: [{name}] must be a table")
         method = get_method(given.get("method", run["method"]))
         table = data.get("settings", {})
-        types = settings_types(method.settings)
+        types = field_types(method.settings)
         check_keys(table, types, f"{path}: [settings]")
         settings |= {k: check_value(v, types[k], f"{path}: [settings] {k}") for k, v in table.items()}
         table = data.get("reward", {})
@@ -135,43 +129,28 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
 
 def cmd_train(args: argparse.Namespace, command: str) -> int:
     """Train the runs and print one summary line each."""
+    from empathy_zoo.environments import default_policies
+    from empathy_zoo.experiment.model import EnvVariant, MethodEntry, RunSpec
     from empathy_zoo.result_file import read_result
     from empathy_zoo.training.runner import train_runs
-    from empathy_zoo.training.spec import RunSpec
 
     run, settings = train_values(args)
     env_kwargs = {key: run[key] for key in ENV_ARGUMENTS if run.get(key) is not None}
-    fixed = None
-    if run["fixed"] is not None:
-        from empathy_zoo.environments import default_policies
-
-        fixed = {**default_policies(run["env"], env_kwargs), **run["fixed"]}
-    specs = [
-        RunSpec(
-            env=run["env"],
-            method=run["method"],
-            settings=settings,
-            reward=run["reward"],
-            seed=seed,
-            steps=run["steps"],
-            eval_interval=run["eval_interval"],
-            eval_episodes=run["eval_episodes"],
-            fixed=fixed,
-            env_kwargs=env_kwargs,
-            label=run["label"],
-        )
-        for seed in run["seeds"]
-    ]
+    fixed = None if run["fixed"] is None else {**default_policies(run["env"], env_kwargs), **run["fixed"]}
+    variant = EnvVariant(run["env"], env_kwargs, fixed)
+    entry = MethodEntry.resolve(run["method"], settings, run["reward"], run["label"])
+    budget = Budget(run["steps"], run["eval_interval"], run["eval_episodes"])
+    specs = [RunSpec(variant, entry, budget, seed) for seed in run["seeds"]]
     options = runner_options(args, run)
     out = Path(run["out"])
-    done = check_results(specs, out)
+    finished, done = read_results(specs, out)
     print(
-        f"{PROG}: {len(specs)} run(s) of {specs[0].display_label()} on {run['env']}, {run['steps']:,} steps each"
+        f"{PROG}: {len(specs)} run(s) of {entry.display_label()} on {run['env']}, {run['steps']:,} steps each"
         + (f" ({done} already finished)" if done else "")
         + f"; results in {out / 'runs'}",
         flush=True,
     )
-    paths = train_runs(specs, out, options)
+    paths = train_runs(specs, out, options, finished=finished)
     for path in paths:
         print(run_summary(read_result(path)))
     return 0
@@ -214,17 +193,7 @@ def add_train(sub: Any, method: str) -> None:
         help=f"episodes per greedy evaluation (default: {RUN_DEFAULTS['eval_episodes']})",
     )
     parser.add_argument("--label", help="display name in tables (default: the method's)")
-    parser.add_argument("--size", type=int, help="side of the torus (default: 7)")
-    parser.add_argument("--view", type=int, help="side of the observation window (default: 5)")
-    parser.add_argument("--max-cycles", type=int, help="steps before truncation (default: 500)")
-    parser.add_argument("--start", help="Sharing only: start cells, random or centre (default: random)")
-    parser.add_argument(
-        "--inventory-encoding",
-        metavar="ENCODING",
-        help="Sharing only: how an agent is drawn, count_plus_one or authors (default: count_plus_one)",
-    )
-    parser.add_argument("--num-cats", type=int, metavar="N", help="Coexistence only: cats (default: 1)")
-    parser.add_argument("--num-humans", type=int, metavar="N", help="Sharing only: humans (default: 1)")
+    _add_env_arguments(parser)
     parser.add_argument(
         "--fixed",
         type=agent_policy,
@@ -236,3 +205,22 @@ def add_train(sub: Any, method: str) -> None:
     add_settings_options(parser, get_method(method))
     add_reward_options(parser, get_method(method))
     parser.set_defaults(handler=cmd_train)
+
+
+def _add_env_arguments(parser: argparse.ArgumentParser) -> None:
+    """One option per environment argument, as the environments declare them (their help, their
+    defaults, and which environments take them)."""
+    group = parser.add_argument_group("environment arguments", "each environment takes its own (empathy-zoo envs)")
+    takers: dict[str, list[str]] = {}
+    for name, engine in ENGINES.items():
+        for argument in argument_types(engine):
+            takers.setdefault(argument, []).append(name)
+    for argument, kind in ENV_ARGUMENTS.items():
+        engine = ENGINES[takers[argument][0]]
+        text = argument_help(engine)[argument]
+        if "(default:" not in text:
+            text += f" (default: {argument_defaults(engine)[argument]})"
+        if len(takers[argument]) < len(ENGINES):
+            text = f"{', '.join(takers[argument])} only: {text}"
+        metavar = "N" if kind is int else argument.upper()
+        group.add_argument("--" + argument.replace("_", "-"), type=kind, metavar=metavar, help=text)

@@ -3,6 +3,7 @@ checks, and the limits on grid size and memory (docs/limits.md)."""
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
 
@@ -18,10 +19,21 @@ __all__ = [
     "check_agent_count",
     "check_env_arguments",
     "TakesArguments",
+    "GRID_ARGUMENT_HELP",
+    "argument_defaults",
+    "argument_help",
+    "argument_types",
+    "own_arguments",
 ]
 
 GRID_ARGUMENTS = ("size", "view", "max_cycles")
 """Constructor arguments every environment takes (besides its :attr:`GridEngine.extra_arguments`)."""
+GRID_ARGUMENT_HELP = {
+    "size": "side of the torus",
+    "view": "side of the observation window (odd, smaller than size)",
+    "max_cycles": "steps before an episode is truncated",
+}
+"""One line for each of :data:`GRID_ARGUMENTS`: the command line's help."""
 MAX_SIZE = 255
 """Largest ``size`` (side of the torus) an environment accepts: the range the suite tests."""
 MAX_TABLE_BYTES = 1 << 30
@@ -37,6 +49,36 @@ class TakesArguments(Protocol):
     """Its own constructor arguments and their allowed values."""
     count_argument: str | None
     """Its constructor argument saying how many other agents it holds (``num_cats``), if any."""
+
+
+def own_arguments(engine: TakesArguments) -> tuple[str, ...]:
+    """The arguments ``engine``'s environment takes besides :data:`GRID_ARGUMENTS`, as it declares
+    them (its :attr:`~TakesArguments.extra_arguments`, then its :attr:`~TakesArguments.count_argument`)."""
+    return (*engine.extra_arguments, *((engine.count_argument,) if engine.count_argument else ()))
+
+
+def argument_types(engine: TakesArguments) -> dict[str, Any]:
+    """``{argument: type}`` of every argument ``engine``'s environment takes (a choice among
+    strings is a ``str``, its values checked by :func:`check_choice`): what a configuration file
+    and the command line accept for it."""
+    return {
+        **{name: int for name in GRID_ARGUMENTS},
+        **{name: str for name in engine.extra_arguments},
+        **({engine.count_argument: int} if engine.count_argument else {}),
+    }
+
+
+def argument_defaults(engine: Any) -> dict[str, Any]:
+    """``{argument: default}`` of every argument ``engine``'s environment takes, read from its
+    constructor (the one place they are written)."""
+    parameters = inspect.signature(engine).parameters
+    return {name: parameters[name].default for name in argument_types(engine)}
+
+
+def argument_help(engine: TakesArguments) -> dict[str, str]:
+    """One line of help for each argument ``engine``'s environment takes."""
+    own: Mapping[str, str] = getattr(engine, "argument_help", {})
+    return {name: GRID_ARGUMENT_HELP.get(name) or own.get(name, "") for name in argument_types(engine)}
 
 
 def table_bytes(size: int, view: int) -> int:
@@ -96,8 +138,7 @@ def check_agent_count(name: str, value: Any, most: int, room: str) -> int:
 def check_env_arguments(engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError) -> None:
     """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
     ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
-    count = () if engine.count_argument is None else (engine.count_argument,)
-    known = (*GRID_ARGUMENTS, *count, *engine.extra_arguments)
+    known = (*GRID_ARGUMENTS, *own_arguments(engine))
     unknown = [key for key in kwargs if key not in known]
     if unknown:
         raise error(f"{engine.name} takes no argument(s) {unknown}; its environment arguments: {', '.join(known)}")

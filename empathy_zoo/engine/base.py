@@ -1,21 +1,24 @@
-"""The part of the rules both gridworlds share: torus, moves, resets, state (what an agent sees,
-and the swap, are in :mod:`empathy_zoo.engine.sight`).
+"""The part of the rules both gridworlds share: torus, moves, resets, state, observations and the
+swap.
 
 A :class:`GridEngine` holds the state of ``num_envs`` environments as numpy arrays and steps them
 all at once. Subclasses add what differs (who harms whom, batteries, observation values). The
 PettingZoo ``ParallelEnv`` is this engine with ``num_envs = 1``; :mod:`empathy_zoo.vector` is the
-same engine with many environments.
+same engine with many environments. Where agents may start is decided by
+:class:`~empathy_zoo.engine.placement.StartRules`; the observation window's lookup tables and the
+painting of views are in :mod:`empathy_zoo.engine.sight`.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from empathy_zoo.actions import check_action_array
+from empathy_zoo.actions import NUM_ACTIONS, Action, check_action_array
 from empathy_zoo.engine.arguments import (
     GRID_ARGUMENTS,
     MAX_SIZE,
@@ -25,16 +28,9 @@ from empathy_zoo.engine.arguments import (
     check_grid_arguments,
     table_bytes,
 )
-from empathy_zoo.engine.placement import HandPlacement
-from empathy_zoo.engine.sight import OUTSIDE, Sight
-from empathy_zoo.grid import (
-    MOVES,
-    NUM_ACTIONS,
-    Action,
-    displacement_origin,
-    spread_ids,
-    window_slot_by_displacement,
-)
+from empathy_zoo.engine.placement import StartRules
+from empathy_zoo.engine.sight import Views, Window, canvas_slots, draw_agents, swap_order
+from empathy_zoo.grid import MOVES, torus_distance
 from empathy_zoo.metrics import equality
 from empathy_zoo.randomness import EnvStreams, check_seed
 
@@ -73,7 +69,7 @@ class StepEvents:
     """(N,) bool: the episode ended this step (the environment needs a reset)."""
 
 
-class GridEngine(HandPlacement, Sight):
+class GridEngine:
     """State and shared rules of ``num_envs`` gridworlds on a ``size x size`` torus."""
 
     name: ClassVar[str]
@@ -89,13 +85,18 @@ class GridEngine(HandPlacement, Sight):
     num_actions: ClassVar[int] = NUM_ACTIONS
     """Actions of every agent (up, down, left, right, stay)."""
     obs_low: ClassVar[float]
-    obs_high: ClassVar[float]
+    obs_high: float
+    """The largest observation value: the class gives it, or an engine whose values depend on its
+    arguments sets it per instance (Sharing: the value of an agent holding every battery)."""
     extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     """Environment-specific keyword arguments of the constructor and their allowed values (the
     first one is the default); every face and the sweep files accept exactly these."""
     count_argument: ClassVar[str | None] = None
     """The constructor keyword giving how many other agents (after the first) the environment
     holds, default 1 (``num_cats``), or ``None`` when the number is fixed."""
+    argument_help: ClassVar[Mapping[str, str]] = {}
+    """One line for each of its own arguments (:attr:`extra_arguments`, :attr:`count_argument`):
+    the command line's help."""
 
     def __init__(self, num_envs: int = 1, size: int = 7, view: int = 5, max_cycles: int = 500, num_others: int = 1) -> None:
         check_grid_arguments(size, view, max_cycles, self.min_size)
@@ -119,8 +120,8 @@ class GridEngine(HandPlacement, Sight):
         self.num_agents = len(self.agents)
         self.other_agents = tuple(np.array([j for j in range(self.num_agents) if j != i]) for i in range(self.num_agents))
         """``[agent]``: the indices of every agent but ``agent``, in agent order (int arrays, read-only)."""
-        for others in self.other_agents:
-            others.flags.writeable = False
+        for other_indices in self.other_agents:
+            other_indices.flags.writeable = False
         self.obs_size = self.view * self.view
         self.num_cells = self.size * self.size
         # lookup tables over flat cells (row * size + col), so a step is a few 1-D numpy lookups;
@@ -131,13 +132,8 @@ class GridEngine(HandPlacement, Sight):
         destination = (self._cell_rc[:, None, :] + MOVES[None, :, :]) % self.size
         self._next_cell = (destination[..., 0] * self.size + destination[..., 1]).ravel()
         """``[cell * NUM_ACTIONS + action]``: the cell an agent on ``cell`` reaches with ``action``."""
-        self._spread = spread_ids(self.size)
-        """``[cell]``: the cell's id on a grid twice as wide; the difference of two tells their displacement."""
-        self._spread_centre = self._spread - displacement_origin(self.size)
-        self._window_slot = window_slot_by_displacement(self.size, self.view)
-        self._window_slot[self._window_slot == self.obs_size] = OUTSIDE
-        """``[_spread[cell] - _spread_centre[centre]]``: the window slot of ``cell`` around ``centre``,
-        or ``OUTSIDE`` (see :meth:`paint`)."""
+        self.window = Window(self.size, self.view)
+        """The observation window's lookup tables (see :meth:`paint`)."""
         self.streams = EnvStreams(self.num_envs)
         n, a = self.num_envs, self.num_agents
         self.cells = np.zeros((n, a), dtype=np.int64)
@@ -268,8 +264,36 @@ class GridEngine(HandPlacement, Sight):
         elif self.start_order is None:
             self._random_start(ids)
         else:  # no randomness drawn; without options every environment has the same layout
-            placed = self._ordered_start(int(ids[0]), {}, range(self.num_agents))
+            placed = self._start_rules(int(ids[0])).in_order(self.start_order, {}, range(self.num_agents))
             self.cells[ids] = [self.flat_cell(*placed[index]) for index in range(self.num_agents)]
+
+    def _start_rules(self, env_id: int) -> StartRules:
+        """Where agents may start in environment ``env_id`` (its blocked cells as they are now)."""
+        return StartRules(self.agents, self.size, frozenset(self._blocked_start_cells(env_id).tolist()), self._start_conflict)
+
+    def _reset_with_options(self, env_id: int, options: Mapping[str, Any]) -> None:
+        """Apply ``reset(options=...)`` to environment ``env_id``: the environment's own options,
+        then the agents placed by hand (checked), then every other agent by the environment's
+        rule (its start order, or drawn from its stream)."""
+        if not isinstance(options, Mapping):
+            raise ValueError(f"options must be a mapping, got {type(options).__name__}")
+        consumed = self._apply_options(env_id, options) | {"positions"}
+        unknown = set(options) - consumed
+        if unknown:  # PettingZoo's own API test passes foreign options; ignore them loudly
+            warnings.warn(
+                f"ignoring unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}",
+                stacklevel=4,
+            )
+        rules = self._start_rules(env_id)
+        placed = rules.hand_placed(options.get("positions"))
+        missing = [index for index in range(self.num_agents) if index not in placed]
+        if self.start_order is not None:
+            placed = rules.in_order(self.start_order, placed, missing)
+        else:
+            env = np.array([env_id])
+            placed = rules.at_random(lambda: self.streams.uniform(env)[0], placed, missing)
+        for index, cell in placed.items():
+            self.cells[env_id, index] = self.flat_cell(*cell)
 
     # ------------------------------------------------------------------ step
     def check_actions(self, actions: np.ndarray) -> np.ndarray:
@@ -326,6 +350,70 @@ class GridEngine(HandPlacement, Sight):
         self.left_at = np.where(gone, self.t[:, None], self.left_at)
         self.present &= ~gone
 
+    # ------------------------------------------------------------------ observations
+    def views(self, viewer: np.ndarray, order: np.ndarray | None = None) -> Views:
+        """The :class:`~empathy_zoo.engine.sight.Views` of agents ``viewer`` (``(K,)`` agent indices);
+        for swapped views, the ``(K, A)`` :func:`~empathy_zoo.engine.sight.swap_order` their agents
+        are painted in (see :meth:`Views.of <empathy_zoo.engine.sight.Views.of>`)."""
+        return Views.of(viewer, self.num_agents, self.obs_size, order)
+
+    def paint(
+        self, env_ids: np.ndarray, cells: np.ndarray, inventory: np.ndarray, present: np.ndarray, views: Views
+    ) -> np.ndarray:
+        """``(K, obs_size)`` float32 observations of ``K`` views at once.
+
+        View ``k`` is environment ``env_ids[k]`` (its batteries) with the agents on flat
+        ``cells[k]`` (``(A,)``), holding ``inventory[k]``, present where ``present[k]``, seen by
+        agent ``views.viewer[k]``: the window around the viewer, the other present agents drawn over
+        it in agent order (or in ``views.draw``'s), the viewer's own cell drawn last.
+        """
+        centre, slots = canvas_slots(self.window, views, cells, present)
+        canvas = np.empty(views.size + 1, dtype=np.float32)
+        picture = canvas[:-1].reshape(-1, self.obs_size)
+        self._paint_background(env_ids, centre[:, 0], picture)
+        draw_agents(canvas, slots, self._appearance(inventory, views.viewer), views)
+        picture[:, self.obs_size // 2] = self._self_appearance(inventory.take(views.own), views.viewer)
+        return picture
+
+    def observe(self, viewer: int, env_ids: np.ndarray | None = None) -> np.ndarray:
+        """``(N, obs_size)`` float32 observations of agent ``viewer`` (in ``env_ids``, default all)."""
+        if env_ids is None:
+            env_ids, cells, inventory, present = self._rows, self.cells, self.inventory, self.present
+        else:
+            cells, inventory, present = self.cells[env_ids], self.inventory[env_ids], self.present[env_ids]
+        return self.paint(env_ids, cells, inventory, present, self.views(np.full(len(env_ids), viewer)))
+
+    def observe_swapped(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
+        """What ``viewer`` would observe had it exchanged its situation (cell, inventory, presence)
+        with ``other`` (an agent index, or one per environment), in every environment.
+
+        Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
+        """
+        order = swap_order(self.num_agents, viewer, other)
+        views = self.views(np.full(self.num_envs, viewer), order)
+        if order.ndim == 1:
+            cells, inventory, present = (x.take(order, axis=1) for x in (self.cells, self.inventory, self.present))
+        else:
+            order = order + self._agent_base  # into the flattened (N, A) arrays
+            cells, inventory, present = (x.ravel().take(order) for x in (self.cells, self.inventory, self.present))
+        return self.paint(self._rows, cells, inventory, present, views)
+
+    def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
+        """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
+        other_cell = self.cells[self._rows, other] if np.ndim(other) else self.cells[:, other]
+        return self.window.contains(other_cell, self.cells[:, viewer])
+
+    def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
+        """Index of the closest other present agent of ``viewer`` (torus Manhattan distance, ties
+        to the lowest index) and a mask of environments where such an agent exists."""
+        other_indices = self.other_agents[viewer]
+        if len(other_indices) == 1:
+            return np.full(self.num_envs, other_indices[0]), self.present[:, other_indices[0]].copy()
+        dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, other_indices, :], self.size).astype(np.float64)
+        dist[~self.present[:, other_indices]] = np.inf
+        choice = np.argmin(dist, axis=1)
+        return np.asarray(other_indices)[choice], np.isfinite(dist[self._rows, choice])
+
     # ------------------------------------------------------------------ infos
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
         """The ``infos[agent]`` entry after a reset."""
@@ -343,25 +431,25 @@ class GridEngine(HandPlacement, Sight):
         ``other_return`` are summed over the others, and ``equality`` compares the learner's
         battery reward with the others' mean (1 when the learner took exactly its share); with one
         other agent each is that agent's own figure."""
-        others = self.other_agents[learner]
-        if len(others) == 1:  # (that agent's own figures, read at once)
+        other_indices = self.other_agents[learner]
+        if len(other_indices) == 1:  # (that agent's own figures, read at once)
 
-            def of_others(array: np.ndarray) -> np.ndarray:
-                return array[env_ids, others[0]]
+            def summed_over_others(array: np.ndarray) -> np.ndarray:
+                return array[env_ids, other_indices[0]]
         else:
 
-            def of_others(array: np.ndarray) -> np.ndarray:
-                return array[env_ids[:, None], others].sum(axis=1)
+            def summed_over_others(array: np.ndarray) -> np.ndarray:
+                return array[env_ids[:, None], other_indices].sum(axis=1)
 
         own_b = self.episode_battery_return[env_ids, learner]
         return {
             "survival": np.where(self.present[env_ids, learner], self.t[env_ids], self.left_at[env_ids, learner]),
             "harms": self.episode_harms[env_ids, learner].copy(),
             "batteries": self.inventory[env_ids, learner].copy(),
-            "other_batteries": of_others(self.inventory),
-            "equality": equality(own_b, of_others(self.episode_battery_return) / len(others)),
+            "other_batteries": summed_over_others(self.inventory),
+            "equality": equality(own_b, summed_over_others(self.episode_battery_return) / len(other_indices)),
             "return": self.episode_return[env_ids, learner].copy(),
-            "other_return": of_others(self.episode_return),
+            "other_return": summed_over_others(self.episode_return),
             "length": self.t[env_ids].copy(),
         }
 

@@ -8,13 +8,15 @@ the first of them (in agent order) in ``harmed_by``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.base import NO_AGENT, GridEngine, StepEvents
 from empathy_zoo.engine.placement import distinct_picks
-from empathy_zoo.grid import MOVES, NUM_ACTIONS, displacement_origin, signed_offset
+from empathy_zoo.grid import MOVES, displacement_origin, signed_offset, spread_ids
 
 __all__ = ["CoexistenceEngine", "harm_outcome", "OWN_CELL", "OTHER_AGENT", "FLOOR"]
 
@@ -72,6 +74,7 @@ class CoexistenceEngine(GridEngine):
     obs_low = -1.0
     obs_high = 1.0
     count_argument = "num_cats"
+    argument_help: ClassVar[Mapping[str, str]] = {"num_cats": "cats, each walking by its own policy (default: 1)"}
     one_pair_tables: bool = True
     """With one cat, look the step's effects up in the one-pair tables (:data:`HARMED_BY`, …)
     rather than through the bookkeeping of several pairs: the same effects, fewer operations."""
@@ -99,8 +102,9 @@ class CoexistenceEngine(GridEngine):
         """``[displacement · 25 + robot action · 5 + cat action]``: the step's outcome."""
         moves = np.arange(self.num_cells * NUM_ACTIONS)
         cell, action = np.divmod(moves, NUM_ACTIONS)
-        self._cat_move = (self._spread[cell] + origin) * NUM_ACTIONS**2 + action
-        self._robot_move = self._spread[cell] * NUM_ACTIONS**2 - NUM_ACTIONS * action
+        spread = spread_ids(self.size)[cell]
+        self._cat_move = (spread + origin) * NUM_ACTIONS**2 + action
+        self._robot_move = spread * NUM_ACTIONS**2 - NUM_ACTIONS * action
         """``[cell · 5 + action]``: the cat's and the robot's parts of the index into :attr:`_outcomes`
         (their difference is ``displacement · 25 + robot action · 5 + cat action``)."""
         self._cat_ids = np.arange(CAT, self.num_agents)

@@ -17,14 +17,14 @@ Two fidelity options (SPEC §3, constructor keywords; the defaults are the suite
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar
 
 import numpy as np
 
 from empathy_zoo.engine.base import GridEngine, StepEvents, check_choice
-from empathy_zoo.engine.placement import distinct_picks
-from empathy_zoo.grid import cells_by_distance, window_indices
+from empathy_zoo.engine.placement import check_cell, distinct_picks
+from empathy_zoo.grid import cells_by_distance
 from empathy_zoo.observation_codes import step_value
 
 __all__ = [
@@ -61,7 +61,7 @@ def battery_value(n: np.ndarray | int) -> np.ndarray:
 _ONE = np.array(1)
 
 
-def agent_value(batteries: np.ndarray) -> np.ndarray:
+def agent_value(batteries: np.ndarray | int) -> np.ndarray:
     """Observation value of an agent that holds ``batteries``: ``1 + batteries``."""
     return batteries + _ONE  # (a 0-d array adds faster than the int 1)
 
@@ -84,6 +84,11 @@ class SharingEngine(GridEngine):
     obs_low = -1.0
     extra_arguments = {"start": STARTS, "inventory_encoding": INVENTORY_ENCODINGS}
     count_argument = "num_humans"
+    argument_help: ClassVar[Mapping[str, str]] = {
+        "start": "start cells: random, or centre as the authors' code (default: random)",
+        "inventory_encoding": "how an agent is drawn: count_plus_one, or authors (default: count_plus_one)",
+        "num_humans": "humans (default: 1)",
+    }
 
     def __init__(
         self,
@@ -99,10 +104,10 @@ class SharingEngine(GridEngine):
         self.start = check_choice("start", start, STARTS)
         self.inventory_encoding = check_choice("inventory_encoding", inventory_encoding, INVENTORY_ENCODINGS)
         super().__init__(num_envs, size, view, max_cycles, num_others=num_humans)
-        self.window = window_indices(self.size, self.view)
-        """``[centre]``: the flat cells of the window around ``centre``, row-major."""
         self.initial_batteries = battery_cells(self.size)
         self.num_batteries = int(self.initial_batteries.sum())
+        self._agent_value: Callable[[np.ndarray | int], np.ndarray]
+        """The observation value of an agent holding so many batteries (in :attr:`inventory_encoding`)."""
         if inventory_encoding == "authors":  # a lookup over every count the env can reach
             self._agent_value = authors_agent_value(np.arange(self.num_batteries + 1)).take
         else:
@@ -144,7 +149,7 @@ class SharingEngine(GridEngine):
             raise ValueError(f"options['batteries'] must be a list of (row, col) cells, got {cells!r}")
         layout = np.zeros(self.size * self.size, dtype=bool)
         for k, cell in enumerate(cells):
-            row, col = self._check_cell(cell, f"options['batteries'][{k}]")
+            row, col = check_cell(cell, f"options['batteries'][{k}]", self.size)
             if layout[row * self.size + col]:
                 raise ValueError(f"options['batteries'] lists {(int(row), int(col))} twice")
             layout[row * self.size + col] = True
@@ -180,7 +185,7 @@ class SharingEngine(GridEngine):
         self.episode_battery_return += value
         self.batteries.ravel()[taken] = False
         self._picture.ravel()[taken] = FLOOR
-        empty = ~self.batteries.any(axis=1)
+        empty = ~np.asarray(self.batteries.any(axis=1))  # (N,): asarray types numpy's "bool or array" as the array
         events.terminated[empty] = True
         events.episode_over = empty
 
@@ -206,7 +211,7 @@ class SharingEngine(GridEngine):
         return {"batteries": self.inventory.item(env_id, agent)}
 
     def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
-        window = self.window.take(centre, 0)
+        window = self.window.cells.take(centre, 0)
         if self.num_envs > 1:
             window += (env_ids * self.num_cells)[:, None]  # into the flattened picture
         self._picture.take(window, out=out, mode="clip")  # (the indices are valid; "clip" avoids a buffer)

@@ -1,32 +1,69 @@
-"""What an agent sees: observation windows painted from the engine's state, the perspective
-swap (SPEC §4) and the closest other agent.
+"""What an agent sees: the lookup tables of the observation window, the index arrays of views
+painted together, and the perspective swap (SPEC §4) as a permutation of agents.
 
-:class:`Sight` is the part of :class:`~empathy_zoo.engine.base.GridEngine` that paints views
-(mixed into it, as :class:`~empathy_zoo.engine.placement.HandPlacement` is); it reads the engine's
-state and lookup tables and calls its hooks ``_paint_background``, ``_appearance`` and
-``_self_appearance``, where each environment says what its cells and agents look like.
+:class:`Window` holds, for a ``view × view`` window on a ``size`` torus, where a cell appears in
+the window around another; :class:`Views` says who looks in each of ``K`` views painted at once;
+:func:`canvas_slots` and :func:`draw_agents` put agents into such a canvas.
+:meth:`GridEngine.paint <empathy_zoo.engine.base.GridEngine.paint>` paints observations with them
+and the environment's own looks. Everything here works on the arrays it is given.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from functools import cached_property
 
 import numpy as np
 
-from empathy_zoo.grid import torus_distance
+from empathy_zoo.grid import displacement_origin, spread_ids, window_indices, window_slot_by_displacement
 
-__all__ = ["Sight", "Views", "swap_order", "OUTSIDE"]
+__all__ = ["Window", "Views", "canvas_slots", "draw_agents", "swap_order", "OUTSIDE"]
 
 OUTSIDE = 1 << 60
 """Window slot of a cell outside the window: larger than any canvas index."""
 
 
+class Window:
+    """The ``view × view`` observation window on a ``size × size`` torus, as lookup tables over
+    flat cells (``row * size + col``); each grows with the number of cells, none with its square."""
+
+    def __init__(self, size: int, view: int) -> None:
+        self.size = size
+        """Side of the torus."""
+        self.view = view
+        """Side of the window (odd)."""
+        self.obs_size = view * view
+        """Cells in the window: the length of an observation; its middle one is the centre."""
+        self.spread = spread_ids(size)
+        """``[cell]``: the cell's id on a grid twice as wide; the difference of two tells their displacement."""
+        self.spread_centre = self.spread - displacement_origin(size)
+        """``[centre]``: ``spread[centre]`` less the origin of the displacement table :attr:`slot`."""
+        slot = window_slot_by_displacement(size, view)
+        slot[slot == self.obs_size] = OUTSIDE
+        self.slot = slot
+        """``[spread[cell] - spread_centre[centre]]``: the window slot of ``cell`` around ``centre``,
+        or :data:`OUTSIDE`."""
+
+    @cached_property
+    def cells(self) -> np.ndarray:
+        """``[centre]``: the flat cells of the window around ``centre``, row-major (``(size², view²)``
+        int64; built when first read: only an environment that paints a background reads it)."""
+        return window_indices(self.size, self.view)
+
+    def slots(self, cells: np.ndarray, centre: np.ndarray) -> np.ndarray:
+        """The window slot of each flat cell of ``cells`` around the matching flat cell of
+        ``centre`` (arrays of one shape), or :data:`OUTSIDE`."""
+        return self.slot.take(self.spread.take(cells) - self.spread_centre.take(centre))
+
+    def contains(self, cells: np.ndarray, centre: np.ndarray) -> np.ndarray:
+        """Bool: each flat cell of ``cells`` is inside the window around the matching ``centre``."""
+        return self.slot[self.spread[cells] - self.spread_centre[centre]] < self.obs_size
+
+
 @dataclass(frozen=True)
 class Views:
-    """Who looks in each of ``K`` views painted together, with the index arrays :meth:`GridEngine.paint`
-    derives from that (build it once with :meth:`GridEngine.views` when the same views are
-    painted every step)."""
+    """Who looks in each of ``K`` views painted together, with the index arrays painting derives
+    from that (build it once with :meth:`Views.of` when the same views are painted every step)."""
 
     viewer: np.ndarray
     """(K,) the agent whose observation each view is."""
@@ -42,7 +79,60 @@ class Views:
     """``size`` as a 0-d array."""
     draw: np.ndarray | None = None
     """(K, A) the agents of each view in the order they are drawn, or ``None``: agent order. A
-    swapped view draws each agent in the turn of the situation it holds (see :meth:`GridEngine.views`)."""
+    swapped view draws each agent in the turn of the situation it holds (see :meth:`Views.of`)."""
+
+    @classmethod
+    def of(cls, viewer: np.ndarray, num_agents: int, obs_size: int, order: np.ndarray | None = None) -> Views:
+        """The views of agents ``viewer`` (``(K,)`` agent indices) among ``num_agents``, each
+        ``obs_size`` long; for swapped views, the ``(K, A)`` :func:`swap_order` their agents are
+        painted in.
+
+        A swapped view holds the agents in that order (each in the other's situation: cell,
+        inventory, presence); each agent is drawn in the turn of the situation it holds, so where
+        agents share a cell the one on top is the same as without the swap (the swapped view is the
+        other agent's own observation wherever the agents look alike to both)."""
+        viewer = np.asarray(viewer, dtype=np.int64)
+        k, a = len(viewer), num_agents
+        own = np.arange(k) * a + viewer
+        first = np.repeat(np.arange(k) * obs_size, a).reshape(k, a)
+        size = k * obs_size
+        # (with two agents the one besides the viewer is drawn alone: the order cannot matter)
+        draw = None if order is None or a <= 2 else np.ascontiguousarray(np.broadcast_to(order, (k, a)))
+        return cls(viewer, own, np.repeat(own, a).reshape(k, a), first, size, np.array(size), draw)
+
+
+def canvas_slots(window: Window, views: Views, cells: np.ndarray, present: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each agent of ``K`` views lands in their flattened canvas (``K * obs_size`` pictures
+    and one scratch element past them), given the agents' flat ``cells`` and ``present`` (``(K, A)``).
+
+    Returns ``(centre, slots)``, both ``(K, A)`` int64: the viewer's cell once per agent, and each
+    agent's canvas index (the scratch element where it is absent or outside the window, so
+    drawing needs no masks), its columns in drawing order (:attr:`Views.draw`)."""
+    # (operands of equal shape and 0-d constants: numpy's cheapest calls on the small arrays of
+    # the one-environment path)
+    centre = cells.take(views.own_each)
+    slots = window.slots(cells, centre)
+    if np.count_nonzero(present) < present.size:
+        slots[~present] = OUTSIDE
+    slots += views.first
+    np.minimum(slots, views.scratch, out=slots)
+    if views.draw is not None:  # (a swapped view of three or more agents)
+        slots = np.take_along_axis(slots, views.draw, axis=1)
+    return centre, slots
+
+
+def draw_agents(canvas: np.ndarray, slots: np.ndarray, looks: np.ndarray | float, views: Views) -> None:
+    """Write each agent's look into ``canvas`` at its ``slots`` (from :func:`canvas_slots`), in
+    drawing order, so a later agent covers an earlier one on the same cell; ``looks`` is one
+    value for every agent or a ``(K, A)`` array in agent order."""
+    if isinstance(looks, np.ndarray):
+        if views.draw is not None:
+            looks = np.take_along_axis(looks, views.draw, axis=1)
+        for agent in range(slots.shape[1]):
+            canvas[slots[:, agent]] = looks[:, agent]
+    else:
+        for agent in range(slots.shape[1]):
+            canvas[slots[:, agent]] = looks
 
 
 def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndarray:
@@ -60,119 +150,3 @@ def swap_order(num_agents: int, viewer: int, other: int | np.ndarray) -> np.ndar
     order[..., viewer] = other
     np.put_along_axis(order, other[..., None], viewer, axis=-1)
     return order
-
-
-class Sight:
-    """Painting views (mixed into :class:`~empathy_zoo.engine.base.GridEngine`, whose state,
-    tables and hooks it uses)."""
-
-    if TYPE_CHECKING:  # what the host engine provides (GridEngine.__init__ and its hooks)
-        num_envs: int
-        num_agents: int
-        size: int
-        obs_size: int
-        other_agents: tuple[np.ndarray, ...]
-        cells: np.ndarray
-        present: np.ndarray
-        inventory: np.ndarray
-        _rows: np.ndarray
-        _agent_base: np.ndarray
-        _spread: np.ndarray
-        _spread_centre: np.ndarray
-        _window_slot: np.ndarray
-
-        @property
-        def pos(self) -> np.ndarray: ...
-        def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None: ...
-        def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float: ...
-        def _self_appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> np.ndarray | float: ...
-
-    def views(self, viewer: np.ndarray, order: np.ndarray | None = None) -> Views:
-        """The :class:`Views` of agents ``viewer`` (``(K,)`` agent indices); for swapped views, the
-        ``(K, A)`` :func:`swap_order` their agents are painted in.
-
-        A swapped view holds the agents in that order (each in the other's situation: cell,
-        inventory, presence); each agent is drawn in the turn of the situation it holds, so where
-        agents share a cell the one on top is the same as without the swap (the swapped view is the
-        other agent's own observation wherever the agents look alike to both)."""
-        viewer = np.asarray(viewer, dtype=np.int64)
-        k, a = len(viewer), self.num_agents
-        own = np.arange(k) * a + viewer
-        first = np.repeat(np.arange(k) * self.obs_size, a).reshape(k, a)
-        size = k * self.obs_size
-        # (with two agents the one besides the viewer is drawn alone: the order cannot matter)
-        draw = None if order is None or a <= 2 else np.ascontiguousarray(np.broadcast_to(order, (k, a)))
-        return Views(viewer, own, np.repeat(own, a).reshape(k, a), first, size, np.array(size), draw)
-
-    def paint(
-        self, env_ids: np.ndarray, cells: np.ndarray, inventory: np.ndarray, present: np.ndarray, views: Views
-    ) -> np.ndarray:
-        """``(K, obs_size)`` float32 observations of ``K`` views at once.
-
-        View ``k`` is environment ``env_ids[k]`` (its batteries) with the agents on flat
-        ``cells[k]`` (``(A,)``), holding ``inventory[k]``, present where ``present[k]``, seen by
-        agent ``views.viewer[k]``: the window around the viewer, the other present agents drawn over
-        it in agent order (or in ``views.draw``'s), the viewer's own cell drawn last.
-        """
-        # (operands of equal shape and 0-d constants: numpy's cheapest calls on the small arrays of
-        # the one-environment path)
-        centre = cells.take(views.own_each)  # (K, A): the viewer's cell, once per agent
-        # each agent's index in the flattened canvas; absent or out-of-window agents go to one
-        # scratch element past the pictures (so drawing needs no masks)
-        slots = self._window_slot.take(self._spread.take(cells) - self._spread_centre.take(centre))
-        if np.count_nonzero(present) < present.size:
-            slots[~present] = OUTSIDE
-        slots += views.first
-        np.minimum(slots, views.scratch, out=slots)
-        canvas = np.empty(views.size + 1, dtype=np.float32)
-        picture = canvas[:-1].reshape(-1, self.obs_size)
-        self._paint_background(env_ids, centre[:, 0], picture)
-        looks = self._appearance(inventory, views.viewer)
-        if views.draw is not None:  # (a swapped view of three or more agents)
-            slots = np.take_along_axis(slots, views.draw, axis=1)
-            if isinstance(looks, np.ndarray):
-                looks = np.take_along_axis(looks, views.draw, axis=1)
-        for agent in range(self.num_agents):
-            canvas[slots[:, agent]] = looks[:, agent] if isinstance(looks, np.ndarray) else looks
-        picture[:, self.obs_size // 2] = self._self_appearance(inventory.take(views.own), views.viewer)
-        return picture
-
-    def observe(self, viewer: int, env_ids: np.ndarray | None = None) -> np.ndarray:
-        """``(N, obs_size)`` float32 observations of agent ``viewer`` (in ``env_ids``, default all)."""
-        if env_ids is None:
-            env_ids, cells, inventory, present = self._rows, self.cells, self.inventory, self.present
-        else:
-            cells, inventory, present = self.cells[env_ids], self.inventory[env_ids], self.present[env_ids]
-        return self.paint(env_ids, cells, inventory, present, self.views(np.full(len(env_ids), viewer)))
-
-    def observe_swapped(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
-        """What ``viewer`` would observe had it exchanged its situation (cell, inventory, presence)
-        with ``other`` (an agent index, or one per environment), in every environment.
-
-        Rows where ``other`` has left the environment are meaningless; see :attr:`present`.
-        """
-        order = swap_order(self.num_agents, viewer, other)
-        views = self.views(np.full(self.num_envs, viewer), order)
-        if order.ndim == 1:
-            cells, inventory, present = (x.take(order, axis=1) for x in (self.cells, self.inventory, self.present))
-        else:
-            order = order + self._agent_base  # into the flattened (N, A) arrays
-            cells, inventory, present = (x.ravel().take(order) for x in (self.cells, self.inventory, self.present))
-        return self.paint(self._rows, cells, inventory, present, views)
-
-    def in_view(self, viewer: int, other: int | np.ndarray) -> np.ndarray:
-        """(N,) bool: ``other`` stands inside ``viewer``'s observation window."""
-        other_cell = self.cells[self._rows, other] if np.ndim(other) else self.cells[:, other]
-        displacement = self._spread[other_cell] - self._spread_centre[self.cells[:, viewer]]
-        return self._window_slot[displacement] < self.obs_size
-
-    def closest_other(self, viewer: int) -> tuple[np.ndarray, np.ndarray]:
-        """Index of the closest other present agent of ``viewer`` (torus Manhattan distance, ties
-        to the lowest index) and a mask of environments where such an agent exists."""
-        others = self.other_agents[viewer]
-        if len(others) == 1:
-            return np.full(self.num_envs, others[0]), self.present[:, others[0]].copy()
-        dist = torus_distance(self.pos[:, viewer, None, :], self.pos[:, others, :], self.size).astype(np.float64)
-        dist[~self.present[:, others]] = np.inf
-        choice = np.argmin(dist, axis=1)
-        return np.asarray(others)[choice], np.isfinite(dist[self._rows, choice])

@@ -6,10 +6,10 @@ What a user drives: :class:`RunSpec` (one run), :func:`load_sweep` (the runs of 
 what), and :func:`train_ensemble` (one ensemble, here).
 """
 
+from empathy_zoo.experiment.model import RunSpec, group_specs
+from empathy_zoo.experiment.sweep_file import load_sweep
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.runner import train_runs
-from empathy_zoo.training.spec import RunSpec, group_specs
-from empathy_zoo.training.sweep import load_sweep
 
 __all__ = ["RunSpec", "RunnerOptions", "group_specs", "load_sweep", "train_ensemble", "train_runs"]

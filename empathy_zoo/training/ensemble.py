@@ -5,13 +5,13 @@ step by step: the learner acts for every run at once, the vector env steps every
 environment, and :func:`learner_batch` hands the learner what happened, unshaped (with the
 stepwise inaction baseline of :mod:`baselines.inaction_baseline` when a reward transform needs
 it). It resumes from the ensemble's checkpoint, evaluates greedily every ``eval_interval``
-steps, and writes one result file per run (atomically) at the end. A run's numbers depend only
+steps, and writes one result file per run (atomically) at the end, with the run's trained agent
+beside it (:mod:`empathy_zoo.agent_file`) when its learner keeps one. A run's numbers depend only
 on its own spec.
 """
 
 from __future__ import annotations
 
-import inspect
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -23,7 +23,9 @@ import torch
 from agents.base import StepBatch
 from agents.rewards import TrainRewards
 from baselines.inaction_baseline import InactionBaseline
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.agent_file import agent_bytes
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.result_file import result_path
@@ -31,9 +33,8 @@ from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_che
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import Report, SweepProgress
-from empathy_zoo.training.results import build_result, empty_columns, write_result
+from empathy_zoo.training.results import build_result, empty_columns, stored, write_result
 from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, write_manifest
-from empathy_zoo.training.spec import RunSpec
 from empathy_zoo.vector import VectorEnv, VectorStep
 
 __all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
@@ -51,9 +52,7 @@ class _EpisodeLog:
         self.columns["episode_end_step"].append(int(end_step))
         for name in METRIC_NAMES:
             value = metrics[name][row]
-            self.columns[name].append(
-                int(value) if name in ("survival", "harms", "batteries", "other_batteries") else round(float(value), 6)
-            )
+            self.columns[name].append(int(value) if name in INTEGER_METRICS else round(float(value), 6))
 
     def recent(self, name: str, count: int = 100) -> float:
         values = self.columns[name][-count:]
@@ -106,9 +105,13 @@ def _train_ensemble(
     if len(venv.learners) != 1:
         raise ValueError(f"training needs exactly one learning agent; {first.env} has {venv.learners} (fix the others)")
     seeds = [s.seed for s in specs]
-    others = {"num_others": len(venv.others[0])} if _takes(method.learner, "num_others") else {}
     learner = method.learner(
-        [s.method_settings() for s in specs], seeds, venv.obs_size, venv.num_actions, options.device, **others
+        [s.method_settings() for s in specs],
+        seeds,
+        venv.obs_size,
+        venv.num_actions,
+        options.device,
+        num_others=len(venv.others[0]),
     )
     train_rewards = TrainRewards([s.reward_transform() for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
@@ -119,10 +122,12 @@ def _train_ensemble(
     ckpt = checkpoint_path(out_dir, specs)
     if ckpt.exists():
         obs, evaluations, step, elapsed = _restore(ckpt, specs, learner, train_rewards, venv, logs)
-    if hasattr(learner, "replay") and hasattr(learner.replay, "check_range"):  # fail now, not mid-run
-        learner.replay.check_range(venv.engine.obs_low, venv.engine.obs_high)
+    check_range = _optional(learner, "check_observation_range")
+    if check_range is not None:  # fail now, not mid-run
+        check_range(venv.engine.obs_low, venv.engine.obs_high)
+    replay_bytes = _optional(learner, "replay_bytes_per_run")
     memory = {
-        "replay_per_run": learner.replay.nbytes_per_run() if hasattr(learner, "replay") else 0,
+        "replay_per_run": 0 if replay_bytes is None else replay_bytes(),
         "learner_per_run": learner.memory_bytes_per_run(),
     }
     total = first.steps
@@ -184,10 +189,11 @@ def _train_ensemble(
     wall = time.perf_counter() - started
     results = []
     for r, spec in enumerate(specs):
-        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory)
+        agent = agent_bytes(learner, r, {"run_id": spec.run_id, **spec.config()})  # (None: the method keeps none)
+        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory, agent)
         if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
             write_result(out_dir, document)
-        results.append(document)
+        results.append(stored(document) if write_results else document)
     remove_checkpoint(ckpt)
     return results
 
@@ -211,35 +217,36 @@ def _restore(
 
 def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> StepBatch:
     """What the learner is told of one step of every run (one env per run, one learner): the
-    environment's facts, as the vector env reports them for its learner, unshaped. The other-term
-    may bootstrap only while the closest other agent is present and not terminal (SPEC §6): a
-    harmed cat has left, and the human's episode ends for good when the last battery is taken; a
-    time-limit truncation still bootstraps. With ``in_view_only``, an other out of view is
-    *unseen* (``other_unseen``), not absent: the empathic target is then the robot's own (SPEC §4)."""
+    environment's facts, as the vector env reports them for its learner and by the same names,
+    unshaped. An other agent's term may bootstrap only while it is present and not terminal
+    (``others_present``, SPEC §6): a harmed cat has left, and the human's episode ends for good
+    when the last battery is taken; a time-limit truncation still bootstraps. With
+    ``in_view_only``, an other out of view is *unseen* (``others_unseen``), not absent: the
+    empathic target is then the robot's own (SPEC §4)."""
     return StepBatch(
         obs=obs[:, None, :],
         actions=actions,
         rewards=result.learner_rewards,
         terminated=result.learner_terminated,
         next_obs=result.final_observations,
-        swapped_next_obs=result.swapped,
-        other_present=result.swapped_valid & ~result.swapped_other_terminated,
-        harmed_other=result.learner_harmed,
-        battery_return=result.learner_battery_return,
-        other_battery_return=result.other_battery_return,
-        truncated=result.learner_truncated,
-        other_rewards=result.other_rewards,
-        swapped_next_obs_all=result.swapped_all,
+        closest=result.closest,
+        others_swapped=result.others_swapped,
         others_present=result.others_present,
         others_live=result.others_live,
-        other_unseen=result.swapped_unseen,
         others_unseen=result.others_unseen,
+        harms=result.harms,
+        battery_return=result.learner_battery_return,
+        others_battery_return=result.others_battery_return,
+        truncated=result.learner_truncated,
+        others_rewards=result.others_rewards,
     )
 
 
-def _takes(learner: type, keyword: str) -> bool:
-    """The learner class's constructor takes ``keyword`` (optional extras a plug-in need not know)."""
-    return keyword in inspect.signature(learner).parameters
+def _optional(learner: Any, name: str) -> Callable[..., Any] | None:
+    """The learner's method ``name`` that :class:`agents.base.Learner` declares optional, or
+    ``None`` where the learner has none."""
+    method = getattr(learner, name, None)
+    return method if callable(method) else None
 
 
 def _live(logs: list[_EpisodeLog], learner: Any, steps_per_second: float) -> dict[str, str]:

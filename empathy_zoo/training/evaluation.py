@@ -18,16 +18,24 @@ STREAM_EVAL = STREAMS["eval_env"]
 
 
 def evaluate_greedy(
-    learner: Any, env: str, seeds: Sequence[int], episodes: int, fixed: Mapping[str, PolicyEntry], env_kwargs: dict[str, Any]
+    learner: Any,
+    env: str,
+    seeds: Sequence[int],
+    episodes: int,
+    fixed: Mapping[str, PolicyEntry],
+    env_kwargs: dict[str, Any],
+    stream: int = STREAM_EVAL,
 ) -> list[dict[str, list]]:
     """Play ``episodes`` greedy episodes per run; returns per run a dict of metric columns.
 
-    Start states come from seeds derived from each run's seed, so every evaluation of a run
-    starts from the same states and the runs' evaluations are independent of each other.
+    Start states come from seeds derived from each run's seed (``derive_key(seed, stream, e)``
+    for episode ``e``; ``stream`` is the training's evaluation stream unless another is given), so
+    every evaluation of a run starts from the same states and the runs' evaluations are
+    independent of each other.
     """
     k = len(seeds)
     venv = VectorEnv(env, k * episodes, fixed=fixed, **env_kwargs)
-    obs = venv.reset(seed=[derive_key(s, STREAM_EVAL, e) for s in seeds for e in range(episodes)])
+    obs = venv.reset(seed=[derive_key(s, stream, e) for s in seeds for e in range(episodes)])
     done = np.zeros(k * episodes, dtype=bool)
     columns: dict[str, np.ndarray] = {name: np.zeros(k * episodes) for name in METRIC_NAMES}
     while not done.all():

@@ -41,12 +41,12 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
+from empathy_zoo.import_names import PLUGIN_NAME, resolve_name
 from empathy_zoo.policies import policy_entry
 from empathy_zoo.provenance import git_commit, package_version
-from empathy_zoo.registry import PLUGIN_NAME, resolve_name
 
 if TYPE_CHECKING:
-    from empathy_zoo.training.spec import RunSpec
+    from empathy_zoo.experiment.model import RunSpec
 
 __all__ = [
     "CodeFingerprint",

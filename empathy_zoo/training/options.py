@@ -20,8 +20,9 @@ class RunnerOptions:
     progress: bool = True
     """Show progress bars (drawn by this process only: one per running ensemble, and one for the
     sweep's env steps when it has several ensembles; see :mod:`empathy_zoo.training.progress`)."""
-    threads: int | None = None
-    """Torch CPU threads per process (None = torch's default; worker processes default to 1)."""
+    threads: int | None = 1
+    """Torch CPU threads per process (``None`` = torch's default, every core): these small
+    networks gain nothing from more than one, and extra threads are much slower on a busy machine."""
     workers: int = 1
     """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
     backend: str = "local"

@@ -38,12 +38,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
-from empathy_zoo.training.results import write_result
+from empathy_zoo.training.results import stored, write_result
 from empathy_zoo.training.resume import CHECKPOINT_DIR
-from empathy_zoo.training.spec import RunSpec
 
 __all__ = ["MAX_RETRIES", "CONNECT_TIMEOUT_S", "RayNotInstalledError", "train_with_ray", "import_ray", "check_ray_address"]
 
@@ -163,7 +163,7 @@ def _run_tasks(
                     write_result(out_dir, result)
                     written.add(run_id)
                     if on_result is not None:
-                        on_result(result)
+                        on_result(stored(result))
     except BaseException:  # Ctrl-C or an error here: stop the tasks; finished runs are written already
         for ref in pending:
             try:

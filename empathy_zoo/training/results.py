@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.atomic import write_bytes_atomic, write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.result_file import SCHEMA, result_path
 from empathy_zoo.training.fingerprint import run_fingerprint
 
-__all__ = ["build_result", "write_result", "empty_columns"]
+__all__ = ["KEPT_AGENT", "build_result", "stored", "write_result", "empty_columns"]
+
+KEPT_AGENT = "_agent_file"
+"""Key of a result document on its way to :func:`write_result`: the ``(suffix, bytes)`` of its
+agent file (:func:`empathy_zoo.agent_file.agent_bytes`), written beside it and never stored."""
 
 
 def empty_columns() -> dict[str, list]:
@@ -19,11 +24,19 @@ def empty_columns() -> dict[str, list]:
 
 
 def build_result(
-    spec: Any, train: dict[str, list], evaluations: list[dict[str, Any]], wall_time_s: float, memory: dict[str, int]
+    spec: Any,
+    train: dict[str, list],
+    evaluations: list[dict[str, Any]],
+    wall_time_s: float,
+    memory: dict[str, int],
+    agent: tuple[str, bytes] | None = None,
 ) -> dict[str, Any]:
     """The result document of one finished run, with the fingerprint of the code that made it
-    (``version``, ``commit``, ``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`)."""
+    (``version``, ``commit``, ``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`) and the
+    name and SHA-256 of its agent file, whose ``(suffix, bytes)`` it carries to :func:`write_result`
+    as :data:`KEPT_AGENT` (``agent`` is ``None`` when the method keeps none)."""
     config = spec.config()
+    kept = None if agent is None else {"file": spec.run_id + agent[0], "sha256": hashlib.sha256(agent[1]).hexdigest()}
     return {
         "schema": SCHEMA,
         "run_id": spec.run_id,
@@ -39,9 +52,24 @@ def build_result(
         "memory_bytes": memory,
         "wall_time_s": round(float(wall_time_s), 3),
         **run_fingerprint(spec).fields(),
+        "agent": kept,
+        **({KEPT_AGENT: agent} if agent is not None else {}),
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
     }
 
 
+def stored(result: dict[str, Any]) -> dict[str, Any]:
+    """``result`` as its file stores it (without the agent file's bytes it may carry)."""
+    return {key: value for key, value in result.items() if key != KEPT_AGENT}
+
+
 def write_result(out_dir: Path, result: dict[str, Any]) -> Path:
-    return write_json_atomic(result_path(out_dir, result["run_id"]), result)
+    """Write ``result``'s agent file (when it carries one), then the result file itself, each
+    atomically: a result file never names an agent file that is not there."""
+    document = dict(result)
+    agent = document.pop(KEPT_AGENT, None)
+    path = result_path(out_dir, document["run_id"])
+    if agent is not None:
+        suffix, data = agent
+        write_bytes_atomic(path.with_name(document["run_id"] + suffix), data)
+    return write_json_atomic(path, document)

@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Callable, Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
+from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.checkpoint import load_checkpoint
-from empathy_zoo.training.spec import RunSpec, group_specs
 
 __all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]
 
@@ -61,9 +60,7 @@ def remove_checkpoint(checkpoint: Path) -> None:
 
 
 def _record(spec: RunSpec) -> dict[str, Any]:
-    record = asdict(spec)
-    record["fixed"] = None if spec.fixed is None else dict(spec.fixed)
-    return record
+    return spec.request()
 
 
 def _ensemble_of(checkpoint: Path, known: dict[str, RunSpec]) -> tuple[list[str], list[RunSpec] | None, str]:
@@ -72,7 +69,7 @@ def _ensemble_of(checkpoint: Path, known: dict[str, RunSpec]) -> tuple[list[str]
     manifest = manifest_path(checkpoint)
     if manifest.exists():
         try:
-            specs = [RunSpec(**record) for record in read_json(manifest)["runs"]]
+            specs = [RunSpec.of(**record) for record in read_json(manifest)["runs"]]
         except (KeyError, TypeError, ValueError) as error:
             return [], None, f"its list of runs {manifest.name} cannot be read ({error})"
         ids = [spec.run_id for spec in specs]

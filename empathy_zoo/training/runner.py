@@ -23,16 +23,16 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
-from empathy_zoo.result_file import RUNS_DIR, check_one_experiment_per_label, read_result, result_path
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, read_result, result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
-from empathy_zoo.training.spec import RunSpec
 
-__all__ = ["RunnerOptions", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX"]
+__all__ = ["RunnerOptions", "read_finished", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX"]
 
 SUPERSEDED_SUFFIX = ".superseded"
 """Suffix of a result file set aside while its run is retrained (``rerun_changed``)."""
@@ -44,6 +44,7 @@ def train_runs(
     options: RunnerOptions = RunnerOptions(),
     on_result: Callable[[dict[str, Any]], None] | None = None,
     on_note: Callable[[str], None] | None = None,
+    finished: dict[Path, dict[str, Any]] | None = None,
 ) -> list[Path]:
     """Train every run not finished yet; returns the result files of all ``specs``.
 
@@ -51,7 +52,9 @@ def train_runs(
     ``ValueError`` before any training starts. Checkpointed ensembles resume as they were
     (:mod:`empathy_zoo.training.resume`); what is resumed, restarted or removed, and the temporary
     files of writes killed mid-way that are removed, is said through ``on_note`` (default: printed
-    to stderr). ``on_result`` gets every result of ``specs`` written here.
+    to stderr). ``on_result`` gets every result of ``specs`` written here. ``finished`` is what
+    :func:`read_finished` gave for ``out_dir`` when the caller has read it already (it is read
+    here otherwise).
 
     A finished run is reused only when its result file was made by this code: this empathy-zoo
     version and, for a ``package.module:NAME`` method or fixed policy, the same source of that
@@ -79,14 +82,15 @@ def train_runs(
     if options.backend == "ray":
         if not import_ray().is_initialized():  # (missing Ray, or no cluster there, is said before anything is written)
             check_ray_address(options.address)
-    finished = _finished_results(out_dir)
+    if finished is None:
+        finished = read_finished(out_dir)
     check_one_experiment_per_label(
         [
             *(
                 (result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path))
                 for path, result in finished.items()
             ),
-            *((s.variant or s.env, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
+            *((s.variant.label, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
         ]
     )
     redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
@@ -164,28 +168,34 @@ def _train_todo(
 
 @contextmanager
 def _set_aside(out_dir: Path, run_ids: Collection[str]) -> Iterator[None]:
-    """Set the result files of ``run_ids`` aside (``<run id>.json.superseded``) while they are
-    retrained; afterwards each is removed if its run's new result was written, else put back."""
+    """Set the result files of ``run_ids`` and the agent files beside them aside (``<name>.superseded``)
+    while they are retrained; afterwards each run's are removed if its new result was written, else
+    put back."""
     moved: list[Path] = []
     try:
         for run_id in sorted(run_ids):
             path = result_path(out_dir, run_id)
-            moved.append(path.rename(path.with_name(path.name + SUPERSEDED_SUFFIX)))
+            for kept in (path, *(path.with_name(run_id + suffix) for suffix in AGENT_SUFFIXES)):
+                if kept == path or kept.exists():
+                    moved.append(kept.rename(kept.with_name(kept.name + SUPERSEDED_SUFFIX)))
         yield
     finally:
         _settle_superseded(out_dir / RUNS_DIR, moved)
 
 
 def _settle_superseded(runs_dir: Path, restore: Iterable[Path] = ()) -> None:
-    """Remove every set-aside result file of ``runs_dir`` whose run has a new result file; put
-    those of ``restore`` without one back."""
+    """Remove every set-aside file of ``runs_dir`` (a result file and its agent file) whose run has a
+    new result file; put those of ``restore`` without one back."""
     restore = set(restore)
-    for old in sorted(runs_dir.glob(f"*.json{SUPERSEDED_SUFFIX}")):
-        new = old.with_name(old.name.removesuffix(SUPERSEDED_SUFFIX))
-        if new.exists():
+    for old in sorted(runs_dir.glob(f"*{SUPERSEDED_SUFFIX}")):
+        name = old.name.removesuffix(SUPERSEDED_SUFFIX)
+        run_id = next((name.removesuffix(end) for end in (".json", *AGENT_SUFFIXES) if name.endswith(end)), None)
+        if run_id is None:
+            continue
+        if (runs_dir / f"{run_id}.json").exists():
             old.unlink()
         elif old in restore:
-            old.rename(new)
+            old.rename(old.with_name(name))
 
 
 def _counting(on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress) -> Callable[[dict[str, Any]], None]:
@@ -201,9 +211,9 @@ def _print_note(text: str) -> None:
     print(f"empathy-zoo: {text}", file=sys.stderr, flush=True)
 
 
-def _finished_results(out_dir: Path) -> dict[Path, dict[str, Any]]:
-    """Every result file in ``out_dir``, read (and checked), by path."""
-    runs_dir = out_dir / RUNS_DIR
+def read_finished(out_dir: str | Path) -> dict[Path, dict[str, Any]]:
+    """Every result file in ``out_dir``, read (and checked: a damaged one raises, naming it), by path."""
+    runs_dir = Path(out_dir) / RUNS_DIR
     paths = sorted(runs_dir.glob("*.json")) if runs_dir.is_dir() else []
     return {path: read_result(path) for path in paths if not path.name.startswith(".")}
 

@@ -1,4 +1,6 @@
-"""Name -> class look-up shared by every plug-in point (fixed policies, learning methods)."""
+"""Plug-in names resolved to what they name: a registered entry, or the object a
+``package.module:Name`` string imports (shared by every plug-in point: fixed policies, learning
+methods)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
-"""A rejected call changes nothing: every face validates its input before any state moves (the
+"""A refused call changes nothing: every face validates its input before any state moves (the
 fixed agents' random streams, the engine, the AEC bookkeeping), and the next valid call gives
-exactly what it would have given without the rejected one."""
+exactly what it would have given without the refused one. What is refused, and with which
+message, is tests/test_bad_input.py."""
 
 from __future__ import annotations
 

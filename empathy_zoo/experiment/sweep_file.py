@@ -57,43 +57,41 @@ from __future__ import annotations
 
 import itertools
 import json
-import tomllib
-from collections.abc import Iterable, Mapping
-from dataclasses import asdict, fields
+from collections.abc import Mapping
+from dataclasses import asdict, replace
 from pathlib import Path
-from typing import Any, get_type_hints
+from typing import Any
 
 from agents.rewards import transform_config
-from agents.settings import EmpathicDQNSettings
 from baselines.registry import get_method
+from empathy_zoo.engine.arguments import argument_types, own_arguments
 from empathy_zoo.environments import ENGINES, default_policies
+from empathy_zoo.experiment.model import Budget, EnvVariant, MethodEntry, RunSpec
+from empathy_zoo.experiment.values import (
+    PolicyTable,
+    Seeds,
+    SweepConfigError,
+    check_keys,
+    check_value,
+    field_types,
+    read_toml,
+    type_name,
+)
 from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import make_policy, policy_entry
-from empathy_zoo.training.spec import RunSpec
 
 __all__ = [
-    "SweepConfigError",
     "CONFIG_DIR",
-    "SEEDS",
-    "STR_LIST",
-    "STR_TABLE",
-    "POLICY_TABLE",
-    "SWEEP_KEYS",
+    "DEFAULT_SEEDS",
     "ENV_KEYS",
     "METHOD_KEYS",
-    "DEFAULT_SEEDS",
-    "EXTRA_ENV_ARGUMENTS",
+    "REWARD_TABLE",
+    "SWEEP_KEYS",
+    "label_fields",
+    "variant_of_table",
     "load_sweep",
     "parse_sweep",
     "profile_path",
     "profiles",
-    "read_toml",
-    "check_keys",
-    "check_value",
-    "settings_types",
-    "describe_type",
-    "label_fields",
-    "REWARD_TABLE",
 ]
 
 CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
@@ -102,129 +100,21 @@ CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
 DEFAULT_SEEDS = 5
 """Seeds per experiment when ``[sweep]`` does not say (the paper's 5 runs per method)."""
 
-SEEDS = "int (number of seeds) or list of distinct non-negative ints"
-"""Type tag of ``seeds``: an int N (seeds 0..N-1) or a list of seeds."""
-STR_LIST = "list of strings"
-"""Type tag: an array of strings."""
-STR_TABLE = "table of strings"
-"""Type tag: a table whose values are strings."""
-POLICY_TABLE = "table of strings (policy names) or of tables { policy = name, <argument> = value, ... }"
-"""Type tag: a table whose values are policy names or tables ``{ policy = name, ... }``."""
-
-SWEEP_KEYS: dict[str, Any] = {
-    "name": str,
-    "seeds": SEEDS,
-    "steps": int,
-    "eval_interval": int,
-    "eval_episodes": int,
-}
-"""Keys of ``[sweep]`` and their types."""
-EXTRA_ENV_ARGUMENTS: tuple[str, ...] = tuple(
-    dict.fromkeys(name for engine in ENGINES.values() for name in engine.extra_arguments)
-)
-"""Environment-specific arguments some registered environment takes (Sharing's ``start``, …)."""
-COUNT_ARGUMENTS: tuple[str, ...] = tuple(
-    dict.fromkeys(engine.count_argument for engine in ENGINES.values() if engine.count_argument)
-)
-"""How many other agents an environment holds (``num_cats``, ``num_humans``)."""
+SWEEP_KEYS: dict[str, Any] = {"name": str, "seeds": Seeds, **field_types(Budget)}
+"""Keys of ``[sweep]`` and their types (the run budget's fields, the sweep's name and seeds)."""
 ENV_KEYS: dict[str, Any] = {
     "env": str,
-    "size": int,
-    "view": int,
-    "max_cycles": int,
-    **{name: str for name in EXTRA_ENV_ARGUMENTS},
-    **{name: int for name in COUNT_ARGUMENTS},
-    "fixed": POLICY_TABLE,
-    "methods": STR_LIST,
+    **{name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()},
+    "fixed": PolicyTable,
+    "methods": list[str],
 }
-"""Keys of an ``[envs.<variant>]`` table (besides nothing else)."""
-METHOD_KEYS: dict[str, Any] = {"method": str, "envs": STR_LIST, "label": str}
+"""Keys of an ``[envs.<variant>]`` table: ``env``, every argument some environment declares, the
+fixed agents and the methods that run there."""
+METHOD_KEYS: dict[str, Any] = {"method": str, "envs": list[str], "label": str}
 """Keys of a ``[[methods]]`` entry besides the method's settings fields and its reward transform's."""
 REWARD_TABLE = "reward"
 """The key of a ``[[methods]]`` entry that holds reward-transform fields as a table (``reward.<field> = ...``)."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
-ENV_ARGUMENTS = ("size", "view", "max_cycles", *EXTRA_ENV_ARGUMENTS, *COUNT_ARGUMENTS)
-
-
-class SweepConfigError(ValueError):
-    """A sweep (or run) configuration file is invalid; the message names file, table and key."""
-
-
-# ---------------------------------------------------------------------------- value checks
-def describe_type(expected: Any) -> str:
-    return expected.__name__ if isinstance(expected, type) else str(expected)
-
-
-def _type_name(value: Any) -> str:
-    return {dict: "table", list: "array"}.get(type(value), type(value).__name__)
-
-
-def check_value(value: Any, expected: Any, where: str) -> Any:
-    """``value`` if it has the ``expected`` type (an int is accepted as a float), else raise.
-
-    ``expected`` is ``int``, ``float``, ``bool``, ``str``, one of the tags :data:`SEEDS`,
-    ``STR_LIST``, ``STR_TABLE``, ``POLICY_TABLE``, or any other type (not checked: the settings class checks it).
-    """
-
-    def fail() -> SweepConfigError:
-        return SweepConfigError(f"{where}: expected {describe_type(expected)}, got {_type_name(value)} {value!r}")
-
-    if expected is bool or expected is str:
-        if not isinstance(value, expected):
-            raise fail()
-    elif expected is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise fail()
-    elif expected is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise fail()
-        return float(value)
-    elif expected == SEEDS:
-        seeds = [value] if isinstance(value, int) and not isinstance(value, bool) else value
-        if not isinstance(seeds, list) or not seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds):
-            raise fail()
-        if isinstance(value, int):
-            if value < 1:
-                raise SweepConfigError(f"{where}: expected a positive number of seeds, got {value}")
-            return list(range(value))
-        if len(set(value)) != len(value):
-            raise SweepConfigError(f"{where}: seed(s) listed twice in {value}")
-    elif expected == STR_LIST:
-        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            raise fail()
-    elif expected == STR_TABLE:
-        if not isinstance(value, dict) or not all(isinstance(v, str) for v in value.values()):
-            raise fail()
-    elif expected == POLICY_TABLE:
-        if not isinstance(value, dict) or not all(isinstance(v, (str, dict)) for v in value.values()):
-            raise fail()
-    return value
-
-
-def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
-    """Raise naming the first key of ``table`` not in ``allowed`` (and listing those allowed)."""
-    allowed = list(allowed)
-    for key in table:
-        if key not in allowed:
-            raise SweepConfigError(f"{where}: unknown key {key!r}; allowed keys: {', '.join(allowed)}")
-
-
-def settings_types(settings_class: type) -> dict[str, Any]:
-    """``{field: type}`` of a settings dataclass (annotations resolved)."""
-    hints = get_type_hints(settings_class)
-    return {f.name: hints.get(f.name, Any) for f in fields(settings_class)}
-
-
-def read_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing or malformed one raises :class:`SweepConfigError` naming it."""
-    path = Path(path)
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except FileNotFoundError:
-        raise SweepConfigError(f"config file {path} does not exist") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise SweepConfigError(f"{path}: not valid TOML ({error})") from None
 
 
 # ---------------------------------------------------------------------------- profiles
@@ -259,7 +149,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
     check_keys(data, TOP_TABLES, f"{source}: top level")
     for table in ("sweep", "settings", "envs"):
         if not isinstance(data.get(table, {}), dict):
-            raise SweepConfigError(f"{source}: [{table}] must be a table, got {_type_name(data[table])}")
+            raise SweepConfigError(f"{source}: [{table}] must be a table, got {type_name(data[table])}")
     run = _sweep_table(data.get("sweep", {}), source)
     if seeds is not None:
         if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
@@ -279,6 +169,10 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
         if unknown:
             raise SweepConfigError(f"{entry['where']} envs: unknown variant(s) {unknown}; declared: {sorted(variants)}")
 
+    try:
+        budget = Budget(run["steps"], run["eval_interval"], run["eval_episodes"])
+    except ValueError as error:
+        raise SweepConfigError(f"{source}: [sweep] {error}") from None
     specs: list[RunSpec] = []
     origin: dict[str, str] = {}  # what a run trains (its config but the label) -> where declared
     labels: dict[tuple[str, str], str] = {}
@@ -296,7 +190,8 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
                 settings |= point["settings"]
                 shown = {**point["settings"], **{f"{REWARD_TABLE}.{k}": v for k, v in point["reward"].items()}}
                 where = f"{entry['where']} on [envs.{variant}]" + (f" with {shown}" if shown else "")
-                experiment = [_spec(run, env, variant, entry, settings, point["reward"], seed, where) for seed in run["seeds"]]
+                first = _spec(budget, env["variant"], entry, settings, point["reward"], run["seeds"][0], where)
+                experiment = [replace(first, seed=seed) for seed in run["seeds"]]
                 label = experiment[0].display_label()
                 if (variant, label) in labels:
                     raise SweepConfigError(
@@ -319,9 +214,9 @@ def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
     run = {
         "name": Path(source).stem,
         "seeds": list(range(DEFAULT_SEEDS)),
-        "steps": RunSpec.steps,
-        "eval_interval": RunSpec.eval_interval,
-        "eval_episodes": RunSpec.eval_episodes,
+        "steps": Budget.steps,
+        "eval_interval": Budget.eval_interval,
+        "eval_episodes": Budget.eval_episodes,
     }
     for key, value in table.items():
         run[key] = check_value(value, SWEEP_KEYS[key], f"{where} {key}")
@@ -340,7 +235,7 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         method = get_method(name)
     except ValueError as error:
         raise SweepConfigError(f"{where} method: {error}") from None
-    types = settings_types(method.settings)
+    types = field_types(method.settings)
     reward_types = method.reward_fields()
     # the transform's fields that are keys of their own (a setting of the same name keeps its key)
     flat = {key: kind for key, kind in reward_types.items() if key not in types and key not in METHOD_KEYS}
@@ -352,13 +247,13 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
     if not isinstance(nested, dict):
         raise SweepConfigError(
             f"{where} {REWARD_TABLE}: expected a table of the reward transform's fields "
-            f"(reward.<field> = value), got {_type_name(nested)} {nested!r}"
+            f"(reward.<field> = value), got {type_name(nested)} {nested!r}"
         )
     for key in nested:
         if key not in reward_types:
             raise SweepConfigError(
                 f"{where} {REWARD_TABLE}.{key}: unknown field {key!r} of the reward transform "
-                f"{method.reward.name!r}; its fields: {', '.join(reward_types)}"
+                f"{getattr(method.reward, 'name', None)!r}; its fields: {', '.join(reward_types)}"
             )
         if key in flat and key in entry:
             raise SweepConfigError(f"{where} {REWARD_TABLE}.{key}: {key} is given twice (as {key} and {REWARD_TABLE}.{key})")
@@ -408,7 +303,7 @@ def _method_keys(method: Any, types: Mapping[str, Any], reward_types: Mapping[st
 
 def _settings_table(table: dict[str, Any], methods: list[dict[str, Any]], source: str) -> dict[str, Any]:
     where = f"{source}: [settings]"
-    types = settings_types(EmpathicDQNSettings)
+    types: dict[str, Any] = {}
     for entry in methods:
         types |= entry["types"]
     check_keys(table, types, where)
@@ -431,7 +326,7 @@ def _settings_table(table: dict[str, Any], methods: list[dict[str, Any]], source
 def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: str) -> dict[str, Any]:
     where = f"{source}: [envs.{variant}]"
     if not isinstance(table, dict):
-        raise SweepConfigError(f"{where}: must be a table (env = ..., size = ...), got {_type_name(table)}")
+        raise SweepConfigError(f"{where}: must be a table (env = ..., size = ...), got {type_name(table)}")
     try:
         check_path_name(variant, "variant name")
     except ValueError as error:
@@ -442,41 +337,39 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
     if env not in ENGINES:
         key = "env" if "env" in checked else "variant name (or set env = ...)"
         raise SweepConfigError(f"{where} {key}: unknown environment {env!r}; registered: {sorted(ENGINES)}")
-    kwargs = {key: checked[key] for key in ENV_ARGUMENTS if key in checked}
-    own_arguments = (*ENGINES[env].extra_arguments, *filter(None, [ENGINES[env].count_argument]))
-    for key in (*EXTRA_ENV_ARGUMENTS, *COUNT_ARGUMENTS):
-        if key in kwargs and key not in own_arguments:
-            own = ", ".join(own_arguments) or "none"
-            raise SweepConfigError(f"{where} {key}: {env} takes no argument {key!r} (its own arguments: {own})")
-    try:
-        engine = ENGINES[env](1, **kwargs)
-    except ValueError as error:
-        raise SweepConfigError(f"{where}: {error}") from None
-    fixed = checked.get("fixed")
-    if fixed is not None:
-        agents, entries = list(engine.agents), {}
-        for agent, policy in fixed.items():
-            if agent not in agents:
-                raise SweepConfigError(f"{where} fixed: unknown agent {agent!r}; agents of {env}: {agents}")
-            try:
-                entries[agent] = policy_entry(policy)
-                make_policy(entries[agent])
-            except ValueError as error:
-                raise SweepConfigError(f"{where} fixed.{agent}: {error}") from None
-        fixed = {**default_policies(env, kwargs), **entries}
+    kwargs = {key: value for key, value in checked.items() if key not in ("env", "fixed", "methods")}
+    own = own_arguments(ENGINES[env])
+    for key in kwargs:
+        if key not in argument_types(ENGINES[env]):
+            own_text = ", ".join(own) or "none"
+            raise SweepConfigError(f"{where} {key}: {env} takes no argument {key!r} (its own arguments: {own_text})")
+    environment = variant_of_table(env, kwargs, checked.get("fixed"), variant, where)
     names = checked.get("methods")
     if names is not None:
         declared = {m["method"] for m in methods}
         unknown = [n for n in names if n not in declared]
         if unknown:
             raise SweepConfigError(f"{where} methods: {unknown} not declared in any [[methods]]; declared: {sorted(declared)}")
-    return {"env": env, "kwargs": kwargs, "fixed": fixed, "methods": names}
+    return {"variant": environment, "methods": names}
+
+
+def variant_of_table(env: str, kwargs: Mapping[str, Any], fixed: Mapping[str, Any] | None, name: str, where: str) -> EnvVariant:
+    """The environment variant a table (``where``) declares: ``env`` with ``kwargs`` and, beside
+    the environment's default fixed agents, those of ``fixed``; its errors as
+    :class:`SweepConfigError` naming the table (an error of the arguments first, naming no agent)."""
+    try:
+        EnvVariant(env, kwargs)
+    except ValueError as error:
+        raise SweepConfigError(f"{where}: {error}") from None
+    try:
+        return EnvVariant(env, kwargs, None if fixed is None else {**default_policies(env, kwargs), **fixed}, name)
+    except ValueError as error:
+        raise SweepConfigError(f"{where} {error}") from None
 
 
 def _spec(
-    run: dict[str, Any],
-    env: dict[str, Any],
-    variant: str,
+    budget: Budget,
+    variant: EnvVariant,
     entry: dict[str, Any],
     settings: dict[str, Any],
     reward: dict[str, Any],
@@ -484,35 +377,23 @@ def _spec(
     where: str,
 ) -> RunSpec:
     try:
-        spec = RunSpec(
-            env=env["env"],
-            method=entry["method"],
-            settings=settings,
-            reward=reward,
-            seed=seed,
-            steps=run["steps"],
-            eval_interval=run["eval_interval"],
-            eval_episodes=run["eval_episodes"],
-            fixed=env["fixed"],
-            env_kwargs=env["kwargs"],
-            variant=variant,
-        )
+        spec = RunSpec(variant, MethodEntry.resolve(entry["method"], settings, reward), budget, seed)
     except ValueError as error:
         raise SweepConfigError(f"{where}: {error}") from None
     if entry["label"] is None:
         if not entry["swept_reward"]:
             return spec
         # a grid of a transform's field: every run's label shows its value, the default's too
-        label = spec.method_object().display_name(spec.method_settings(), spec.reward_transform(), entry["swept_reward"])
-        return RunSpec(**{**spec.__dict__, "label": label})
-    try:
-        label = entry["label"].format_map(label_fields(spec))
-    except (KeyError, ValueError, IndexError, AttributeError) as error:
-        raise SweepConfigError(
-            f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
-            f"placeholders are settings fields and the reward transform's fields"
-        ) from None
-    return RunSpec(**{**spec.__dict__, "label": label})
+        label = spec.entry.display_label(entry["swept_reward"])
+    else:
+        try:
+            label = entry["label"].format_map(label_fields(spec))
+        except (KeyError, ValueError, IndexError, AttributeError) as error:
+            raise SweepConfigError(
+                f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
+                f"placeholders are settings fields and the reward transform's fields"
+            ) from None
+    return replace(spec, entry=replace(spec.entry, label=label))
 
 
 def label_fields(spec: RunSpec) -> dict[str, Any]:

@@ -1,0 +1,66 @@
+"""``evaluate``: play every kept agent of a results directory beside held-out partners.
+
+    empathy-zoo evaluate RESULTS_DIR [--scenarios NAME_OR_FILE ...] [--episodes N] [--out DIR] [--no-progress]
+
+Writes ``<out>/evaluations/<scenario set>/<run id>.json`` (:mod:`empathy_zoo.training.heldout`);
+run again, it skips what is done. ``empathy-zoo leaderboard`` then adds a "Held-out partners"
+section per environment (:mod:`leaderboard.heldout`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from empathy_zoo.cli.common import PROG
+
+__all__ = ["add_evaluate", "cmd_evaluate"]
+
+
+def cmd_evaluate(args: argparse.Namespace, command: str) -> int:
+    """Evaluate the kept agents; print what was written, skipped and left out."""
+    from empathy_zoo.training.heldout import evaluate_results
+
+    if args.episodes is not None and args.episodes < 1:
+        raise ValueError(f"--episodes must be positive, got {args.episodes}")
+    options: dict[str, Any] = {} if args.episodes is None else {"episodes": args.episodes}
+    summary = evaluate_results(args.results, args.scenarios, out_dir=args.out, progress=not args.no_progress, **options)
+    if summary.without_agent:
+        print(
+            f"{PROG}: note: {len(summary.without_agent)} run(s) kept no trained agent and are not evaluated "
+            f"(e.g. {summary.without_agent[0]})",
+            flush=True,
+        )
+    if summary.without_set:
+        print(
+            f"{PROG}: note: {len(summary.without_set)} run(s) are of an environment no scenario set is for "
+            f"(e.g. {summary.without_set[0]})",
+            flush=True,
+        )
+    if summary.done:
+        print(f"{PROG}: {len(summary.done)} evaluation file(s) already there, skipped", flush=True)
+    for path in summary.written:
+        print(f"{PROG}: wrote {path}", flush=True)
+    return 0
+
+
+def add_evaluate(sub: Any) -> None:
+    """The ``evaluate`` subcommand."""
+    from empathy_zoo.scenarios import shipped_sets
+    from empathy_zoo.training.heldout import DEFAULT_EPISODES
+
+    parser = sub.add_parser("evaluate", help="play every kept agent beside partners it never trained with")
+    parser.add_argument("results", metavar="RESULTS_DIR", help="results directory (with runs/ or *.json)")
+    parser.add_argument(
+        "--scenarios",
+        action="append",
+        metavar="NAME_OR_FILE",
+        help=f"a shipped scenario set ({', '.join(shipped_sets())}) or a scenario TOML file; repeat for several "
+        "(default: the shipped set of each environment)",
+    )
+    parser.add_argument(
+        "--episodes", type=int, metavar="N", help=f"greedy episodes per run and scenario (default: {DEFAULT_EPISODES})"
+    )
+    parser.add_argument("--out", metavar="DIR", help="where evaluations/ goes (default: RESULTS_DIR)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(handler=cmd_evaluate)

@@ -1,0 +1,168 @@
+"""``watch``: greedy episodes of a trained agent in its own environment, their metrics printed,
+optionally the grid every step (``--render ansi``) and a GIF of the first episode (``--gif``).
+
+    empathy-zoo watch RUN_ID [--dir runs] [--episodes 3] [--seed 0] [--fixed cat_0=stay] [--gif run.gif]
+    empathy-zoo watch path/to/<run id>.agent.pt
+
+A run id is looked up as ``<dir>/runs/<run id>.json`` (``--dir``: what ``train --out`` or a sweep
+wrote to, default ``runs``), whose ``agent`` entry names the agent file beside it and its
+SHA-256 (:func:`~empathy_zoo.agent_file.load_run_agent`); a path is read as an agent file (checked
+against the result file beside it when that one names it) or as a result file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, agent_policy, positive
+
+__all__ = ["add_watch", "cmd_watch", "find_agent"]
+
+_LISTED = 5
+"""Run ids an unknown one's error names at most."""
+
+
+def _run_agent(result_file: Path) -> Any:
+    """The agent its result file names, a missing agent file said as such."""
+    from empathy_zoo.agent_file import load_run_agent
+
+    try:
+        return load_run_agent(result_file)
+    except FileNotFoundError as error:
+        raise ValueError(
+            f"result file {result_file} names agent file {Path(str(error.filename)).name}, which is missing"
+        ) from None
+
+
+def _agent_file(path: Path) -> Any:
+    """The agent of the agent (or result) file at ``path``."""
+    from empathy_zoo.agent_file import AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, RESULT_FIELD, load_agent
+    from empathy_zoo.atomic import read_json
+
+    if not path.is_file():
+        raise ValueError(f"no agent file {path}")
+    if path.suffix == ".json":
+        return _run_agent(path)
+    for suffix in (AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX):
+        result = path.with_name(path.name.removesuffix(suffix) + ".json")
+        if path.name.endswith(suffix) and result.is_file():
+            entry = read_json(result)
+            entry = entry.get(RESULT_FIELD) if isinstance(entry, dict) else None
+            if isinstance(entry, dict) and entry.get("file") == path.name:  # (its run's: checked against its SHA-256)
+                return _run_agent(result)
+    return load_agent(path)
+
+
+def _unknown_run(run_id: str, results_dir: Path) -> ValueError:
+    from empathy_zoo.result_file import RUNS_DIR
+
+    runs = results_dir / RUNS_DIR
+    if not runs.is_dir():
+        return ValueError(
+            f"unknown run id {run_id!r}: there is no {runs} (--dir names the directory train --out or a sweep wrote)"
+        )
+    ids = sorted(path.stem for path in runs.glob("*.json") if not path.name.startswith("."))
+    if not ids:
+        return ValueError(f"unknown run id {run_id!r}: {runs} holds no result files")
+    close = difflib.get_close_matches(run_id, ids, n=_LISTED, cutoff=0.5)
+    shown = close + [i for i in ids if i not in close][: _LISTED - len(close)]
+    more = f" and {len(ids) - len(shown)} more" if len(ids) > len(shown) else ""
+    return ValueError(
+        f"unknown run id {run_id!r}: no result file {runs / (run_id + '.json')}; runs there: {', '.join(shown)}{more}"
+    )
+
+
+def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> Any:
+    """The trained agent ``target`` names: a run id (its result file in ``results_dir/runs``, the
+    agent file checked against the SHA-256 that records), or the path of an agent file or a
+    result file. Anything not found, not an agent file, changed since its run wrote it, or a run
+    that kept no agent, raises ``ValueError`` saying which."""
+    from empathy_zoo.agent_file import AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX
+    from empathy_zoo.result_file import result_path
+
+    path = Path(target)
+    try:
+        if path.is_file() or target.endswith((AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, ".json")) or "/" in target:
+            return _agent_file(path)
+        result = result_path(Path(results_dir), target)
+        if not result.is_file():
+            raise _unknown_run(target, Path(results_dir))
+        return _run_agent(result)
+    except ImportError as error:  # (a Stable-Baselines3 agent without SB3 installed)
+        raise ValueError(str(error)) from None
+
+
+def cmd_watch(args: argparse.Namespace, command: str) -> int:
+    """Greedy episodes of a trained agent, each one's metrics printed; a GIF of the first."""
+    from empathy_zoo.episode_gif import EpisodeRecorder
+    from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
+    from empathy_zoo.policies import entry_label
+    from empathy_zoo.render import render_text
+
+    positive("--episodes", args.episodes)
+    positive("--gif-steps", args.gif_steps)
+    if args.gif and Path(args.gif).is_dir():
+        raise ValueError(f"--gif {args.gif} is a directory; give the GIF's file name")
+    agent = find_agent(args.target, args.dir)
+    fixed = dict(args.fixed or [])
+    env = agent_env(agent, fixed, render_mode="rgb_array" if args.gif else None)
+    d = agent.describe()
+    beside = ", ".join(f"{a}={entry_label(p)}" for a, p in agent_policies(agent, fixed).items())
+    run = f" of run {d['run_id']}" if d.get("run_id") else ""
+    print(f"{d.get('method')} agent{run} ({d['file']}) on {d['env']} {d['env_kwargs']}, beside {beside}")
+    engine = env.unwrapped.engine
+    recorder = None
+    if args.gif:
+        recorder = EpisodeRecorder(str(d.get("method")), f"{d['env']} · seed {args.seed}", args.gif_steps)
+    for episode in range(args.episodes):
+        seed = args.seed + episode
+
+        def on_step(step: EpisodeStep, first: bool = episode == 0) -> None:
+            if args.render:
+                print(render_text(engine))
+            if recorder is not None and first:
+                recorder(step)
+
+        outcome = play_greedy(agent, env, seed, on_step=on_step)
+        print(f"episode {episode} (seed {seed}): {format_metrics(outcome.metrics)}", flush=True)
+    if recorder is not None:
+        from empathy_zoo.atomic import write_bytes_atomic
+
+        data = recorder.gif()
+        path = write_bytes_atomic(args.gif, data)
+        steps = recorder.frames - 1
+        shown = f"the whole of episode 0, {steps} steps" if recorder.whole_episode else f"episode 0's first {steps} steps"
+        print(f"{PROG}: wrote {path} ({recorder.frames} frames: {shown}; {len(data) / 1024:.0f} KB)")
+    return 0
+
+
+def add_watch(sub: Any) -> None:
+    """The ``watch`` subcommand."""
+    from empathy_zoo.episode_gif import GIF_STEPS
+
+    watch = sub.add_parser("watch", help="greedy episodes of a trained agent; prints episode metrics, optionally a GIF")
+    watch.add_argument("target", metavar="RUN_ID_OR_AGENT_FILE", help="a run id (in --dir), or an agent or result file")
+    watch.add_argument(
+        "--dir",
+        default=RUN_DEFAULTS["out"],
+        metavar="RESULTS_DIR",
+        help=f"where a run id's result file is: RESULTS_DIR/runs/<run id>.json (default: {RUN_DEFAULTS['out']}, as train --out)",
+    )
+    watch.add_argument("--episodes", type=int, default=1, help="episodes (default: 1)")
+    watch.add_argument("--seed", type=int, default=0, help="seed of the first episode (default: 0)")
+    watch.add_argument("--render", choices=["ansi"], default=None, help="print the grid every step")
+    watch.add_argument(
+        "--fixed",
+        type=agent_policy,
+        action="append",
+        metavar="AGENT=POLICY",
+        help="replace a fixed agent's policy, a name or package.module:ClassName (repeatable)",
+    )
+    watch.add_argument("--gif", metavar="FILE", default=None, help="write a GIF of the first episode")
+    watch.add_argument(
+        "--gif-steps", type=int, default=GIF_STEPS, metavar="N", help=f"steps the GIF shows at most (default: {GIF_STEPS})"
+    )
+    watch.set_defaults(handler=cmd_watch)

@@ -1,0 +1,220 @@
+"""The evaluation file: one trained agent scored beside held-out partners, and reading it back.
+
+``empathy-zoo evaluate`` (:mod:`empathy_zoo.training.heldout`) writes one JSON file per run and
+scenario set, atomically: ``<results>/evaluations/<scenario set>/<run id>.json``
+(:func:`evaluation_path`). Its fields (docs/formats.md, "The evaluation file"):
+
+* ``format`` (:data:`FORMAT`), ``schema`` (:data:`SCHEMA`), ``version`` (the empathy-zoo that wrote it);
+* the run: ``run_id``, ``env``, ``variant``, ``method``, ``method_label``, ``seed`` (as its result file has them);
+* ``agent``: ``{"file": name, "sha256": hex}``, the agent file evaluated (the result file's record);
+* ``scenario_set``: the set's definition (``name``, ``env``, ``description``, ``scenarios``: each
+  ``name``, ``reason``, ``env_kwargs``, ``fixed``), as its file gave it;
+* ``episodes`` (per scenario) and ``stream`` (the random-stream id of the start seeds:
+  episode ``e`` of every scenario starts from ``derive_key(seed, stream, e)``);
+* ``scenarios``: one entry per scenario played, :data:`TRAINED_WITH` first:
+  ``name``, ``reason``, ``held_out`` (``false`` for the run's own partners, and for a scenario that
+  is the same world), ``env_kwargs`` and ``fixed`` (what was played: the environment's arguments and
+  ``{agent: policy label}``), and ``metrics``: ``{metric: [one value per episode]}`` for every
+  metric of :data:`empathy_zoo.metrics.METRIC_NAMES`.
+
+:func:`read_evaluation` refuses anything else with one ``ValueError`` line naming the file and the
+field. The file holds no time stamp: evaluating the same agent again writes the same bytes.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.atomic import read_json
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_path_name
+
+__all__ = [
+    "TRAINED_WITH",
+    "FORMAT",
+    "SCHEMA",
+    "EVALUATIONS_DIR",
+    "EvaluationFileError",
+    "evaluation_path",
+    "evaluations_root",
+    "evaluation_files",
+    "check_evaluation",
+    "read_evaluation",
+]
+
+TRAINED_WITH = "trained_with"
+"""The name of the scenario every run is scored in besides a set's: its own partners and world
+(:func:`empathy_zoo.scenarios.trained_with`); no scenario of a file may take it."""
+
+FORMAT = "empathy_zoo.evaluation"
+"""The ``format`` field of every evaluation file."""
+SCHEMA = 1
+"""The schema of the evaluation files this suite writes (and the newest it reads)."""
+EVALUATIONS_DIR = "evaluations"
+"""The folder, beside a results directory's ``runs/``, that holds ``<scenario set>/<run id>.json``."""
+REQUIRED_FIELDS = (
+    "format",
+    "schema",
+    "run_id",
+    "env",
+    "method",
+    "method_label",
+    "seed",
+    "agent",
+    "scenario_set",
+    "episodes",
+    "stream",
+    "scenarios",
+)
+"""Top-level fields every evaluation file has (``variant`` and ``version`` are written too)."""
+SCENARIO_FIELDS = ("name", "reason", "held_out", "env_kwargs", "fixed", "metrics")
+"""Fields of every entry of ``scenarios``."""
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
+class EvaluationFileError(ValueError):
+    """An evaluation file is not what this suite writes; the message names the file and the field."""
+
+
+def evaluations_root(results_dir: str | os.PathLike[str]) -> Path:
+    """Where the evaluation files of ``results_dir`` go: ``<results_dir>/evaluations`` (a results
+    directory holds its result files in ``runs/``, or is itself a folder of result files)."""
+    return Path(results_dir) / EVALUATIONS_DIR
+
+
+def evaluation_path(results_dir: str | os.PathLike[str], scenario_set: str, run_id: str) -> Path:
+    """``<results_dir>/evaluations/<scenario set>/<run id>.json`` (names that are no file names raise ``ValueError``)."""
+    return (
+        evaluations_root(results_dir)
+        / check_path_name(scenario_set, "scenario set name")
+        / f"{check_path_name(run_id, 'run id')}.json"
+    )
+
+
+def evaluation_files(results_dir: str | os.PathLike[str]) -> list[Path]:
+    """Every evaluation file of ``results_dir``, sorted (``[]`` when it has no ``evaluations/``);
+    names starting with ``.`` (writes in progress) are left out."""
+    root = evaluations_root(results_dir)
+    if not root.is_dir():
+        return []
+    return sorted(p for p in root.glob("*/*.json") if not p.name.startswith(".") and p.is_file())
+
+
+class _Checker:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, field: str, expected: str, value: Any) -> EvaluationFileError:
+        shown = repr(value)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        return EvaluationFileError(
+            f"{self.path}: field {field}: expected {expected}, got {shown}; the file is damaged or not an evaluation "
+            "of this suite: move it away (empathy-zoo evaluate writes it again)"
+        )
+
+    def table(self, value: Any, field: str) -> dict[str, Any]:
+        if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
+            raise self.fail(field, "an object", value)
+        return value
+
+    def has(self, table: Mapping[str, Any], keys: tuple[str, ...], field: str) -> None:
+        missing = [key for key in keys if key not in table]
+        if missing:
+            raise EvaluationFileError(f"{self.path}: field {field}{missing[0]}: missing; the file is damaged: move it away")
+
+    def integer(self, value: Any, field: str, low: int) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise self.fail(field, f"an int >= {low}", value)
+        return value
+
+    def text(self, value: Any, field: str) -> str:
+        if not isinstance(value, str) or not value or "\n" in value:
+            raise self.fail(field, "a non-empty one-line string", value)
+        return value
+
+    def name(self, value: Any, field: str) -> str:
+        try:
+            return check_path_name(value, "a name")
+        except ValueError:
+            raise self.fail(field, "a name of letters, digits, '_', '-' and '.'", value) from None
+
+    def numbers(self, value: Any, field: str, length: int) -> list[float]:
+        if not isinstance(value, list) or len(value) != length:
+            raise self.fail(field, f"an array of {length} numbers (one per episode)", value)
+        for i, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, (int, float)):
+                raise self.fail(f"{field}[{i}]", "a number", item)
+        return value
+
+
+def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
+    """``document`` (a parsed evaluation file) if it follows the schema (see the module page), else
+    :class:`EvaluationFileError` naming ``path`` and the field."""
+    check = _Checker(Path(path))
+    evaluation = check.table(document, "(the whole file)")
+    check.has(evaluation, REQUIRED_FIELDS, "")
+    if evaluation["format"] != FORMAT:
+        raise check.fail("format", repr(FORMAT), evaluation["format"])
+    if evaluation["schema"] != SCHEMA or isinstance(evaluation["schema"], bool):
+        raise EvaluationFileError(
+            f"{path}: field schema: this suite reads evaluation schema {SCHEMA}, got {evaluation['schema']!r}; move the file away"
+        )
+    for field in ("run_id", "env"):
+        check.name(evaluation[field], field)
+    if evaluation.get("variant") is not None:
+        check.name(evaluation["variant"], "variant")
+    for field in ("method", "method_label"):
+        check.text(evaluation[field], field)
+    if "version" in evaluation:
+        check.text(evaluation["version"], "version")
+    check.integer(evaluation["seed"], "seed", 0)
+    agent = check.table(evaluation["agent"], "agent")
+    check.has(agent, ("file", "sha256"), "agent.")
+    check.text(agent["file"], "agent.file")
+    if not isinstance(agent["sha256"], str) or not _SHA256.fullmatch(agent["sha256"]):
+        raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", agent["sha256"])
+    scenario_set = check.table(evaluation["scenario_set"], "scenario_set")
+    check.has(scenario_set, ("name", "env", "scenarios"), "scenario_set.")
+    check.name(scenario_set["name"], "scenario_set.name")
+    if scenario_set["env"] != evaluation["env"]:
+        raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
+    if not isinstance(scenario_set["scenarios"], list):
+        raise check.fail("scenario_set.scenarios", "an array of scenario definitions", scenario_set["scenarios"])
+    episodes = check.integer(evaluation["episodes"], "episodes", 1)
+    check.integer(evaluation["stream"], "stream", 0)
+    scenarios = evaluation["scenarios"]
+    if not isinstance(scenarios, list) or not scenarios:
+        raise check.fail("scenarios", "a non-empty array of scenarios", scenarios)
+    names = []
+    for i, entry in enumerate(scenarios):
+        where = f"scenarios[{i}]"
+        entry = check.table(entry, where)
+        check.has(entry, SCENARIO_FIELDS, f"{where}.")
+        names.append(check.name(entry["name"], f"{where}.name"))
+        check.text(entry["reason"], f"{where}.reason")
+        if not isinstance(entry["held_out"], bool):
+            raise check.fail(f"{where}.held_out", "true or false", entry["held_out"])
+        check.table(entry["env_kwargs"], f"{where}.env_kwargs")
+        for agent_name, label in check.table(entry["fixed"], f"{where}.fixed").items():
+            check.text(label, f"{where}.fixed.{agent_name}")
+        metrics = check.table(entry["metrics"], f"{where}.metrics")
+        check.has(metrics, METRIC_NAMES, f"{where}.metrics.")
+        for metric in METRIC_NAMES:
+            check.numbers(metrics[metric], f"{where}.metrics.{metric}", episodes)
+    if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
+        raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
+    if len(set(names)) != len(names):
+        raise check.fail("scenarios", "distinct scenario names", names)
+    declared = [definition.get("name") if isinstance(definition, dict) else None for definition in scenario_set["scenarios"]]
+    if declared != names[1:]:
+        raise check.fail("scenarios", f"the set's scenarios {declared} after {TRAINED_WITH!r}", names)
+    return evaluation
+
+
+def read_evaluation(path: str | Path) -> dict[str, Any]:
+    """Read an evaluation file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
+    return check_evaluation(read_json(path), path)

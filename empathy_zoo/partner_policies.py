@@ -1,0 +1,199 @@
+"""Fixed agents a trained robot never met: partners for held-out evaluation (:mod:`empathy_zoo.scenarios`).
+
+Each is a :class:`empathy_zoo.policies.FixedPolicy` registered by name in
+:data:`empathy_zoo.policies.POLICIES`:
+
+* ``slow_walk`` (:class:`SlowWalk`): steps in a random direction with probability
+  ``move_probability`` (0.1), else stays; reads nothing.
+* ``chase`` (:class:`Chase`): steps towards the robot along the shorter way round the torus, rows
+  first; reads ``positions``.
+* ``keep_away`` (:class:`KeepAway`): takes the move that leaves it farthest from the robot; reads
+  ``positions``.
+* ``nearest_battery`` (:class:`NearestBattery`, Sharing): steps towards the nearest battery in its
+  window, else patrols; reads its observation.
+
+:class:`Chase`, :class:`KeepAway` and :class:`NearestBattery` are deterministic and keep nothing
+between steps (``stateless = True``); :class:`SlowWalk` draws from a counter-based stream of its
+seed, as :class:`~empathy_zoo.builtin_policies.RandomWalk` does, and has a batched fast path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.actions import Action
+from empathy_zoo.builtin_policies import CounterStream, CounterStreamBatch
+from empathy_zoo.randomness import counter_uniform
+
+__all__ = ["SlowWalk", "Chase", "KeepAway", "NearestBattery", "BATTERY_VALUE", "MOVES_BY_ACTION"]
+
+BATTERY_VALUE = -1.0
+"""How a battery looks in a Sharing observation (SPEC §3: floor 0, battery −1, an agent positive)."""
+MOVES_BY_ACTION: tuple[tuple[Action, int, int], ...] = (
+    (Action.UP, -1, 0),
+    (Action.DOWN, 1, 0),
+    (Action.LEFT, 0, -1),
+    (Action.RIGHT, 0, 1),
+    (Action.STAY, 0, 0),
+)
+"""Every action and its ``(row, col)`` displacement (SPEC §1), in action order."""
+_DIRECTIONS = (Action.UP, Action.DOWN, Action.LEFT, Action.RIGHT)
+
+
+def _slow_walk_action(draw: float, move_probability: float) -> int:
+    """The action of a draw ``u`` in ``[0, 1)``: the ``⌊4u/p⌋``-th move when ``u < p``, else stay."""
+    if draw < move_probability:
+        return int(_DIRECTIONS[min(int(draw / move_probability * 4), 3)])
+    return int(Action.STAY)
+
+
+class SlowWalk(CounterStream):
+    """A cat that rarely moves (one step in ten by default).
+
+    On each step, with probability ``move_probability`` it steps up, down, left or right (each
+    equally likely), otherwise it stays. One draw per step from the counter-based stream of its
+    seed (the same numbers alone or batched)."""
+
+    needs_observation = False
+
+    def __init__(self, move_probability: float = 0.1) -> None:
+        if isinstance(move_probability, bool) or not isinstance(move_probability, (int, float)):
+            raise ValueError(f"move_probability must be a number in (0, 1], got {move_probability!r}")
+        if not 0.0 < float(move_probability) <= 1.0:
+            raise ValueError(f"move_probability must lie in (0, 1], got {move_probability}")
+        super().__init__()
+        self.move_probability = float(move_probability)
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        key, count = self._take()
+        return _slow_walk_action(float(counter_uniform(key, count)[0]), self.move_probability)
+
+    def batched(self, num_envs: int) -> _SlowWalkBatch:
+        return _SlowWalkBatch(num_envs, self.move_probability)
+
+
+class _SlowWalkBatch(CounterStreamBatch):
+    needs_observation = False
+    state_name = "slow walk"
+
+    def __init__(self, num_envs: int, move_probability: float) -> None:
+        super().__init__(num_envs)
+        self.move_probability = move_probability
+
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
+        draws = counter_uniform(*self._take(active))
+        p = self.move_probability
+        moves = np.minimum((draws / p * 4).astype(np.int64), 3)
+        return np.where(draws < p, np.asarray(_DIRECTIONS, dtype=np.int64)[moves], int(Action.STAY)).astype(np.int64)
+
+
+def _check_target(target: Any) -> str:
+    if not isinstance(target, str) or not target:
+        raise ValueError(f"target must be an agent's name (e.g. 'robot_0'), got {target!r}")
+    return target
+
+
+def _torus_offset(delta: int, size: int) -> int:
+    """The shortest signed displacement ``delta`` on a ring of ``size`` cells (a tie goes forward)."""
+    delta %= size
+    return delta if delta <= size - delta else delta - size
+
+
+class Chase:
+    """A cat that chases the robot (from the true positions).
+
+    On every ``every``-th step of the episode it steps towards ``target`` along the shorter way
+    round the torus, rows first (a tie of the two ways: down, or right); it stays on the other
+    steps, once it stands on the target's cell, and when the target is gone. It reads the true
+    positions (the target is often outside its window)."""
+
+    needs_state = True
+    stateless = True
+
+    def __init__(self, target: str = "robot_0", every: int = 1) -> None:
+        if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+            raise ValueError(f"every must be a positive int, got {every!r}")
+        self.target, self.every = _check_target(target), every
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        positions, size = info["positions"], info["size"]
+        if info["step"] % self.every or self.target not in positions:
+            return int(Action.STAY)
+        (row, col), (to_row, to_col) = positions[info["agent"]], positions[self.target]
+        down, right = _torus_offset(to_row - row, size), _torus_offset(to_col - col, size)
+        if down:
+            return int(Action.DOWN if down > 0 else Action.UP)
+        if right:
+            return int(Action.RIGHT if right > 0 else Action.LEFT)
+        return int(Action.STAY)
+
+
+class KeepAway:
+    """A cat that keeps away from the robot (from the true positions).
+
+    It takes the action (the four moves or staying) after which its torus distance (the Manhattan
+    distance the shorter ways round) to where ``target`` stands now is largest, the first in
+    action order on a tie (up, down, left, right, stay); it stays when the target is gone."""
+
+    needs_state = True
+    stateless = True
+
+    def __init__(self, target: str = "robot_0") -> None:
+        self.target = _check_target(target)
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        positions, size = info["positions"], info["size"]
+        if self.target not in positions:
+            return int(Action.STAY)
+        (row, col), (to_row, to_col) = positions[info["agent"]], positions[self.target]
+
+        def distance(action: tuple[Action, int, int]) -> int:
+            _, d_row, d_col = action
+            return abs(_torus_offset(to_row - row - d_row, size)) + abs(_torus_offset(to_col - col - d_col, size))
+
+        return int(max(MOVES_BY_ACTION, key=distance)[0])  # (max keeps the first of equals)
+
+
+class NearestBattery:
+    """A Sharing human that heads for the nearest battery it sees, else patrols.
+
+    It steps towards the nearest battery in its own window (a cell of value −1; the Manhattan
+    distance inside the window, the first cell in row-major order on a tie), rows first; with no
+    battery in view it patrols as the authors' human does (up on steps 0, ``period``,
+    2·``period``, …, right otherwise). It reads only its observation (and the step count), so it
+    knows no battery it cannot see."""
+
+    stateless = True
+
+    def __init__(self, period: int = 7) -> None:
+        if isinstance(period, bool) or not isinstance(period, int) or period < 1:
+            raise ValueError(f"period must be a positive int, got {period!r}")
+        self.period = period
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        window = np.asarray(observation)
+        side = int(round(len(window) ** 0.5))
+        if side * side != len(window):
+            raise ValueError(f"nearest_battery reads a square window, got an observation of {len(window)} values")
+        centre = side // 2
+        cells = np.flatnonzero(window == BATTERY_VALUE)
+        if cells.size == 0:
+            return int(Action.UP if info["step"] % self.period == 0 else Action.RIGHT)
+        rows, cols = cells // side - centre, cells % side - centre
+        nearest = int(np.argmin(np.abs(rows) + np.abs(cols)))  # (argmin keeps the first of equals)
+        down, right = int(rows[nearest]), int(cols[nearest])
+        if down:
+            return int(Action.DOWN if down > 0 else Action.UP)
+        return int(Action.RIGHT if right > 0 else Action.LEFT)

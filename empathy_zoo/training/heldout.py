@@ -1,0 +1,314 @@
+"""Held-out evaluation: every kept agent of a results directory played greedily beside partners it
+never trained with (the scenarios of :mod:`empathy_zoo.scenarios`), one evaluation file per run
+and scenario set (:mod:`empathy_zoo.evaluation_file`).
+
+:func:`evaluate_results` is what ``empathy-zoo evaluate`` runs. For each run whose result file
+names an agent file (``"agent": {"file", "sha256"}``) and each scenario set of its environment
+(by default the shipped one), it loads the agent, refusing a file whose SHA-256 is not the one the
+result file records (the message names both files), and plays ``episodes`` greedy episodes in the
+run's own world and partners (:data:`~empathy_zoo.scenarios.TRAINED_WITH`) and in every scenario of
+the set, through :func:`~empathy_zoo.training.evaluation.evaluate_greedy`: the agent acts as the
+learner did (ε = 0). Episode ``e`` of every scenario starts from the seed
+``derive_key(run seed, STREAMS["heldout_eval"], e)``: a stream of its own, the same for every
+scenario (so the run's scenarios differ in their partners, not in their luck at the start).
+
+It is resumable: an evaluation file is written atomically once all of its run's scenarios are
+played, and a later call skips every run whose file is there and was made of the same agent, set
+and episode count; a file that was made otherwise is refused by name, never overwritten.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
+from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
+from empathy_zoo.environments import DEFAULT_ARGUMENTS
+from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, read_evaluation
+from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.policies import entry_label
+from empathy_zoo.provenance import package_version
+from empathy_zoo.randomness import STREAMS
+from empathy_zoo.result_file import RUNS_DIR, read_result
+from empathy_zoo.scenarios import Scenario, ScenarioSet, default_set_name, load_scenario_set, trained_with
+from empathy_zoo.training.evaluation import evaluate_greedy
+
+__all__ = [
+    "STREAM_HELDOUT",
+    "DEFAULT_EPISODES",
+    "EvaluationSummary",
+    "GreedyAgent",
+    "evaluate_results",
+    "evaluate_run",
+    "results_of",
+    "same_world",
+]
+
+STREAM_HELDOUT = STREAMS["heldout_eval"]
+"""The random stream of a held-out evaluation's start seeds (its own id in :data:`empathy_zoo.randomness.STREAMS`)."""
+DEFAULT_EPISODES = 100
+"""Greedy episodes per scenario and run unless told otherwise: a run's per-scenario mean is one
+number of the seeds the leaderboard's intervals are over; 100 episodes keep its own noise well
+below the spread between seeds (a harm rate of 0.1 is then known to about ±0.03)."""
+
+
+class GreedyAgent:
+    """A loaded agent (``act_batch``) as :func:`evaluate_greedy` drives a learner: ``act(observations
+    (K, M, V), greedy=True) -> (K, M)``."""
+
+    def __init__(self, agent: Any) -> None:
+        self.agent = agent
+        """The trained agent (:class:`~empathy_zoo.trained_agent.TrainedAgent` or ``SB3Agent``)."""
+
+    def act(self, observations: np.ndarray, greedy: bool = True) -> np.ndarray:
+        if not greedy:
+            raise ValueError("a loaded agent acts greedily only (it keeps no exploration schedule)")
+        k, m, v = observations.shape
+        return self.agent.act_batch(observations.reshape(k * m, v)).reshape(k, m)
+
+
+@dataclass
+class EvaluationSummary:
+    """What :func:`evaluate_results` did."""
+
+    written: list[Path] = field(default_factory=list)
+    """Evaluation files written by this call."""
+    done: list[Path] = field(default_factory=list)
+    """Evaluation files already there (made of the same agent, set and episodes): skipped."""
+    without_agent: list[str] = field(default_factory=list)
+    """Runs whose result file names no agent file (a run that kept none, or of an older empathy-zoo)."""
+    without_set: list[str] = field(default_factory=list)
+    """Runs of an environment none of the scenario sets is for."""
+
+    @property
+    def files(self) -> list[Path]:
+        """Every evaluation file of the runs evaluated: written or already there."""
+        return sorted(self.written + self.done)
+
+
+def results_of(results_dir: str | Path) -> list[tuple[Path, dict[str, Any]]]:
+    """``(result file, result)`` of every result file of ``results_dir`` (its ``runs/``, or itself
+    when it holds the files), read and checked (:func:`empathy_zoo.result_file.read_result`), in
+    file-name order; a directory without result files raises ``ValueError``."""
+    root = Path(results_dir)
+    if not root.is_dir():
+        raise ValueError(f"results directory {root} does not exist")
+    runs = root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
+    paths = sorted(p for p in runs.glob("*.json") if not p.name.startswith(".") and p.is_file())
+    if not paths:
+        raise ValueError(f"no result files (*.json) in {runs}: train runs first")
+    return [(path, read_result(path)) for path in paths]
+
+
+def same_world(a: EnvVariant, b: EnvVariant) -> bool:
+    """Whether two variants are the same world: one environment, equal arguments (those left out
+    at their defaults) and the same fixed agents with the same policies."""
+    defaults = DEFAULT_ARGUMENTS.get(a.env, {})
+
+    def world(variant: EnvVariant) -> tuple[Any, ...]:
+        fixed = {agent: entry_label(entry) for agent, entry in variant.fixed_policies().items()}
+        return variant.env, {**defaults, **variant.kwargs}, fixed
+
+    return world(a) == world(b)
+
+
+def evaluate_run(
+    result_file: Path,
+    result: Mapping[str, Any],
+    scenario_set: ScenarioSet,
+    episodes: int = DEFAULT_EPISODES,
+    on_scenario: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """The evaluation document of one run (see :mod:`empathy_zoo.evaluation_file`): its agent,
+    loaded from the agent file its result file names and checked against the SHA-256 recorded
+    there, played ``episodes`` greedy episodes in its own world and in every scenario of
+    ``scenario_set``; ``on_scenario(name)`` is called after each. ``ValueError`` for a run that kept
+    no agent, an agent file changed since, or a scenario the run's world cannot hold."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be a positive int, got {episodes!r}")
+    if result["env"] != scenario_set.env:
+        raise ValueError(
+            f"scenario set {scenario_set.name!r} is for {scenario_set.env}; run {result['run_id']} is of {result['env']}"
+        )
+    agent = load_run_agent(result_file)
+    described = agent.describe().get("env")
+    if described is not None and described != result["env"]:
+        raise ValueError(
+            f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result['env']}"
+        )
+    own = trained_with(result)
+    home = own.variant
+    view = int({**DEFAULT_ARGUMENTS[result["env"]], **home.kwargs}["view"])
+    if agent.obs_size != view * view:
+        raise ValueError(
+            f"agent file {agent.describe().get('file')} takes observations of {agent.obs_size} values, but its run "
+            f"{result_file} sees a {view}×{view} window ({view * view}): the agent file is not this run's"
+        )
+    learner = GreedyAgent(agent)
+    entries = []
+    scenarios: list[Scenario] = [own, *scenario_set.scenarios]
+    for scenario in scenarios:
+        variant = scenario.for_run(home.kwargs)
+        columns = evaluate_greedy(
+            learner,
+            result["env"],
+            [int(result["seed"])],
+            episodes,
+            variant.fixed_policies(),
+            dict(variant.kwargs),
+            STREAM_HELDOUT,
+        )[0]
+        entries.append(
+            {
+                "name": scenario.name,
+                "reason": scenario.reason,
+                "held_out": scenario is not own and not same_world(variant, home),
+                "env_kwargs": dict(variant.kwargs),
+                "fixed": {agent_name: entry_label(entry) for agent_name, entry in variant.fixed_policies().items()},
+                "metrics": columns,
+            }
+        )
+        if on_scenario is not None:
+            on_scenario(scenario.name)
+    return {
+        "format": FORMAT,
+        "schema": SCHEMA,
+        "version": package_version(),
+        "run_id": result["run_id"],
+        "env": result["env"],
+        "variant": result.get("variant") or result["env"],
+        "method": result["method"],
+        "method_label": result["method_label"],
+        "seed": result["seed"],
+        "agent": dict(result[RESULT_FIELD]),
+        "scenario_set": scenario_set.definition(),
+        "episodes": episodes,
+        "stream": STREAM_HELDOUT,
+        "scenarios": entries,
+    }
+
+
+def _identity(document: Mapping[str, Any]) -> dict[str, Any]:
+    """What must agree for an evaluation file to be the one asked for."""
+    return {
+        "the run": document["run_id"],
+        "the agent file's SHA-256": document["agent"]["sha256"],
+        "the scenario set": document["scenario_set"],
+        "the episodes per scenario": document["episodes"],
+        "the start seeds' stream": document["stream"],
+    }
+
+
+def _check_done(path: Path, result_file: Path, result: Mapping[str, Any], scenario_set: ScenarioSet, episodes: int) -> None:
+    """Raise ``ValueError`` naming ``path`` when the evaluation file there was made of another agent,
+    set or episode count than asked for now."""
+    existing = read_evaluation(path)
+    asked = {
+        "the run": result["run_id"],
+        "the agent file's SHA-256": result[RESULT_FIELD]["sha256"],
+        "the scenario set": scenario_set.definition(),
+        "the episodes per scenario": episodes,
+        "the start seeds' stream": STREAM_HELDOUT,
+    }
+    found = _identity(existing)
+    for what, value in asked.items():
+        if found[what] != value:
+            shown = (
+                f"{found[what]!r}, asked for {value!r}"
+                if what != "the scenario set"
+                else f"another definition of set {scenario_set.name!r} than {scenario_set.source}'s"
+            )
+            raise ValueError(
+                f"evaluation file {path} was made with {what} {shown} (result file {result_file}): move it away "
+                "to evaluate again, or write elsewhere (--out)"
+            )
+
+
+def _agent_entry(result: Mapping[str, Any]) -> Mapping[str, Any] | None:
+    entry = result.get(RESULT_FIELD)
+    return entry if isinstance(entry, Mapping) else None
+
+
+def evaluate_results(
+    results_dir: str | Path,
+    scenario_sets: Sequence[str | Path | ScenarioSet] | None = None,
+    episodes: int = DEFAULT_EPISODES,
+    out_dir: str | Path | None = None,
+    progress: bool = True,
+    on_written: Callable[[Path], None] | None = None,
+) -> EvaluationSummary:
+    """Evaluate every kept agent of ``results_dir`` in every scenario set of its environment.
+
+    ``scenario_sets``: shipped names, TOML files or :class:`ScenarioSet` objects; ``None`` = the
+    shipped set of each environment the runs are of. ``out_dir`` (default ``results_dir``) gets
+    ``evaluations/<set>/<run id>.json`` (:func:`empathy_zoo.evaluation_file.evaluation_path`).
+    Files already there are skipped when made of the same agent, set and episodes, refused by name
+    otherwise; ``on_written(path)`` is called after each file written. ``progress`` draws a bar
+    counting the scenarios played. Raises ``ValueError`` when nothing could be evaluated (no run
+    kept an agent, or no set is for their environments), and for the errors of :func:`evaluate_run`.
+    """
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be a positive int, got {episodes!r}")
+    runs = results_of(results_dir)
+    out = Path(results_dir if out_dir is None else out_dir)
+    summary = EvaluationSummary()
+    kept = []
+    for path, result in runs:
+        if _agent_entry(result) is None:
+            summary.without_agent.append(result["run_id"])
+        else:
+            kept.append((path, result))
+    if not kept:
+        raise ValueError(
+            f"no run in {results_dir} kept a trained agent (their result files name no agent file): "
+            "only runs trained by empathy-zoo 0.4 or later, with a method that keeps its agent, can be evaluated"
+        )
+    if scenario_sets is None:
+        names = sorted({name for _, result in kept if (name := default_set_name(result["env"])) is not None})
+        sets = [load_scenario_set(name) for name in names]
+    else:
+        sets = [s if isinstance(s, ScenarioSet) else load_scenario_set(s) for s in scenario_sets]
+    by_name: dict[str, ScenarioSet] = {}
+    for scenario_set in sets:
+        if scenario_set.name in by_name and by_name[scenario_set.name].definition() != scenario_set.definition():
+            raise ValueError(
+                f"two scenario sets are named {scenario_set.name!r} ({by_name[scenario_set.name].source}, {scenario_set.source})"
+            )
+        by_name[scenario_set.name] = scenario_set
+    envs = {s.env for s in by_name.values()}
+    summary.without_set = [result["run_id"] for _, result in kept if result["env"] not in envs]
+    work = [(s, path, result) for s in by_name.values() for path, result in kept if result["env"] == s.env]
+    if not work:
+        raise ValueError(
+            f"no scenario set is for the environments of the kept agents in {results_dir} "
+            f"({', '.join(sorted({result['env'] for _, result in kept}))}); sets given: "
+            + ", ".join(f"{s.name} ({s.env})" for s in by_name.values())
+        )
+    for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
+        check_output_dir(directory)
+        remove_stale_temp_files(directory)
+    todo = []
+    for scenario_set, path, result in work:
+        target = evaluation_path(out, scenario_set.name, result["run_id"])
+        if target.exists():
+            _check_done(target, path, result, scenario_set, episodes)
+            summary.done.append(target)
+        else:
+            todo.append((scenario_set, path, result, target))
+    total = sum(1 + len(scenario_set.scenarios) for scenario_set, *_ in todo)
+    bar_off = not progress or total == 0
+    with tqdm(total=total, unit="scenario", desc="evaluate", disable=bar_off, dynamic_ncols=True, mininterval=1.0) as bar:
+        for scenario_set, path, result, target in todo:
+            bar.set_postfix_str(f"{scenario_set.name}: {result['run_id']}", refresh=False)
+            document = evaluate_run(path, result, scenario_set, episodes, on_scenario=lambda _name: bar.update(1))
+            write_json_atomic(target, document)
+            summary.written.append(target)
+            if on_written is not None:
+                on_written(target)
+    return summary

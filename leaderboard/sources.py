@@ -1,0 +1,194 @@
+"""Several results directories read into one leaderboard, their experiments kept apart.
+
+:func:`load_results_dirs` reads every result file of each directory, each directory checked as
+:func:`leaderboard.aggregate.load_results` checks one, into one list: a researcher's runs tabled
+beside the suite's (``docs/results/paper``) without retraining either. Nothing is written to a
+result file; what keeps experiments apart is done on the runs read:
+
+* **Label prefixes.** ``labels={DIR: PREFIX}`` (``--label DIR=PREFIX``) puts ``PREFIX`` and a
+  space before the label of every run read from ``DIR``.
+* **Budgets.** Where the runs read have more than one training budget
+  (:class:`leaderboard.budgets.RunBudget`), every row's label ends with its budget
+  (:data:`BUDGET_SEPARATOR`, ``"DQN · 30,000 steps"``, with the evaluation interval and episodes
+  where those differ between budgets), so runs of different budgets never share a row; a row is
+  compared only with DQN rows of its own variant and budget
+  (:func:`leaderboard.improvement.improvements_over_dqn`).
+* **One experiment per row.** Runs of one row (variant and label) from two experiments are refused
+  (:func:`leaderboard.aggregate.check_runs` over the combined runs); between two directories the
+  message names both and the ``--label`` option. Runs of one experiment found in two directories
+  (other seeds of the same run ids) make one row; the same run in both is refused.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.result_file import experiment_of
+from leaderboard.aggregate import check_runs, load_result_files, table_env
+from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
+
+__all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option"]
+
+BUDGET_SEPARATOR = " · "
+"""Between a row's label and its budget, where the leaderboard holds several budgets."""
+
+
+@dataclass(frozen=True)
+class ResultsDir:
+    """One results directory read into a leaderboard, as its header names it."""
+
+    path: str
+    """The directory as it was given."""
+    prefix: str | None
+    """What its labels were prefixed with (``None``: nothing)."""
+    runs: int
+    """Result files read from it."""
+    versions: tuple[str, ...]
+    """The empathy-zoo versions its result files record, sorted (empty: none records one)."""
+    commits: tuple[str, ...]
+    """The git commits its result files record, sorted (empty: none records one)."""
+    budgets: tuple[RunBudget, ...]
+    """The training budgets of its runs, ascending."""
+
+
+@dataclass(frozen=True)
+class ResultSet:
+    """The runs of one leaderboard, with where they were read from."""
+
+    results: list[dict[str, Any]]
+    """Every run, its label prefixed and (with several budgets) ending with its budget."""
+    directories: tuple[ResultsDir, ...]
+    """The directories read, in the order given."""
+    budgets: tuple[RunBudget, ...]
+    """The training budgets of all runs, ascending."""
+    origins: tuple[str, ...]
+    """The directory (as given) each run of :attr:`results` was read from."""
+
+    def row_directories(self) -> dict[tuple[str, str], tuple[str, ...]]:
+        """The directories each row's runs (``(variant, label)``) were read from, in the order given."""
+        order = [directory.path for directory in self.directories]
+        rows: dict[tuple[str, str], set[str]] = {}
+        for result, origin in zip(self.results, self.origins):
+            rows.setdefault((table_env(result), result["method_label"]), set()).add(origin)
+        return {row: tuple(sorted(found, key=order.index)) for row, found in rows.items()}
+
+    @property
+    def budget_in_labels(self) -> bool:
+        """Whether the labels end with their budget: the runs have more than one."""
+        return len(self.budgets) > 1
+
+    @property
+    def budget_with_evaluation(self) -> bool:
+        """Whether a budget's text names its evaluation (:func:`leaderboard.budgets.shows_evaluation`)."""
+        return shows_evaluation(self.budgets)
+
+    def budget_text(self, budget: RunBudget) -> str:
+        """``budget`` as the leaderboard writes it."""
+        return budget.text(self.budget_with_evaluation)
+
+
+def parse_label_option(text: str) -> tuple[str, str]:
+    """``"DIR=PREFIX"`` (a ``--label`` option) as ``(DIR, PREFIX)``; ``ValueError`` if it is not that."""
+    directory, equals, prefix = text.rpartition("=")
+    if not equals or not directory or not prefix.strip():
+        raise ValueError(f"--label takes DIR=PREFIX (a results directory and the prefix of its labels), got {text!r}")
+    return directory, prefix.strip()
+
+
+def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:
+    prefixes: list[str | None] = [None] * len(given)
+    for directory, prefix in labels.items():
+        where = Path(directory).resolve()
+        if where not in resolved:
+            read = ", ".join(given)
+            raise ValueError(f"--label {directory}={prefix}: {directory} is not one of the results directories read ({read})")
+        if not isinstance(prefix, str) or not prefix.strip() or "\n" in prefix:
+            raise ValueError(f"--label {directory}: the prefix must be a non-empty one-line text, got {prefix!r}")
+        prefixes[resolved.index(where)] = prefix.strip()
+    return prefixes
+
+
+def _recorded(runs: Sequence[dict[str, Any]], field: str) -> tuple[str, ...]:
+    return tuple(sorted({str(run[field]) for run in runs if run.get(field)}))
+
+
+def load_results_dirs(
+    results_dirs: Sequence[str | os.PathLike[str]], labels: Mapping[str | os.PathLike[str], str] | None = None
+) -> ResultSet:
+    """Every run of every directory of ``results_dirs`` (each as
+    :func:`leaderboard.aggregate.load_results` reads it), labels prefixed by ``labels``
+    (``{directory: prefix}``) and, where the runs have several budgets, ending with their budget.
+
+    ``ValueError`` for no directory, a directory given twice, a ``labels`` key that is not one of
+    them, a directory :func:`~leaderboard.aggregate.load_results` refuses, and runs of two
+    experiments in one row or one run read twice (:func:`leaderboard.aggregate.check_runs`); when
+    those come from two directories, the message names both and the ``--label`` option.
+    """
+    given = [os.fspath(directory) for directory in results_dirs]
+    dirs = [Path(directory) for directory in given]
+    if not dirs:
+        raise ValueError("no results directory to read")
+    resolved = [directory.resolve() for directory in dirs]
+    for i, directory in enumerate(resolved):
+        if directory in resolved[:i]:
+            raise ValueError(f"results directory {given[i]} is given twice (as {given[resolved.index(directory)]} too)")
+    prefixes = _prefixes(given, resolved, labels or {})
+    read: list[tuple[int, Path, dict[str, Any]]] = []
+    for i, directory in enumerate(dirs):
+        for path, result in load_result_files(directory):
+            if prefixes[i] is not None:
+                result = {**result, "method_label": f"{prefixes[i]} {result['method_label']}"}
+            read.append((i, path, result))
+    budgets = budgets_of(result for _, _, result in read)
+    with_evaluation = shows_evaluation(budgets)
+    if len(budgets) > 1:
+        suffixed = [budget_of(result).text(with_evaluation) for _, _, result in read]
+        read = [
+            (i, path, {**result, "method_label": result["method_label"] + BUDGET_SEPARATOR + budget})
+            for (i, path, result), budget in zip(read, suffixed)
+        ]
+    try:
+        check_runs([(path, result) for _, path, result in read])
+    except ValueError as error:
+        first, second = _clashing_dirs(read)
+        if first == second:
+            raise
+        raise ValueError(
+            f"{error}. They come from two results directories, {given[first]} and {given[second]}: to table both "
+            f"without editing a result file, prefix one directory's labels (--label {given[second]}=PREFIX; "
+            "Python: labels={directory: prefix})"
+        ) from None
+    directories = tuple(
+        ResultsDir(
+            path=directory,
+            prefix=prefixes[i],
+            runs=len(mine),
+            versions=_recorded(mine, "version"),
+            commits=_recorded(mine, "commit"),
+            budgets=budgets_of(mine),
+        )
+        for i, directory in enumerate(given)
+        for mine in [[result for j, _, result in read if j == i]]
+    )
+    return ResultSet([result for _, _, result in read], directories, budgets, tuple(given[i] for i, _, _ in read))
+
+
+def _clashing_dirs(read: Sequence[tuple[int, Path, dict[str, Any]]]) -> tuple[int, int]:
+    """The directories of the first two runs that share a row but not an experiment, or are
+    the same run (each directory passed these checks on its own)."""
+    rows: dict[tuple[str, str], tuple[str, int]] = {}
+    runs: dict[tuple[str, str, Any], int] = {}
+    for i, _, result in read:
+        row = (table_env(result), result["method_label"])
+        experiment, first = rows.setdefault(row, (experiment_of(result["run_id"]), i))
+        if experiment != experiment_of(result["run_id"]):
+            return first, i
+    for i, _, result in read:
+        first = runs.setdefault((table_env(result), result["method_label"], result["seed"]), i)
+        if first != i:
+            return first, i
+    return 0, 0

@@ -1,0 +1,102 @@
+"""Hand-made evaluation files (``empathy-zoo evaluate``'s) for the held-out section's tests: per
+run and scenario, the per-episode values of every metric are given, so each verdict is known."""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from helpers_results import synthetic_result
+
+from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.evaluation_file import FORMAT, SCHEMA, TRAINED_WITH, check_evaluation, evaluation_path
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.randomness import STREAMS
+
+EPISODES = 4
+"""Episodes per scenario of every synthetic evaluation."""
+
+
+def scenario_set(env: str, scenarios: Mapping[str, Mapping[str, str]], name: str = "synthetic") -> dict[str, Any]:
+    """A set's definition: ``{scenario: fixed}``, each with a reason."""
+    return {
+        "name": name,
+        "env": env,
+        "description": "Hand-made partners.",
+        "scenarios": [{"name": s, "reason": f"Why {s}.", "env_kwargs": {}, "fixed": dict(f)} for s, f in scenarios.items()],
+    }
+
+
+def sha_of(run_id: str) -> str:
+    return hashlib.sha256(run_id.encode()).hexdigest()
+
+
+def synthetic_run(env: str, method: str, beta: float, seed: int) -> dict[str, Any]:
+    """A result (as :func:`leaderboard.aggregate.load_results` gives it) that kept an agent."""
+    run = synthetic_result(env, method, beta, seed)
+    run["agent"] = {"file": f"{run['run_id']}.agent.pt", "sha256": sha_of(run["run_id"])}
+    return run
+
+
+def synthetic_evaluation(
+    run: Mapping[str, Any],
+    definition: Mapping[str, Any],
+    values: Mapping[str, Mapping[str, float | Sequence[float]]],
+    own_fixed: Mapping[str, str],
+) -> dict[str, Any]:
+    """The evaluation file of ``run`` in the set ``definition``: ``values[scenario][metric]`` is the
+    value of every episode (a number) or the episodes' values; metrics not given are 0."""
+
+    def metrics(scenario: str) -> dict[str, list[float]]:
+        given = values.get(scenario, {})
+        out = {}
+        for metric in METRIC_NAMES:
+            value = given.get(metric, 0.0)
+            out[metric] = [float(v) for v in value] if isinstance(value, Sequence) else [float(value)] * EPISODES
+        return out
+
+    scenarios = [
+        {
+            "name": TRAINED_WITH,
+            "reason": "Own.",
+            "held_out": False,
+            "env_kwargs": {},
+            "fixed": dict(own_fixed),
+            "metrics": metrics(TRAINED_WITH),
+        }
+    ]
+    for entry in definition["scenarios"]:
+        scenarios.append({**entry, "held_out": dict(entry["fixed"]) != dict(own_fixed), "metrics": metrics(entry["name"])})
+    document = {
+        "format": FORMAT,
+        "schema": SCHEMA,
+        "version": "0.4.0",
+        "run_id": run["run_id"],
+        "env": run["env"],
+        "variant": run["env"],
+        "method": run["method"],
+        "method_label": run["method_label"],
+        "seed": run["seed"],
+        "agent": dict(run["agent"]),
+        "scenario_set": dict(definition),
+        "episodes": EPISODES,
+        "stream": STREAMS["heldout_eval"],
+        "scenarios": scenarios,
+    }
+    return check_evaluation(document, "synthetic evaluation")
+
+
+def write_synthetic(
+    out: Path,
+    runs_and_values: Sequence[tuple[dict[str, Any], Mapping[str, Any]]],
+    definition: Mapping[str, Any],
+    own_fixed: Mapping[str, str],
+) -> list[Path]:
+    """Write the evaluation files of ``(run, values)`` pairs under ``out/evaluations/<set>/``."""
+    paths = []
+    for run, values in runs_and_values:
+        path = evaluation_path(out, definition["name"], run["run_id"])
+        paths.append(write_json_atomic(path, synthetic_evaluation(run, definition, values, own_fixed)))
+    return paths

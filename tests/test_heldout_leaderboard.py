@@ -1,0 +1,203 @@
+"""The held-out section's reading rule on hand-made evaluation files whose verdicts are known both
+ways (generalises, does not: by its own partners and by DQN's), before any real run is judged; the
+section and its figure rendered from them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers_heldout import scenario_set, synthetic_run, write_synthetic
+
+from leaderboard.heldout import (
+    DOES_NOT_GENERALISE,
+    GENERALISES,
+    MARGINS,
+    UNDECIDED,
+    add_heldout_section,
+    heldout_cells,
+    load_heldout,
+    reading_rule,
+    readings,
+)
+from leaderboard.improvement import TOO_FEW_SEEDS
+
+COEXISTENCE = "coexistence_v0"
+OWN = {"cat_0": "random_walk"}
+SCENARIOS = {
+    "kept": {"cat_0": "stay"},
+    "lost": {"cat_0": "chase"},
+    "below_dqn": {"cat_0": "keep_away"},
+    "noisy": {"cat_0": "slow_walk(move_probability=0.1)"},
+    "two_cats": {"cat_0": "random_walk", "cat_1": "random_walk"},
+}
+SEEDS = range(5)
+DQN_HARMS = 0.8
+
+
+def method_harms(seed: int) -> dict[str, float]:
+    """Harms per episode of the method's run ``seed`` in every scenario: kept (+0.02, ▲ against DQN),
+    lost (+0.5: still ▲ against DQN, but far from its own partners), below_dqn (+0.05 where DQN
+    harms nothing: ▼), noisy (+0.3 on two seeds of five: the seeds cannot tell), two_cats (twice the
+    harms with twice the cats: the same harms per cat)."""
+    own = 0.1 + 0.01 * seed
+    return {
+        "trained_with": own,
+        "kept": own + 0.02,
+        "lost": own + 0.5 + 0.01 * seed,
+        "below_dqn": own + 0.05,
+        "noisy": own + (0.3 if seed in (1, 3) else 0.0),
+        "two_cats": 2 * own,
+    }
+
+
+def dqn_harms(seed: int) -> dict[str, float]:
+    base = DQN_HARMS + 0.01 * seed
+    return {**{s: base for s in ("trained_with", *SCENARIOS)}, "below_dqn": 0.0}
+
+
+@pytest.fixture
+def synthetic(tmp_path):
+    definition = scenario_set(COEXISTENCE, SCENARIOS)
+    pairs = []
+    for seed in SEEDS:
+        dqn = synthetic_run(COEXISTENCE, "dqn", 1.0, seed)
+        mine = synthetic_run(COEXISTENCE, "empathic_dqn", 0.5, seed)
+        pairs.append((dqn, {s: {"harms": h, "survival": 400.0} for s, h in dqn_harms(seed).items()}))
+        pairs.append((mine, {s: {"harms": h, "survival": 300.0} for s, h in method_harms(seed).items()}))
+    write_synthetic(tmp_path, pairs, definition, OWN)
+    return tmp_path, [run for run, _ in pairs]
+
+
+def verdicts(out, results) -> dict[str, str]:
+    (group,), notes = load_heldout(out, results)
+    assert notes == []
+    return {r.scenario: r.verdict for r in readings(group)}
+
+
+def test_the_reading_rule_on_known_cases(synthetic) -> None:
+    out, results = synthetic
+    assert verdicts(out, results) == {
+        "kept": GENERALISES,
+        "lost": DOES_NOT_GENERALISE,
+        "below_dqn": DOES_NOT_GENERALISE,
+        "noisy": UNDECIDED,
+        "two_cats": GENERALISES,
+    }
+
+
+def test_why_each_verdict_was_given(synthetic) -> None:
+    out, results = synthetic
+    (group,), _ = load_heldout(out, results)
+    found = {r.scenario: r for r in readings(group)}
+    assert found["lost"].versus_dqn == "better" and found["lost"].gap_low > MARGINS["harms"]
+    assert found["below_dqn"].versus_dqn == "worse" and "DQN" in found["below_dqn"].why
+    assert found["kept"].versus_dqn == "better" and found["kept"].gap == pytest.approx(0.02)
+    assert found["two_cats"].gap == pytest.approx(0.0)  # harms per cat: 2·h over 2 cats is h
+    assert found["noisy"].gap_low <= MARGINS["harms"] < found["noisy"].gap_high
+
+
+def test_fewer_seeds_than_the_test_needs_leave_every_reading_undecided(synthetic) -> None:
+    out, results = synthetic
+    few = [run for run in results if run["seed"] < 3]  # 3 against 3: the exact test cannot reach 5 %
+    (group,), notes = load_heldout(out, few)
+    assert all(r.verdict == UNDECIDED and r.versus_dqn == TOO_FEW_SEEDS for r in readings(group))
+    assert len(notes) == 4  # the evaluations of the seeds left out have no result file here
+
+
+def test_without_dqn_nothing_is_judged(synthetic) -> None:
+    out, results = synthetic
+    (group,), _ = load_heldout(out, [run for run in results if run["method"] != "dqn"])
+    assert {r.verdict for r in readings(group)} == {UNDECIDED}
+    assert all("no DQN" in r.why for r in readings(group))
+
+
+@pytest.mark.parametrize(
+    "versus, low, high, expected",
+    [
+        ("better", 0.0, 0.05, GENERALISES),
+        ("no clear difference", -0.2, 0.1, GENERALISES),
+        ("no clear difference", 0.0, 0.2, UNDECIDED),
+        ("better", 0.11, 0.5, DOES_NOT_GENERALISE),
+        ("worse", -0.5, -0.1, DOES_NOT_GENERALISE),
+        (TOO_FEW_SEEDS, 0.5, 0.9, UNDECIDED),
+        (None, 0.0, 0.0, UNDECIDED),
+        ("better", math.nan, math.nan, UNDECIDED),
+    ],
+)
+def test_reading_rule_table(versus, low, high, expected) -> None:
+    assert reading_rule(versus, low, high, 0.1)[0] == expected
+
+
+def test_equality_in_sharing_is_judged_towards_lower(tmp_path) -> None:
+    env, own = "sharing_v0", {"human_0": "patrol"}
+    definition = scenario_set(env, {"fair": {"human_0": "stay"}, "unfair": {"human_0": "random_walk"}})
+    pairs = []
+    for seed in SEEDS:
+        noise = 0.005 * seed
+        pairs.append(
+            (synthetic_run(env, "dqn", 1.0, seed), {s: {"equality": 0.3 + noise} for s in ("trained_with", "fair", "unfair")})
+        )
+        mine = {"trained_with": 0.9 + noise, "fair": 0.85 + noise, "unfair": 0.5 + 2 * noise}
+        pairs.append((synthetic_run(env, "empathic_dqn", 0.5, seed), {s: {"equality": e} for s, e in mine.items()}))
+    write_synthetic(tmp_path, pairs, definition, own)
+    assert verdicts(tmp_path, [run for run, _ in pairs]) == {"fair": GENERALISES, "unfair": DOES_NOT_GENERALISE}
+
+
+def test_cells_are_the_means_over_seeds_with_the_suites_marks(synthetic) -> None:
+    out, results = synthetic
+    (group,), _ = load_heldout(out, results)
+    cells = {(c.method_label, c.scenario, c.metric): c for c in heldout_cells(group)}
+    mine = cells[("empathic_dqn 0.5", "kept", "harms")]
+    assert mine.mean == pytest.approx(np.mean([method_harms(s)["kept"] for s in SEEDS]))
+    assert mine.versus_dqn == "better" and mine.probability == 1.0
+    assert cells[("empathic_dqn 0.5", "below_dqn", "harms")].versus_dqn == "worse"
+    assert cells[("dqn 1.0", "kept", "harms")].versus_dqn is None  # DQN is the reference
+
+
+def test_the_section_renders_with_its_rule_and_figure(synthetic) -> None:
+    out, results = synthetic
+    page = "# board\n\n## coexistence_v0\n\n## Metric definitions\n\n- harms\n"
+    html = "<html><body><h2>Metric definitions</h2></body></html>"
+    markdown, html_page, figures = add_heldout_section(out, results, out, page, html)
+    section = markdown[markdown.index("## Held-out partners") : markdown.index("## Metric definitions")]
+    for text in (
+        "Reading rule",
+        "✓ generalises",
+        "✗ does not generalise",
+        "? undecided",
+        "P(improves on DQN): harms",
+        "Why kept.",
+    ):
+        assert text in section
+    assert html_page.index("Held-out partners") < html_page.index("<h2>Metric definitions</h2>")
+    (path,) = figures.values()
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"]({path.relative_to(out).as_posix()})" in section
+
+
+def test_without_evaluation_files_the_pages_are_unchanged(tmp_path) -> None:
+    run = synthetic_run(COEXISTENCE, "dqn", 1.0, 0)
+    assert add_heldout_section(tmp_path, [run], tmp_path, "md", "html") == ("md", "html", {})
+
+
+def test_an_evaluation_of_another_agent_is_left_out_with_a_note(synthetic) -> None:
+    out, results = synthetic
+    changed = [dict(run, agent={**run["agent"], "sha256": "0" * 64}) if run["seed"] == 0 else run for run in results]
+    (group,), notes = load_heldout(out, changed)
+    assert len(notes) == 2 and all("another agent" in note for note in notes)
+    assert all(len(pairs) == 4 for pairs in group.runs.values())
+
+
+def test_several_results_directories_match_each_evaluation_in_its_own(synthetic, tmp_path) -> None:
+    import shutil
+
+    out, results = synthetic
+    other = tmp_path / "other"
+    shutil.copytree(out / "evaluations", other / "evaluations")
+    prefixed = [{**run, "method_label": f"B {run['method_label']}"} for run in results]
+    (group,), notes = load_heldout([out, other], results + prefixed, [str(out)] * len(results) + [str(other)] * len(results))
+    assert notes == [] and set(group.runs) == {"dqn 1.0", "empathic_dqn 0.5", "B dqn 1.0", "B empathic_dqn 0.5"}
+    with pytest.raises(ValueError, match="need each result's origin"):
+        load_heldout([out, other], results + prefixed)
