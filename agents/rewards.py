@@ -37,7 +37,7 @@ import inspect
 import math
 import typing
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -52,6 +52,7 @@ __all__ = [
     "TrainRewards",
     "configure_transform",
     "same_transform",
+    "StatefulTransform",
     "transform_config",
     "transform_fields",
 ]
@@ -66,6 +67,18 @@ class RewardTransform(Protocol):
     def __call__(self, batch: StepBatch, *state: Any) -> Any:
         """``(K, M)`` training rewards for every run of ``batch`` (``batch.rewards`` holds the
         environment's); a stateful transform also takes its state and returns ``(rewards, state)``."""
+
+
+@runtime_checkable
+class StatefulTransform(RewardTransform, Protocol):
+    """A reward transform that keeps state between steps (inequity aversion's smoothed rewards):
+    :class:`TrainRewards` keeps it, checkpoints it and passes it to each call."""
+
+    def initial_state(self, num_runs: int, envs_per_run: int, *args: Any, **kwargs: Any) -> dict[str, np.ndarray]:
+        """The state of ``num_runs`` runs of ``envs_per_run`` environments each, as arrays with a
+        leading run axis; a transform whose ``initial_state`` also takes ``seeds`` gets the runs'
+        seeds (for random numbers of its own)."""
+        ...
 
 
 class InactionBaselineTransform(RewardTransform, Protocol):
@@ -87,7 +100,7 @@ def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None
     """What a result file records of a reward transform: ``{"name": ..., **its fields}``."""
     if transform is None:
         return None
-    fields = dataclasses.asdict(transform) if dataclasses.is_dataclass(transform) else {}
+    fields: dict[str, Any] = dataclasses.asdict(transform) if dataclasses.is_dataclass(transform) else {}
     return {"name": transform.name, **fields}
 
 
@@ -114,7 +127,7 @@ def configure_transform(transform: RewardTransform | None, overrides: Mapping[st
         return transform
     whose = f" of method {owner!r}" if owner else ""
     kinds = transform_fields(transform)
-    if not kinds:
+    if transform is None or not kinds:
         what = "no reward transform" if transform is None else f"a reward transform without fields ({transform.name!r})"
         raise ValueError(
             f"{f'method {owner!r}' if owner else 'this method'} has {what}: {', '.join(sorted(overrides))} cannot be set"
@@ -125,7 +138,8 @@ def configure_transform(transform: RewardTransform | None, overrides: Mapping[st
             f"unknown field(s) {unknown} of the reward transform {transform.name!r}{whose}; its fields: {', '.join(kinds)}"
         )
     checked = {name: _checked_value(name, value, kinds[name]) for name, value in overrides.items()}
-    return dataclasses.replace(transform, **checked)
+    editable: Any = transform  # (a dataclass: transform_fields found its fields)
+    return dataclasses.replace(editable, **checked)
 
 
 def _checked_value(name: str, value: Any, kind: Any) -> Any:
@@ -178,13 +192,13 @@ class TrainRewards:
         if seeds is not None and len(seeds) != len(self.transforms):
             raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")
         self.states: list[dict[str, np.ndarray] | None] = [
-            self._initial_state(t, rows, envs_per_run, seeds) if hasattr(t, "initial_state") else None
+            self._initial_state(t, rows, envs_per_run, seeds) if isinstance(t, StatefulTransform) else None
             for t, rows in zip(self.distinct, self.rows)
         ]
 
     @staticmethod
     def _initial_state(
-        transform: RewardTransform, rows: np.ndarray, envs_per_run: int, seeds: Sequence[int] | None
+        transform: StatefulTransform, rows: np.ndarray, envs_per_run: int, seeds: Sequence[int] | None
     ) -> dict[str, np.ndarray]:
         if "seeds" not in inspect.signature(transform.initial_state).parameters:
             return transform.initial_state(len(rows), envs_per_run)
