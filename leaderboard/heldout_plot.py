@@ -1,6 +1,6 @@
 """The held-out figure: each method's score with its own partners against its held-out partners.
 
-One panel per metric of the environment (:data:`leaderboard.heldout.HELDOUT_METRICS`), one slot per
+One panel per metric of the environment (:data:`leaderboard.heldout_scores.HELDOUT_METRICS`), one slot per
 method: a black line across the slot at the method's mean with its training partners (its 95 %
 interval shaded), and one coloured point per held-out scenario (its interval as a bar) joined to
 that line, so the generalisation gap reads as the length of the join. A scenario that is the
@@ -28,7 +28,7 @@ from leaderboard.colours import method_colours
 from leaderboard.improvement import HIGHER_IS_BETTER
 
 if TYPE_CHECKING:
-    from leaderboard.heldout import HeldoutCell, HeldoutGroup
+    from leaderboard.heldout_scores import HeldoutCell, HeldoutGroup
 
 __all__ = ["heldout_filename", "render_heldout_png", "plot_heldout"]
 
