@@ -20,6 +20,7 @@ from leaderboard.aggregate import (
     table_env,
 )
 from leaderboard.budgets import budgets_of
+from leaderboard.episodes import add_episodes_section
 from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
 from leaderboard.plots import plot_learning_curves
@@ -64,9 +65,12 @@ def write_leaderboard(
 
     Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
     ``figures/<env>_<metric>.png`` (learning curves) and ``figures/<env>_tradeoff.png`` (task against
-    side effect, :mod:`leaderboard.tradeoff`). Returns ``{"markdown", "csv", "html": path}`` plus
-    ``"figure:<env>:<metric>": path`` for every figure (``<metric>`` is ``tradeoff`` for the trade-off).
-    No result file raises ``ValueError``.
+    side effect, :mod:`leaderboard.tradeoff`); where runs kept their trained agents, one greedy
+    episode per variant and row, ``figures/<env>_<row slug>_episode.gif``, in a "Greedy episodes"
+    section (:mod:`leaderboard.episodes`; an agent file changed since its run wrote it raises
+    ``ValueError``). Returns ``{"markdown", "csv", "html": path}`` plus ``"figure:<env>:<metric>": path``
+    for every figure (``<metric>`` is ``tradeoff`` for the trade-off, ``episode_<row slug>`` for an
+    episode). No result file raises ``ValueError``.
     """
     several = not isinstance(results_dir, (str, os.PathLike))
     dirs: list[str | os.PathLike[str]] = [results_dir] if isinstance(results_dir, (str, os.PathLike)) else list(results_dir)
@@ -120,6 +124,7 @@ def write_leaderboard(
     markdown = markdown_report(scores, provenance, links, base_env=base_env, improvements=improvements, uncompared=uncompared)
     html = html_report(scores, provenance, pngs, base_env=base_env, improvements=improvements, uncompared=uncompared)
     markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
+    markdown, html, episode_figures = add_episodes_section(results, out, markdown, html, origins=read.origins)
     paths = {
         "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown),
         "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance, rows)),
@@ -127,4 +132,5 @@ def write_leaderboard(
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     paths.update(heldout_figures)
+    paths.update(episode_figures)
     return paths

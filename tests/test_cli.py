@@ -156,6 +156,11 @@ def test_bad_config_file_exits_2_naming_file_and_key(tmp_path, capsys, content, 
         (["train", "--selfishness", "1.5"], "selfishness must be in [0, 1]"),
         (["train", "--steps", "0"], "steps must be a positive int"),
         (["train", "--fixed", "dog_0=stay"], "unknown agent(s) ['dog_0']"),
+        (["train", "--fixed", "cat_0=nosuch"], "fixed.cat_0: unknown fixed policy 'nosuch'"),
+        (["train", "--size", "4"], "size must be at least 5"),
+        (["train", "--view", "4"], "view must be odd"),
+        (["train", "--num-cats", "0"], "num_cats must be at least 1"),
+        (["train", "--env", "sharing_v0", "--start", "corner"], "start must be one of 'random', 'centre'"),
         (["train", "--device", "tpu"], "--device 'tpu'"),
         (["reproduce", "--profile", "no_such_profile"], "unknown profile 'no_such_profile'"),
         (["leaderboard", "/nonexistent/results"], "does not exist"),
@@ -168,6 +173,7 @@ def test_bad_input_exits_2_with_a_message(tmp_path, capsys, argv, expected):
     err = capsys.readouterr().err
     assert err.startswith("empathy-zoo: error: ") and expected in err, err
     assert "Traceback" not in err
+    assert not (tmp_path / "out").exists(), "a refused run writes nothing (docs/limits.md)"
 
 
 def test_cuda_unavailable_is_a_clear_error(tmp_path, capsys):

@@ -1,0 +1,372 @@
+"""The leaderboard's "Greedy episodes" section: one short greedy episode per environment variant
+and method row, as an animated GIF, from the trained agents the runs kept beside their result files.
+
+For every row (variant and label, in the tables' order) whose runs kept their agents
+(:data:`empathy_zoo.agent_file.RESULT_FIELD`), the run of the lowest seed that kept one is chosen;
+its agent file, beside its result file in the directory it was read from, is loaded checked
+against the SHA-256 its result file records (:func:`empathy_zoo.agent_file.load_agent`: a changed
+file is refused, the message naming both files). The agent plays one greedy episode in the world
+it trained in (its result file's ``config``: ``env``, ``env_kwargs`` and the ``fixed`` partners,
+policy labels read back by :func:`empathy_zoo.policies.parse_entry_label`), reset with
+:data:`EPISODE_SEED`, for at most :data:`EPISODE_STEPS` steps, written atomically as
+``figures/<variant>_<row slug>_episode.gif`` by :func:`empathy_zoo.episode_gif.episode_gif`
+(:func:`episode_slugs`: file-safe names that depend only on the variant and the label, and
+on the labels beside it only where two would share a name).
+
+The section (:func:`episodes_section`) is a table per variant (the run, the steps shown and the
+episode's metrics) with each row's GIF, linked from ``LEADERBOARD.md`` and embedded as base64 in
+``leaderboard.html``; :func:`add_episodes_section` places it before the metric definitions. A
+leaderboard whose runs kept no agent has no such section and no GIF. A row whose agent file is
+missing, or is a Stable-Baselines3 agent without Stable-Baselines3 installed, is named in a note
+instead of shown.
+
+One episode illustrates what a method's robot does; it measures nothing (the tables above do):
+``empathy-zoo watch <run id> --dir DIR`` plays more.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import html
+import unicodedata
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.agent_file import RESULT_FIELD, load_agent
+from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_path_name, confined
+from empathy_zoo.policies import PolicyEntry, parse_entry_label, policy_entry
+from empathy_zoo.result_file import RUNS_DIR
+from leaderboard.aggregate import group_runs, table_env
+from leaderboard.heldout import HTML_ANCHOR, MARKDOWN_ANCHOR
+from leaderboard.tables import env_metrics, markdown_table
+
+__all__ = [
+    "SECTION_TITLE",
+    "EPISODE_SEED",
+    "EPISODE_STEPS",
+    "GIF_SUFFIX",
+    "MAX_SLUG",
+    "RowEpisode",
+    "EpisodeSection",
+    "row_slug",
+    "episode_slugs",
+    "episode_file_name",
+    "chosen_runs",
+    "trained_world",
+    "play_row_episodes",
+    "episodes_section",
+    "add_episodes_section",
+]
+
+SECTION_TITLE = "Greedy episodes"
+"""The section's heading."""
+EPISODE_SEED = 0
+"""The seed every row's episode is reset with (the same for every row, so rows meet the same start)."""
+EPISODE_STEPS = GIF_STEPS
+"""Steps an episode shows at most."""
+GIF_SUFFIX = "_episode.gif"
+"""How an episode's file name ends: ``<variant>_<row slug>_episode.gif``."""
+MAX_SLUG = 80
+"""Longest row slug, in characters (a longer one is cut and ends with its label's hash)."""
+HASH_CHARS = 8
+"""Hex digits of the label's SHA-256 that tell apart two labels of one slug."""
+
+
+@dataclass(frozen=True)
+class RowEpisode:
+    """One row's greedy episode, as :func:`play_row_episodes` played and wrote it."""
+
+    env: str
+    """The row's variant (its table env)."""
+    label: str
+    """The row's method label."""
+    slug: str
+    """The row's slug in the GIF's file name (:func:`episode_slugs`)."""
+    run_id: str
+    """The run whose agent played."""
+    run_seed: int
+    """That run's seed (the lowest of the row's runs that kept an agent)."""
+    result_file: Path
+    """The run's result file."""
+    agent_file: Path
+    """Its agent file, beside it."""
+    gif: GifEpisode
+    """The episode played and the GIF written (its path, frames, size and bytes)."""
+
+
+@dataclass
+class EpisodeSection:
+    """The section's Markdown and HTML, and the GIFs it shows."""
+
+    markdown: str
+    html: str
+    figures: dict[str, Path]
+    """``{"figure:<variant>:episode_<row slug>": path}`` of every GIF written."""
+    episodes: list[RowEpisode]
+    """Every row's episode, in the section's order."""
+
+
+# ---------------------------------------------------------------------------- file names
+def _letter_name(char: str) -> str:
+    """A non-ASCII letter as a word: ``β`` → ``beta`` (the last word of its Unicode name)."""
+    name = unicodedata.name(char, "")
+    return name.rsplit(" ", 1)[-1].lower() if name else ""
+
+
+def row_slug(label: str) -> str:
+    """``label`` as part of a file name: lower-case ASCII letters, digits, ``.`` and ``-`` kept,
+    a non-ASCII letter spelled by its Unicode name (``β`` → ``beta``), anything else one ``_``;
+    ``"Empathic DQN (β=0.5)"`` → ``"empathic_dqn_beta_0.5"``. A slug longer than :data:`MAX_SLUG`
+    is cut and ends with the label's hash; a label with nothing to keep gives ``"row"``."""
+    pieces: list[str] = []
+    for char in unicodedata.normalize("NFKD", label):
+        if unicodedata.combining(char):
+            continue
+        if char.isascii() and (char.isalnum() or char in ".-"):
+            pieces.append(char.lower())
+        elif not char.isascii() and char.isalpha():
+            pieces.append(f"_{_letter_name(char)}_")
+        else:
+            pieces.append("_")
+    slug = "_".join(part for part in "".join(pieces).split("_") if part).strip(".-_")
+    if len(slug) > MAX_SLUG:
+        slug = slug[: MAX_SLUG - HASH_CHARS - 1].rstrip(".-_") + "-" + _label_hash(label)
+    return slug or "row"
+
+
+def _label_hash(label: str) -> str:
+    return hashlib.sha256(label.encode("utf-8")).hexdigest()[:HASH_CHARS]
+
+
+def episode_slugs(rows: Sequence[tuple[str, str]]) -> dict[tuple[str, str], str]:
+    """``{(variant, label): row slug}`` of ``rows`` (:func:`row_slug`); where two labels of one
+    variant share a slug (``"A B"`` and ``"A_B"``), each such slug ends with ``-`` and the first
+    :data:`HASH_CHARS` hex digits of its label's SHA-256."""
+    slugs = {row: row_slug(row[1]) for row in rows}
+    counts: dict[tuple[str, str], int] = {}
+    for (env, _), slug in slugs.items():
+        counts[env, slug] = counts.get((env, slug), 0) + 1
+    return {
+        (env, label): slug + "-" + _label_hash(label) if counts[env, slug] > 1 else slug for (env, label), slug in slugs.items()
+    }
+
+
+def episode_file_name(env: str, slug: str) -> str:
+    """``<variant>_<row slug>_episode.gif``; a variant that cannot be part of a file name raises
+    ``ValueError`` (:func:`empathy_zoo.names.check_path_name`)."""
+    return check_path_name(f"{check_path_name(env, 'variant')}_{slug}{GIF_SUFFIX}", "episode file name")
+
+
+# ---------------------------------------------------------------------------- which run, which world
+def _kept_agent(run: Mapping[str, Any]) -> Mapping[str, Any] | None:
+    entry = run.get(RESULT_FIELD)
+    return entry if isinstance(entry, Mapping) else None
+
+
+def chosen_runs(results: Sequence[dict[str, Any]], origins: Sequence[str]) -> dict[tuple[str, str], tuple[dict[str, Any], str]]:
+    """``{(variant, label): (run, directory)}``: each row's run of the lowest seed that kept an agent,
+    and the directory (as given) it was read from (``origins``, one per result:
+    :attr:`leaderboard.sources.ResultSet.origins`); rows whose runs kept none are left out. Rows
+    are in the tables' order (:func:`leaderboard.aggregate.group_runs`)."""
+    if len(origins) != len(results):
+        raise ValueError(f"{len(origins)} origins for {len(results)} results")
+    origin_of = {id(run): origin for run, origin in zip(results, origins)}
+    chosen = {}
+    for row, runs in group_runs(results).items():
+        kept = [run for run in runs if _kept_agent(run) is not None]
+        if kept:
+            run = min(kept, key=lambda run: run["seed"])
+            chosen[row] = (run, origin_of[id(run)])
+    return chosen
+
+
+def _runs_root(directory: str) -> Path:
+    """Where ``directory``'s result files are (its ``runs/`` if it has one, as the leaderboard reads it)."""
+    root = Path(directory)
+    return root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
+
+
+def trained_world(run: Mapping[str, Any]) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
+    """``(env, env_kwargs, fixed)`` the run trained in, from its result file's ``config``: the
+    fixed partners' policy labels read back as policy entries."""
+    config = run["config"]
+    fixed = {
+        agent: parse_entry_label(entry) if isinstance(entry, str) else policy_entry(entry)
+        for agent, entry in dict(config.get("fixed") or {}).items()
+    }
+    return str(config["env"]), dict(config.get("env_kwargs") or {}), fixed
+
+
+# ---------------------------------------------------------------------------- playing
+def play_row_episodes(
+    results: Sequence[dict[str, Any]],
+    out_dir: str | Path,
+    origins: Sequence[str],
+    figures_dir: str = "figures",
+) -> tuple[list[RowEpisode], list[str]]:
+    """Play and write every row's greedy episode (see the module page) into ``out_dir / figures_dir``;
+    returns the episodes and notes on rows left out (an agent file that is missing, or needs a
+    library not installed). An agent file whose SHA-256 is not the one its result file records
+    raises ``ValueError`` naming both files."""
+    chosen = chosen_runs(results, origins)
+    slugs = episode_slugs(list(chosen))
+    folder = Path(out_dir) / figures_dir
+    episodes: list[RowEpisode] = []
+    notes: list[str] = []
+    for (env, label), (run, origin) in chosen.items():
+        root = _runs_root(origin)
+        entry = _kept_agent(run)
+        assert entry is not None
+        result_file = root / f"{check_path_name(run['run_id'], 'run id')}.json"
+        agent_file = confined(root, str(entry["file"]))
+        if not agent_file.is_file():
+            notes.append(
+                f"{label} ({env}): agent file {agent_file}, named by result file {result_file}, is missing; no episode shown"
+            )
+            continue
+        try:
+            agent = load_agent(agent_file, str(entry["sha256"]), result_file=result_file)
+        except ImportError as error:
+            notes.append(f"{label} ({env}): {error}; no episode shown")
+            continue
+        world_env, env_kwargs, fixed = trained_world(run)
+        gif = episode_gif(
+            agent,
+            confined(folder, episode_file_name(env, slugs[env, label])),
+            env=world_env,
+            env_kwargs=env_kwargs,
+            fixed=fixed,
+            seed=EPISODE_SEED,
+            max_steps=EPISODE_STEPS,
+            title=label,
+        )
+        episodes.append(
+            RowEpisode(env, label, slugs[env, label], str(run["run_id"]), int(run["seed"]), result_file, agent_file, gif)
+        )
+    return episodes, notes
+
+
+# ---------------------------------------------------------------------------- the section
+def _intro() -> str:
+    return (
+        "One greedy episode per row: the trained agent of the row's lowest seed (kept beside its result file, "
+        "checked against the SHA-256 the result file records), in the world it trained in (its environment, "
+        f"arguments and fixed partners), reset with seed {EPISODE_SEED} and shown for at most {EPISODE_STEPS} steps; "
+        "beside the grid, the step, the robot's action, a legend and the episode's metrics so far. One episode "
+        "illustrates what a robot does and measures nothing (the tables above do); "
+        "`empathy-zoo watch <run id> --dir <results dir>` plays more."
+    )
+
+
+def _value(name: str, value: float) -> str:
+    return f"{value:.2f}" if name == "equality" else f"{value:g}"
+
+
+def _steps_text(episode: RowEpisode) -> str:
+    outcome = episode.gif.outcome
+    return f"{outcome.steps}, episode over" if outcome.ended else f"first {outcome.steps}"
+
+
+def _table(episodes: Sequence[RowEpisode], metrics: Sequence[str]) -> tuple[list[str], list[list[str]]]:
+    header = ["Method", "Run", "Steps shown", *metrics]
+    rows = [
+        [
+            episode.label,
+            f"{episode.run_id} (seed {episode.run_seed})",
+            _steps_text(episode),
+            *(_value(name, episode.gif.outcome.metrics[name]) for name in metrics),
+        ]
+        for episode in episodes
+    ]
+    return header, rows
+
+
+def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    head = "".join(f"<th>{html.escape(cell, quote=False)}</th>" for cell in header)
+    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell, quote=False)}</td>" for cell in row) + "</tr>" for row in rows)
+    return f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
+
+
+def _alt(episode: RowEpisode) -> str:
+    return f"{episode.label}: a greedy episode of {episode.run_id}"
+
+
+def _md_alt(text: str) -> str:
+    return text.replace("\\", "\\\\").replace("[", "\\[").replace("]", "\\]")
+
+
+def episodes_section(
+    results: Sequence[dict[str, Any]],
+    out_dir: str | Path,
+    origins: Sequence[str],
+    figures_dir: str = "figures",
+) -> EpisodeSection | None:
+    """The "Greedy episodes" section of ``results`` (``origins``: the directory each was read
+    from), its GIFs written into ``out_dir / figures_dir`` and linked relative to ``out_dir``;
+    ``None`` when no run kept an agent."""
+    episodes, notes = play_row_episodes(results, out_dir, origins, figures_dir)
+    if not episodes and not notes:
+        return None
+    out = Path(out_dir)
+    base_env = {table_env(run): str(run["env"]) for run in results}
+    markdown = ["", f"## {SECTION_TITLE}", "", _intro()]
+    page = [f"<h2>{SECTION_TITLE}</h2>", f'<p class="note">{_html_code(_intro())}</p>']
+    figures: dict[str, Path] = {}
+    for env in dict.fromkeys(episode.env for episode in episodes):
+        mine = [episode for episode in episodes if episode.env == env]
+        header, rows = _table(mine, env_metrics(env, base_env, METRIC_NAMES))
+        markdown += ["", f"### {env}", "", markdown_table(header, rows)]
+        page += [f"<h3>{html.escape(env)}</h3>", _html_table(header, rows)]
+        for episode in mine:
+            path = episode.gif.path
+            figures[f"figure:{env}:episode_{episode.slug}"] = path
+            link = path.relative_to(out).as_posix()
+            markdown += ["", f"![{_md_alt(_alt(episode))}]({link})"]
+            data = base64.b64encode(path.read_bytes()).decode("ascii")
+            page.append(f"<h4>{html.escape(episode.label)}</h4>")
+            page.append(f'<img alt="{html.escape(_alt(episode))}" src="data:image/gif;base64,{data}">')
+    for note in notes:
+        markdown += ["", f"Note: {note}"]
+        page.append(f'<p class="note">Note: {html.escape(note)}</p>')
+    return EpisodeSection("\n".join(markdown) + "\n", "\n".join(page) + "\n", figures, episodes)
+
+
+def _html_code(text: str) -> str:
+    """``text``'s `code spans` as ``<code>``, escaped."""
+    pieces = text.split("`")
+    return "".join(
+        f"<code>{html.escape(p, quote=False)}</code>" if i % 2 else html.escape(p, quote=False) for i, p in enumerate(pieces)
+    )
+
+
+def add_episodes_section(
+    results: Sequence[dict[str, Any]],
+    out_dir: str | Path,
+    markdown: str,
+    html_page: str,
+    origins: Sequence[str],
+) -> tuple[str, str, dict[str, Path]]:
+    """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Greedy episodes" section
+    placed before their metric definitions (after any section placed there before), and the GIFs
+    written; the pages unchanged and nothing written when no run kept an agent. ``origins``: the
+    directory each result was read from (:attr:`leaderboard.sources.ResultSet.origins`)."""
+    section = episodes_section(results, out_dir, origins)
+    if section is None:
+        return markdown, html_page, {}
+    if MARKDOWN_ANCHOR in markdown:
+        before, after = markdown.split(MARKDOWN_ANCHOR, 1)
+        markdown = before.rstrip("\n") + "\n" + section.markdown + MARKDOWN_ANCHOR + after
+    else:
+        markdown = markdown.rstrip("\n") + "\n" + section.markdown
+    anchor = HTML_ANCHOR if HTML_ANCHOR in html_page else "</body>"
+    if anchor in html_page:
+        before, after = html_page.split(anchor, 1)
+        html_page = before + section.html + anchor + after
+    else:
+        html_page += section.html
+    return markdown, html_page, section.figures
