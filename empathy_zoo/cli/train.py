@@ -210,7 +210,9 @@ def add_train(sub: Any, method: str) -> None:
 def _add_env_arguments(parser: argparse.ArgumentParser) -> None:
     """One option per environment argument, as the environments declare them (their help, their
     defaults, and which environments take them)."""
-    group = parser.add_argument_group("environment arguments", "each environment takes its own (empathy-zoo envs)")
+    group = parser.add_argument_group(
+        "environment arguments", "each environment takes its own (its page: help(empathy_zoo.<env name>))"
+    )
     takers: dict[str, list[str]] = {}
     for name, engine in ENGINES.items():
         for argument in argument_types(engine):
