@@ -60,6 +60,14 @@ class Learner(Protocol):
     def memory_bytes_per_run(self) -> int:
         """Bytes each run holds (replay and networks)."""
 
+    @classmethod
+    def check_memory(cls, settings: Sequence[Any], obs_size: int, num_actions: int, device: str, *, num_others: int) -> None:
+        """Optional: raise ``ValueError`` (stating how much is needed and how much there is) when
+        ``K = len(settings)`` runs would not fit in the memory of ``device``, from the settings
+        alone, before anything is allocated (see :func:`empathy_zoo.limits.check_memory`). The
+        trainer asks it for every ensemble of a sweep before the first one trains (without it,
+        memory is not checked up front)."""
+
     def replay_bytes_per_run(self) -> int:
         """Optional: the part of :meth:`memory_bytes_per_run` that is each run's replay memory, as
         the result file's ``memory.replay_per_run`` reports it (0 without this method)."""

@@ -28,6 +28,7 @@ nothing else: each has its own seed, replay memory, ε stream and target copies.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,11 +39,13 @@ from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
+from empathy_zoo.limits import check_memory, format_bytes
 from empathy_zoo.randomness import STREAMS, counter_integers, counter_uniform, derive_key
 from empathy_zoo.schedules import linear_epsilon
 
 __all__ = [
     "EmpathicDQN",
+    "MemoryEstimate",
     "double_dqn_target",
     "continuation_value",
     "empathic_targets",
@@ -147,11 +150,63 @@ def other_term(
     return torch.where(anyone, least, torch.zeros_like(least))
 
 
+@dataclass(frozen=True)
+class MemoryEstimate:
+    """The memory an ensemble of Empathic DQN will hold, computed from its settings before anything
+    is allocated (:meth:`EmpathicDQN.memory_needed`)."""
+
+    per_run: int
+    """Bytes each run holds, as the built learner reports them (:meth:`EmpathicDQN.memory_bytes_per_run`)."""
+    replay_per_run: int
+    """The part of :attr:`per_run` that is its replay memory (:meth:`EmpathicDQN.replay_bytes_per_run`)."""
+    total: int
+    """Bytes the whole ensemble needs at its peak: every run's memory, its gradients, and one
+    gradient step's batch (decoded observations and activations)."""
+
+
 class EmpathicDQN:
     """``K`` runs of Empathic DQN in lockstep (the runs may differ in seed and β; each trains on
     ``StepBatch.rewards``, whatever reward transform its method composes)."""
 
     settings_class = EmpathicDQNSettings
+
+    @classmethod
+    def memory_needed(
+        cls, settings: Sequence[EmpathicDQNSettings], obs_size: int, num_actions: int = 5, *, num_others: int = 1
+    ) -> MemoryEstimate:
+        """The memory ``K = len(settings)`` runs of this learner will need (see :class:`MemoryEstimate`),
+        from the settings alone: the replay memories (one-byte codes, :mod:`agents.replay`), the
+        networks ``Q``, ``Q̂`` and, for the runs that have one, ``Q_emp`` (float32), and Adam's two
+        moments. The constructor refuses, before allocating anything, an ensemble that would not fit."""
+        config, k = settings[0], len(settings)
+        overridden = cls.targets is not EmpathicDQN.targets
+        empathic = sum(overridden or s.selfishness < 1.0 for s in settings)
+        others = num_others if config.others != "closest" and num_others > 1 else 1
+        replay = config.replay_capacity * ((2 + others) * obs_size + (2 + others) + 4)
+        sizes = [obs_size, config.hidden_size, config.hidden_size, num_actions]
+        network = 4 * sum(fan_in * fan_out + fan_out for fan_in, fan_out in zip(sizes[:-1], sizes[1:]))
+        per_run = replay + 3 * (network * (2 if empathic else 1) + network)
+        online = k + empathic
+        batch = online * config.batch_size * 4 * ((3 + others) * obs_size + 4 * config.hidden_size + 2 * num_actions) * 2
+        return MemoryEstimate(per_run, replay, k * per_run + 2 * online * network + batch)
+
+    @classmethod
+    def check_memory(
+        cls, settings: Sequence[EmpathicDQNSettings], obs_size: int, num_actions: int, device: str, *, num_others: int = 1
+    ) -> None:
+        """Refuse (``ValueError``, with the figures) ``len(settings)`` runs that would need more
+        memory than ``device`` has available (:meth:`memory_needed`,
+        :func:`empathy_zoo.limits.check_memory`); the constructor asks first, the trainer asks for
+        every ensemble of a sweep before the first one trains."""
+        needed = cls.memory_needed(settings, obs_size, num_actions, num_others=num_others)
+        first = settings[0]
+        check_memory(
+            needed.total,
+            str(torch.device(device)),
+            f"{len(settings)} run(s) of {cls.__name__} with replay_capacity={first.replay_capacity:,}, "
+            f"hidden_size={first.hidden_size:,} and batch_size={first.batch_size:,} ({format_bytes(needed.per_run)} per run)",
+            "lower replay_capacity or hidden_size, or train fewer runs at once (--max-parallel-runs)",
+        )
 
     def __init__(
         self,
@@ -168,6 +223,7 @@ class EmpathicDQN:
         shared = {s.shared() for s in settings}
         if len(shared) != 1:
             raise ValueError("runs of one ensemble may differ only in seed and selfishness")
+        type(self).check_memory(settings, obs_size, num_actions, device, num_others=num_others)  # before allocating
         self.settings = list(settings)
         self.config = settings[0]
         self.seeds = [int(s) for s in seeds]

@@ -32,6 +32,7 @@ reward, termination, truncation), never the metrics.
 from __future__ import annotations
 
 import copy
+import inspect
 import json
 import math
 import random
@@ -126,6 +127,7 @@ class SB3Settings:
         clash = sorted(_FIELD_KWARGS & set(self.algorithm_kwargs))
         if clash:
             raise ValueError(f"algorithm_kwargs may not set {clash}: they are settings fields or set by the suite")
+        _check_algorithm_kwargs(self.algorithm, self.algorithm_kwargs)
         object.__setattr__(self, "algorithm_kwargs", dict(self.algorithm_kwargs))
 
     def model_kwargs(self) -> dict[str, Any]:
@@ -141,6 +143,29 @@ class SB3Settings:
     def shared(self) -> tuple:
         """Runs of one ensemble share every setting (each run is its own SB3 model anyway)."""
         return tuple(json.dumps(getattr(self, f.name), sort_keys=True, default=str) for f in fields(self))
+
+
+def _check_algorithm_kwargs(algorithm: str, kwargs: Mapping[str, Any]) -> None:
+    """Refuse (``ValueError``) a key of ``kwargs`` that the SB3 class of ``algorithm`` does not take,
+    read from its signature, so a sweep naming one is refused when it loads, not when its ensemble
+    starts. Without Stable-Baselines3 installed there is no signature to read (and no learner can be
+    built: building one says how to install it)."""
+    try:
+        sb3 = _sb3()
+    except ImportError:
+        return
+    cls = {"dqn": sb3.DQN, "ppo": sb3.PPO}[algorithm]
+    parameters = inspect.signature(cls.__init__).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
+        return
+    taken = [name for name in parameters if name != "self" and not name.startswith("_") and name not in _FIELD_KWARGS]
+    unknown = sorted(set(kwargs) - set(taken))
+    if unknown:
+        raise ValueError(
+            f"algorithm_kwargs: {', '.join(map(repr, unknown))} is no keyword argument of stable_baselines3.{cls.__name__} "
+            f"{sb3.__version__}; {cls.__name__} takes {', '.join(taken)} (learning_rate, gamma and batch_size are "
+            "settings of their own)"
+        )
 
 
 def _sb3() -> Any:

@@ -1,7 +1,8 @@
 """Atomic file writes: a reader (or a crash) never sees a half-written results file.
 
 :func:`check_output_dir` is asked before any long work starts: it refuses an output directory
-that is a file, cannot be created or cannot be written, so no training is lost at the first write.
+that is a file, cannot be created or cannot be written (as much as a result file and its agent file
+take: a full disk too), so no training is lost at the first write.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
+
+from empathy_zoo.names import check_no_links
 
 __all__ = [
     "write_bytes_atomic",
@@ -28,7 +31,11 @@ __all__ = [
 TEMP_SUFFIX = ".tmp"
 """Name suffix of the temporary file of an atomic write in progress (its name starts with ``.``)."""
 PROBE_PREFIX = ".write-probe-"
-"""Name prefix of the empty file :func:`check_output_dir` writes (atomically) and removes."""
+"""Name prefix of the file :func:`check_output_dir` writes (atomically) and removes."""
+PROBE_BYTES = 256 * 1024
+"""Bytes :func:`check_output_dir` writes to each directory: as much as a run's result file and its
+agent file take (≈ 200 KB at the paper's settings), so a full disk is found before training, not
+after it."""
 _OURS = re.compile(rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^{re.escape(PROBE_PREFIX)}(?P<prober>\d+))$")
 """The end of a temporary file name this module writes, with the writer's process id."""
 
@@ -86,16 +93,19 @@ def read_json(path: str | os.PathLike[str]) -> Any:
     path = Path(path)
     try:
         return json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ValueError(f"{path} is corrupted ({error}); move it away to redo that run") from error
+    except (ValueError, RecursionError) as error:  # (bad JSON or UTF-8, an int of over 4,300 digits, nesting past the stack)
+        why = f"{type(error).__name__}: {str(error)[:200]}"
+        raise ValueError(f"{path} is corrupted ({why}); move it away to redo that run") from error
 
 
 def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()) -> Path:
-    """``path`` (and ``path / sub`` for every name in ``subdirs``), created if missing, once an empty
-    file was written there atomically and removed again; a ``ValueError`` naming the directory
-    and the reason when it is a file, cannot be created or cannot be written."""
+    """``path`` (and ``path / sub`` for every name in ``subdirs``), created if missing, once a file of
+    :data:`PROBE_BYTES` was written there atomically and removed again; a ``ValueError`` naming the directory
+    and the reason when it is a file, cannot be created or cannot be written, or naming the link
+    when a ``sub`` is (or passes through) a symbolic link (:func:`empathy_zoo.names.check_no_links`)."""
     root = Path(path)
     for directory in (root, *(root / sub for sub in subdirs)):
+        check_no_links(root, directory)  # (the output directory itself may be a link; nothing below it)
         if directory.exists() and not directory.is_dir():
             raise ValueError(
                 f"output directory {directory} is a file, not a directory; "
@@ -109,7 +119,7 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
             ) from None
         probe = directory / f"{PROBE_PREFIX}{os.getpid()}"
         try:
-            write_bytes_atomic(probe, b"")
+            write_bytes_atomic(probe, bytes(PROBE_BYTES))
             probe.unlink()
         except OSError as error:
             raise ValueError(

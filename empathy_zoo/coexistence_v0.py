@@ -63,7 +63,8 @@ agent index (SPEC §3b): one harmed in the step is the one swapped with.
 ## Arguments
 `coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, num_cats=1)`
 * `size`: side of the torus (≥ 5, so that "above" is never ambiguous; at most 255: the lookup
-  tables take about `600 + 8·view²` bytes per cell, 50 MB at size 255 with view 5; see docs/limits.md).
+  tables take at most `600 + 24·view + 8·view²` bytes per cell, 57 MB at size 255 with view 5; see
+  docs/limits.md).
 * `view`: side of the observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
 * `render_mode`: `None`, `"ansi"` (text grid: `R` robot, `C` cat, `*` several agents) or `"rgb_array"`.

@@ -251,7 +251,7 @@ def episode_gif(
 
     ``env`` (with ``env_kwargs``) replaces the agent's own environment (its ``describe()``'s, with
     the fixed agents it recorded); ``fixed`` replaces some of the other agents' policies either way.
-    ``title`` heads the panel (default: the agent's method)."""
+    ``title`` heads the panel (default: the run's label, as its tables show it, else its method)."""
     description = agent.describe()
     if env is None:
         if env_kwargs is not None:
@@ -261,7 +261,8 @@ def episode_gif(
     else:
         environment = watch_env(env, env_kwargs, fixed, render_mode="rgb_array")
         name = env
-    recorder = EpisodeRecorder(title or str(description.get("method", "trained agent")), f"{name} · seed {seed}", max_steps)
+    default = description.get("label") or description.get("method") or "trained agent"
+    recorder = EpisodeRecorder(title or str(default), f"{name} · seed {seed}", max_steps)
     outcome = play_greedy(agent, environment, seed, max_steps=max_steps, on_step=recorder)
     data = recorder.gif()
     written = write_bytes_atomic(path, data)

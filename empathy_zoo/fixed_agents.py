@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import copy
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -12,15 +13,49 @@ from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from empathy_zoo.actions import check_joint_action
 from empathy_zoo.engine.base import GridEngine
-from empathy_zoo.policies import FixedPolicy, PolicyEntry, checked_policy_action, make_policy, policy_context
+from empathy_zoo.policies import (
+    FixedPolicy,
+    PolicyEntry,
+    checked_policy_action,
+    make_policy,
+    policy_context,
+    unsaved_policy,
+)
 from empathy_zoo.randomness import STREAMS, derive_key
 
-__all__ = ["FixedAgents", "policy_seed"]
+__all__ = ["FixedAgents", "policy_seed", "undo_point"]
 
 
 def policy_seed(env_seed: int, agent_index: int) -> int:
     """The seed a fixed agent gets when its environment is reset with ``env_seed``."""
     return derive_key(env_seed, STREAMS["fixed_agent"] + agent_index)
+
+
+def undo_point(policy: Any) -> Callable[[], None]:
+    """A function that puts ``policy`` (per-environment or batched) back as it is now: a copy of
+    its own ``state()``, given back with ``load_state``; nothing for one that declares
+    ``stateless = True``; a deep copy of its attributes for one that saves no state. A step
+    takes one of every fixed policy before any acts, so a step refused because one chose an
+    invalid action leaves every policy's stream where it was."""
+    if getattr(policy, "stateless", False) is True:
+        return lambda: None
+    if unsaved_policy(policy) is None:
+        saved = policy.state()
+        try:
+            saved = copy.deepcopy(saved)  # (a state may share its arrays with the policy)
+        except Exception:  # noqa: BLE001 - a state that cannot be copied is given back as it was taken
+            pass
+        return lambda: policy.load_state(saved)
+    try:
+        attributes = copy.deepcopy(vars(policy))
+    except Exception:  # noqa: BLE001 - no attributes to copy (slots), or ones that cannot be copied
+        return lambda: None
+
+    def restore() -> None:
+        vars(policy).clear()
+        vars(policy).update(attributes)
+
+    return restore
 
 
 class FixedAgents(BaseParallelWrapper, EzPickle):
@@ -69,7 +104,8 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
 
     def step(self, actions: Mapping[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         """Step with the learners' ``actions``; they are checked before any fixed agent acts, so
-        a bad one raises ``ValueError`` and changes nothing."""
+        a bad one raises ``ValueError`` and changes nothing. So does a fixed policy's invalid
+        action: every fixed policy is put back as it was before the step (:func:`undo_point`)."""
         if isinstance(actions, Mapping):
             for agent in actions:
                 if agent in self.policies:
@@ -77,15 +113,21 @@ class FixedAgents(BaseParallelWrapper, EzPickle):
         if not self.env.agents:
             raise RuntimeError("step() called with no live agents; call reset() first")
         merged: dict[str, Any] = check_joint_action(actions, self.agents, self.possible_agents, self._num_actions)
-        for agent in self.env.agents:
-            if agent in self.policies:
+        acting = [agent for agent in self.env.agents if agent in self.policies]
+        undo = [undo_point(self.policies[agent]) for agent in acting]
+        try:  # every fixed agent's action is chosen and checked before the environment moves
+            for agent in acting:
                 observation, info = self._last[agent]
                 policy = self.policies[agent]
                 context = policy_context(
                     self._engine, 0, self._fixed_index[agent], info, bool(getattr(policy, "needs_state", False))
                 )
                 merged[agent] = checked_policy_action(policy, agent, policy.act(observation, context), self._num_actions)
-        observations, rewards, terminations, truncations, infos = self.env.step(merged)
+            observations, rewards, terminations, truncations, infos = self.env.step(merged)
+        except BaseException:
+            for restore in undo:  # (an earlier policy's stream has moved: put it back)
+                restore()
+            raise
         self._remember(observations, infos)
         self.agents = [agent for agent in self.env.agents if agent not in self.policies]
         learners = self._learners

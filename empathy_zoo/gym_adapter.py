@@ -41,7 +41,7 @@ the reward.
   `None` = the paper's (`empathy_zoo.environments.DEFAULT_POLICIES`). Exactly one agent must be left.
 * `size`, `view`, `max_cycles`, `render_mode`: as for the PettingZoo env.
 * `env_options`: the environment's own arguments, passed on to its PettingZoo env (Sharing:
-  `start`, `inventory_encoding`); any other keyword raises `TypeError`.
+  `start`, `inventory_encoding`); any other keyword raises `UnknownArgumentError` (a `ValueError` and a `TypeError`).
 """
 
 from __future__ import annotations

@@ -1,20 +1,36 @@
-"""Names that become parts of file paths (environment variants, run ids), and paths kept inside
-the directory they belong to: a name read from a file or a sweep can never point elsewhere."""
+"""Names that become parts of file paths (environment variants, run ids), labels that become table
+rows, and paths kept inside the directory they belong to: a name read from a file or a sweep can
+never point elsewhere, and a label the result-file reader accepts is exactly one a run may be built
+with (:func:`check_label`, the one rule both apply)."""
 
 from __future__ import annotations
 
 import os
 import re
+import unicodedata
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PATH_NAME", "check_path_name", "confined"]
+from empathy_zoo.limits import MAX_LABEL, MAX_NAME
+
+__all__ = [
+    "LABEL_REFUSED_CATEGORIES",
+    "MAX_LABEL",
+    "MAX_NAME",
+    "PATH_NAME",
+    "check_label",
+    "check_no_links",
+    "check_path_name",
+    "confined",
+]
 
 PATH_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 """What a name used in a file name may look like: letters, digits, ``_``, ``-`` and ``.``,
 starting with a letter or a digit (so never ``..``, a hidden name, a separator or an absolute path)."""
-MAX_NAME = 200
-"""Longest such name, in characters (file names are at most 255 bytes on common file systems)."""
+LABEL_REFUSED_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
+"""Unicode categories a label may not hold: control characters (a newline, a tab, an escape), format
+characters (a right-to-left override, a zero-width joiner), lone surrogates, and line and paragraph
+separators: each would break a table row, a line of the report or the file's one-line fields."""
 
 
 def check_path_name(value: Any, what: str) -> str:
@@ -28,10 +44,54 @@ def check_path_name(value: Any, what: str) -> str:
     return value
 
 
+def check_label(value: Any, what: str) -> str:
+    """``value`` if it may be a label (a table row's name): a non-empty string of at most
+    :data:`~empathy_zoo.limits.MAX_LABEL` characters, none of them of :data:`LABEL_REFUSED_CATEGORIES`;
+    else a ``ValueError`` naming ``what`` it is and the first character refused. The writer (a run's
+    label, when it is built) and the reader (a result file's) apply this same rule."""
+    if not isinstance(value, str) or not value:
+        raise ValueError(f"{what} must be a non-empty string, got {value!r}")
+    if len(value) > MAX_LABEL:
+        raise ValueError(f"{what} must be at most {MAX_LABEL} characters, got {len(value):,} ({value[:40]!r}...)")
+    for position, character in enumerate(value):
+        category = unicodedata.category(character)
+        if category in LABEL_REFUSED_CATEGORIES:
+            name = unicodedata.name(character, f"U+{ord(character):04X}")
+            raise ValueError(
+                f"{what} {value[:60]!r} holds {name} ({category}) at position {position}: a label is one line of "
+                "printable text (no control or format characters, no line breaks)"
+            )
+    return value
+
+
 def confined(root: str | os.PathLike[str], *parts: str) -> Path:
-    """``root / parts…``, or a ``ValueError`` when that path would lie outside ``root``."""
+    """``root / parts…``, or a ``ValueError`` when that path would lie outside ``root`` or pass
+    through a symbolic link below it (:func:`check_no_links`)."""
     base = Path(root)
     path = base.joinpath(*parts)
     if not path.resolve().is_relative_to(base.resolve()):
         raise ValueError(f"{path} lies outside {base}; refusing to write there")
-    return path
+    return check_no_links(base, path)
+
+
+def check_no_links(root: str | os.PathLike[str], path: str | os.PathLike[str]) -> Path:
+    """``path`` if none of its components below ``root`` is a symbolic link (``root`` itself may be
+    one: whoever named it chose it), else a ``ValueError`` naming the link and its target: nothing
+    is written through a link inside an output directory. ``path`` must lie below ``root``."""
+    base, target = Path(root), Path(path)
+    try:
+        parts = target.relative_to(base).parts
+    except ValueError:
+        raise ValueError(f"{target} lies outside {base}; refusing to write there") from None
+    current = base
+    for part in parts:
+        if part == "..":
+            raise ValueError(f"{target} leaves {base} ('..'); refusing to write there")
+        current = current / part
+        if current.is_symlink():
+            raise ValueError(
+                f"{current} is a symbolic link (to {os.readlink(current)}) inside the output directory {base}: "
+                "refusing to write through it; remove the link (a real directory is created in its place) "
+                "or choose another output directory"
+            )
+    return target

@@ -34,8 +34,9 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None, **env_options: Any
     ) -> None:
         """``env_options``: the environment's own arguments (``engine_class.extra_arguments``, and
-        its ``count_argument``: how many other agents); any other keyword raises ``TypeError``
-        naming it."""
+        its ``count_argument``: how many other agents); any other keyword raises
+        :class:`~empathy_zoo.engine.arguments.UnknownArgumentError` (a ``ValueError`` and a
+        ``TypeError``) naming it."""
         EzPickle.__init__(self, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
         check_env_arguments(self.engine_class, env_options)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -199,11 +200,19 @@ def env_constructors(raw: type[GridParallelEnv]) -> tuple[Callable[..., GridPara
     name = raw.metadata["name"]
 
     def parallel_env(**kwargs: Any) -> GridParallelEnv:
-        return raw(**kwargs)
+        return raw(**_known_arguments(raw, kwargs))
 
     def env(**kwargs: Any) -> AECEnv:
-        return GridAECEnv(raw(**kwargs))
+        return GridAECEnv(raw(**_known_arguments(raw, kwargs)))
 
     parallel_env.__doc__ = f"``{name}`` with the parallel API (keyword arguments: see the module documentation)."
     env.__doc__ = f"``{name}`` with the AEC API (:class:`GridAECEnv`: ``parallel_to_aec`` over ``parallel_env``)."
     return parallel_env, env
+
+
+def _known_arguments(raw: type[GridParallelEnv], kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``kwargs`` if ``raw`` takes every one (``render_mode`` and its environment's arguments),
+    else :class:`~empathy_zoo.engine.arguments.UnknownArgumentError` naming those it does not
+    (before Python's own ``TypeError`` of an unexpected keyword could)."""
+    check_env_arguments(raw.engine_class, {key: value for key, value in kwargs.items() if key != "render_mode"})
+    return kwargs

@@ -26,11 +26,12 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.engine.arguments import GRID_ARGUMENTS
+from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
+from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED, MAX_STEPS
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_path_name
+from empathy_zoo.names import check_label, check_path_name
 
 __all__ = [
     "AGENT_SUFFIXES",
@@ -94,9 +95,9 @@ class _Checker:
                 "the file is damaged or not a result of this suite: move it away"
             )
 
-    def integer(self, value: Any, field: str, low: int) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise self.fail(field, f"an int >= {low}", value)
+    def integer(self, value: Any, field: str, low: int, high: int | None = None) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low or (high is not None and value > high):
+            raise self.fail(field, f"an int >= {low}" + ("" if high is None else f" and <= {high:,}"), value)
         return value
 
     def positive(self, value: Any, field: str) -> int:
@@ -111,6 +112,15 @@ class _Checker:
         if not isinstance(value, str) or not value or "\n" in value:
             raise self.fail(field, "a non-empty one-line string", value)
         return value
+
+    def label(self, value: Any, field: str) -> str:
+        expected = "a non-empty one-line string, a label as a run is built with"
+        if not isinstance(value, str) or not value:
+            raise self.fail(field, expected, value)
+        try:
+            return check_label(value, "the label")
+        except ValueError as error:
+            raise self.fail(field, f"{expected} ({error})", value) from None
 
     def name(self, value: Any, field: str) -> str:
         try:
@@ -147,9 +157,9 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     if result.get("variant") is not None:
         check.name(result["variant"], "variant")
     check.text(result["method"], "method")
-    check.text(result["method_label"], "method_label")
-    check.integer(result["seed"], "seed", 0)
-    steps = check.integer(result["steps"], "steps", 1)
+    check.label(result["method_label"], "method_label")
+    check.integer(result["seed"], "seed", 0, MAX_SEED)
+    steps = check.integer(result["steps"], "steps", 1, MAX_STEPS)
     _check_config(check, result)
     _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": check.number})
     if result.get("commit") is not None:
@@ -207,13 +217,22 @@ def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]
     """A schema-1 result as schema 2 (:func:`upgrade_schema_2` takes it on to 3): the settings
     ``harm_penalty`` and ``equality_shaping`` become ``config.reward`` (``{"name": "harm_penalty",
     "penalty": p}``, ``{"name": "equality_scaling"}`` or ``None``), as the method's reward transform
-    records it now. The run id stays as written."""
+    records it now; a penalty that is no finite number or a shaping that is no boolean raises
+    :class:`ResultFileError` (never read as "no shaping"). The run id stays as written."""
     config = result.get("config")
     if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
         return {**result, "schema": 2}  # (the checks that follow say what is wrong)
     settings = dict(config["settings"])
     shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
     penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
+    if isinstance(penalty, bool) or not isinstance(penalty, (int, float)) or not math.isfinite(penalty):
+        raise ResultFileError(
+            f"{path}: field config.settings.harm_penalty: a finite number, got {penalty!r}; move the file away"
+        )
+    if not isinstance(scaled, bool):
+        raise ResultFileError(
+            f"{path}: field config.settings.equality_shaping: true or false, got {scaled!r}; move the file away"
+        )
     if penalty != 0.0 and scaled is True:
         raise ResultFileError(
             f"{path}: field config.settings: a schema-1 run with both a harm penalty and equality "
@@ -325,13 +344,15 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
         assert engine is not None
         field = f"config.env_kwargs.{name}"
         if name in GRID_ARGUMENTS or name == engine.count_argument:
-            check.positive(value, field)
+            check.integer(value, field, 1, MAX_CYCLES)
         elif name in engine.extra_arguments:
             if value not in engine.extra_arguments[name]:
                 raise check.fail(field, f"one of {', '.join(engine.extra_arguments[name])}", value)
         else:
             known = (*GRID_ARGUMENTS, *engine.extra_arguments, *filter(None, [engine.count_argument]))
             raise check.fail(field, f"an argument of {result['env']} ({', '.join(known)})", name)
+    if engine is not None:
+        _check_grid(check, engine, env_kwargs)
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.text(policy, f"config.fixed.{agent}")
     _check_optional(
@@ -341,11 +362,11 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
         {
             "env": check.name,
             "method": check.text,
-            "label": check.text,
-            "seed": lambda v, f: check.integer(v, f, 0),
-            "steps": check.positive,
-            "eval_interval": check.positive,
-            "eval_episodes": check.positive,
+            "label": check.label,
+            "seed": lambda v, f: check.integer(v, f, 0, MAX_SEED),
+            "steps": lambda v, f: check.integer(v, f, 1, MAX_STEPS),
+            "eval_interval": lambda v, f: check.integer(v, f, 1, MAX_STEPS),
+            "eval_episodes": lambda v, f: check.integer(v, f, 1, MAX_EVAL_EPISODES),
         },
     )
     if config.get("variant") is not None:
@@ -366,6 +387,21 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
         raise check.fail(
             "config.description" + ("" if error.field.startswith("(") else f".{error.field}"), error.expected, error.value
         ) from None
+
+
+def _check_grid(check: _Checker, engine: Any, env_kwargs: Mapping[str, Any]) -> None:
+    """The grid arguments of ``env_kwargs`` (each an int already) within what the environment
+    builds (:func:`~empathy_zoo.engine.arguments.check_grid_arguments`: a size of at most
+    :data:`~empathy_zoo.limits.MAX_SIZE`, an odd view below it, lookup tables within their bound),
+    and as many other agents as the grid holds; checked as numbers, nothing is built."""
+    grid = {**{name: argument_defaults(engine)[name] for name in GRID_ARGUMENTS}, **env_kwargs}
+    try:
+        check_grid_arguments(grid["size"], grid["view"], grid["max_cycles"], engine.min_size)
+    except ValueError as error:
+        raise check.fail("config.env_kwargs", f"arguments {engine.name} is built with ({error})", dict(env_kwargs)) from None
+    count = engine.count_argument
+    if count is not None and count in env_kwargs and env_kwargs[count] > grid["size"] ** 2:
+        raise check.fail(f"config.env_kwargs.{count}", f"at most {grid['size'] ** 2} (the cells of the grid)", env_kwargs[count])
 
 
 RUNS_DIR = "runs"

@@ -55,8 +55,8 @@ agent index (SPEC §3b): one harmed in the step is the one swapped with.
 ## Arguments
 `sharing_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, start="random",
 inventory_encoding="count_plus_one", num_humans=1)`
-* `size`: side of the torus (≥ 3, at most 255: the lookup tables take about `600 + 8·view²` bytes
-  per cell, 50 MB at size 255 with view 5, and every environment keeps 5 bytes per cell for its
+* `size`: side of the torus (≥ 3, at most 255: the lookup tables take at most `600 + 24·view + 8·view²`
+  bytes per cell, 57 MB at size 255 with view 5, and every environment keeps 5 bytes per cell for its
   batteries; see docs/limits.md). `view`: observation window (odd, < `size`).
 * `max_cycles`: steps before truncation.
 * `render_mode`: `None`, `"ansi"` (`R` robot, `H` human, `o` battery, `*` both agents) or `"rgb_array"`.
@@ -68,7 +68,8 @@ inventory_encoding="count_plus_one", num_humans=1)`
   `FixedAgents(parallel_env(num_humans=2), {"human_0": "patrol", "human_1": "patrol"})`.
 
 Any other value of `start` or `inventory_encoding` raises `ValueError` naming the argument and
-the allowed values; an unknown keyword raises `TypeError`. The vector env takes the same keywords
+the allowed values; an unknown keyword raises `UnknownArgumentError` (a `ValueError` and a
+`TypeError`). The vector env takes the same keywords
 (`VectorEnv("sharing_v0", n, start="centre", inventory_encoding="authors")`), and so does a sweep
 file's `[envs.<variant>]` table.
 

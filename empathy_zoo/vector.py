@@ -32,7 +32,7 @@ from empathy_zoo.closest_other import ClosestOther
 from empathy_zoo.engine import GridEngine
 from empathy_zoo.engine.base import StepEvents, check_env_arguments
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.fixed_agents import policy_seed
+from empathy_zoo.fixed_agents import policy_seed, undo_point
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import (
     BatchedPolicy,
@@ -252,13 +252,14 @@ class VectorEnv:
         )
         full = np.full((self.num_envs, engine.num_agents), 4, dtype=np.int64)
         full[:, self.learner_index] = actions
-        for index, policy in self.fixed.items():
-            observations = engine.observe(index) if policy.needs_observation else None
-            if getattr(policy, "needs_context", False):
-                act_in_context: Callable[..., np.ndarray] = policy.act  # (with a fourth argument, the contexts)
-                full[:, index] = act_in_context(observations, engine.t, engine.present[:, index], self._contexts(index, policy))
-            else:
-                full[:, index] = policy.act(observations, engine.t, engine.present[:, index])
+        undo = [undo_point(policy) for policy in self.fixed.values()]
+        try:  # every fixed agent's actions are chosen and checked before anything moves
+            for index, policy in self.fixed.items():
+                full[:, index] = self._fixed_actions(index, policy)
+        except BaseException:
+            for restore in undo:  # (an earlier policy's stream has moved: put it back)
+                restore()
+            raise
         # the closest other agent of each learner, chosen among the others present when the step
         # begins (SPEC §3b): a cat harmed in the step stays the one swapped with
         closest = self._closest_places()
@@ -314,6 +315,25 @@ class VectorEnv:
             learner_battery_return=battery_return[:, learners],
             finished=finished,
         )
+
+    def _fixed_actions(self, index: int, policy: BatchedPolicy) -> np.ndarray:
+        """The ``(N,)`` actions fixed agent ``index`` chooses this step, checked: integers in
+        ``[0, num_actions)`` where it is present (``ValueError`` naming the policy otherwise)."""
+        engine = self.engine
+        observations = engine.observe(index) if policy.needs_observation else None
+        present = engine.present[:, index]
+        if getattr(policy, "needs_context", False):
+            act_in_context: Callable[..., np.ndarray] = policy.act  # (with a fourth argument, the contexts)
+            chosen = act_in_context(observations, engine.t, present, self._contexts(index, policy))
+        else:
+            chosen = policy.act(observations, engine.t, present)
+        agent, chosen = self.agents[index], np.asarray(chosen)
+        try:
+            if chosen.shape != (self.num_envs,):
+                raise ValueError(f"actions must have shape ({self.num_envs},), got {chosen.shape}")
+            return check_action_array(chosen[:, None], (self.num_envs, 1), [agent], present[:, None], self.num_actions)[:, 0]
+        except ValueError as error:
+            raise ValueError(f"fixed policy {policy_name(policy)} of {agent} chose an invalid action: {error}") from None
 
     def watch_engine(self, watcher: EngineWatcher) -> None:
         """Have ``watcher`` see every engine step of :meth:`step` from now on: its
@@ -404,7 +424,25 @@ class VectorEnv:
     def check_checkpointable(self) -> None:
         """Raise ``ValueError`` naming the first fixed policy (and its agent) whose state a
         checkpoint could not save: one without ``state()``/``load_state()`` that does not declare
-        ``stateless = True`` (see :class:`empathy_zoo.policies.FixedPolicy`)."""
+        ``stateless = True`` (see :class:`empathy_zoo.policies.FixedPolicy`) and, once the
+        environments were reset, one whose ``state()`` (taken once here, as a checkpoint takes it;
+        nothing changes) is not plain data. Asked before training, it refuses what the first
+        checkpoint would."""
+        self._check_saveable()
+        if self._observations is None:
+            return
+        for index, policy in self.fixed.items():
+            try:
+                policy_state(policy)
+            except ValueError as error:
+                raise ValueError(
+                    f"{error}; fixed agent {self.agents[index]} cannot be checkpointed (a checkpoint holds plain data "
+                    "only): make state() return numbers, strings, lists and tables (a generator's "
+                    "bit_generator.state, not the generator), or train without checkpoints (--checkpoint-interval 0)"
+                ) from None
+
+    def _check_saveable(self) -> None:
+        """The first part of :meth:`check_checkpointable`: every fixed policy has a state to save."""
         for index, policy in self.fixed.items():
             unsaved = unsaved_policy(policy)
             if unsaved is not None:
@@ -419,7 +457,7 @@ class VectorEnv:
         """Everything needed to continue exactly (for checkpoints): the engine, each fixed policy's
         own state (by agent name), the last step's events and the observations to act on.
         Raises ``ValueError`` as :meth:`check_checkpointable` does."""
-        self.check_checkpointable()
+        self._check_saveable()
         policies = {self.agents[index]: policy_state(policy) for index, policy in self.fixed.items()}
         observations = None if self._observations is None else self._observations.copy()
         return {

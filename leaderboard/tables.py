@@ -11,6 +11,7 @@ import csv
 import html
 import io
 import math
+import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -43,6 +44,7 @@ __all__ = [
     "names_baselines",
     "uncompared_note",
     "markdown_table",
+    "markdown_text",
     "markdown_report",
     "csv_text",
     "html_report",
@@ -259,9 +261,10 @@ def names_baselines(provenance: Provenance, cells: Sequence[Improvement]) -> boo
     return provenance.comparison() or any(len(baselines) > 1 for baselines in compared.values())
 
 
-def uncompared_note(uncompared: Sequence[tuple[str, str]], env: str | None) -> str:
-    """The sentence naming ``env``'s rows that no DQN row of their variant and budget is compared with."""
-    labels = [label for row_env, label in uncompared if row_env == env]
+def uncompared_note(uncompared: Sequence[tuple[str, str]], env: str | None, markdown: bool = False) -> str:
+    """The sentence naming ``env``'s rows that no DQN row of their variant and budget is compared
+    with (their labels :func:`markdown_text` with ``markdown``)."""
+    labels = [markdown_text(label) if markdown else label for row_env, label in uncompared if row_env == env]
     if not labels:
         return ""
     return "Not compared with DQN (no DQN row of their variant and budget): " + ", ".join(labels) + "."
@@ -285,17 +288,38 @@ def _has_single_seed(scores: Sequence[Score]) -> bool:
     return any(score.n_seeds == 1 for score in scores)
 
 
+_MARKDOWN_SYNTAX = re.compile(r"[\\`*~\[\]<>&|]|(?<!\w)_|_(?!\w)")
+"""What text must not carry unescaped into Markdown to read as itself: a backslash, code, emphasis,
+strike-through, link and HTML characters, a table's ``|``, and a ``_`` at a word's edge (one
+inside a word, ``other_return``, is no emphasis and stays as it is)."""
+_MARKDOWN_CELL = re.compile(r"[\\<>&|]")
+"""What a cell of figures must not carry unescaped: HTML characters and a table's ``|``."""
+_LINE_BREAKS = re.compile(r"[\r\n\u2028\u2029]+")
+
+
+def markdown_text(text: str) -> str:
+    """``text`` (a label, a name: data) escaped for Markdown, so it reads as itself: no HTML (a
+    label ``<script>`` is shown, not run), no link, no emphasis, no code, no table cell of its
+    own, and on one line."""
+    return _MARKDOWN_SYNTAX.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
+
+
 def _md_cell(text: str) -> str:
-    return text.replace("|", "\\|")
+    return _MARKDOWN_CELL.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
 
 
-def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    """A Markdown table; the first column is left-aligned, the others right-aligned."""
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]], text_columns: int = 1) -> str:
+    """A Markdown table; the first column is left-aligned, the others right-aligned. The first
+    ``text_columns`` cells of each row (a method's label, and the DQN row it is compared with)
+    are :func:`markdown_text`; in every cell, HTML characters and ``|`` are escaped."""
     lines = [
         "| " + " | ".join(_md_cell(cell) for cell in header) + " |",
         "|" + "|".join([":---", *(["---:"] * (len(header) - 1))]) + "|",
     ]
-    lines += ["| " + " | ".join(_md_cell(cell) for cell in row) + " |" for row in rows]
+    lines += [
+        "| " + " | ".join(markdown_text(cell) if i < text_columns else _md_cell(cell) for i, cell in enumerate(row)) + " |"
+        for row in rows
+    ]
     return "\n".join(lines)
 
 
@@ -369,8 +393,8 @@ def _markdown_improvements(
 ) -> list[str]:
     lines = []
     for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
-        lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
-    note = uncompared_note(uncompared, env)
+        lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows, 2 if against else 1)]
+    note = uncompared_note(uncompared, env, markdown=True)
     return lines + (["", IMPROVEMENT_NOTE] if lines else []) + (["", note] if note else [])
 
 

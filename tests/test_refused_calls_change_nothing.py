@@ -137,3 +137,99 @@ def test_the_vector_env_rejects_bad_actions_before_the_fixed_agents_act(bad):
     with pytest.raises(ValueError):
         vector.step(bad)
     assert same(env_state(vector), before)
+
+
+# ------------------------------------------------------------------ several fixed agents, one invalid action
+class RefusesWhileBroken:
+    """Stays, or chooses 9 (no action) while the class attribute ``broken`` is set (a class
+    attribute, so the vector env's per-environment copies see it too)."""
+
+    broken = False
+    stateless = True
+
+    def reset(self, seed: int | None = None) -> None:
+        pass
+
+    def act(self, observation: np.ndarray, info: dict) -> int:
+        return 9 if type(self).broken else 4
+
+
+FIRST_POLICIES = {
+    "random_walk": "random_walk",  # a batched counter stream
+    "wanderer": "helpers_policies:Wanderer",  # a generator, saved by state()
+    "wanderer_without_state": "helpers_policies:WandererWithoutState",  # no state(): copied
+}
+"""The policies of the fixed agents that act before the one whose action is refused."""
+
+
+def several_fixed(first: str, cats: int) -> dict:
+    return {**{f"cat_{i}": FIRST_POLICIES[first] for i in range(cats - 1)}, f"cat_{cats - 1}": RefusesWhileBroken()}
+
+
+@pytest.mark.parametrize("cats", [2, 3])
+@pytest.mark.parametrize("first", sorted(FIRST_POLICIES))
+def test_fixed_agents_refusing_one_fixed_policys_action_leave_the_others_streams_as_they_were(first, cats, monkeypatch):
+    def make():
+        return FixedAgents(coexistence_v0.parallel_env(num_cats=cats), several_fixed(first, cats))
+
+    env, twin = make(), make()
+    for e in (env, twin):
+        e.reset(seed=3)
+        e.step({ROBOT: 1})
+    before = env_state(env)
+    with monkeypatch.context() as patch:
+        patch.setattr(RefusesWhileBroken, "broken", True)
+        with pytest.raises(ValueError, match=f"cat_{cats - 1} chose an invalid action"):
+            env.step({ROBOT: 2})
+    assert same(env_state(env), before)
+    for action in [2, 0, 3, 1, 4] * 6:
+        if not twin.agents:
+            break
+        assert same(env.step({ROBOT: action}), twin.step({ROBOT: action}))
+
+
+@pytest.mark.parametrize("cats", [2, 3])
+@pytest.mark.parametrize("first", sorted(FIRST_POLICIES))
+def test_the_vector_env_refusing_one_fixed_policys_action_leaves_the_others_streams_as_they_were(first, cats, monkeypatch):
+    def make():
+        vector = VectorEnv("coexistence_v0", 3, fixed=several_fixed(first, cats), num_cats=cats)
+        vector.reset(seed=5)
+        vector.step(np.ones((3, 1), dtype=np.int64))
+        return vector
+
+    vector, twin = make(), make()
+    with monkeypatch.context() as patch:
+        patch.setattr(RefusesWhileBroken, "broken", True)
+        with pytest.raises(ValueError, match=f"cat_{cats - 1} .*invalid action|invalid action 9 for cat_{cats - 1}"):
+            vector.step(np.full((3, 1), 2, dtype=np.int64))
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        actions = rng.integers(5, size=(3, 1))
+        assert same(vector.step(actions).observations, twin.step(actions).observations)
+
+
+class BatchedFloats:
+    """A batched policy whose actions are floats (2.0): refused, never truncated to 2."""
+
+    needs_observation = False
+    stateless = True
+
+    def reset(self, env_ids: np.ndarray, seeds: list) -> None:
+        pass
+
+    def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
+        return np.full(len(active), 2.0)
+
+
+class FloatsWhenBatched(RefusesWhileBroken):
+    def batched(self, num_envs: int) -> BatchedFloats:
+        return BatchedFloats()
+
+
+def test_the_vector_env_refuses_a_batched_policys_float_actions_and_changes_nothing():
+    vector = VectorEnv("coexistence_v0", 3, fixed={"cat_0": "random_walk", "cat_1": FloatsWhenBatched()}, num_cats=2)
+    vector.reset(seed=0)
+    before = env_state(vector)
+    with pytest.raises(ValueError, match="cat_1 chose an invalid action.*integers"):
+        vector.step(np.ones((3, 1), dtype=np.int64))
+    assert same(env_state(vector), before)

@@ -13,7 +13,8 @@ transform (see ``empathy-zoo train --method NAME --help``); the method is ``--me
 ``method`` in the ``--config`` file. Its precedence: built-in defaults < the ``--config`` TOML file
 (``[settings]`` for method settings, ``[reward]`` for the reward transform's fields, top-level keys
 for the run) < the command line. A bad input prints
-``empathy-zoo: error: <message>`` and exits with status 2, before any training.
+``empathy-zoo: error: <message>`` and exits with status 2, before any training; a write or an
+allocation that fails later prints one such line too, with status 1.
 
 One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.settings_options`, a method's settings as options),
@@ -78,9 +79,26 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
     return args
 
 
-def _error(error: Exception, status: int) -> int:
+def _error(error: object, status: int) -> int:
     print(f"{PROG}: error: {error}", file=sys.stderr)
     return status
+
+
+def _allocation_failure(error: BaseException) -> bool:
+    """Whether ``error`` is an allocation that failed (torch reports one as a ``RuntimeError``,
+    ``torch.OutOfMemoryError`` on a GPU), not some other ``RuntimeError``, whose traceback stays."""
+    text = str(error).lower()
+    return type(error).__name__ == "OutOfMemoryError" or any(
+        words in text for words in ("can't allocate memory", "cannot allocate memory", "out of memory", "not enough memory")
+    )
+
+
+def _out_of_memory(error: BaseException) -> str:
+    first = str(error).strip().splitlines()[0][:300] if str(error).strip() else type(error).__name__
+    return (
+        f"out of memory ({first}); train fewer runs at once (--max-parallel-runs), or smaller networks or replay "
+        "memories (--hidden-size, --replay-capacity); docs/limits.md says what a run needs"
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -99,6 +117,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _error(error, 2)
     except OSError as error:  # a write that failed mid-way (disk full, a directory removed): no traceback
         return _error(error, 1)
+    except MemoryError as error:  # an allocation the checks before training could not foresee
+        return _error(_out_of_memory(error), 1)
+    except RuntimeError as error:
+        if not _allocation_failure(error):
+            raise
+        return _error(_out_of_memory(error), 1)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; run the same command again to resume from the last checkpoint", file=sys.stderr)
         return 130

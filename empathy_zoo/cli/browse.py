@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.cli.common import agent_policy, positive
+from empathy_zoo.cli.common import AgentPolicies, agent_policy, positive
 
 __all__ = ["add_browse_commands", "cmd_methods", "cmd_play", "cmd_policies"]
 
@@ -47,6 +47,7 @@ def cmd_play(args: argparse.Namespace, command: str) -> int:
     if args.env not in ENVIRONMENTS:
         raise ValueError(f"unknown environment {args.env!r}; registered: {sorted(ENVIRONMENTS)}")
     positive("--episodes", args.episodes)
+    positive("--seed", args.seed, allow_zero=True)
     fixed = {**DEFAULT_POLICIES.get(args.env, {}), **dict(args.fixed or [])}
     env = FixedAgents(ENVIRONMENTS[args.env].parallel_env(render_mode=args.render), fixed)
     engine = env.unwrapped.engine
@@ -82,8 +83,8 @@ def add_browse_commands(sub: Any) -> None:
     play.add_argument(
         "--fixed",
         type=agent_policy,
-        action="append",
+        action=AgentPolicies,
         metavar="AGENT=POLICY",
-        help="fixed agent policy, a name or package.module:ClassName (repeatable)",
+        help="fixed agent policy, a name or package.module:ClassName (repeatable, once per agent)",
     )
     play.set_defaults(handler=cmd_play)

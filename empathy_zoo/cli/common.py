@@ -16,10 +16,12 @@ __all__ = [
     "RUN_DEFAULTS",
     "SUMMARY_METRICS",
     "add_runner_options",
+    "AgentPolicies",
     "agent_policy",
     "check_device",
     "read_results",
     "help_text",
+    "path_text",
     "positive",
     "print_written",
     "run_summary",
@@ -69,6 +71,32 @@ def agent_policy(text: str) -> tuple[str, str]:
     if not sep or not agent or not policy:
         raise argparse.ArgumentTypeError(f"expected AGENT=POLICY (e.g. cat_0=stay), got {text!r}")
     return agent, policy
+
+
+class AgentPolicies(argparse.Action):
+    """The action of a repeatable ``--fixed AGENT=POLICY`` (``type=agent_policy``): the table
+    ``{agent: policy}`` of every one given; an agent given twice is a usage error naming it
+    (never the last one silently)."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any, option_string: str | None = None
+    ) -> None:
+        agent, policy = values
+        table = dict(getattr(namespace, self.dest, None) or {})
+        if agent in table:
+            raise argparse.ArgumentError(
+                self, f"{agent} is given twice ({agent}={table[agent]} and {agent}={policy}): give each agent one policy"
+            )
+        table[agent] = policy
+        setattr(namespace, self.dest, table)
+
+
+def path_text(text: str) -> str:
+    """A path option's or argument's value, refused when empty (which would silently mean the
+    current directory: name it, ``.``)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path: name the directory ('.' for the current one)")
+    return text
 
 
 def check_device(device: str) -> str:

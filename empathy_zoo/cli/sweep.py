@@ -13,6 +13,7 @@ from empathy_zoo.cli.common import (
     PROG,
     RUN_DEFAULTS,
     add_runner_options,
+    path_text,
     positive,
     print_written,
     read_results,
@@ -74,6 +75,7 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     from leaderboard.reproduction import write_reproduction
     from leaderboard.sensitivity import sensitivity_markdown
 
+    note = _read_note(args.note)
     appendix = ""
     if args.sensitivity:
         appendix = sensitivity_markdown(
@@ -81,7 +83,6 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
-    note = Path(args.note).read_text() if args.note else ""
     written = write_reproduction(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix)
     print(f"{PROG}: wrote {written}")
     return 0
@@ -91,9 +92,22 @@ def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
     """Write SENSITIVITY.md of existing results."""
     from leaderboard.sensitivity import write_sensitivity
 
-    note = Path(args.note).read_text() if args.note else ""
+    note = _read_note(args.note)
     print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note)}")
     return 0
+
+
+def _read_note(path: str | None) -> str:
+    """The ``--note`` file's text (``""`` without one); one larger than
+    :data:`~empathy_zoo.limits.MAX_NOTE_BYTES` is refused (``ValueError``), never read to its end."""
+    from empathy_zoo.limits import MAX_NOTE_BYTES, read_bounded
+
+    if not path:
+        return ""
+    try:
+        return read_bounded(path, MAX_NOTE_BYTES, "--note").decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"--note {path} is not UTF-8 text ({error})") from None
 
 
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
@@ -128,19 +142,20 @@ def add_sweep_commands(sub: Any) -> None:
         help="a shipped sweep (empathy_zoo/profiles/<name>.toml) or a sweep file",
     )
     reproduce.add_argument("--seeds", type=int, metavar="N", help="replace the sweep's seeds with 0..N-1")
-    reproduce.add_argument("--out", metavar="DIR", help="output directory (default: results/<profile>)")
+    reproduce.add_argument("--out", type=path_text, metavar="DIR", help="output directory (default: results/<profile>)")
     add_runner_options(reproduce)
     reproduce.set_defaults(handler=cmd_reproduce)
 
     board = sub.add_parser("leaderboard", help="write the leaderboard of existing results (one directory, or several into one)")
     board.add_argument(
         "results",
+        type=path_text,
         metavar="DIR",
         nargs="+",
         help="results directory (with runs/ or *.json); several are read into one leaderboard, "
         "rows of different training budgets kept apart",
     )
-    board.add_argument("--out", metavar="OUT", help="where to write (default: DIR; required with several DIRs)")
+    board.add_argument("--out", type=path_text, metavar="OUT", help="where to write (default: DIR; required with several DIRs)")
     board.add_argument(
         "--label",
         metavar="DIR=PREFIX",

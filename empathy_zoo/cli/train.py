@@ -17,8 +17,10 @@ from empathy_zoo.cli.common import (
     PROG,
     RUN_DEFAULTS,
     RUNNER_KEYS,
+    AgentPolicies,
     add_runner_options,
     agent_policy,
+    path_text,
     read_results,
     run_summary,
     runner_options,
@@ -97,6 +99,8 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
                 run["seeds"] = [check_value(value, int, f"{path}: seed")]
             elif key not in TABLES:
                 run[key] = check_value(value, RUN_KEYS[key], f"{path}: {key}")
+        if data.get("out") == "":
+            raise SweepConfigError(f"{path}: out: an empty path; name the output directory ('.' for the current one)")
         for name in TABLES:
             if not isinstance(data.get(name, {}), dict):
                 raise SweepConfigError(f"{path}: [{name}] must be a table")
@@ -179,7 +183,7 @@ def add_train(sub: Any, method: str) -> None:
     seeds.add_argument("--seed", type=int, help="seed of the run (default: 0)")
     seeds.add_argument("--seeds", type=int, nargs="+", metavar="S", help="several seeds, trained as one ensemble")
     parser.add_argument("--steps", type=int, help=f"env steps per run (default: {RUN_DEFAULTS['steps']})")
-    parser.add_argument("--out", metavar="DIR", help=f"output directory (default: {RUN_DEFAULTS['out']})")
+    parser.add_argument("--out", type=path_text, metavar="DIR", help=f"output directory (default: {RUN_DEFAULTS['out']})")
     parser.add_argument(
         "--eval-interval",
         type=int,
@@ -197,9 +201,9 @@ def add_train(sub: Any, method: str) -> None:
     parser.add_argument(
         "--fixed",
         type=agent_policy,
-        action="append",
+        action=AgentPolicies,
         metavar="AGENT=POLICY",
-        help="fixed agent policy, a name or package.module:ClassName (repeatable)",
+        help="fixed agent policy, a name or package.module:ClassName (repeatable, once per agent)",
     )
     add_runner_options(parser, default=argparse.SUPPRESS)
     add_settings_options(parser, get_method(method))

@@ -17,7 +17,7 @@ import difflib
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, agent_policy, positive
+from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, AgentPolicies, agent_policy, positive
 
 __all__ = ["add_watch", "cmd_watch", "find_agent"]
 
@@ -157,9 +157,9 @@ def add_watch(sub: Any) -> None:
     watch.add_argument(
         "--fixed",
         type=agent_policy,
-        action="append",
+        action=AgentPolicies,
         metavar="AGENT=POLICY",
-        help="replace a fixed agent's policy, a name or package.module:ClassName (repeatable)",
+        help="replace a fixed agent's policy, a name or package.module:ClassName (repeatable, once per agent)",
     )
     watch.add_argument("--gif", metavar="FILE", default=None, help="write a GIF of the first episode")
     watch.add_argument(

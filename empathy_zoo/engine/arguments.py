@@ -9,8 +9,11 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from empathy_zoo.limits import MAX_CYCLES, MAX_SIZE, MAX_TABLE_BYTES
+
 __all__ = [
     "GRID_ARGUMENTS",
+    "MAX_CYCLES",
     "MAX_SIZE",
     "MAX_TABLE_BYTES",
     "table_bytes",
@@ -18,6 +21,7 @@ __all__ = [
     "check_choice",
     "check_agent_count",
     "check_env_arguments",
+    "UnknownArgumentError",
     "TakesArguments",
     "GRID_ARGUMENT_HELP",
     "argument_defaults",
@@ -34,10 +38,6 @@ GRID_ARGUMENT_HELP = {
     "max_cycles": "steps before an episode is truncated",
 }
 """One line for each of :data:`GRID_ARGUMENTS`: the command line's help."""
-MAX_SIZE = 255
-"""Largest ``size`` (side of the torus) an environment accepts: the range the suite tests."""
-MAX_TABLE_BYTES = 1 << 30
-"""Most memory an engine's lookup tables may need (1 GiB); a larger ``view`` is refused."""
 
 
 class TakesArguments(Protocol):
@@ -82,9 +82,10 @@ def argument_help(engine: TakesArguments) -> dict[str, str]:
 
 
 def table_bytes(size: int, view: int) -> int:
-    """An upper bound, in bytes, of the memory an engine builds its lookup tables with: about
-    ``600 + 8·view²`` per cell (the window of every cell, the moves, the displacements)."""
-    return size * size * (600 + 8 * view * view)
+    """An upper bound, in bytes, of the memory an engine builds its lookup tables with:
+    ``600 + 24·view + 8·view²`` per cell (the window of every cell, the moves, the displacements,
+    and the rows and columns the window of every cell is built from)."""
+    return size * size * (600 + 24 * view + 8 * view * view)
 
 
 def _megabytes(count: int) -> str:
@@ -113,6 +114,8 @@ def check_grid_arguments(size: int, view: int, max_cycles: int, min_size: int) -
         )
     if max_cycles < 1:
         raise ValueError(f"max_cycles must be positive, got {max_cycles}")
+    if max_cycles > MAX_CYCLES:
+        raise ValueError(f"max_cycles must be at most {MAX_CYCLES:,} (no run is longer), got {max_cycles:,} (docs/limits.md)")
 
 
 def check_choice(name: str, value: Any, allowed: Sequence[str]) -> str:
@@ -135,9 +138,17 @@ def check_agent_count(name: str, value: Any, most: int, room: str) -> int:
     return int(value)
 
 
-def check_env_arguments(engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = TypeError) -> None:
-    """Raise ``error`` (default ``TypeError``, as for any unexpected keyword) naming every key of
-    ``kwargs`` that ``engine``'s environment does not take, and the arguments it does take."""
+class UnknownArgumentError(ValueError, TypeError):
+    """An environment argument no environment of that kind takes: a ``ValueError``, as every
+    refusal of the suite is (docs/limits.md), and a ``TypeError``, as Python's own for an
+    unexpected keyword is."""
+
+
+def check_env_arguments(
+    engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = UnknownArgumentError
+) -> None:
+    """Raise ``error`` (default :class:`UnknownArgumentError`) naming every key of ``kwargs`` that
+    ``engine``'s environment does not take, and the arguments it does take."""
     known = (*GRID_ARGUMENTS, *own_arguments(engine))
     unknown = [key for key in kwargs if key not in known]
     if unknown:

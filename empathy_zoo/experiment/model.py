@@ -21,7 +21,8 @@ from agents.rewards import RewardTransform, transform_config
 from baselines.registry import get_method
 from empathy_zoo.engine.arguments import check_choice, check_env_arguments
 from empathy_zoo.environments import ENGINES, default_policies
-from empathy_zoo.names import check_path_name
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATIONS, MAX_SEED, MAX_STEPS, check_at_most
+from empathy_zoo.names import check_label, check_path_name
 from empathy_zoo.policies import PolicyEntry, entry_label, make_policy, policy_entry
 
 __all__ = ["DEFAULT_METHOD", "Budget", "EnvVariant", "MethodEntry", "RunSpec", "group_specs"]
@@ -73,6 +74,14 @@ class EnvVariant:
                     raise ValueError(f"fixed.{agent}: {error}") from None
             object.__setattr__(self, "fixed", entries)  # one form: an entry without arguments is its name
         object.__setattr__(self, "kwargs", dict(self.kwargs))
+        fixed = self.fixed_policies()
+        learners = [agent for agent in agents if agent not in fixed]
+        if len(learners) != 1:
+            raise ValueError(
+                f"a run needs exactly one learning agent, but {self.env} with fixed agents {sorted(fixed)} leaves "
+                + (f"{len(learners)}: {learners}" if learners else "none")
+                + f" (its agents: {list(agents)}); fix every agent but one (the learner, usually {agents[0]})"
+            )
 
     @property
     def label(self) -> str:
@@ -97,7 +106,15 @@ class MethodEntry:
     reward: RewardTransform | None
     """The reward transform its runs train with (``None``: the environment's reward)."""
     label: str | None = None
-    """Display name in tables; ``None`` = the method's own (:meth:`Method.display_name`)."""
+    """Display name in tables; ``None`` = the method's own (:meth:`Method.display_name`). Either is
+    a label the result-file reader accepts (:func:`empathy_zoo.names.check_label`), or the entry is
+    refused when it is built."""
+
+    def __post_init__(self) -> None:
+        if self.label is not None:
+            check_label(self.label, "label")
+        else:
+            check_label(self.display_label(), f"the label method {self.name!r} gives its runs")
 
     @classmethod
     def resolve(
@@ -151,17 +168,26 @@ class Budget:
     """How long a run trains and how it is evaluated; a sweep's ``[sweep]`` table."""
 
     steps: int = 1_000_000
-    """Env steps to train for."""
+    """Env steps to train for (at most :data:`~empathy_zoo.limits.MAX_STEPS`)."""
     eval_interval: int = 50_000
-    """Env steps between greedy evaluations (there is always one at the end)."""
+    """Env steps between greedy evaluations (there is always one at the end; at most
+    :data:`~empathy_zoo.limits.MAX_EVALUATIONS` of them)."""
     eval_episodes: int = 10
-    """Episodes per greedy evaluation (ε = 0, fixed start seeds)."""
+    """Episodes per greedy evaluation (ε = 0, fixed start seeds; at most
+    :data:`~empathy_zoo.limits.MAX_EVAL_EPISODES`)."""
 
     def __post_init__(self) -> None:
-        for name in ("steps", "eval_interval", "eval_episodes"):
+        for name, bound in (("steps", MAX_STEPS), ("eval_interval", MAX_STEPS), ("eval_episodes", MAX_EVAL_EPISODES)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive int, got {value!r}")
+            check_at_most(name, value, bound)
+        evaluations = -(-self.steps // self.eval_interval)
+        if evaluations > MAX_EVALUATIONS:
+            raise ValueError(
+                f"steps={self.steps:,} with eval_interval={self.eval_interval:,} makes {evaluations:,} evaluations: a run "
+                f"has at most {MAX_EVALUATIONS:,} evaluations (docs/limits.md); raise eval_interval"
+            )
 
 
 @dataclass(frozen=True)
@@ -182,6 +208,7 @@ class RunSpec:
     def __post_init__(self) -> None:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative int, got {self.seed!r}")
+        check_at_most("seed", self.seed, MAX_SEED, "2**63 - 1")
 
     @classmethod
     def of(

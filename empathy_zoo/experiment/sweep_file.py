@@ -35,7 +35,8 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     method = "empathic_dqn"     # registry name (empathy-zoo methods) or "package.module:NAME"
     envs = ["coexistence_v0"]   # optional: the variants it runs on (default: all)
     label = "..."               # optional table name; may use {field} placeholders of the
-                                #   settings and of the reward transform's fields, e.g.
+                                #   settings and of the reward transform's fields ({reward.<field>}
+                                #   too), with a short format spec or none, e.g.
                                 #   "Mine (β={selfishness:g})"; default: the method's
     selfishness = [1.0, 0.5]    # any settings field; a list is a grid: one experiment per value
                                 #   (several lists: every combination)
@@ -57,12 +58,15 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
+import re
+import string
 from collections.abc import Mapping
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-from agents.rewards import transform_config
+from agents.rewards import transform_config, transform_fields
 from baselines.registry import get_method
 from empathy_zoo.engine.arguments import argument_types, own_arguments
 from empathy_zoo.environments import ENGINES, default_policies
@@ -77,6 +81,7 @@ from empathy_zoo.experiment.values import (
     read_toml,
     type_name,
 )
+from empathy_zoo.limits import MAX_RUNS, MAX_SEEDS
 from empathy_zoo.names import check_path_name
 
 __all__ = [
@@ -84,8 +89,10 @@ __all__ = [
     "DEFAULT_SEEDS",
     "ENV_KEYS",
     "METHOD_KEYS",
+    "LABEL_FORMAT_SPEC",
     "REWARD_TABLE",
     "SWEEP_KEYS",
+    "expand_label",
     "label_fields",
     "variant_of_table",
     "load_sweep",
@@ -115,6 +122,10 @@ METHOD_KEYS: dict[str, Any] = {"method": str, "envs": list[str], "label": str}
 REWARD_TABLE = "reward"
 """The key of a ``[[methods]]`` entry that holds reward-transform fields as a table (``reward.<field> = ...``)."""
 TOP_TABLES = ("sweep", "settings", "envs", "methods")
+LABEL_FORMAT_SPEC = re.compile(r"[<>^=]?[-+ ]?#?0?(?:[1-9][0-9]?)?[,_]?(?:\.[0-9]{1,2})?[bdeEfFgGnosxX%]?")
+"""The format spec a ``label`` placeholder may carry: Python's alignment, sign, ``#``, ``0``, a
+width below 100, a grouping, a precision below 100 and a type (``{selfishness:g}``,
+``{learning_rate:.0e}``, ``{penalty:>6.1f}``), or none; no fill character, no nested field."""
 
 
 # ---------------------------------------------------------------------------- profiles
@@ -154,6 +165,8 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
     if seeds is not None:
         if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
             raise SweepConfigError(f"--seeds must be a positive int, got {seeds!r}")
+        if seeds > MAX_SEEDS:
+            raise SweepConfigError(f"--seeds: an experiment has at most {MAX_SEEDS:,} seeds (docs/limits.md), got {seeds:,}")
         run["seeds"] = list(range(seeds))
     entries = data.get("methods")
     if not isinstance(entries, list) or not entries or not all(isinstance(e, dict) for e in entries):
@@ -173,6 +186,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
         budget = Budget(run["steps"], run["eval_interval"], run["eval_episodes"])
     except ValueError as error:
         raise SweepConfigError(f"{source}: [sweep] {error}") from None
+    _check_run_count(variants, methods, len(run["seeds"]), source)
     specs: list[RunSpec] = []
     origin: dict[str, str] = {}  # what a run trains (its config but the label) -> where declared
     labels: dict[tuple[str, str], str] = {}
@@ -206,6 +220,21 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
                     origin[trains] = where
                 specs += experiment
     return specs
+
+
+def _check_run_count(variants: Mapping[str, Any], methods: list[dict[str, Any]], seeds: int, source: str) -> None:
+    """Refuse a sweep of more than :data:`~empathy_zoo.limits.MAX_RUNS` runs, counted before any is built."""
+    count = sum(
+        len(m["grid"]) * seeds
+        for variant, env in variants.items()
+        for m in methods
+        if (m["envs"] is None or variant in m["envs"]) and (env["methods"] is None or m["method"] in env["methods"])
+    )
+    if count > MAX_RUNS:
+        raise SweepConfigError(
+            f"{source}: the sweep declares {count:,} runs, more than {MAX_RUNS:,} (docs/limits.md): "
+            "split it, or give fewer seeds or grid values"
+        )
 
 
 def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
@@ -272,6 +301,11 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         if len(set(map(repr, checked))) != len(checked):
             raise SweepConfigError(f"{where} {shown}: value listed twice in the grid {values}")
         axes.append([(part, key, v) for v in checked])
+    points = math.prod(len(axis) for axis in axes)
+    if points > MAX_RUNS:
+        raise SweepConfigError(
+            f"{where}: its grid has {points:,} points, more than the {MAX_RUNS:,} runs a sweep may declare (docs/limits.md)"
+        )
     grid = []
     for point in itertools.product(*axes):
         grid.append({part: {key: v for p, key, v in point if p == part} for part in ("settings", "reward")})
@@ -386,23 +420,61 @@ def _spec(
         # a grid of a transform's field: every run's label shows its value, the default's too
         label = spec.entry.display_label(entry["swept_reward"])
     else:
-        try:
-            label = entry["label"].format_map(label_fields(spec))
-        except (KeyError, ValueError, IndexError, AttributeError) as error:
+        label = expand_label(entry["label"], spec, f"{where} label")
+    try:
+        return replace(spec, entry=replace(spec.entry, label=label))
+    except ValueError as error:  # (a label the result-file reader would refuse: empathy_zoo.names.check_label)
+        raise SweepConfigError(f"{where} label: {error}") from None
+
+
+def expand_label(template: str, spec: RunSpec, where: str) -> str:
+    """``template`` with each ``{field}`` or ``{field:spec}`` placeholder replaced by that field of
+    :func:`label_fields` of ``spec``, formatted with ``spec`` (one :data:`LABEL_FORMAT_SPEC`);
+    ``{{`` and ``}}`` are braces. Anything else in braces (an index, an attribute, a conversion,
+    a nested field, a wider spec) raises :class:`SweepConfigError` naming ``where`` (a file, its
+    table and key): a template is data, never evaluated."""
+    fields = label_fields(spec)
+    try:
+        parts = list(string.Formatter().parse(template))
+    except ValueError as error:
+        raise SweepConfigError(
+            f"{where}: bad placeholder in {template!r} ({error}); write a brace that is no placeholder as {{{{ or }}}}"
+        ) from None
+    names = ", ".join(fields)
+    pieces = []
+    for literal, name, format_spec, conversion in parts:
+        pieces.append(literal)
+        if name is None:
+            continue
+        placeholder = "{" + name + (f"!{conversion}" if conversion else "") + (f":{format_spec}" if format_spec else "") + "}"
+        if name not in fields:
             raise SweepConfigError(
-                f"{where} label: bad placeholder in {entry['label']!r} ({error!r}); "
-                f"placeholders are settings fields and the reward transform's fields"
+                f"{where}: bad placeholder {placeholder} in {template!r}: {name!r} is no field; placeholders are "
+                f"{{field}} or {{field:spec}} of the settings fields and the reward transform's fields: {names}"
+            )
+        if conversion is not None or not LABEL_FORMAT_SPEC.fullmatch(format_spec or ""):
+            raise SweepConfigError(
+                f"{where}: bad placeholder {placeholder} in {template!r}: a placeholder takes a short format spec "
+                "(alignment, sign, width and precision below 100, a type: {selfishness:g}, {learning_rate:.0e}) "
+                "and no conversion"
+            )
+        try:
+            pieces.append(format(fields[name], format_spec or ""))
+        except (ValueError, TypeError) as error:
+            raise SweepConfigError(
+                f"{where}: bad placeholder {placeholder} in {template!r}: cannot format {fields[name]!r} ({error})"
             ) from None
-    return replace(spec, entry=replace(spec.entry, label=label))
+    return "".join(pieces)
 
 
 def label_fields(spec: RunSpec) -> dict[str, Any]:
-    """What a ``label`` template of ``spec`` may name: its settings' fields, its reward transform's
-    fields (a field named like a setting as ``{reward.<field>}`` only) and ``{reward.<field>}``."""
+    """What a ``label`` template of ``spec`` may name, and their values: its settings' fields, its
+    reward transform's fields (a field named like a setting as ``reward.<field>`` only) and
+    ``reward.<field>`` for each of them."""
     transform = spec.reward_transform()
     fields_of_reward = transform_config(transform) or {}
     fields_of_reward.pop("name", None)
     values: dict[str, Any] = {**fields_of_reward, **asdict(spec.method_settings())}
-    if transform is not None:
-        values[REWARD_TABLE] = transform
+    for name in transform_fields(transform):
+        values[f"{REWARD_TABLE}.{name}"] = getattr(transform, name)
     return values

@@ -18,6 +18,8 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
+from empathy_zoo.limits import MAX_CONFIG_BYTES, MAX_SEED, MAX_SEEDS, read_bounded
+
 __all__ = [
     "SweepConfigError",
     "PolicyTable",
@@ -139,7 +141,13 @@ def check_seeds(value: Any, where: str) -> list[int]:
     if isinstance(value, int):
         if value < 1:
             raise SweepConfigError(f"{where}: expected a positive number of seeds, got {value}")
+        if value > MAX_SEEDS:
+            raise SweepConfigError(f"{where}: an experiment has at most {MAX_SEEDS:,} seeds (docs/limits.md), got {value:,}")
         return list(range(value))
+    if len(value) > MAX_SEEDS:
+        raise SweepConfigError(f"{where}: an experiment has at most {MAX_SEEDS:,} seeds (docs/limits.md), got {len(value):,}")
+    if max(value) > MAX_SEED:
+        raise SweepConfigError(f"{where}: a seed is at most {MAX_SEED:,} (2**63 - 1; docs/limits.md), got {max(value)}")
     if len(set(value)) != len(value):
         raise SweepConfigError(f"{where}: seed(s) listed twice in {value}")
     return list(value)
@@ -163,12 +171,16 @@ def field_types(cls: type) -> dict[str, Any]:
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing or malformed one raises :class:`SweepConfigError` naming it."""
+    """Parse a TOML file; a missing, malformed or too large one (over
+    :data:`~empathy_zoo.limits.MAX_CONFIG_BYTES`) raises :class:`SweepConfigError` naming it."""
     path = Path(path)
     try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
+        data = read_bounded(path, MAX_CONFIG_BYTES, "config file")
     except FileNotFoundError:
         raise SweepConfigError(f"config file {path} does not exist") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise SweepConfigError(f"{path}: not valid TOML ({error})") from None
+    except ValueError as error:  # (larger than MAX_CONFIG_BYTES)
+        raise SweepConfigError(str(error)) from None
+    try:
+        return tomllib.loads(data.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as error:
+        raise SweepConfigError(f"{path}: not valid TOML ({type(error).__name__}: {str(error)[:200]})") from None

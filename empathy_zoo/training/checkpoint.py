@@ -11,7 +11,7 @@ import torch
 from empathy_zoo.atomic import write_with_atomic
 from empathy_zoo.safe_data import from_safe, to_safe
 
-__all__ = ["save_checkpoint", "load_checkpoint", "to_safe", "from_safe", "CheckpointError"]
+__all__ = ["save_checkpoint", "load_checkpoint", "check_checkpoint_keys", "corrupted", "to_safe", "from_safe", "CheckpointError"]
 
 FORMAT = 1
 
@@ -31,10 +31,28 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as error:  # torch raises many kinds for a damaged file
-        raise CheckpointError(
-            f"checkpoint {path} is corrupted or unreadable ({type(error).__name__}: {error}); "
-            "it was left untouched: delete or move it to restart those runs from scratch"
-        ) from error
+        raise corrupted(path, error) from error
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"checkpoint {path} has an unknown format; delete or move it to restart")
+    return payload
+
+
+def corrupted(path: Path, error: BaseException | str) -> CheckpointError:
+    """The error of checkpoint ``path``, unusable because of ``error`` (what was wrong in it)."""
+    why = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
+    return CheckpointError(
+        f"checkpoint {path} is corrupted or unreadable ({why}); "
+        "it was left untouched: delete or move it to restart those runs from scratch"
+    )
+
+
+def check_checkpoint_keys(path: Path, payload: dict[str, Any], keys: dict[str, type | tuple[type, ...]]) -> dict[str, Any]:
+    """``payload`` (checkpoint ``path`` as loaded) if it holds every key of ``keys`` with a value of
+    its type, else the :func:`corrupted` error naming what is missing or wrong."""
+    missing = [key for key in keys if key not in payload]
+    if missing:
+        raise corrupted(path, f"it holds no {', '.join(map(repr, missing))}")
+    wrong = [key for key, kind in keys.items() if isinstance(payload[key], bool) or not isinstance(payload[key], kind)]
+    if wrong:
+        raise corrupted(path, ", ".join(f"{key!r} is a {type(payload[key]).__name__}" for key in wrong))
     return payload

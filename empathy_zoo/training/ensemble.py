@@ -29,17 +29,35 @@ from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.result_file import result_path
-from empathy_zoo.training.checkpoint import from_safe, load_checkpoint, save_checkpoint, to_safe
+from empathy_zoo.training.checkpoint import (
+    CheckpointError,
+    check_checkpoint_keys,
+    corrupted,
+    from_safe,
+    load_checkpoint,
+    save_checkpoint,
+    to_safe,
+)
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import Report, SweepProgress
-from empathy_zoo.training.results import build_result, empty_columns, stored, write_result
+from empathy_zoo.training.results import ResultWriteError, build_result, empty_columns, stored, write_result
 from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, write_manifest
 from empathy_zoo.vector import VectorEnv, VectorStep
 
 __all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
 
 STREAM_ENV = STREAMS["train_env"]
+CHECKPOINT_KEYS: dict[str, type | tuple[type, ...]] = {
+    "run_ids": list,
+    "step": int,
+    "elapsed": (int, float),
+    "learner": dict,
+    "vector": dict,
+    "logs": list,
+    "evaluations": list,
+}
+"""What an ensemble's checkpoint holds (and ``obs``, ``rewards``), with the types they have."""
 
 
 class _EpisodeLog:
@@ -118,6 +136,8 @@ def _train_ensemble(
     logs = [_EpisodeLog() for _ in specs]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
+    if options.checkpoint_interval > 0:
+        venv.check_checkpointable()  # (now reset: each fixed policy's state() is taken once, as a checkpoint takes it)
     step, elapsed = 0, 0.0
     ckpt = checkpoint_path(out_dir, specs)
     if ckpt.exists():
@@ -168,21 +188,7 @@ def _train_ensemble(
             for row in rows:
                 evaluations[row].append({"step": step, **per_run[row]})
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
-            write_manifest(ckpt, specs)
-            save_checkpoint(
-                ckpt,
-                {
-                    "run_ids": [s.run_id for s in specs],
-                    "step": step,
-                    "elapsed": time.perf_counter() - started,
-                    "learner": learner.state_dict(),
-                    "vector": to_safe(venv.state()),
-                    "obs": to_safe(obs),
-                    "logs": [log.columns for log in logs],
-                    "evaluations": evaluations,
-                    "rewards": to_safe(train_rewards.state()),
-                },
-            )
+            _checkpoint(ckpt, specs, step, time.perf_counter() - started, learner, venv, obs, logs, evaluations, train_rewards)
         if report is not None and (step % 500 == 0 or step == total):
             rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
             report(Report(ensemble, step, total, k, label, stats=_live(logs, learner, rate), done=step == total))
@@ -192,10 +198,65 @@ def _train_ensemble(
         agent = agent_bytes(learner, r, {"run_id": spec.run_id, **spec.config()})  # (None: the method keeps none)
         document = build_result(spec, logs[r].columns, evaluations[r], wall, memory, agent)
         if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
-            write_result(out_dir, document)
+            try:
+                write_result(out_dir, document)
+            except ResultWriteError as error:  # (a full disk, a directory removed): keep the training, say where
+                kept = _keep_finished(
+                    ckpt, lambda: _checkpoint(ckpt, specs, step, wall, learner, venv, obs, logs, evaluations, train_rewards)
+                )
+                raise ResultWriteError(error.errno, f"{error.strerror}; {kept}") from error
         results.append(stored(document) if write_results else document)
-    remove_checkpoint(ckpt)
+    remove_checkpoint(ckpt)  # (only once every result is written)
     return results
+
+
+def _checkpoint(
+    ckpt: Path,
+    specs: Sequence[RunSpec],
+    step: int,
+    elapsed: float,
+    learner: Any,
+    venv: VectorEnv,
+    obs: np.ndarray,
+    logs: list[_EpisodeLog],
+    evaluations: list[list[dict[str, Any]]],
+    train_rewards: TrainRewards,
+) -> None:
+    """Write the ensemble's checkpoint ``ckpt`` at ``step`` (and the list of its runs beside it)."""
+    write_manifest(ckpt, specs)
+    save_checkpoint(
+        ckpt,
+        {
+            "run_ids": [s.run_id for s in specs],
+            "step": step,
+            "elapsed": elapsed,
+            "learner": learner.state_dict(),
+            "vector": to_safe(venv.state()),
+            "obs": to_safe(obs),
+            "logs": [log.columns for log in logs],
+            "evaluations": evaluations,
+            "rewards": to_safe(train_rewards.state()),
+        },
+    )
+
+
+def _keep_finished(ckpt: Path, save: Callable[[], None]) -> str:
+    """Keep a finished ensemble whose results could not be written: ``save()`` its checkpoint at its
+    last step (the same command then writes the results without training again); say what was
+    kept, and where."""
+    try:
+        save()
+    except (OSError, RuntimeError) as error:  # (torch reports a failed write as RuntimeError)
+        if ckpt.exists():
+            return (
+                f"its finished training could not be kept either ({error}); its last checkpoint {ckpt} is kept: "
+                "free space and run the same command again to resume from there"
+            )
+        return f"its finished training could not be kept either ({error}): the same command retrains its runs"
+    return (
+        f"the finished training of its ensemble is kept in checkpoint {ckpt}: free space and run the same command "
+        "again to write the results without training again"
+    )
 
 
 def _restore(
@@ -204,15 +265,25 @@ def _restore(
     """Continue from checkpoint ``ckpt``: restore the learner, reward transforms, environments and
     logs; return the observations, evaluations, step and elapsed seconds. The loaded checkpoint
     is dropped on return (in the paper profile it is ≈ 1 GB: the replay memories)."""
-    saved = load_checkpoint(ckpt)
+    saved = check_checkpoint_keys(ckpt, load_checkpoint(ckpt), {**CHECKPOINT_KEYS, "obs": object})
     if saved["run_ids"] != [s.run_id for s in specs]:
         raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
-    learner.load_state_dict(saved["learner"])
-    train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
-    venv.load_state(from_safe(saved["vector"]))
+    if not len(saved["logs"]) == len(saved["evaluations"]) == len(specs):
+        raise corrupted(ckpt, f"it holds the logs of {len(saved['logs'])} runs and the evaluations of {len(saved['evaluations'])}, not {len(specs)}")
+    try:
+        learner.load_state_dict(saved["learner"])
+        train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
+        venv.load_state(from_safe(saved["vector"]))
+        observations = from_safe(saved["obs"])
+    except CheckpointError:
+        raise
+    except ValueError as error:  # (says what is wrong: an earlier version's layout, another shape)
+        raise CheckpointError(f"checkpoint {ckpt} cannot be resumed: {error}") from error
+    except (KeyError, IndexError, TypeError, AttributeError, RuntimeError) as error:  # a state that is not the learner's
+        raise corrupted(ckpt, error) from error
     for log, columns in zip(logs, saved["logs"]):
         log.columns = columns
-    return from_safe(saved["obs"]), saved["evaluations"], int(saved["step"]), float(saved["elapsed"])
+    return observations, saved["evaluations"], int(saved["step"]), float(saved["elapsed"])
 
 
 def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> StepBatch:

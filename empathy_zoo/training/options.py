@@ -1,10 +1,16 @@
-"""How runs are executed: :class:`RunnerOptions` (results never depend on these)."""
+"""How runs are executed: :class:`RunnerOptions` (results never depend on these), checked when
+they are made, so the command line and Python callers get the same refusals (docs/limits.md)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["RunnerOptions"]
+from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
+
+__all__ = ["BACKENDS", "RunnerOptions"]
+
+BACKENDS = ("local", "ray")
+"""Where ensembles may run (:attr:`RunnerOptions.backend`)."""
 
 
 @dataclass(frozen=True)
@@ -21,10 +27,12 @@ class RunnerOptions:
     """Show progress bars (drawn by this process only: one per running ensemble, and one for the
     sweep's env steps when it has several ensembles; see :mod:`empathy_zoo.training.progress`)."""
     threads: int | None = 1
-    """Torch CPU threads per process (``None`` = torch's default, every core): these small
-    networks gain nothing from more than one, and extra threads are much slower on a busy machine."""
+    """Torch CPU threads per process (``None`` = torch's default, every core), at most the CPUs of
+    this machine: these small networks gain nothing from more than one, and extra threads are much
+    slower on a busy machine."""
     workers: int = 1
-    """Processes training ensembles side by side (the sweep's ensembles are spread over them)."""
+    """Processes training ensembles side by side (the sweep's ensembles are spread over them), at
+    most the CPUs of this machine."""
     backend: str = "local"
     """Where ensembles run: ``local`` (this machine, ``workers`` processes) or ``ray``."""
     address: str | None = None
@@ -35,3 +43,20 @@ class RunnerOptions:
     :mod:`empathy_zoo.training.fingerprint`) and overwrite their files with the new results;
     ``False`` refuses a sweep asking for changed runs, before training anything (runs whose code
     cannot be told are reused then, with a note)."""
+
+    def __post_init__(self) -> None:
+        for name, low in (("max_parallel_runs", 1), ("checkpoint_interval", 0), ("workers", 1), ("threads", 1)):
+            value = getattr(self, name)
+            if name == "threads" and value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ValueError(f"{name} must be an int >= {low}, got {value!r}")
+        check_at_most("checkpoint_interval", self.checkpoint_interval, MAX_STEPS)
+        for name in ("threads", "workers"):
+            value = getattr(self, name)
+            if value is not None:
+                check_at_most(name, value, cpu_count(), "the CPUs of this machine, os.cpu_count()")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
+        if not isinstance(self.device, str) or not self.device:
+            raise ValueError(f"device must be a torch device name (cpu, cuda, cuda:1), got {self.device!r}")

@@ -12,7 +12,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.result_file import SCHEMA, result_path
 from empathy_zoo.training.fingerprint import run_fingerprint
 
-__all__ = ["KEPT_AGENT", "build_result", "stored", "write_result", "empty_columns"]
+__all__ = ["KEPT_AGENT", "ResultWriteError", "build_result", "stored", "write_result", "empty_columns"]
 
 KEPT_AGENT = "_agent_file"
 """Key of a result document on its way to :func:`write_result`: the ``(suffix, bytes)`` of its
@@ -63,13 +63,30 @@ def stored(result: dict[str, Any]) -> dict[str, Any]:
     return {key: value for key, value in result.items() if key != KEPT_AGENT}
 
 
+class ResultWriteError(OSError):
+    """A result file (or the agent file beside it) could not be written (a full disk, a directory
+    removed); the message (:attr:`strerror`) names the file, and ``errno`` is the failed write's."""
+
+    def __str__(self) -> str:
+        return self.strerror or super().__str__()
+
+
 def write_result(out_dir: Path, result: dict[str, Any]) -> Path:
     """Write ``result``'s agent file (when it carries one), then the result file itself, each
-    atomically: a result file never names an agent file that is not there."""
+    atomically: a result file never names an agent file that is not there. A write that fails
+    raises :class:`ResultWriteError` naming the file (nothing half-written is left)."""
     document = dict(result)
     agent = document.pop(KEPT_AGENT, None)
     path = result_path(out_dir, document["run_id"])
-    if agent is not None:
-        suffix, data = agent
-        write_bytes_atomic(path.with_name(document["run_id"] + suffix), data)
-    return write_json_atomic(path, document)
+    target = path
+    try:
+        if agent is not None:
+            suffix, data = agent
+            target = path.with_name(document["run_id"] + suffix)
+            write_bytes_atomic(target, data)
+            target = path
+        return write_json_atomic(path, document)
+    except ResultWriteError:
+        raise
+    except OSError as error:
+        raise ResultWriteError(error.errno, f"cannot write {target} ({error.strerror or error})") from error

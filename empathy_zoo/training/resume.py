@@ -12,8 +12,18 @@ checkpoint of the output directory:
   its runs not asked for this time are finished and written too (nothing is lost);
 * one whose runs are all finished is removed;
 * one that holds only runs not asked for here (another sweep's) is kept;
-* one that cannot be resumed (its runs can no longer be rebuilt, or it overlaps a newer one) is
-  removed, and its runs still to do start again from scratch.
+* one that holds runs asked for here beside runs that cannot be rebuilt from those asked for is
+  kept (it resumes when they are asked for too), and its runs asked for start again from scratch;
+* one that cannot be resumed (the code that defines its runs changed, or it overlaps a newer one)
+  is removed, and its runs still to do start again from scratch.
+
+The list of runs beside a checkpoint is data, never code: it is read as JSON and each record is
+compared with the :meth:`~empathy_zoo.experiment.model.RunSpec.request` of the runs asked for
+here (and its run id with theirs); a record is never resolved, so it can name no method or
+policy to import. A record that equals a run asked for but for its seed is that run with the
+record's seed (another ``--seeds``); any other record cannot be rebuilt here. A list that cannot
+be read is set aside (``<name>.runs.json.unreadable``, said), and the checkpoint's own run ids
+are used instead.
 
 Every decision but a plain resume is reported through ``on_note``, one line each.
 """
@@ -21,26 +31,40 @@ Every decision but a plain resume is reported through ``on_note``, one line each
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Sequence
+import inspect
+import json
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.experiment.model import RunSpec, group_specs
+from empathy_zoo.names import check_path_name
 from empathy_zoo.result_file import result_path
-from empathy_zoo.training.checkpoint import load_checkpoint
+from empathy_zoo.training.checkpoint import CheckpointError, load_checkpoint
 
 __all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]
 
 CHECKPOINT_DIR = "checkpoints"
 MANIFEST_SUFFIX = ".runs.json"
 """Suffix of the file beside a checkpoint that lists its runs' specs."""
+MANIFEST_FORMAT = 2
+"""Format of that list: 2, each record a run's ``request()`` with its ``run_id``; 1 (read too): without it."""
+UNREADABLE_SUFFIX = ".unreadable"
+"""Suffix a list of runs that cannot be read is set aside with."""
+REQUEST_KEYS = frozenset(inspect.signature(RunSpec.of).parameters)
+"""The keys a record of a list of runs may hold (those of :meth:`RunSpec.request`), besides ``run_id``."""
 
 
 def checkpoint_path(out_dir: Path, specs: Sequence[RunSpec]) -> Path:
     """The checkpoint of the ensemble ``specs`` (in this order)."""
-    digest = hashlib.sha256("|".join(s.run_id for s in specs).encode()).hexdigest()[:16]
-    return Path(out_dir) / CHECKPOINT_DIR / f"{specs[0].env}-{digest}.pt"
+    return _checkpoint_file(out_dir, specs[0].env, [s.run_id for s in specs])
+
+
+def _checkpoint_file(out_dir: Path, env: str, run_ids: Sequence[str]) -> Path:
+    digest = hashlib.sha256("|".join(run_ids).encode()).hexdigest()[:16]
+    return Path(out_dir) / CHECKPOINT_DIR / f"{env}-{digest}.pt"
 
 
 def manifest_path(checkpoint: Path) -> Path:
@@ -51,7 +75,8 @@ def write_manifest(checkpoint: Path, specs: Sequence[RunSpec]) -> None:
     """Write the specs of ``checkpoint``'s runs beside it (once: they never change)."""
     manifest = manifest_path(checkpoint)
     if not manifest.exists():
-        write_json_atomic(manifest, {"format": 1, "runs": [_record(spec) for spec in specs]})
+        records = [{"run_id": spec.run_id, **spec.request()} for spec in specs]
+        write_json_atomic(manifest, {"format": MANIFEST_FORMAT, "runs": records})
 
 
 def remove_checkpoint(checkpoint: Path) -> None:
@@ -59,33 +84,141 @@ def remove_checkpoint(checkpoint: Path) -> None:
     manifest_path(checkpoint).unlink(missing_ok=True)
 
 
-def _record(spec: RunSpec) -> dict[str, Any]:
-    return spec.request()
+def read_manifest(manifest: Path, checkpoint: Path) -> list[dict[str, Any]]:
+    """The records of the list of runs ``manifest`` beside ``checkpoint``, checked as data (a
+    ``ValueError`` saying what is wrong): a table per run of the keys :meth:`RunSpec.request` gives
+    and, in format 2, the run's id, the ids those of ``checkpoint``'s name."""
+    data = read_json(manifest)
+    if not isinstance(data, dict) or data.get("format") not in (1, MANIFEST_FORMAT):
+        raise ValueError(f"not a list of runs of format 1 or {MANIFEST_FORMAT}")
+    runs = data.get("runs")
+    if not isinstance(runs, list) or not runs or not all(isinstance(record, dict) for record in runs):
+        raise ValueError("'runs' must be a non-empty list of tables")
+    with_ids = data["format"] == MANIFEST_FORMAT
+    for number, record in enumerate(runs):
+        unknown = sorted(str(key) for key in record if key not in REQUEST_KEYS and not (with_ids and key == "run_id"))
+        if unknown:
+            raise ValueError(f"run {number} has unknown key(s) {unknown}")
+        if with_ids:
+            check_path_name(record.get("run_id"), f"run {number}'s run_id")
+    if with_ids:
+        ids = [record["run_id"] for record in runs]
+        env = runs[0].get("env")
+        if not isinstance(env, str) or _checkpoint_file(checkpoint.parent.parent, env, ids) != checkpoint:
+            raise ValueError(f"its run ids are not those of {checkpoint.name}")
+    return runs
 
 
-def _ensemble_of(checkpoint: Path, known: dict[str, RunSpec]) -> tuple[list[str], list[RunSpec] | None, str]:
-    """The run ids of ``checkpoint``'s ensemble, their specs (``None`` when they cannot be rebuilt),
-    and why not."""
+def _canonical(request: Mapping[str, Any]) -> str:
+    """``request`` as the text its record in a list of runs compares by (tuples are lists there)."""
+    return json.dumps(request, sort_keys=True, default=repr)
+
+
+class _AskedRuns:
+    """The runs asked for here, by what a record of a list of runs is compared with: their
+    ``request()``, and their ``request()`` without the seed."""
+
+    def __init__(self, known: Mapping[str, RunSpec]) -> None:
+        self.known = known
+        """The runs asked for (finished ones too), by run id."""
+        self._exact: dict[str, RunSpec] | None = None
+        self._seedless: dict[str, RunSpec] = {}
+
+    def _index(self) -> dict[str, RunSpec]:
+        if self._exact is None:  # (only when a directory has checkpoints)
+            self._exact = {}
+            for spec in self.known.values():
+                request = spec.request()
+                self._exact[_canonical(request)] = spec
+                self._seedless.setdefault(_canonical({**request, "seed": None}), spec)
+        return self._exact
+
+    def spec_of(self, record: Mapping[str, Any]) -> RunSpec | None:
+        """The run ``record`` describes, if it is a run asked for here or one of them with another
+        seed; ``None`` otherwise (nothing of ``record`` is resolved)."""
+        plain = {key: value for key, value in record.items() if key != "run_id"}
+        exact = self._index().get(_canonical(plain))
+        if exact is not None:
+            return exact
+        template = self._seedless.get(_canonical({**plain, "seed": None}))
+        seed = plain.get("seed")
+        if template is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            return None
+        return replace(template, seed=seed)
+
+
+@dataclass
+class _Ensemble:
+    """What the run of ``train_runs`` knows of a checkpoint's ensemble."""
+
+    ids: list[str]
+    """Its run ids (of the runs asked for, as they are now; of the others, as the checkpoint has them)."""
+    specs: list[RunSpec] | None
+    """Its runs, in order, when every one can be rebuilt here, else ``None``."""
+    problem: str = ""
+    """Why it cannot resume (``""`` when it can)."""
+    dead: bool = False
+    """It can never resume (the code that defines its runs changed): remove it."""
+
+
+def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], None]) -> _Ensemble:
+    """``checkpoint``'s ensemble, from its list of runs (or, without a readable one, from its own run ids)."""
     manifest = manifest_path(checkpoint)
     if manifest.exists():
         try:
-            specs = [RunSpec.of(**record) for record in read_json(manifest)["runs"]]
-        except (KeyError, TypeError, ValueError) as error:
-            return [], None, f"its list of runs {manifest.name} cannot be read ({error})"
-        ids = [spec.run_id for spec in specs]
-        if checkpoint_path(checkpoint.parent.parent, specs) != checkpoint:
-            return ids, None, "its runs are no longer the same runs (the code that defines them changed)"
-        return ids, specs, ""
-    ids = list(load_checkpoint(checkpoint)["run_ids"])  # written before checkpoints had a list of runs
-    if all(run_id in known for run_id in ids):
-        return ids, [known[run_id] for run_id in ids], ""
-    return ids, None, "it was written by an earlier version and holds runs not asked for here"
+            records = read_manifest(manifest, checkpoint)
+        except ValueError as error:
+            aside = manifest.replace(manifest.with_name(manifest.name + UNREADABLE_SUFFIX))
+            on_note(
+                f"set aside {manifest} as {aside.name}: it cannot be read as the list of runs of checkpoint "
+                f"{checkpoint.name} ({error}); that checkpoint's own run ids are read instead"
+            )
+        else:
+            return _ensemble_of_records(checkpoint, records, asked)
+    ids = _checkpoint_run_ids(checkpoint)  # (written before checkpoints had a list of runs, or it was unreadable)
+    if all(run_id in asked.known for run_id in ids):
+        return _Ensemble(ids, [asked.known[run_id] for run_id in ids])
+    return _Ensemble(ids, None, "it holds runs not asked for here, and has no list of runs to rebuild them from")
+
+
+def _ensemble_of_records(checkpoint: Path, records: list[dict[str, Any]], asked: _AskedRuns) -> _Ensemble:
+    found = [asked.spec_of(record) for record in records]
+    if None in found:
+        stored = [record.get("run_id") for record in records]
+        if None in stored:  # (format 1: the checkpoint has them)
+            stored = _checkpoint_run_ids(checkpoint)
+            if len(stored) != len(records):
+                raise CheckpointError(f"checkpoint {checkpoint} holds {len(stored)} runs, its list of runs {len(records)}")
+        ids = [str(run_id) if spec is None else spec.run_id for spec, run_id in zip(found, stored)]
+        foreign = [str(run_id) for spec, run_id in zip(found, stored) if spec is None]
+        return _Ensemble(ids, None, f"it also holds runs that cannot be rebuilt from the runs asked for here ({', '.join(foreign)})")
+    specs = [spec for spec in found if spec is not None]
+    ids = [spec.run_id for spec in specs]
+    if checkpoint_path(checkpoint.parent.parent, specs) != checkpoint:
+        return _Ensemble(ids, None, "its runs are no longer the same runs (the code that defines them changed)", dead=True)
+    return _Ensemble(ids, specs)
+
+
+def _checkpoint_run_ids(checkpoint: Path) -> list[str]:
+    """The run ids ``checkpoint`` itself holds (a damaged one raises :class:`CheckpointError`)."""
+    run_ids = load_checkpoint(checkpoint).get("run_ids")
+    if not isinstance(run_ids, list) or not run_ids or not all(isinstance(run_id, str) for run_id in run_ids):
+        raise CheckpointError(
+            f"checkpoint {checkpoint} is corrupted or incomplete (no list of run ids); it was left untouched: "
+            "delete or move it to restart those runs from scratch"
+        )
+    return run_ids
 
 
 def plan_ensembles(
-    todo: Sequence[RunSpec], out_dir: Path, max_parallel_runs: int, on_note: Callable[[str], None]
+    todo: Sequence[RunSpec],
+    out_dir: Path,
+    max_parallel_runs: int,
+    on_note: Callable[[str], None],
+    asked: Sequence[RunSpec] | None = None,
 ) -> list[list[RunSpec]]:
-    """The ensembles that train the runs ``todo`` (see the module documentation)."""
+    """The ensembles that train the runs ``todo`` (see the module documentation); ``asked``: every
+    run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from."""
     directory = Path(out_dir) / CHECKPOINT_DIR
     pending = {spec.run_id: spec for spec in todo}
     claimed: dict[str, Path] = {}
@@ -95,8 +228,10 @@ def plan_ensembles(
         if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists():
             manifest.unlink()
     checkpoints = sorted(directory.glob("*.pt"), key=lambda p: (-p.stat().st_mtime_ns, p.name)) if directory.is_dir() else []
+    runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if asked is None else asked)})
     for checkpoint in checkpoints:  # the most recent first: it wins an overlap
-        ids, specs, reason = _ensemble_of(checkpoint, pending)
+        ensemble = _ensemble_of(checkpoint, runs_asked, on_note)
+        ids, specs = ensemble.ids, ensemble.specs
         asked = [run_id for run_id in ids if run_id in pending]
         finished = [run_id for run_id in ids if run_id not in pending and result_path(out_dir, run_id).exists()]
         overlap = [run_id for run_id in ids if run_id in claimed]
@@ -116,8 +251,13 @@ def plan_ensembles(
             on_note(f"removed checkpoint {checkpoint}: all its runs are finished")
         elif not asked:
             on_note(f"kept checkpoint {checkpoint}: it holds unfinished runs not asked for here ({', '.join(ids)})")
+        elif not overlap and not ensemble.dead:
+            on_note(
+                f"kept checkpoint {checkpoint}: {ensemble.problem}; it resumes when they are asked for too; "
+                f"these runs start again from scratch: {', '.join(asked)}"
+            )
         else:
-            why = f"it overlaps the newer checkpoint {claimed[overlap[0]]}" if overlap else reason
+            why = f"it overlaps the newer checkpoint {claimed[overlap[0]]}" if overlap else ensemble.problem
             remove_checkpoint(checkpoint)
             restart = [run_id for run_id in asked if run_id not in claimed]
             on_note(

@@ -28,6 +28,7 @@ from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experime
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.training.preflight import check_before_training
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
@@ -94,6 +95,7 @@ def train_runs(
         ]
     )
     redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
+    check_before_training([s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options)
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
     stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
@@ -147,7 +149,7 @@ def _train_todo(
 ) -> None:
     """Train the runs of ``specs`` that have no result file (``train_runs`` checked everything)."""
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note)
+    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note, asked=specs)
     wanted = {s.run_id for s in todo}
     if on_result is not None:  # (a resumed ensemble may finish runs not asked for here)
         given, on_result = on_result, lambda result: given(result) if result["run_id"] in wanted else None
