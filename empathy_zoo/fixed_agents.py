@@ -34,18 +34,23 @@ def policy_seed(env_seed: int, agent_index: int) -> int:
 def undo_point(policy: Any) -> Callable[[], None]:
     """A function that puts ``policy`` (per-environment or batched) back as it is now: a copy of
     its own ``state()``, given back with ``load_state``; nothing for one that declares
-    ``stateless = True``; a deep copy of its attributes for one that saves no state. A step
+    ``stateless = True``; a deep copy of its attributes for one that saves no state (or, copied
+    per environment, a state that is no plain data). A step
     takes one of every fixed policy before any acts, so a step refused because one chose an
     invalid action leaves every policy's stream where it was."""
     if getattr(policy, "stateless", False) is True:
         return lambda: None
     if unsaved_policy(policy) is None:
-        saved = policy.state()
         try:
-            saved = copy.deepcopy(saved)  # (a state may share its arrays with the policy)
-        except Exception:  # noqa: BLE001 - a state that cannot be copied is given back as it was taken
+            saved = policy.state()
+        except ValueError:  # (the per-environment copies refuse a state that is no plain data: copied below)
             pass
-        return lambda: policy.load_state(saved)
+        else:
+            try:
+                saved = copy.deepcopy(saved)  # (a state may share its arrays with the policy)
+            except Exception:  # noqa: BLE001 - a state that cannot be copied is given back as it was taken
+                pass
+            return lambda: policy.load_state(saved)
     try:
         attributes = copy.deepcopy(vars(policy))
     except Exception:  # noqa: BLE001 - no attributes to copy (slots), or ones that cannot be copied

@@ -226,9 +226,7 @@ def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]
     shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
     penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
     if isinstance(penalty, bool) or not isinstance(penalty, (int, float)) or not math.isfinite(penalty):
-        raise ResultFileError(
-            f"{path}: field config.settings.harm_penalty: a finite number, got {penalty!r}; move the file away"
-        )
+        raise ResultFileError(f"{path}: field config.settings.harm_penalty: a finite number, got {penalty!r}; move the file away")
     if not isinstance(scaled, bool):
         raise ResultFileError(
             f"{path}: field config.settings.equality_shaping: true or false, got {scaled!r}; move the file away"

@@ -138,9 +138,7 @@ def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     """
     root = Path(results_dir)
     if root.exists() and not root.is_dir():
-        raise ValueError(
-            f"results directory {root} is a file, not a directory: name the directory that holds the result files"
-        )
+        raise ValueError(f"results directory {root} is a file, not a directory: name the directory that holds the result files")
     if not root.is_dir():
         raise ValueError(f"results directory {root} does not exist")
     if (root / "runs").is_dir():

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from helpers_envs import env_state, same
+from helpers_policies import Wanderer
 
 from empathy_zoo import EmpathyWrapper, FixedAgents, coexistence_v0, sharing_v0
 from empathy_zoo.gym_adapter import make_single_agent_env
@@ -154,10 +155,22 @@ class RefusesWhileBroken:
         return 9 if type(self).broken else 4
 
 
+class KeepsItsGenerator(Wanderer):
+    """:class:`helpers_policies.Wanderer` whose ``state()`` holds the generator object itself (no
+    plain data: a checkpoint refuses it, a run without checkpoints takes it)."""
+
+    def state(self) -> dict:
+        return {"rng": self.rng, "memory": list(self.memory)}
+
+    def load_state(self, state: dict) -> None:
+        self.rng, self.memory = state["rng"], list(state["memory"])
+
+
 FIRST_POLICIES = {
     "random_walk": "random_walk",  # a batched counter stream
     "wanderer": "helpers_policies:Wanderer",  # a generator, saved by state()
     "wanderer_without_state": "helpers_policies:WandererWithoutState",  # no state(): copied
+    "keeps_its_generator": "test_refused_calls_change_nothing:KeepsItsGenerator",  # a state that is no plain data
 }
 """The policies of the fixed agents that act before the one whose action is refused."""
 

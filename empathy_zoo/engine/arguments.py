@@ -144,9 +144,7 @@ class UnknownArgumentError(ValueError, TypeError):
     unexpected keyword is."""
 
 
-def check_env_arguments(
-    engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = UnknownArgumentError
-) -> None:
+def check_env_arguments(engine: TakesArguments, kwargs: Mapping[str, Any], error: type[Exception] = UnknownArgumentError) -> None:
     """Raise ``error`` (default :class:`UnknownArgumentError`) naming every key of ``kwargs`` that
     ``engine``'s environment does not take, and the arguments it does take."""
     known = (*GRID_ARGUMENTS, *own_arguments(engine))

@@ -269,7 +269,8 @@ def _restore(
     if saved["run_ids"] != [s.run_id for s in specs]:
         raise ValueError(f"checkpoint {ckpt} belongs to other runs; move it away")
     if not len(saved["logs"]) == len(saved["evaluations"]) == len(specs):
-        raise corrupted(ckpt, f"it holds the logs of {len(saved['logs'])} runs and the evaluations of {len(saved['evaluations'])}, not {len(specs)}")
+        counts = len(saved["logs"]), len(saved["evaluations"])
+        raise corrupted(ckpt, f"it holds the logs of {counts[0]} runs and the evaluations of {counts[1]}, not {len(specs)}")
     try:
         learner.load_state_dict(saved["learner"])
         train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))

@@ -291,7 +291,7 @@ def evaluate_results(
             + ", ".join(f"{s.name} ({s.env})" for s in by_name.values())
         )
     for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
-        check_output_dir(directory)
+        check_output_dir(out, (directory.relative_to(out).as_posix(),))  # (no link below out)
         remove_stale_temp_files(directory)
     todo = []
     for scenario_set, path, result in work:

@@ -184,14 +184,15 @@ def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], N
 def _ensemble_of_records(checkpoint: Path, records: list[dict[str, Any]], asked: _AskedRuns) -> _Ensemble:
     found = [asked.spec_of(record) for record in records]
     if None in found:
-        stored = [record.get("run_id") for record in records]
+        stored: list[Any] = [record.get("run_id") for record in records]
         if None in stored:  # (format 1: the checkpoint has them)
             stored = _checkpoint_run_ids(checkpoint)
             if len(stored) != len(records):
                 raise CheckpointError(f"checkpoint {checkpoint} holds {len(stored)} runs, its list of runs {len(records)}")
         ids = [str(run_id) if spec is None else spec.run_id for spec, run_id in zip(found, stored)]
         foreign = [str(run_id) for spec, run_id in zip(found, stored) if spec is None]
-        return _Ensemble(ids, None, f"it also holds runs that cannot be rebuilt from the runs asked for here ({', '.join(foreign)})")
+        why = f"it also holds runs that cannot be rebuilt from the runs asked for here ({', '.join(foreign)})"
+        return _Ensemble(ids, None, why)
     specs = [spec for spec in found if spec is not None]
     ids = [spec.run_id for spec in specs]
     if checkpoint_path(checkpoint.parent.parent, specs) != checkpoint:
@@ -215,10 +216,10 @@ def plan_ensembles(
     out_dir: Path,
     max_parallel_runs: int,
     on_note: Callable[[str], None],
-    asked: Sequence[RunSpec] | None = None,
+    every_run: Sequence[RunSpec] | None = None,
 ) -> list[list[RunSpec]]:
-    """The ensembles that train the runs ``todo`` (see the module documentation); ``asked``: every
-    run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from."""
+    """The ensembles that train the runs ``todo`` (see the module documentation); ``every_run``:
+    every run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from."""
     directory = Path(out_dir) / CHECKPOINT_DIR
     pending = {spec.run_id: spec for spec in todo}
     claimed: dict[str, Path] = {}
@@ -228,7 +229,7 @@ def plan_ensembles(
         if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists():
             manifest.unlink()
     checkpoints = sorted(directory.glob("*.pt"), key=lambda p: (-p.stat().st_mtime_ns, p.name)) if directory.is_dir() else []
-    runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if asked is None else asked)})
+    runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if every_run is None else every_run)})
     for checkpoint in checkpoints:  # the most recent first: it wins an overlap
         ensemble = _ensemble_of(checkpoint, runs_asked, on_note)
         ids, specs = ensemble.ids, ensemble.specs

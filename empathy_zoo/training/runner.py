@@ -149,7 +149,7 @@ def _train_todo(
 ) -> None:
     """Train the runs of ``specs`` that have no result file (``train_runs`` checked everything)."""
     todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note, asked=specs)
+    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note, every_run=specs)
     wanted = {s.run_id for s in todo}
     if on_result is not None:  # (a resumed ensemble may finish runs not asked for here)
         given, on_result = on_result, lambda result: given(result) if result["run_id"] in wanted else None

@@ -1,0 +1,184 @@
+"""The bounds of every size an input may give, in one table (docs/limits.md states each, one row per bound).
+
+Every number a user, a sweep file, a config file or a result file gives that sizes work or memory
+is bounded here: a value beyond its bound is refused with a ``ValueError`` that states the bound
+(:func:`check_at_most`), before anything is built, trained or written. The bounds lie far beyond
+what the suite's profiles use (the paper's run is 1,000,000 steps, 5 seeds, 10 evaluation
+episodes), so nothing within them trains differently; what they refuse would not finish, or not
+fit, on any machine. Two bounds are the machine's own: the CPUs (:func:`cpu_count`) and the memory
+available when a learner is built (:func:`available_memory`, :func:`check_memory`).
+
+This module imports nothing of the suite: every layer may read it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = [
+    "BOUNDS",
+    "MAX_CONFIG_BYTES",
+    "MAX_CYCLES",
+    "MAX_EVALUATIONS",
+    "MAX_EVAL_EPISODES",
+    "MAX_LABEL",
+    "MAX_NAME",
+    "MAX_NOTE_BYTES",
+    "MAX_RUNS",
+    "MAX_SEED",
+    "MAX_SEEDS",
+    "MAX_SIZE",
+    "MAX_STEPS",
+    "MAX_TABLE_BYTES",
+    "available_memory",
+    "check_at_most",
+    "check_memory",
+    "cpu_count",
+    "format_bytes",
+    "read_bounded",
+]
+
+MAX_SIZE = 255
+"""Largest ``size`` (side of the torus) an environment accepts: the range the suite tests."""
+MAX_TABLE_BYTES = 1 << 30
+"""Most memory an engine's lookup tables may need (1 GiB); a larger ``view`` is refused."""
+MAX_CYCLES = 10**9
+"""Longest episode (``max_cycles``), in steps: no run is longer (:data:`MAX_STEPS`)."""
+MAX_STEPS = 10**9
+"""Most env steps a run trains (``steps``; also the bound of ``eval_interval`` and
+``checkpoint_interval``): a thousand times the paper's budget, weeks of training."""
+MAX_EVALUATIONS = 10_000
+"""Most greedy evaluations of a run (``steps / eval_interval``, rounded up): each is a row of its
+result file."""
+MAX_EVAL_EPISODES = 10_000
+"""Most episodes of one greedy evaluation (``eval_episodes``): an ensemble evaluates
+``runs × eval_episodes`` environments at once."""
+MAX_SEEDS = 10_000
+"""Most seeds of one experiment (``seeds = N`` or a list of seeds)."""
+MAX_SEED = 2**63 - 1
+"""Largest seed (a run id holds it, and it seeds 64-bit random streams)."""
+MAX_RUNS = 100_000
+"""Most runs one sweep declares (environment variants × grid points × seeds): checked before
+the runs are built."""
+MAX_NAME = 200
+"""Longest name that becomes part of a file name (a variant, a run id), in characters (file
+names are at most 255 bytes on common file systems)."""
+MAX_LABEL = 200
+"""Longest label (a table row's name: ``--label``, ``label`` of a sweep entry, a method's own
+name), in characters."""
+MAX_NOTE_BYTES = 1 << 20
+"""Largest ``--note`` file of ``reproduction`` and ``sensitivity`` (1 MiB of prose)."""
+MAX_CONFIG_BYTES = 1 << 20
+"""Largest sweep file or ``train --config`` file (1 MiB)."""
+
+BOUNDS: Mapping[str, int] = {
+    "size": MAX_SIZE,
+    "lookup tables": MAX_TABLE_BYTES,
+    "max_cycles": MAX_CYCLES,
+    "steps": MAX_STEPS,
+    "eval_interval": MAX_STEPS,
+    "checkpoint_interval": MAX_STEPS,
+    "evaluations per run": MAX_EVALUATIONS,
+    "eval_episodes": MAX_EVAL_EPISODES,
+    "seeds per experiment": MAX_SEEDS,
+    "seed": MAX_SEED,
+    "runs per sweep": MAX_RUNS,
+    "names": MAX_NAME,
+    "labels": MAX_LABEL,
+    "note file": MAX_NOTE_BYTES,
+    "sweep and config files": MAX_CONFIG_BYTES,
+}
+"""Every fixed bound, by what docs/limits.md calls it (the machine's own, ``threads``, ``workers``
+and a learner's memory, are :func:`cpu_count` and :func:`available_memory`)."""
+
+
+def check_at_most(name: str, value: Any, bound: int, why: str = "") -> Any:
+    """``value`` if it is at most ``bound``, else a ``ValueError`` naming ``name`` and stating the bound."""
+    if value > bound:
+        reason = f" ({why})" if why else ""
+        raise ValueError(f"{name} must be at most {bound:,}{reason}, got {_shown(value)} (docs/limits.md)")
+    return value
+
+
+def _shown(value: Any) -> str:
+    """``value`` for a message: a huge integer by its number of digits, not its 5,000 digits."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        return f"an integer of about {int(abs(value).bit_length() * 0.30103) + 1:,} digits"
+    return f"{value:,}" if isinstance(value, int) else repr(value)
+
+
+def cpu_count() -> int:
+    """The CPUs of this machine (``os.cpu_count()``; 1 where it cannot tell): the bound of
+    ``threads`` and ``workers``."""
+    return os.cpu_count() or 1
+
+
+def format_bytes(count: float) -> str:
+    """``count`` bytes in the unit that reads best (``"41.0 MB"``, ``"40.0 PB"``; powers of 1024)."""
+    for unit in ("bytes", "KB", "MB", "GB", "TB", "PB", "EB"):
+        if abs(count) < 1024 or unit == "EB":
+            return f"{count:,.0f} {unit}" if unit == "bytes" else f"{count:,.1f} {unit}"
+        count /= 1024
+    raise AssertionError("unreachable")
+
+
+def _meminfo_available(path: str = "/proc/meminfo") -> int | None:
+    """``MemAvailable`` of ``/proc/meminfo`` in bytes (Linux), or ``None`` where there is none."""
+    try:
+        with open(path, encoding="ascii") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def available_memory(device: str = "cpu") -> tuple[int | None, str]:
+    """Bytes of memory free for a new allocation on ``device``, and where the figure comes from:
+    on a CUDA device, what it has free (``torch.cuda.mem_get_info``); elsewhere, the host's
+    available memory (``MemAvailable`` of ``/proc/meminfo``, else the free physical pages of
+    ``os.sysconf``, else its physical memory). ``(None, why)`` where nothing tells."""
+    if device.startswith("cuda"):
+        try:
+            import torch
+
+            return int(torch.cuda.mem_get_info(torch.device(device))[0]), f"free on {device}"
+        except Exception as error:  # noqa: BLE001 - no CUDA here: the device check says so elsewhere
+            return None, f"{device} cannot tell ({type(error).__name__})"
+    if device != "cpu" and not device.startswith("cpu:"):
+        return None, f"{device} cannot tell"
+    available = _meminfo_available()
+    if available is not None:
+        return available, "available on this machine (MemAvailable)"
+    for pages, what in (("SC_AVPHYS_PAGES", "free on this machine"), ("SC_PHYS_PAGES", "of this machine")):
+        try:
+            return int(os.sysconf(pages)) * int(os.sysconf("SC_PAGE_SIZE")), what
+        except (AttributeError, ValueError, OSError):
+            continue
+    return None, "this machine cannot tell"
+
+
+def check_memory(needed: int, device: str, what: str, advice: str) -> None:
+    """Refuse (``ValueError``) ``what`` when the ``needed`` bytes exceed the memory available on
+    ``device`` (:func:`available_memory`), stating both figures and ``advice``; nothing is
+    refused where the machine cannot tell."""
+    available, source = available_memory(device)
+    if available is not None and needed > available:
+        raise ValueError(
+            f"{what} need about {format_bytes(needed)} of memory, more than the {format_bytes(available)} "
+            f"{source}: {advice} (docs/limits.md)"
+        )
+
+
+def read_bounded(path: str | os.PathLike[str], bound: int, what: str) -> bytes:
+    """The bytes of the file ``path``, or a ``ValueError`` naming it when it holds more than
+    ``bound`` bytes (read at most ``bound + 1`` bytes: ``/dev/zero`` or a huge file is refused at
+    once, never read to the end)."""
+    with open(path, "rb") as handle:
+        data = handle.read(bound + 1)
+    if len(data) > bound:
+        raise ValueError(f"{what} {os.fspath(path)} is larger than {format_bytes(bound)}, the most it may be (docs/limits.md)")
+    return data

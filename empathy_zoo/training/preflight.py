@@ -1,0 +1,64 @@
+"""What is checked of a sweep's runs before the first one trains and before anything is written.
+
+The sweep loader (:mod:`empathy_zoo.experiment.sweep_file`) and the experiment model
+(:mod:`empathy_zoo.experiment.model`) check every value a run is built from: its label, its
+environment variant (exactly one learning agent), its method's settings (an SB3 method's keyword
+arguments against its class), its budget and seeds within :mod:`empathy_zoo.limits`.
+:func:`check_before_training` adds what needs the environment built: once for each ensemble the
+runs make (:func:`~empathy_zoo.experiment.model.group_specs`), it builds that ensemble's
+environment (one copy), resets it and checks that
+
+* every fixed policy's state can be checkpointed, its ``state()`` taken once as plain data (when
+  checkpoints are on), so no run is refused at its first checkpoint;
+* the learner's memory fits on the device (the learner's optional ``check_memory``, computed from
+  its settings, before anything is allocated; on this machine's backend only: a Ray task's learner
+  asks on the node it lands on).
+
+:func:`~empathy_zoo.training.runner.train_runs` asks it for every run still to train, before it
+writes anything.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from empathy_zoo.experiment.model import RunSpec, group_specs
+from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.vector import VectorEnv
+
+__all__ = ["check_before_training"]
+
+
+def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> None:
+    """Raise ``ValueError`` naming a run of the first ensemble of ``specs`` that could not train to
+    its end with ``options`` (see the module documentation); nothing is written or trained."""
+    largest: dict[tuple, list[RunSpec]] = {}
+    for chunk in group_specs(specs, options.max_parallel_runs):
+        key = chunk[0].ensemble_key()
+        if len(chunk) > len(largest.get(key, ())):
+            largest[key] = chunk
+    for chunk in largest.values():
+        first = chunk[0]
+        where = f"run {first.run_id}" + (f" (and {len(chunk) - 1} more of its ensemble)" if len(chunk) > 1 else "")
+        try:
+            _check_ensemble(chunk, options)
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}") from None
+
+
+def _check_ensemble(chunk: Sequence[RunSpec], options: RunnerOptions) -> None:
+    first = chunk[0]
+    method = first.method_object()
+    venv = VectorEnv(first.env, 1, fixed=first.fixed_policies(), in_view_only=method.in_view_only, **first.env_kwargs)
+    if options.checkpoint_interval > 0:
+        venv.reset(seed=first.seed)
+        venv.check_checkpointable()
+    check_memory = getattr(method.learner, "check_memory", None)
+    if options.backend == "local" and callable(check_memory):
+        check_memory(
+            [spec.method_settings() for spec in chunk],
+            venv.obs_size,
+            venv.num_actions,
+            options.device,
+            num_others=len(venv.others[0]),
+        )
