@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+from pathlib import Path
 
 import pytest
 from helpers_cli_method import TINY
@@ -15,6 +16,9 @@ import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.train import train_values
 from empathy_zoo.training.resume import CHECKPOINT_DIR
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+QUICK = DOCS / "results" / "quick"
 
 
 def run_files(out):
@@ -163,12 +167,16 @@ def test_bad_config_file_exits_2_naming_file_and_key(tmp_path, capsys, content, 
         (["train", "--env", "sharing_v0", "--start", "corner"], "start must be one of 'random', 'centre'"),
         (["train", "--device", "tpu"], "--device 'tpu'"),
         (["reproduce", "--profile", "no_such_profile"], "unknown profile 'no_such_profile'"),
+        (["reproduce", "--profile", str(DOCS)], "docs is a directory, not a sweep file"),
+        (["reproduction", str(QUICK), "--note", "no_such_note.md", "--out", "-"], "--note no_such_note.md does not exist"),
+        (["reproduction", str(QUICK), "--note", str(DOCS), "--out", "-"], "docs is a directory, not a file"),
         (["leaderboard", "/nonexistent/results"], "does not exist"),
         (["play", "--env", "chess_v0"], "unknown environment 'chess_v0'"),
     ],
 )
 def test_bad_input_exits_2_with_a_message(tmp_path, capsys, argv, expected):
     argv = [*argv, "--out", str(tmp_path / "out")] if argv[0] in ("train", "reproduce") else argv
+    argv = [str(tmp_path / "out") if a == "-" else a for a in argv]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("empathy-zoo: error: ") and expected in err, err

@@ -104,6 +104,9 @@ def _read_note(path: str | None) -> str:
 
     if not path:
         return ""
+    if Path(path).is_dir() or not Path(path).exists():
+        what = "is a directory, not a file" if Path(path).is_dir() else "does not exist"
+        raise ValueError(f"--note {path} {what} (give a Markdown file of prose)")
     try:
         return read_bounded(path, MAX_NOTE_BYTES, "--note").decode("utf-8")
     except UnicodeDecodeError as error:

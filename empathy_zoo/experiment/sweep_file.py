@@ -141,6 +141,8 @@ def profile_path(profile: str | Path) -> Path:
         return CONFIG_DIR / f"{text}.toml"
     path = Path(text)
     if path.suffix == ".toml" or path.exists():
+        if path.is_dir():
+            raise SweepConfigError(f"{path} is a directory, not a sweep file (give a .toml file or a shipped profile)")
         if not path.is_file():
             raise SweepConfigError(f"sweep file {path} does not exist")
         return path
