@@ -42,8 +42,7 @@ from empathy_zoo.names import check_path_name, confined
 from empathy_zoo.policies import PolicyEntry, parse_entry_label, policy_entry
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs, table_env
-from leaderboard.heldout import HTML_ANCHOR, MARKDOWN_ANCHOR
-from leaderboard.tables import env_metrics, markdown_table
+from leaderboard.tables import env_metrics, markdown_table, place_before_definitions
 
 __all__ = [
     "SECTION_TITLE",
@@ -358,15 +357,5 @@ def add_episodes_section(
     section = episodes_section(results, out_dir, origins)
     if section is None:
         return markdown, html_page, {}
-    if MARKDOWN_ANCHOR in markdown:
-        before, after = markdown.split(MARKDOWN_ANCHOR, 1)
-        markdown = before.rstrip("\n") + "\n" + section.markdown + MARKDOWN_ANCHOR + after
-    else:
-        markdown = markdown.rstrip("\n") + "\n" + section.markdown
-    anchor = HTML_ANCHOR if HTML_ANCHOR in html_page else "</body>"
-    if anchor in html_page:
-        before, after = html_page.split(anchor, 1)
-        html_page = before + section.html + anchor + after
-    else:
-        html_page += section.html
+    markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)
     return markdown, html_page, section.figures

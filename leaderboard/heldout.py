@@ -54,52 +54,27 @@ from typing import Any
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.metrics import METRIC_DEFINITIONS
 from leaderboard.heldout_scores import (
-    DOES_NOT_GENERALISE,
     EFFECT_NAMES,
-    GENERALISES,
-    HELDOUT_METRICS,
     MARGINS,
     PER_OTHER_AGENT,
     READING_MARKS,
     READING_RULE,
     SAME_WORLD_MARK,
-    UNDECIDED,
     HeldoutCell,
     HeldoutGroup,
     Reading,
     ResultsDirs,
     heldout_cells,
     load_heldout,
-    reading_rule,
     readings,
 )
 from leaderboard.improvement import (
     HIGHER_IS_BETTER,
     VERDICT_MARKS,
 )
-from leaderboard.tables import format_interval, markdown_table
+from leaderboard.tables import format_interval, markdown_table, place_before_definitions
 
-__all__ = [
-    "HELDOUT_METRICS",
-    "MARGINS",
-    "PER_OTHER_AGENT",
-    "GENERALISES",
-    "DOES_NOT_GENERALISE",
-    "UNDECIDED",
-    "READING_MARKS",
-    "READING_RULE",
-    "EFFECT_NAMES",
-    "HeldoutGroup",
-    "HeldoutCell",
-    "Reading",
-    "HeldoutSection",
-    "reading_rule",
-    "load_heldout",
-    "heldout_cells",
-    "readings",
-    "heldout_section",
-    "add_heldout_section",
-]
+__all__ = ["HeldoutSection", "heldout_section", "add_heldout_section"]
 
 
 def _metric_title(metric: str) -> str:
@@ -269,10 +244,6 @@ def heldout_section(
     return HeldoutSection("\n".join(markdown) + "\n", "\n".join(page) + "\n", figures)
 
 
-MARKDOWN_ANCHOR = "\n## Metric definitions"
-HTML_ANCHOR = "<h2>Metric definitions</h2>"
-
-
 def add_heldout_section(
     results_dirs: ResultsDirs,
     results: Sequence[dict[str, Any]],
@@ -288,15 +259,5 @@ def add_heldout_section(
     section = heldout_section(results_dirs, results, out_dir, origins)
     if section is None:
         return markdown, html_page, {}
-    if MARKDOWN_ANCHOR in markdown:
-        before, after = markdown.split(MARKDOWN_ANCHOR, 1)
-        markdown = before.rstrip("\n") + "\n" + section.markdown + MARKDOWN_ANCHOR + after
-    else:
-        markdown = markdown.rstrip("\n") + "\n" + section.markdown
-    anchor = HTML_ANCHOR if HTML_ANCHOR in html_page else "</body>"
-    if anchor in html_page:
-        before, after = html_page.split(anchor, 1)
-        html_page = before + section.html + anchor + after
-    else:
-        html_page += section.html
+    markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)
     return markdown, html_page, section.figures

@@ -32,6 +32,9 @@ from leaderboard.improvement import TOO_FEW_SEEDS, VERDICT_MARKS, VERDICT_NOTE, 
 from leaderboard.sources import BUDGET_SEPARATOR, ResultsDir
 
 __all__ = [
+    "HTML_ANCHOR",
+    "MARKDOWN_ANCHOR",
+    "place_before_definitions",
     "PHASE_TITLES",
     "SINGLE_SEED_MARK",
     "CSV_COLUMNS",
@@ -541,3 +544,26 @@ def html_report(
         lines.append(f"<dt>{esc(metric)}</dt><dd>{esc(METRIC_DEFINITIONS.get(metric, '(no definition)'))}</dd>")
     lines += ["</dl>", "</body>", "</html>"]
     return "\n".join(lines) + "\n"
+
+
+MARKDOWN_ANCHOR = "\n## Metric definitions"
+"""Where a section of the Markdown page goes: before its metric definitions."""
+HTML_ANCHOR = "<h2>Metric definitions</h2>"
+"""Where a section of the HTML page goes: before its metric definitions (else before ``</body>``)."""
+
+
+def place_before_definitions(markdown: str, html_page: str, section_markdown: str, section_html: str) -> tuple[str, str]:
+    """The leaderboard's two pages with a section placed before their metric definitions (after
+    any section placed there before), or at their end where they have none."""
+    if MARKDOWN_ANCHOR in markdown:
+        before, after = markdown.split(MARKDOWN_ANCHOR, 1)
+        markdown = before.rstrip("\n") + "\n" + section_markdown + MARKDOWN_ANCHOR + after
+    else:
+        markdown = markdown.rstrip("\n") + "\n" + section_markdown
+    anchor = HTML_ANCHOR if HTML_ANCHOR in html_page else "</body>"
+    if anchor in html_page:
+        before, after = html_page.split(anchor, 1)
+        html_page = before + section_html + anchor + after
+    else:
+        html_page += section_html
+    return markdown, html_page

@@ -100,3 +100,27 @@ def write_synthetic(
         path = evaluation_path(out, definition["name"], run["run_id"])
         paths.append(write_json_atomic(path, synthetic_evaluation(run, definition, values, own_fixed)))
     return paths
+
+
+def dqn_and_empathic_runs(seeds: Sequence[int], max_cycles: int, eval_episodes: int) -> list[Any]:
+    """Tiny runs kept agents can be read from: DQN and Empathic DQN (β = 0.5) on Coexistence,
+    600 steps of episodes of at most ``max_cycles`` steps, one greedy evaluation at the end."""
+    from helpers_resume import SMALL_SETTINGS
+
+    from empathy_zoo.experiment import RunSpec
+
+    methods: dict[str, dict[str, Any]] = {"dqn": {}, "empathic_dqn": {"selfishness": 0.5}}
+    return [
+        RunSpec.of(
+            env="coexistence_v0",
+            method=method,
+            settings={**SMALL_SETTINGS, **extra},
+            steps=600,
+            eval_interval=600,
+            eval_episodes=eval_episodes,
+            env_kwargs={"max_cycles": max_cycles},
+            seed=seed,
+        )
+        for method, extra in methods.items()
+        for seed in seeds
+    ]

@@ -11,6 +11,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers_heldout import dqn_and_empathic_runs
 from helpers_resume import SMALL_SETTINGS
 
 from agents.empathic_dqn import EmpathicDQN
@@ -32,21 +33,7 @@ MAX_CYCLES = 40
 
 def specs() -> list[RunSpec]:
     """DQN and Empathic DQN (β = 0.5), two seeds each, 600 steps of 40-step episodes."""
-    methods = {"dqn": {}, "empathic_dqn": {"selfishness": 0.5}}
-    return [
-        RunSpec.of(
-            env="coexistence_v0",
-            method=method,
-            settings={**SMALL_SETTINGS, **extra},
-            steps=600,
-            eval_interval=600,
-            eval_episodes=3,
-            env_kwargs={"max_cycles": MAX_CYCLES},
-            seed=seed,
-        )
-        for method, extra in methods.items()
-        for seed in (0, 1)
-    ]
+    return dqn_and_empathic_runs((0, 1), MAX_CYCLES, 3)
 
 
 @pytest.fixture(scope="module")

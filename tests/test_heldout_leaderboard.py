@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 
-from leaderboard.heldout import (
+from leaderboard.heldout import add_heldout_section
+from leaderboard.heldout_scores import (
     DOES_NOT_GENERALISE,
     GENERALISES,
     MARGINS,
     UNDECIDED,
-    add_heldout_section,
     heldout_cells,
     load_heldout,
     reading_rule,

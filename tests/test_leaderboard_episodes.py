@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from helpers_resume import SMALL_SETTINGS
+from helpers_heldout import dqn_and_empathic_runs
 
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
 from empathy_zoo.episode_gif import HOLD_MS
@@ -47,21 +47,7 @@ GIFS = {
 
 def specs() -> list[RunSpec]:
     """DQN and Empathic DQN (β = 0.5), two seeds each, 600 steps of at most 80-step episodes."""
-    methods = {"dqn": {}, "empathic_dqn": {"selfishness": 0.5}}
-    return [
-        RunSpec.of(
-            env="coexistence_v0",
-            method=method,
-            settings={**SMALL_SETTINGS, **extra},
-            steps=600,
-            eval_interval=600,
-            eval_episodes=2,
-            env_kwargs={"max_cycles": MAX_CYCLES},
-            seed=seed,
-        )
-        for method, extra in methods.items()
-        for seed in SEEDS
-    ]
+    return dqn_and_empathic_runs(SEEDS, MAX_CYCLES, 2)
 
 
 @pytest.fixture(scope="module")
