@@ -58,7 +58,13 @@ class Learner(Protocol):
     def load_state_dict(self, state: dict[str, Any]) -> None: ...
 
     def memory_bytes_per_run(self) -> int:
-        """Bytes each run holds (replay and networks)."""
+        """Bytes each run holds (replay and networks); where runs differ, the largest run's."""
+
+    def memory_bytes_of(self, run: int) -> int:
+        """Optional: run ``run``'s own bytes, as its result file's ``memory_bytes.learner_per_run``
+        records them, for a learner whose runs differ (Empathic DQN: a run with ``Q_emp`` holds
+        twice the networks of one without). A run's figure must not depend on which runs share
+        its ensemble; without this method every run records :meth:`memory_bytes_per_run`."""
 
     @classmethod
     def check_memory(cls, settings: Sequence[Any], obs_size: int, num_actions: int, device: str, *, num_others: int) -> None:

@@ -413,7 +413,14 @@ class EmpathicDQN:
         return {"eps": self.epsilon(), "loss": self.last_loss}
 
     def memory_bytes_per_run(self) -> int:
-        heads = 2 if self._emp.size else 1  # Q (and Q_emp): the largest run's share
+        """The largest run's bytes (a run with ``Q_emp`` when the ensemble has one)."""
+        return max(self.memory_bytes_of(run) for run in range(self.num_runs))
+
+    def memory_bytes_of(self, run: int) -> int:
+        """Run ``run``'s own bytes: its replay memory, ``Q`` (and ``Q_emp`` if it has one), ``Q̂``
+        and Adam's two moments of what it trains; the same in any ensemble (what its result file
+        records)."""
+        heads = 2 if self.empathic_runs[run] else 1
         params = sum(p[0].numel() * p.element_size() for p in self.online) * heads
         params += sum(p[0].numel() * p.element_size() for p in self.target)
         return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments

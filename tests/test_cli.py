@@ -369,3 +369,12 @@ def test_train_takes_several_others_and_their_aggregation(tmp_path, capsys):
     capsys.readouterr()
     assert main(["train", "--env", "sharing_v0", "--num-cats", "2", "--out", str(tmp_path / "x"), *TINY]) == 2
     assert "num_cats" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command, report", [("reproduction", "REPRODUCTION.md"), ("sensitivity", "SENSITIVITY.md")])
+def test_a_report_given_an_existing_directory_as_out_is_written_into_it(tmp_path, capsys, command, report):
+    results = DOCS / "results" / ("paper" if command == "reproduction" else "sharing_sensitivity")
+    assert main([command, str(results), "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.strip() == f"empathy-zoo: wrote {tmp_path / report}"
+    assert (tmp_path / report).read_text().startswith("#")
+    assert [p.name for p in tmp_path.iterdir()] == [report]

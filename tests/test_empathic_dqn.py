@@ -222,7 +222,7 @@ def _spec(**kw) -> RunSpec:
 
 def _scores(path) -> dict:
     result = json.loads(path.read_text())
-    return {"train": result["train"], "eval": result["eval"], "config": result["config"]}
+    return {"train": result["train"], "eval": result["eval"], "config": result["config"], "memory_bytes": result["memory_bytes"]}
 
 
 def test_same_seed_gives_identical_result_files(tmp_path) -> None:

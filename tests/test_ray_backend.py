@@ -160,3 +160,27 @@ def test_an_unreachable_cluster_fails_at_once_naming_the_address(tmp_path, monke
     with pytest.raises(ValueError, match=expected):
         train_runs(SPECS, tmp_path / "out", replace(RAY, address=address))
     assert not (tmp_path / "out").exists()
+
+
+def test_address_auto_without_a_cluster_is_refused_before_anything_is_written(tmp_path, monkeypatch) -> None:
+    ray = pytest.importorskip("ray")
+    if ray.is_initialized():
+        pytest.skip("a Ray is already running in this process")
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    monkeypatch.setenv("RAY_TMPDIR", str(tmp_path / "ray-tmp"))  # (no cluster was started from here)
+    with pytest.raises(ValueError, match=r"--address auto found no running Ray cluster .*ray start --head"):
+        train_runs(SPECS, tmp_path / "out", replace(RAY, address="auto"))
+    assert not (tmp_path / "out").exists()
+
+
+def test_address_auto_follows_ray_address_and_checks_it(tmp_path, monkeypatch) -> None:
+    ray = pytest.importorskip("ray")
+    if ray.is_initialized():
+        pytest.skip("a Ray is already running in this process")
+    import empathy_zoo.training.ray_backend as backend
+
+    monkeypatch.setattr(backend, "CONNECT_TIMEOUT_S", 0.5)
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:1")
+    with pytest.raises(ValueError, match=r"cannot reach the Ray cluster at [^ ]+:1 "):  # (Ray names the host by its address)
+        train_runs(SPECS, tmp_path / "out", replace(RAY, address="auto"))
+    assert not (tmp_path / "out").exists()

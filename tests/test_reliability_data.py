@@ -182,6 +182,49 @@ def test_a_list_of_runs_of_other_seeds_rebuilds_them_from_the_runs_asked_for(tmp
     assert any("not asked for here, but finished and written too" in note for note in notes), notes
 
 
+@pytest.mark.parametrize("with_manifest", [False, True], ids=["checkpoint-alone", "with-its-list-of-runs"])
+def test_a_checkpoint_copied_to_the_name_of_other_runs_is_set_aside_and_they_train(tmp_path, monkeypatch, with_manifest):
+    """A checkpoint of run A renamed to the name run B's ensemble would have: it was said "kept"
+    (it holds runs not asked for), then B's ensemble found it under its own name and refused it
+    as "belongs to other runs". It is set aside (said, with the name that would resume it), and B
+    trains to the files it gives without it."""
+    import empathy_zoo.training.ensemble as ensemble
+
+    first, second = specs(seeds=(0,)), specs(seeds=(1,))
+    expected = json.loads(train_runs(second, tmp_path / "clean", options())[0].read_text())
+    out = tmp_path / "out"
+    real = ensemble._checkpoint
+
+    def stop_after_the_first_checkpoint(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as patch:
+        patch.setattr(ensemble, "_checkpoint", stop_after_the_first_checkpoint)
+        with pytest.raises(KeyboardInterrupt):
+            train_runs(first, out, options())
+    own = checkpoint_path(out, first)
+    assert own.exists()
+    wrong = checkpoint_path(out, second)
+    own.rename(wrong)
+    manifest = own.with_name(own.stem + ".runs.json")
+    if with_manifest:
+        manifest.rename(wrong.with_name(wrong.stem + ".runs.json"))
+    else:
+        manifest.unlink()
+    notes: list[str] = []
+    [path] = train_runs(second, out, options(), on_note=notes.append)
+    unstamped = ("wall_time_s", "created")
+    assert {k: v for k, v in json.loads(path.read_text()).items() if k not in unstamped} == {
+        k: v for k, v in expected.items() if k not in unstamped
+    }
+    aside = wrong.with_name(wrong.name + ".misnamed")
+    assert aside.exists() and not wrong.exists()
+    said = [note for note in notes if note.startswith(f"set aside checkpoint {wrong} as {aside.name}")]
+    assert said and first[0].run_id in said[0] and own.name in said[0], notes
+    assert not any(note.startswith("kept checkpoint") for note in notes), notes
+
+
 # ---------------------------------------------------------------------------- cause 3: label templates
 SWEEP = """
 [sweep]

@@ -299,6 +299,50 @@ def test_a_result_write_that_fails_at_the_end_names_its_file_and_keeps_the_run(t
     assert list((out / "checkpoints").glob("*")) == []
 
 
+def test_a_checkpoint_that_cannot_be_written_is_one_line_naming_it_and_the_previous_one_resumes(tmp_path, monkeypatch, capsys):
+    """A disk that fills between two checkpoints: torch's zip writer fails (a ``RuntimeError``
+    whose context is the ``OSError``); the command says so in one line naming the checkpoint, keeps
+    the previous one, and the same command resumes from it to the files of an uninterrupted run."""
+    import empathy_zoo.training.checkpoint as checkpoint_module
+
+    real, calls = checkpoint_module.write_with_atomic, []
+
+    def second_fills_the_disk(path, write):
+        calls.append(path)
+        if len(calls) < 2:
+            return real(path, write)
+        return real(path, lambda handle: write(_FullDiskHandle(handle)))
+
+    whole = tmp_path / "whole"
+    assert main(["train", "--out", str(whole), *TINY_TRAIN]) == 0
+    out = tmp_path / "out"
+    command = ["train", "--out", str(out), "--checkpoint-interval", "50", *TINY_TRAIN]
+    with monkeypatch.context() as patch:
+        patch.setattr(checkpoint_module, "write_with_atomic", second_fills_the_disk)
+        assert main(command) == 1
+    err = capsys.readouterr().err
+    (kept,) = (out / "checkpoints").glob("*.pt")
+    assert "Traceback" not in err and "inline_container" not in err
+    assert f"cannot write checkpoint {kept} (No space left on device)" in err, err
+    assert "previous checkpoint" in err and "same command" in err
+    assert load_checkpoint(kept)["step"] == 50
+    assert main(command) == 0
+    assert stored_results((out / "runs").glob("*.json")) == stored_results((whole / "runs").glob("*.json"))
+
+
+def test_a_first_checkpoint_that_cannot_be_written_says_none_is_kept(tmp_path, monkeypatch):
+    import empathy_zoo.training.checkpoint as checkpoint_module
+
+    real = checkpoint_module.write_with_atomic
+    monkeypatch.setattr(
+        checkpoint_module, "write_with_atomic", lambda path, write: real(path, lambda h: write(_FullDiskHandle(h)))
+    )
+    ckpt = tmp_path / "x.pt"
+    with pytest.raises(OSError, match=r"cannot write checkpoint .*x\.pt \(No space left on device\); no earlier") as error:
+        checkpoint_module.save_checkpoint(ckpt, {"a": 1})
+    assert error.value.errno == errno.ENOSPC and not ckpt.exists()
+
+
 def test_a_failed_write_that_cannot_keep_anything_says_the_run_is_lost(tmp_path, monkeypatch):
     specs = parse_sweep(tiny_sweep(), source="tiny.toml")
 

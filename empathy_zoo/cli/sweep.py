@@ -83,7 +83,9 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
-    written = write_reproduction(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix)
+    written = write_reproduction(
+        args.results, _report_out(args), command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix
+    )
     print(f"{PROG}: wrote {written}")
     return 0
 
@@ -93,8 +95,19 @@ def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
     from leaderboard.sensitivity import write_sensitivity
 
     note = _read_note(args.note)
-    print(f"{PROG}: wrote {write_sensitivity(args.results, args.out, command=args.produced_by or PRODUCED_BY, note=note)}")
+    print(
+        f"{PROG}: wrote {write_sensitivity(args.results, _report_out(args), command=args.produced_by or PRODUCED_BY, note=note)}"
+    )
     return 0
+
+
+def _report_out(args: argparse.Namespace) -> Path | None:
+    """Where a report goes: ``--out`` as given, or the report's own name inside it when it is an
+    existing directory (``None``: the report's default, inside the results directory)."""
+    if args.out is None:
+        return None
+    out = Path(args.out)
+    return out / args.report_name if out.is_dir() else out
 
 
 def _read_note(path: str | None) -> str:
@@ -183,6 +196,12 @@ def add_sweep_commands(sub: Any) -> None:
 
 def _add_report_options(parser: argparse.ArgumentParser, sweep: str, report: str) -> None:
     parser.add_argument("results", metavar="DIR", help=f"results directory of {sweep}")
-    parser.add_argument("--out", metavar="PATH", help=f"where to write (default: DIR/{report})")
+    parser.add_argument(
+        "--out",
+        type=path_text,
+        metavar="PATH",
+        help=f"the file to write, or a directory to write {report} into (default: DIR/{report})",
+    )
+    parser.set_defaults(report_name=report)
     parser.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
     parser.add_argument("--note", metavar="FILE.md", help="prose placed before the rules (how the run was made, what it shows)")

@@ -22,8 +22,23 @@ class CheckpointError(ValueError):
 
 def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
     """Write ``payload`` to ``path`` atomically, streamed into the temporary file (no copy of the
-    checkpoint is held in memory: an ensemble's replay memories are ≈ 1 GB in the paper profile)."""
-    write_with_atomic(path, lambda handle: torch.save({"format": FORMAT, **payload}, handle))
+    checkpoint is held in memory: an ensemble's replay memories are ≈ 1 GB in the paper profile).
+
+    A write that fails (a full disk) raises ``OSError`` with its ``errno``, naming the checkpoint
+    and saying whether an earlier one is kept (torch reports a failed write as a ``RuntimeError``
+    of its zip writer, the ``OSError`` in its context)."""
+    try:
+        write_with_atomic(path, lambda handle: torch.save({"format": FORMAT, **payload}, handle))
+    except (OSError, RuntimeError) as error:
+        cause = error if isinstance(error, OSError) else error.__context__
+        if not isinstance(cause, OSError):  # (a torch error that is no failed write)
+            raise
+        kept = (
+            f"the previous checkpoint {path} is kept: free space and run the same command again to resume from it"
+            if path.exists()
+            else "no earlier checkpoint was written: free space and run the same command again to start these runs again"
+        )
+        raise OSError(cause.errno, f"cannot write checkpoint {path} ({cause.strerror or cause}); {kept}") from error
 
 
 def load_checkpoint(path: Path) -> dict[str, Any]:

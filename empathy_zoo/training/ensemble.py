@@ -146,10 +146,15 @@ def _train_ensemble(
     if check_range is not None:  # fail now, not mid-run
         check_range(venv.engine.obs_low, venv.engine.obs_high)
     replay_bytes = _optional(learner, "replay_bytes_per_run")
-    memory = {
-        "replay_per_run": 0 if replay_bytes is None else replay_bytes(),
-        "learner_per_run": learner.memory_bytes_per_run(),
-    }
+    bytes_of = _optional(learner, "memory_bytes_of")
+    largest = learner.memory_bytes_per_run()
+    memory = [
+        {
+            "replay_per_run": 0 if replay_bytes is None else replay_bytes(),
+            "learner_per_run": largest if bytes_of is None else bytes_of(r),
+        }
+        for r in range(k)
+    ]
     total = first.steps
     label = f"{first.env} ×{k} runs"
     if report is not None:
@@ -162,9 +167,9 @@ def _train_ensemble(
                 k,
                 label,
                 line=(
-                    f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run "
-                    f"{memory['learner_per_run'] / mb:.1f} MB (replay {memory['replay_per_run'] / mb:.1f} MB), "
-                    f"total {k * memory['learner_per_run'] / mb:.0f} MB"
+                    f"{first.env}: {k} run(s) in lockstep on {options.device}; memory per run up to "
+                    f"{largest / mb:.1f} MB (replay {memory[0]['replay_per_run'] / mb:.1f} MB), "
+                    f"total {sum(m['learner_per_run'] for m in memory) / mb:.0f} MB"
                 ),
             )
         )
@@ -196,7 +201,7 @@ def _train_ensemble(
     results = []
     for r, spec in enumerate(specs):
         agent = agent_bytes(learner, r, {"run_id": spec.run_id, **spec.config()})  # (None: the method keeps none)
-        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory, agent)
+        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory[r], agent)
         if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
             try:
                 write_result(out_dir, document)

@@ -30,8 +30,9 @@ from tqdm.auto import tqdm
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
-from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, read_evaluation
+from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
 from empathy_zoo.randomness import STREAMS
@@ -242,6 +243,7 @@ def evaluate_results(
     out_dir: str | Path | None = None,
     progress: bool = True,
     on_written: Callable[[Path], None] | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> EvaluationSummary:
     """Evaluate every kept agent of ``results_dir`` in every scenario set of its environment.
 
@@ -249,9 +251,12 @@ def evaluate_results(
     shipped set of each environment the runs are of. ``out_dir`` (default ``results_dir``) gets
     ``evaluations/<set>/<run id>.json`` (:func:`empathy_zoo.evaluation_file.evaluation_path`).
     Files already there are skipped when made of the same agent, set and episodes, refused by name
-    otherwise; ``on_written(path)`` is called after each file written. ``progress`` draws a bar
-    counting the scenarios played. Raises ``ValueError`` when nothing could be evaluated (no run
-    kept an agent, or no set is for their environments), and for the errors of :func:`evaluate_run`.
+    otherwise; ``on_written(path)`` is called after each file written. Another process evaluating
+    into ``out_dir`` meanwhile is refused (:func:`empathy_zoo.output_lock.hold_output_dir`, on its
+    ``evaluations/``: training may go on in the same directory); ``on_note`` gets what the lock
+    has to say (nothing on Linux and macOS). ``progress`` draws a bar counting the scenarios played.
+    Raises ``ValueError`` when nothing could be evaluated (no run kept an agent, or no set is for
+    their environments), and for the errors of :func:`evaluate_run`.
     """
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
@@ -292,7 +297,23 @@ def evaluate_results(
         )
     for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
         check_output_dir(out, (directory.relative_to(out).as_posix(),))  # (no link below out)
-        remove_stale_temp_files(directory)
+    with hold_output_dir(evaluations_root(out), command_line(), on_note):  # (training may go on beside it)
+        for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
+            remove_stale_temp_files(directory)
+        _evaluate_todo(work, out, episodes, progress, on_written, summary)
+    return summary
+
+
+def _evaluate_todo(
+    work: Sequence[tuple[ScenarioSet, Path, dict[str, Any]]],
+    out: Path,
+    episodes: int,
+    progress: bool,
+    on_written: Callable[[Path], None] | None,
+    summary: EvaluationSummary,
+) -> None:
+    """Evaluate what of ``work`` has no evaluation file in ``out`` yet (:func:`evaluate_results`
+    checked everything and holds the directory)."""
     todo = []
     for scenario_set, path, result in work:
         target = evaluation_path(out, scenario_set.name, result["run_id"])
@@ -311,4 +332,3 @@ def evaluate_results(
             summary.written.append(target)
             if on_written is not None:
                 on_written(target)
-    return summary

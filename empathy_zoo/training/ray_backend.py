@@ -71,9 +71,16 @@ def import_ray() -> Any:
 def check_ray_address(address: str | None, timeout: float | None = None) -> None:
     """Raise ``ValueError`` within ``timeout`` seconds (default :data:`CONNECT_TIMEOUT_S`) when the
     cluster ``address`` (``"ray://HOST:PORT"`` or ``"HOST:PORT"``) is malformed or nothing answers
-    there, instead of letting ``ray.init`` retry for minutes. ``None`` and ``"auto"`` pass."""
-    if address is None or address == "auto":
+    there, instead of letting ``ray.init`` retry for minutes. ``None`` passes (Ray is started on
+    this machine); ``"auto"`` is the cluster Ray finds (``RAY_ADDRESS``, or the last one started on
+    this machine), refused when there is none (:func:`auto_address`)."""
+    if address is None:
         return
+    if address == "auto":
+        found = auto_address()
+        if found is None:  # (this Ray cannot say before connecting: ray.init will)
+            return
+        address = found
     host, _, port = address.removeprefix("ray://").rpartition(":")
     if not host or not port.isdigit():
         raise ValueError(f"--address {address!r}: expected auto, ray://HOST:PORT (Ray Client) or HOST:PORT")
@@ -85,6 +92,30 @@ def check_ray_address(address: str | None, timeout: float | None = None) -> None
             f"cannot reach the Ray cluster at {address} ({error.strerror or error}, waited at most {limit:g} s): check "
             "the address, that the head node runs Ray (ray start --head) and that its port is open to this machine"
         ) from None
+
+
+NO_CLUSTER = (
+    "--address auto found no running Ray cluster (RAY_ADDRESS is not set and none was started on this machine): "
+    "start one (ray start --head), give its head's address (--address HOST:PORT), or leave --address out to "
+    "start Ray on this machine"
+)
+"""The refusal of ``--address auto`` where there is no cluster (Ray's own says ``--address flag``)."""
+
+
+def auto_address() -> str | None:
+    """``HOST:PORT`` of the cluster ``address="auto"`` would join, as Ray itself finds it
+    (``RAY_ADDRESS``, else the address file of the last cluster started on this machine); ``ValueError``
+    (:data:`NO_CLUSTER`) when there is none; ``None`` when this Ray version cannot say before
+    connecting (its private finder moved)."""
+    try:
+        from ray._private.services import canonicalize_bootstrap_address
+    except ImportError:  # pragma: no cover - another Ray layout: ray.init says it
+        return None
+    try:
+        found = canonicalize_bootstrap_address("auto")
+    except ConnectionError:
+        raise ValueError(NO_CLUSTER) from None
+    return None if found is None else str(found)
 
 
 def train_with_ray(
@@ -110,7 +141,10 @@ def train_with_ray(
         if options.address is None:
             ray.init(num_cpus=os.cpu_count() or 1, include_dashboard=False, **settings)
         else:
-            ray.init(address=options.address, **settings)
+            try:
+                ray.init(address=options.address, **settings)
+            except ConnectionError as error:  # (gone since the check before training)
+                raise ValueError(NO_CLUSTER if options.address == "auto" else f"--address {options.address}: {error}") from None
     try:
         _run_tasks(ray, [list(chunk) for chunk in chunks], out_dir, options, on_result, fault_injection)
     finally:

@@ -15,7 +15,10 @@ checkpoint of the output directory:
 * one that holds runs asked for here beside runs that cannot be rebuilt from those asked for is
   kept (it resumes when they are asked for too), and its runs asked for start again from scratch;
 * one that cannot be resumed (the code that defines its runs changed, or it overlaps a newer one)
-  is removed, and its runs still to do start again from scratch.
+  is removed, and its runs still to do start again from scratch;
+* one that holds other runs than its name says (a renamed or copied file) is set aside as
+  ``<name>.misnamed`` (said, with the name that would resume it): under its name it would be
+  taken for the checkpoint of other runs.
 
 The list of runs beside a checkpoint is data, never code: it is read as JSON and each record is
 compared with the :meth:`~empathy_zoo.experiment.model.RunSpec.request` of the runs asked for
@@ -53,6 +56,8 @@ MANIFEST_FORMAT = 2
 """Format of that list: 2, each record a run's ``request()`` with its ``run_id``; 1 (read too): without it."""
 UNREADABLE_SUFFIX = ".unreadable"
 """Suffix a list of runs that cannot be read is set aside with."""
+MISNAMED_SUFFIX = ".misnamed"
+"""Suffix a checkpoint is set aside with when it holds other runs than its name says (renamed or copied)."""
 REQUEST_KEYS = frozenset(inspect.signature(RunSpec.of).parameters)
 """The keys a record of a list of runs may hold (those of :meth:`RunSpec.request`), besides ``run_id``."""
 
@@ -82,6 +87,20 @@ def write_manifest(checkpoint: Path, specs: Sequence[RunSpec]) -> None:
 def remove_checkpoint(checkpoint: Path) -> None:
     checkpoint.unlink(missing_ok=True)
     manifest_path(checkpoint).unlink(missing_ok=True)
+
+
+def _set_aside_misnamed(checkpoint: Path) -> Path:
+    """Rename ``checkpoint`` (and its list of runs) to ``<name>.misnamed`` (never over a file)."""
+    aside = checkpoint.with_name(checkpoint.name + MISNAMED_SUFFIX)
+    number = 1
+    while aside.exists():
+        number += 1
+        aside = checkpoint.with_name(f"{checkpoint.name}{MISNAMED_SUFFIX}.{number}")
+    checkpoint.replace(aside)
+    manifest = manifest_path(checkpoint)
+    if manifest.exists():
+        manifest.replace(aside.with_name(manifest.name + aside.name.removeprefix(checkpoint.name)))
+    return aside
 
 
 def read_manifest(manifest: Path, checkpoint: Path) -> list[dict[str, Any]]:
@@ -159,6 +178,9 @@ class _Ensemble:
     """Why it cannot resume (``""`` when it can)."""
     dead: bool = False
     """It can never resume (the code that defines its runs changed): remove it."""
+    misnamed: bool = False
+    """It holds other runs than its name says (a renamed or copied file): set it aside, as it
+    would be taken for the checkpoint of the runs its name is for."""
 
 
 def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], None]) -> _Ensemble:
@@ -176,6 +198,8 @@ def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], N
         else:
             return _ensemble_of_records(checkpoint, records, asked)
     ids = _checkpoint_run_ids(checkpoint)  # (written before checkpoints had a list of runs, or it was unreadable)
+    if _checkpoint_file(checkpoint.parent.parent, checkpoint.stem.rpartition("-")[0], ids) != checkpoint:
+        return _Ensemble(ids, None, "misnamed", misnamed=True)
     if all(run_id in asked.known for run_id in ids):
         return _Ensemble(ids, [asked.known[run_id] for run_id in ids])
     return _Ensemble(ids, None, "it holds runs not asked for here, and has no list of runs to rebuild them from")
@@ -233,6 +257,14 @@ def plan_ensembles(
     for checkpoint in checkpoints:  # the most recent first: it wins an overlap
         ensemble = _ensemble_of(checkpoint, runs_asked, on_note)
         ids, specs = ensemble.ids, ensemble.specs
+        if ensemble.misnamed:
+            aside = _set_aside_misnamed(checkpoint)
+            on_note(
+                f"set aside checkpoint {checkpoint} as {aside.name}: it holds the runs {', '.join(ids)}, not those its "
+                f"name is for (was it renamed or copied?); to resume them, give it back its own name "
+                f"{_checkpoint_file(out_dir, checkpoint.stem.rpartition('-')[0], ids).name}"
+            )
+            continue
         asked = [run_id for run_id in ids if run_id in pending]
         finished = [run_id for run_id in ids if run_id not in pending and result_path(out_dir, run_id).exists()]
         overlap = [run_id for run_id in ids if run_id in claimed]

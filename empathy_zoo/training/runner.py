@@ -24,6 +24,7 @@ from typing import Any
 
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, read_result, result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
@@ -98,12 +99,13 @@ def train_runs(
     check_before_training([s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options)
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
-    stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
-    if stale:
-        note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
-    _settle_superseded(out_dir / RUNS_DIR)
-    with _set_aside(out_dir, redo):
-        _train_todo(specs, out_dir, options, on_result, note)
+    with hold_output_dir(out_dir, command_line(), note):
+        stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
+        if stale:
+            note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
+        _settle_superseded(out_dir / RUNS_DIR)
+        with _set_aside(out_dir, redo):
+            _train_todo(specs, out_dir, options, on_result, note)
     return [result_path(out_dir, s.run_id) for s in specs]
 
 
