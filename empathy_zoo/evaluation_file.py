@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.document_checks import DocumentChecker
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
@@ -104,57 +104,21 @@ def evaluation_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     return sorted(p for p in root.glob("*/*.json") if not p.name.startswith(".") and p.is_file())
 
 
-class _Checker:
-    def __init__(self, path: Path) -> None:
-        self.path = path
-
-    def fail(self, field: str, expected: str, value: Any) -> EvaluationFileError:
-        shown = repr(value)
-        shown = shown if len(shown) <= 60 else shown[:57] + "..."
-        return EvaluationFileError(
-            f"{self.path}: field {field}: expected {expected}, got {shown}; the file is damaged or not an evaluation "
-            "of this suite: move it away (empathy-zoo evaluate writes it again)"
-        )
-
-    def table(self, value: Any, field: str) -> dict[str, Any]:
-        if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
-            raise self.fail(field, "an object", value)
-        return value
-
-    def has(self, table: Mapping[str, Any], keys: tuple[str, ...], field: str) -> None:
-        missing = [key for key in keys if key not in table]
-        if missing:
-            raise EvaluationFileError(f"{self.path}: field {field}{missing[0]}: missing; the file is damaged: move it away")
-
-    def integer(self, value: Any, field: str, low: int) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise self.fail(field, f"an int >= {low}", value)
-        return value
-
-    def text(self, value: Any, field: str) -> str:
-        if not isinstance(value, str) or not value or "\n" in value:
-            raise self.fail(field, "a non-empty one-line string", value)
-        return value
-
-    def name(self, value: Any, field: str) -> str:
-        try:
-            return check_path_name(value, "a name")
-        except ValueError:
-            raise self.fail(field, "a name of letters, digits, '_', '-' and '.'", value) from None
-
-    def numbers(self, value: Any, field: str, length: int) -> list[float]:
-        if not isinstance(value, list) or len(value) != length:
-            raise self.fail(field, f"an array of {length} numbers (one per episode)", value)
-        for i, item in enumerate(value):
-            if isinstance(item, bool) or not isinstance(item, (int, float)):
-                raise self.fail(f"{field}[{i}]", "a number", item)
-        return value
+def _checker(path: Path) -> DocumentChecker:
+    """Checks of one evaluation file, each raising :class:`EvaluationFileError` naming ``path`` and the field."""
+    return DocumentChecker(
+        path,
+        EvaluationFileError,
+        "an evaluation file",
+        "an evaluation of this suite",
+        "move it away (empathy-zoo evaluate writes it again)",
+    )
 
 
 def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     """``document`` (a parsed evaluation file) if it follows the schema (see the module page), else
     :class:`EvaluationFileError` naming ``path`` and the field."""
-    check = _Checker(Path(path))
+    check = _checker(Path(path))
     evaluation = check.table(document, "(the whole file)")
     check.has(evaluation, REQUIRED_FIELDS, "")
     if evaluation["format"] != FORMAT:
@@ -204,7 +168,7 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         metrics = check.table(entry["metrics"], f"{where}.metrics")
         check.has(metrics, METRIC_NAMES, f"{where}.metrics.")
         for metric in METRIC_NAMES:
-            check.numbers(metrics[metric], f"{where}.metrics.{metric}", episodes)
+            check.numbers(metrics[metric], f"{where}.metrics.{metric}", length=episodes)
     if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
         raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
     if len(set(names)) != len(names):

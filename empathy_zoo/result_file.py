@@ -26,12 +26,13 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED, MAX_STEPS
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_label, check_path_name
+from empathy_zoo.names import check_path_name
 
 __all__ = [
     "AGENT_SUFFIXES",
@@ -55,8 +56,6 @@ REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", 
 fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
 """Tables of ``config`` every result file has."""
-_SHOWN = 60
-"""Characters of a bad value quoted in a message."""
 _SHA256 = re.compile(r"[0-9a-f]{64}")
 """A plug-in module's source hash (``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`)."""
 
@@ -65,82 +64,20 @@ class ResultFileError(ValueError):
     """A result file is not what this suite writes; the message names the file and the field."""
 
 
-def _shown(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= _SHOWN else text[: _SHOWN - 3] + "..."
-
-
-class _Checker:
-    """Checks of one document, each raising :class:`ResultFileError` naming ``path`` and the field."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-
-    def fail(self, field: str, expected: str, value: Any) -> ResultFileError:
-        return ResultFileError(
-            f"{self.path}: field {field}: expected {expected}, got {_shown(value)}; the file is damaged or not a "
-            "result of this suite: move it away (its run is redone on the next reproduce/train)"
-        )
-
-    def table(self, value: Any, field: str) -> Mapping[str, Any]:
-        if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
-            raise self.fail(field, "an object", value)
-        return value
-
-    def has(self, table: Mapping[str, Any], keys: tuple[str, ...], field: str) -> None:
-        missing = [key for key in keys if key not in table]
-        if missing:
-            raise ResultFileError(
-                f"{self.path}: field {field}{missing[0]}: missing (a result file has {', '.join(keys)}); "
-                "the file is damaged or not a result of this suite: move it away"
-            )
-
-    def integer(self, value: Any, field: str, low: int, high: int | None = None) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < low or (high is not None and value > high):
-            raise self.fail(field, f"an int >= {low}" + ("" if high is None else f" and <= {high:,}"), value)
-        return value
-
-    def positive(self, value: Any, field: str) -> int:
-        return self.integer(value, field, 1)
-
-    def number(self, value: Any, field: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(field, "a number", value)
-        return value
-
-    def text(self, value: Any, field: str) -> str:
-        if not isinstance(value, str) or not value or "\n" in value:
-            raise self.fail(field, "a non-empty one-line string", value)
-        return value
-
-    def label(self, value: Any, field: str) -> str:
-        expected = "a non-empty one-line string, a label as a run is built with"
-        if not isinstance(value, str) or not value:
-            raise self.fail(field, expected, value)
-        try:
-            return check_label(value, "the label")
-        except ValueError as error:
-            raise self.fail(field, f"{expected} ({error})", value) from None
-
-    def name(self, value: Any, field: str) -> str:
-        try:
-            return check_path_name(value, "a file-name-safe name")
-        except ValueError:
-            raise self.fail(field, "a name of letters, digits, '_', '-' and '.' (it becomes part of file names)", value) from None
-
-    def numbers(self, value: Any, field: str, integral: bool = False) -> list:
-        if not isinstance(value, list):
-            raise self.fail(field, "an array of numbers", value)
-        for i, item in enumerate(value):
-            self.number(item, f"{field}[{i}]")
-            if integral and not isinstance(item, int) and not (math.isfinite(item) and item == int(item)):
-                raise self.fail(f"{field}[{i}]", "an integer", item)
-        return value
+def _checker(path: Path) -> DocumentChecker:
+    """Checks of one result file, each raising :class:`ResultFileError` naming ``path`` and the field."""
+    return DocumentChecker(
+        path,
+        ResultFileError,
+        "a result file",
+        "a result of this suite",
+        "move it away (its run is redone on the next reproduce/train)",
+    )
 
 
 def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     """``document`` (a parsed result file) if it follows the schema, else :class:`ResultFileError`."""
-    check = _Checker(Path(path))
+    check = _checker(Path(path))
     result = dict(check.table(document, "(the whole file)"))
     check.has(result, REQUIRED_FIELDS, "")
     if result["schema"] == 1 and not isinstance(result["schema"], bool):
@@ -150,7 +87,7 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
         raise ResultFileError(
             f"{path}: field schema: this suite reads result schemas 1, 2 and {SCHEMA}, "
-            f"got {_shown(result['schema'])}; move the file away"
+            f"got {shown(result['schema'])}; move the file away"
         )
     check.name(result["run_id"], "run_id")
     check.name(result["env"], "env")
@@ -193,7 +130,7 @@ AGENT_SUFFIXES = (".agent.pt", ".agent.zip")
 """How the name of a run's agent file ends (:mod:`empathy_zoo.agent_file`)."""
 
 
-def _check_agent(check: _Checker, result: Mapping[str, Any]) -> None:
+def _check_agent(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     """``agent``: the agent file the run kept beside its result file, ``{"file": "<run id>.agent.pt",
     "sha256": ...}``, or null when its method keeps none (absent in files made before runs kept
     their agents)."""
@@ -325,14 +262,14 @@ def upgrade_schema_2(result: dict[str, Any]) -> dict[str, Any]:
     return {**result, "schema": SCHEMA, "config": {**config, "description": schema_2_description(result["method"], config)}}
 
 
-def _check_optional(check: _Checker, table: Mapping[str, Any], prefix: str, checks: Mapping[str, Any]) -> None:
+def _check_optional(check: DocumentChecker, table: Mapping[str, Any], prefix: str, checks: Mapping[str, Any]) -> None:
     """Fields nobody needs, written by this suite: checked when present."""
     for name, check_field in checks.items():
         if name in table:
             check_field(table[name], f"{prefix}{name}")
 
 
-def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
+def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     config = check.table(result["config"], "config")
     check.has(config, CONFIG_TABLES, "config.")
     settings = check.table(config["settings"], "config.settings")
@@ -387,7 +324,7 @@ def _check_config(check: _Checker, result: Mapping[str, Any]) -> None:
         ) from None
 
 
-def _check_grid(check: _Checker, engine: Any, env_kwargs: Mapping[str, Any]) -> None:
+def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, Any]) -> None:
     """The grid arguments of ``env_kwargs`` (each an int already) within what the environment
     builds (:func:`~empathy_zoo.engine.arguments.check_grid_arguments`: a size of at most
     :data:`~empathy_zoo.limits.MAX_SIZE`, an odd view below it, lookup tables within their bound),

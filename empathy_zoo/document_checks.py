@@ -1,0 +1,110 @@
+"""Field-by-field checks of a parsed JSON document the suite wrote (a result file, an evaluation
+file), each raising one ``ValueError`` line that names the file and the field.
+
+:class:`DocumentChecker` is what :mod:`empathy_zoo.result_file` and
+:mod:`empathy_zoo.evaluation_file` check with; each gives its own error class and says what the
+document is and what to do with a damaged one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.names import check_label, check_path_name
+
+__all__ = ["DocumentChecker", "shown"]
+
+SHOWN = 60
+"""Characters of a bad value quoted in a message."""
+
+
+def shown(value: Any) -> str:
+    """``repr(value)``, cut to :data:`SHOWN` characters."""
+    text = repr(value)
+    return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
+
+
+@dataclass(frozen=True)
+class DocumentChecker:
+    """Checks of one document, each raising :attr:`error` naming :attr:`path` and the field."""
+
+    path: Path
+    """The file the document was read from."""
+    error: type[ValueError]
+    """The error raised (e.g. :class:`~empathy_zoo.result_file.ResultFileError`)."""
+    what: str
+    """What the document is, as a message says it: ``"a result file"``."""
+    suite: str
+    """What a good one is: ``"a result of this suite"``."""
+    remedy: str
+    """What to do with a damaged one: ``"move it away (...)"``."""
+
+    def fail(self, field: str, expected: str, value: Any) -> ValueError:
+        """The error for ``field`` holding ``value`` where ``expected`` was."""
+        return self.error(
+            f"{self.path}: field {field}: expected {expected}, got {shown(value)}; the file is damaged or not "
+            f"{self.suite}: {self.remedy}"
+        )
+
+    def table(self, value: Any, field: str) -> dict[str, Any]:
+        if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
+            raise self.fail(field, "an object", value)
+        return value
+
+    def has(self, table: Mapping[str, Any], keys: tuple[str, ...], field: str) -> None:
+        """Every one of ``keys`` is in ``table`` (``field`` is its prefix, ``"config."``)."""
+        missing = [key for key in keys if key not in table]
+        if missing:
+            raise self.error(
+                f"{self.path}: field {field}{missing[0]}: missing ({self.what} has {', '.join(keys)}); "
+                f"the file is damaged or not {self.suite}: move it away"
+            )
+
+    def integer(self, value: Any, field: str, low: int, high: int | None = None) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low or (high is not None and value > high):
+            raise self.fail(field, f"an int >= {low}" + ("" if high is None else f" and <= {high:,}"), value)
+        return value
+
+    def positive(self, value: Any, field: str) -> int:
+        return self.integer(value, field, 1)
+
+    def number(self, value: Any, field: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(field, "a number", value)
+        return value
+
+    def text(self, value: Any, field: str) -> str:
+        if not isinstance(value, str) or not value or "\n" in value:
+            raise self.fail(field, "a non-empty one-line string", value)
+        return value
+
+    def label(self, value: Any, field: str) -> str:
+        """A label by the rule runs are built with (:func:`empathy_zoo.names.check_label`)."""
+        expected = "a non-empty one-line string, a label as a run is built with"
+        if not isinstance(value, str) or not value:
+            raise self.fail(field, expected, value)
+        try:
+            return check_label(value, "the label")
+        except ValueError as error:
+            raise self.fail(field, f"{expected} ({error})", value) from None
+
+    def name(self, value: Any, field: str) -> str:
+        """A name that becomes part of file names (:func:`empathy_zoo.names.check_path_name`)."""
+        try:
+            return check_path_name(value, "a file-name-safe name")
+        except ValueError:
+            raise self.fail(field, "a name of letters, digits, '_', '-' and '.' (it becomes part of file names)", value) from None
+
+    def numbers(self, value: Any, field: str, integral: bool = False, length: int | None = None) -> list[Any]:
+        """An array of numbers (integers where ``integral``; of ``length`` items where given)."""
+        if not isinstance(value, list) or (length is not None and len(value) != length):
+            raise self.fail(field, "an array of numbers" + ("" if length is None else f" of {length} items"), value)
+        for i, item in enumerate(value):
+            self.number(item, f"{field}[{i}]")
+            if integral and not isinstance(item, int) and not (math.isfinite(item) and item == int(item)):
+                raise self.fail(f"{field}[{i}]", "an integer", item)
+        return value
