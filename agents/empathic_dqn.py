@@ -27,9 +27,11 @@ nothing else: each has its own seed, replay memory, ε stream and target copies.
 
 from __future__ import annotations
 
+import importlib
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -53,6 +55,9 @@ __all__ = [
     "own_where_unseen",
     "linear_epsilon",
 ]
+
+if TYPE_CHECKING:
+    from agents.fused_update import NumbaUpdate
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
 
@@ -170,6 +175,11 @@ class EmpathicDQN:
 
     settings_class = EmpathicDQNSettings
 
+    update_kernel = "torch"
+    """How :meth:`update` computes a gradient step unless the constructor is told: ``"torch"``
+    (batched PyTorch operations) or ``"numba"`` (compiled per-run loops, :mod:`agents.fused_update`:
+    the same algorithm in float32, sums in another order). On an instance: the kernel it uses."""
+
     @classmethod
     def memory_needed(
         cls, settings: Sequence[EmpathicDQNSettings], obs_size: int, num_actions: int = 5, *, num_others: int = 1
@@ -217,7 +227,11 @@ class EmpathicDQN:
         device: str = "cpu",
         *,
         num_others: int = 1,
+        update_kernel: str | None = None,
     ) -> None:
+        kernel = type(self).update_kernel if update_kernel is None else update_kernel
+        if kernel not in ("torch", "numba"):
+            raise ValueError(f"update_kernel must be 'torch' or 'numba', got {kernel!r}")
         if len(settings) != len(seeds) or not settings:
             raise ValueError("give one settings object per seed, and at least one run")
         shared = {s.shared() for s in settings}
@@ -262,6 +276,21 @@ class EmpathicDQN:
         self.env_steps = 0  # per run
         self.grad_steps = 0
         self.last_loss = float("nan")
+        self._numba: NumbaUpdate | None = None
+        if kernel == "numba" and self.device.type == "cpu":  # (other devices: the PyTorch update)
+            fused_update = importlib.import_module("agents.fused_update")  # (imports numba: only when asked)
+            if fused_update.numba_available():
+                self._numba = fused_update.NumbaUpdate(
+                    self.online, self.target, self.optimizer, np.concatenate([np.arange(k), self._emp]), self.config.batch_size
+                )
+            else:
+                warnings.warn(
+                    f"the numba update kernel is not available ({fused_update.numba_unavailable_reason()}); "
+                    "using the PyTorch update",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+        self.update_kernel = "numba" if self._numba is not None else "torch"
 
     # ------------------------------------------------------------------ acting
     def q_values(self, observations: torch.Tensor, which: str = "emp") -> torch.Tensor:
@@ -330,6 +359,16 @@ class EmpathicDQN:
         """One gradient step of every run's ``Q`` (and ``Q_emp``); returns the mean loss."""
         k, cfg, emp = self.num_runs, self.config, self._emp.size
         batch = self.sample_batch()
+        loss = self._torch_step(batch) if self._numba is None else self._numba_step(batch, self._numba)
+        self.grad_steps += 1
+        if self.grad_steps % cfg.target_update_interval == 0:
+            self.sync_target()
+        self.last_loss = loss / (k + emp)
+        return self.last_loss
+
+    def _torch_step(self, batch: dict[str, torch.Tensor]) -> float:
+        """The gradient step of :meth:`update` in batched PyTorch operations; returns the summed loss."""
+        k, cfg, emp = self.num_runs, self.config, self._emp.size
         with torch.no_grad():
             q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
             if emp:
@@ -357,11 +396,23 @@ class EmpathicDQN:
         self.optimizer.zero_grad()
         loss.backward()
         self.optimizer.step()
-        self.grad_steps += 1
-        if self.grad_steps % cfg.target_update_interval == 0:
-            self.sync_target()
-        self.last_loss = float(loss.detach()) / (k + emp)
-        return self.last_loss
+        return float(loss.detach())
+
+    def _numba_step(self, batch: dict[str, torch.Tensor], fused: NumbaUpdate) -> float:
+        """The gradient step of :meth:`update` in compiled per-run loops (:mod:`agents.fused_update`),
+        the targets of ``Q_emp`` still from :meth:`targets`; returns the summed loss."""
+        k, emp = self.num_runs, self._emp.size
+        if emp:
+            swapped = batch["others_swapped" if self.aggregated else "other_swapped"]
+            q_next, target_next, target_swapped = fused.next_values(batch["next_obs"], swapped)
+            assert target_swapped is not None
+            with torch.no_grad():
+                y, y_emp = self.targets(batch, q_next, target_next, target_swapped)
+                targets = torch.cat([y, y_emp if emp == k else y_emp.index_select(0, self._emp_rows)])
+        else:
+            q_next, target_next, _ = fused.next_values(batch["next_obs"], None)
+            targets = fused.dqn_targets(batch["reward"], batch["terminated"], q_next, target_next, self.config.gamma)
+        return fused.train(batch["obs"], batch["action"], targets)
 
     def targets(
         self, batch: dict[str, torch.Tensor], q_next: torch.Tensor, target_next: torch.Tensor, target_swapped: torch.Tensor

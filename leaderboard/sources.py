@@ -31,7 +31,7 @@ from empathy_zoo.result_file import experiment_of
 from leaderboard.aggregate import check_runs, load_result_files, table_env
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
 
-__all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option"]
+__all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option", "parse_label_options"]
 
 BUDGET_SEPARATOR = " · "
 """Between a row's label and its budget, where the leaderboard holds several budgets."""
@@ -97,6 +97,18 @@ def parse_label_option(text: str) -> tuple[str, str]:
     if not equals or not directory or not prefix.strip():
         raise ValueError(f"--label takes DIR=PREFIX (a results directory and the prefix of its labels), got {text!r}")
     return directory, prefix.strip()
+
+
+def parse_label_options(options: Sequence[str] | None) -> dict[str | os.PathLike[str], str]:
+    """``{directory: prefix}`` of the ``--label DIR=PREFIX`` options (:func:`parse_label_option`);
+    a directory given twice is refused."""
+    labels: dict[str | os.PathLike[str], str] = {}
+    for option in options or ():
+        directory, prefix = parse_label_option(option)
+        if directory in labels:
+            raise ValueError(f"--label {directory}= is given twice ({labels[directory]!r} and {prefix!r})")
+        labels[directory] = prefix
+    return labels
 
 
 def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:

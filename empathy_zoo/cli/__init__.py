@@ -7,6 +7,7 @@
     empathy-zoo play --env sharing_v0 --episodes 3 --render ansi
     empathy-zoo watch RUN_ID [--dir runs] [--gif episode.gif]   # a trained agent's greedy episodes
     empathy-zoo evaluate results/quick                # kept agents beside partners they never met
+    empathy-zoo export results/quick --format marl-eval --out quick.json   # results in marl-eval's JSON
 
 ``train`` takes one ``--<field>`` option per field of the method's settings and of its reward
 transform (see ``empathy-zoo train --method NAME --help``); the method is ``--method``, else
@@ -20,7 +21,7 @@ One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.settings_options`, a method's settings as options),
 :mod:`~empathy_zoo.cli.sweep` (reproduce, leaderboard, reproduction, sensitivity),
 :mod:`~empathy_zoo.cli.browse` (methods, policies, play), :mod:`~empathy_zoo.cli.watch` (watch),
-:mod:`~empathy_zoo.cli.evaluate` (evaluate); what they share is in
+:mod:`~empathy_zoo.cli.evaluate` (evaluate), :mod:`~empathy_zoo.cli.export` (export); what they share is in
 :mod:`~empathy_zoo.cli.common`.
 """
 
@@ -34,6 +35,7 @@ from collections.abc import Sequence
 from empathy_zoo.cli.browse import add_browse_commands
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS
 from empathy_zoo.cli.evaluate import add_evaluate
+from empathy_zoo.cli.export import add_export
 from empathy_zoo.cli.sweep import add_sweep_commands
 from empathy_zoo.cli.train import RUN_KEYS, add_train, train_method
 from empathy_zoo.cli.watch import add_watch
@@ -50,6 +52,7 @@ def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParse
     add_browse_commands(sub)
     add_watch(sub)
     add_evaluate(sub)
+    add_export(sub)
     return parser
 
 

@@ -130,19 +130,14 @@ def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     """Write the leaderboard (Markdown, CSV, HTML) of existing results: one directory, or several
     into one leaderboard (``--out`` required; ``--label DIR=PREFIX`` prefixes a directory's labels)."""
     from leaderboard.report import write_leaderboard
-    from leaderboard.sources import parse_label_option
+    from leaderboard.sources import parse_label_options
 
     if len(args.results) > 1 and args.out is None:
         raise ValueError(
             f"{len(args.results)} results directories: name the output directory with --out OUT "
             "(the leaderboard of several is written into none of them unless asked)"
         )
-    labels: dict[str | os.PathLike[str], str] = {}
-    for option in args.label or ():
-        directory, prefix = parse_label_option(option)
-        if directory in labels:
-            raise ValueError(f"--label {directory}= is given twice ({labels[directory]!r} and {prefix!r})")
-        labels[directory] = prefix
+    labels = parse_label_options(args.label)
     results = args.results[0] if len(args.results) == 1 else args.results
     print_written(write_leaderboard(results, args.out, command=command, labels=labels or None))
     return 0
