@@ -90,6 +90,35 @@ def test_evaluating_again_writes_the_same_bytes(trained, evaluated, tmp_path) ->
     assert contents(tmp_path) == contents(evaluated)
 
 
+def test_threads_change_nothing_evaluated_and_are_put_back(trained, evaluated, tmp_path, monkeypatch) -> None:
+    """The command line plays on one torch thread by default (several are many times slower on a
+    busy machine); two give the same bytes; the caller's thread count is put back; more threads
+    than CPUs are refused before anything is played."""
+    import torch
+
+    import empathy_zoo.training.heldout as heldout
+
+    results, _ = trained
+    seen: list[int] = []
+    real = heldout.evaluate_run
+
+    def recording(*args, **kwargs):
+        seen.append(torch.get_num_threads())
+        return real(*args, **kwargs)
+
+    before = torch.get_num_threads()
+    monkeypatch.setattr(heldout, "evaluate_run", recording)
+    monkeypatch.setattr(heldout, "cpu_count", lambda: 2)
+    evaluate_results(results, episodes=EPISODES, out_dir=tmp_path / "two", progress=False, threads=2)
+    assert contents(tmp_path / "two") == contents(evaluated)
+    assert seen and set(seen) == {2} and torch.get_num_threads() == before
+    assert run_command(["evaluate", str(results), "--episodes", str(EPISODES), "--no-progress", "--out", str(tmp_path / "one")]) == 0
+    assert seen[-1] == 1 and torch.get_num_threads() == before
+    with pytest.raises(ValueError, match=r"threads must be at most 2 \(the CPUs of this machine\)"):
+        evaluate_results(results, episodes=EPISODES, out_dir=tmp_path / "three", progress=False, threads=3)
+    assert not (tmp_path / "three").exists()
+
+
 def test_a_killed_evaluation_resumes_skipping_what_it_wrote(trained, evaluated, tmp_path) -> None:
     results, _ = trained
 

@@ -1,6 +1,6 @@
 """``evaluate``: play every kept agent of a results directory beside held-out partners.
 
-    empathy-zoo evaluate RESULTS_DIR [--scenarios NAME_OR_FILE ...] [--episodes N] [--out DIR] [--no-progress]
+    empathy-zoo evaluate RESULTS_DIR [--scenarios NAME_OR_FILE ...] [--episodes N] [--out DIR] [--threads N] [--no-progress]
 
 Writes ``<out>/evaluations/<scenario set>/<run id>.json`` (:mod:`empathy_zoo.training.heldout`);
 run again, it skips what is done. ``empathy-zoo leaderboard`` then adds a "Held-out partners"
@@ -24,7 +24,9 @@ def cmd_evaluate(args: argparse.Namespace, command: str) -> int:
     if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be positive, got {args.episodes}")
     options: dict[str, Any] = {} if args.episodes is None else {"episodes": args.episodes}
-    summary = evaluate_results(args.results, args.scenarios, out_dir=args.out, progress=not args.no_progress, **options)
+    summary = evaluate_results(
+        args.results, args.scenarios, out_dir=args.out, progress=not args.no_progress, threads=args.threads, **options
+    )
     if summary.without_agent:
         print(
             f"{PROG}: note: {len(summary.without_agent)} run(s) kept no trained agent and are not evaluated "
@@ -62,5 +64,13 @@ def add_evaluate(sub: Any) -> None:
         "--episodes", type=int, metavar="N", help=f"greedy episodes per run and scenario (default: {DEFAULT_EPISODES})"
     )
     parser.add_argument("--out", metavar="DIR", help="where evaluations/ goes (default: RESULTS_DIR)")
+    parser.add_argument(
+        "--threads",
+        type=int,
+        default=1,
+        metavar="N",
+        help="torch CPU threads (default: 1; the agents' small products gain nothing from more, and extra threads "
+        "are much slower on a busy machine; what is computed does not depend on it)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=cmd_evaluate)

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
 from tqdm.auto import tqdm
 
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
@@ -32,6 +33,7 @@ from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.limits import check_at_most, cpu_count
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
@@ -244,6 +246,7 @@ def evaluate_results(
     progress: bool = True,
     on_written: Callable[[Path], None] | None = None,
     on_note: Callable[[str], None] | None = None,
+    threads: int = 1,
 ) -> EvaluationSummary:
     """Evaluate every kept agent of ``results_dir`` in every scenario set of its environment.
 
@@ -254,12 +257,18 @@ def evaluate_results(
     otherwise; ``on_written(path)`` is called after each file written. Another process evaluating
     into ``out_dir`` meanwhile is refused (:func:`empathy_zoo.output_lock.hold_output_dir`, on its
     ``evaluations/``: training may go on in the same directory); ``on_note`` gets what the lock
-    has to say (nothing on Linux and macOS). ``progress`` draws a bar counting the scenarios played.
+    has to say (nothing on Linux and macOS). ``threads``: torch's CPU threads while playing (1, as
+    training: the agents' small products gain nothing from more, and extra threads are many times
+    slower on a busy machine; at most :func:`empathy_zoo.limits.cpu_count`); what is computed does
+    not depend on it. ``progress`` draws a bar counting the scenarios played.
     Raises ``ValueError`` when nothing could be evaluated (no run kept an agent, or no set is for
     their environments), and for the errors of :func:`evaluate_run`.
     """
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise ValueError(f"threads must be a positive int, got {threads!r}")
+    check_at_most("threads", threads, cpu_count(), "the CPUs of this machine")
     runs = results_of(results_dir)
     out = Path(results_dir if out_dir is None else out_dir)
     summary = EvaluationSummary()
@@ -300,7 +309,12 @@ def evaluate_results(
     with hold_output_dir(evaluations_root(out), command_line(), on_note):  # (training may go on beside it)
         for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
             remove_stale_temp_files(directory)
-        _evaluate_todo(work, out, episodes, progress, on_written, summary)
+        before = torch.get_num_threads()
+        torch.set_num_threads(threads)
+        try:
+            _evaluate_todo(work, out, episodes, progress, on_written, summary)
+        finally:
+            torch.set_num_threads(before)
     return summary
 
 
