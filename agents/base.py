@@ -50,6 +50,14 @@ class Learner(Protocol):
     def live_stats(self) -> dict[str, float]:
         """A few numbers for the progress bar (e.g. ``{"eps": 0.3}``)."""
 
+    def tracked_scalars(self) -> list[dict[str, float]]:
+        """Optional: per run (``K`` dicts, in run order), the figures a logged run records now, by
+        the field's names (``{"losses/td_loss": …, "losses/q_values": …}``). Asked only when runs
+        log (``--log``, :mod:`empathy_zoo.training.tracking`), every few hundred env steps, so it
+        may compute them then; it must change nothing a run computes (no random draws, no state).
+        Without it a logged run records the other :meth:`live_stats` (the ensemble's, not the run's)
+        as ``learner/<name>``; ``live_stats()["eps"]`` is logged as ``charts/epsilon`` either way."""
+
     def state_dict(self) -> dict[str, Any]:
         """Everything needed to continue exactly: tensors, numbers, lists (``torch.save``-able,
         loadable with ``weights_only=True``). Written to the checkpoint file at once, so tensors

@@ -463,6 +463,37 @@ class EmpathicDQN:
     def live_stats(self) -> dict[str, float]:
         return {"eps": self.epsilon(), "loss": self.last_loss}
 
+    def tracked_scalars(self) -> list[dict[str, float]]:
+        """Per run, the mean squared TD error and mean ``Q(s, a)`` of each head on the batch of the
+        last gradient step (``losses/td_loss``, ``losses/q_values``; ``Q_emp``'s as ``…_emp``),
+        recomputed now with the current networks, without gradients (empty before the first step).
+        Computed only when asked (:meth:`agents.base.Learner.tracked_scalars`: a logged run, every
+        few hundred steps); it draws nothing and changes nothing."""
+        k, b = self.num_runs, self.config.batch_size
+        if self.grad_steps == 0:
+            return [{} for _ in range(k)]
+        index = counter_integers(self._sample_keys, (self.grad_steps - 1) * b + np.arange(b)[None, :], self.replay.size)
+        batch = self.sample_batch(torch.as_tensor(index, device=self.device))
+        obs, action, emp = batch["obs"], batch["action"].unsqueeze(2), self._emp_rows
+        with torch.no_grad():
+            q_next = StackedMLP.forward([p[:k] for p in self.online], batch["next_obs"])
+            target_next = StackedMLP.forward(self.target, batch["next_obs"])
+            y = double_dqn_target(batch["reward"], batch["terminated"], q_next, target_next, self.config.gamma)
+            heads = {"": (StackedMLP.forward([p[:k] for p in self.online], obs).gather(2, action).squeeze(2), y)}
+            if emp.numel():
+                swapped = batch["others_swapped" if self.aggregated else "other_swapped"]
+                target_swapped = StackedMLP.forward(self.target, swapped.reshape(k, -1, swapped.shape[-1]))
+                y, y_emp = self.targets(batch, q_next, target_next, target_swapped.reshape(*swapped.shape[:-1], -1))
+                taken = StackedMLP.forward([p[k:] for p in self.online], obs.index_select(0, emp))
+                heads = {"": (heads[""][0], y), "_emp": (taken.gather(2, action.index_select(0, emp)).squeeze(2), y_emp[emp])}
+        scalars: list[dict[str, float]] = [{} for _ in range(k)]
+        for suffix, (values, targets) in heads.items():
+            runs = range(k) if suffix == "" else self._emp.tolist()
+            loss, mean = ((values - targets) ** 2).mean(dim=1).tolist(), values.mean(dim=1).tolist()
+            for row, run in enumerate(runs):
+                scalars[run] |= {f"losses/td_loss{suffix}": loss[row], f"losses/q_values{suffix}": mean[row]}
+        return scalars
+
     def memory_bytes_per_run(self) -> int:
         """The largest run's bytes (a run with ``Q_emp`` when the ensemble has one)."""
         return max(self.memory_bytes_of(run) for run in range(self.num_runs))

@@ -112,7 +112,8 @@ def test_threads_change_nothing_evaluated_and_are_put_back(trained, evaluated, t
     evaluate_results(results, episodes=EPISODES, out_dir=tmp_path / "two", progress=False, threads=2)
     assert contents(tmp_path / "two") == contents(evaluated)
     assert seen and set(seen) == {2} and torch.get_num_threads() == before
-    assert run_command(["evaluate", str(results), "--episodes", str(EPISODES), "--no-progress", "--out", str(tmp_path / "one")]) == 0
+    one = ["evaluate", str(results), "--episodes", str(EPISODES), "--no-progress", "--out", str(tmp_path / "one")]
+    assert run_command(one) == 0
     assert seen[-1] == 1 and torch.get_num_threads() == before
     with pytest.raises(ValueError, match=r"threads must be at most 2 \(the CPUs of this machine\)"):
         evaluate_results(results, episodes=EPISODES, out_dir=tmp_path / "three", progress=False, threads=3)

@@ -31,7 +31,7 @@ __all__ = [
 PROG = "empathy-zoo"
 SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 
-RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers")
+RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers", "log")
 """The fields of :class:`~empathy_zoo.training.options.RunnerOptions` that ``train`` options and
 its ``--config`` file set (the others have options of their own: ``--backend``, ``--address``,
 ``--rerun-changed``)."""
@@ -177,6 +177,7 @@ def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
         backend=getattr(args, "backend", None) or "local",
         address=_ray_address(args),
         rerun_changed=bool(getattr(args, "rerun_changed", False)),
+        log=values["log"],
     )
 
 
@@ -225,6 +226,14 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
         help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"),
     )
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
+    parser.add_argument(
+        "--log",
+        default=default,
+        metavar="BACKENDS",
+        help="log every run's scalars live to tensorboard, csv and/or wandb, comma-separated, under "
+        'OUT/logs/<backend>/<run id>/ (tensorboard, wandb: pip install "empathy-zoo[tensorboard]" / "[wandb]"; '
+        "none: no logging) (default: none)",
+    )
     parser.add_argument(
         "--rerun-changed",
         action="store_true",

@@ -29,7 +29,7 @@ PRODUCED_BY = "(the command that trained these runs is in each result file's con
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md."""
     from empathy_zoo.experiment.model import group_specs
-    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path
+    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, sweep_log
     from empathy_zoo.result_file import RUNS_DIR
     from empathy_zoo.training.runner import train_runs
     from leaderboard.report import write_leaderboard
@@ -40,6 +40,8 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     out = Path(args.out) if args.out else Path("results") / path.stem
     values = {**RUN_DEFAULTS, **{k: v for k, v in vars(args).items() if k in RUN_DEFAULTS and v is not None}}
     values["progress"] = not args.no_progress
+    if args.log is None:  # (--log, else the sweep file's, else none)
+        values["log"] = sweep_log(path)
     ensembles = len(group_specs(specs, positive("max_parallel_runs", values["max_parallel_runs"])))
     if args.workers is None:  # one process per ensemble, as many as there are CPUs
         values["workers"] = max(1, min(os.cpu_count() or 1, ensembles))

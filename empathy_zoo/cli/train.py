@@ -37,7 +37,7 @@ __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method"
 ENV_ARGUMENTS: dict[str, Any] = {name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()}
 """The environment arguments some registered environment declares, and their types (each
 environment checks which it takes)."""
-_RUNNER_TYPES = field_types(RunnerOptions)
+_RUNNER_TYPES = field_types(RunnerOptions) | {"log": str | list[str]}  # (log: "tensorboard,csv" or a list of names)
 RUN_KEYS: dict[str, Any] = {
     "env": str,
     "method": str,

@@ -15,6 +15,9 @@ Schema (every table but ``[[methods]]`` and ``[envs.<variant>]`` is optional)::
     steps = 50_000              # env steps per run (default 1,000,000)
     eval_interval = 10_000      # env steps between greedy evaluations (default 50,000)
     eval_episodes = 10          # episodes per greedy evaluation (default 10)
+    log = ["tensorboard"]       # optional: log every run's scalars live (tensorboard, csv, wandb; or
+                                #   "tensorboard,csv"): how the runs are watched, not what they
+                                #   compute (run ids unchanged; reproduce --log overrides it)
 
     [settings]                  # defaults for every method: any field every method declared takes,
     learning_starts = 2_000     # single values (settings a method fixes are left to it; a field
@@ -97,6 +100,7 @@ __all__ = [
     "variant_of_table",
     "load_sweep",
     "parse_sweep",
+    "sweep_log",
     "profile_path",
     "profiles",
 ]
@@ -107,8 +111,9 @@ CONFIG_DIR = Path(__file__).resolve().parents[1] / "profiles"
 DEFAULT_SEEDS = 5
 """Seeds per experiment when ``[sweep]`` does not say (the paper's 5 runs per method)."""
 
-SWEEP_KEYS: dict[str, Any] = {"name": str, "seeds": Seeds, **field_types(Budget)}
-"""Keys of ``[sweep]`` and their types (the run budget's fields, the sweep's name and seeds)."""
+SWEEP_KEYS: dict[str, Any] = {"name": str, "seeds": Seeds, **field_types(Budget), "log": str | list[str]}
+"""Keys of ``[sweep]`` and their types (the run budget's fields, the sweep's name and seeds, and
+where runs log their scalars: :mod:`empathy_zoo.training.tracking`)."""
 ENV_KEYS: dict[str, Any] = {
     "env": str,
     **{name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()},
@@ -242,7 +247,7 @@ def _check_run_count(variants: Mapping[str, Any], methods: list[dict[str, Any]],
 def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
     where = f"{source}: [sweep]"
     check_keys(table, SWEEP_KEYS, where)
-    run = {
+    run: dict[str, Any] = {
         "name": Path(source).stem,
         "seeds": list(range(DEFAULT_SEEDS)),
         "steps": Budget.steps,
@@ -253,7 +258,24 @@ def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
         run[key] = check_value(value, SWEEP_KEYS[key], f"{where} {key}")
         if SWEEP_KEYS[key] is int and value < 1:
             raise SweepConfigError(f"{where} {key}: expected a positive int, got {value}")
+    if "log" in run:
+        from empathy_zoo.training.tracking import parse_log  # (here: the training package imports this module)
+
+        try:
+            run["log"] = parse_log(run["log"], f"{where} log")
+        except ValueError as error:
+            raise SweepConfigError(str(error)) from None
     return run
+
+
+def sweep_log(path: str | Path) -> tuple[str, ...]:
+    """The backends the sweep file ``path`` logs its runs to (its ``[sweep]`` table's ``log``; ``()``
+    without one), checked as :func:`load_sweep` checks it."""
+    data = read_toml(path)
+    table = data.get("sweep", {})
+    if not isinstance(table, dict):
+        raise SweepConfigError(f"{path}: [sweep] must be a table, got {type_name(table)}")
+    return tuple(_sweep_table(table, str(path)).get("log", ()))
 
 
 def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, Any]:

@@ -43,6 +43,7 @@ from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import Report, SweepProgress
 from empathy_zoo.training.results import ResultWriteError, build_result, empty_columns, stored, write_result
 from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, write_manifest
+from empathy_zoo.training.tracking import LOG_INTERVAL, EnsembleTracker, open_tracker
 from empathy_zoo.vector import VectorEnv, VectorStep
 
 __all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
@@ -89,14 +90,24 @@ def train_ensemble(
     (atomically) unless ``write_results`` is False (a remote worker hands them to the driver).
 
     With ``options.progress``, progress goes to ``report`` (as ensemble number ``ensemble`` of a
-    sweep), or, without one, to bars drawn here."""
+    sweep), or, without one, to bars drawn here. With ``options.log``, every run logs its scalars
+    under ``out_dir/logs`` as it trains (:mod:`empathy_zoo.training.tracking`)."""
     git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
+    tracker = open_tracker(options.log, out_dir, specs)
     own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
     try:
         return _train_ensemble(
-            specs, Path(out_dir), options, write_results, (own.update if own else report) if options.progress else None, ensemble
+            specs,
+            Path(out_dir),
+            options,
+            write_results,
+            (own.update if own else report) if options.progress else None,
+            ensemble,
+            tracker,
         )
     finally:
+        if tracker is not None:
+            tracker.close()
         if own is not None:
             own.close()
 
@@ -108,6 +119,7 @@ def _train_ensemble(
     write_results: bool,
     report: Callable[[Report], None] | None,
     ensemble: int,
+    tracker: EnsembleTracker | None = None,
 ) -> list[dict[str, Any]]:
     if len({s.ensemble_key() for s in specs}) != 1:
         raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
@@ -175,6 +187,8 @@ def _train_ensemble(
         )
     started = time.perf_counter() - elapsed
     first_step = step
+    if tracker is not None:
+        tracker.start(step, train_rewards.transforms)
     rows = np.arange(k)
     while step < total:
         actions = learner.act(obs[:, None, :])
@@ -182,21 +196,30 @@ def _train_ensemble(
         batch = learner_batch(obs, actions, result)
         if inaction is not None:
             batch = inaction.fill(batch)
-        learner.observe(train_rewards(batch))
+        trained = train_rewards(batch)
+        learner.observe(trained)
         step += 1
         finished = result.finished
         for j, env_id in enumerate(finished["env"]):
             logs[env_id].add(step, finished, j)
+        if tracker is not None:
+            tracker.after_step(step, finished, batch.rewards, trained.rewards)
         obs = result.observations[:, 0]
         if step % first.eval_interval == 0 or step == total:
             per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)
             for row in rows:
                 evaluations[row].append({"step": step, **per_run[row]})
+            if tracker is not None:
+                tracker.evaluation(step, per_run)
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
+            if tracker is not None:
+                tracker.flush()  # (the logs up to a checkpoint are on disk before it: a resumed run logs on from it)
             _checkpoint(ckpt, specs, step, time.perf_counter() - started, learner, venv, obs, logs, evaluations, train_rewards)
         if report is not None and (step % 500 == 0 or step == total):
             rate = (step - first_step) * k / max(time.perf_counter() - started - elapsed, 1e-9)
             report(Report(ensemble, step, total, k, label, stats=_live(logs, learner, rate), done=step == total))
+        if tracker is not None and (step % LOG_INTERVAL == 0 or step == total):
+            tracker.interval(step, learner, (step - first_step) / max(time.perf_counter() - started - elapsed, 1e-9))
     wall = time.perf_counter() - started
     results = []
     for r, spec in enumerate(specs):
@@ -211,6 +234,8 @@ def _train_ensemble(
                 )
                 raise ResultWriteError(error.errno, f"{error.strerror}; {kept}") from error
         results.append(stored(document) if write_results else document)
+        if tracker is not None:
+            tracker.finish(r, stored(document), result_path(out_dir, spec.run_id))
     remove_checkpoint(ckpt)  # (only once every result is written)
     return results
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
+from empathy_zoo.training.tracking import check_installed, parse_log
 
 __all__ = ["BACKENDS", "RunnerOptions"]
 
@@ -43,6 +44,10 @@ class RunnerOptions:
     :mod:`empathy_zoo.training.fingerprint`) and overwrite their files with the new results;
     ``False`` refuses a sweep asking for changed runs, before training anything (runs whose code
     cannot be told are reused then, with a note)."""
+    log: tuple[str, ...] = ()
+    """Where each run logs its scalars live: any of ``tensorboard``, ``csv``, ``wandb``
+    (:mod:`empathy_zoo.training.tracking`; ``()``: nowhere). A comma-separated string is taken too;
+    an unknown backend, or one whose package is missing, is refused here."""
 
     def __post_init__(self) -> None:
         for name, low in (("max_parallel_runs", 1), ("checkpoint_interval", 0), ("workers", 1), ("threads", 1)):
@@ -58,5 +63,7 @@ class RunnerOptions:
                 check_at_most(name, value, cpu_count(), "the CPUs of this machine, os.cpu_count()")
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
+        object.__setattr__(self, "log", parse_log(self.log))
+        check_installed(self.log)
         if not isinstance(self.device, str) or not self.device:
             raise ValueError(f"device must be a torch device name (cpu, cuda, cuda:1), got {self.device!r}")
