@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any
 
+from agents.phases import TrainingPhases
 from empathy_zoo.schedules import linear_schedule
 
 __all__ = ["EmpathicDQNSettings", "OTHERS_RULES", "PER_RUN_FIELDS"]
@@ -89,6 +90,19 @@ class EmpathicDQNSettings:
         """What a result file's description records of these settings (:meth:`agents.base.Method.describe`):
         β, γ and the ε schedule as data (:func:`empathy_zoo.schedules.linear_schedule`)."""
         return {"selfishness": self.selfishness, "gamma": self.gamma, "exploration": linear_schedule(self)}
+
+    def training_phases(self) -> TrainingPhases:
+        """The warm-up (:attr:`learning_starts`) and the env step at which ε reaches
+        :attr:`epsilon_end` (``learning_starts + epsilon_decay_steps``), checked against a run's
+        budget before it trains (:mod:`agents.phases`)."""
+        return TrainingPhases(
+            learning_starts=self.learning_starts,
+            learning_starts_setting="learning_starts",
+            learning_starts_least=self.batch_size,
+            exploration_ends=self.learning_starts + self.epsilon_decay_steps,
+            exploration_rule="learning_starts + epsilon_decay_steps",
+            exploration_fix=lambda steps: f"epsilon_decay_steps = {steps - self.learning_starts:,}",
+        )
 
     def shared(self) -> tuple:
         """The settings runs must share to train in one ensemble (all but the per-run ones)."""

@@ -46,6 +46,7 @@ import numpy as np
 import torch
 
 from agents.base import Method, StepBatch
+from agents.phases import TrainingPhases
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.safe_data import from_safe, to_safe
 
@@ -139,6 +140,22 @@ class SB3Settings:
         kwargs["gamma"] = self.gamma
         kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), **dict(kwargs.get("policy_kwargs") or {})}
         return kwargs
+
+    def training_phases(self) -> TrainingPhases | None:
+        """DQN's warm-up (SB3's ``learning_starts``) and the env step at which its ε reaches
+        ``exploration_final_eps`` (``exploration_fraction × schedule_steps``), checked against a
+        run's budget before it trains (:mod:`agents.phases`); PPO declares neither (``None``)."""
+        if self.algorithm != "dqn":
+            return None
+        kwargs = self.model_kwargs()
+        fraction = float(kwargs["exploration_fraction"])
+        return TrainingPhases(
+            learning_starts=int(kwargs["learning_starts"]),
+            learning_starts_setting="algorithm_kwargs.learning_starts",
+            exploration_ends=math.ceil(fraction * self.schedule_steps),
+            exploration_rule="exploration_fraction × schedule_steps",
+            exploration_fix=lambda steps: f"schedule_steps = {max(1, math.floor(steps / fraction)):,}" if fraction > 0 else "",
+        )
 
     def shared(self) -> tuple:
         """Runs of one ensemble share every setting (each run is its own SB3 model anyway)."""

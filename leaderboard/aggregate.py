@@ -46,6 +46,7 @@ __all__ = [
     "CONFIDENCE",
     "DEFAULT_SEED",
     "N_POINTS",
+    "MIN_INTERVAL_SEEDS",
     "Score",
     "Curve",
     "table_env",
@@ -82,6 +83,11 @@ DEFAULT_SEED = 0
 """Seed of the ``numpy.random.Generator`` of :func:`bootstrap_mean_ci` unless one is given."""
 N_POINTS = 50
 """Points (equally spaced training env steps) per learning curve."""
+MIN_INTERVAL_SEEDS = 3
+"""The fewest seeds whose interval of the mean the leaderboard shows (tables and figures): with one
+there is no spread, with two the t interval has one degree of freedom and spans about ±18
+standard deviations at :func:`t_level`; 3 is the least at which ``benchmarks/interval_coverage.py``
+measured its coverage. The interval is still computed (the CSV keeps it)."""
 
 RandomState: TypeAlias = np.random.Generator | int
 

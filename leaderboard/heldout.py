@@ -53,6 +53,7 @@ from typing import Any
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.metrics import METRIC_DEFINITIONS
+from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.heldout_scores import (
     EFFECT_NAMES,
     MARGINS,
@@ -72,7 +73,7 @@ from leaderboard.improvement import (
     HIGHER_IS_BETTER,
     VERDICT_MARKS,
 )
-from leaderboard.tables import format_interval, markdown_table, place_before_definitions
+from leaderboard.tables import NO_INTERVAL_NOTE, format_interval, format_mean, markdown_table, place_before_definitions
 
 __all__ = ["HeldoutSection", "heldout_section", "add_heldout_section"]
 
@@ -99,7 +100,8 @@ def _tables(group: HeldoutGroup, cells: Sequence[HeldoutCell], digits: int) -> l
                 cell = by_key[(label, scenario, metric)]
                 mark = VERDICT_MARKS.get(cell.versus_dqn or "", "")
                 same = f" {SAME_WORLD_MARK}" if scenario in group.same_world.get(label, set()) else ""
-                row.append(format_interval(cell.mean, cell.ci_low, cell.ci_high, digits) + (f" {mark}" if mark else "") + same)
+                mean = format_mean(cell.mean, cell.ci_low, cell.ci_high, len(pairs), digits)
+                row.append(mean + (f" {mark}" if mark else "") + same)
             rows.append(row)
         tables.append((_metric_title(metric), header, rows))
     if any(reference is not None for reference in group.dqn_of.values()):
@@ -154,12 +156,21 @@ def _intro(group: HeldoutGroup) -> str:
     description = group.scenario_set.get("description") or ""
     seeds = "the runs' per-scenario means over seeds"
     return (
-        f"{description} Each run's trained agent played up to {group.episodes} greedy episodes with its own partners and "
-        f"world (trained with) and in each scenario of set `{group.scenario_set['name']}` (`empathy-zoo evaluate`); "
-        f"each cell is the mean of {seeds} [its 95 % Student-t interval], ▲/▼ better/worse than DQN in the same "
-        f"scenario by the exact permutation test at 5 % (⊘ too few seeds); {SAME_WORLD_MARK}: a scenario that is the "
-        "run's own world."
-    ).strip() + _references(group)
+        (
+            f"{description} Each run's trained agent played up to {group.episodes} greedy episodes with its own partners and "
+            f"world (trained with) and in each scenario of set `{group.scenario_set['name']}` (`empathy-zoo evaluate`); "
+            f"each cell is the mean of {seeds} [its 95 % Student-t interval], ▲/▼ better/worse than DQN in the same "
+            f"scenario by the exact permutation test at 5 % (⊘ too few seeds); {SAME_WORLD_MARK}: a scenario that is the "
+            "run's own world."
+        ).strip()
+        + _references(group)
+        + _few_seeds(group)
+    )
+
+
+def _few_seeds(group: HeldoutGroup) -> str:
+    """The legend of a row with too few seeds for an interval, where the group has one."""
+    return f" {NO_INTERVAL_NOTE}" if any(len(pairs) < MIN_INTERVAL_SEEDS for pairs in group.runs.values()) else ""
 
 
 def _references(group: HeldoutGroup) -> str:

@@ -24,7 +24,7 @@ from matplotlib.patches import Patch
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.names import confined
-from leaderboard.colours import method_colours
+from leaderboard.colours import distinct_colours
 from leaderboard.improvement import HIGHER_IS_BETTER
 
 if TYPE_CHECKING:
@@ -43,7 +43,7 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
     by_key = {(c.method_label, c.scenario, c.metric): c for c in cells}
     labels = list(group.runs)
     held_out = group.scenarios[1:]
-    colours = method_colours(len(held_out))
+    colours = distinct_colours(len(held_out))  # (one per scenario, not per method)
     width = max(8.0, 1.2 * len(labels) + 4.0)
     figure = Figure(figsize=(width, 3.4 * len(group.metrics) + 0.8), layout="constrained")
     FigureCanvasAgg(figure)

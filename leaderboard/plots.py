@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import io
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +21,7 @@ from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE,
     DEFAULT_SEED,
+    MIN_INTERVAL_SEEDS,
     N_POINTS,
     N_RESAMPLES,
     Curve,
@@ -28,13 +29,15 @@ from leaderboard.aggregate import (
     learning_curves,
     table_env,
 )
-from leaderboard.colours import method_colours
+from leaderboard.colours import label_colours
 from leaderboard.reference_curves import reference_curve
+from leaderboard.row_names import dqn_rows_of
 
 __all__ = [
     "FIGURE_SPECS",
     "FALLBACK_SPEC",
     "figure_filename",
+    "seeds_text",
     "render_curves_png",
     "plot_metric",
     "plot_learning_curves",
@@ -51,6 +54,12 @@ FALLBACK_SPEC: FigureSpec = (("return", "Return per episode (robot)"),)
 """Drawn for an env without an entry in :data:`FIGURE_SPECS`."""
 
 
+def seeds_text(n_seeds: int) -> str:
+    """How a legend names a row's seeds: ``"n=5"``, or ``"n=2: no interval"`` below
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` (no interval is drawn then)."""
+    return f"n={n_seeds}" if n_seeds >= MIN_INTERVAL_SEEDS else f"n={n_seeds}: no interval"
+
+
 def figure_filename(env: str, metric: str) -> str:
     """File name of the figure of ``metric`` on ``env``."""
     return f"{env}_{metric}.png"
@@ -65,17 +74,24 @@ def render_curves_png(
     xlabel: str = "training env steps",
     confidence: float = CONFIDENCE,
     dpi: int = 110,
+    dqn_labels: Collection[str] = (),
 ) -> bytes:
-    """PNG bytes of ``curves``: a line per curve (its mean) with its interval shaded, and, where
+    """PNG bytes of ``curves``: a line per curve (its mean) in its label's colour
+    (:func:`leaderboard.colours.label_colours`; ``dqn_labels`` are the DQN reference rows, said so
+    in the legend) with its interval shaded (none below
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds, said in the legend), and, where
     ``references[i]`` is given, that curve's exact reference dashed in the same colour."""
     figure = Figure(figsize=(7.5, 4.2), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
-    colours = method_colours(len(curves))
+    by_label = label_colours([curve.method_label for curve in curves], dqn_labels)
+    colours = [by_label[curve.method_label] for curve in curves]
     for curve, colour in zip(curves, colours):
-        label = f"{curve.method_label} (n={curve.n_seeds})"
+        role = ", the DQN reference" if curve.method_label in dqn_labels else ""
+        label = f"{curve.method_label} ({seeds_text(curve.n_seeds)}{role})"
         axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)
-        axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
+        if curve.n_seeds >= MIN_INTERVAL_SEEDS:
+            axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
     drawn = [reference for reference in references or [] if reference is not None]
     for curve, colour, reference in zip(curves, colours, references or [None] * len(curves)):
         if reference is not None:
@@ -137,6 +153,7 @@ def plot_metric(
         ylabel=ylabel,
         confidence=confidence,
         references=references,
+        dqn_labels={label for row_env, label in dqn_rows_of(results) if row_env == env},
     )
     return write_bytes_atomic(path, png)
 

@@ -24,8 +24,18 @@ from leaderboard.episodes import add_episodes_section
 from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
 from leaderboard.plots import plot_learning_curves
+from leaderboard.row_names import dqn_rows_of, renaming_note
 from leaderboard.sources import load_results_dirs
-from leaderboard.tables import TRADEOFF, Provenance, RowFacts, csv_text, env_metrics, html_report, markdown_report
+from leaderboard.tables import (
+    TRADEOFF,
+    Provenance,
+    RowFacts,
+    csv_text,
+    env_metrics,
+    html_report,
+    markdown_report,
+    markdown_text,
+)
 from leaderboard.tradeoff import plot_tradeoffs
 
 __all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "write_leaderboard"]
@@ -61,7 +71,9 @@ def write_leaderboard(
     commits its files record) and the budgets in its header, each row's DQN row in its
     probability-of-improvement tables, and each row's budget and directories in its CSV
     (:data:`leaderboard.tables.COMPARISON_CSV_COLUMNS`); that of one directory of one budget is
-    written as it always was.
+    written as it always was. A DQN reference row is shown as DQN whatever its result files label
+    it (:mod:`leaderboard.row_names`; the CSV too, as it shows prefixes), and the pages say which
+    rows are the reference and which labels were shown as DQN.
 
     Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
     ``figures/<env>_<metric>.png`` (learning curves) and ``figures/<env>_tradeoff.png`` (task against
@@ -79,8 +91,9 @@ def write_leaderboard(
             f"a leaderboard of {len(dirs)} results directories needs an output directory (--out OUT): "
             "it is written into none of the directories it reads unless asked"
         )
-    read = load_results_dirs(dirs, labels)
+    read = load_results_dirs(dirs, labels, dqn_named=True)
     results = read.results
+    dqn_rows = dqn_rows_of(results)
     comparison = len(dirs) > 1 or bool(labels) or read.budget_in_labels
     out = check_output_dir(dirs[0] if out_dir is None else out_dir, (FIGURES_DIR,))
     for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
@@ -117,12 +130,29 @@ def write_leaderboard(
     if comparison:
         directories = read.row_directories()
         rows = {row: RowFacts(budgets_of(runs)[0], directories[row]) for row, runs in group_runs(results).items()}
-    tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env)
+    tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env, dqn_rows)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
     pngs = {key: path.read_bytes() for key, path in figures.items()}
-    markdown = markdown_report(scores, provenance, links, base_env=base_env, improvements=improvements, uncompared=uncompared)
-    html = html_report(scores, provenance, pngs, base_env=base_env, improvements=improvements, uncompared=uncompared)
+    markdown_note = renaming_note(read.renamed, bool(dqn_rows), markdown_text)
+    markdown = markdown_report(
+        scores,
+        provenance,
+        links,
+        base_env=base_env,
+        improvements=improvements,
+        uncompared=uncompared,
+        reference_note=markdown_note,
+    )
+    html = html_report(
+        scores,
+        provenance,
+        pngs,
+        base_env=base_env,
+        improvements=improvements,
+        uncompared=uncompared,
+        reference_note=renaming_note(read.renamed, bool(dqn_rows)),
+    )
     markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
     markdown, html, episode_figures = add_episodes_section(results, out, markdown, html, origins=read.origins)
     paths = {

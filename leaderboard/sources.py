@@ -13,6 +13,9 @@ result file; what keeps experiments apart is done on the runs read:
   where those differ between budgets), so runs of different budgets never share a row; a row is
   compared only with DQN rows of its own variant and budget
   (:func:`leaderboard.improvement.improvements_over_dqn`).
+* **DQN rows** (with ``dqn_named``, as the leaderboard reads them): a DQN reference row is shown
+  as ``DQN`` whatever its runs are labelled (:mod:`leaderboard.row_names`), before any prefix and
+  budget; :attr:`ResultSet.renamed` says which labels were.
 * **One experiment per row.** Runs of one row (variant and label) from two experiments are refused
   (:func:`leaderboard.aggregate.check_runs` over the combined runs); between two directories the
   message names both and the ``--label`` option. Runs of one experiment found in two directories
@@ -23,13 +26,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.result_file import experiment_of
 from leaderboard.aggregate import check_runs, load_result_files, table_env
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
+from leaderboard.row_names import dqn_row_names, rename_dqn_rows
 
 __all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option", "parse_label_options"]
 
@@ -67,6 +71,9 @@ class ResultSet:
     """The training budgets of all runs, ascending."""
     origins: tuple[str, ...]
     """The directory (as given) each run of :attr:`results` was read from."""
+    renamed: Mapping[tuple[str, str], str] = field(default_factory=dict)
+    """``{(table env, label in the result files): shown name}`` of the DQN reference rows shown
+    as DQN (:func:`leaderboard.row_names.dqn_row_names`; empty without ``dqn_named``)."""
 
     def row_directories(self) -> dict[tuple[str, str], tuple[str, ...]]:
         """The directories each row's runs (``(variant, label)``) were read from, in the order given."""
@@ -129,11 +136,16 @@ def _recorded(runs: Sequence[dict[str, Any]], field: str) -> tuple[str, ...]:
 
 
 def load_results_dirs(
-    results_dirs: Sequence[str | os.PathLike[str]], labels: Mapping[str | os.PathLike[str], str] | None = None
+    results_dirs: Sequence[str | os.PathLike[str]],
+    labels: Mapping[str | os.PathLike[str], str] | None = None,
+    *,
+    dqn_named: bool = False,
 ) -> ResultSet:
     """Every run of every directory of ``results_dirs`` (each as
     :func:`leaderboard.aggregate.load_results` reads it), labels prefixed by ``labels``
-    (``{directory: prefix}``) and, where the runs have several budgets, ending with their budget.
+    (``{directory: prefix}``) and, where the runs have several budgets, ending with their budget;
+    with ``dqn_named``, a DQN reference row's label is first its shown name (``DQN``:
+    :mod:`leaderboard.row_names`).
 
     ``ValueError`` for no directory, a directory given twice, a ``labels`` key that is not one of
     them, a directory :func:`~leaderboard.aggregate.load_results` refuses, and runs of two
@@ -149,21 +161,17 @@ def load_results_dirs(
         if directory in resolved[:i]:
             raise ValueError(f"results directory {given[i]} is given twice (as {given[resolved.index(directory)]} too)")
     prefixes = _prefixes(given, resolved, labels or {})
-    read: list[tuple[int, Path, dict[str, Any]]] = []
-    for i, directory in enumerate(dirs):
-        for path, result in load_result_files(directory):
-            if prefixes[i] is not None:
-                result = {**result, "method_label": f"{prefixes[i]} {result['method_label']}"}
-            read.append((i, path, result))
-    budgets = budgets_of(result for _, _, result in read)
+    files = [(i, path, result) for i, directory in enumerate(dirs) for path, result in load_result_files(directory)]
+    budgets = budgets_of(result for _, _, result in files)
     with_evaluation = shows_evaluation(budgets)
-    if len(budgets) > 1:
-        suffixed = [budget_of(result).text(with_evaluation) for _, _, result in read]
-        read = [
-            (i, path, {**result, "method_label": result["method_label"] + BUDGET_SEPARATOR + budget})
-            for (i, path, result), budget in zip(read, suffixed)
-        ]
-    try:
+
+    def label(i: int, result: dict[str, Any], core: str) -> str:
+        """``core`` (a run's label, or its shown name) with the directory's prefix and the run's budget."""
+        prefixed = core if prefixes[i] is None else f"{prefixes[i]} {core}"
+        return prefixed + (BUDGET_SEPARATOR + budget_of(result).text(with_evaluation) if len(budgets) > 1 else "")
+
+    read = [(i, path, {**result, "method_label": label(i, result, result["method_label"])}) for i, path, result in files]
+    try:  # (on the labels of the result files: a clash names what a user finds in them)
         check_runs([(path, result) for _, path, result in read])
     except ValueError as error:
         first, second = _clashing_dirs(read)
@@ -174,6 +182,13 @@ def load_results_dirs(
             f"without editing a result file, prefix one directory's labels (--label {given[second]}=PREFIX; "
             "Python: labels={directory: prefix})"
         ) from None
+    renamed = dqn_row_names(result for _, _, result in files) if dqn_named else {}
+    if renamed:
+        shown = rename_dqn_rows([result for _, _, result in files], renamed)
+        read = [
+            (i, path, {**result, "method_label": label(i, result, named["method_label"])})
+            for (i, path, result), named in zip(read, shown)
+        ]
     directories = tuple(
         ResultsDir(
             path=directory,
@@ -186,7 +201,7 @@ def load_results_dirs(
         for i, directory in enumerate(given)
         for mine in [[result for j, _, result in read if j == i]]
     )
-    return ResultSet([result for _, _, result in read], directories, budgets, tuple(given[i] for i, _, _ in read))
+    return ResultSet([result for _, _, result in read], directories, budgets, tuple(given[i] for i, _, _ in read), renamed)
 
 
 def _clashing_dirs(read: Sequence[tuple[int, Path, dict[str, Any]]]) -> tuple[int, int]:

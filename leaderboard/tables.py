@@ -22,6 +22,7 @@ from leaderboard.aggregate import (
     DEFAULT_SEED,
     FINAL_FRACTION,
     MEAN_INTERVAL_NOTE,
+    MIN_INTERVAL_SEEDS,
     N_RESAMPLES,
     PHASES,
     Score,
@@ -42,6 +43,8 @@ __all__ = [
     "RowFacts",
     "Provenance",
     "format_interval",
+    "format_mean",
+    "NO_INTERVAL_NOTE",
     "table_rows",
     "improvement_sections",
     "names_baselines",
@@ -161,7 +164,17 @@ class Provenance:
 
 
 def _single_seed_note() -> str:
-    return f"{SINGLE_SEED_MARK} a single seed: its interval is the point itself (no spread to measure)."
+    return f"{SINGLE_SEED_MARK} a single seed: no spread to measure."
+
+
+NO_INTERVAL_NOTE = (
+    f"(n=1: no interval), (n=2: no interval): a mean over fewer than {MIN_INTERVAL_SEEDS} seeds is printed without "
+    "its interval, which would not mean anything: with one seed there is no spread to measure, and with two the "
+    "Student-t interval has one degree of freedom (t = 25.5 at 97.5 %), so it spans about ±18 standard deviations, "
+    f"mostly the metric's whole range; {MIN_INTERVAL_SEEDS} seeds is the least at which its coverage was measured "
+    "(94–98 %)."
+)
+"""The legend of a cell with too few seeds for an interval (:func:`format_mean`)."""
 
 
 def format_interval(mean: float, low: float, high: float, digits: int = 2) -> str:
@@ -169,6 +182,14 @@ def format_interval(mean: float, low: float, high: float, digits: int = 2) -> st
     if math.isnan(mean):
         return "n/a"
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def format_mean(mean: float, low: float, high: float, n_seeds: int, digits: int = 2) -> str:
+    """A mean over ``n_seeds`` seeds with its interval (:func:`format_interval`), or, below
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds, without it: ``"0.50 (n=2: no interval)"``."""
+    if n_seeds >= MIN_INTERVAL_SEEDS or math.isnan(mean):
+        return format_interval(mean, low, high, digits)
+    return f"{mean:.{digits}f} (n={n_seeds}: no interval)"
 
 
 TABLE_METRICS: dict[str, tuple[str, ...]] = {
@@ -209,7 +230,7 @@ def table_rows(
         row = [label, seeds]
         for metric in metrics:
             cell = by_metric.get(metric)
-            row.append("n/a" if cell is None else format_interval(cell.mean, cell.ci_low, cell.ci_high, digits))
+            row.append("n/a" if cell is None else format_mean(cell.mean, cell.ci_low, cell.ci_high, cell.n_seeds, digits))
         rows.append(row)
     return header, rows
 
@@ -291,6 +312,10 @@ def _has_single_seed(scores: Sequence[Score]) -> bool:
     return any(score.n_seeds == 1 for score in scores)
 
 
+def _has_few_seeds(scores: Sequence[Score]) -> bool:
+    return any(0 < score.n_seeds < MIN_INTERVAL_SEEDS for score in scores)
+
+
 _MARKDOWN_SYNTAX = re.compile(r"[\\`*~\[\]<>&|]|(?<!\w)_|_(?!\w)")
 """What text must not carry unescaped into Markdown to read as itself: a backslash, code, emphasis,
 strike-through, link and HTML characters, a table's ``|``, and a ``_`` at a word's edge (one
@@ -335,11 +360,14 @@ def markdown_report(
     base_env: Mapping[str, str] | None = None,
     improvements: Sequence[Improvement] = (),
     uncompared: Sequence[tuple[str, str]] = (),
+    reference_note: str = "",
 ) -> str:
     """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
 
     ``figures`` maps ``(env, metric)`` to a link (a path relative to the page); ``uncompared``
-    names the ``(env, label)`` rows no DQN row is compared with (:func:`uncompared_note`).
+    names the ``(env, label)`` rows no DQN row is compared with (:func:`uncompared_note`);
+    ``reference_note`` (Markdown) says which rows are the DQN reference, under the paragraph on
+    what a cell means (:func:`leaderboard.row_names.renaming_note`).
     """
     figures = figures or {}
     against = names_baselines(provenance, improvements)
@@ -352,6 +380,7 @@ def markdown_report(
         heading, directories, budget = provenance.source_lines()
         lines += ["", heading, "", *(f"- {line}" for line in directories), *(["", budget] if budget else [])]
     lines += ["", provenance.method_text()]
+    lines += ["", reference_note] if reference_note else []
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
@@ -364,6 +393,8 @@ def markdown_report(
     lines += _markdown_figures(figures, current_env)
     if _has_single_seed(scores):
         lines += ["", _single_seed_note()]
+    if _has_few_seeds(scores):
+        lines += ["", NO_INTERVAL_NOTE]
     lines += ["", "## Metric definitions", ""]
     lines += [f"- **{metric}**: {METRIC_DEFINITIONS.get(metric, '(no definition)')}" for metric in metrics]
     return "\n".join(lines) + "\n"
@@ -501,10 +532,12 @@ def html_report(
     base_env: Mapping[str, str] | None = None,
     improvements: Sequence[Improvement] = (),
     uncompared: Sequence[tuple[str, str]] = (),
+    reference_note: str = "",
 ) -> str:
     """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
 
-    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` as :func:`markdown_report`.
+    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` as :func:`markdown_report`;
+    ``reference_note`` as there, in plain text (escaped here).
     """
     figures = figures or {}
     esc = _text
@@ -527,6 +560,7 @@ def html_report(
         lines += [f"<p>{esc(heading)}</p>", "<ul>", *(f"<li>{_html_code(line)}</li>" for line in directories), "</ul>"]
         lines += [f"<p>{_html_code(budget)}</p>"] if budget else []
     lines.append(f'<p class="note">{esc(provenance.method_text())}</p>')
+    lines += [f'<p class="note">{esc(reference_note)}</p>'] if reference_note else []
     current_env = None
     for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
         if env != current_env:
@@ -539,6 +573,8 @@ def html_report(
     lines += _html_figures(figures, current_env)
     if _has_single_seed(scores):
         lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
+    if _has_few_seeds(scores):
+        lines.append(f'<p class="note">{esc(NO_INTERVAL_NOTE)}</p>')
     lines += ["<h2>Metric definitions</h2>", "<dl>"]
     for metric in metrics:
         lines.append(f"<dt>{esc(metric)}</dt><dd>{esc(METRIC_DEFINITIONS.get(metric, '(no definition)'))}</dd>")

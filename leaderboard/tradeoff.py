@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import io
 import os
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,8 +24,9 @@ from matplotlib.lines import Line2D
 
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
-from leaderboard.aggregate import PHASES, Score
-from leaderboard.colours import method_colours
+from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
+from leaderboard.colours import label_colours
+from leaderboard.plots import seeds_text
 from leaderboard.tables import PHASE_TITLES
 
 __all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs", "tradeoff_filename"]
@@ -92,11 +93,17 @@ def _cell(scores: Sequence[Score], label: str, phase: str, metric: str) -> Score
     return next((s for s in scores if s.method_label == label and s.phase == phase and s.metric == metric), None)
 
 
-def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, dpi: int = 110) -> bytes:
-    """PNG bytes of ``env``'s trade-off, one panel per phase, from the leaderboard's ``scores``."""
+def render_tradeoff_png(
+    scores: Sequence[Score], env: str, spec: TradeoffSpec, dpi: int = 110, dqn_labels: Collection[str] = ()
+) -> bytes:
+    """PNG bytes of ``env``'s trade-off, one panel per phase, from the leaderboard's ``scores``:
+    each method in its label's colour (:func:`leaderboard.colours.label_colours`; ``dqn_labels``
+    are the DQN reference rows, said so in the legend), without bars below
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds (said in the legend)."""
     scores = [s for s in scores if s.env == env]
     labels = list(dict.fromkeys(s.method_label for s in scores))
-    colours = method_colours(len(labels))
+    by_label = label_colours(labels, dqn_labels)
+    colours = [by_label[label] for label in labels]
     figure = Figure(figsize=(11.0, 4.6), layout="constrained")
     FigureCanvasAgg(figure)
     panels = figure.subplots(1, len(PHASES), squeeze=False)[0]
@@ -107,11 +114,12 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
         for i, (label, x, y) in enumerate(drawn):
             colour = colours[labels.index(label)]
             on_front = i in front
+            bars = min(x.n_seeds, y.n_seeds) >= MIN_INTERVAL_SEEDS
             axes.errorbar(
                 x.mean,
                 y.mean,
-                xerr=[[x.mean - x.ci_low], [x.ci_high - x.mean]],
-                yerr=[[y.mean - y.ci_low], [y.ci_high - y.mean]],
+                xerr=[[x.mean - x.ci_low], [x.ci_high - x.mean]] if bars else None,
+                yerr=[[y.mean - y.ci_low], [y.ci_high - y.mean]] if bars else None,
                 fmt="o",
                 color=colour,
                 markersize=8,
@@ -129,7 +137,15 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
         axes.grid(True, alpha=0.3)
     seeds = {s.method_label: s.n_seeds for s in scores if s.metric in (spec.task, spec.effect)}
     handles = [
-        Line2D([], [], marker="s", linestyle="", color=colours[i], markersize=8, label=f"{label} (n={seeds[label]})")
+        Line2D(
+            [],
+            [],
+            marker="s",
+            linestyle="",
+            color=colours[i],
+            markersize=8,
+            label=f"{label} ({seeds_text(seeds[label])}{', the DQN reference' if label in dqn_labels else ''})",
+        )
         for i, label in enumerate(labels)
     ]
     handles += [
@@ -151,15 +167,19 @@ def render_tradeoff_png(scores: Sequence[Score], env: str, spec: TradeoffSpec, d
 
 
 def plot_tradeoffs(
-    scores: Sequence[Score], figures_dir: str | os.PathLike[str], base_env: dict[str, str] | None = None
+    scores: Sequence[Score],
+    figures_dir: str | os.PathLike[str],
+    base_env: dict[str, str] | None = None,
+    dqn_rows: Collection[tuple[str, str]] = (),
 ) -> dict[str, Path]:
     """Write the trade-off figure of every env of ``scores`` that has a spec (``base_env`` maps a
-    variant to its environment); returns ``{env: path}``, envs sorted."""
+    variant to its environment; ``dqn_rows`` are the ``(env, label)`` DQN reference rows:
+    :func:`leaderboard.row_names.dqn_rows_of`); returns ``{env: path}``, envs sorted."""
     paths: dict[str, Path] = {}
     for env in sorted({s.env for s in scores}):
         spec = TRADEOFF_SPECS.get(env) or TRADEOFF_SPECS.get((base_env or {}).get(env, ""))
         if spec is None:
             continue
-        png = render_tradeoff_png(scores, env, spec)
+        png = render_tradeoff_png(scores, env, spec, dqn_labels={label for row_env, label in dqn_rows if row_env == env})
         paths[env] = write_bytes_atomic(confined(figures_dir, tradeoff_filename(env)), png)
     return paths

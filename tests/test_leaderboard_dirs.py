@@ -24,6 +24,9 @@ ENV = "coexistence_v0"
 SEEDS = range(5)
 """5 seeds a side: every run of one side beating every run of the other gives a verdict."""
 DQN = "empathic_dqn 1.0"
+"""The DQN reference's label in its result files."""
+SHOWN = "DQN"
+"""What the leaderboard calls that row (leaderboard.row_names)."""
 EMPATHIC = "empathic_dqn 0.5"
 PENALTY = "dqn_harm_penalty 1.0"
 
@@ -68,13 +71,13 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     paths = write_leaderboard([mine, shipped], tmp_path / "out", command="c")
     markdown = paths["markdown"].read_text(encoding="utf-8")
     rows = table_lines(markdown, "Final greedy evaluation")
-    assert [row.split(" | ")[0] for row in rows] == [f"| {PENALTY}", f"| {EMPATHIC}", f"| {DQN}"]
+    assert [row.split(" | ")[0] for row in rows] == [f"| {PENALTY}", f"| {SHOWN}", f"| {EMPATHIC}"]
     assert f"- `{mine}`: 5 runs, 4,000 steps; empathy-zoo " in markdown and f"- `{shipped}`: 10 runs, 4,000 steps;" in markdown
     assert "Every run has the same training budget: 4,000 steps, eval 2,000 × 3" in markdown
     # the other directory's method is compared with the shipped DQN, and the table says so
     compared = table_lines(markdown, "P(improves on DQN): Final greedy evaluation")
     against = [row.split(" | ")[:2] for row in compared]
-    assert against == [[f"| {PENALTY}", f"{DQN} (5 seeds)"], [f"| {EMPATHIC}", f"{DQN} (5 seeds)"]]
+    assert against == [[f"| {PENALTY}", f"{SHOWN} (5 seeds)"], [f"| {EMPATHIC}", f"{SHOWN} (5 seeds)"]]
     assert not (tmp_path / "mine" / "LEADERBOARD.md").exists() and not (tmp_path / "shipped" / "LEADERBOARD.md").exists()
     table = list(csv.DictReader(io.StringIO(paths["csv"].read_text(encoding="utf-8"))))
     assert tuple(table[0]) == CSV_COLUMNS + COMPARISON_CSV_COLUMNS
@@ -83,7 +86,7 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     assert facts == {
         (PENALTY, "4000", "2000", "3", str(mine)),
         (EMPATHIC, "4000", "2000", "3", str(shipped)),
-        (DQN, "4000", "2000", "3", str(shipped)),
+        (SHOWN, "4000", "2000", "3", str(shipped)),
     }
     assert "Read from 2 results directories" in paths["html"].read_text(encoding="utf-8")
 
@@ -107,13 +110,13 @@ def test_rows_of_different_budgets_are_kept_apart_and_compared_only_with_dqn_of_
     markdown = write_leaderboard([short, long], tmp_path / "out", command="c")["markdown"].read_text(encoding="utf-8")
     rows = table_lines(markdown, "Final greedy evaluation")
     assert [row.split(" | ")[:2] for row in rows] == [
+        [f"| {SHOWN} · 4,000 steps", "5"],
+        [f"| {SHOWN} · 8,000 steps", "5"],
         [f"| {EMPATHIC} · 4,000 steps", "5"],
         [f"| {EMPATHIC} · 8,000 steps", "5"],
-        [f"| {DQN} · 4,000 steps", "5"],
-        [f"| {DQN} · 8,000 steps", "5"],
     ]
     compared = table_lines(markdown, "P(improves on DQN): Final greedy evaluation")
-    assert [row.split(" | ")[1] for row in compared] == [f"{DQN} · 4,000 steps (5 seeds)", f"{DQN} · 8,000 steps (5 seeds)"]
+    assert [row.split(" | ")[1] for row in compared] == [f"{SHOWN} · 4,000 steps (5 seeds)", f"{SHOWN} · 8,000 steps (5 seeds)"]
     harms = [row.split(" | ")[4] for row in compared]  # Method | Against | Seeds | survival | harms | …
     assert harms[0].startswith("▼") and harms[1].startswith("▲")
     assert "The runs have 2 training budgets: each row's label ends with its budget" in markdown
@@ -160,14 +163,14 @@ def test_a_label_prefix_resolves_the_clash_and_each_row_is_compared_with_both_dq
     paths = write_leaderboard([first, second], tmp_path / "out", labels={second: "mine:"})
     markdown = paths["markdown"].read_text(encoding="utf-8")
     rows = [row.split(" | ")[0] for row in table_lines(markdown, "Final greedy evaluation")]
-    assert rows == [f"| {EMPATHIC}", f"| {DQN}", f"| mine: {DQN}"]
+    assert rows == [f"| {SHOWN}", f"| {EMPATHIC}", f"| mine: {SHOWN}"]
     assert f"- `{second}`, labels prefixed `mine:`: 5 runs" in markdown
     compared = [row.split(" | ")[:2] for row in table_lines(markdown, "P(improves on DQN): Final greedy evaluation")]
     assert compared == [
-        [f"| {EMPATHIC}", f"{DQN} (5 seeds)"],
-        [f"| {EMPATHIC}", f"mine: {DQN} (5 seeds)"],
-        [f"| {DQN}", f"mine: {DQN} (5 seeds)"],
-        [f"| mine: {DQN}", f"{DQN} (5 seeds)"],
+        [f"| {SHOWN}", f"mine: {SHOWN} (5 seeds)"],
+        [f"| {EMPATHIC}", f"{SHOWN} (5 seeds)"],
+        [f"| {EMPATHIC}", f"mine: {SHOWN} (5 seeds)"],
+        [f"| mine: {SHOWN}", f"{SHOWN} (5 seeds)"],
     ]
     assert (tmp_path / "first" / "runs").is_dir() and not (tmp_path / "first" / "LEADERBOARD.md").exists()
 
@@ -241,6 +244,6 @@ def test_the_command_line_reads_two_directories(tmp_path: Path, capsys: pytest.C
     markdown = (out / "LEADERBOARD.md").read_text(encoding="utf-8")
     command = f"empathy-zoo leaderboard {first} {second} --out {out} --label {second}=mine"
     assert f"Produced by `{command}`" in markdown and f"- `{first}`: 10 runs" in markdown
-    assert f"| mine {DQN} | 5 |" in markdown
+    assert f"| mine {SHOWN} | 5 |" in markdown
     assert main(["leaderboard", str(first), "--label", f"{tmp_path / 'nowhere'}=x"]) == 2
     assert "is not one of the results directories read" in capsys.readouterr().err

@@ -18,6 +18,7 @@ from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
 from leaderboard.tables import (
     CSV_COLUMNS,
+    NO_INTERVAL_NOTE,
     Provenance,
     csv_text,
     format_interval,
@@ -113,7 +114,7 @@ def test_markdown_table_exact_lines() -> None:
         "| Method | Seeds | survival | harms |",
         "|:---|---:|---:|---:|",
         "| DQN | 3 | 12.50 [10.00, 15.00] | 0.50 [0.00, 1.00] |",
-        "| Empathic DQN (β=0.5) | 1† | 7.00 [7.00, 7.00] | n/a |",
+        "| Empathic DQN (β=0.5) | 1† | 7.00 (n=1: no interval) | n/a |",
     ]
     assert table_rows(tiny_scores(), "coexistence_v0", "train_final10")[1] == []
 
@@ -194,7 +195,8 @@ def test_write_leaderboard_is_deterministic_and_writes_to_out_dir(tmp_path: Path
 def test_write_leaderboard_single_seed_note(tmp_path: Path) -> None:
     write_synthetic_results(tmp_path, envs=("coexistence_v0",), seeds=(4,))
     markdown = write_leaderboard(tmp_path)["markdown"].read_text(encoding="utf-8")
-    assert "| DQN | 1† |" in markdown and "† a single seed: its interval is the point itself" in markdown
+    assert "| DQN | 1† | " in markdown and "† a single seed: no spread to measure." in markdown
+    assert " (n=1: no interval) |" in markdown and NO_INTERVAL_NOTE in markdown
     assert "leaderboard.write_leaderboard(" in markdown
 
 

@@ -247,7 +247,8 @@ def test_the_leaderboard_shows_the_plug_in_s_rows(tmp_path: Path) -> None:
         write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
     markdown = write_leaderboard(tmp_path)["markdown"].read_text(encoding="utf-8")
     tables, improvements = markdown.split("### P(improves on DQN): Final greedy evaluation")
-    assert "| Kind DQN (care=0) | 4 |" in tables and "| Kind DQN (care=0.5) | 4 |" in tables
+    assert "| DQN | 4 |" in tables and "| Kind DQN (care=0.5) | 4 |" in tables  # (its DQN reference is shown as DQN)
+    assert "Kind DQN (care=0)" in markdown  # (the reference note names the file's label)
     compared = improvements.split("### P(improves on DQN): Training")[0]  # every method but the DQN, the plug-in at β = 1
     assert "| empathic_dqn 0.25 | 4 | ▲ 1.00" in compared and "| Kind DQN (care=0.5) | 4 |" in compared
     assert "Kind DQN (care=0) |" not in compared

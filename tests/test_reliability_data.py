@@ -413,7 +413,7 @@ def test_leaderboard_markdown_escapes_labels(tmp_path, label, escaped):
     markdown = paths["markdown"].read_text(encoding="utf-8")
     assert label not in markdown
     assert f"| {escaped} | 3 |" in markdown
-    assert "| empathic_dqn 1.0 | 3 |" in markdown and "other_return" in markdown  # (plain text stays as it is)
+    assert "| DQN | 3 |" in markdown and "other_return" in markdown  # (plain text stays as it is; β = 1 is shown as DQN)
 
 
 # ---------------------------------------------------------------------------- schema-1 shaping

@@ -206,6 +206,8 @@ steps = 100
 eval_interval = 100
 eval_episodes = 1
 {log}
+[settings]
+learning_starts = 32
 [envs.coexistence_v0]
 max_cycles = 20
 [[methods]]

@@ -48,8 +48,9 @@ def test_the_figure_is_a_png(env: str) -> None:
 def test_every_method_of_a_figure_gets_its_own_colour() -> None:
     from matplotlib.colors import to_rgba
 
-    from leaderboard.colours import method_colours
+    from leaderboard.colours import distinct_colours, label_colours
 
     for count in (3, 10, 11, 20, 27):
-        colours = {to_rgba(c) for c in method_colours(count)}
-        assert len(colours) == count
+        assert len({to_rgba(c) for c in distinct_colours(count)}) == count
+        labels = [f"method {i}" for i in range(count)]
+        assert len({to_rgba(c) for c in label_colours(labels, dqn_labels=labels[:2]).values()}) == count

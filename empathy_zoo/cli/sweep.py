@@ -28,6 +28,7 @@ PRODUCED_BY = "(the command that trained these runs is in each result file's con
 
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
     """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md."""
+    from empathy_zoo.experiment.budget_fit import warmup_refusal
     from empathy_zoo.experiment.model import group_specs
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, sweep_log
     from empathy_zoo.result_file import RUNS_DIR
@@ -37,6 +38,10 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
 
     path = profile_path(args.profile)
     specs = load_sweep(path, seeds=args.seeds)
+    for spec in specs:  # (train_runs refuses it too; here the message can name the file)
+        refusal = warmup_refusal(spec)
+        if refusal is not None:
+            raise ValueError(f"{path}: {refusal} (in its [settings], or in the method's [[methods]] table)")
     out = Path(args.out) if args.out else Path("results") / path.stem
     values = {**RUN_DEFAULTS, **{k: v for k, v in vars(args).items() if k in RUN_DEFAULTS and v is not None}}
     values["progress"] = not args.no_progress

@@ -14,6 +14,10 @@ environment (one copy), resets it and checks that
   its settings, before anything is allocated; on this machine's backend only: a Ray task's learner
   asks on the node it lands on).
 
+Before those, every run's budget is checked against the warm-up and the ε schedule its method's
+settings declare (:func:`empathy_zoo.experiment.budget_fit.check_budgets`): a budget that ends inside
+the warm-up is refused; an ε decay that ends after the budget is said once, through ``note``.
+
 :func:`~empathy_zoo.training.runner.train_runs` asks it for every run still to train, before it
 writes anything.
 """
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from empathy_zoo.experiment.budget_fit import check_budgets
 from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.vector import VectorEnv
@@ -29,9 +34,12 @@ from empathy_zoo.vector import VectorEnv
 __all__ = ["check_before_training"]
 
 
-def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> None:
-    """Raise ``ValueError`` naming a run of the first ensemble of ``specs`` that could not train to
-    its end with ``options`` (see the module documentation); nothing is written or trained."""
+def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> list[str]:
+    """Raise ``ValueError`` naming a run of ``specs`` whose budget ends inside its warm-up, or a run
+    of the first ensemble that could not train to its end with ``options`` (see the module
+    documentation); nothing is written or trained. Returns the warnings to say once every check
+    before training has passed (a budget the ε decay outlasts): a refused call says only why."""
+    warnings = check_budgets(specs)
     largest: dict[tuple, list[RunSpec]] = {}
     for chunk in group_specs(specs, options.max_parallel_runs):
         key = chunk[0].ensemble_key()
@@ -44,6 +52,7 @@ def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> N
             _check_ensemble(chunk, options)
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
+    return warnings
 
 
 def _check_ensemble(chunk: Sequence[RunSpec], options: RunnerOptions) -> None:

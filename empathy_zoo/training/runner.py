@@ -96,10 +96,14 @@ def train_runs(
         ]
     )
     redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
-    check_before_training([s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options)
+    warnings = check_before_training(
+        [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options
+    )
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
     with hold_output_dir(out_dir, command_line(), note):
+        for warning in warnings:  # (said once everything before training has passed)
+            note(warning)
         stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
         if stale:
             note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")

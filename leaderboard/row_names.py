@@ -1,0 +1,88 @@
+"""What the leaderboard calls its DQN reference rows: "DQN", whatever their result files label them.
+
+A row is a DQN reference when every one of its runs is, as its result file's description says
+(``config.description.dqn_reference``: :func:`leaderboard.run_facts.is_dqn_reference`): plain DQN
+on the environment's reward, the row every P(improves on DQN) compares the others with. Empathic
+DQN at β = 1 is one, and its runs are labelled ``"Empathic DQN (β=1)"`` in their result files
+(the label is part of a run's identity, and never rewritten in a file); the leaderboard shows such
+a row as **DQN** in its tables, figures and legends, and says which labels it renamed
+(:func:`renaming_note`).
+
+Where one variant has several DQN reference rows (a ``dqn`` run and an ``empathic_dqn`` β = 1 run,
+say), each keeps apart: a row labelled ``DQN`` stays ``DQN``, another is shown as ``"DQN, as
+<its label>"`` (``"DQN, as Empathic DQN (β=1)"``). A name another row of the variant already has
+is never given: where one would be, that variant's rows keep their labels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any
+
+from leaderboard.aggregate import table_env
+from leaderboard.run_facts import is_dqn_reference
+
+__all__ = ["DQN_NAME", "dqn_row_names", "rename_dqn_rows", "dqn_rows_of", "renaming_note"]
+
+DQN_NAME = "DQN"
+"""What a DQN reference row is called."""
+
+
+def _qualified(label: str) -> str:
+    return label if label == DQN_NAME else f"{DQN_NAME}, as {label}"
+
+
+def dqn_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+    """``{(table env, label): shown name}`` of every DQN reference row of ``results`` (labels as
+    their result files have them) whose shown name differs from its label (see the module page)."""
+    rows: dict[tuple[str, str], bool] = {}
+    for run in results:
+        key = (table_env(dict(run)), str(run["method_label"]))
+        rows[key] = rows.get(key, True) and is_dqn_reference(run)
+    names: dict[tuple[str, str], str] = {}
+    for env in sorted({env for env, _ in rows}):
+        references = sorted(label for (e, label), reference in rows.items() if e == env and reference)
+        others = {label for (e, label), reference in rows.items() if e == env and not reference}
+        if not references:
+            continue
+        shown = {label: DQN_NAME if len(references) == 1 else _qualified(label) for label in references}
+        if len(set(shown.values())) < len(shown) or set(shown.values()) & others:
+            continue  # (a name another row has: this variant's rows keep their labels)
+        names.update({(env, label): name for label, name in shown.items() if name != label})
+    return names
+
+
+def rename_dqn_rows(results: Sequence[dict[str, Any]], names: Mapping[tuple[str, str], str]) -> list[dict[str, Any]]:
+    """``results`` with the label of every run of a renamed row (``names``, from
+    :func:`dqn_row_names`) replaced by its shown name; the others as they are (nothing is written)."""
+    renamed = []
+    for run in results:
+        name = names.get((table_env(run), run["method_label"]))
+        renamed.append(run if name is None else {**run, "method_label": name})
+    return renamed
+
+
+def dqn_rows_of(results: Iterable[dict[str, Any]]) -> set[tuple[str, str]]:
+    """``{(table env, label)}`` of the rows of ``results`` whose every run is a DQN reference."""
+    rows: dict[tuple[str, str], bool] = {}
+    for run in results:
+        key = (table_env(run), run["method_label"])
+        rows[key] = rows.get(key, True) and is_dqn_reference(run)
+    return {key for key, reference in rows.items() if reference}
+
+
+def renaming_note(names: Mapping[tuple[str, str], str], has_reference: bool = True, escape: Callable[[str], str] = str) -> str:
+    """The sentence that says which rows are the DQN reference and, of the rows shown as DQN, how
+    their result files label them (each label through ``escape``: Markdown's, say); ``""`` where
+    the leaderboard has no DQN reference row."""
+    if not has_reference and not names:
+        return ""
+    text = (
+        "Rows named DQN are the DQN reference, the rows P(improves on DQN) compares every other row with: runs "
+        "their result files describe as plain DQN on the environment's reward (config.description.dqn_reference)."
+    )
+    pairs = list(dict.fromkeys((label, name) for (_, label), name in sorted(names.items())))
+    if pairs:
+        shown = "; ".join(f"{escape(name)} is labelled “{escape(label)}”" for label, name in pairs)
+        text += f" In their result files (and run ids) these rows keep their own labels: {shown}."
+    return text
