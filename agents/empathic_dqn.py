@@ -283,6 +283,20 @@ class EmpathicDQN:
                 self._numba = fused_update.NumbaUpdate(
                     self.online, self.target, self.optimizer, np.concatenate([np.arange(k), self._emp]), self.config.batch_size
                 )
+                own = type(self)
+                self._numba_whole = all(
+                    getattr(own, name) is getattr(EmpathicDQN, name) for name in ("targets", "other_inputs", "sample_batch")
+                )
+                """Whether an update is one compiled call (:meth:`agents.fused_update.NumbaUpdate.step`): the
+                default targets (not overridden) and batches; else the targets come from :meth:`targets`."""
+                self._numba_draws = own.sample_indices is EmpathicDQN.sample_indices
+                """Whether that call draws the batch's indices itself (the same numbers as :meth:`sample_indices`)."""
+                emp_row = np.full(k, -1, dtype=np.int64)
+                emp_row[self._emp] = k + np.arange(self._emp.size)
+                self._numba.setup_step(
+                    self._sample_keys[:, 0], emp_row, self.selfishness[:, 0].numpy(), self.config.gamma,
+                    self._others_rule(), self.replay.others,
+                )  # fmt: skip
             else:
                 warnings.warn(
                     f"the numba update kernel is not available ({fused_update.numba_unavailable_reason()}); "
@@ -358,8 +372,7 @@ class EmpathicDQN:
     def update(self) -> float:
         """One gradient step of every run's ``Q`` (and ``Q_emp``); returns the mean loss."""
         k, cfg, emp = self.num_runs, self.config, self._emp.size
-        batch = self.sample_batch()
-        loss = self._torch_step(batch) if self._numba is None else self._numba_step(batch, self._numba)
+        loss = self._torch_step(self.sample_batch()) if self._numba is None else self._numba_step(self._numba)
         self.grad_steps += 1
         if self.grad_steps % cfg.target_update_interval == 0:
             self.sync_target()
@@ -398,10 +411,19 @@ class EmpathicDQN:
         self.optimizer.step()
         return float(loss.detach())
 
-    def _numba_step(self, batch: dict[str, torch.Tensor], fused: NumbaUpdate) -> float:
-        """The gradient step of :meth:`update` in compiled per-run loops (:mod:`agents.fused_update`),
-        the targets of ``Q_emp`` still from :meth:`targets`; returns the summed loss."""
+    def _numba_step(self, fused: NumbaUpdate) -> float:
+        """The gradient step of :meth:`update` in compiled per-run loops (:mod:`agents.fused_update`):
+        one call from the batch's indices to Adam, or, where :meth:`targets` (or the batch) is
+        overridden, the compiled gather and forward passes, :meth:`targets` in torch, then the
+        compiled train step; returns the summed loss."""
         k, emp = self.num_runs, self._emp.size
+        if self._numba_whole:
+            index = None if self._numba_draws else self.sample_indices().numpy()
+            return fused.step(self.replay, self.grad_steps * self.config.batch_size, index)
+        if type(self).sample_batch is EmpathicDQN.sample_batch:
+            batch = fused.sample_batch(self.replay, self.sample_indices(), self.aggregated)
+        else:
+            batch = self.sample_batch()
         if emp:
             swapped = batch["others_swapped" if self.aggregated else "other_swapped"]
             q_next, target_next, target_swapped = fused.next_values(batch["next_obs"], swapped)

@@ -10,7 +10,8 @@ accumulation); only the order in which sums are taken differs:
   exports none, loops summing over the inner index in order from 0 (exact zeros skipped).
 * **the forward passes** of ``Q(s')``, ``Q̂(s')`` and ``Q̂(s_emp')`` (:func:`next_values`) and of
   the trained networks on ``s``: each layer's product, then its bias added to the finished sum;
-  ReLU on the hidden layers.
+  ReLU on the hidden layers; the output layer's product taken against its weights transposed
+  (the form BLAS serves fastest for a handful of outputs).
 * **the loss** of each network (row of the stacked parameters): the mean over the batch of
   ``(Q(s, a) − y)²``, summed in batch order; its gradient with respect to ``Q(s, a)`` is
   ``2·(Q(s, a) − y)·(1/B)``; the output layer's gradients (one taken action per row) and every
@@ -24,6 +25,21 @@ accumulation); only the order in which sums are taken differs:
   torch's build contracted them into. Step counts, moments and parameters are the learner's
   :class:`agents.stacked_adam.StackedAdam` tensors, written in place, so a checkpoint holds them
   as the PyTorch path keeps them.
+* **the loops** are compiled with IEEE division (numba's numpy error model: no zero test in
+  each division), so the element-wise ones (Adam, biases, ReLU masks) run in the vector lanes,
+  each element by the operations written.
+* **the batch** (:func:`draw_indices`, :func:`gather`): the replay indices drawn from each run's
+  sampling stream as :meth:`agents.empathic_dqn.EmpathicDQN.sample_indices` draws them (SplitMix64,
+  the same integers), and the transitions gathered and decoded from the replay's one-byte codes,
+  bit for bit what :meth:`agents.replay.StackedReplay.sample` returns.
+* **the targets** (:func:`empathic_targets`): the operations of
+  :func:`agents.empathic_dqn.empathic_targets` in its order, in float32: bit for bit for the
+  closest other agent and for two to four aggregated (tested); a mean is summed over the others
+  in order, which torch does not for five (float32 rounding then).
+
+:meth:`NumbaUpdate.step` is the whole update in one call: indices, gather, and run by run the
+next-state values and targets, then the train step; a learner whose :meth:`targets` is overridden
+(a plug-in's rule) gets the compiled batch and passes with its own torch targets in between.
 
 Every network is taken in turn (forward, backward and Adam of one row before the next), with
 scratch buffers of one network's size, so a run's parameters, gradients and moments stay in the
@@ -43,12 +59,17 @@ from typing import Any
 import numpy as np
 import torch
 
+from empathy_zoo.observation_codes import DECODE_TABLE
+
 __all__ = [
     "BLAS",
     "NumbaUpdate",
     "gemm",
     "adam_step",
+    "draw_indices",
     "dqn_targets",
+    "empathic_targets",
+    "gather",
     "next_values",
     "numba_available",
     "numba_unavailable_reason",
@@ -80,14 +101,17 @@ else:
 def _jit() -> Any:
     """``numba.njit`` with an on-disk cache where numba finds a writable place for it (else the
     kernels compile in every process), or a stand-in that leaves the functions uncompiled (without
-    numba: they are then never called)."""
+    numba: they are then never called). Floating-point division follows IEEE (numpy's error
+    model: no test for a zero divisor in every division, which would keep loops from being
+    vectorised; no kernel divides by zero), so the loops run in the machine's vector lanes, each
+    element by the same operations as alone."""
     if numba is None:
         return lambda function: function
     try:
         numba.njit(cache=True)(lambda: 0)
     except Exception:  # (no cache directory numba can write)
-        return numba.njit(nogil=True)
-    return numba.njit(cache=True, nogil=True)
+        return numba.njit(nogil=True, error_model="numpy")
+    return numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
 jit = _jit()
@@ -218,11 +242,24 @@ def dense(x, w, b, out, relu, blas):  # type: ignore[no-untyped-def]
 
 
 @jit
+def dense_out(x, w, b, out, blas):  # type: ignore[no-untyped-def]
+    """``out = x @ w + b`` for a network's output layer (a handful of outputs): ``w`` copied
+    transposed first, so the product is taken as rows of ``x`` against rows of ``wᵀ``, the form
+    in which BLAS serves such a narrow product fastest; the bias added to the finished sum."""
+    gemm(False, True, x, np.ascontiguousarray(w.T), out, blas)
+    n, fout = out.shape
+    for r in range(n):
+        row = out[r]
+        for j in range(fout):
+            row[j] = row[j] + b[0, j]
+
+
+@jit
 def forward(w1, b1, w2, b2, w3, b3, x, h1, h2, out, blas):  # type: ignore[no-untyped-def]
     """One network's forward pass on ``x (n, fin)``: hidden activations into ``h1``, ``h2``."""
     dense(x, w1, b1, h1, True, blas)
     dense(h1, w2, b2, h2, True, blas)
-    dense(h2, w3, b3, out, False, blas)
+    dense_out(h2, w3, b3, out, blas)
 
 
 @jit
@@ -310,20 +347,24 @@ def train_kernel(  # type: ignore[no-untyped-def]
             loss += diff * diff
             g[i] = np.float32(2.0) * diff * inv_b
         total += loss / np.float32(b)
-        # output layer: only the taken action's value has a gradient
-        for j in range(hid2):
-            for a in range(acts):
-                gw3[j, a] = 0
+        # output layer: only the taken action's value has a gradient (kept transposed, one
+        # contiguous row per action, while it is summed)
+        w3t = np.ascontiguousarray(w3.T)
+        gw3t = np.zeros((acts, hid2), np.float32)
         for a in range(acts):
             gb3[0, a] = 0
         for i in range(b):
             a = action[run, i]
             gi = g[i]
             gb3[0, a] += gi
+            grad_row, weight_row, h_row, dz_row = gw3t[a], w3t[a], h2[i], dz2[i]
             for j in range(hid2):
-                gw3[j, a] += h2[i, j] * gi
+                grad_row[j] += h_row[j] * gi
             for j in range(hid2):
-                dz2[i, j] = gi * w3[j, a] if h2[i, j] > 0 else 0
+                dz_row[j] = gi * weight_row[j] if h_row[j] > 0 else 0
+        for j in range(hid2):
+            for a in range(acts):
+                gw3[j, a] = gw3t[a, j]
         # second hidden layer
         for j in range(hid2):
             gb2[0, j] = 0
@@ -355,6 +396,172 @@ def train_kernel(  # type: ignore[no-untyped-def]
     return total
 
 
+# ---------------------------------------------------------------------------- the replay batch
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+"""SplitMix64's constants, as :func:`empathy_zoo.randomness.counter_bits` uses them."""
+
+
+@jit
+def draw_indices_kernel(keys, start, size, index):  # type: ignore[no-untyped-def]
+    """``index[r, i] = ⌊u·size⌋``, ``u`` the uniform of ``(keys[r], start + i)`` as
+    :func:`empathy_zoo.randomness.counter_integers` computes it (SplitMix64, then float64)."""
+    k, b = index.shape
+    scale = 1.0 / 9007199254740992.0  # 2⁻⁵³
+    high = np.float64(size)
+    for run in range(k):
+        key = keys[run]
+        for i in range(b):
+            z = key + (np.uint64(start + i) + np.uint64(1)) * _GOLDEN
+            z = (z ^ (z >> np.uint64(30))) * _MIX1
+            z = (z ^ (z >> np.uint64(27))) * _MIX2
+            z = z ^ (z >> np.uint64(31))
+            index[run, i] = np.int64(math.floor(np.float64(z >> np.uint64(11)) * scale * high))
+
+
+@jit
+def gather_kernel(codes, flags, stored_reward, table, index, decoded, action, terminated, reward, present, live, unseen):  # type: ignore[no-untyped-def]
+    """The transitions at ``index (K, B)`` of the replay's arrays (``codes (K, C, 2 + O, V)``,
+    ``flags (K, C, 2 + O)``, ``stored_reward (K, C)``), decoded by ``table``: observations into
+    ``decoded (K, B, 2 + O, V)``, the flags into ``action``, ``terminated``, ``reward`` ``(K, B)``
+    and ``present``, ``live``, ``unseen`` ``(K, B, O)`` (the codes of
+    :attr:`agents.replay.StackedReplay.flags`). Raises ``IndexError`` on an index outside ``[0, C)``."""
+    k, b = index.shape
+    capacity, width, v = codes.shape[1], codes.shape[2], codes.shape[3]
+    for run in range(k):
+        for i in range(b):
+            row = index[run, i]
+            if row < 0 or row >= capacity:
+                raise IndexError("a replay index lies outside the memory")
+            for w in range(width):
+                source, target = codes[run, row, w], decoded[run, i, w]
+                for j in range(v):
+                    target[j] = table[source[j]]
+            action[run, i] = flags[run, row, 0]
+            terminated[run, i] = flags[run, row, 1] != 0
+            reward[run, i] = stored_reward[run, row]
+            for o in range(width - 2):
+                code = flags[run, row, 2 + o]
+                present[run, i, o] = code == 2
+                live[run, i, o] = code >= 1
+                unseen[run, i, o] = code == 3
+
+
+# ---------------------------------------------------------------------------- the targets
+CLOSEST, MEAN, MIN = 0, 1, 2
+"""How :func:`run_targets_kernel` takes the other agents (``others`` of :func:`agents.empathic_dqn.other_term`)."""
+RULES = {"closest": CLOSEST, "mean": MEAN, "min": MIN}
+
+
+@jit
+def _max(values):  # type: ignore[no-untyped-def]
+    best = values[0]
+    for a in range(1, values.shape[0]):
+        if values[a] > best:
+            best = values[a]
+    return best
+
+
+@jit
+def run_targets_kernel(  # type: ignore[no-untyped-def]
+    reward, terminated, q_next, target_next, target_swapped, present, live, unseen, gamma, beta, rule, empathic, y, y_emp
+):  # fmt: skip
+    """One run's ``y`` (and, where ``empathic``, ``y_emp``) into ``(B,)`` arrays, the operations of
+    :func:`agents.empathic_dqn.empathic_targets` in its order, in float32: ``reward``,
+    ``terminated`` ``(B,)``, ``q_next``, ``target_next`` ``(B, A)``, ``target_swapped (B, O, A)``,
+    ``present``, ``live``, ``unseen`` ``(B, O)``; ``rule`` one of :data:`RULES` (with
+    :data:`CLOSEST`, the other agent is entry 0)."""
+    b, a = q_next.shape
+    others = target_swapped.shape[1]
+    one, zero = np.float32(1.0), np.float32(0.0)
+    rest = one - beta
+    for i in range(b):
+        best = 0
+        for action in range(1, a):  # the first of equal values, as torch's argmax
+            if q_next[i, action] > q_next[i, best]:
+                best = action
+        keep = zero if terminated[i] else one
+        yi = reward[i] + gamma * keep * target_next[i, best]
+        y[i] = yi
+        if not empathic:
+            continue
+        if rule == CLOSEST:
+            term = gamma * (one if present[i, 0] else zero) * _max(target_swapped[i, 0])
+            own = unseen[i, 0]
+        else:
+            total, count, least = zero, 0, np.float32(np.inf)
+            anyone_live, anyone_counted = False, False
+            for o in range(others):
+                value = gamma * (one if present[i, o] else zero) * _max(target_swapped[i, o])
+                counted = live[i, o] and not unseen[i, o]
+                anyone_live = anyone_live or live[i, o]
+                anyone_counted = anyone_counted or counted
+                if rule == MEAN:
+                    total += value * (one if counted else zero)
+                    count += 1 if counted else 0
+                elif counted and value < least:
+                    least = value
+            if rule == MEAN:
+                term = total / np.float32(max(count, 1))
+            else:
+                term = least if anyone_counted else zero
+            own = anyone_live and not anyone_counted
+        y_emp[i] = yi if own else beta * yi + rest * term
+
+
+@jit
+def targets_kernel(  # type: ignore[no-untyped-def]
+    reward, terminated, q_next, target_next, target_swapped, present, live, unseen, gamma, beta, rule, y, y_emp
+):  # fmt: skip
+    for run in range(reward.shape[0]):
+        run_targets_kernel(
+            reward[run], terminated[run], q_next[run], target_next[run], target_swapped[run], present[run], live[run],
+            unseen[run], gamma, beta[run], rule, True, y[run], y_emp[run],
+        )  # fmt: skip
+
+
+# ---------------------------------------------------------------------------- the whole update
+@jit
+def update_kernel(  # type: ignore[no-untyped-def]
+    replay, keys, start, size, draw, index, batch, online, target, exp_avg, exp_avg_sq, steps, run_of_row, emp_row,
+    beta, gamma, rule, lr, beta1, beta2, eps, width, scratch, values, targets, grads, blas,
+):  # fmt: skip
+    """One gradient step of every online row from the replay's arrays: the batch's indices (drawn
+    here where ``draw``, else ``index`` as given), its gather and decode, then run by run
+    ``Q(s')``, ``Q̂(s')`` (and ``Q̂(s_emp')`` where the run has ``Q_emp``, row ``emp_row[run] ≥ 0``)
+    and its targets into ``targets (R, B)``, then :func:`train_kernel`. Returns the summed loss."""
+    codes, flags, stored_reward, table = replay
+    decoded, action, terminated, reward, present, live, unseen = batch
+    if draw:
+        draw_indices_kernel(keys, start, size, index)
+    gather_kernel(codes, flags, stored_reward, table, index, decoded, action, terminated, reward, present, live, unseen)
+    h1, h2 = scratch[0], scratch[1]
+    q_next, target_next, target_swapped = values
+    others = target_swapped.shape[1]
+    for run in range(index.shape[0]):
+        nxt = decoded[run, :, 1]
+        forward(
+            online[0][run], online[1][run], online[2][run], online[3][run], online[4][run], online[5][run],
+            nxt, h1, h2, q_next, blas,
+        )  # fmt: skip
+        t = (target[0][run], target[1][run], target[2][run], target[3][run], target[4][run], target[5][run])
+        forward(t[0], t[1], t[2], t[3], t[4], t[5], nxt, h1, h2, target_next, blas)
+        row = emp_row[run]
+        empathic = row >= 0
+        if empathic:
+            for o in range(others):
+                forward(t[0], t[1], t[2], t[3], t[4], t[5], decoded[run, :, 2 + o], h1, h2, target_swapped[:, o], blas)
+        run_targets_kernel(
+            reward[run], terminated[run], q_next, target_next, target_swapped, present[run], live[run], unseen[run],
+            gamma, beta[run], rule, empathic, targets[run], targets[row if empathic else run],
+        )  # fmt: skip
+    return train_kernel(
+        online, exp_avg, exp_avg_sq, steps, decoded[:, :, 0], action, targets, run_of_row,
+        lr, beta1, beta2, eps, width, scratch, grads, blas,
+    )  # fmt: skip
+
+
 def _tiny_inputs() -> tuple[Any, ...]:
     """Arguments of every kernel for a 2-3-3-2 network, one run, two rows (to compile them once)."""
     rng = np.random.default_rng(0)
@@ -379,6 +586,10 @@ def _kernels() -> dict[str, Any]:
             "dqn_targets": dqn_targets_kernel,
             "adam": adam_kernel,
             "train": train_kernel,
+            "draw_indices": draw_indices_kernel,
+            "gather": gather_kernel,
+            "targets": targets_kernel,
+            "update": update_kernel,
         }
         params, zeros = _tiny_inputs()
         update = NumbaUpdate.__new__(NumbaUpdate)
@@ -389,11 +600,30 @@ def _kernels() -> dict[str, Any]:
         targets = np.zeros((1, 2), np.float32)
         kernels["dqn_targets"](targets, np.zeros((1, 2), np.bool_), q_next, target_next, np.float32(0.9), targets)
         update._train(obs, np.zeros((1, 2), np.int64), targets)
+        replay = _TinyReplay()
+        update.setup_step(np.zeros(1, np.uint64), np.zeros(1, np.int64), np.ones(1, np.float32), 0.9, "mean", 1)
+        update.sample_batch(replay, torch.zeros((1, 2), dtype=torch.int64), aggregated=True)
+        update.step(replay, 0)
+        flags = np.zeros((1, 2, 1), np.bool_)
+        _empathic_targets(
+            kernels, targets, flags[:, :, 0], q_next, target_next, swapped, flags, 0.9, np.ones(1), "min", flags, flags
+        )
     except Exception as error:  # (numba missing, or it cannot compile here: the caller falls back)
         _FAILURE = f"{type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
         raise RuntimeError(_FAILURE) from error
     _KERNELS = kernels
     return kernels
+
+
+class _TinyReplay:
+    """A replay memory's arrays for two transitions of the 2-input network (to compile the step)."""
+
+    def __init__(self) -> None:
+        self.observations = torch.full((1, 2, 3, 2), 20, dtype=torch.uint8)
+        self.flags = torch.full((1, 2, 3), 2, dtype=torch.uint8)
+        self.reward = torch.zeros((1, 2))
+        self.decode_table = torch.from_numpy(DECODE_TABLE.copy())
+        self.size = 2
 
 
 def numba_available() -> bool:
@@ -449,6 +679,119 @@ def dqn_targets(
     out = np.empty(reward.shape, np.float32)
     _kernels()["dqn_targets"](reward, terminated, q_next, target_next, np.float32(gamma), out)
     return out
+
+
+def draw_indices(keys: np.ndarray, start: int, size: int, batch_size: int) -> np.ndarray:
+    """``(K, B)`` int64 replay indices: row ``r`` is ``counter_integers(keys[r], start + arange(B),
+    size)`` (:func:`empathy_zoo.randomness.counter_integers`, the same numbers), ``keys (K,)`` uint64."""
+    keys = np.ascontiguousarray(keys, dtype=np.uint64).reshape(-1)
+    index = np.empty((keys.shape[0], batch_size), np.int64)
+    _kernels()["draw_indices"](keys, int(start), int(size), index)
+    return index
+
+
+def gather(replay: Any, index: torch.Tensor | np.ndarray) -> dict[str, torch.Tensor]:
+    """The transitions at ``index (K, B)`` of ``replay`` (an :class:`agents.replay.StackedReplay`
+    on the CPU), as :meth:`agents.replay.StackedReplay.sample` returns them, bit for bit: the same
+    keys, dtypes, shapes and values, in fresh CPU tensors."""
+    return _gather(_kernels(), replay, np.asarray(index, dtype=np.int64))
+
+
+def _replay_arrays(replay: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """numpy views of a CPU replay memory's codes, flags, rewards and decode table."""
+    return (replay.observations.numpy(), replay.flags.numpy(), replay.reward.numpy(), replay.decode_table.numpy())
+
+
+def _batch_buffers(k: int, b: int, others: int, obs_size: int) -> tuple[np.ndarray, ...]:
+    """``(decoded, action, terminated, reward, present, live, unseen)`` for a batch of ``(K, B)``."""
+    return (
+        np.empty((k, b, 2 + others, obs_size), np.float32),
+        np.empty((k, b), np.int64),
+        np.empty((k, b), np.bool_),
+        np.empty((k, b), np.float32),
+        *(np.empty((k, b, others), np.bool_) for _ in range(3)),
+    )
+
+
+def _gather(kernels: dict[str, Any], replay: Any, index: np.ndarray) -> dict[str, torch.Tensor]:
+    if replay.observations.device.type != "cpu":
+        raise ValueError("the compiled gather reads replay memories on the CPU only")
+    codes = replay.observations
+    k, b = index.shape
+    if k != codes.shape[0]:
+        raise ValueError(f"expected one row of indices per run, ({codes.shape[0]}, B); got {index.shape}")
+    buffers = _batch_buffers(k, b, codes.shape[2] - 2, codes.shape[3])
+    kernels["gather"](*_replay_arrays(replay), np.ascontiguousarray(index), *buffers)
+    decoded, action, terminated, reward, present, live, unseen = (torch.from_numpy(x) for x in buffers)
+    return {
+        "obs": decoded[:, :, 0],
+        "next_obs": decoded[:, :, 1],
+        "others_swapped": decoded[:, :, 2:],
+        "action": action,
+        "terminated": terminated,
+        "reward": reward,
+        "others_present": present,
+        "others_live": live,
+        "others_unseen": unseen,
+    }
+
+
+def empathic_targets(
+    reward: np.ndarray,
+    terminated: np.ndarray,
+    q_next: np.ndarray,
+    target_next: np.ndarray,
+    target_swapped: np.ndarray,
+    present: np.ndarray,
+    gamma: float,
+    selfishness: np.ndarray,
+    others: str = "closest",
+    live: np.ndarray | None = None,
+    unseen: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`agents.empathic_dqn.empathic_targets` compiled: ``(y, y_emp)``, ``(K, B)`` float32
+    each, from numpy arrays of the same shapes (``selfishness`` ``(K,)`` or ``(K, 1)``; with
+    ``others="closest"``, ``q_swapped`` is ``(K, B, A)`` and ``present``, ``unseen`` ``(K, B)``),
+    by the same float32 operations in the same order (sums over several others in their order)."""
+    return _empathic_targets(
+        _kernels(), reward, terminated, q_next, target_next, target_swapped, present, gamma, selfishness, others, live, unseen
+    )
+
+
+def _empathic_targets(
+    kernels: dict[str, Any],
+    reward: np.ndarray,
+    terminated: np.ndarray,
+    q_next: np.ndarray,
+    target_next: np.ndarray,
+    target_swapped: np.ndarray,
+    present: np.ndarray,
+    gamma: float,
+    selfishness: np.ndarray,
+    others: str = "closest",
+    live: np.ndarray | None = None,
+    unseen: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    if others not in RULES:
+        raise ValueError(f"others must be one of {sorted(RULES)}, got {others!r}")
+    swapped = np.asarray(target_swapped, np.float32)
+    present = np.asarray(present, np.bool_)
+    if others == "closest":
+        swapped, present = swapped[:, :, None], present[:, :, None]
+        unseen = None if unseen is None else np.asarray(unseen)[:, :, None]
+        live = np.ones_like(present)
+    elif swapped.ndim != 4:
+        raise ValueError(f"others={others!r} needs one swapped value per other agent, (K, B, N, A); got {swapped.shape}")
+    live = np.ones_like(present) if live is None else np.asarray(live, np.bool_)
+    unseen = np.zeros_like(present) if unseen is None else np.asarray(unseen, np.bool_)
+    y = np.empty(np.shape(reward), np.float32)
+    y_emp = np.empty_like(y)
+    kernels["targets"](
+        np.asarray(reward, np.float32), np.asarray(terminated, np.bool_), np.asarray(q_next, np.float32),
+        np.asarray(target_next, np.float32), swapped, present, live, unseen, np.float32(gamma),
+        np.asarray(selfishness, np.float32).reshape(-1), RULES[others], y, y_emp,
+    )  # fmt: skip
+    return y, y_emp
 
 
 def adam_step(
@@ -539,6 +882,68 @@ class NumbaUpdate:
         """One network's gradients ``(W₁, b₁, …)``, reused network after network."""
         assert self._grads[0].shape == (obs_size, hidden)
         self._width = vector_width()
+
+    def setup_step(
+        self, keys: np.ndarray, empathic_row: np.ndarray, selfishness: np.ndarray, gamma: float, others: str, num_others: int
+    ) -> None:
+        """Prepare :meth:`step`, the whole update in one compiled call: ``keys (K,)`` uint64, each
+        run's replay-sampling key (:meth:`agents.empathic_dqn.EmpathicDQN.sample_indices`);
+        ``empathic_row (K,)`` the online row of each run's ``Q_emp`` (−1: none); ``selfishness
+        (K,)`` β; ``others`` the rule of :func:`agents.empathic_dqn.other_term` over
+        ``num_others`` swapped observations per transition (``"closest"``: one). Allocates every
+        buffer the step uses, once."""
+        if others not in RULES:
+            raise ValueError(f"others must be one of {sorted(RULES)}, got {others!r}")
+        k, b = self.target[0].shape[0], self._scratch[0].shape[0]
+        obs_size, actions = self.online[0].shape[1], self.online[4].shape[2]
+        self._keys = np.ascontiguousarray(keys, dtype=np.uint64).reshape(k)
+        self._emp_row = np.ascontiguousarray(empathic_row, dtype=np.int64).reshape(k)
+        self._beta = np.ascontiguousarray(selfishness, dtype=np.float32).reshape(k)
+        self._gamma, self._rule = np.float32(gamma), RULES[others]
+        self._index = np.zeros((k, b), np.int64)
+        self._batch = _batch_buffers(k, b, num_others, obs_size)
+        self._step_values = (
+            np.zeros((b, actions), np.float32),
+            np.zeros((b, actions), np.float32),
+            np.zeros((b, num_others, actions), np.float32),
+        )
+        self._targets = np.zeros((self.run_of_row.shape[0], b), np.float32)
+        self._replay: tuple[tuple[torch.Tensor, ...], tuple[np.ndarray, ...]] | None = None
+        """The replay tensors :meth:`step` last read, and their numpy views."""
+
+    def step(self, replay: Any, start: int, index: np.ndarray | None = None) -> float:
+        """One whole gradient step of every online row in one compiled call (:func:`update_kernel`):
+        the batch at ``index (K, B)``, or where ``None`` at the indices drawn from the keys at
+        counter ``start`` (as :meth:`agents.empathic_dqn.EmpathicDQN.sample_indices` draws them),
+        gathered from ``replay`` (a CPU :class:`agents.replay.StackedReplay`), the targets of
+        :func:`agents.empathic_dqn.empathic_targets` (of ``Q`` only for a run without ``Q_emp``),
+        forward, backward and Adam network after network (:meth:`setup_step` first). Returns the
+        summed loss, as :meth:`train`."""
+        tensors, cached = (replay.observations, replay.flags, replay.reward, replay.decode_table), self._replay
+        if cached is None or any(a is not b for a, b in zip(cached[0], tensors)):
+            if any(t.device.type != "cpu" for t in tensors):
+                raise ValueError("the compiled step reads replay memories on the CPU only")
+            cached = self._replay = (tensors, _replay_arrays(replay))
+        if index is not None:
+            self._index[...] = index
+        total = self._k["update"](
+            cached[1], self._keys, int(start), int(replay.size), index is None, self._index, self._batch,
+            self.online, self.target, self.exp_avg, self.exp_avg_sq, self.steps, self.run_of_row, self._emp_row,
+            self._beta, self._gamma, self._rule, self.lr, self.beta1, self.beta2, self.eps, self._width,
+            self._scratch, self._step_values, self._targets, self._grads, BLAS,
+        )  # fmt: skip
+        return float(total)
+
+    def sample_batch(self, replay: Any, index: torch.Tensor, aggregated: bool) -> dict[str, torch.Tensor]:
+        """:meth:`agents.empathic_dqn.EmpathicDQN.sample_batch` at ``index`` by the compiled gather
+        (:func:`gather`; fresh tensors): with ``aggregated`` false, the closest other agent's
+        ``other_swapped``, ``other_present`` and ``other_unseen`` in place of the ``others_…``."""
+        batch = _gather(self._k, replay, np.asarray(index.numpy(), dtype=np.int64))
+        if not aggregated:
+            for name in ("swapped", "present", "unseen"):
+                batch[f"other_{name}"] = batch.pop(f"others_{name}")[:, :, 0]
+            del batch["others_live"]
+        return batch
 
     def _values(self, next_obs: np.ndarray, swapped: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return _next_values(self._k, self.online, self.target, next_obs, swapped, (self._scratch[0], self._scratch[1]))

@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from agents import fused_update
-from agents.empathic_dqn import EmpathicDQN
+from agents.empathic_dqn import EmpathicDQN, empathic_targets
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import init_stacked_mlp
@@ -160,13 +160,15 @@ def test_every_update_matches_the_torch_update_from_the_same_state(needs_numba: 
 
 
 # ---------------------------------------------------------------------------- exactness
-def test_a_run_is_the_same_alone_or_in_an_ensemble(needs_numba: None) -> None:
+@pytest.mark.parametrize("others", [1, 2])
+def test_a_run_is_the_same_alone_or_in_an_ensemble(needs_numba: None, others: int) -> None:
     betas, seeds = [1.0, 0.5, 1.0, 0.25], [11, 12, 13, 14]
-    ensemble = _learner(betas, "numba", seeds)
+    settings = {"others": "mean"} if others > 1 else {}
+    ensemble = _learner(betas, "numba", seeds, num_others=others, **settings)
     for _ in range(120):
         ensemble.update()
     for run, (beta, seed) in enumerate(zip(betas, seeds)):
-        solo = _learner([beta], "numba", [seed])
+        solo = _learner([beta], "numba", [seed], num_others=others, **settings)
         for _ in range(120):
             solo.update()
         heads = [run] + ([len(betas) + [1, 3].index(run)] if beta < 1 else [])
@@ -203,6 +205,204 @@ def test_a_checkpoint_continues_identically(needs_numba: None) -> None:
         for a, b in zip(uninterrupted.optimizer.state_dict()[name], resumed.optimizer.state_dict()[name]):
             assert torch.equal(a, b)
     assert torch.equal(uninterrupted.optimizer._step_table, resumed.optimizer._step_table)
+
+
+# ---------------------------------------------------------------------------- the batch, the targets, one call
+@pytest.mark.parametrize("size", [1, 37, 600])
+def test_the_compiled_indices_are_sample_indices(needs_numba: None, size: int) -> None:
+    """:func:`agents.fused_update.draw_indices` draws the numbers of
+    :meth:`EmpathicDQN.sample_indices` (the replay-sampling stream), at every gradient step."""
+    learner = _learner([0.5, 1.0, 0.25], "numba", seeds=[3, 99, 2**40])
+    learner.replay.size = size
+    for grad_steps in (0, 1, 17, 10**6, 2**40):
+        learner.grad_steps = grad_steps
+        drawn = fused_update.draw_indices(learner._sample_keys[:, 0], grad_steps * 32, size, 32)
+        np.testing.assert_array_equal(drawn, learner.sample_indices().numpy())
+        assert drawn.dtype == np.int64 and 0 <= drawn.min() and drawn.max() < size
+
+
+@pytest.mark.parametrize("others", [1, 3])
+def test_the_compiled_gather_is_sample_batch_bit_for_bit(needs_numba: None, others: int) -> None:
+    """The compiled gather and decode of :meth:`NumbaUpdate.sample_batch` (and
+    :func:`agents.fused_update.gather` of the replay's own layout) return what
+    :meth:`EmpathicDQN.sample_batch` (and :meth:`StackedReplay.sample`) return on the same
+    indices: the same keys, dtypes, shapes and values, bit for bit, for the closest other agent
+    and for three aggregated by their mean (every code of an other agent occurs)."""
+    learner = _learner([0.5, 1.0], "numba", num_others=others, **({"others": "mean"} if others > 1 else {}))
+    assert learner.aggregated == (others > 1)
+    for grad_steps in (0, 5, 123):
+        learner.grad_steps = grad_steps
+        index = learner.sample_indices()
+        assert learner._numba is not None
+        pairs = [
+            (learner._numba.sample_batch(learner.replay, index, learner.aggregated), learner.sample_batch(index)),
+            (fused_update.gather(learner.replay, index), learner.replay.sample(index)),
+        ]
+        for mine, theirs in pairs:
+            assert mine.keys() == theirs.keys()
+            for name, value in theirs.items():
+                assert mine[name].dtype == value.dtype and mine[name].shape == value.shape, name
+                assert torch.equal(mine[name], value), name
+    codes = learner.replay.flags[:, : learner.replay.size, 2:].unique().tolist()
+    assert codes == [0, 1, 2, 3]
+    with pytest.raises(IndexError, match="outside the memory"):
+        fused_update.gather(learner.replay, torch.full((2, 4), 600))
+
+
+def _random_target_inputs(seed: int, others: int, k: int = 3, b: int = 64, a: int = 5) -> dict[str, torch.Tensor]:
+    """Random values (some actions tied) and masks in every combination a replay holds."""
+    g = torch.Generator().manual_seed(seed)
+    values = [torch.randn((k, b, a), generator=g) * 3 for _ in range(2)]
+    values[0][:, ::7, 1] = values[0][:, ::7, 3]  # (ties: the first one is taken)
+    live = torch.rand((k, b, others), generator=g) < 0.8
+    present = live & (torch.rand((k, b, others), generator=g) < 0.7)
+    unseen = live & ~present & (torch.rand((k, b, others), generator=g) < 0.5)
+    return {
+        "reward": torch.randn((k, b), generator=g),
+        "terminated": torch.rand((k, b), generator=g) < 0.2,
+        "q_next": values[0],
+        "target_next": values[1],
+        "target_swapped": torch.randn((k, b, others, a), generator=g) * 3,
+        "present": present,
+        "live": live,
+        "unseen": unseen,
+        "selfishness": torch.tensor([[0.5], [0.25], [1.0]])[:k],
+    }
+
+
+@pytest.mark.parametrize("rule, others", [("closest", 1), ("mean", 2), ("mean", 3), ("mean", 5), ("min", 3)])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_compiled_targets_are_the_torch_targets(needs_numba: None, rule: str, others: int, seed: int) -> None:
+    """:func:`agents.fused_update.empathic_targets` equals :func:`agents.empathic_dqn.empathic_targets`
+    on random inputs (unseen, present and live masks, terminated transitions, tied actions): bit
+    for bit, except the mean of five others, to float32 rounding (the compiled sum is taken in
+    order; torch's over five is not, over two to four it is)."""
+    x = _random_target_inputs(seed, others)
+    if rule == "closest":
+        for name in ("target_swapped", "present", "live", "unseen"):
+            x[name] = x[name][:, :, 0]
+    live = None if rule == "closest" else x["live"]
+    args = (x["reward"], x["terminated"], x["q_next"], x["target_next"], x["target_swapped"], x["present"], 0.99)
+    y, y_emp = empathic_targets(*args, x["selfishness"], rule, live, x["unseen"])
+    mine = fused_update.empathic_targets(
+        *(t.numpy() for t in args[:-1]), 0.99, x["selfishness"].numpy(), rule, None if live is None else live.numpy(),
+        x["unseen"].numpy(),
+    )  # fmt: skip
+    assert mine[0].dtype == mine[1].dtype == np.float32
+    np.testing.assert_array_equal(mine[0], y.numpy())
+    if others == 5:
+        np.testing.assert_allclose(mine[1], y_emp.numpy(), rtol=1e-6, atol=1e-6)
+    else:
+        np.testing.assert_array_equal(mine[1], y_emp.numpy())
+
+
+def test_the_compiled_targets_on_hand_made_numbers(needs_numba: None) -> None:
+    """One run, β = 0.5, γ = 0.5, two others, four transitions by hand (the mean and the least
+    of the others that count; unseen ones count for nothing; all unseen: ``y_emp = y``)."""
+    q_next = np.array([[[0, 1], [2, 2], [5, 0], [0, 1]]], np.float32)  # argmax: 1, 0 (tie), 0, 1
+    target_next = np.array([[[10, 20], [30, 40], [50, 60], [70, 80]]], np.float32)
+    swapped = np.array([[[[4, 2], [8, 6]]] * 4], np.float32)  # maxima 4 and 8
+    reward = np.array([[1, 2, 3, 4]], np.float32)
+    terminated = np.array([[False, False, True, False]])
+    present = np.array([[[True, True], [True, False], [False, False], [True, True]]])
+    live = np.array([[[True, True], [True, True], [True, False], [True, True]]])
+    unseen = np.array([[[False, False], [False, False], [True, False], [False, True]]])
+    y_expected = [1 + 0.5 * 20, 2 + 0.5 * 30, 3, 4 + 0.5 * 80]
+    for rule, others in (("mean", [(2 + 4) / 2, (2 + 0) / 2, None, 2]), ("min", [2, 0, None, 2])):
+        y, y_emp = fused_update.empathic_targets(
+            reward, terminated, q_next, target_next, swapped, present, 0.5, np.array([0.5]), rule, live, unseen
+        )
+        np.testing.assert_array_equal(y[0], y_expected)
+        expected = [y_expected[i] if o is None else 0.5 * y_expected[i] + 0.5 * o for i, o in enumerate(others)]
+        np.testing.assert_array_equal(y_emp[0], expected)
+    y, y_emp = fused_update.empathic_targets(
+        reward, terminated, q_next, target_next, swapped[:, :, 0], present[:, :, 0], 0.5, np.array([0.5]), "closest",
+        None, unseen[:, :, 0],
+    )  # fmt: skip
+    np.testing.assert_array_equal(y_emp[0], [0.5 * y_expected[0] + 1, 0.5 * y_expected[1] + 1, y_expected[2], 0.5 * 44 + 1])
+    with pytest.raises(ValueError, match="others must be one of"):
+        fused_update.empathic_targets(reward, terminated, q_next, target_next, swapped, present, 0.5, np.ones(1), "max")
+
+
+ONE_CALL_CASES = {
+    "empathic": ([0.5], {}, 1),
+    "mixed": ([1.0, 0.5, 0.25, 1.0], {}, 1),
+    "dqn": ([1.0, 1.0], {}, 1),
+    "mean of 2 others": ([0.5, 1.0], {"others": "mean"}, 2),
+    "least of 3 others": ([0.25, 0.5], {"others": "min"}, 3),
+}
+
+
+@pytest.mark.parametrize("case", list(ONE_CALL_CASES))
+def test_the_one_call_update_is_the_step_with_torch_targets(needs_numba: None, case: str) -> None:
+    """The whole update in one compiled call (indices, gather, next values, the compiled targets,
+    train step) computes bit for bit what the compiled passes with :meth:`EmpathicDQN.targets`
+    in torch in between compute, over 150 updates (a target copy at 50, 100 and 150)."""
+    betas, settings, others = ONE_CALL_CASES[case]
+    whole, split = (_learner(betas, "numba", num_others=others, **settings) for _ in range(2))
+    assert whole._numba_whole and whole._numba_draws
+    split._numba_whole = False
+    for _ in range(150):
+        assert whole.update() == split.update()
+    for a, b in zip(whole.online + whole.target + whole.optimizer.exp_avg, split.online + split.target + split.optimizer.exp_avg):
+        assert torch.equal(a, b)
+
+
+class _OwnIndices(EmpathicDQN):
+    """Draws its batches as Empathic DQN does, through an overridden :meth:`sample_indices`."""
+
+    def sample_indices(self) -> torch.Tensor:
+        return super().sample_indices()
+
+
+class _CountedTargets(EmpathicDQN):
+    """Empathic DQN's targets through an override that counts its calls."""
+
+    calls = 0
+
+    def targets(self, batch, q_next, target_next, target_swapped):  # type: ignore[no-untyped-def]
+        type(self).calls += 1
+        return super().targets(batch, q_next, target_next, target_swapped)
+
+
+def test_overridden_indices_and_targets_are_used(needs_numba: None) -> None:
+    """An overridden :meth:`sample_indices` is asked for the batch (the one call then takes its
+    indices); an overridden :meth:`targets` is called at every update (no compiled targets), and
+    both give the default learner's numbers."""
+    _CountedTargets.calls = 0
+    reference = _learner([0.5], "numba")
+    config = [EmpathicDQNSettings(selfishness=0.5, **SMALL)]
+    learners = [cls(config, [0], 25, update_kernel="numba") for cls in (_OwnIndices, _CountedTargets)]
+    for learner in learners:
+        learner.replay.load_state_dict(reference.replay.state_dict())
+    assert (learners[0]._numba_whole, learners[0]._numba_draws, learners[1]._numba_whole) == (True, False, False)
+    for _ in range(60):
+        loss = reference.update()
+        assert [learner.update() for learner in learners] == [loss, loss]
+    assert _CountedTargets.calls == 60
+    for learner in learners:
+        for a, b in zip(reference.online, learner.online):
+            assert torch.equal(a, b)
+
+
+def test_the_silver_rule_keeps_its_targets_and_matches_torch(needs_numba: None) -> None:
+    """A plug-in that overrides :meth:`targets` (the silver rule) trains with the compiled passes
+    and its own torch targets: from the PyTorch learner's state at each of 100 updates, one
+    compiled update lands within 1e-6 of the tensor's largest magnitude of the PyTorch update
+    (over hundreds of updates its kink, ``max(c − o, 0)``, lets rounding differences grow)."""
+    from baselines.silver_rule import SilverRuleDQN
+
+    config = [EmpathicDQNSettings(selfishness=b, **SMALL) for b in (0.5, 1.0)]
+    pair = [SilverRuleDQN(config, [0, 1], 25, update_kernel=kernel) for kernel in ("torch", "numba")]
+    reference = _learner([0.5, 1.0], "torch")
+    for learner in pair:
+        learner.replay.load_state_dict(reference.replay.state_dict())
+    assert pair[1].update_kernel == "numba" and not pair[1]._numba_whole
+    for _ in range(100):
+        pair[1].load_state_dict(pair[0].state_dict())
+        losses = [learner.update() for learner in pair]
+        assert losses[1] == pytest.approx(losses[0], rel=1e-5)
+        _close(pair[0].online, pair[1].online, 1e-6)
 
 
 # ---------------------------------------------------------------------------- fallback
