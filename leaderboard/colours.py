@@ -6,7 +6,7 @@ and any other row a colour of :data:`PALETTE` chosen by a hash of its label (SHA
 in every process and on every machine), so a method keeps its colour from one leaderboard to the
 next whatever other methods sit beside it. Where two rows of one figure hash to one colour, the
 label first in the leaderboard's order (:func:`leaderboard.ordering.label_order`) keeps it and the
-other takes the next colour of the palette not taken; past the palette's 12 colours (a figure of
+other takes the next colour of the palette not taken; past the palette's 10 colours (a figure of
 more rows), evenly spaced hues. :func:`distinct_colours` gives colours that tell things apart
 within one figure only (the held-out figure's scenarios).
 """
@@ -36,13 +36,12 @@ PALETTE: tuple[str, ...] = (
     "#d55e00",
     "#cc79a7",
     # Paul Tol's "muted" scheme, without its cyan, teal and sand (too near Okabe–Ito's sky blue,
-    # bluish green and yellow to tell apart in one figure)
+    # bluish green and yellow to tell apart in one figure) and its rose and purple (with Okabe–Ito's
+    # reddish purple and Tol's wine, four pinks: rows of one method family looked alike)
     "#332288",
     "#117733",
     "#999933",
-    "#cc6677",
     "#882255",
-    "#aa4499",
 )
 """The colours a method row may take, from two colour-blind-safe palettes: Okabe–Ito's and Paul Tol's muted."""
 
