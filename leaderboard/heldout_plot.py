@@ -24,6 +24,7 @@ from matplotlib.patches import Patch
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.names import confined
+from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.colours import distinct_colours
 from leaderboard.improvement import HIGHER_IS_BETTER
 
@@ -52,7 +53,9 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
     for axes, metric in zip(panels, group.metrics):
         for x, label in enumerate(labels):
             own = by_key[(label, TRAINED_WITH, metric)]
-            axes.fill_between([x - half, x + half], own.ci_low, own.ci_high, color="0.85", linewidth=0, zorder=1)
+            interval = len(group.runs[label]) >= MIN_INTERVAL_SEEDS  # (below: no band, no bars, as the tables say)
+            if interval:
+                axes.fill_between([x - half, x + half], own.ci_low, own.ci_high, color="0.85", linewidth=0, zorder=1)
             axes.plot([x - half, x + half], [own.mean, own.mean], color="black", linewidth=2.0, zorder=3)
             for j, scenario in enumerate(held_out):
                 cell = by_key[(label, scenario, metric)]
@@ -62,7 +65,7 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
                 axes.errorbar(
                     offset,
                     cell.mean,
-                    yerr=[[max(0.0, cell.mean - cell.ci_low)], [max(0.0, cell.ci_high - cell.mean)]],
+                    yerr=[[max(0.0, cell.mean - cell.ci_low)], [max(0.0, cell.ci_high - cell.mean)]] if interval else None,
                     fmt="o",
                     color=colours[j],
                     markerfacecolor="white" if same else colours[j],
@@ -75,7 +78,7 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
         axes.set_ylabel(f"{metric} per episode\n({better} is better)")
         axes.set_xticks(range(len(labels)))
         axes.set_xticklabels(
-            [f"{label} (n={len(group.runs[label])})" for label in labels], rotation=20, ha="right", fontsize="small"
+            [_tick(label, len(group.runs[label])) for label in labels], rotation=20, ha="right", fontsize="small"
         )
         axes.set_xlim(-0.6, len(labels) - 0.4)
         axes.grid(True, axis="y", alpha=0.3)
@@ -102,6 +105,12 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return buffer.getvalue()
+
+
+def _tick(label: str, seeds: int) -> str:
+    """A row's label under its group: its seed count, and that it has no interval below
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS`."""
+    return f"{label} (n={seeds})" if seeds >= MIN_INTERVAL_SEEDS else f"{label} (n={seeds}: no interval)"
 
 
 def plot_heldout(group: HeldoutGroup, cells: Sequence[HeldoutCell], figures_dir: str | os.PathLike[str]) -> Path:

@@ -201,3 +201,37 @@ def test_several_results_directories_match_each_evaluation_in_its_own(synthetic,
     assert notes == [] and set(group.runs) == {"dqn 1.0", "empathic_dqn 0.5", "B dqn 1.0", "B empathic_dqn 0.5"}
     with pytest.raises(ValueError, match="need each result's origin"):
         load_heldout([out, other], results + prefixed)
+
+
+def test_the_figure_draws_no_interval_for_a_row_of_fewer_than_three_seeds(tmp_path, monkeypatch) -> None:
+    """As the tables say "(n=2: no interval)", the figure draws no band and no bars for such a row,
+    and its tick label says so; a row of enough seeds keeps both."""
+    from matplotlib.axes import Axes
+
+    from leaderboard.heldout_plot import render_heldout_png
+
+    definition = scenario_set(COEXISTENCE, SCENARIOS)
+    pairs = []
+    for seed in SEEDS:
+        dqn = synthetic_run(COEXISTENCE, "dqn", 1.0, seed)
+        pairs.append((dqn, {s: {"harms": h, "survival": 400.0} for s, h in dqn_harms(seed).items()}))
+    for seed in SEEDS[:2]:
+        mine = synthetic_run(COEXISTENCE, "empathic_dqn", 0.5, seed)
+        pairs.append((mine, {s: {"harms": h, "survival": 300.0} for s, h in method_harms(seed).items()}))
+    write_synthetic(tmp_path, pairs, definition, OWN)
+    (group,), _ = load_heldout(tmp_path, [run for run, _ in pairs])
+    bars, bands, ticks = [], [], []
+    real_errorbar, real_fill, real_ticks = Axes.errorbar, Axes.fill_between, Axes.set_xticklabels
+    monkeypatch.setattr(Axes, "errorbar", lambda self, x, y, **kw: bars.append(kw.get("yerr")) or real_errorbar(self, x, y, **kw))
+    monkeypatch.setattr(Axes, "fill_between", lambda self, *a, **kw: bands.append(a) or real_fill(self, *a, **kw))
+    monkeypatch.setattr(
+        Axes, "set_xticklabels", lambda self, labels, **kw: ticks.extend(labels) or real_ticks(self, labels, **kw)
+    )
+    assert render_heldout_png(group, heldout_cells(group))[:8] == b"\x89PNG\r\n\x1a\n"
+    few = [t for t in ticks if "n=2: no interval" in t]
+    assert few and all("n=2" not in t for t in ticks if t not in few)
+    held_out = len(group.scenarios) - 1
+    per_metric_row = held_out  # one marker per held-out scenario
+    assert sum(b is None for b in bars) == per_metric_row * len(group.metrics)  # the 2-seed row: markers only
+    assert sum(b is not None for b in bars) == per_metric_row * len(group.metrics)  # DQN's row keeps its bars
+    assert len(bands) == len(group.metrics)  # DQN's band only
