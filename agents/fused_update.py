@@ -229,6 +229,15 @@ def gemm(ta, tb, a, b, c, blas):  # type: ignore[no-untyped-def]
 
 
 @jit
+def column_sums(rows, out):  # type: ignore[no-untyped-def]
+    """``out[0, j] = Σ_i rows[i, j]``, summed over the rows in order ``0 … B−1`` (a bias gradient)."""
+    out[0, :] = 0
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            out[0, j] += rows[i, j]
+
+
+@jit
 def dense(x, w, b, out, relu, blas):  # type: ignore[no-untyped-def]
     """``out = act(x @ w + b)`` for one network's layer: ``x (n, fin)``, ``w (fin, fout)``, ``b (1, fout)``;
     the bias is added to the finished sum."""
@@ -366,11 +375,7 @@ def train_kernel(  # type: ignore[no-untyped-def]
             for a in range(acts):
                 gw3[j, a] = gw3t[a, j]
         # second hidden layer
-        for j in range(hid2):
-            gb2[0, j] = 0
-        for i in range(b):
-            for j in range(hid2):
-                gb2[0, j] += dz2[i, j]
+        column_sums(dz2, gb2)
         gemm(True, False, h1, dz2, gw2, blas)
         gemm(False, True, dz2, w2, dz1, blas)
         for i in range(b):
@@ -378,11 +383,7 @@ def train_kernel(  # type: ignore[no-untyped-def]
                 if not h1[i, u] > 0:
                     dz1[i, u] = 0
         # first hidden layer
-        for u in range(hid):
-            gb1[0, u] = 0
-        for i in range(b):
-            for u in range(hid):
-                gb1[0, u] += dz1[i, u]
+        column_sums(dz1, gb1)
         gemm(True, False, x, dz1, gw1, blas)
         # Adam, tensor by tensor of this network
         for t in range(6):
@@ -605,8 +606,8 @@ def _kernels() -> dict[str, Any]:
         update.sample_batch(replay, torch.zeros((1, 2), dtype=torch.int64), aggregated=True)
         update.step(replay, 0)
         flags = np.zeros((1, 2, 1), np.bool_)
-        _empathic_targets(
-            kernels, targets, flags[:, :, 0], q_next, target_next, swapped, flags, 0.9, np.ones(1), "min", flags, flags
+        empathic_targets(
+            targets, flags[:, :, 0], q_next, target_next, swapped, flags, 0.9, np.ones(1), "min", flags, flags, kernels=kernels
         )
     except Exception as error:  # (numba missing, or it cannot compile here: the caller falls back)
         _FAILURE = f"{type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
@@ -748,30 +749,15 @@ def empathic_targets(
     others: str = "closest",
     live: np.ndarray | None = None,
     unseen: np.ndarray | None = None,
+    *,
+    kernels: dict[str, Any] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`agents.empathic_dqn.empathic_targets` compiled: ``(y, y_emp)``, ``(K, B)`` float32
     each, from numpy arrays of the same shapes (``selfishness`` ``(K,)`` or ``(K, 1)``; with
     ``others="closest"``, ``q_swapped`` is ``(K, B, A)`` and ``present``, ``unseen`` ``(K, B)``),
-    by the same float32 operations in the same order (sums over several others in their order)."""
-    return _empathic_targets(
-        _kernels(), reward, terminated, q_next, target_next, target_swapped, present, gamma, selfishness, others, live, unseen
-    )
-
-
-def _empathic_targets(
-    kernels: dict[str, Any],
-    reward: np.ndarray,
-    terminated: np.ndarray,
-    q_next: np.ndarray,
-    target_next: np.ndarray,
-    target_swapped: np.ndarray,
-    present: np.ndarray,
-    gamma: float,
-    selfishness: np.ndarray,
-    others: str = "closest",
-    live: np.ndarray | None = None,
-    unseen: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+    by the same float32 operations in the same order (sums over several others in their order).
+    ``kernels``: the compiled kernels (default: compiled now, or taken from the cache)."""
+    kernels = _kernels() if kernels is None else kernels
     if others not in RULES:
         raise ValueError(f"others must be one of {sorted(RULES)}, got {others!r}")
     swapped = np.asarray(target_swapped, np.float32)

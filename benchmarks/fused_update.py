@@ -22,13 +22,12 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import tempfile
 
 import numpy as np
 import torch
 from filled_learners import PAPER_BETAS, cpu_ms, filled_learner  # benchmarks/ is on sys.path
 from machine import describe_machine
-from train_speed import FINAL_EPSILON, REPLAY, STOPWATCH, sb3_dqn_rates
+from train_speed import STOPWATCH, empathic_dqn_rates, sb3_dqn_rates
 
 from agents import fused_update
 from agents.base import Method
@@ -119,31 +118,7 @@ TIMED_NUMBA = Method(name="timed_numba", learner=TimedNumbaEmpathicDQN, settings
 def train_rate(kind: str, warmup: int, settle: int, steps: int) -> float:
     """Env steps per CPU second of one run (K = 1, β = 0.5) through ``train_runs``, as
     ``benchmarks/train_speed.py`` times Empathic DQN, with the ``kind`` update."""
-    from empathy_zoo.experiment.model import RunSpec
-    from empathy_zoo.training import RunnerOptions, train_runs
-
-    settings = {
-        "selfishness": 0.5,
-        "batch_size": 32,
-        "learning_starts": warmup,
-        "replay_capacity": REPLAY,
-        "epsilon_end": FINAL_EPSILON,
-        "epsilon_decay_steps": 1,
-    }
-    start = warmup + settle
-    spec = RunSpec.of(
-        env="coexistence_v0",
-        method=f"{__name__}:TIMED_{kind.upper()}",
-        settings=settings,
-        seed=0,
-        steps=start + steps,
-        eval_interval=10 * (start + steps),
-        eval_episodes=1,
-    )
-    STOPWATCH.arm(start, start + steps)
-    with tempfile.TemporaryDirectory(prefix="ez-fused-update-") as out:
-        train_runs([spec], out, RunnerOptions(progress=False, checkpoint_interval=0))
-    return STOPWATCH.rates()[1]
+    return empathic_dqn_rates(warmup, settle, steps, method=f"{__name__}:TIMED_{kind.upper()}")[1]
 
 
 def train_table(repeats: int, steps: int, sb3: bool) -> None:

@@ -82,7 +82,11 @@ TIMED_EMPATHIC_DQN = Method(
 )
 
 
-def empathic_dqn_rates(warmup: int, settle: int, steps: int) -> tuple[float, float]:
+def empathic_dqn_rates(
+    warmup: int, settle: int, steps: int, method: str = f"{__name__}:TIMED_EMPATHIC_DQN"
+) -> tuple[float, float]:
+    """Env steps per CPU second (before, after the warm-up) of one Empathic DQN run (K = 1, β = 0.5)
+    through ``train_runs``, timed by :data:`STOPWATCH` in the learner ``method`` names."""
     settings = {
         "selfishness": 0.5,
         "batch_size": 32,
@@ -94,7 +98,7 @@ def empathic_dqn_rates(warmup: int, settle: int, steps: int) -> tuple[float, flo
     start = warmup + settle
     spec = RunSpec.of(
         env="coexistence_v0",
-        method=f"{__name__}:TIMED_EMPATHIC_DQN",
+        method=method,
         settings=settings,
         seed=0,
         steps=start + steps,

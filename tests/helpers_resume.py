@@ -45,6 +45,16 @@ SMALL_SETTINGS = {
 """A learner small enough for a 600-step run that still learns something."""
 
 
+TINY_SETTINGS = {
+    "learning_starts": 32,
+    "replay_capacity": 300,
+    "hidden_size": 8,
+    "target_update_interval": 50,
+    "epsilon_decay_steps": 200,
+}
+"""A learner for runs of a few hundred steps whose numbers do not matter (resume, checkpoints, fixed policies)."""
+
+
 def small_run(method: str, env: str = "coexistence_v0", **spec: Any) -> Any:
     """The ``RunSpec`` of a 600-step run of ``method`` (greedy evaluations at 300 and 600, episodes
     of 40 steps, :data:`SMALL_SETTINGS`); ``spec`` sets other fields (``reward=...``)."""

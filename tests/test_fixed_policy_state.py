@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import torch
 from helpers_policies import Wanderer
+from helpers_resume import TINY_SETTINGS
 
 import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.experiment.sweep_file import parse_sweep
@@ -21,13 +22,7 @@ from empathy_zoo.vector import VectorEnv
 
 HELPERS = Wanderer.__module__  # "helpers_policies", importable because pytest puts tests/ on the path
 CAT = "cat_0"
-SETTINGS = {
-    "learning_starts": 32,
-    "replay_capacity": 300,
-    "hidden_size": 8,
-    "target_update_interval": 50,
-    "epsilon_decay_steps": 200,
-}
+SETTINGS = TINY_SETTINGS
 UNSTAMPED = ("wall_time_s", "created")
 """Fields of a result file that tell when it was written, not what was trained."""
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pytest
 from helpers_results import synthetic_result, synthetic_schema_1
+from helpers_resume import TINY_SETTINGS
 
 from empathy_zoo import coexistence_v0, sharing_v0
 from empathy_zoo.atomic import write_json_atomic
@@ -38,13 +39,7 @@ from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, plan_en
 from empathy_zoo.vector import VectorEnv
 from leaderboard.report import write_leaderboard
 
-SETTINGS = {
-    "learning_starts": 32,
-    "replay_capacity": 300,
-    "hidden_size": 8,
-    "target_update_interval": 50,
-    "epsilon_decay_steps": 200,
-}
+SETTINGS = TINY_SETTINGS
 
 
 def specs(seeds=(0, 1)):

@@ -8,6 +8,7 @@ import json
 import os
 
 import pytest
+from helpers_resume import TINY_SETTINGS
 
 import empathy_zoo.training.ensemble as ensemble
 from empathy_zoo.atomic import write_bytes_atomic
@@ -15,13 +16,7 @@ from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.resume import CHECKPOINT_DIR
 
-SETTINGS = {
-    "learning_starts": 32,
-    "replay_capacity": 300,
-    "hidden_size": 8,
-    "target_update_interval": 50,
-    "epsilon_decay_steps": 200,
-}
+SETTINGS = TINY_SETTINGS
 
 
 def specs(seeds=(0, 1, 2), betas=(0.5,)):
