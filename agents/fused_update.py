@@ -647,22 +647,15 @@ def next_values(
     next_obs: np.ndarray,
     swapped: np.ndarray,
     scratch: tuple[np.ndarray, np.ndarray],
+    *,
+    kernels: dict[str, Any] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(Q(s'), Q̂(s'), Q̂(s_emp'))`` of every run: ``(K, B, A)``, ``(K, B, A)``, ``(K, B, O, A)``,
     from ``next_obs (K, B, V)`` and ``swapped (K, B, O, V)`` (``O`` may be 0). ``online`` and
     ``target`` are the six stacked float32 parameter arrays ``W₁, b₁, W₂, b₂, W₃, b₃`` (``Q`` of
-    run ``r`` is row ``r`` of ``online``); ``scratch`` two ``(B, hidden)`` float32 buffers."""
-    return _next_values(_kernels(), online, target, next_obs, swapped, scratch)
-
-
-def _next_values(
-    kernels: dict[str, Any],
-    online: tuple[np.ndarray, ...],
-    target: tuple[np.ndarray, ...],
-    next_obs: np.ndarray,
-    swapped: np.ndarray,
-    scratch: tuple[np.ndarray, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    run ``r`` is row ``r`` of ``online``); ``scratch`` two ``(B, hidden)`` float32 buffers;
+    ``kernels`` the compiled kernels (default: compiled now, or taken from the cache)."""
+    kernels = _kernels() if kernels is None else kernels
     k, b, _ = next_obs.shape
     actions = online[4].shape[2]
     q_next = np.empty((k, b, actions), np.float32)
@@ -932,7 +925,7 @@ class NumbaUpdate:
         return batch
 
     def _values(self, next_obs: np.ndarray, swapped: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return _next_values(self._k, self.online, self.target, next_obs, swapped, (self._scratch[0], self._scratch[1]))
+        return next_values(self.online, self.target, next_obs, swapped, (self._scratch[0], self._scratch[1]), kernels=self._k)
 
     def _train(self, obs: np.ndarray, action: np.ndarray, targets: np.ndarray) -> float:
         total = self._k["train"](
