@@ -48,6 +48,7 @@ from empathy_zoo.schedules import linear_epsilon
 __all__ = [
     "EmpathicDQN",
     "MemoryEstimate",
+    "UPDATE_KERNELS",
     "double_dqn_target",
     "continuation_value",
     "empathic_targets",
@@ -155,6 +156,10 @@ def other_term(
     return torch.where(anyone, least, torch.zeros_like(least))
 
 
+UPDATE_KERNELS = ("auto", "numba", "torch")
+"""The names :attr:`EmpathicDQN.update_kernel` takes."""
+
+
 @dataclass(frozen=True)
 class MemoryEstimate:
     """The memory an ensemble of Empathic DQN will hold, computed from its settings before anything
@@ -176,9 +181,27 @@ class EmpathicDQN:
     settings_class = EmpathicDQNSettings
 
     update_kernel = "torch"
-    """How :meth:`update` computes a gradient step unless the constructor is told: ``"torch"``
-    (batched PyTorch operations) or ``"numba"`` (compiled per-run loops, :mod:`agents.fused_update`:
-    the same algorithm in float32, sums in another order). On an instance: the kernel it uses."""
+    """How :meth:`update` computes a gradient step unless the constructor is told (one of
+    :data:`UPDATE_KERNELS`): ``"numba"`` (compiled per-run loops, :mod:`agents.fused_update`: the
+    same algorithm in float32, sums in another order), ``"torch"`` (batched PyTorch operations), or
+    ``"auto"``: numba on a CPU device where it compiles, else torch (on a CPU with a warning, since
+    the last bits of every run then differ). On an instance: the kernel it uses, ``"torch"`` or
+    ``"numba"``, which each result file records (``update_kernel``)."""
+
+    @classmethod
+    def resolved_update_kernel(cls, requested: str | None, device: str | torch.device) -> str:
+        """The kernel an instance built with ``update_kernel=requested`` on ``device`` uses (what
+        the constructor resolves, without building anything): ``"torch"`` or ``"numba"``.
+        ``ValueError`` for an unknown name, and for ``"numba"`` on a device that is not a CPU."""
+        kernel = cls.update_kernel if requested is None else requested
+        if kernel not in UPDATE_KERNELS:
+            raise ValueError(f"update_kernel must be one of {', '.join(map(repr, UPDATE_KERNELS))}, got {kernel!r}")
+        on_cpu = torch.device(device).type == "cpu"
+        if kernel == "numba" and not on_cpu:
+            raise ValueError(f"the numba update kernel runs on the CPU only; on {device} use update_kernel='torch' or 'auto'")
+        if kernel == "torch" or not on_cpu:
+            return "torch"
+        return "numba" if importlib.import_module("agents.fused_update").numba_available() else "torch"
 
     @classmethod
     def memory_needed(
@@ -229,9 +252,8 @@ class EmpathicDQN:
         num_others: int = 1,
         update_kernel: str | None = None,
     ) -> None:
-        kernel = type(self).update_kernel if update_kernel is None else update_kernel
-        if kernel not in ("torch", "numba"):
-            raise ValueError(f"update_kernel must be 'torch' or 'numba', got {kernel!r}")
+        requested = type(self).update_kernel if update_kernel is None else update_kernel
+        kernel = type(self).resolved_update_kernel(requested, device)  # (checks the name first)
         if len(settings) != len(seeds) or not settings:
             raise ValueError("give one settings object per seed, and at least one run")
         shared = {s.shared() for s in settings}
@@ -277,33 +299,33 @@ class EmpathicDQN:
         self.grad_steps = 0
         self.last_loss = float("nan")
         self._numba: NumbaUpdate | None = None
-        if kernel == "numba" and self.device.type == "cpu":  # (other devices: the PyTorch update)
-            fused_update = importlib.import_module("agents.fused_update")  # (imports numba: only when asked)
-            if fused_update.numba_available():
-                self._numba = fused_update.NumbaUpdate(
-                    self.online, self.target, self.optimizer, np.concatenate([np.arange(k), self._emp]), self.config.batch_size
-                )
-                own = type(self)
-                self._numba_whole = all(
-                    getattr(own, name) is getattr(EmpathicDQN, name) for name in ("targets", "other_inputs", "sample_batch")
-                )
-                """Whether an update is one compiled call (:meth:`agents.fused_update.NumbaUpdate.step`): the
-                default targets (not overridden) and batches; else the targets come from :meth:`targets`."""
-                self._numba_draws = own.sample_indices is EmpathicDQN.sample_indices
-                """Whether that call draws the batch's indices itself (the same numbers as :meth:`sample_indices`)."""
-                emp_row = np.full(k, -1, dtype=np.int64)
-                emp_row[self._emp] = k + np.arange(self._emp.size)
-                self._numba.setup_step(
-                    self._sample_keys[:, 0], emp_row, self.selfishness[:, 0].numpy(), self.config.gamma,
-                    self._others_rule(), self.replay.others,
-                )  # fmt: skip
-            else:
-                warnings.warn(
-                    f"the numba update kernel is not available ({fused_update.numba_unavailable_reason()}); "
-                    "using the PyTorch update",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
+        if kernel == "numba":
+            fused_update = importlib.import_module("agents.fused_update")
+            self._numba = fused_update.NumbaUpdate(
+                self.online, self.target, self.optimizer, np.concatenate([np.arange(k), self._emp]), self.config.batch_size
+            )
+            own = type(self)
+            self._numba_whole = all(
+                getattr(own, name) is getattr(EmpathicDQN, name) for name in ("targets", "other_inputs", "sample_batch")
+            )
+            """Whether an update is one compiled call (:meth:`agents.fused_update.NumbaUpdate.step`): the
+            default targets (not overridden) and batches; else the targets come from :meth:`targets`."""
+            self._numba_draws = own.sample_indices is EmpathicDQN.sample_indices
+            """Whether that call draws the batch's indices itself (the same numbers as :meth:`sample_indices`)."""
+            emp_row = np.full(k, -1, dtype=np.int64)
+            emp_row[self._emp] = k + np.arange(self._emp.size)
+            self._numba.setup_step(
+                self._sample_keys[:, 0], emp_row, self.selfishness[:, 0].numpy(), self.config.gamma,
+                self._others_rule(), self.replay.others,
+            )  # fmt: skip
+        elif requested != "torch" and self.device.type == "cpu":  # (asked for numba, or auto, where it cannot build)
+            reason = importlib.import_module("agents.fused_update").numba_unavailable_reason()
+            warnings.warn(
+                f"the numba update kernel is not available ({reason}); using the PyTorch update, whose sums run in "
+                "another order: results differ in their last bits from the numba kernel's (install numba to use it)",
+                RuntimeWarning,
+                stacklevel=2,
+            )
         self.update_kernel = "numba" if self._numba is not None else "torch"
 
     # ------------------------------------------------------------------ acting
@@ -547,6 +569,7 @@ class EmpathicDQN:
             "env_steps": self.env_steps,
             "grad_steps": self.grad_steps,
             "seeds": list(self.seeds),
+            "update_kernel": self.update_kernel,
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:

@@ -424,8 +424,29 @@ def test_without_numba_the_learner_says_so_and_trains_with_torch(monkeypatch: py
 def test_the_default_kernel_is_torch_and_a_bad_name_is_refused() -> None:
     assert EmpathicDQN.update_kernel == "torch"
     assert _learner([1.0], None).update_kernel == "torch"  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match="update_kernel must be 'torch' or 'numba'"):
+    with pytest.raises(ValueError, match="update_kernel must be one of 'auto', 'numba', 'torch', got 'numpy'"):
         _learner([1.0], "numpy")
+
+
+def test_auto_is_numba_where_it_builds_and_torch_with_a_warning_where_not(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``auto`` resolves to the compiled kernel where numba builds; where it does not, the learner
+    says so (its results differ in their last bits) and trains exactly as the PyTorch update."""
+    if fused_update.numba_available():
+        assert EmpathicDQN.resolved_update_kernel("auto", "cpu") == "numba"
+        assert _learner([0.5], "auto").update_kernel == "numba"
+    monkeypatch.setattr(fused_update, "numba_available", lambda: False)
+    monkeypatch.setattr(fused_update, "numba_unavailable_reason", lambda: "numba is not installed (test)")
+    assert EmpathicDQN.resolved_update_kernel("auto", "cpu") == "torch"
+    with pytest.warns(RuntimeWarning, match="not available .*numba is not installed.*last bits"):
+        fallen = _learner([0.5], "auto")
+    assert fallen.update_kernel == "torch"
+
+
+def test_numba_is_refused_off_the_cpu_and_auto_is_torch_there() -> None:
+    with pytest.raises(ValueError, match="numba update kernel runs on the CPU only; on meta"):
+        EmpathicDQN.resolved_update_kernel("numba", "meta")
+    assert EmpathicDQN.resolved_update_kernel("auto", "meta") == "torch"
+    assert EmpathicDQN.resolved_update_kernel("torch", "cpu") == "torch"
 
 
 @pytest.mark.parametrize("ta, tb", [(False, False), (True, False), (False, True)])

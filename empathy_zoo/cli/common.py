@@ -11,6 +11,9 @@ from typing import Any
 
 import numpy as np
 
+# (the names only: agents.empathic_dqn imports torch, which the command line loads anyway)
+from agents.empathic_dqn import UPDATE_KERNELS
+
 __all__ = [
     "PROG",
     "RUN_DEFAULTS",
@@ -31,7 +34,7 @@ __all__ = [
 PROG = "empathy-zoo"
 SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 
-RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers", "log")
+RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers", "log", "update_kernel")
 """The fields of :class:`~empathy_zoo.training.options.RunnerOptions` that ``train`` options and
 its ``--config`` file set (the others have options of their own: ``--backend``, ``--address``,
 ``--rerun-changed``)."""
@@ -178,6 +181,7 @@ def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
         address=_ray_address(args),
         rerun_changed=bool(getattr(args, "rerun_changed", False)),
         log=values["log"],
+        update_kernel=values["update_kernel"],
     )
 
 
@@ -233,6 +237,14 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
         help="log every run's scalars live to tensorboard, csv and/or wandb, comma-separated, under "
         'OUT/logs/<backend>/<run id>/ (tensorboard, wandb: pip install "empathy-zoo[tensorboard]" / "[wandb]"; '
         "none: no logging) (default: none)",
+    )
+    parser.add_argument(
+        "--update-kernel",
+        choices=UPDATE_KERNELS,
+        default=default,
+        help="how Empathic DQN and the methods built on it take a gradient step: compiled (numba), "
+        "PyTorch (torch), or auto: numba where it builds on a CPU; the two differ in the last bits of a run, "
+        "and each result file records which made it" + d("update_kernel"),
     )
     parser.add_argument(
         "--rerun-changed",

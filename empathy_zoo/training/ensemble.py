@@ -39,6 +39,7 @@ from empathy_zoo.training.checkpoint import (
     to_safe,
 )
 from empathy_zoo.training.evaluation import evaluate_greedy
+from empathy_zoo.training.fingerprint import kernel_argument, update_kernel_of
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.progress import Report, SweepProgress
 from empathy_zoo.training.results import ResultWriteError, build_result, empty_columns, stored, write_result
@@ -85,13 +86,17 @@ def train_ensemble(
     write_results: bool = True,
     report: Callable[[Report], None] | None = None,
     ensemble: int = 0,
+    on_evaluation: Callable[[int, list[dict[str, list]]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Train the compatible runs ``specs`` in lockstep and return their results; write them
     (atomically) unless ``write_results`` is False (a remote worker hands them to the driver).
 
     With ``options.progress``, progress goes to ``report`` (as ensemble number ``ensemble`` of a
     sweep), or, without one, to bars drawn here. With ``options.log``, every run logs its scalars
-    under ``out_dir/logs`` as it trains (:mod:`empathy_zoo.training.tracking`)."""
+    under ``out_dir/logs`` as it trains (:mod:`empathy_zoo.training.tracking`). ``on_evaluation``
+    is told each greedy evaluation, ``(step, per_run)`` as :func:`evaluate_greedy` gives it, after
+    it is recorded; it only reads them (a tuning study's pruner: :mod:`empathy_zoo.training.tuning`),
+    and an exception it raises stops the ensemble there."""
     git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
     tracker = open_tracker(options.log, out_dir, specs)
     own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
@@ -104,6 +109,7 @@ def train_ensemble(
             (own.update if own else report) if options.progress else None,
             ensemble,
             tracker,
+            on_evaluation,
         )
     finally:
         if tracker is not None:
@@ -120,6 +126,7 @@ def _train_ensemble(
     report: Callable[[Report], None] | None,
     ensemble: int,
     tracker: EnsembleTracker | None = None,
+    on_evaluation: Callable[[int, list[dict[str, list]]], None] | None = None,
 ) -> list[dict[str, Any]]:
     if len({s.ensemble_key() for s in specs}) != 1:
         raise ValueError("these runs cannot share an ensemble (different env, method family or shared settings)")
@@ -142,6 +149,7 @@ def _train_ensemble(
         venv.num_actions,
         options.device,
         num_others=len(venv.others[0]),
+        **kernel_argument(method.learner, options.update_kernel),
     )
     train_rewards = TrainRewards([s.reward_transform() for s in specs], seeds=seeds)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
@@ -211,6 +219,8 @@ def _train_ensemble(
                 evaluations[row].append({"step": step, **per_run[row]})
             if tracker is not None:
                 tracker.evaluation(step, per_run)
+            if on_evaluation is not None:
+                on_evaluation(step, per_run)
         if options.checkpoint_interval and step % options.checkpoint_interval == 0 and step < total:
             if tracker is not None:
                 tracker.flush()  # (the logs up to a checkpoint are on disk before it: a resumed run logs on from it)
@@ -224,7 +234,7 @@ def _train_ensemble(
     results = []
     for r, spec in enumerate(specs):
         agent = agent_bytes(learner, r, {"run_id": spec.run_id, **spec.config()})  # (None: the method keeps none)
-        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory[r], agent)
+        document = build_result(spec, logs[r].columns, evaluations[r], wall, memory[r], agent, update_kernel_of(learner))
         if write_results and not result_path(out_dir, spec.run_id).exists():  # (a resumed ensemble's finished runs)
             try:
                 write_result(out_dir, document)
@@ -301,8 +311,18 @@ def _restore(
     if not len(saved["logs"]) == len(saved["evaluations"]) == len(specs):
         counts = len(saved["logs"]), len(saved["evaluations"])
         raise corrupted(ckpt, f"it holds the logs of {counts[0]} runs and the evaluations of {counts[1]}, not {len(specs)}")
+    learner_state = saved["learner"]
+    kernel = update_kernel_of(learner)
+    if kernel is not None and isinstance(learner_state, dict):
+        saved_kernel = learner_state.get("update_kernel", "torch")  # (checkpoints older than the field: torch's)
+        if saved_kernel != kernel:
+            raise CheckpointError(
+                f"checkpoint {ckpt} was made with the {saved_kernel} update kernel and these runs would go on with "
+                f"{kernel}, whose sums run in another order: resume with --update-kernel {saved_kernel} "
+                "(update_kernel in RunnerOptions), or move the checkpoint away to restart"
+            )
     try:
-        learner.load_state_dict(saved["learner"])
+        learner.load_state_dict(learner_state)
         train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
         venv.load_state(from_safe(saved["vector"]))
         observations = from_safe(saved["obs"])

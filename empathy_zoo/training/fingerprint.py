@@ -13,6 +13,11 @@ What counts when a finished run is asked for again:
 
 * the empathy-zoo version and the plug-in hashes: when either differs, the result file was made
   by other code (*changed*), and :func:`train_runs` refuses to reuse it unless told to retrain it;
+* the update kernel (``update_kernel``: ``"numba"`` or ``"torch"``, :attr:`RunnerOptions.update_kernel
+  <empathy_zoo.training.options.RunnerOptions.update_kernel>`), for learners that have a choice:
+  the two sum in another order, so a run made by the other kernel has other last bits (*changed*);
+  a file without the field (written before it was recorded, all by the torch kernel, under an
+  older version that already counts as changed) or a learner without a choice is not compared;
 * not the commit: it is recorded for provenance only, since most commits do not touch a given
   method, and a new commit alone would throw away results that are still right;
 * a file without ``plugin_sha256`` (written before the hashes were recorded) counts as made by
@@ -50,6 +55,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CodeFingerprint",
+    "kernel_argument",
+    "update_kernel_of",
+    "expected_update_kernel",
     "run_fingerprint",
     "recorded_fingerprint",
     "plugin_names",
@@ -76,10 +84,19 @@ class CodeFingerprint:
     plugins: Mapping[str, str | None] | None
     """SHA-256 of each plug-in module's source file by module name (``None``: a module without a
     file); ``None`` = not recorded (a result file written before the hashes were)."""
+    update_kernel: str | None = None
+    """The update kernel of the run's learner (``"numba"`` or ``"torch"``); ``None`` = its learner
+    has no choice of kernels, or not recorded."""
 
     def fields(self) -> dict[str, Any]:
-        """The fingerprint as a result file records it (``version``, ``commit``, ``plugin_sha256``)."""
-        return {"version": self.version, "commit": self.commit, "plugin_sha256": dict(self.plugins or {})}
+        """The fingerprint as a result file records it (``version``, ``commit``, ``plugin_sha256``,
+        ``update_kernel``)."""
+        return {
+            "version": self.version,
+            "commit": self.commit,
+            "plugin_sha256": dict(self.plugins or {}),
+            "update_kernel": self.update_kernel,
+        }
 
     def changes_since(self, recorded: CodeFingerprint) -> tuple[list[str], list[str]]:
         """What differs between ``recorded`` (a result file's) and this (the current code), and
@@ -90,6 +107,11 @@ class CodeFingerprint:
             unknown.append("the result file records no empathy-zoo version")
         elif recorded.version != self.version:
             changed.append(f"made by empathy-zoo {recorded.version}, this is {self.version}")
+        if None not in (recorded.update_kernel, self.update_kernel) and recorded.update_kernel != self.update_kernel:
+            changed.append(
+                f"made with the {recorded.update_kernel} update kernel, this would use {self.update_kernel} "
+                f"(--update-kernel {recorded.update_kernel} goes on with it)"
+            )
         for module, digest in sorted((self.plugins or {}).items()):
             if recorded.plugins is None:
                 unknown.append(
@@ -120,18 +142,41 @@ def plugin_names(spec: RunSpec) -> dict[str, tuple[str, str]]:
     return {name.partition(":")[0]: (name, kind) for name, kind in named if PLUGIN_NAME.fullmatch(name)}
 
 
-def run_fingerprint(spec: RunSpec) -> CodeFingerprint:
-    """The fingerprint of the code that trains ``spec`` here, now (its plug-ins are imported)."""
+def kernel_argument(learner: Any, update_kernel: str) -> dict[str, str]:
+    """The keyword that asks ``learner`` (a learner class or factory) for ``update_kernel``: empty
+    for a learner without a choice of kernels (it has no ``resolved_update_kernel``)."""
+    return {"update_kernel": update_kernel} if hasattr(learner, "resolved_update_kernel") else {}
+
+
+def update_kernel_of(learner: Any) -> str | None:
+    """The update kernel a built learner uses (``"numba"`` or ``"torch"``), ``None`` for a learner
+    without a choice of kernels."""
+    kernel = getattr(learner, "update_kernel", None) if hasattr(learner, "resolved_update_kernel") else None
+    return kernel if isinstance(kernel, str) else None
+
+
+def expected_update_kernel(spec: RunSpec, update_kernel: str, device: str) -> str | None:
+    """The update kernel ``spec``'s learner would use here with ``update_kernel`` on ``device``
+    (``None``: its learner has no choice)."""
+    learner = spec.method_object().learner
+    resolve = getattr(learner, "resolved_update_kernel", None)
+    return None if resolve is None else str(resolve(update_kernel, device))
+
+
+def run_fingerprint(spec: RunSpec, update_kernel: str | None = None) -> CodeFingerprint:
+    """The fingerprint of the code that trains ``spec`` here, now (its plug-ins are imported),
+    with the update kernel it trains with (``None``: none to choose)."""
     plugins = {}
     for module, (name, kind) in plugin_names(spec).items():
         resolve_name(name, {}, kind)  # imports the module (or says why it cannot)
         plugins[module] = module_sha256(sys.modules[module])
-    return CodeFingerprint(package_version(), git_commit(), plugins)
+    return CodeFingerprint(package_version(), git_commit(), plugins, update_kernel)
 
 
 def recorded_fingerprint(result: Mapping[str, Any]) -> CodeFingerprint:
-    """The fingerprint a result file records (``plugins`` is ``None`` in files older than it)."""
-    return CodeFingerprint(result.get("version"), result.get("commit"), result.get("plugin_sha256"))
+    """The fingerprint a result file records (``plugins`` is ``None`` in files older than it,
+    ``update_kernel`` in files older than that field)."""
+    return CodeFingerprint(result.get("version"), result.get("commit"), result.get("plugin_sha256"), result.get("update_kernel"))
 
 
 @lru_cache(maxsize=None)
@@ -152,15 +197,17 @@ def module_sha256(module: ModuleType) -> str | None:
 def code_changes(
     specs: Iterable[RunSpec],
     results: Mapping[str, Mapping[str, Any]],
+    update_kernel: str = "auto",
+    device: str = "cpu",
 ) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
-    """Fingerprint every run of ``specs`` (so its plug-ins are hashed before it trains) and compare
-    it with the one recorded by its result file in ``results`` (by run id; runs without one are
-    not finished): the run ids made by other code than this, and those whose code cannot be told,
-    each by reason (see the module documentation)."""
+    """Fingerprint every run of ``specs`` (so its plug-ins are hashed before it trains), as trained
+    with ``update_kernel`` on ``device``, and compare it with the one recorded by its result file
+    in ``results`` (by run id; runs without one are not finished): the run ids made by other code
+    than this, and those whose code cannot be told, each by reason (see the module documentation)."""
     changed: dict[str, list[str]] = {}
     unknown: dict[str, list[str]] = {}
     for spec in specs:
-        current = run_fingerprint(spec)
+        current = run_fingerprint(spec, expected_update_kernel(spec, update_kernel, device))
         if spec.run_id not in results:
             continue
         differs, untold = current.changes_since(recorded_fingerprint(results[spec.run_id]))

@@ -1,10 +1,12 @@
-"""How runs are executed: :class:`RunnerOptions` (results never depend on these), checked when
+"""How runs are executed: :class:`RunnerOptions` (results never depend on these but for the last
+bits that :attr:`RunnerOptions.update_kernel` chooses, which every result file records), checked when
 they are made, so the command line and Python callers get the same refusals (docs/limits.md)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from agents.empathic_dqn import UPDATE_KERNELS
 from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
 from empathy_zoo.training.tracking import check_installed, parse_log
 
@@ -16,7 +18,8 @@ BACKENDS = ("local", "ray")
 
 @dataclass(frozen=True)
 class RunnerOptions:
-    """How runs are executed (not what they compute: results do not depend on these)."""
+    """How runs are executed (not what they compute: results do not depend on these, but for the
+    last bits of the runs whose learner has a choice of update kernels: :attr:`update_kernel`)."""
 
     device: str = "cpu"
     """Torch device for the networks and replay (``cpu``, ``cuda``, ``cuda:1``)."""
@@ -49,6 +52,15 @@ class RunnerOptions:
     (:mod:`empathy_zoo.training.tracking`; ``()``: nowhere). A comma-separated string is taken too;
     an unknown backend, or one whose package is missing, is refused here."""
 
+    update_kernel: str = "torch"
+    """How learners that have a choice compute a gradient step (Empathic DQN and the methods built on
+    it: :attr:`agents.empathic_dqn.EmpathicDQN.update_kernel`): ``auto`` (the compiled ``numba``
+    kernel where it builds on a CPU, else ``torch``), ``numba`` or ``torch``. The two compute the
+    same algorithm in float32 with sums in another order, so a run's last bits depend on it (their
+    metrics were shown statistically equivalent: BENCHMARKS.md); each result file records the
+    kernel that made it, a finished run made by the other one counts as made by other code, and a
+    checkpoint resumes only with the kernel that wrote it. Other learners ignore it."""
+
     def __post_init__(self) -> None:
         for name, low in (("max_parallel_runs", 1), ("checkpoint_interval", 0), ("workers", 1), ("threads", 1)):
             value = getattr(self, name)
@@ -63,6 +75,8 @@ class RunnerOptions:
                 check_at_most(name, value, cpu_count(), "the CPUs of this machine, os.cpu_count()")
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
+        if self.update_kernel not in UPDATE_KERNELS:
+            raise ValueError(f"update_kernel must be one of {', '.join(UPDATE_KERNELS)}, got {self.update_kernel!r}")
         object.__setattr__(self, "log", parse_log(self.log))
         check_installed(self.log)
         if not isinstance(self.device, str) or not self.device:

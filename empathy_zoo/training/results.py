@@ -30,9 +30,11 @@ def build_result(
     wall_time_s: float,
     memory: dict[str, int],
     agent: tuple[str, bytes] | None = None,
+    update_kernel: str | None = None,
 ) -> dict[str, Any]:
     """The result document of one finished run, with the fingerprint of the code that made it
-    (``version``, ``commit``, ``plugin_sha256``: :mod:`empathy_zoo.training.fingerprint`) and the
+    (``version``, ``commit``, ``plugin_sha256`` and the learner's ``update_kernel``, ``None`` for a
+    learner without a choice: :mod:`empathy_zoo.training.fingerprint`) and the
     name and SHA-256 of its agent file, whose ``(suffix, bytes)`` it carries to :func:`write_result`
     as :data:`KEPT_AGENT` (``agent`` is ``None`` when the method keeps none)."""
     config = spec.config()
@@ -51,7 +53,7 @@ def build_result(
         "eval": evaluations,
         "memory_bytes": memory,
         "wall_time_s": round(float(wall_time_s), 3),
-        **run_fingerprint(spec).fields(),
+        **run_fingerprint(spec, update_kernel).fields(),
         "agent": kept,
         **({KEPT_AGENT: agent} if agent is not None else {}),
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),

@@ -95,7 +95,7 @@ def train_runs(
             *((s.variant.label, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
         ]
     )
-    redo = _runs_to_redo(specs, out_dir, finished, options.rerun_changed, note)
+    redo = _runs_to_redo(specs, out_dir, finished, options, note)
     warnings = check_before_training(
         [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options
     )
@@ -117,13 +117,17 @@ def _runs_to_redo(
     specs: Sequence[RunSpec],
     out_dir: Path,
     finished: dict[Path, dict[str, Any]],
-    rerun_changed: bool,
+    options: RunnerOptions,
     note: Callable[[str], None],
 ) -> set[str]:
-    """The finished runs of ``specs`` to retrain because other code made them (``rerun_changed``);
-    without ``rerun_changed``, ``ValueError`` when there are any (see :func:`train_runs`)."""
+    """The finished runs of ``specs`` to retrain because other code made them
+    (``options.rerun_changed``); without it, ``ValueError`` when there are any (see :func:`train_runs`)."""
+    rerun_changed = options.rerun_changed
     changed, unknown = code_changes(
-        specs, {s.run_id: finished[path] for s in specs if (path := result_path(out_dir, s.run_id)) in finished}
+        specs,
+        {s.run_id: finished[path] for s in specs if (path := result_path(out_dir, s.run_id)) in finished},
+        options.update_kernel,
+        options.device,
     )
     if changed and not rerun_changed:
         count = len({run_id for run_ids in changed.values() for run_id in run_ids})

@@ -1,0 +1,213 @@
+"""Whether two sets of runs of the same experiments are draws from one distribution: the check that a
+change of summation order (another update kernel, :attr:`RunnerOptions.update_kernel
+<empathy_zoo.training.options.RunnerOptions.update_kernel>`) changed nothing but the last bits.
+
+Two kernels that sum in another order give runs that part ways after a few hundred updates (a
+hidden unit near its ReLU threshold falls on the other side), so a run of one kernel is not
+expected to equal the same seed's run of the other: each is another draw of the same process. The
+rule, fixed before the runs it judges:
+
+* **Cells.** Runs are matched by experiment (variant, method, β, aggregation of the others, reward
+  transform: :func:`leaderboard.compare_runs.run_key` without the seed). For every experiment found
+  in both sets, both phases (:data:`leaderboard.aggregate.PHASES`) and the metrics that mean
+  something in its environment (:data:`leaderboard.tables.TABLE_METRICS`), a cell holds each set's
+  per-seed values (:func:`leaderboard.aggregate.run_scalars`). A cell whose values are all equal on
+  both sides (every run harm-free, say) says nothing and is counted as *constant*, not tested.
+* **Test.** Each cell: the exact two-sided Mann–Whitney permutation test of one set's values
+  against the other's (:func:`leaderboard.improvement.permutation_test`: midranks for ties, the
+  exact null distribution of every split).
+* **Verdict.** Holm's step-down over every tested cell at a family-wise 5 %
+  (:func:`holm_rejections`): a cell *differs* when it is rejected. The two sets are
+  **equivalent** when no cell differs, else **different**, naming the cells. The family-wise level
+  holds whatever the dependence between cells (survival and return of one run, say).
+* **Verdicts of the leaderboard.** Beside it, the verdicts against DQN
+  (:func:`leaderboard.improvement.improvements_over_dqn`, ▲ / ▼ / no clear difference) of each set
+  are listed where they differ (:func:`verdict_flips`): reported with their p-values, not folded
+  into the verdict, since two draws of a cell near the test's threshold may fall on either side.
+
+What it can see (:func:`simulated_power`): with 10 seeds a side and about 60 tested cells, a cell
+whose metric moved by 2 standard deviations is rejected in roughly half of the draws, one moved by
+1 in a few percent: the check finds a kernel that changes what runs learn, not one that moves a
+metric by a fraction of its seed-to-seed spread.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from leaderboard.aggregate import PHASES, run_scalars, table_env
+from leaderboard.compare_runs import run_key
+from leaderboard.improvement import improvements_over_dqn, permutation_test
+from leaderboard.tables import TABLE_METRICS
+
+__all__ = ["FAMILY_LEVEL", "Cell", "Equivalence", "equivalence", "holm_rejections", "report", "simulated_power", "verdict_flips"]
+
+FAMILY_LEVEL = 0.05
+"""The chance, when nothing differs, that any cell is called different (Holm's family-wise level)."""
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One experiment, phase and metric: both sets' per-seed values and the test between them."""
+
+    experiment: tuple
+    """:func:`leaderboard.compare_runs.run_key` without the seed."""
+    phase: str
+    metric: str
+    old: tuple[float, ...]
+    new: tuple[float, ...]
+    p_value: float
+    """Two-sided p of the exact permutation test; NaN for a constant cell (not tested)."""
+    differs: bool = False
+    """Rejected by Holm's step-down at :data:`FAMILY_LEVEL`."""
+
+    @property
+    def constant(self) -> bool:
+        return math.isnan(self.p_value)
+
+
+@dataclass(frozen=True)
+class Equivalence:
+    """The verdict over every cell."""
+
+    cells: tuple[Cell, ...]
+    only_old: tuple[tuple, ...]
+    """Experiments of the first set without a partner (not compared)."""
+    only_new: tuple[tuple, ...]
+
+    @property
+    def tested(self) -> list[Cell]:
+        return [cell for cell in self.cells if not cell.constant]
+
+    @property
+    def differing(self) -> list[Cell]:
+        return [cell for cell in self.cells if cell.differs]
+
+    @property
+    def verdict(self) -> str:
+        """``"equivalent"`` when no tested cell differs, else ``"different"``; ``"nothing compared"``
+        when no cell could be tested."""
+        if not self.tested:
+            return "nothing compared"
+        return "different" if self.differing else "equivalent"
+
+
+def holm_rejections(p_values: Sequence[float], level: float = FAMILY_LEVEL) -> list[bool]:
+    """Holm's step-down: sorted ascending, the ``i``-th smallest p (from 0) is rejected while every
+    p up to it is at most ``level / (m − i)``; the first that is not stops the procedure. In the
+    order given."""
+    order = sorted(range(len(p_values)), key=lambda i: p_values[i])
+    rejected = [False] * len(p_values)
+    m = len(p_values)
+    for rank, index in enumerate(order):
+        if p_values[index] > level / (m - rank):
+            break
+        rejected[index] = True
+    return rejected
+
+
+def _experiment(run: dict[str, Any]) -> tuple:
+    return run_key(run)[:-1]
+
+
+def _per_experiment(runs: Sequence[dict[str, Any]]) -> dict[tuple, list[dict[str, Any]]]:
+    groups: dict[tuple, list[dict[str, Any]]] = {}
+    for run in runs:
+        groups.setdefault(_experiment(run), []).append(run)
+    return groups
+
+
+def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], level: float = FAMILY_LEVEL) -> Equivalence:
+    """The verdict of the rule (module documentation) on two sets of result documents."""
+    a, b = _per_experiment(old), _per_experiment(new)
+    raw: list[Cell] = []
+    for experiment in sorted(set(a) & set(b), key=repr):
+        env = table_env(a[experiment][0])
+        metrics = TABLE_METRICS.get(env) or TABLE_METRICS.get(a[experiment][0]["env"], ())
+        scalars_a = [run_scalars(run) for run in a[experiment]]
+        scalars_b = [run_scalars(run) for run in b[experiment]]
+        for phase in PHASES:
+            for metric in metrics:
+                x = tuple(float(s[phase][metric]) for s in scalars_a)
+                y = tuple(float(s[phase][metric]) for s in scalars_b)
+                finite = [v for v in x + y if math.isfinite(v)]
+                p = math.nan if len(set(finite)) <= 1 else permutation_test(x, y)[1]
+                raw.append(Cell(experiment, phase, metric, x, y, p))
+    tested = [i for i, cell in enumerate(raw) if not cell.constant]
+    rejected = holm_rejections([raw[i].p_value for i in tested], level)
+    cells = list(raw)
+    for i, reject in zip(tested, rejected):
+        if reject:
+            cells[i] = Cell(**{**raw[i].__dict__, "differs": True})
+    return Equivalence(
+        tuple(cells),
+        tuple(sorted(set(a) - set(b), key=repr)),
+        tuple(sorted(set(b) - set(a), key=repr)),
+    )
+
+
+def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> list[tuple[tuple, str, str, float, float]]:
+    """The leaderboard's verdicts against DQN that differ between the sets: ``(cell key, old
+    verdict, new verdict, old p, new p)``, the key ``(variant, label, phase, metric, DQN row)``."""
+    metrics_of = {table_env(run): TABLE_METRICS.get(run["env"], ()) for run in [*old, *new]}
+    before = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(old, metrics_of)}
+    after = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(new, metrics_of)}
+    return [
+        (key, before[key].verdict, after[key].verdict, before[key].p_value, after[key].p_value)
+        for key in sorted(set(before) & set(after))
+        if before[key].verdict != after[key].verdict
+    ]
+
+
+def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, seed: int = 0, level: float = FAMILY_LEVEL) -> float:
+    """How often one cell whose values moved by ``shift`` standard deviations (normal data, ``seeds``
+    runs a side) is found to differ among ``cells`` tested cells, the others unchanged: the share
+    of ``trials`` draws (seeded) in which Holm's step-down rejects it."""
+    rng = np.random.default_rng(seed)
+    found = 0
+    for _ in range(trials):
+        p_values = [permutation_test(rng.normal(shift, 1.0, seeds), rng.normal(0.0, 1.0, seeds))[1]]
+        p_values += [permutation_test(rng.normal(0.0, 1.0, seeds), rng.normal(0.0, 1.0, seeds))[1] for _ in range(cells - 1)]
+        found += holm_rejections(p_values, level)[0]
+    return found / trials
+
+
+def report(old_dir: str, new_dir: str) -> str:
+    """Markdown: the verdict of :func:`equivalence` on two results directories, its ten smallest
+    p-values, every differing cell and every flipped verdict against DQN."""
+    from leaderboard.aggregate import load_results
+
+    old, new = load_results(old_dir), load_results(new_dir)
+    result = equivalence(old, new)
+    tested = sorted(result.tested, key=lambda cell: cell.p_value)
+    lines = [
+        f"**{result.verdict}**: {len(result.differing)} of {len(tested)} tested cells differ at a family-wise "
+        f"{FAMILY_LEVEL:.0%} (Holm; {len(result.cells) - len(tested)} constant cells not tested; "
+        f"{len(old)} runs against {len(new)}; experiments without a partner: {len(result.only_old)} + {len(result.only_new)})",
+        "",
+        "| experiment | phase | metric | mean (first) | mean (second) | p | differs |",
+        "|---|---|---|---:|---:|---:|---|",
+    ]
+    for cell in tested[:10] + [c for c in result.differing if c not in tested[:10]]:
+        name = ", ".join(str(part) for part in cell.experiment if part not in (None, "closest"))
+        lines.append(
+            f"| {name} | {cell.phase} | {cell.metric} | {np.nanmean(cell.old):.3f} | {np.nanmean(cell.new):.3f} "
+            f"| {cell.p_value:.4f} | {'yes' if cell.differs else ''} |"
+        )
+    flips = verdict_flips(old, new)
+    lines += ["", f"Verdicts against DQN that differ: {len(flips)}"]
+    lines += [f"- {key}: {a} (p = {pa:.3f}) → {b} (p = {pb:.3f})" for key, a, b, pa, pb in flips]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) != 3:
+        sys.exit("usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR")
+    print(report(sys.argv[1], sys.argv[2]))
