@@ -8,6 +8,7 @@
     empathy-zoo watch RUN_ID [--dir runs] [--gif episode.gif]   # a trained agent's greedy episodes
     empathy-zoo evaluate results/quick                # kept agents beside partners they never met
     empathy-zoo export results/quick --format marl-eval --out quick.json   # results in marl-eval's JSON
+    empathy-zoo tune methods --method dqn --env coexistence_v0 --param learning_rate=log:1e-4:3e-3   # Optuna
 
 ``train`` takes one ``--<field>`` option per field of the method's settings and of its reward
 transform (see ``empathy-zoo train --method NAME --help``); the method is ``--method``, else
@@ -21,8 +22,8 @@ One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.settings_options`, a method's settings as options),
 :mod:`~empathy_zoo.cli.sweep` (reproduce, leaderboard, reproduction, sensitivity),
 :mod:`~empathy_zoo.cli.browse` (methods, policies, play), :mod:`~empathy_zoo.cli.watch` (watch),
-:mod:`~empathy_zoo.cli.evaluate` (evaluate), :mod:`~empathy_zoo.cli.export` (export); what they share is in
-:mod:`~empathy_zoo.cli.common`.
+:mod:`~empathy_zoo.cli.evaluate` (evaluate), :mod:`~empathy_zoo.cli.export` (export),
+:mod:`~empathy_zoo.cli.tune` (tune); what they share is in :mod:`~empathy_zoo.cli.common`.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from empathy_zoo.cli.evaluate import add_evaluate
 from empathy_zoo.cli.export import add_export
 from empathy_zoo.cli.sweep import add_sweep_commands
 from empathy_zoo.cli.train import RUN_KEYS, add_train, train_method
+from empathy_zoo.cli.tune import add_tune
 from empathy_zoo.cli.watch import add_watch
 
 __all__ = ["main", "build_parser", "parse_args", "RUN_KEYS", "RUN_DEFAULTS"]
@@ -53,6 +55,7 @@ def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParse
     add_watch(sub)
     add_evaluate(sub)
     add_export(sub)
+    add_tune(sub)
     return parser
 
 

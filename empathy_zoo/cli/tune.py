@@ -1,0 +1,200 @@
+"""``tune``: one experiment of a sweep file tuned with Optuna, on seeds its results are not reported on.
+
+    empathy-zoo tune SWEEP_FILE --method NAME --param NAME=KIND:... [--param ...] [--env VARIANT]
+                     [--trials N] [--budget STEPS] [--tuning-seeds N] [--objective METRIC] [--out DIR]
+
+The study (:mod:`empathy_zoo.training.tuning`) writes ``study.json``, ``tuned.toml`` (a sweep file
+of the best settings on the sweep's reporting seeds: ``empathy-zoo reproduce --profile
+DIR/tuned.toml``) and ``trials.png`` (:mod:`leaderboard.trials_figure`) into ``--out``, after every
+trial; the same command resumes a stopped study. The objective is, unless ``--objective`` says
+otherwise, the environment's task metric as the leaderboard's trade-off figure names it
+(:data:`leaderboard.tradeoff.TRADEOFF_SPECS`: Coexistence's survival, Sharing's batteries),
+maximised or minimised as :data:`leaderboard.improvement.HIGHER_IS_BETTER` says. Optuna is the
+``tune`` extra. The protocol a fair comparison needs is docs/tuning.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.cli.common import PROG, check_device, help_text, path_text, positive
+
+__all__ = ["DEFAULT_TRIALS", "DEFAULT_TUNING_SEEDS", "add_tune", "cmd_tune", "default_objective"]
+
+DEFAULT_TRIALS = 20
+"""Trials of a study when ``--trials`` does not say (the same for every method of a comparison)."""
+DEFAULT_TUNING_SEEDS = 2
+"""Tuning seeds every trial trains when ``--tuning-seeds`` does not say."""
+
+
+def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
+    """``(metric, direction)`` of a study on environment ``env``: ``metric`` (default: the
+    environment's task metric), maximised unless fewer is better."""
+    from leaderboard.improvement import HIGHER_IS_BETTER
+    from leaderboard.tradeoff import TRADEOFF_SPECS
+
+    if metric is None:
+        if env not in TRADEOFF_SPECS:
+            raise ValueError(f"{env} has no task metric on record: name the objective with --objective METRIC")
+        metric = TRADEOFF_SPECS[env].task
+    return metric, "maximize" if HIGHER_IS_BETTER.get(metric, True) else "minimize"
+
+
+def cmd_tune(args: argparse.Namespace, command: str) -> int:
+    """Run (or resume) the study; print what it wrote and its best trial."""
+    from empathy_zoo.experiment.model import Budget
+    from empathy_zoo.experiment.search_space import parse_params
+    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path
+    from empathy_zoo.training.options import RunnerOptions
+    from empathy_zoo.training.tuning import (
+        STUDY_FILE,
+        TUNED_FILE,
+        StudyPlan,
+        import_optuna,
+        run_study,
+        select_experiment,
+        tuning_seeds,
+    )
+    from leaderboard.trials_figure import TRIALS_FIGURE
+
+    import_optuna()  # (said first: nothing else is worth checking without it)
+    path = profile_path(args.sweep)
+    specs = load_sweep(path)
+    reporting = sorted({spec.seed for spec in specs})
+    base = select_experiment(specs, args.method, args.env, args.label)
+    steps = positive("--budget", args.budget) if args.budget is not None else base.steps
+    interval = positive("--eval-interval", args.eval_interval) if args.eval_interval is not None else base.eval_interval
+    budget = Budget(steps, min(interval, steps), base.eval_episodes)
+    params = parse_params(args.param, base.method_object())
+    metric, direction = default_objective(base.env, args.objective)
+    plan = StudyPlan(
+        source=str(path),
+        base=replace(base, budget=budget),
+        params=params,
+        metric=metric,
+        direction=direction,
+        seeds=tuning_seeds(positive("--tuning-seeds", args.tuning_seeds), reporting),
+        reporting_seeds=tuple(reporting),
+        reporting_budget=base.budget,
+        trials=positive("--trials", args.trials),
+        sampler_seed=args.sampler_seed,
+        prune=not args.no_prune,
+        startup_trials=positive("--startup-trials", args.startup_trials),
+    )
+    options = RunnerOptions(device=check_device(args.device), threads=positive("--threads", args.threads), progress=False)
+    out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
+    print(
+        f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({path}): {plan.trials} trials × "
+        f"{len(plan.seeds)} tuning seeds ({plan.seeds[0]}..{plan.seeds[-1]}) × {steps:,} steps; objective {metric} "
+        f"({direction}) of the last greedy evaluation; reporting seeds {reporting} kept apart; results in {out}",
+        flush=True,
+    )
+    figure = out / TRIALS_FIGURE
+    document = run_study(
+        plan,
+        out,
+        options,
+        command=command,
+        progress=not args.no_progress,
+        on_trial=lambda study: _draw(study, figure),
+    )
+    _draw(document, figure)
+    for name in (STUDY_FILE, TRIALS_FIGURE):
+        print(f"{PROG}: wrote {out / name}")
+    best = document["best"]
+    if best is None:
+        print(f"{PROG}: no trial finished (all pruned or refused): no {TUNED_FILE}; widen the ranges or raise --trials")
+        return 0
+    print(f"{PROG}: wrote {out / TUNED_FILE}")
+    shown = ", ".join(f"{name} = {value!r}" for name, value in best["params"].items())
+    print(
+        f"{PROG}: best: trial {best['number']}, {metric} {best['value']:.4g} ({shown}); report it on the reporting seeds: "
+        f"{PROG} reproduce --profile {out / TUNED_FILE}"
+    )
+    return 0
+
+
+def _draw(study: dict[str, Any], path: Path) -> None:
+    """Draw ``trials.png`` of the study document ``study`` (after every trial)."""
+    from leaderboard.trials_figure import write_trials_figure
+
+    write_trials_figure(study, path)
+
+
+def add_tune(sub: Any) -> None:
+    """The ``tune`` subcommand."""
+    from empathy_zoo.experiment.search_space import KINDS
+    from empathy_zoo.metrics import METRIC_NAMES
+    from empathy_zoo.training.tuning import STARTUP_TRIALS, TUNING_SEED_BASE
+
+    tune = sub.add_parser(
+        "tune",
+        help='tune a method\'s settings or reward fields with Optuna on tuning seeds (pip install "empathy-zoo[tune]")',
+        description=__doc__.splitlines()[0],
+    )
+    tune.add_argument(
+        "sweep", type=path_text, metavar="SWEEP_FILE", help="a sweep file or a shipped profile (methods, quick, ...)"
+    )
+    tune.add_argument("--method", required=True, metavar="NAME", help="the method of the sweep file to tune")
+    tune.add_argument(
+        "--param",
+        required=True,
+        action="append",
+        metavar="NAME=KIND:...",
+        help=help_text(
+            f"a parameter and its range (repeatable); kinds: {', '.join(KINDS)}: learning_rate=log:1e-4:1e-2, "
+            "penalty=float:-50:-1, batch_size=int:16:128, others=choice:closest,mean,min (docs/tuning.md)"
+        ),
+    )
+    tune.add_argument("--env", metavar="VARIANT", help="the variant to tune on, where the method runs on several")
+    tune.add_argument("--label", metavar="LABEL", help="the experiment to tune, where the method has several on the variant")
+    tune.add_argument(
+        "--trials",
+        type=int,
+        default=DEFAULT_TRIALS,
+        metavar="N",
+        help=f"trials (finished, pruned or refused); give every method of a comparison the same (default: {DEFAULT_TRIALS})",
+    )
+    tune.add_argument(
+        "--budget", type=int, metavar="STEPS", help="env steps per run of a trial (default: the sweep file's steps)"
+    )
+    tune.add_argument(
+        "--eval-interval",
+        type=int,
+        metavar="STEPS",
+        help="env steps between a trial's greedy evaluations, where the pruner looks (default: the sweep file's)",
+    )
+    tune.add_argument(
+        "--tuning-seeds",
+        type=int,
+        default=DEFAULT_TUNING_SEEDS,
+        metavar="N",
+        help=f"seeds every trial trains, {TUNING_SEED_BASE} and on; refused if the sweep file reports on one "
+        f"(default: {DEFAULT_TUNING_SEEDS})",
+    )
+    tune.add_argument(
+        "--objective",
+        choices=METRIC_NAMES,
+        metavar="METRIC",
+        help="the metric of the last greedy evaluation to optimise (default: the environment's task metric: "
+        "survival in coexistence_v0, batteries in sharing_v0); harms are minimised, the others maximised",
+    )
+    tune.add_argument("--sampler-seed", type=int, default=0, metavar="S", help="seed of the TPE sampler (default: 0)")
+    tune.add_argument(
+        "--startup-trials",
+        type=int,
+        default=STARTUP_TRIALS,
+        metavar="N",
+        help=f"trials sampled at random before TPE models the rest (default: {STARTUP_TRIALS})",
+    )
+    tune.add_argument("--no-prune", action="store_true", help="train every trial to its end (no median pruner)")
+    tune.add_argument(
+        "--out", type=path_text, metavar="DIR", help="output directory (default: results/tuning/<variant>/<method>)"
+    )
+    tune.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:N (default: cpu)")
+    tune.add_argument("--threads", type=int, default=1, metavar="N", help="torch CPU threads (default: 1)")
+    tune.add_argument("--no-progress", action="store_true", help="no progress bar")
+    tune.set_defaults(handler=cmd_tune)

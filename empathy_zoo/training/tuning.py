@@ -1,0 +1,460 @@
+"""Tuning a method with Optuna, on tuning seeds kept apart from the seeds its results are reported on.
+
+:func:`run_study` tunes the parameters of one experiment of a sweep file (a method on one
+environment variant; :func:`select_experiment`) over a search space
+(:mod:`empathy_zoo.experiment.search_space`) and writes, into its output directory:
+
+* ``study.json``: the plan (sweep file, experiment, search space, objective, tuning and reporting
+  seeds, budget, sampler, pruner) and every trial: its parameters, state, value and learning curve
+  (the objective at each greedy evaluation, per tuning seed), and the best trial;
+* ``tuned.toml``: the best trial's settings as a sweep file of that experiment on the sweep's
+  **reporting** seeds and budget (:func:`~empathy_zoo.experiment.sweep_writer.experiment_sweep`),
+  labelled ``<the method's label at those settings>, tuned``: ``empathy-zoo reproduce --profile
+  DIR/tuned.toml`` trains the row to report;
+* ``study.journal``: Optuna's journal of the study (its storage), from which a study that was
+  stopped resumes.
+
+Each is rewritten (atomically) after every trial. Decisions, and why:
+
+* **Objective**: the mean, over the tuning seeds, of a metric of the run's last greedy evaluation
+  (ε = 0, its fixed start states): the figure the leaderboard's greedy column reports. Which
+  metric is the caller's (``tune`` defaults to the environment's task metric, docs/tuning.md).
+* **Tuning seeds** are :data:`TUNING_SEED_BASE` and on (``10000, 10001, …``), a range no shipped
+  sweep reports on; seeds that a sweep file reports on are refused (:func:`tuning_seeds`), so a
+  setting is never chosen on the runs that then score it. Every trial trains the same tuning
+  seeds (common random numbers: trials differ by their parameters only), in one lockstep ensemble.
+* **Sampler**: Optuna's TPE, seeded; before each trial a new sampler is seeded from the study's
+  seed and the number of trials finished, and it sees only finished trials, so the same command
+  gives the same study, and a stopped study resumed gives the study an unstopped one gives.
+  Its first :attr:`StudyPlan.startup_trials` trials (:data:`STARTUP_TRIALS` unless said)
+  sample at random.
+* **Pruner**: Optuna's median pruner on the learning curve: at each greedy evaluation before the
+  last, the trial reports its objective and is stopped when it is worse than the median of the
+  finished trials at that step (after :data:`PRUNE_STARTUP_TRIALS` finished trials). The report
+  rides on the trainer's ``on_evaluation`` hook (:func:`~empathy_zoo.training.ensemble.train_ensemble`),
+  which only reads the evaluations: a run trains the same numbers with it as without it.
+* **Equal budgets**: a study runs exactly ``trials`` trials (finished, pruned or refused), each of
+  ``len(seeds)`` runs of ``budget.steps`` env steps at most; a trial stopped by an interruption
+  does not count and is run again when the study resumes (its runs keep no checkpoint).
+* **Refused points**: a point whose settings the method refuses (a warm-up longer than the
+  budget, say) is a trial in state ``FAIL`` with the reason in ``study.json``; the ends of every
+  range are checked before the study starts, so this is rare.
+
+Optuna is an optional extra (``pip install "empathy-zoo[tune]"``): :func:`import_optuna` says so
+in one line where it is missing.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo._version import __version__
+from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic, write_text_atomic
+from empathy_zoo.experiment.model import Budget, RunSpec
+from empathy_zoo.experiment.search_space import ParamSpec, check_ends, point_runs
+from empathy_zoo.experiment.sweep_writer import experiment_sweep
+from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.output_lock import hold_output_dir
+from empathy_zoo.training.ensemble import train_ensemble
+from empathy_zoo.training.options import RunnerOptions
+from empathy_zoo.training.preflight import check_before_training
+
+__all__ = [
+    "DIRECTIONS",
+    "JOURNAL_FILE",
+    "PRUNE_STARTUP_TRIALS",
+    "STARTUP_TRIALS",
+    "STUDY_FILE",
+    "STUDY_SCHEMA",
+    "TRIALS_DIR",
+    "TUNED_FILE",
+    "TUNING_SEED_BASE",
+    "StudyPlan",
+    "TuningNotInstalledError",
+    "import_optuna",
+    "run_study",
+    "select_experiment",
+    "train_trial",
+    "trial_value",
+    "tuning_seeds",
+]
+
+TUNING_SEED_BASE = 10_000
+"""The first tuning seed: trials train seeds ``TUNING_SEED_BASE, TUNING_SEED_BASE + 1, …``."""
+PRUNE_STARTUP_TRIALS = 3
+"""Finished trials before the median pruner stops any trial."""
+STARTUP_TRIALS = 5
+"""Trials TPE samples at random before it models the others, unless a plan says otherwise (half
+of a laptop study of 10 trials; Optuna's own default, 10, would leave such a study all random)."""
+DIRECTIONS = ("maximize", "minimize")
+"""How an objective is optimised."""
+STUDY_FILE = "study.json"
+TUNED_FILE = "tuned.toml"
+JOURNAL_FILE = "study.journal"
+TRIALS_DIR = "trials"
+"""Where a trial's ensemble would keep a checkpoint (it keeps none: an interrupted trial is rerun)."""
+STUDY_SCHEMA = 1
+"""Version of ``study.json``'s layout."""
+_REFUSED = "refused"
+_CURVE = "curve"
+_WALL = "wall_time_s"
+
+
+class TuningNotInstalledError(ImportError, ValueError):
+    """Optuna is missing (a ``ValueError`` too: the command line reports it in one line)."""
+
+
+def import_optuna() -> Any:
+    """The ``optuna`` module, or :class:`TuningNotInstalledError` saying which extra installs it."""
+    try:
+        return importlib.import_module("optuna")
+    except ImportError:
+        raise TuningNotInstalledError('tuning needs Optuna, which is not installed: pip install "empathy-zoo[tune]"') from None
+
+
+class _Refused(Exception):
+    """A trial's point the method refuses (its reason is the trial's ``refused`` attribute)."""
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    """Everything a study's trials and outcome depend on (a resumed study must have the same,
+    but for :attr:`trials`)."""
+
+    source: str
+    """The sweep file the experiment comes from."""
+    base: RunSpec
+    """The experiment tuned, with the tuning budget (its seed is not used)."""
+    params: tuple[ParamSpec, ...]
+    """The search space."""
+    metric: str
+    """The objective's metric (:data:`~empathy_zoo.metrics.METRIC_NAMES`)."""
+    direction: str
+    """``maximize`` or ``minimize``."""
+    seeds: tuple[int, ...]
+    """The tuning seeds every trial trains."""
+    reporting_seeds: tuple[int, ...]
+    """The sweep file's seeds: ``tuned.toml``'s, never tuned on."""
+    reporting_budget: Budget
+    """The sweep file's budget: ``tuned.toml``'s."""
+    trials: int
+    """Trials the study runs (finished, pruned or refused)."""
+    sampler_seed: int = 0
+    """Seed of the TPE sampler."""
+    prune: bool = True
+    """Stop trials whose learning curve falls below the median (:data:`PRUNE_STARTUP_TRIALS`)."""
+    startup_trials: int = STARTUP_TRIALS
+    """Trials TPE samples at random before it models the others."""
+
+    def __post_init__(self) -> None:
+        if self.metric not in METRIC_NAMES:
+            raise ValueError(f"objective metric {self.metric!r} is not one of {', '.join(METRIC_NAMES)}")
+        if self.direction not in DIRECTIONS:
+            raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {self.direction!r}")
+        for name in ("trials", "startup_trials"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be a positive int, got {value!r}")
+        if not self.params:
+            raise ValueError("a study needs at least one parameter to tune")
+        overlap = sorted(set(self.seeds) & set(self.reporting_seeds))
+        if overlap:
+            raise ValueError(f"tuning seeds {overlap} are reporting seeds of {self.source}: tune on other seeds")
+
+    def record(self) -> dict[str, Any]:
+        """The plan as ``study.json`` keeps it."""
+        return {
+            "sweep_file": self.source,
+            "experiment": self.base.experiment_id,
+            "variant": self.base.variant.label,
+            "method": self.base.method,
+            "label": self.base.display_label(),
+            "params": {spec.name: spec.text.partition("=")[2] for spec in self.params},
+            "objective": {
+                "metric": self.metric,
+                "direction": self.direction,
+                "of": "mean over the tuning seeds of the metric's mean in the run's last greedy evaluation",
+            },
+            "tuning_seeds": list(self.seeds),
+            "reporting_seeds": list(self.reporting_seeds),
+            "budget": {
+                "steps": self.base.steps,
+                "eval_interval": self.base.eval_interval,
+                "eval_episodes": self.base.eval_episodes,
+                "trials": self.trials,
+                "env_steps_at_most": self.trials * len(self.seeds) * self.base.steps,
+            },
+            "reporting_budget": {
+                "steps": self.reporting_budget.steps,
+                "eval_interval": self.reporting_budget.eval_interval,
+                "eval_episodes": self.reporting_budget.eval_episodes,
+            },
+            "sampler": {"name": "TPESampler", "seed": self.sampler_seed, "n_startup_trials": self.startup_trials},
+            "pruner": (
+                {"name": "MedianPruner", "n_startup_trials": PRUNE_STARTUP_TRIALS, "n_warmup_steps": 0} if self.prune else None
+            ),
+        }
+
+
+def tuning_seeds(count: int, reporting: Sequence[int], first: int = TUNING_SEED_BASE) -> tuple[int, ...]:
+    """``count`` tuning seeds from ``first`` on; ``ValueError`` where one is a reporting seed."""
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise ValueError(f"the number of tuning seeds must be a positive int, got {count!r}")
+    seeds = tuple(range(first, first + count))
+    overlap = sorted(set(seeds) & set(reporting))
+    if overlap:
+        raise ValueError(
+            f"tuning seeds {seeds[0]}..{seeds[-1]} overlap the sweep file's reporting seeds {overlap}: a setting chosen on "
+            "the seeds that then score it would be scored on its own selection; report on other seeds (the sweep's "
+            "[sweep] seeds) or tune on others"
+        )
+    return seeds
+
+
+def select_experiment(specs: Sequence[RunSpec], method: str, variant: str | None = None, label: str | None = None) -> RunSpec:
+    """The experiment of a sweep's runs ``specs`` to tune: method ``method``, on ``variant`` and
+    labelled ``label`` where those are needed to pick one (``ValueError`` naming the choices)."""
+    experiments = {spec.experiment_id: spec for spec in specs}
+    chosen = [spec for spec in experiments.values() if spec.method == method]
+    if not chosen:
+        methods = sorted({spec.method for spec in specs})
+        raise ValueError(f"the sweep file has no experiment of method {method!r}; its methods: {', '.join(methods)}")
+    if variant is not None:
+        variants = sorted({spec.variant.label for spec in chosen})
+        chosen = [spec for spec in chosen if spec.variant.label == variant]
+        if not chosen:
+            raise ValueError(
+                f"method {method!r} runs on no variant {variant!r} in the sweep file; it runs on {', '.join(variants)}"
+            )
+    if label is not None:
+        labels = sorted({spec.display_label() for spec in chosen})
+        chosen = [spec for spec in chosen if spec.display_label() == label]
+        if not chosen:
+            raise ValueError(f"no experiment of method {method!r} is labelled {label!r}; its labels: {'; '.join(labels)}")
+    if len({spec.variant.label for spec in chosen}) > 1:
+        variants = sorted({spec.variant.label for spec in chosen})
+        raise ValueError(f"method {method!r} runs on {len(variants)} variants ({', '.join(variants)}): choose one with --env")
+    if len(chosen) > 1:
+        labels = sorted(spec.display_label() for spec in chosen)
+        raise ValueError(f"method {method!r} has {len(chosen)} experiments there ({'; '.join(labels)}): choose one with --label")
+    return chosen[0]
+
+
+def trial_value(per_run: Sequence[Mapping[str, Sequence[float]]], metric: str) -> tuple[float, list[float]]:
+    """The objective of one greedy evaluation of a trial's runs (``per_run`` as
+    :func:`~empathy_zoo.training.evaluation.evaluate_greedy` gives it), and each run's part."""
+    per_seed = [float(np.mean(columns[metric])) for columns in per_run]
+    return float(np.mean(per_seed)), per_seed
+
+
+def train_trial(
+    specs: Sequence[RunSpec],
+    out_dir: Path,
+    options: RunnerOptions,
+    on_evaluation: Callable[[int, list[dict[str, list]]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Train a trial's runs ``specs`` (one ensemble) and return their result documents, without
+    writing them; ``on_evaluation`` is told each greedy evaluation (and may stop the trial by
+    raising). Trained as :func:`~empathy_zoo.training.runner.train_runs` trains them, but for
+    checkpoints: a trial keeps none."""
+    return train_ensemble(specs, out_dir, replace(options, checkpoint_interval=0), False, on_evaluation=on_evaluation)
+
+
+def _counted(trial: Any, states: Any) -> bool:
+    """Whether a stored trial counts toward the study's trials (finished, pruned or refused)."""
+    return trial.state in (states.COMPLETE, states.PRUNED) or (trial.state == states.FAIL and _REFUSED in trial.user_attrs)
+
+
+def run_study(
+    plan: StudyPlan,
+    out_dir: str | Path,
+    options: RunnerOptions = RunnerOptions(progress=False),
+    command: str = "",
+    progress: bool = True,
+    on_trial: Callable[[dict[str, Any]], None] | None = None,
+    on_note: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Run (or resume) the study ``plan`` in ``out_dir`` and return its ``study.json`` document
+    (see the module documentation); ``on_trial`` gets that document after every trial (the
+    command line draws its figure), ``on_note`` what is said on the way (default: stderr)."""
+    optuna = import_optuna()
+    note = on_note or (lambda text: print(f"empathy-zoo: {text}", file=sys.stderr, flush=True))
+    out = Path(out_dir)
+    check_ends(plan.base, plan.params)
+    first = point_runs(plan.base, plan.params, {p.name: p.ends()[0] for p in plan.params}, plan.seeds)
+    for warning in check_before_training(first, options):
+        note(warning)
+    check_output_dir(out, (TRIALS_DIR,))
+    verbosity = optuna.logging.get_verbosity()
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+    try:
+        with hold_output_dir(out, command or "run_study", note):
+            for stale in remove_stale_temp_files(out):
+                note(f"removed {stale}, a write killed mid-way")
+            return _study(optuna, plan, out, options, command, progress, on_trial, note)
+    finally:
+        optuna.logging.set_verbosity(verbosity)
+
+
+def _open_study(optuna: Any, plan: StudyPlan, out: Path) -> Any:
+    """The study stored in ``out`` (created when there is none); one of another plan is refused."""
+    from optuna.storages import JournalStorage
+    from optuna.storages.journal import JournalFileBackend
+
+    storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
+    pruner = (
+        optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=0)
+        if plan.prune
+        else optuna.pruners.NopPruner()
+    )
+    study = optuna.create_study(storage=storage, study_name="tune", direction=plan.direction, pruner=pruner, load_if_exists=True)
+    wanted = {key: value for key, value in plan.record().items() if key != "budget"}
+    wanted["budget"] = {k: v for k, v in plan.record()["budget"].items() if k not in ("trials", "env_steps_at_most")}
+    stored = study.user_attrs.get("plan")
+    if stored is None:
+        study.set_user_attr("plan", wanted)
+    elif stored != wanted:
+        differs = sorted(key for key in set(stored) | set(wanted) if stored.get(key) != wanted.get(key))
+        raise ValueError(
+            f"{out} holds a study of another plan ({', '.join(differs)} differ): give another --out, or the same "
+            "sweep file, method, parameters, objective, seeds and budget to resume it (--trials may change)"
+        )
+    return study
+
+
+def _study(
+    optuna: Any,
+    plan: StudyPlan,
+    out: Path,
+    options: RunnerOptions,
+    command: str,
+    progress: bool,
+    on_trial: Callable[[dict[str, Any]], None] | None,
+    note: Callable[[str], None],
+) -> dict[str, Any]:
+    from tqdm.auto import tqdm
+
+    study = _open_study(optuna, plan, out)
+    states = optuna.trial.TrialState
+    done = sum(_counted(t, states) for t in study.trials)
+    interrupted = [t.number for t in study.trials if not _counted(t, states)]
+    if done or interrupted:
+        note(
+            f"resuming the study in {out}: {done} of {plan.trials} trial(s) done"
+            + (f"; trial(s) {interrupted} were interrupted and do not count" if interrupted else "")
+        )
+    bar = tqdm(
+        total=plan.trials, initial=min(done, plan.trials), desc=f"tune {plan.base.method}", unit="trial", disable=not progress
+    )
+    try:
+        while done < plan.trials:
+            seed = int(np.random.SeedSequence([plan.sampler_seed, done]).generate_state(1)[0])
+            study.sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=plan.startup_trials, constant_liar=False)
+            study.optimize(_objective(optuna, plan, out, options), n_trials=1, catch=(_Refused,))
+            done = sum(_counted(t, states) for t in study.trials)
+            document = _write_outputs(study, plan, out, command, optuna)
+            if on_trial is not None:
+                on_trial(document)
+            best = document["best"]
+            bar.set_postfix_str(
+                f"best {plan.metric} {best['value']:.4g} (trial {best['number']})" if best else "no trial finished"
+            )
+            bar.update(1)
+    finally:
+        bar.close()
+    return _write_outputs(study, plan, out, command, optuna)
+
+
+def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) -> Callable[[Any], float]:
+    def objective(trial: Any) -> float:
+        values = {spec.name: spec.suggest(trial) for spec in plan.params}
+        try:
+            specs = point_runs(plan.base, plan.params, values, plan.seeds)
+            check_before_training(specs, options)
+        except ValueError as error:
+            trial.set_user_attr(_REFUSED, str(error))
+            raise _Refused(str(error)) from None
+        curve: list[dict[str, Any]] = []
+        started = time.perf_counter()
+
+        def report(step: int, per_run: list[dict[str, list]]) -> None:
+            value, per_seed = trial_value(per_run, plan.metric)
+            curve.append({"step": step, "value": value, "per_seed": per_seed})
+            trial.set_user_attr(_CURVE, curve)
+            trial.report(value, step)
+            if step < plan.base.steps and trial.should_prune():
+                trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
+                raise optuna.TrialPruned(f"pruned at step {step}: {plan.metric} {value:.4g}")
+
+        train_trial(specs, out / TRIALS_DIR, options, report)
+        trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
+        return curve[-1]["value"]
+
+    return objective
+
+
+def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any) -> dict[str, Any]:
+    """``study.json``'s document of ``study``."""
+    states = optuna.trial.TrialState
+    trials = []
+    for trial in study.trials:
+        curve = trial.user_attrs.get(_CURVE, [])
+        state = trial.state.name if _counted(trial, states) else "INTERRUPTED"
+        trials.append(
+            {
+                "number": trial.number,
+                "state": "REFUSED" if _REFUSED in trial.user_attrs else state,
+                "params": dict(trial.params),
+                "value": trial.value if trial.state == states.COMPLETE else None,
+                "last_value": curve[-1]["value"] if curve else None,
+                "steps_trained": curve[-1]["step"] if curve else 0,
+                "curve": curve,
+                **({"refused": trial.user_attrs[_REFUSED]} if _REFUSED in trial.user_attrs else {}),
+                _WALL: trial.user_attrs.get(_WALL),
+            }
+        )
+    complete = [t for t in study.trials if t.state == states.COMPLETE]
+    best = study.best_trial if complete else None
+    counted = [t for t in trials if t["state"] != "INTERRUPTED"]
+    return {
+        "schema": STUDY_SCHEMA,
+        "version": __version__,
+        "optuna": optuna.__version__,
+        "command": command,
+        "plan": plan.record(),
+        "trials_done": len(counted),
+        "env_steps_trained": sum(t["steps_trained"] for t in counted) * len(plan.seeds),
+        "best": None if best is None else {"number": best.number, "value": best.value, "params": dict(best.params)},
+        "tuned_sweep_file": TUNED_FILE if best is not None else None,
+        "trials": trials,
+    }
+
+
+def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any) -> dict[str, Any]:
+    """Write ``study.json`` and, once a trial finished, ``tuned.toml``; return the document."""
+    document = study_document(study, plan, command, optuna)
+    best = document["best"]
+    if best is not None:
+        tuned = point_runs(plan.base, plan.params, best["params"], plan.reporting_seeds[:1])[0]
+        tuned = replace(tuned, budget=plan.reporting_budget)
+        label = f"{tuned.display_label()}, tuned"
+        comment = (
+            f"{label}: the best of {document['trials_done']} trial(s) of `empathy-zoo tune` (study.json beside this file),\n"
+            f"tuned on seeds {list(plan.seeds)} at {plan.base.steps:,} env steps per run, objective: {plan.metric} "
+            f"({plan.direction}) of the last greedy evaluation;\n"
+            f"reported on the sweep's seeds and budget (from {plan.source}):\n"
+            f"  empathy-zoo reproduce --profile {out / TUNED_FILE}\n"
+            f"tuned: {', '.join(f'{name} = {value!r}' for name, value in best['params'].items())}"
+        )
+        text = experiment_sweep(tuned, plan.reporting_seeds, label=label, comment=comment, name=f"{plan.base.method}_tuned")
+        write_text_atomic(out / TUNED_FILE, text)
+    write_json_atomic(out / STUDY_FILE, document)
+    return document
