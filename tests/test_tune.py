@@ -88,7 +88,10 @@ def _same_study(document: dict[str, Any]) -> dict[str, Any]:
         ("batch_size=int:16:128", ParamSpec("batch_size", "settings", "batch_size", "int", True, 16, 128)),
         ("hidden_size=log:8:256", ParamSpec("hidden_size", "settings", "hidden_size", "log", True, 8, 256)),
         ("penalty=float:-200:-1", ParamSpec("penalty", "reward", "penalty", "float", False, -200, -1)),
-        ("others=choice:closest,mean,min", ParamSpec("others", "settings", "others", "choice", choices=("closest", "mean", "min"))),
+        (
+            "others=choice:closest,mean,min",
+            ParamSpec("others", "settings", "others", "choice", choices=("closest", "mean", "min")),
+        ),
         ("batch_size=choice:32,64", ParamSpec("batch_size", "settings", "batch_size", "choice", choices=(32, 64))),
     ],
 )

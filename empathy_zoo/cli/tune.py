@@ -84,7 +84,12 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         prune=not args.no_prune,
         startup_trials=positive("--startup-trials", args.startup_trials),
     )
-    options = RunnerOptions(device=check_device(args.device), threads=positive("--threads", args.threads), progress=False)
+    options = RunnerOptions(
+        device=check_device(args.device),
+        threads=positive("--threads", args.threads),
+        progress=False,
+        update_kernel=args.update_kernel,
+    )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
     print(
         f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({path}): {plan.trials} trials × "
@@ -126,8 +131,10 @@ def _draw(study: dict[str, Any], path: Path) -> None:
 
 def add_tune(sub: Any) -> None:
     """The ``tune`` subcommand."""
+    from agents.empathic_dqn import UPDATE_KERNELS
     from empathy_zoo.experiment.search_space import KINDS
     from empathy_zoo.metrics import METRIC_NAMES
+    from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.tuning import STARTUP_TRIALS, TUNING_SEED_BASE
 
     tune = sub.add_parser(
@@ -196,5 +203,12 @@ def add_tune(sub: Any) -> None:
     )
     tune.add_argument("--device", default="cpu", help="torch device: cpu, cuda, cuda:N (default: cpu)")
     tune.add_argument("--threads", type=int, default=1, metavar="N", help="torch CPU threads (default: 1)")
+    tune.add_argument(
+        "--update-kernel",
+        choices=UPDATE_KERNELS,
+        default=RunnerOptions.update_kernel,
+        help="how Empathic DQN and the methods built on it take a gradient step (numba: compiled, faster; the "
+        f"runs differ in their last bits; a study resumes only with its own) (default: {RunnerOptions.update_kernel})",
+    )
     tune.add_argument("--no-progress", action="store_true", help="no progress bar")
     tune.set_defaults(handler=cmd_tune)

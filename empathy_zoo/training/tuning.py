@@ -304,8 +304,9 @@ def run_study(
         optuna.logging.set_verbosity(verbosity)
 
 
-def _open_study(optuna: Any, plan: StudyPlan, out: Path) -> Any:
-    """The study stored in ``out`` (created when there is none); one of another plan is refused."""
+def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str) -> Any:
+    """The study stored in ``out`` (created when there is none); one of another plan, or trained
+    with another update kernel (whose runs differ in their last bits), is refused."""
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
 
@@ -318,6 +319,7 @@ def _open_study(optuna: Any, plan: StudyPlan, out: Path) -> Any:
     study = optuna.create_study(storage=storage, study_name="tune", direction=plan.direction, pruner=pruner, load_if_exists=True)
     wanted = {key: value for key, value in plan.record().items() if key != "budget"}
     wanted["budget"] = {k: v for k, v in plan.record()["budget"].items() if k not in ("trials", "env_steps_at_most")}
+    wanted["update_kernel"] = update_kernel
     stored = study.user_attrs.get("plan")
     if stored is None:
         study.set_user_attr("plan", wanted)
@@ -342,7 +344,7 @@ def _study(
 ) -> dict[str, Any]:
     from tqdm.auto import tqdm
 
-    study = _open_study(optuna, plan, out)
+    study = _open_study(optuna, plan, out, options.update_kernel)
     states = optuna.trial.TrialState
     done = sum(_counted(t, states) for t in study.trials)
     interrupted = [t.number for t in study.trials if not _counted(t, states)]
@@ -360,7 +362,7 @@ def _study(
             study.sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=plan.startup_trials, constant_liar=False)
             study.optimize(_objective(optuna, plan, out, options), n_trials=1, catch=(_Refused,))
             done = sum(_counted(t, states) for t in study.trials)
-            document = _write_outputs(study, plan, out, command, optuna)
+            document = _write_outputs(study, plan, out, command, optuna, options)
             if on_trial is not None:
                 on_trial(document)
             best = document["best"]
@@ -370,7 +372,7 @@ def _study(
             bar.update(1)
     finally:
         bar.close()
-    return _write_outputs(study, plan, out, command, optuna)
+    return _write_outputs(study, plan, out, command, optuna, options)
 
 
 def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) -> Callable[[Any], float]:
@@ -401,8 +403,8 @@ def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) 
     return objective
 
 
-def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any) -> dict[str, Any]:
-    """``study.json``'s document of ``study``."""
+def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, update_kernel: str) -> dict[str, Any]:
+    """``study.json``'s document of ``study``, whose trials trained with ``update_kernel``."""
     states = optuna.trial.TrialState
     trials = []
     for trial in study.trials:
@@ -430,6 +432,7 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any) -> di
         "optuna": optuna.__version__,
         "command": command,
         "plan": plan.record(),
+        "update_kernel": update_kernel,
         "trials_done": len(counted),
         "env_steps_trained": sum(t["steps_trained"] for t in counted) * len(plan.seeds),
         "best": None if best is None else {"number": best.number, "value": best.value, "params": dict(best.params)},
@@ -438,9 +441,9 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any) -> di
     }
 
 
-def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any) -> dict[str, Any]:
+def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any, options: RunnerOptions) -> dict[str, Any]:
     """Write ``study.json`` and, once a trial finished, ``tuned.toml``; return the document."""
-    document = study_document(study, plan, command, optuna)
+    document = study_document(study, plan, command, optuna, options.update_kernel)
     best = document["best"]
     if best is not None:
         tuned = point_runs(plan.base, plan.params, best["params"], plan.reporting_seeds[:1])[0]
@@ -451,7 +454,9 @@ def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna:
             f"tuned on seeds {list(plan.seeds)} at {plan.base.steps:,} env steps per run, objective: {plan.metric} "
             f"({plan.direction}) of the last greedy evaluation;\n"
             f"reported on the sweep's seeds and budget (from {plan.source}):\n"
-            f"  empathy-zoo reproduce --profile {out / TUNED_FILE}\n"
+            f"  empathy-zoo reproduce --profile {out / TUNED_FILE}"
+            + (f" --update-kernel {options.update_kernel}" if options.update_kernel != RunnerOptions.update_kernel else "")
+            + "\n"
             f"tuned: {', '.join(f'{name} = {value!r}' for name, value in best['params'].items())}"
         )
         text = experiment_sweep(tuned, plan.reporting_seeds, label=label, comment=comment, name=f"{plan.base.method}_tuned")
