@@ -353,6 +353,8 @@ class EmpathicDQN:
         m = observations.shape[1]
         counter = (self.env_steps * m + np.arange(m))[None, :] * 2
         explore = counter_uniform(self._explore_keys, counter) < self.epsilon()
+        if not explore.any():  # (the random actions are drawn from counters of their own: none is needed)
+            return actions
         random_actions = counter_integers(self._explore_keys, counter + 1, self.num_actions)
         return np.where(explore, random_actions, actions)
 

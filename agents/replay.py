@@ -58,6 +58,11 @@ class StackedReplay:
         self.position = 0
         self.size = 0
         self._first_row = torch.arange(k, device=device)[:, None] * c
+        self._arrays = (
+            (self.observations.numpy(), self.flags.numpy(), self.reward.numpy()) if torch.device(device).type == "cpu" else None
+        )
+        """On a CPU: numpy views of :attr:`observations`, :attr:`flags` and :attr:`reward` (the same
+        memory), through which :meth:`add` writes without a tensor round trip per step."""
         """(K, 1): where each run's buffer starts in the flattened ``(K·capacity, …)`` tensors."""
 
     def check_range(self, low: float, high: float) -> None:
@@ -96,9 +101,15 @@ class StackedReplay:
         packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped], axis=2))  # raises unless exact
         codes = np.where(present, PRESENT, np.where(unseen, UNSEEN, np.where(live, LEFT_IN_STEP, GONE)))
         flags = np.concatenate([action[..., None], terminated[..., None], codes], axis=2).astype(np.uint8)
-        self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
-        self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
-        self.reward[:, rows] = torch.from_numpy(np.asarray(reward, dtype=np.float32)).to(self.device)
+        if self._arrays is not None:
+            observations, flag_array, rewards = self._arrays
+            observations[:, rows] = packed
+            flag_array[:, rows] = flags
+            rewards[:, rows] = np.asarray(reward, dtype=np.float32)
+        else:
+            self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
+            self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
+            self.reward[:, rows] = torch.from_numpy(np.asarray(reward, dtype=np.float32)).to(self.device)
         self.position = int((self.position + m) % self.capacity)
         self.size = min(self.size + m, self.capacity)
 

@@ -3,12 +3,13 @@
 Prints, in one run on this machine:
   (a) the measured float32 matmul peak (GFLOP/s),
   (b) aggregate env-steps/s with every gradient step, for K = 1, 8, 32, 64 runs in one process,
-      and for two worker processes,
+      and for two worker processes, with each update kernel (``--update-kernel``: torch and numba
+      alternated row by row, so a busy machine slows both alike),
   (c) Stable-Baselines3 DQN env-steps/s on the same environment (same MLP, batch 32, one
       gradient step per env step), (d) the ratios, (e) achieved GFLOP/s as a fraction of the
       peak, (f) the projected wall time of the `paper` profile (50 runs × 1,000,000 steps).
 
-    python benchmarks/sweep_speed.py [--quick]
+    python benchmarks/sweep_speed.py [--quick] [--kernels torch,numba]
 """
 
 from __future__ import annotations
@@ -52,7 +53,12 @@ def matmul_peak(seconds: float = 2.0) -> float:
 
 
 def ensemble_rate(
-    k: int, steps: int, workers: int = 1, threads: int | None = None, selfishness: float | list[float] = 0.5
+    k: int,
+    steps: int,
+    workers: int = 1,
+    threads: int | None = None,
+    selfishness: float | list[float] = 0.5,
+    kernel: str = "auto",
 ) -> float:
     """Aggregate env-steps/s of ``workers`` ensembles of ``k`` runs (all updates on); a list of
     ``k`` selfishness values mixes runs with and without ``Q_emp`` in one ensemble."""
@@ -76,7 +82,9 @@ def ensemble_rate(
         train_runs(
             specs,
             out,
-            RunnerOptions(progress=False, max_parallel_runs=k, workers=workers, threads=threads, checkpoint_interval=0),
+            RunnerOptions(
+                progress=False, max_parallel_runs=k, workers=workers, threads=threads, checkpoint_interval=0, update_kernel=kernel
+            ),
         )
         return len(specs) * steps / (time.perf_counter() - start)
     finally:
@@ -113,9 +121,11 @@ def sb3_rate(steps: int) -> float | None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps (noisier figures)")
+    parser.add_argument("--kernels", default="torch,numba", help="update kernels to time, comma-separated (default: torch,numba)")
     args = parser.parse_args()
+    kernels = args.kernels.split(",")
     scale = 0.3 if args.quick else 1.0
-    print(f"command: python benchmarks/sweep_speed.py{' --quick' if args.quick else ''}")
+    print(f"command: python benchmarks/sweep_speed.py{' --quick' if args.quick else ''} --kernels {args.kernels}")
     print("\n".join(describe_machine(f"torch {torch.__version__} ({torch.get_num_threads()} threads)")))
     peak = matmul_peak()
     print(f"(a) float32 matmul peak (2048², {torch.get_num_threads()} threads): {peak:.1f} GFLOP/s")
@@ -131,34 +141,32 @@ def main() -> None:
         (25, 800, 2, 1),
         (32, 700, 2, 1),
     ):
-        rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers, threads=threads)
-        rows.append((k, workers, rate))
-        print(f"(b) K={k:>3} runs × {workers} process(es), {threads} torch thread(s) each: {rate:9.0f} env-steps/s", flush=True)
-    if sb3:
-        print(f"(c) SB3 DQN (same MLP, batch 32, 1 update/step): {sb3:.0f} env-steps/s")
-    best = max(rows, key=lambda r: r[2])
-    for k, workers, rate in rows:
+        for kernel in kernels:
+            rate = ensemble_rate(k, max(50, int(steps * scale)), workers=workers, threads=threads, kernel=kernel)
+            rows.append((k, workers, kernel, rate))
+            print(
+                f"(b) K={k:>3} runs × {workers} process(es), {threads} thread(s) each, {kernel:5s}: {rate:9.0f} env-steps/s",
+                flush=True,
+            )
+    sb3_after = sb3_rate(int(2000 * scale))
+    if sb3 and sb3_after:
+        print(f"(c) SB3 DQN (same MLP, batch 32, 1 update/step): {sb3:.0f} env-steps/s before, {sb3_after:.0f} after")
+        sb3 = (sb3 + sb3_after) / 2
+    for k, workers, kernel, rate in rows:
         ratio = f"{rate / sb3:5.1f}× SB3" if sb3 else "   n/a"
         achieved = rate * per_step / 1e9
-        print(f"(d,e) K={k:>3} × {workers}: {ratio}; {achieved:6.1f} GFLOP/s = {achieved / peak:5.1%} of peak")
-    hours = PAPER_RUNS * PAPER_STEPS / best[2] / 3600
-    print(
-        f"(f) paper profile ({PAPER_RUNS} runs × {PAPER_STEPS:,} steps) at the best rate "
-        f"(K={best[0]} × {best[1]}): {hours * 60:.0f} minutes (+ greedy evaluations) if every run needed Q_emp"
-    )
+        print(f"(d,e) K={k:>3} × {workers} {kernel:5s}: {ratio}; {achieved:6.1f} GFLOP/s = {achieved / peak:5.1%} of peak")
     # the paper's ensembles: per env one ensemble of 25 runs, 15 with β < 1 (Q and Q_emp) and 10
     # DQN-type runs (Q only), one worker process per env
     paper_betas = [0.75, 0.5, 0.25] * 5 + [1.0] * 10
-    paper_rate = ensemble_rate(25, max(50, int(700 * scale)), workers=2, threads=1, selfishness=paper_betas)
     mean_flops = (15 * per_step + 10 * flops_per_run_step(False)) / 25
-    print(
-        f"(f) the paper's ensembles (K = 25: 15 with β < 1 and 10 with β = 1) × 2 processes, 1 thread each: "
-        f"{paper_rate:.0f} env-steps/s ({paper_rate * mean_flops / 1e9 / peak:.1%} of peak)"
-    )
-    print(
-        f"(f) projected paper profile: 50 runs × 1M at that rate = {PAPER_RUNS * PAPER_STEPS / paper_rate / 60:.0f} "
-        f"minutes (+ greedy evaluations)"
-    )
+    for kernel in kernels:
+        paper_rate = ensemble_rate(25, max(50, int(700 * scale)), workers=2, threads=1, selfishness=paper_betas, kernel=kernel)
+        print(
+            f"(f) the paper's ensembles (K = 25: 15 with β < 1 and 10 with β = 1) × 2 processes, 1 thread each, {kernel}: "
+            f"{paper_rate:.0f} env-steps/s ({paper_rate * mean_flops / 1e9 / peak:.1%} of peak); 50 runs × 1M at that rate = "
+            f"{PAPER_RUNS * PAPER_STEPS / paper_rate / 60:.0f} minutes (+ greedy evaluations)"
+        )
     print(
         f"FLOPs per run-step (analytic): {per_step / 1e6:.2f} MFLOP with Q_emp, "
         f"{flops_per_run_step(False) / 1e6:.2f} MFLOP standard DQN"
