@@ -171,8 +171,10 @@ def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, see
     rng = np.random.default_rng(seed)
     found = 0
     for _ in range(trials):
-        p_values = [permutation_test(rng.normal(shift, 1.0, seeds), rng.normal(0.0, 1.0, seeds))[1]]
-        p_values += [permutation_test(rng.normal(0.0, 1.0, seeds), rng.normal(0.0, 1.0, seeds))[1] for _ in range(cells - 1)]
+        p_values = [permutation_test(list(rng.normal(shift, 1.0, seeds)), list(rng.normal(0.0, 1.0, seeds)))[1]]
+        p_values += [
+            permutation_test(list(rng.normal(0.0, 1.0, seeds)), list(rng.normal(0.0, 1.0, seeds)))[1] for _ in range(cells - 1)
+        ]
         found += holm_rejections(p_values, level)[0]
     return found / trials
 
