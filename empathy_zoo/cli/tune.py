@@ -47,7 +47,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     """Run (or resume) the study; print what it wrote and its best trial."""
     from empathy_zoo.experiment.model import Budget
     from empathy_zoo.experiment.search_space import parse_params
-    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path
+    from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
     from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.tuning import (
         STUDY_FILE,
@@ -71,7 +71,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     params = parse_params(args.param, base.method_object())
     metric, direction = default_objective(base.env, args.objective)
     plan = StudyPlan(
-        source=str(path),
+        source=args.sweep if args.sweep in profiles() else str(path),  # (a shipped profile by its name, not its path here)
         base=replace(base, budget=budget),
         params=params,
         metric=metric,
@@ -92,7 +92,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
     print(
-        f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({path}): {plan.trials} trials × "
+        f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({plan.source}): {plan.trials} trials × "
         f"{len(plan.seeds)} tuning seeds ({plan.seeds[0]}..{plan.seeds[-1]}) × {steps:,} steps; objective {metric} "
         f"({direction}) of the last greedy evaluation; reporting seeds {reporting} kept apart; results in {out}",
         flush=True,
