@@ -180,7 +180,7 @@ class EmpathicDQN:
 
     settings_class = EmpathicDQNSettings
 
-    update_kernel = "torch"
+    update_kernel = "auto"
     """How :meth:`update` computes a gradient step unless the constructor is told (one of
     :data:`UPDATE_KERNELS`): ``"numba"`` (compiled per-run loops, :mod:`agents.fused_update`: the
     same algorithm in float32, sums in another order), ``"torch"`` (batched PyTorch operations), or
@@ -189,11 +189,12 @@ class EmpathicDQN:
     ``"numba"``, which each result file records (``update_kernel``)."""
 
     @classmethod
-    def resolved_update_kernel(cls, requested: str | None, device: str | torch.device) -> str:
-        """The kernel an instance built with ``update_kernel=requested`` on ``device`` uses (what
-        the constructor resolves, without building anything): ``"torch"`` or ``"numba"``.
-        ``ValueError`` for an unknown name, and for ``"numba"`` on a device that is not a CPU."""
-        kernel = cls.update_kernel if requested is None else requested
+    def resolved_update_kernel(cls, update_kernel: str | None = None, device: str | torch.device = "cpu") -> str:
+        """The kernel an instance built with ``update_kernel`` on ``device`` uses (what the
+        constructor resolves, without building anything; ``None``: the class's own
+        :attr:`update_kernel`): ``"torch"`` or ``"numba"``. ``ValueError`` for an unknown name, and
+        for ``"numba"`` on a device that is not a CPU."""
+        kernel = cls.update_kernel if update_kernel is None else update_kernel
         if kernel not in UPDATE_KERNELS:
             raise ValueError(f"update_kernel must be one of {', '.join(map(repr, UPDATE_KERNELS))}, got {kernel!r}")
         on_cpu = torch.device(device).type == "cpu"
@@ -304,14 +305,6 @@ class EmpathicDQN:
             self._numba = fused_update.NumbaUpdate(
                 self.online, self.target, self.optimizer, np.concatenate([np.arange(k), self._emp]), self.config.batch_size
             )
-            own = type(self)
-            self._numba_whole = all(
-                getattr(own, name) is getattr(EmpathicDQN, name) for name in ("targets", "other_inputs", "sample_batch")
-            )
-            """Whether an update is one compiled call (:meth:`agents.fused_update.NumbaUpdate.step`): the
-            default targets (not overridden) and batches; else the targets come from :meth:`targets`."""
-            self._numba_draws = own.sample_indices is EmpathicDQN.sample_indices
-            """Whether that call draws the batch's indices itself (the same numbers as :meth:`sample_indices`)."""
             emp_row = np.full(k, -1, dtype=np.int64)
             emp_row[self._emp] = k + np.arange(self._emp.size)
             self._numba.setup_step(
@@ -441,10 +434,10 @@ class EmpathicDQN:
         overridden, the compiled gather and forward passes, :meth:`targets` in torch, then the
         compiled train step; returns the summed loss."""
         k, emp = self.num_runs, self._emp.size
-        if self._numba_whole:
-            index = None if self._numba_draws else self.sample_indices().numpy()
+        if not any(map(self._overridden, ("targets", "other_inputs", "sample_batch"))):  # (the default targets and batch)
+            index = self.sample_indices().numpy() if self._overridden("sample_indices") else None  # (None: drawn there)
             return fused.step(self.replay, self.grad_steps * self.config.batch_size, index)
-        if type(self).sample_batch is EmpathicDQN.sample_batch:
+        if not self._overridden("sample_batch"):
             batch = fused.sample_batch(self.replay, self.sample_indices(), self.aggregated)
         else:
             batch = self.sample_batch()
@@ -459,6 +452,11 @@ class EmpathicDQN:
             q_next, target_next, _ = fused.next_values(batch["next_obs"], None)
             targets = fused.dqn_targets(batch["reward"], batch["terminated"], q_next, target_next, self.config.gamma)
         return fused.train(batch["obs"], batch["action"], targets)
+
+    def _overridden(self, name: str) -> bool:
+        """Whether method ``name`` is not :class:`EmpathicDQN`'s own here (a subclass's, or one set
+        on the instance): the compiled update then calls it instead of its compiled twin."""
+        return name in vars(self) or getattr(type(self), name) is not getattr(EmpathicDQN, name)
 
     def targets(
         self, batch: dict[str, torch.Tensor], q_next: torch.Tensor, target_next: torch.Tensor, target_swapped: torch.Tensor

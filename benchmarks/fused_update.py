@@ -36,6 +36,12 @@ from agents.fused_update import NumbaUpdate
 from agents.settings import EmpathicDQNSettings
 
 
+class TorchEmpathicDQN(EmpathicDQN):
+    """The learner with the PyTorch update."""
+
+    update_kernel = "torch"
+
+
 class NumbaEmpathicDQN(EmpathicDQN):
     """The learner with the compiled update."""
 
@@ -66,7 +72,7 @@ class SplitNumbaEmpathicDQN(NumbaEmpathicDQN):
 def update_table(repeats: int, updates: int) -> None:
     """µs per update of the three updates, alternated ``repeats`` times, per setup."""
     setups = [("K = 1, β = 0.5", [0.5]), ("K = 1, β = 1", [1.0]), ("K = 25, the paper's mix", PAPER_BETAS)]
-    kinds = [("torch", EmpathicDQN), ("numba, split", SplitNumbaEmpathicDQN), ("numba, one call", NumbaEmpathicDQN)]
+    kinds = [("torch", TorchEmpathicDQN), ("numba, split", SplitNumbaEmpathicDQN), ("numba, one call", NumbaEmpathicDQN)]
     rows = []
     for name, betas in setups:
         learners = [filled_learner(cls=cls, betas=betas) for _, cls in kinds]
@@ -103,7 +109,7 @@ class _Timed:
         STOPWATCH.tick(self.env_steps)  # type: ignore[attr-defined]
 
 
-class TimedEmpathicDQN(_Timed, EmpathicDQN):
+class TimedEmpathicDQN(_Timed, TorchEmpathicDQN):
     """The PyTorch update, timed."""
 
 

@@ -52,8 +52,10 @@ SCHEMA = 3
 read too, upgraded in memory by :func:`upgrade_schema_1` and :func:`upgrade_schema_2`."""
 REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", "steps", "config", "train", "eval")
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
-``version``, ``commit``, ``plugin_sha256``, ``agent`` and ``created`` are written too, and checked when present, as are the
-fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
+``version``, ``commit``, ``plugin_sha256``, ``update_kernel``, ``agent`` and ``created`` are written
+too, and checked when present, as are the fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
+UPDATE_KERNELS_RECORDED = ("numba", "torch")
+"""The update kernels a result file may name (``update_kernel``; ``null``: the learner has no choice)."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
 """Tables of ``config`` every result file has."""
 _SHA256 = re.compile(r"[0-9a-f]{64}")
@@ -101,6 +103,8 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": check.number})
     if result.get("commit") is not None:
         check.text(result["commit"], "commit")
+    if result.get("update_kernel") is not None and result["update_kernel"] not in UPDATE_KERNELS_RECORDED:
+        raise check.fail("update_kernel", f"one of {', '.join(UPDATE_KERNELS_RECORDED)} or null", result["update_kernel"])
     for module, digest in check.table(result.get("plugin_sha256", {}), "plugin_sha256").items():
         if digest is not None and not (isinstance(digest, str) and _SHA256.fullmatch(digest)):
             raise check.fail(f"plugin_sha256.{module}", "a SHA-256 (64 lowercase hex digits) or null", digest)

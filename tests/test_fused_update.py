@@ -340,8 +340,9 @@ def test_the_one_call_update_is_the_step_with_torch_targets(needs_numba: None, c
     in torch in between compute, over 150 updates (a target copy at 50, 100 and 150)."""
     betas, settings, others = ONE_CALL_CASES[case]
     whole, split = (_learner(betas, "numba", num_others=others, **settings) for _ in range(2))
-    assert whole._numba_whole and whole._numba_draws
-    split._numba_whole = False
+    assert not any(map(whole._overridden, ("targets", "other_inputs", "sample_batch", "sample_indices")))
+    split.targets = split.targets  # type: ignore[method-assign]  # (set on the instance: the split path, same targets)
+    assert split._overridden("targets")
     for _ in range(150):
         assert whole.update() == split.update()
     for a, b in zip(whole.online + whole.target + whole.optimizer.exp_avg, split.online + split.target + split.optimizer.exp_avg):
@@ -375,7 +376,8 @@ def test_overridden_indices_and_targets_are_used(needs_numba: None) -> None:
     learners = [cls(config, [0], 25, update_kernel="numba") for cls in (_OwnIndices, _CountedTargets)]
     for learner in learners:
         learner.replay.load_state_dict(reference.replay.state_dict())
-    assert (learners[0]._numba_whole, learners[0]._numba_draws, learners[1]._numba_whole) == (True, False, False)
+    assert [learners[0]._overridden(name) for name in ("targets", "sample_indices")] == [False, True]
+    assert learners[1]._overridden("targets")
     for _ in range(60):
         loss = reference.update()
         assert [learner.update() for learner in learners] == [loss, loss]
@@ -397,7 +399,7 @@ def test_the_silver_rule_keeps_its_targets_and_matches_torch(needs_numba: None) 
     reference = _learner([0.5, 1.0], "torch")
     for learner in pair:
         learner.replay.load_state_dict(reference.replay.state_dict())
-    assert pair[1].update_kernel == "numba" and not pair[1]._numba_whole
+    assert pair[1].update_kernel == "numba" and pair[1]._overridden("targets")
     for _ in range(100):
         pair[1].load_state_dict(pair[0].state_dict())
         losses = [learner.update() for learner in pair]
@@ -421,9 +423,10 @@ def test_without_numba_the_learner_says_so_and_trains_with_torch(monkeypatch: py
         assert torch.equal(a, b)
 
 
-def test_the_default_kernel_is_torch_and_a_bad_name_is_refused() -> None:
-    assert EmpathicDQN.update_kernel == "torch"
-    assert _learner([1.0], None).update_kernel == "torch"  # type: ignore[arg-type]
+def test_the_default_kernel_is_auto_and_a_bad_name_is_refused() -> None:
+    assert EmpathicDQN.update_kernel == "auto"
+    expected = "numba" if fused_update.numba_available() else "torch"
+    assert _learner([1.0], None).update_kernel == expected  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="update_kernel must be one of 'auto', 'numba', 'torch', got 'numpy'"):
         _learner([1.0], "numpy")
 

@@ -313,7 +313,7 @@ def _restore(
         raise corrupted(ckpt, f"it holds the logs of {counts[0]} runs and the evaluations of {counts[1]}, not {len(specs)}")
     learner_state = saved["learner"]
     kernel = update_kernel_of(learner)
-    if kernel is not None and isinstance(learner_state, dict):
+    if kernel is not None and isinstance(learner_state, dict) and ("update_kernel" in learner_state or "online" in learner_state):
         saved_kernel = learner_state.get("update_kernel", "torch")  # (checkpoints older than the field: torch's)
         if saved_kernel != kernel:
             raise CheckpointError(

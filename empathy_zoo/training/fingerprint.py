@@ -144,8 +144,9 @@ def plugin_names(spec: RunSpec) -> dict[str, tuple[str, str]]:
 
 def kernel_argument(learner: Any, update_kernel: str) -> dict[str, str]:
     """The keyword that asks ``learner`` (a learner class or factory) for ``update_kernel``: empty
-    for a learner without a choice of kernels (it has no ``resolved_update_kernel``)."""
-    return {"update_kernel": update_kernel} if hasattr(learner, "resolved_update_kernel") else {}
+    for ``"auto"`` (the learner's own default: a subclass may pin its kernel) and for a learner
+    without a choice of kernels (it has no ``resolved_update_kernel``)."""
+    return {"update_kernel": update_kernel} if update_kernel != "auto" and hasattr(learner, "resolved_update_kernel") else {}
 
 
 def update_kernel_of(learner: Any) -> str | None:
@@ -160,7 +161,7 @@ def expected_update_kernel(spec: RunSpec, update_kernel: str, device: str) -> st
     (``None``: its learner has no choice)."""
     learner = spec.method_object().learner
     resolve = getattr(learner, "resolved_update_kernel", None)
-    return None if resolve is None else str(resolve(update_kernel, device))
+    return None if resolve is None else str(resolve(**kernel_argument(learner, update_kernel), device=device))
 
 
 def run_fingerprint(spec: RunSpec, update_kernel: str | None = None) -> CodeFingerprint:

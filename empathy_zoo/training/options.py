@@ -52,10 +52,11 @@ class RunnerOptions:
     (:mod:`empathy_zoo.training.tracking`; ``()``: nowhere). A comma-separated string is taken too;
     an unknown backend, or one whose package is missing, is refused here."""
 
-    update_kernel: str = "torch"
+    update_kernel: str = "auto"
     """How learners that have a choice compute a gradient step (Empathic DQN and the methods built on
-    it: :attr:`agents.empathic_dqn.EmpathicDQN.update_kernel`): ``auto`` (the compiled ``numba``
-    kernel where it builds on a CPU, else ``torch``), ``numba`` or ``torch``. The two compute the
+    it: :attr:`agents.empathic_dqn.EmpathicDQN.update_kernel`): ``auto`` (each learner's own
+    default: for Empathic DQN the compiled ``numba`` kernel where it builds on a CPU, else
+    ``torch``), ``numba`` or ``torch``. The two compute the
     same algorithm in float32 with sums in another order, so a run's last bits depend on it (their
     metrics were shown statistically equivalent: BENCHMARKS.md); each result file records the
     kernel that made it, a finished run made by the other one counts as made by other code, and a
