@@ -204,18 +204,21 @@ def heldout_section(
     origins: Sequence[str] | None = None,
     figures_dir: str = "figures",
     digits: int = 2,
+    title: str = "Held-out partners",
+    lead: str = "",
 ) -> HeldoutSection | None:
     """The "Held-out partners" section of the evaluation files of ``results_dirs`` (``None`` when
     they have none; ``origins`` as :func:`load_heldout` takes it), its figures written into
-    ``out_dir / figures_dir`` and linked relative to ``out_dir``."""
+    ``out_dir / figures_dir`` and linked relative to ``out_dir``; headed ``title``, with ``lead``
+    (a paragraph) before its first table."""
     from leaderboard.heldout_plot import plot_heldout
 
     groups, notes = load_heldout(results_dirs, results, origins)
     if not groups and not notes:
         return None
     out = Path(out_dir)
-    markdown = ["", "## Held-out partners"]
-    page = ["<h2>Held-out partners</h2>"]
+    markdown = ["", f"## {title}"] + (["", lead] if lead else [])
+    page = [f"<h2>{html.escape(title)}</h2>"] + ([f"<p>{html.escape(lead)}</p>"] if lead else [])
     figures: dict[str, Path] = {}
     for group in groups:
         cells = heldout_cells(group)

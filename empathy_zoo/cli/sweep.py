@@ -79,7 +79,8 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
 def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     """Write REPRODUCTION.md of existing results (with the sensitivity sweep's table if given)."""
     from leaderboard.aggregate import load_results
-    from leaderboard.reproduction import write_reproduction
+    from leaderboard.beyond_paper import beyond_the_paper
+    from leaderboard.reproduction import NotThePaperSweep, missing_paper_experiments, write_reproduction
     from leaderboard.sensitivity import sensitivity_markdown
 
     note = _read_note(args.note)
@@ -90,9 +91,13 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
-    written = write_reproduction(
-        args.results, _report_out(args), command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix
-    )
+    out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"
+    missing = missing_paper_experiments(load_results(args.results))
+    if missing:  # (refused before any figure of the held-out section is drawn)
+        raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
+    beyond = beyond_the_paper(args.results, out)  # (the held-out evaluation, where the directory has one)
+    appendix = "\n\n".join(part for part in (appendix, beyond) if part)
+    written = write_reproduction(args.results, out, command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix)
     print(f"{PROG}: wrote {written}")
     return 0
 
