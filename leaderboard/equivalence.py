@@ -23,7 +23,9 @@ rule, fixed before the runs it judges:
 * **Verdicts of the leaderboard.** Beside it, the verdicts against DQN
   (:func:`leaderboard.improvement.improvements_over_dqn`, ▲ / ▼ / no clear difference) of each set
   are listed where they differ (:func:`verdict_flips`): reported with their p-values, not folded
-  into the verdict, since two draws of a cell near the test's threshold may fall on either side.
+  into the verdict, since two draws of a cell near the test's threshold may fall on either side;
+  :func:`split_flips` says how many flip between two random halves of the pooled runs, what
+  redrawing the seeds alone does.
 
 What it can see (:func:`simulated_power`): with 10 seeds a side and about 60 tested cells, a cell
 whose metric moved by 2 standard deviations is rejected in roughly half of the draws, one moved by
@@ -45,7 +47,17 @@ from leaderboard.compare_runs import run_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import TABLE_METRICS
 
-__all__ = ["FAMILY_LEVEL", "Cell", "Equivalence", "equivalence", "holm_rejections", "report", "simulated_power", "verdict_flips"]
+__all__ = [
+    "FAMILY_LEVEL",
+    "Cell",
+    "Equivalence",
+    "equivalence",
+    "holm_rejections",
+    "report",
+    "simulated_power",
+    "split_flips",
+    "verdict_flips",
+]
 
 FAMILY_LEVEL = 0.05
 """The chance, when nothing differs, that any cell is called different (Holm's family-wise level)."""
@@ -164,6 +176,27 @@ def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) 
     ]
 
 
+def split_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], trials: int = 40, seed: int = 0) -> list[int]:
+    """How many verdicts against DQN differ between two draws of the same process, for reading
+    :func:`verdict_flips`: the runs of both sets pooled per row (variant and label), split at
+    random into two halves of equal size (each row's seeds renumbered), and the halves' verdicts
+    compared; one count per split (``trials`` splits, seeded). Where the two sets are equivalent,
+    this is what redrawing the seeds alone does."""
+    rng = np.random.default_rng(seed)
+    pooled: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for run in [*old, *new]:
+        pooled.setdefault((table_env(run), run["method_label"]), []).append(run)
+    counts = []
+    for _ in range(trials):
+        halves: tuple[list[dict[str, Any]], list[dict[str, Any]]] = ([], [])
+        for runs in pooled.values():
+            half = len(runs) // 2
+            for position, index in enumerate(rng.permutation(len(runs))[: 2 * half]):
+                halves[position // half].append({**runs[index], "seed": position % half})
+        counts.append(len(verdict_flips(*halves)))
+    return counts
+
+
 def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, seed: int = 0, level: float = FAMILY_LEVEL) -> float:
     """How often one cell whose values moved by ``shift`` standard deviations (normal data, ``seeds``
     runs a side) is found to differ among ``cells`` tested cells, the others unchanged: the share
@@ -204,6 +237,12 @@ def report(old_dir: str, new_dir: str) -> str:
     flips = verdict_flips(old, new)
     lines += ["", f"Verdicts against DQN that differ: {len(flips)}"]
     lines += [f"- {key}: {a} (p = {pa:.3f}) → {b} (p = {pb:.3f})" for key, a, b, pa, pb in flips]
+    redrawn = split_flips(old, new)
+    lines += [
+        "",
+        f"For reading them (not part of the rule): between two random halves of the pooled runs, {len(redrawn)} splits, "
+        f"{int(np.median(redrawn))} verdicts differ at the median (range {min(redrawn)}–{max(redrawn)}).",
+    ]
     return "\n".join(lines)
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from leaderboard.equivalence import FAMILY_LEVEL, equivalence, holm_rejections, simulated_power, verdict_flips
+from leaderboard.equivalence import FAMILY_LEVEL, equivalence, holm_rejections, simulated_power, split_flips, verdict_flips
 from tests.helpers_results import synthetic_result
 
 SEEDS = range(10)
@@ -105,3 +105,13 @@ def test_holm_keeps_the_family_wise_level_under_the_null(level: float) -> None:
         p_values = [permutation_test(rng.normal(size=10), rng.normal(size=10))[1] for _ in range(20)]
         any_rejected += any(holm_rejections(p_values, level))
     assert any_rejected / draws <= level + 0.03
+
+
+def test_split_flips_counts_flips_between_halves_of_the_pooled_runs() -> None:
+    dqn_a, dqn_b = runs(3, beta=1.0), runs(6, beta=1.0)
+    far = runs(4, harm_shift=-6.0) + runs(5, harm_shift=-6.0)  # β = 0.5 harms far less in both sets: never flips
+    counts = split_flips(dqn_a + far[:10], dqn_b + far[10:], trials=5, seed=0)
+    assert len(counts) == 5 and all(isinstance(c, int) for c in counts)
+    flips_of_harms = split_flips(dqn_a + far[:10], dqn_b + far[10:], trials=5, seed=0)
+    assert flips_of_harms == counts  # seeded
+    assert max(counts) <= 4  # only survival and the cat's return can flip; both harms cells stay "better"
