@@ -212,9 +212,10 @@ def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, see
     return found / trials
 
 
-def report(old_dir: str, new_dir: str) -> str:
+def report(old_dir: str, new_dir: str, every_cell: bool = False) -> str:
     """Markdown: the verdict of :func:`equivalence` on two results directories, its ten smallest
-    p-values, every differing cell and every flipped verdict against DQN."""
+    p-values (every cell, in experiment order, with ``every_cell``), every differing cell and every
+    flipped verdict against DQN."""
     from leaderboard.aggregate import load_results
 
     old, new = load_results(old_dir), load_results(new_dir)
@@ -228,11 +229,12 @@ def report(old_dir: str, new_dir: str) -> str:
         "| experiment | phase | metric | mean (first) | mean (second) | p | differs |",
         "|---|---|---|---:|---:|---:|---|",
     ]
-    for cell in tested[:10] + [c for c in result.differing if c not in tested[:10]]:
+    shown = list(result.cells) if every_cell else tested[:10] + [c for c in result.differing if c not in tested[:10]]
+    for cell in shown:
         name = ", ".join(str(part) for part in cell.experiment if part not in (None, "closest"))
         lines.append(
             f"| {name} | {cell.phase} | {cell.metric} | {np.nanmean(cell.old):.3f} | {np.nanmean(cell.new):.3f} "
-            f"| {cell.p_value:.4f} | {'yes' if cell.differs else ''} |"
+            f"| {'constant' if cell.constant else f'{cell.p_value:.4f}'} | {'yes' if cell.differs else ''} |"
         )
     flips = verdict_flips(old, new)
     lines += ["", f"Verdicts against DQN that differ: {len(flips)}"]
@@ -249,6 +251,9 @@ def report(old_dir: str, new_dir: str) -> str:
 if __name__ == "__main__":
     import sys
 
-    if len(sys.argv) != 3:
-        sys.exit("usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR")
-    print(report(sys.argv[1], sys.argv[2]))
+    args = [a for a in sys.argv[1:] if a != "--all"]
+    if len(args) != 2:
+        sys.exit(
+            "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all]   (--all: every cell, not the ten smallest p)"
+        )
+    print(report(args[0], args[1], every_cell="--all" in sys.argv[1:]))
