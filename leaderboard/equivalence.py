@@ -8,7 +8,7 @@ expected to equal the same seed's run of the other: each is another draw of the 
 rule, fixed before the runs it judges:
 
 * **Cells.** Runs are matched by experiment (variant, method, β, aggregation of the others, reward
-  transform: :func:`leaderboard.compare_runs.run_key` without the seed). For every experiment found
+  transform and budget: :func:`leaderboard.compare_runs.run_key` without the seed, with the steps). For every experiment found
   in both sets, both phases (:data:`leaderboard.aggregate.PHASES`) and the metrics that mean
   something in its environment (:data:`leaderboard.tables.TABLE_METRICS`), a cell holds each set's
   per-seed values (:func:`leaderboard.aggregate.run_scalars`). A cell whose values are all equal on
@@ -68,7 +68,7 @@ class Cell:
     """One experiment, phase and metric: both sets' per-seed values and the test between them."""
 
     experiment: tuple
-    """:func:`leaderboard.compare_runs.run_key` without the seed."""
+    """:func:`leaderboard.compare_runs.run_key` without the seed, then the run's steps."""
     phase: str
     metric: str
     old: tuple[float, ...]
@@ -124,7 +124,9 @@ def holm_rejections(p_values: Sequence[float], level: float = FAMILY_LEVEL) -> l
 
 
 def _experiment(run: dict[str, Any]) -> tuple:
-    return run_key(run)[:-1]
+    """The run's experiment: :func:`leaderboard.compare_runs.run_key` without the seed, and its
+    budget (runs of another length are another experiment)."""
+    return (*run_key(run)[:-1], int(run["steps"]))
 
 
 def _per_experiment(runs: Sequence[dict[str, Any]]) -> dict[tuple, list[dict[str, Any]]]:

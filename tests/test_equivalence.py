@@ -115,3 +115,11 @@ def test_split_flips_counts_flips_between_halves_of_the_pooled_runs() -> None:
     flips_of_harms = split_flips(dqn_a + far[:10], dqn_b + far[10:], trials=5, seed=0)
     assert flips_of_harms == counts  # seeded
     assert max(counts) <= 4  # only survival and the cat's return can flip; both harms cells stay "better"
+
+
+def test_runs_of_another_budget_are_another_experiment() -> None:
+    longer = runs(2)
+    for run in longer:
+        run["steps"] = 8000
+    result = equivalence(runs(1), longer)
+    assert result.verdict == "nothing compared" and len(result.only_old) == len(result.only_new) == 1
