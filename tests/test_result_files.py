@@ -229,7 +229,7 @@ def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() ->
     from empathy_zoo.atomic import read_json
     from empathy_zoo.result_file import SCHEMA, read_result
 
-    runs = Path(__file__).resolve().parents[1] / "docs" / "results" / "paper" / "runs"  # made by 0.1.0
+    runs = Path(__file__).resolve().parent / "data" / "schema_1"  # files the paper profile of 0.1.0 wrote
     expected = {
         "dqn_harm_penalty": {"name": "harm_penalty", "penalty": -100.0},
         "dqn_equality": {"name": "equality_scaling"},
