@@ -2,7 +2,8 @@
 ran, with the best so far as a step line.
 
 Drawn from ``study.json`` alone (:mod:`empathy_zoo.training.tuning`): a finished trial is a filled
-dot at its value; a pruned one a hollow dot at the last value it reported (at fewer env steps, so
+dot at its value; a pruned one a hollow dot at the last value it reported (its objective up to
+the evaluation where it was stopped: at fewer env steps, so
 it is not comparable with the finished ones, and the best-so-far line ignores it); a refused or
 interrupted trial has no value and is named in the legend's count only.
 """
@@ -60,7 +61,8 @@ def render_trials_png(study: Mapping[str, Any], dpi: int = 110) -> bytes:
     if others:
         axes.plot([], [], " ", label=f"refused ({others}): no value")
     axes.set_xlabel("trial (in the order run)")
-    axes.set_ylabel(f"{metric}, last greedy evaluation\n(mean of {len(plan['tuning_seeds'])} tuning seed(s))")
+    where = "mean of its greedy evaluations" if plan["objective"].get("over") == "curve" else "last greedy evaluation"
+    axes.set_ylabel(f"{metric}, {where}\n(mean of {len(plan['tuning_seeds'])} tuning seed(s))")
     axes.set_xlim(-0.5, max(len(trials), 1) - 0.5)
     axes.xaxis.set_major_locator(MaxNLocator(integer=True))
     axes.grid(True, alpha=0.3)

@@ -292,3 +292,53 @@ def test_every_experiment_of_the_methods_profile_is_written_as_a_sweep_file_that
     experiments = {spec.experiment_id: spec for spec in load_sweep("empathy_zoo/profiles/methods.toml")}
     for spec in experiments.values():  # (each checks its own round trip)
         experiment_sweep(spec, [0, 1, 2, 3, 4], label=f"{spec.display_label()}, tuned")
+
+
+def test_a_value_over_the_curve_is_the_mean_of_its_evaluations_and_over_last_the_last() -> None:
+    assert tuning.curve_value([100.0, 400.0, 500.0], "last") == 500.0
+    assert tuning.curve_value([100.0, 400.0, 500.0], "curve") == pytest.approx(1000.0 / 3)
+    # two trials at the same saturated end are told apart by how soon they got there
+    assert tuning.curve_value([500.0, 500.0], "curve") > tuning.curve_value([200.0, 500.0], "curve")
+    with pytest.raises(ValueError, match="at least one greedy evaluation"):
+        tuning.curve_value([], "curve")
+    with pytest.raises(ValueError, match="last, curve"):
+        tuning.curve_value([1.0], "area")
+
+
+def test_ties_at_the_best_value_are_named_and_a_single_best_is_alone() -> None:
+    def study(values: list[float | None], states: list[str]) -> dict[str, Any]:
+        trials = [{"number": i, "state": s, "value": v} for i, (v, s) in enumerate(zip(values, states))]
+        finished = [t for t in trials if t["state"] == "COMPLETE"]
+        best = max(finished, key=lambda t: t["value"]) if finished else None
+        return {"trials": trials, "best": best and {"number": best["number"], "value": best["value"]}}
+
+    assert tuning.ties_at_best(study([500.0, 320.0, 500.0, None], ["COMPLETE"] * 3 + ["PRUNED"])) == [0, 2]
+    assert tuning.ties_at_best(study([500.0, 320.0], ["COMPLETE", "COMPLETE"])) == [0]
+    assert tuning.ties_at_best(study([None], ["PRUNED"])) == []
+
+
+def test_a_study_over_the_curve_records_it_and_its_values_are_the_mean_of_each_curve(sweep: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "curve"
+    assert main(["tune", str(sweep), *TUNE, "--objective-over", "curve", "--no-prune", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    study = json.loads((out / STUDY_FILE).read_text())
+    assert study["plan"]["objective"]["over"] == "curve"
+    assert "every greedy evaluation" in study["plan"]["objective"]["of"]
+    for trial in study["trials"]:
+        assert len(trial["curve"]) == 3  # (evaluations at steps 100, 200 and 300)
+        assert trial["value"] == pytest.approx(sum(p["value"] for p in trial["curve"]) / 3)
+    assert "over every greedy evaluation" in (out / TUNED_FILE).read_text()
+    assert "over every greedy evaluation" in printed
+    # a study over the last evaluation is another plan: refused in the same directory
+    assert main(["tune", str(sweep), *TUNE, "--no-prune", "--out", str(out)]) == 2
+    assert "objective" in capsys.readouterr().err
+
+
+def test_tied_best_trials_are_said_with_the_option_that_tells_them_apart(
+    sweep: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
+    monkeypatch.setattr(tuning, "trial_value", lambda per_run, metric: (40.0, [40.0] * len(per_run)))
+    assert main(["tune", str(sweep), *TUNE, "--no-prune", "--out", str(tmp_path / "tied")]) == 0
+    printed = capsys.readouterr().out
+    assert "4 finished trials tie at the best value ([0, 1, 2, 3])" in printed
+    assert "--objective-over curve" in printed

@@ -1,7 +1,8 @@
 """``tune``: one experiment of a sweep file tuned with Optuna, on seeds its results are not reported on.
 
     empathy-zoo tune SWEEP_FILE --method NAME --param NAME=KIND:... [--param ...] [--env VARIANT]
-                     [--trials N] [--budget STEPS] [--tuning-seeds N] [--objective METRIC] [--out DIR]
+                     [--trials N] [--budget STEPS] [--tuning-seeds N] [--objective METRIC]
+                     [--objective-over last|curve] [--out DIR]
 
 The study (:mod:`empathy_zoo.training.tuning`) writes ``study.json``, ``tuned.toml`` (a sweep file
 of the best settings on the sweep's reporting seeds: ``empathy-zoo reproduce --profile
@@ -50,12 +51,14 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
     from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.tuning import (
+        OVER_WORDS,
         STUDY_FILE,
         TUNED_FILE,
         StudyPlan,
         import_optuna,
         run_study,
         select_experiment,
+        ties_at_best,
         tuning_seeds,
     )
     from leaderboard.trials_figure import TRIALS_FIGURE
@@ -83,6 +86,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         sampler_seed=args.sampler_seed,
         prune=not args.no_prune,
         startup_trials=positive("--startup-trials", args.startup_trials),
+        over=args.objective_over,
     )
     options = RunnerOptions(
         device=check_device(args.device),
@@ -94,7 +98,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     print(
         f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({plan.source}): {plan.trials} trials × "
         f"{len(plan.seeds)} tuning seeds ({plan.seeds[0]}..{plan.seeds[-1]}) × {steps:,} steps; objective {metric} "
-        f"({direction}) of the last greedy evaluation; reporting seeds {reporting} kept apart; results in {out}",
+        f"({direction}) {OVER_WORDS[plan.over]}; reporting seeds {reporting} kept apart; results in {out}",
         flush=True,
     )
     figure = out / TRIALS_FIGURE
@@ -114,6 +118,17 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         print(f"{PROG}: no trial finished (all pruned or refused): no {TUNED_FILE}; widen the ranges or raise --trials")
         return 0
     print(f"{PROG}: wrote {out / TUNED_FILE}")
+    tied = ties_at_best(document)
+    if len(tied) > 1:
+        print(
+            f"{PROG}: note: {len(tied)} finished trials tie at the best value ({tied}): the objective could not tell "
+            "them apart, and the first was kept"
+            + (
+                "; --objective-over curve ranks such trials by how soon they got there (docs/tuning.md)"
+                if plan.over == "last"
+                else ""
+            )
+        )
     shown = ", ".join(f"{name} = {value!r}" for name, value in best["params"].items())
     print(
         f"{PROG}: best: trial {best['number']}, {metric} {best['value']:.4g} ({shown}); report it on the reporting seeds: "
@@ -135,7 +150,7 @@ def add_tune(sub: Any) -> None:
     from empathy_zoo.experiment.search_space import KINDS
     from empathy_zoo.metrics import METRIC_NAMES
     from empathy_zoo.training.options import RunnerOptions
-    from empathy_zoo.training.tuning import STARTUP_TRIALS, TUNING_SEED_BASE
+    from empathy_zoo.training.tuning import OBJECTIVE_OVER, STARTUP_TRIALS, TUNING_SEED_BASE
 
     tune = sub.add_parser(
         "tune",
@@ -188,6 +203,14 @@ def add_tune(sub: Any) -> None:
         metavar="METRIC",
         help="the metric of the last greedy evaluation to optimise (default: the environment's task metric: "
         "survival in coexistence_v0, batteries in sharing_v0); harms are minimised, the others maximised",
+    )
+    tune.add_argument(
+        "--objective-over",
+        choices=OBJECTIVE_OVER,
+        default="last",
+        help="which greedy evaluations a trial's value summarises: last (the leaderboard's greedy figure) or curve "
+        "(their mean: the area under the greedy learning curve, which tells apart trials that all reach a "
+        "saturated metric's ceiling, as Coexistence's survival does) (default: last)",
     )
     tune.add_argument("--sampler-seed", type=int, default=0, metavar="S", help="seed of the TPE sampler (default: 0)")
     tune.add_argument(

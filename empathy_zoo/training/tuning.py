@@ -17,8 +17,14 @@ environment variant; :func:`select_experiment`) over a search space
 Each is rewritten (atomically) after every trial. Decisions, and why:
 
 * **Objective**: the mean, over the tuning seeds, of a metric of the run's last greedy evaluation
-  (ε = 0, its fixed start states): the figure the leaderboard's greedy column reports. Which
-  metric is the caller's (``tune`` defaults to the environment's task metric, docs/tuning.md).
+  (ε = 0, its fixed start states): the figure the leaderboard's greedy column reports
+  (:attr:`StudyPlan.over` ``"last"``). Which metric is the caller's (``tune`` defaults to the
+  environment's task metric, docs/tuning.md). Where that figure saturates (Coexistence's greedy
+  survival reaches its 500-step ceiling within a laptop budget at many learning rates), trials tie
+  and the first of a tie is kept: ``over="curve"`` takes instead the mean over every greedy
+  evaluation of the run (the area under its greedy learning curve, :func:`curve_value`), which
+  ranks trials that reach the same end by how soon they got there; :func:`ties_at_best` says
+  when a study's best value is tied.
 * **Tuning seeds** are :data:`TUNING_SEED_BASE` and on (``10000, 10001, …``), a range no shipped
   sweep reports on; seeds that a sweep file reports on are refused (:func:`tuning_seeds`), so a
   setting is never chosen on the runs that then score it. Every trial trains the same tuning
@@ -84,6 +90,10 @@ __all__ = [
     "select_experiment",
     "train_trial",
     "trial_value",
+    "curve_value",
+    "ties_at_best",
+    "OBJECTIVE_OVER",
+    "OVER_WORDS",
     "tuning_seeds",
 ]
 
@@ -96,6 +106,14 @@ STARTUP_TRIALS = 5
 of a laptop study of 10 trials; Optuna's own default, 10, would leave such a study all random)."""
 DIRECTIONS = ("maximize", "minimize")
 """How an objective is optimised."""
+OBJECTIVE_OVER: dict[str, str] = {
+    "last": "mean over the tuning seeds of the metric's mean in the run's last greedy evaluation",
+    "curve": (
+        "mean over the tuning seeds and over every greedy evaluation of the metric's mean "
+        "(the area under the greedy learning curve)"
+    ),
+}
+"""Which greedy evaluations a trial's value summarises, and how ``study.json`` says it."""
 STUDY_FILE = "study.json"
 TUNED_FILE = "tuned.toml"
 JOURNAL_FILE = "study.journal"
@@ -103,6 +121,8 @@ TRIALS_DIR = "trials"
 """Where a trial's ensemble would keep a checkpoint (it keeps none: an interrupted trial is rerun)."""
 STUDY_SCHEMA = 1
 """Version of ``study.json``'s layout."""
+OVER_WORDS = {"last": "of the last greedy evaluation", "curve": "over every greedy evaluation (their mean)"}
+"""How a sentence says which greedy evaluations a trial's value summarises."""
 _REFUSED = "refused"
 _CURVE = "curve"
 _WALL = "wall_time_s"
@@ -153,12 +173,17 @@ class StudyPlan:
     """Stop trials whose learning curve falls below the median (:data:`PRUNE_STARTUP_TRIALS`)."""
     startup_trials: int = STARTUP_TRIALS
     """Trials TPE samples at random before it models the others."""
+    over: str = "last"
+    """Which greedy evaluations a trial's value summarises (:data:`OBJECTIVE_OVER`): ``"last"``,
+    the leaderboard's greedy figure; ``"curve"``, their mean, for a metric that saturates."""
 
     def __post_init__(self) -> None:
         if self.metric not in METRIC_NAMES:
             raise ValueError(f"objective metric {self.metric!r} is not one of {', '.join(METRIC_NAMES)}")
         if self.direction not in DIRECTIONS:
             raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {self.direction!r}")
+        if self.over not in OBJECTIVE_OVER:
+            raise ValueError(f"the objective is over one of {', '.join(OBJECTIVE_OVER)}, got {self.over!r}")
         for name in ("trials", "startup_trials"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -181,7 +206,8 @@ class StudyPlan:
             "objective": {
                 "metric": self.metric,
                 "direction": self.direction,
-                "of": "mean over the tuning seeds of the metric's mean in the run's last greedy evaluation",
+                "over": self.over,
+                "of": OBJECTIVE_OVER[self.over],
             },
             "tuning_seeds": list(self.seeds),
             "reporting_seeds": list(self.reporting_seeds),
@@ -253,6 +279,28 @@ def trial_value(per_run: Sequence[Mapping[str, Sequence[float]]], metric: str) -
     :func:`~empathy_zoo.training.evaluation.evaluate_greedy` gives it), and each run's part."""
     per_seed = [float(np.mean(columns[metric])) for columns in per_run]
     return float(np.mean(per_seed)), per_seed
+
+
+def curve_value(values: Sequence[float], over: str) -> float:
+    """A trial's value from its greedy evaluations so far (``values``, each a :func:`trial_value`,
+    in step order): the last (``over="last"``) or their mean (``over="curve"``)."""
+    if not values:
+        raise ValueError("a trial's value needs at least one greedy evaluation")
+    if over == "last":
+        return float(values[-1])
+    if over == "curve":
+        return float(np.mean(values))
+    raise ValueError(f"the objective is over one of {', '.join(OBJECTIVE_OVER)}, got {over!r}")
+
+
+def ties_at_best(study: Mapping[str, Any]) -> list[int]:
+    """The numbers of the finished trials of ``study`` (a ``study.json`` document) whose value
+    equals the best one, the best included; more than one means the objective could not tell them
+    apart and the first was kept. ``[]`` where no trial finished."""
+    best = study.get("best")
+    if best is None:
+        return []
+    return [t["number"] for t in study["trials"] if t["state"] == "COMPLETE" and t["value"] == best["value"]]
 
 
 def train_trial(
@@ -391,6 +439,7 @@ def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) 
             value, per_seed = trial_value(per_run, plan.metric)
             curve.append({"step": step, "value": value, "per_seed": per_seed})
             trial.set_user_attr(_CURVE, curve)
+            value = curve_value([point["value"] for point in curve], plan.over)
             trial.report(value, step)
             if step < plan.base.steps and trial.should_prune():
                 trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
@@ -398,7 +447,7 @@ def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) 
 
         train_trial(specs, out / TRIALS_DIR, options, report)
         trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
-        return curve[-1]["value"]
+        return curve_value([point["value"] for point in curve], plan.over)
 
     return objective
 
@@ -416,7 +465,7 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, updat
                 "state": "REFUSED" if _REFUSED in trial.user_attrs else state,
                 "params": dict(trial.params),
                 "value": trial.value if trial.state == states.COMPLETE else None,
-                "last_value": curve[-1]["value"] if curve else None,
+                "last_value": curve_value([point["value"] for point in curve], plan.over) if curve else None,
                 "steps_trained": curve[-1]["step"] if curve else 0,
                 "curve": curve,
                 **({"refused": trial.user_attrs[_REFUSED]} if _REFUSED in trial.user_attrs else {}),
@@ -452,7 +501,7 @@ def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna:
         comment = (
             f"{label}: the best of {document['trials_done']} trial(s) of `empathy-zoo tune` (study.json beside this file),\n"
             f"tuned on seeds {list(plan.seeds)} at {plan.base.steps:,} env steps per run, objective: {plan.metric} "
-            f"({plan.direction}) of the last greedy evaluation;\n"
+            f"({plan.direction}) {OVER_WORDS[plan.over]};\n"
             f"reported on the sweep's seeds and budget (from {plan.source}):\n"
             f"  empathy-zoo reproduce --profile {out / TUNED_FILE}"
             + (f" --update-kernel {options.update_kernel}" if options.update_kernel != RunnerOptions.update_kernel else "")
