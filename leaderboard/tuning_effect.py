@@ -1,0 +1,151 @@
+"""Does tuning change a verdict? Each tuned row against its tuned DQN, beside the untuned row
+against the untuned DQN.
+
+    python -m leaderboard.tuning_effect UNTUNED_DIR TUNED_DIR [--changed-only]
+
+A tuned row is one of ``TUNED_DIR`` whose label is ``<label>, tuned`` (what ``empathy-zoo tune``
+writes: :mod:`empathy_zoo.training.tuning`); its untuned row is ``<label>`` on the same variant in
+``UNTUNED_DIR``. Each directory is scored alone, by the leaderboard's rule unchanged
+(:func:`leaderboard.improvement.improvements_over_dqn`: the exact two-sided Mann–Whitney test at
+5 %), so a tuned row is compared with the tuned DQN of its variant and never with an untuned one.
+Per metric (:data:`leaderboard.versus_dqn.DEFAULT_METRICS`) and phase the table gives both rows'
+means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
+no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
+named, never dropped. Nothing new is tested: this is a view of two leaderboards' cells.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from leaderboard.aggregate import group_runs, load_results, score_runs
+from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
+from leaderboard.versus_dqn import DEFAULT_METRICS
+
+__all__ = ["TUNED_SUFFIX", "VerdictPair", "TuningEffect", "tuning_effect", "tuning_effect_table"]
+
+TUNED_SUFFIX = ", tuned"
+"""How a tuned row's label ends (``tuned.toml``'s label)."""
+PHASE_NAMES = {"eval": "greedy", "train_final10": "training"}
+"""The phases compared, as the tables name them."""
+
+
+@dataclass(frozen=True)
+class VerdictPair:
+    """One metric and phase of one method: untuned against DQN, tuned against the tuned DQN."""
+
+    variant: str
+    label: str
+    """The untuned row's label (the tuned one's without :data:`TUNED_SUFFIX`)."""
+    phase: str
+    metric: str
+    untuned_mean: float
+    tuned_mean: float
+    untuned_verdict: str | None
+    """The leaderboard's verdict against DQN; ``None`` for a DQN row (the reference itself)."""
+    tuned_verdict: str | None
+
+    @property
+    def changed(self) -> bool:
+        """Whether tuning changed the verdict."""
+        return self.untuned_verdict != self.tuned_verdict
+
+
+@dataclass(frozen=True)
+class TuningEffect:
+    """Every pair, and the tuned rows that have no untuned row."""
+
+    pairs: tuple[VerdictPair, ...]
+    unmatched: tuple[tuple[str, str], ...]
+    """``(variant, label)`` of each tuned row of ``TUNED_DIR`` with no untuned row."""
+
+
+def _cells(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]]) -> tuple[dict, dict, set]:
+    means = {(s.env, s.method_label, s.phase, s.metric): s.mean for s in score_runs(results)}
+    verdicts = {(c.env, c.method_label, c.phase, c.metric): c.verdict for c in improvements_over_dqn(results, metrics_of)}
+    references = {key for key, runs in group_runs(results).items() if all(is_dqn(run) for run in runs)}
+    return means, verdicts, references
+
+
+def tuning_effect(
+    untuned: Sequence[dict[str, Any]], tuned: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]] | None = None
+) -> TuningEffect:
+    """The pairs of :class:`VerdictPair` of every tuned row of ``tuned`` with its row in ``untuned``
+    (result documents, as :func:`leaderboard.aggregate.load_results` reads them)."""
+    groups = group_runs(tuned)
+    variants = {env: runs[0]["env"] for (env, _), runs in groups.items()}
+    metrics = {v: tuple((metrics_of or DEFAULT_METRICS).get(v) or DEFAULT_METRICS[env]) for v, env in variants.items()}
+    old_means, old_verdicts, old_references = _cells(untuned, metrics)
+    new_means, new_verdicts, new_references = _cells(tuned, metrics)
+    old_rows = set(group_runs(untuned))
+    pairs: list[VerdictPair] = []
+    unmatched: list[tuple[str, str]] = []
+    for variant, label in groups:
+        base = label.removesuffix(TUNED_SUFFIX)
+        if base == label or (variant, base) not in old_rows:
+            unmatched.append((variant, label))
+            continue
+        reference = (variant, label) in new_references
+        if reference != ((variant, base) in old_references):
+            raise ValueError(f"{variant}: {label!r} and {base!r} are not both DQN references or both methods")
+        for metric in metrics[variant]:
+            for phase in PHASE_NAMES:
+                pairs.append(
+                    VerdictPair(
+                        variant=variant,
+                        label=base,
+                        phase=phase,
+                        metric=metric,
+                        untuned_mean=old_means[(variant, base, phase, metric)],
+                        tuned_mean=new_means[(variant, label, phase, metric)],
+                        untuned_verdict=None if reference else old_verdicts.get((variant, base, phase, metric)),
+                        tuned_verdict=None if reference else new_verdicts.get((variant, label, phase, metric)),
+                    )
+                )
+    return TuningEffect(tuple(pairs), tuple(unmatched))
+
+
+def _cell(mean: float, verdict: str | None) -> str:
+    mark = "" if verdict is None else VERDICT_MARKS.get(verdict, "")
+    return f"{mark} {mean:.3g}".strip()
+
+
+def tuning_effect_table(effect: TuningEffect, changed_only: bool = False) -> str:
+    """Markdown: per variant, one line per method, metric and phase: untuned → tuned, each
+    ``mark mean``, and whether the verdict changed; then the count of changed verdicts."""
+    lines: list[str] = []
+    for variant in sorted({p.variant for p in effect.pairs}):
+        rows = [p for p in effect.pairs if p.variant == variant and (p.changed or not changed_only)]
+        lines += [f"### {variant}", "", "| method | metric | phase | untuned vs DQN | tuned vs tuned DQN | verdict |"]
+        lines.append("|---|---|---|---|---|---|")
+        for p in rows:
+            said = "(the reference)" if p.untuned_verdict is None else ("**changed by tuning**" if p.changed else "same")
+            lines.append(
+                f"| {p.label} | {p.metric} | {PHASE_NAMES[p.phase]} | {_cell(p.untuned_mean, p.untuned_verdict)} | "
+                f"{_cell(p.tuned_mean, p.tuned_verdict)} | {said} |"
+            )
+        lines.append("")
+    compared = [p for p in effect.pairs if p.untuned_verdict is not None]
+    lines.append(f"Verdicts changed by tuning: {sum(p.changed for p in compared)} of {len(compared)}.")
+    if effect.unmatched:
+        shown = ", ".join(f"{label!r} ({variant})" for variant, label in effect.unmatched)
+        lines.append(f"Tuned rows with no untuned row (not compared): {shown}.")
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.tuning_effect UNTUNED_DIR TUNED_DIR [--changed-only]``."""
+    parser = argparse.ArgumentParser(prog="python -m leaderboard.tuning_effect", description=__doc__.splitlines()[0])
+    parser.add_argument("untuned", help="results directory of the untuned rows (with their DQN)")
+    parser.add_argument("tuned", help="results directory of the tuned rows (with the tuned DQN)")
+    parser.add_argument("--changed-only", action="store_true", help="list only the verdicts tuning changed")
+    args = parser.parse_args(argv)
+    print(tuning_effect_table(tuning_effect(load_results(args.untuned), load_results(args.tuned)), args.changed_only))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
