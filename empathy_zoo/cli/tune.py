@@ -133,6 +133,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     print(
         f"{PROG}: best: trial {best['number']}, {metric} {best['value']:.4g} ({shown}); report it on the reporting seeds: "
         f"{PROG} reproduce --profile {out / TUNED_FILE}"
+        + (f" --update-kernel {options.update_kernel}" if options.update_kernel != RunnerOptions.update_kernel else "")
     )
     return 0
 
