@@ -1,0 +1,192 @@
+"""Many tuning studies at a glance: one table line per study and one figure of where each study
+searched and what it chose.
+
+    python -m leaderboard.tuning_summary DIR [--figure PATH]
+
+reads every ``study.json`` under ``DIR`` (:mod:`empathy_zoo.training.tuning`'s; the methods
+profile's are ``docs/results/methods/tuning/<variant>/<method>/``), prints a Markdown table (per
+study: its trials finished / pruned / refused, the env steps it spent against its budget, the best
+value and the settings chosen) and, with ``--figure``, draws the trials of studies that tune one
+numeric parameter: one panel per variant, one line per study, each trial a dot at its value of
+the parameter (finished filled, pruned hollow), the chosen one a star, the range's ends dotted. Read from the study files
+alone; nothing is trained or tested.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from empathy_zoo.atomic import write_bytes_atomic
+
+__all__ = ["StudySummary", "find_studies", "summarise", "summary_table", "render_studies_png", "main"]
+
+STUDY_FILE = "study.json"
+"""A study's file (:data:`empathy_zoo.training.tuning.STUDY_FILE`)."""
+
+
+@dataclass(frozen=True)
+class StudySummary:
+    """What one study did and chose."""
+
+    variant: str
+    label: str
+    """The tuned experiment's label (untuned)."""
+    metric: str
+    over: str
+    """``last`` or ``curve`` (:data:`empathy_zoo.training.tuning.OBJECTIVE_OVER`)."""
+    trials: int
+    """Trials that count (finished, pruned or refused)."""
+    finished: int
+    pruned: int
+    refused: int
+    env_steps_trained: int
+    env_steps_at_most: int
+    wall_time_s: float
+    """The trials' wall time, summed."""
+    best_value: float | None
+    best_params: Mapping[str, Any]
+
+
+def find_studies(root: str | os.PathLike[str]) -> list[Path]:
+    """Every ``study.json`` under ``root``, sorted; ``ValueError`` where there is none."""
+    found = sorted(Path(root).rglob(STUDY_FILE))
+    if not found:
+        raise ValueError(f"no {STUDY_FILE} under {root}: run empathy-zoo tune first")
+    return found
+
+
+def summarise(study: Mapping[str, Any]) -> StudySummary:
+    """The :class:`StudySummary` of a ``study.json`` document."""
+    plan = study["plan"]
+    counted = [t for t in study["trials"] if t["state"] != "INTERRUPTED"]
+    states = [t["state"] for t in counted]
+    best = study.get("best")
+    return StudySummary(
+        variant=plan["variant"],
+        label=plan["label"],
+        metric=plan["objective"]["metric"],
+        over=plan["objective"].get("over", "last"),
+        trials=len(counted),
+        finished=states.count("COMPLETE"),
+        pruned=states.count("PRUNED"),
+        refused=states.count("REFUSED"),
+        env_steps_trained=int(study["env_steps_trained"]),
+        env_steps_at_most=int(plan["budget"]["env_steps_at_most"]),
+        wall_time_s=float(sum(t.get("wall_time_s") or 0.0 for t in counted)),
+        best_value=None if best is None else float(best["value"]),
+        best_params={} if best is None else dict(best["params"]),
+    )
+
+
+def _value(value: Any) -> str:
+    return f"{value:.3g}" if isinstance(value, float) else str(value)
+
+
+def summary_table(summaries: Sequence[StudySummary]) -> str:
+    """Markdown: one line per study, in the order given."""
+    lines = [
+        "| variant | method | trials: finished / pruned / refused | env steps (of at most) | trials' wall time | "
+        "best value | chosen |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for s in summaries:
+        best = "none finished" if s.best_value is None else f"{s.metric} {s.best_value:.4g} ({s.over})"
+        chosen = ", ".join(f"{name} = {_value(value)}" for name, value in s.best_params.items()) or "—"
+        lines.append(
+            f"| {s.variant} | {s.label} | {s.trials}: {s.finished} / {s.pruned} / {s.refused} | "
+            f"{s.env_steps_trained:,} ({s.env_steps_at_most:,}) | {s.wall_time_s / 60:.1f} min | {best} | {chosen} |"
+        )
+    return "\n".join(lines)
+
+
+def _parameter(studies: Sequence[Mapping[str, Any]]) -> tuple[str, bool, tuple[float, float]]:
+    """The one numeric parameter every study tunes, whether its scale is logarithmic, and its range."""
+    spaces = {tuple(sorted(study["plan"]["params"].items())) for study in studies}
+    if len(spaces) != 1 or len(next(iter(spaces))) != 1:
+        raise ValueError(
+            "the figure draws studies of one and the same parameter and range; these tune "
+            + "; ".join(sorted(", ".join(f"{n}={r}" for n, r in space) for space in spaces))
+        )
+    ((name, spec),) = next(iter(spaces))
+    kind = spec.partition(":")[0]
+    if kind not in ("log", "float", "int"):
+        raise ValueError(f"the figure draws a numeric parameter; {name} is {spec}")
+    low, high = (float(end) for end in spec.split(":")[1:3])
+    return name, kind == "log", (low, high)
+
+
+def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> bytes:
+    """PNG bytes of the figure of ``studies`` (``study.json`` documents of one parameter)."""
+    if not studies:
+        raise ValueError("no studies to draw")
+    name, log, (low, high) = _parameter(studies)
+    variants = sorted({study["plan"]["variant"] for study in studies})
+    rows = {v: [s for s in studies if s["plan"]["variant"] == v] for v in variants}
+    height = max(len(r) for r in rows.values())
+    figure = Figure(figsize=(6.2 * len(variants), 0.9 + 0.38 * height), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes_row = figure.subplots(1, len(variants), squeeze=False)[0]
+    for axes, variant in zip(axes_row, variants):
+        labels = [s["plan"]["label"] for s in rows[variant]]
+        for y, study in enumerate(rows[variant]):
+            trials = [t for t in study["trials"] if name in t["params"] and t["state"] != "INTERRUPTED"]
+            done = [t["params"][name] for t in trials if t["state"] == "COMPLETE"]
+            stopped = [t["params"][name] for t in trials if t["state"] == "PRUNED"]
+            axes.plot(done, [y] * len(done), "o", color="#0072B2", markersize=6, label="finished" if y == 0 else None)
+            axes.plot(
+                stopped,
+                [y] * len(stopped),
+                "o",
+                color="#D55E00",
+                markerfacecolor="white",
+                markersize=6,
+                label="pruned" if y == 0 else None,
+            )
+            best = study.get("best")
+            if best is not None:
+                axes.plot([best["params"][name]], [y], "*", color="black", markersize=13, label="chosen" if y == 0 else None)
+        axes.set_yticks(range(len(labels)), labels, fontsize="small")
+        axes.set_ylim(len(labels) - 0.5, -0.5)
+        if log:
+            axes.set_xscale("log")
+            axes.set_xlim(low / 1.25, high * 1.25)
+        else:
+            axes.set_xlim(low - 0.05 * (high - low), high + 0.05 * (high - low))
+        for end in (low, high):
+            axes.axvline(end, color="0.6", linewidth=0.8, linestyle=":")
+        axes.set_xlabel(name)
+        metric = rows[variant][0]["plan"]["objective"]
+        axes.set_title(f"{variant}: objective {metric['metric']} ({metric.get('over', 'last')})", fontsize="medium")
+        axes.grid(True, axis="x", alpha=0.3)
+        axes.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
+    return buffer.getvalue()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.tuning_summary DIR [--figure PATH]``."""
+    parser = argparse.ArgumentParser(prog="python -m leaderboard.tuning_summary", description=__doc__.splitlines()[0])
+    parser.add_argument("root", metavar="DIR", help="a directory holding study.json files, at any depth")
+    parser.add_argument("--figure", metavar="PATH", help="draw the trials of every study into this PNG")
+    args = parser.parse_args(argv)
+    studies = [json.loads(path.read_text(encoding="utf-8")) for path in find_studies(args.root)]
+    print(summary_table([summarise(study) for study in studies]))
+    if args.figure:
+        write_bytes_atomic(args.figure, render_studies_png(studies))
+        print(f"\nwrote {args.figure}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
