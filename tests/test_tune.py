@@ -342,3 +342,19 @@ def test_tied_best_trials_are_said_with_the_option_that_tells_them_apart(
     printed = capsys.readouterr().out
     assert "4 finished trials tie at the best value ([0, 1, 2, 3])" in printed
     assert "--objective-over curve" in printed
+
+
+def test_the_pruner_waits_until_prune_from_and_a_step_it_would_never_reach_is_refused(
+    sweep: Path, tmp_path: Path, capsys
+) -> None:
+    out = tmp_path / "late"
+    assert main(["tune", str(sweep), *TUNE, "--prune-from", "200", "--out", str(out)]) == 0
+    study = json.loads((out / STUDY_FILE).read_text())
+    assert study["plan"]["pruner"]["n_warmup_steps"] == 200
+    assert all(t["steps_trained"] >= 200 for t in study["trials"] if t["state"] == "PRUNED")
+    assert main(["tune", str(sweep), *TUNE, "--prune-from", "300", "--out", str(tmp_path / "never")]) == 2
+    assert "the pruner would never look: it starts at step 300 and a trial ends at 300" in capsys.readouterr().err
+    assert main(["tune", str(sweep), *TUNE, "--prune-from", "-1", "--out", str(tmp_path / "negative")]) == 2
+    assert "prune_from must be an int >= 0, got -1" in capsys.readouterr().err
+    assert main(["tune", str(sweep), *TUNE, "--prune-from", "100", "--no-prune", "--out", str(tmp_path / "both")]) == 2
+    assert "a study without a pruner has no step to start pruning from" in capsys.readouterr().err

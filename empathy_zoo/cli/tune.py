@@ -87,6 +87,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         prune=not args.no_prune,
         startup_trials=positive("--startup-trials", args.startup_trials),
         over=args.objective_over,
+        prune_from=args.prune_from,
     )
     options = RunnerOptions(
         device=check_device(args.device),
@@ -222,6 +223,14 @@ def add_tune(sub: Any) -> None:
         help=f"trials sampled at random before TPE models the rest (default: {STARTUP_TRIALS})",
     )
     tune.add_argument("--no-prune", action="store_true", help="train every trial to its end (no median pruner)")
+    tune.add_argument(
+        "--prune-from",
+        type=int,
+        default=0,
+        metavar="STEPS",
+        help="the env step from which the pruner may stop a trial; a later one where the first greedy evaluations "
+        "are too noisy to judge a trial by (default: 0, every evaluation)",
+    )
     tune.add_argument(
         "--out", type=path_text, metavar="DIR", help="output directory (default: results/tuning/<variant>/<method>)"
     )

@@ -36,7 +36,8 @@ Each is rewritten (atomically) after every trial. Decisions, and why:
   sample at random.
 * **Pruner**: Optuna's median pruner on the learning curve: at each greedy evaluation before the
   last, the trial reports its objective and is stopped when it is worse than the median of the
-  finished trials at that step (after :data:`PRUNE_STARTUP_TRIALS` finished trials). The report
+  finished trials at that step (after :data:`PRUNE_STARTUP_TRIALS` finished trials, and from
+  the env step :attr:`StudyPlan.prune_from` on). The report
   rides on the trainer's ``on_evaluation`` hook (:func:`~empathy_zoo.training.ensemble.train_ensemble`),
   which only reads the evaluations: a run trains the same numbers with it as without it.
 * **Equal budgets**: a study runs exactly ``trials`` trials (finished, pruned or refused), each of
@@ -173,6 +174,9 @@ class StudyPlan:
     """Stop trials whose learning curve falls below the median (:data:`PRUNE_STARTUP_TRIALS`)."""
     startup_trials: int = STARTUP_TRIALS
     """Trials TPE samples at random before it models the others."""
+    prune_from: int = 0
+    """The env step from which the pruner may stop a trial (Optuna's ``n_warmup_steps``): 0, at
+    every evaluation; later, where the first evaluations are too noisy to judge a trial by."""
     over: str = "last"
     """Which greedy evaluations a trial's value summarises (:data:`OBJECTIVE_OVER`): ``"last"``,
     the leaderboard's greedy figure; ``"curve"``, their mean, for a metric that saturates."""
@@ -182,6 +186,15 @@ class StudyPlan:
             raise ValueError(f"objective metric {self.metric!r} is not one of {', '.join(METRIC_NAMES)}")
         if self.direction not in DIRECTIONS:
             raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {self.direction!r}")
+        if isinstance(self.prune_from, bool) or not isinstance(self.prune_from, int) or self.prune_from < 0:
+            raise ValueError(f"prune_from must be an int >= 0, got {self.prune_from!r}")
+        if not self.prune and self.prune_from:
+            raise ValueError("a study without a pruner has no step to start pruning from: drop one of the two")
+        if self.prune and self.prune_from >= self.base.steps:
+            raise ValueError(
+                f"the pruner would never look: it starts at step {self.prune_from:,} and a trial ends at "
+                f"{self.base.steps:,}; give an earlier step, or turn pruning off"
+            )
         if self.over not in OBJECTIVE_OVER:
             raise ValueError(f"the objective is over one of {', '.join(OBJECTIVE_OVER)}, got {self.over!r}")
         for name in ("trials", "startup_trials"):
@@ -225,7 +238,9 @@ class StudyPlan:
             },
             "sampler": {"name": "TPESampler", "seed": self.sampler_seed, "n_startup_trials": self.startup_trials},
             "pruner": (
-                {"name": "MedianPruner", "n_startup_trials": PRUNE_STARTUP_TRIALS, "n_warmup_steps": 0} if self.prune else None
+                {"name": "MedianPruner", "n_startup_trials": PRUNE_STARTUP_TRIALS, "n_warmup_steps": self.prune_from}
+                if self.prune
+                else None
             ),
         }
 
@@ -360,7 +375,7 @@ def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str) -> 
 
     storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
     pruner = (
-        optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=0)
+        optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
         if plan.prune
         else optuna.pruners.NopPruner()
     )
