@@ -43,7 +43,7 @@ class StudySummary:
     """The tuned experiment's label (untuned)."""
     metric: str
     over: str
-    """``last`` or ``curve`` (:data:`empathy_zoo.training.tuning.OBJECTIVE_OVER`)."""
+    """``last`` or ``curve`` (:data:`empathy_zoo.training.study_plan.OBJECTIVE_OVER`)."""
     trials: int
     """Trials that count (finished, pruned or refused)."""
     finished: int

@@ -18,8 +18,9 @@ from baselines.registry import get_method  # noqa: E402
 from empathy_zoo.cli import main  # noqa: E402
 from empathy_zoo.experiment import load_sweep  # noqa: E402
 from empathy_zoo.experiment.search_space import ParamSpec, parse_param, parse_params, point_runs  # noqa: E402
-from empathy_zoo.training import tuning  # noqa: E402
-from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE, select_experiment, tuning_seeds  # noqa: E402
+from empathy_zoo.training import study_plan, tuning  # noqa: E402
+from empathy_zoo.training.study_plan import select_experiment, tuning_seeds  # noqa: E402
+from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE  # noqa: E402
 
 SWEEP = """
 [sweep]
@@ -208,7 +209,7 @@ def test_a_study_is_the_same_twice_and_its_sweep_file_reproduces_its_best_trial(
 
     # ... whose runs, trained on the tuning seeds, give the best trial's value again
     from empathy_zoo.training import RunnerOptions, train_runs
-    from empathy_zoo.training.tuning import trial_value
+    from empathy_zoo.training.study_plan import trial_value
 
     again = [s.__class__(s.variant, s.entry, s.budget, seed) for s, seed in zip(specs, study["plan"]["tuning_seeds"])]
     results = [json.loads(p.read_text()) for p in train_runs(again, tmp_path / "again", RunnerOptions(progress=False))]
@@ -295,14 +296,14 @@ def test_every_experiment_of_the_methods_profile_is_written_as_a_sweep_file_that
 
 
 def test_a_value_over_the_curve_is_the_mean_of_its_evaluations_and_over_last_the_last() -> None:
-    assert tuning.curve_value([100.0, 400.0, 500.0], "last") == 500.0
-    assert tuning.curve_value([100.0, 400.0, 500.0], "curve") == pytest.approx(1000.0 / 3)
+    assert study_plan.curve_value([100.0, 400.0, 500.0], "last") == 500.0
+    assert study_plan.curve_value([100.0, 400.0, 500.0], "curve") == pytest.approx(1000.0 / 3)
     # two trials at the same saturated end are told apart by how soon they got there
-    assert tuning.curve_value([500.0, 500.0], "curve") > tuning.curve_value([200.0, 500.0], "curve")
+    assert study_plan.curve_value([500.0, 500.0], "curve") > study_plan.curve_value([200.0, 500.0], "curve")
     with pytest.raises(ValueError, match="at least one greedy evaluation"):
-        tuning.curve_value([], "curve")
+        study_plan.curve_value([], "curve")
     with pytest.raises(ValueError, match="last, curve"):
-        tuning.curve_value([1.0], "area")
+        study_plan.curve_value([1.0], "area")
 
 
 def test_ties_at_the_best_value_are_named_and_a_single_best_is_alone() -> None:
@@ -312,9 +313,9 @@ def test_ties_at_the_best_value_are_named_and_a_single_best_is_alone() -> None:
         best = max(finished, key=lambda t: t["value"]) if finished else None
         return {"trials": trials, "best": best and {"number": best["number"], "value": best["value"]}}
 
-    assert tuning.ties_at_best(study([500.0, 320.0, 500.0, None], ["COMPLETE"] * 3 + ["PRUNED"])) == [0, 2]
-    assert tuning.ties_at_best(study([500.0, 320.0], ["COMPLETE", "COMPLETE"])) == [0]
-    assert tuning.ties_at_best(study([None], ["PRUNED"])) == []
+    assert study_plan.ties_at_best(study([500.0, 320.0, 500.0, None], ["COMPLETE"] * 3 + ["PRUNED"])) == [0, 2]
+    assert study_plan.ties_at_best(study([500.0, 320.0], ["COMPLETE", "COMPLETE"])) == [0]
+    assert study_plan.ties_at_best(study([None], ["PRUNED"])) == []
 
 
 def test_a_study_over_the_curve_records_it_and_its_values_are_the_mean_of_each_curve(sweep: Path, tmp_path: Path, capsys) -> None:

@@ -50,17 +50,8 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.experiment.search_space import parse_params
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
     from empathy_zoo.training.options import RunnerOptions
-    from empathy_zoo.training.tuning import (
-        OVER_WORDS,
-        STUDY_FILE,
-        TUNED_FILE,
-        StudyPlan,
-        import_optuna,
-        run_study,
-        select_experiment,
-        ties_at_best,
-        tuning_seeds,
-    )
+    from empathy_zoo.training.study_plan import OVER_WORDS, StudyPlan, select_experiment, ties_at_best, tuning_seeds
+    from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE, import_optuna, run_study
     from leaderboard.trials_figure import TRIALS_FIGURE
 
     import_optuna()  # (said first: nothing else is worth checking without it)
@@ -152,7 +143,7 @@ def add_tune(sub: Any) -> None:
     from empathy_zoo.experiment.search_space import KINDS
     from empathy_zoo.metrics import METRIC_NAMES
     from empathy_zoo.training.options import RunnerOptions
-    from empathy_zoo.training.tuning import OBJECTIVE_OVER, STARTUP_TRIALS, TUNING_SEED_BASE
+    from empathy_zoo.training.study_plan import OBJECTIVE_OVER, STARTUP_TRIALS, TUNING_SEED_BASE
 
     tune = sub.add_parser(
         "tune",
