@@ -11,7 +11,8 @@ writes: :mod:`empathy_zoo.training.tuning`); its untuned row is ``<label>`` on t
 Per metric (:data:`leaderboard.versus_dqn.DEFAULT_METRICS`) and phase the table gives both rows'
 means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
 no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
-named, never dropped. Nothing new is tested: this is a view of two leaderboards' cells.
+named, never dropped; a directory with two DQN rows in one variant is refused (a verdict would be
+one of several). Nothing new is tested: this is a view of two leaderboards' cells.
 """
 
 from __future__ import annotations
@@ -67,6 +68,13 @@ def _cells(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[
     means = {(s.env, s.method_label, s.phase, s.metric): s.mean for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c.verdict for c in improvements_over_dqn(results, metrics_of)}
     references = {key for key, runs in group_runs(results).items() if all(is_dqn(run) for run in runs)}
+    for variant in sorted({variant for variant, _ in references}):
+        rows = sorted(label for v, label in references if v == variant)
+        if len(rows) > 1:
+            raise ValueError(
+                f"{variant} has {len(rows)} DQN reference rows ({'; '.join(rows)}): a verdict would be one of several; "
+                "give directories with one DQN row per variant"
+            )
     return means, verdicts, references
 
 

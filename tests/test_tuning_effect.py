@@ -3,6 +3,7 @@ the untuned DQN, and a verdict that differs is said (synthetic runs whose verdic
 
 from __future__ import annotations
 
+import pytest
 from helpers_results import synthetic_result
 
 from leaderboard.tuning_effect import tuning_effect, tuning_effect_table
@@ -43,3 +44,10 @@ def test_an_unchanged_verdict_is_same_and_a_tuned_row_without_its_untuned_row_is
     text = tuning_effect_table(effect, changed_only=True)
     assert "Verdicts changed by tuning: 0 of 2." in text and "'F, tuned' (coexistence_v0)" in text
     assert "| E |" not in text  # (only the changed are listed)
+
+
+def test_a_directory_with_two_dqn_rows_in_a_variant_is_refused() -> None:
+    untuned = _rows("dqn", 1.0, "DQN", harms=0.9) + _rows("empathic_dqn", 1.0, "Empathic DQN (β=1)", harms=0.9)
+    tuned = _rows("dqn", 1.0, "DQN, tuned", harms=0.9)
+    with pytest.raises(ValueError, match="coexistence_v0 has 2 DQN reference rows"):
+        tuning_effect(untuned, tuned, {"coexistence_v0": ("harms",)})
