@@ -194,7 +194,7 @@ def add_tune(sub: Any) -> None:
         "--objective",
         choices=METRIC_NAMES,
         metavar="METRIC",
-        help="the metric of the last greedy evaluation to optimise (default: the environment's task metric: "
+        help="the metric to optimise, in the greedy evaluations --objective-over names (default: the environment's task metric: "
         "survival in coexistence_v0, batteries in sharing_v0); harms are minimised, the others maximised",
     )
     tune.add_argument(
