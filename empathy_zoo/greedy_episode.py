@@ -11,7 +11,7 @@ metrics: the engine's :meth:`~empathy_zoo.engine.base.GridEngine.episode_metrics
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,7 +20,7 @@ import numpy as np
 from empathy_zoo.environments import default_policies, face_module
 from empathy_zoo.fixed_agents import FixedAgents, policy_seed
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import PolicyEntry, parse_entry_label, policy_entry
+from empathy_zoo.policies import PolicyEntry, recorded_entry
 
 __all__ = ["EpisodeStep", "EpisodeOutcome", "watch_env", "agent_policies", "agent_env", "play_greedy", "format_metrics"]
 
@@ -83,27 +83,41 @@ def watch_env(
     return wrapped
 
 
-def agent_policies(agent: Any, fixed: Mapping[str, PolicyEntry] | None = None) -> dict[str, PolicyEntry]:
+def agent_policies(
+    agent: Any, fixed: Mapping[str, PolicyEntry] | None = None, allowed_imports: Collection[str] = ()
+) -> dict[str, PolicyEntry]:
     """The other agents' policies beside ``agent`` in its environment: the environment's defaults,
     then the ``fixed`` agents its run recorded (its ``describe()``: the result file's ``config.fixed``,
-    labels such as ``"patrol(period=3)"``, read back as policy entries), then ``fixed``."""
+    labels such as ``"patrol(period=3)"``, read back as policy entries), then ``fixed``.
 
+    A recorded policy is data from the agent's file: it resolves only to a registered policy or a
+    name in ``allowed_imports`` (:func:`~empathy_zoo.policies.recorded_entry`); one that ``fixed``
+    replaces is not read at all."""
     description = agent.describe()
+    given = dict(fixed or {})
+    where = f"{description.get('file') or 'the agent file'}: header.fixed"
     recorded = {
-        agent_name: parse_entry_label(entry) if isinstance(entry, str) else policy_entry(entry)
+        agent_name: recorded_entry(entry, f"{where}.{agent_name}", allowed_imports)
         for agent_name, entry in dict(description.get("fixed") or {}).items()
+        if agent_name not in given
     }
-    return {**default_policies(description["env"], dict(description["env_kwargs"])), **recorded, **dict(fixed or {})}
+    return {**default_policies(description["env"], dict(description["env_kwargs"])), **recorded, **given}
 
 
-def agent_env(agent: Any, fixed: Mapping[str, PolicyEntry] | None = None, render_mode: str | None = None) -> FixedAgents:
+def agent_env(
+    agent: Any,
+    fixed: Mapping[str, PolicyEntry] | None = None,
+    render_mode: str | None = None,
+    allowed_imports: Collection[str] = (),
+) -> FixedAgents:
     """The environment ``agent`` was trained in (its ``describe()``: ``env``, ``env_kwargs`` and the
-    ``fixed`` agents it recorded), ``fixed`` replacing some of those policies (:func:`agent_policies`);
+    ``fixed`` agents it recorded), ``fixed`` replacing some of those policies (:func:`agent_policies`,
+    which resolves a recorded policy only to a registered one or one of ``allowed_imports``);
     an agent whose observation is not the environment's raises ``ValueError``."""
     description = agent.describe()
     recorded = dict(description.get("fixed") or {})
     try:
-        policies = agent_policies(agent, fixed)
+        policies = agent_policies(agent, fixed, allowed_imports)
         env = watch_env(description["env"], description["env_kwargs"], policies, render_mode)
     except ValueError as error:
         if not recorded:

@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 import inspect
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "parse_entry_label",
+    "recorded_entry",
     "FixedPolicy",
     "BatchedPolicy",
     "RandomWalk",
@@ -52,6 +53,7 @@ __all__ = [
     "policy_context",
     "policy_entry",
     "entry_label",
+    "entry_policy_name",
     "policy_name",
     "unsaved_policy",
     "policy_state",
@@ -239,6 +241,7 @@ def make_policy(spec: PolicyEntry | FixedPolicy, **kwargs: Any) -> FixedPolicy:
         policy = spec
     else:
         factory = resolve_name(spec, POLICIES, "fixed policy")
+        _check_factory(spec, factory)
         _check_arguments(spec, factory, kwargs)
         try:
             policy = factory(**kwargs)
@@ -247,6 +250,18 @@ def make_policy(spec: PolicyEntry | FixedPolicy, **kwargs: Any) -> FixedPolicy:
     if not isinstance(policy, FixedPolicy):
         raise ValueError(f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info)")
     return policy
+
+
+def _check_factory(spec: str, factory: Any) -> None:
+    """Raise ``ValueError`` unless ``factory`` is a class whose instances have ``reset`` and
+    ``act`` methods: what a name resolves to is checked before it is called."""
+    if not inspect.isclass(factory):
+        raise ValueError(f"{spec!r} is not a fixed policy: it names a {type(factory).__name__}, not a class")
+    missing = [name for name in ("reset", "act") if not callable(getattr(factory, name, None))]
+    if missing:
+        raise ValueError(
+            f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info) (no {', '.join(missing)})"
+        )
 
 
 def _check_arguments(spec: str, factory: Any, kwargs: Mapping[str, Any]) -> None:
@@ -361,6 +376,32 @@ def plain_data_problem(value: Any, arrays: bool, where: str = "the value") -> st
         return None
     allowed = "numbers, strings, booleans, None, lists and tables" + (", numeric numpy arrays" if arrays else "")
     return f"{where} is a {type(value).__module__}.{type(value).__qualname__} (plain data is {allowed})"
+
+
+def entry_policy_name(entry: PolicyEntry) -> str:
+    """The policy name of a policy entry (a registered name or ``package.module:ClassName``)."""
+    return entry if isinstance(entry, str) else str(entry["policy"])
+
+
+def recorded_entry(label: Any, where: str, allowed_imports: Collection[str] = ()) -> PolicyEntry:
+    """The policy entry a file records as ``label`` (a label, :func:`parse_entry_label`, or an
+    entry, :func:`policy_entry`), checked to name a registered policy or one of
+    ``allowed_imports``: a file is data, so a ``package.module:Name`` it records is never imported
+    unless the user named it (``--allow-import``). Otherwise ``ValueError`` naming ``where`` (the
+    file and field) and what to do; nothing is imported."""
+    try:
+        entry = parse_entry_label(label) if isinstance(label, str) else policy_entry(label)
+    except ValueError as error:
+        raise ValueError(f"{where}: {error}") from None
+    name = entry_policy_name(entry)
+    if name not in POLICIES and ":" not in name:
+        raise ValueError(f"{where} names fixed policy {name!r}, which is not registered: {sorted(POLICIES)}")
+    if name not in POLICIES and name not in allowed_imports:
+        raise ValueError(
+            f"{where} names fixed policy {name!r}, which is not registered: a file never makes the suite import "
+            f"code; if you trust that module, pass --allow-import {name} (or name the policy yourself: --fixed AGENT=POLICY)"
+        )
+    return entry
 
 
 def parse_entry_label(label: str) -> PolicyEntry:

@@ -7,7 +7,8 @@ its agent file, beside its result file in the directory it was read from, is loa
 against the SHA-256 its result file records (:func:`empathy_zoo.agent_file.load_agent`: a changed
 file is refused, the message naming both files). The agent plays one greedy episode in the world
 it trained in (its result file's ``config``: ``env``, ``env_kwargs`` and the ``fixed`` partners,
-policy labels read back by :func:`empathy_zoo.policies.parse_entry_label`), reset with
+policy labels read back by :func:`empathy_zoo.policies.recorded_entry`: registered policies only,
+unless the user allows a plug-in by name), reset with
 :data:`EPISODE_SEED`, for at most :data:`EPISODE_STEPS` steps, written atomically as
 ``figures/<variant>_<row slug>_episode.gif`` by :func:`empathy_zoo.episode_gif.episode_gif`
 (:func:`episode_slugs`: file-safe names that depend only on the variant and the label, and
@@ -30,7 +31,7 @@ import base64
 import hashlib
 import html
 import unicodedata
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,7 +40,7 @@ from empathy_zoo.agent_file import RESULT_FIELD, load_agent
 from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name, confined
-from empathy_zoo.policies import PolicyEntry, parse_entry_label, policy_entry
+from empathy_zoo.policies import PolicyEntry, recorded_entry
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs, table_env
 from leaderboard.tables import env_metrics, markdown_table, place_before_definitions
@@ -190,12 +191,16 @@ def _runs_root(directory: str) -> Path:
     return root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
 
 
-def trained_world(run: Mapping[str, Any]) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
+def trained_world(
+    run: Mapping[str, Any], allowed_imports: Collection[str] = ()
+) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
     """``(env, env_kwargs, fixed)`` the run trained in, from its result file's ``config``: the
-    fixed partners' policy labels read back as policy entries."""
+    fixed partners' policy labels read back as policy entries, each a registered policy or one of
+    ``allowed_imports`` (:func:`empathy_zoo.policies.recorded_entry`: a result file never makes
+    the leaderboard import code), else ``ValueError`` naming the field; nothing is imported."""
     config = run["config"]
     fixed = {
-        agent: parse_entry_label(entry) if isinstance(entry, str) else policy_entry(entry)
+        agent: recorded_entry(entry, f"run {run.get('run_id')}: config.fixed.{agent}", allowed_imports)
         for agent, entry in dict(config.get("fixed") or {}).items()
     }
     return str(config["env"]), dict(config.get("env_kwargs") or {}), fixed
@@ -207,16 +212,19 @@ def play_row_episodes(
     out_dir: str | Path,
     origins: Sequence[str],
     figures_dir: str = "figures",
+    allowed_imports: Collection[str] = (),
 ) -> tuple[list[RowEpisode], list[str]]:
     """Play and write every row's greedy episode (see the module page) into ``out_dir / figures_dir``;
-    returns the episodes and notes on rows left out (an agent file that is missing, or needs a
-    library not installed). An agent file whose SHA-256 is not the one its result file records
-    raises ``ValueError`` naming both files."""
+    returns the episodes and notes on rows left out (an agent file that is missing, needs a
+    library not installed, or a run whose partner is a plug-in policy not in ``allowed_imports``).
+    Every row's agent file and world are checked before the first GIF is written: an agent file
+    whose SHA-256 is not the one its result file records raises ``ValueError`` naming both files,
+    and nothing is written."""
     chosen = chosen_runs(results, origins)
     slugs = episode_slugs(list(chosen))
     folder = Path(out_dir) / figures_dir
-    episodes: list[RowEpisode] = []
     notes: list[str] = []
+    ready = []
     for (env, label), (run, origin) in chosen.items():
         root = _runs_root(origin)
         entry = _kept_agent(run)
@@ -229,11 +237,18 @@ def play_row_episodes(
             )
             continue
         try:
+            world = trained_world(run, allowed_imports)
+        except ValueError as error:
+            notes.append(f"{label} ({env}): {error}; no episode shown")
+            continue
+        try:
             agent = load_agent(agent_file, str(entry["sha256"]), result_file=result_file)
         except ImportError as error:
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue
-        world_env, env_kwargs, fixed = trained_world(run)
+        ready.append((env, label, run, result_file, agent_file, agent, world))
+    episodes: list[RowEpisode] = []
+    for env, label, run, result_file, agent_file, agent, (world_env, env_kwargs, fixed) in ready:
         gif = episode_gif(
             agent,
             confined(folder, episode_file_name(env, slugs[env, label])),
@@ -304,11 +319,12 @@ def episodes_section(
     out_dir: str | Path,
     origins: Sequence[str],
     figures_dir: str = "figures",
+    allowed_imports: Collection[str] = (),
 ) -> EpisodeSection | None:
     """The "Greedy episodes" section of ``results`` (``origins``: the directory each was read
     from), its GIFs written into ``out_dir / figures_dir`` and linked relative to ``out_dir``;
     ``None`` when no run kept an agent."""
-    episodes, notes = play_row_episodes(results, out_dir, origins, figures_dir)
+    episodes, notes = play_row_episodes(results, out_dir, origins, figures_dir, allowed_imports)
     if not episodes and not notes:
         return None
     out = Path(out_dir)
@@ -349,12 +365,14 @@ def add_episodes_section(
     markdown: str,
     html_page: str,
     origins: Sequence[str],
+    allowed_imports: Collection[str] = (),
 ) -> tuple[str, str, dict[str, Path]]:
     """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Greedy episodes" section
     placed before their metric definitions (after any section placed there before), and the GIFs
     written; the pages unchanged and nothing written when no run kept an agent. ``origins``: the
-    directory each result was read from (:attr:`leaderboard.sources.ResultSet.origins`)."""
-    section = episodes_section(results, out_dir, origins)
+    directory each result was read from (:attr:`leaderboard.sources.ResultSet.origins`);
+    ``allowed_imports``: plug-in partner policies the runs may name (:func:`trained_world`)."""
+    section = episodes_section(results, out_dir, origins, allowed_imports=allowed_imports)
     if section is None:
         return markdown, html_page, {}
     markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)

@@ -1,6 +1,7 @@
 """``evaluate``: play every kept agent of a results directory beside held-out partners.
 
     empathy-zoo evaluate RESULTS_DIR [--scenarios NAME_OR_FILE ...] [--episodes N] [--out DIR] [--threads N] [--no-progress]
+                        [--allow-import MODULE:NAME ...]
 
 Writes ``<out>/evaluations/<scenario set>/<run id>.json`` (:mod:`empathy_zoo.training.heldout`);
 run again, it skips what is done. ``empathy-zoo leaderboard`` then adds a "Held-out partners"
@@ -12,6 +13,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import PROG
 
 __all__ = ["add_evaluate", "cmd_evaluate"]
@@ -25,7 +27,13 @@ def cmd_evaluate(args: argparse.Namespace, command: str) -> int:
         raise ValueError(f"--episodes must be positive, got {args.episodes}")
     options: dict[str, Any] = {} if args.episodes is None else {"episodes": args.episodes}
     summary = evaluate_results(
-        args.results, args.scenarios, out_dir=args.out, progress=not args.no_progress, threads=args.threads, **options
+        args.results,
+        args.scenarios,
+        out_dir=args.out,
+        progress=not args.no_progress,
+        threads=args.threads,
+        allowed_imports=frozenset(args.allow_import or ()),
+        **options,
     )
     if summary.without_agent:
         print(
@@ -73,4 +81,5 @@ def add_evaluate(sub: Any) -> None:
         "are much slower on a busy machine; what is computed does not depend on it)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_allow_import(parser)
     parser.set_defaults(handler=cmd_evaluate)

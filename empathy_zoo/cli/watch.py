@@ -14,12 +14,19 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import os
+import stat
+import tempfile
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, AgentPolicies, agent_policy, positive
 
-__all__ = ["add_watch", "cmd_watch", "find_agent"]
+__all__ = ["add_watch", "check_gif_path", "cmd_watch", "find_agent"]
+
+GIF_PROBE_PREFIX = ".ezoo-gif-probe-"
+"""Name prefix of the empty file ``--gif`` writes and removes to see that its directory takes a file."""
 
 _LISTED = 5
 """Run ids an unknown one's error names at most."""
@@ -95,6 +102,34 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
         raise ValueError(str(error)) from None
 
 
+def check_gif_path(path: str) -> Path:
+    """``path`` if a GIF may be written there, checked before any episode is played: nothing or a
+    regular file is there (never a directory, a link, a device or a pipe: only a regular file is
+    ever replaced), and its directory takes a file (created if missing, probed with a file of the
+    suite's own name, removed at once); else a ``ValueError`` naming it."""
+    target = Path(path)
+    try:
+        mode = target.lstat().st_mode
+    except FileNotFoundError:
+        mode = None
+    except OSError as error:
+        raise ValueError(f"--gif {path}: cannot be examined ({error.strerror or error})") from None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise ValueError(f"--gif {path} is a directory; give the GIF's file name")
+    if mode is not None and not stat.S_ISREG(mode):
+        kind = "a symbolic link" if stat.S_ISLNK(mode) else "not a regular file (a device, a pipe or a socket)"
+        raise ValueError(f"--gif {path} is {kind}: only a regular file is ever replaced; give another file name")
+    parent = target.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        descriptor, probe = tempfile.mkstemp(prefix=GIF_PROBE_PREFIX, dir=parent)
+        os.close(descriptor)
+        os.unlink(probe)
+    except OSError as error:
+        raise ValueError(f"--gif {path}: cannot write in {parent} ({error.strerror or error})") from None
+    return target
+
+
 def cmd_watch(args: argparse.Namespace, command: str) -> int:
     """Greedy episodes of a trained agent, each one's metrics printed; a GIF of the first."""
     from empathy_zoo.episode_gif import EpisodeRecorder
@@ -104,19 +139,21 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
 
     positive("--episodes", args.episodes)
     positive("--gif-steps", args.gif_steps)
-    if args.gif and Path(args.gif).is_dir():
-        raise ValueError(f"--gif {args.gif} is a directory; give the GIF's file name")
+    if args.gif:
+        check_gif_path(args.gif)
     agent = find_agent(args.target, args.dir)
     fixed = dict(args.fixed or [])
-    env = agent_env(agent, fixed, render_mode="rgb_array" if args.gif else None)
+    allowed = frozenset(args.allow_import or ())
+    env = agent_env(agent, fixed, render_mode="rgb_array" if args.gif else None, allowed_imports=allowed)
     d = agent.describe()
-    beside = ", ".join(f"{a}={entry_label(p)}" for a, p in agent_policies(agent, fixed).items())
+    beside = ", ".join(f"{a}={entry_label(p)}" for a, p in agent_policies(agent, fixed, allowed).items())
     run = f" of run {d['run_id']}" if d.get("run_id") else ""
     print(f"{d.get('method')} agent{run} ({d['file']}) on {d['env']} {d['env_kwargs']}, beside {beside}")
     engine = env.unwrapped.engine
     recorder = None
     if args.gif:
-        recorder = EpisodeRecorder(str(d.get("method")), f"{d['env']} · seed {args.seed}", args.gif_steps)
+        title = str(d.get("label") or d.get("method"))  # (a run's label names its settings: β, the penalty)
+        recorder = EpisodeRecorder(title, f"{d['env']} · seed {args.seed}", args.gif_steps)
     for episode in range(args.episodes):
         seed = args.seed + episode
 
@@ -165,4 +202,5 @@ def add_watch(sub: Any) -> None:
     watch.add_argument(
         "--gif-steps", type=int, default=GIF_STEPS, metavar="N", help=f"steps the GIF shows at most (default: {GIF_STEPS})"
     )
+    add_allow_import(watch)
     watch.set_defaults(handler=cmd_watch)

@@ -11,6 +11,7 @@ painting of views are in :mod:`empathy_zoo.engine.sight`.
 
 from __future__ import annotations
 
+import difflib
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -46,6 +47,10 @@ __all__ = [
 ]
 
 NO_AGENT = -1
+MISSPELT_OPTION_RATIO = 0.9
+"""How alike (``difflib`` ratio) an unknown reset option must be to a known one to be refused as
+its misspelling (``position`` for ``positions``); other unknown keys are ignored with a warning, as
+PettingZoo's API test passes ``{"options": 1}``."""
 STAY = int(Action.STAY)
 
 
@@ -279,6 +284,12 @@ class GridEngine:
             raise ValueError(f"options must be a mapping, got {type(options).__name__}")
         consumed = self._apply_options(env_id, options) | {"positions"}
         unknown = set(options) - consumed
+        for key in sorted(unknown, key=str):  # a misspelt option is refused, never ignored
+            close = difflib.get_close_matches(str(key), sorted(consumed), n=1, cutoff=MISSPELT_OPTION_RATIO)
+            if close:
+                raise ValueError(
+                    f"unknown reset option {key!r} for {self.name}: did you mean {close[0]!r}? known: {sorted(consumed)}"
+                )
         if unknown:  # PettingZoo's own API test passes foreign options; ignore them loudly
             warnings.warn(
                 f"ignoring unknown reset option(s) {sorted(unknown)} for {self.name}; known: {sorted(consumed)}",

@@ -34,7 +34,8 @@ naming the file, the table and the key.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import unicodedata
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,13 +46,14 @@ from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.sweep_file import variant_of_table
 from empathy_zoo.experiment.values import PolicyTable, SweepConfigError, check_keys, check_value, read_toml, type_name
-from empathy_zoo.names import check_path_name
-from empathy_zoo.policies import entry_label, parse_entry_label
+from empathy_zoo.names import LABEL_REFUSED_CATEGORIES, check_path_name
+from empathy_zoo.policies import entry_label, parse_entry_label, recorded_entry
 
 __all__ = [
     "SCENARIO_DIR",
     "TRAINED_WITH",
     "TRAINED_WITH_REASON",
+    "MAX_REASON",
     "OBSERVATION_ARGUMENTS",
     "SET_KEYS",
     "Scenario",
@@ -67,6 +69,8 @@ __all__ = [
 
 SCENARIO_DIR = Path(__file__).resolve().parent
 """Where the shipped scenario sets (``<env>.toml``) live."""
+MAX_REASON = 500
+"""Most characters a scenario's ``reason`` may hold (one line of a table)."""
 TRAINED_WITH_REASON = "The run's own partners and world, as its result file records them: what it trained with."
 """The ``reason`` of :data:`TRAINED_WITH`."""
 OBSERVATION_ARGUMENTS: dict[str, str] = {
@@ -229,21 +233,39 @@ def _scenario(key: str, table: Any, env: str, source: str) -> Scenario:
     check_keys(table, allowed, where)
     checked = {name: check_value(value, allowed[name], f"{where} {name}") for name, value in table.items()}
     reason = checked.get("reason")
-    if reason is None or not reason.strip() or "\n" in reason:
-        raise SweepConfigError(f"{where} reason: every scenario needs a one-line reason (what it tests), got {reason!r}")
+    if reason is None or not reason.strip() or _unprintable(reason) is not None or len(reason) > MAX_REASON:
+        raise SweepConfigError(
+            f"{where} reason: every scenario needs a one-line reason (what it tests) of printable text, at most "
+            f"{MAX_REASON} characters, got {reason if reason is None else reason[:80]!r}"
+            + ("" if reason is None or _unprintable(reason) is None else f" (it holds {_unprintable(reason)})")
+        )
     kwargs = {name: value for name, value in checked.items() if name in arguments}
     return Scenario(key, reason.strip(), variant_of_table(env, kwargs, checked.get("fixed"), key, where))
 
 
+def _unprintable(text: str) -> str | None:
+    """The first character of ``text`` a one-line text may not hold (a control or format character,
+    a line break: :data:`~empathy_zoo.names.LABEL_REFUSED_CATEGORIES`), named, or ``None``."""
+    for character in text:
+        category = unicodedata.category(character)
+        if category in LABEL_REFUSED_CATEGORIES:
+            return f"{unicodedata.name(character, f'U+{ord(character):04X}')} ({category})"
+    return None
+
+
 # ---------------------------------------------------------------------------- a run's own partners
-def trained_with(result: Mapping[str, Any]) -> Scenario:
+def trained_with(result: Mapping[str, Any], allowed_imports: Collection[str] = ()) -> Scenario:
     """The scenario of a run's own partners and world (:data:`TRAINED_WITH`): its environment, its
     ``config.env_kwargs`` and its fixed agents (``config.fixed``), from its result file as
     :func:`empathy_zoo.result_file.read_result` gives it; ``ValueError`` naming the run when they
-    do not make an environment variant."""
+    do not make an environment variant. A recorded policy resolves only to a registered one or a
+    name in ``allowed_imports`` (:func:`~empathy_zoo.policies.recorded_entry`): nothing a result
+    file names is imported unless the user allowed it."""
     config = result["config"]
     try:
-        fixed = {agent: parse_entry_label(label) for agent, label in config["fixed"].items()}
+        fixed = {
+            agent: recorded_entry(label, f"config.fixed.{agent}", allowed_imports) for agent, label in config["fixed"].items()
+        }
         variant = EnvVariant(result["env"], dict(config["env_kwargs"]), fixed, TRAINED_WITH)
     except ValueError as error:
         raise ValueError(f"run {result['run_id']}: its own partners do not make a scenario: {error}") from None

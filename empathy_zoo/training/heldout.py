@@ -19,7 +19,7 @@ and episode count; a file that was made otherwise is refused by name, never over
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -127,12 +127,15 @@ def evaluate_run(
     scenario_set: ScenarioSet,
     episodes: int = DEFAULT_EPISODES,
     on_scenario: Callable[[str], None] | None = None,
+    allowed_imports: Collection[str] = (),
 ) -> dict[str, Any]:
     """The evaluation document of one run (see :mod:`empathy_zoo.evaluation_file`): its agent,
     loaded from the agent file its result file names and checked against the SHA-256 recorded
     there, played ``episodes`` greedy episodes in its own world and in every scenario of
     ``scenario_set``; ``on_scenario(name)`` is called after each. ``ValueError`` for a run that kept
-    no agent, an agent file changed since, or a scenario the run's world cannot hold."""
+    no agent, an agent file changed since, or a scenario the run's world cannot hold. A partner the
+    result file records resolves only to a registered policy or one of ``allowed_imports``
+    (:func:`empathy_zoo.scenarios.trained_with`)."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
     if result["env"] != scenario_set.env:
@@ -145,7 +148,7 @@ def evaluate_run(
         raise ValueError(
             f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result['env']}"
         )
-    own = trained_with(result)
+    own = trained_with(result, allowed_imports)
     home = own.variant
     view = int({**DEFAULT_ARGUMENTS[result["env"]], **home.kwargs}["view"])
     if agent.obs_size != view * view:
@@ -247,6 +250,7 @@ def evaluate_results(
     on_written: Callable[[Path], None] | None = None,
     on_note: Callable[[str], None] | None = None,
     threads: int = 1,
+    allowed_imports: Collection[str] = (),
 ) -> EvaluationSummary:
     """Evaluate every kept agent of ``results_dir`` in every scenario set of its environment.
 
@@ -260,7 +264,9 @@ def evaluate_results(
     has to say (nothing on Linux and macOS). ``threads``: torch's CPU threads while playing (1, as
     training: the agents' small products gain nothing from more, and extra threads are many times
     slower on a busy machine; at most :func:`empathy_zoo.limits.cpu_count`); what is computed does
-    not depend on it. ``progress`` draws a bar counting the scenarios played.
+    not depend on it. ``progress`` draws a bar counting the scenarios played. A run's recorded
+    partners resolve only to registered policies or names in ``allowed_imports`` (a result file
+    never makes the suite import code); every run's are checked before anything is written.
     Raises ``ValueError`` when nothing could be evaluated (no run kept an agent, or no set is for
     their environments), and for the errors of :func:`evaluate_run`.
     """
@@ -304,6 +310,8 @@ def evaluate_results(
             f"({', '.join(sorted({result['env'] for _, result in kept}))}); sets given: "
             + ", ".join(f"{s.name} ({s.env})" for s in by_name.values())
         )
+    for _, result in kept:
+        trained_with(result, allowed_imports)  # (every run's own partners, checked before anything is written)
     for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
         check_output_dir(out, (directory.relative_to(out).as_posix(),))  # (no link below out)
     with hold_output_dir(evaluations_root(out), command_line(), on_note):  # (training may go on beside it)
@@ -312,7 +320,7 @@ def evaluate_results(
         before = torch.get_num_threads()
         torch.set_num_threads(threads)
         try:
-            _evaluate_todo(work, out, episodes, progress, on_written, summary)
+            _evaluate_todo(work, out, episodes, progress, on_written, summary, allowed_imports)
         finally:
             torch.set_num_threads(before)
     return summary
@@ -325,6 +333,7 @@ def _evaluate_todo(
     progress: bool,
     on_written: Callable[[Path], None] | None,
     summary: EvaluationSummary,
+    allowed_imports: Collection[str] = (),
 ) -> None:
     """Evaluate what of ``work`` has no evaluation file in ``out`` yet (:func:`evaluate_results`
     checked everything and holds the directory)."""
@@ -341,7 +350,9 @@ def _evaluate_todo(
     with tqdm(total=total, unit="scenario", desc="evaluate", disable=bar_off, dynamic_ncols=True, mininterval=1.0) as bar:
         for scenario_set, path, result, target in todo:
             bar.set_postfix_str(f"{scenario_set.name}: {result['run_id']}", refresh=False)
-            document = evaluate_run(path, result, scenario_set, episodes, on_scenario=lambda _name: bar.update(1))
+            document = evaluate_run(
+                path, result, scenario_set, episodes, on_scenario=lambda _name: bar.update(1), allowed_imports=allowed_imports
+            )
             write_json_atomic(target, document)
             summary.written.append(target)
             if on_written is not None:
