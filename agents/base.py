@@ -124,7 +124,7 @@ class Method:
     in_view_only: bool = False
     """Swap with the other agent only while it stands in the learner's window: elsewhere
     ``StepBatch.other_present`` is False, ``other_unseen`` is True (the other is unseen, not
-    harmed: Empathic DQN's target is then the robot's own, SPEC §4) and ``other_swapped`` is
+    harmed: Empathic DQN puts the robot's own continuation in its place, SPEC §4) and ``other_swapped`` is
     zeros. The paper's swap is omniscient (seeing through walls is its future work)."""
     label: Callable[..., str] | None = None
     """Display name of a run from its settings (defaults to the name). A label that takes two

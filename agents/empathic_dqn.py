@@ -5,14 +5,15 @@ value), its target copy ``Q̂``, and ``Q_emp`` (the empathic value the robot act
 gradient step, on a batch ``(s, a, r, s', done, s_emp', other_present)``:
 
     y     = r + γ·(1 − done)·Q̂(s', argmax_a Q(s', a))                      (double DQN)
-    y_emp = β·y + (1 − β)·γ·other_present·max_a Q̂(s_emp', a)   (y where the other is unseen)
+    y_emp = β·y + (1 − β)·γ·other_present·max_a Q̂(s_emp', a)
     Q     ← Adam step on mean (Q(s, a) − y)²
     Q_emp ← Adam step on mean (Q_emp(s, a) − y_emp)²
 
 ``s_emp'`` is the robot's swapped observation at t+1 with the closest other agent when the step
 began (SPEC §3b); the other-term is 0 when that agent is terminal at t+1. With in-view-only swaps
-an other out of view at t+1 is *unseen*, not harmed: ``y_emp = y`` there (SPEC §4), so the robot
-is neither paid nor charged for keeping it in view. Acting is ε-greedy on ``Q_emp``.
+an other out of view at t+1 is *unseen*, not harmed: it is taken to fare as the robot does, and
+the robot's own continuation ``c = y − r`` stands in its place, ``y_emp = β·y + (1 − β)·c =
+y − (1 − β)·r`` (SPEC §4). Acting is ε-greedy on ``Q_emp``.
 
 β = 1 is standard DQN (the paper: "1.0 recovers standard DQN"), and it is run as such: one
 network ``Q`` (and its target), acting on ``Q``, no ``Q_emp`` (whose target would equal ``y``).
@@ -53,7 +54,8 @@ __all__ = [
     "continuation_value",
     "empathic_targets",
     "other_term",
-    "own_where_unseen",
+    "own_continuation_where_unseen",
+    "unseen_rows",
     "linear_epsilon",
 ]
 
@@ -104,25 +106,37 @@ def empathic_targets(
     ``selfishness`` is β per run, ``(K, 1)``; with several others aggregated (``others`` "mean" or
     "min"), ``q_swapped_target`` is ``(K, B, N, A)``, ``other_present``, ``live`` and ``unseen``
     ``(K, B, N)`` (see :func:`other_term`). Where the other agent is ``unseen`` (in-view-only
-    swaps, out of view; with several others: every one counted is), ``y_emp = y`` (SPEC §4)."""
-    y = double_dqn_target(reward, terminated, q_next_online, q_next_target, gamma)
+    swaps, out of view; with several others: every one counted is), the robot's continuation
+    ``c`` is the other-term, ``y_emp = β·y + (1 − β)·c = y − (1 − β)·r`` (SPEC §4)."""
+    continuation = continuation_value(terminated, q_next_online, q_next_target, gamma)
+    y = reward + continuation
     term = other_term(q_swapped_target, other_present, gamma, others, live, unseen)
-    y_emp = selfishness * y + (1.0 - selfishness) * term
-    return y, own_where_unseen(y, y_emp, unseen, others, live)
+    term = own_continuation_where_unseen(term, continuation, unseen, others, live)
+    return y, selfishness * y + (1.0 - selfishness) * term
 
 
-def own_where_unseen(
-    y: torch.Tensor, y_emp: torch.Tensor, unseen: torch.Tensor | None, others: str = "closest", live: torch.Tensor | None = None
+def unseen_rows(unseen: torch.Tensor | None, others: str = "closest", live: torch.Tensor | None = None) -> torch.Tensor | None:
+    """``(K, B)`` bool: the transitions with no other agent seen to care about (SPEC §4): the
+    closest other is unseen; with several others aggregated, every other that was live when the
+    step began is unseen (and at least one was). ``None`` where ``unseen`` is."""
+    if unseen is None or others == "closest":
+        return unseen
+    live = torch.ones_like(unseen) if live is None else live
+    return live.any(dim=2) & ~(live & ~unseen).any(dim=2)
+
+
+def own_continuation_where_unseen(
+    term: torch.Tensor,
+    continuation: torch.Tensor,
+    unseen: torch.Tensor | None,
+    others: str = "closest",
+    live: torch.Tensor | None = None,
 ) -> torch.Tensor:
-    """``y_emp`` with the robot's own target ``y`` where no other agent is seen to care about
-    (SPEC §4): the closest other is unseen; with several others aggregated, every other that was
-    live when the step began is unseen (and at least one was)."""
-    if unseen is None:
-        return y_emp
-    if others != "closest":
-        live = torch.ones_like(unseen) if live is None else live
-        unseen = live.any(dim=2) & ~(live & ~unseen).any(dim=2)
-    return torch.where(unseen, y, y_emp)
+    """The other-term ``term`` with the robot's own continuation ``c`` (``y = r + c``) in its
+    place where no other agent is seen (:func:`unseen_rows`): an unseen other is taken to fare as
+    the robot does (SPEC §4)."""
+    rows = unseen_rows(unseen, others, live)
+    return term if rows is None else torch.where(rows, continuation, term)
 
 
 def other_term(

@@ -426,7 +426,8 @@ def run_targets_kernel(  # type: ignore[no-untyped-def]
     :func:`agents.empathic_dqn.empathic_targets` in its order, in float32: ``reward``,
     ``terminated`` ``(B,)``, ``q_next``, ``target_next`` ``(B, A)``, ``target_swapped (B, O, A)``,
     ``present``, ``live``, ``unseen`` ``(B, O)``; ``rule`` one of :data:`RULES` (with
-    :data:`CLOSEST`, the other agent is entry 0)."""
+    :data:`CLOSEST`, the other agent is entry 0). Where no other is seen, the robot's continuation
+    is the other-term (SPEC §4)."""
     b, a = q_next.shape
     others = target_swapped.shape[1]
     one, zero = np.float32(1.0), np.float32(0.0)
@@ -437,7 +438,8 @@ def run_targets_kernel(  # type: ignore[no-untyped-def]
             if q_next[i, action] > q_next[i, best]:
                 best = action
         keep = zero if terminated[i] else one
-        yi = reward[i] + gamma * keep * target_next[i, best]
+        continuation = gamma * keep * target_next[i, best]
+        yi = reward[i] + continuation
         y[i] = yi
         if not empathic:
             continue
@@ -462,7 +464,9 @@ def run_targets_kernel(  # type: ignore[no-untyped-def]
             else:
                 term = least if anyone_counted else zero
             own = anyone_live and not anyone_counted
-        y_emp[i] = yi if own else beta * yi + rest * term
+        if own:
+            term = continuation
+        y_emp[i] = beta * yi + rest * term
 
 
 @jit

@@ -53,7 +53,7 @@ class StackedReplay:
         """(action, terminated, code₁ … codeₒ) of every transition. An other agent's code: 0 it had
         left before the step, 1 it was there when the step began but is not at its end (harmed, or
         done: its term is 0), 2 it is there at the end (its term bootstraps), 3 it is there but
-        unseen (out of view with in-view-only swaps: it counts for no other-term, SPEC §4)."""
+        unseen (out of view with in-view-only swaps: it is taken to fare as the robot does, SPEC §4)."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
         self.position = 0
         self.size = 0

@@ -49,7 +49,7 @@ class StepBatch(ClosestOther):
     others_unseen: np.ndarray
     """(K, M, O) that other agent is present and not terminal at the end of the step but out of
     the learner's window (in-view-only methods; else always False): *unseen*, not harmed, so an
-    in-view empathic target uses no other-term for it (SPEC §4)."""
+    in-view empathic target puts the robot's own continuation in its place (SPEC §4)."""
     harms: np.ndarray
     """(K, M) number of agents the learner harmed this step."""
     battery_return: np.ndarray

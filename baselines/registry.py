@@ -49,7 +49,7 @@ METHODS: dict[str, Method] = {
         target="golden",
         label=lambda s: f"Empathic DQN in view (β={s.selfishness:g})",
         description="Empathic DQN that swaps only with an agent inside its window (no omniscience; "
-        "the paper's future work); an unseen other gives the robot's own target",
+        "the paper's future work); an unseen other fares as the robot does: y_emp = y − (1−β)·r",
     ),
     "empathic_dqn_silver": Method(
         name="empathic_dqn_silver",

@@ -32,7 +32,8 @@ survival (54 steps of 500) and the silver robot does not (500): the rules differ
 the golden rule lets the other's good future pay for the robot's own harm. In learning the
 targets differ wherever the learned ``o`` exceeds ``c``.
 
-With in-view-only swaps an unseen other gives the robot's own target, as in Empathic DQN (SPEC §4).
+With in-view-only swaps an unseen other is taken to fare as the robot does, as in Empathic DQN
+(SPEC §4): ``o = c``, so the target is the robot's own ``y``.
 Acting is ε-greedy on ``Q_emp`` as in Empathic DQN (every run of this method trains ``Q_emp``,
 also at β = 1).
 """
@@ -41,7 +42,7 @@ from __future__ import annotations
 
 import torch
 
-from agents.empathic_dqn import EmpathicDQN, continuation_value, other_term, own_where_unseen
+from agents.empathic_dqn import EmpathicDQN, continuation_value, other_term, own_continuation_where_unseen
 
 __all__ = ["SilverRuleDQN", "silver_targets"]
 
@@ -66,4 +67,5 @@ class SilverRuleDQN(EmpathicDQN):
         continuation = continuation_value(batch["terminated"], q_next, target_next, self.config.gamma)
         y = batch["reward"] + continuation
         other = other_term(target_swapped, present, self.config.gamma, rule, live, unseen)
-        return y, own_where_unseen(y, silver_targets(batch["reward"], continuation, other, self.selfishness), unseen, rule, live)
+        other = own_continuation_where_unseen(other, continuation, unseen, rule, live)
+        return y, silver_targets(batch["reward"], continuation, other, self.selfishness)

@@ -6,7 +6,7 @@ learned. The verdict thresholds of the leaderboard compare trained runs with it.
 | | |
 |---|---|
 | Import | `from empathy_zoo.reference import coexistence_optimum` |
-| Call | `coexistence_optimum(selfishness, epsilon, *, ties="uniform", rule="golden", in_view_only=False, view=5, unseen="own", gamma=0.99, size=7, max_cycles=500, tolerance=1e-10)` |
+| Call | `coexistence_optimum(selfishness, epsilon, *, ties="uniform", rule="golden", in_view_only=False, view=5, unseen="continuation", gamma=0.99, size=7, max_cycles=500, tolerance=1e-10)` |
 | Returns | `ReferenceOutcome(harms, survival, selfishness, epsilon)`: expected harms and steps survived per episode |
 
 ## Model
@@ -35,9 +35,11 @@ learned. The verdict thresholds of the leaderboard compare trained runs with it.
 * **Variants** of the target: `rule="silver"` optimises the silver rule's
   `y − (1 − β)·max(c − o, 0)` (`c = γ·(1 − done)·V*(s')`, the robot's continuation; the other's
   value only counts where it falls below the robot's own); `in_view_only=True` the in-view
-  method's, whose target is the robot's own `y` wherever the cat is present but outside the
-  `view × view` window at t+1 (SPEC §4; `unseen="zero"` gives the rule before 2026-12-01, an
-  other-term of 0 there, as for a harmed cat).
+  method's, whose other-term is the robot's own continuation `c` wherever the cat is present but
+  outside the `view × view` window at t+1 (SPEC §4: the unseen cat fares as the robot does, so
+  the golden-rule target there is `y − (1 − β)·r`; `unseen="own"` gives the rule of 2026-12-01,
+  the robot's own `y` there, and `unseen="zero"` the rule before it, an other-term of 0 there, as
+  for a harmed cat).
 * **Policy**: greedy on `Q_emp`, executed ε-greedy: with probability ε a uniform action among
   the 5. Values within `TIE_TOLERANCE` of the maximum count as tied (so the choice does not
   depend on rounding). `ties="uniform"` (the default, and what the verdicts use) spreads the
@@ -165,10 +167,11 @@ def _optimal_values(gamma: float, size: int, tolerance: float) -> np.ndarray:
 RULES = ("golden", "silver")
 """Which empathic target is optimised: Empathic DQN's (``"golden"``) or the silver rule's
 (``"silver"``, :mod:`baselines.silver_rule`)."""
-UNSEEN = ("own", "zero")
+UNSEEN = ("continuation", "own", "zero")
 """With ``in_view_only``, the target where the cat is out of view at t+1: the robot's own
-(``"own"``, SPEC §4 since 2026-12-01) or an other-term of 0 (``"zero"``, the rule before, which
-treated an unseen cat as a harmed one)."""
+continuation as the other-term (``"continuation"``, SPEC §4 since 2026-12-04: the unseen cat fares
+as the robot does), the robot's own target ``y`` (``"own"``, the rule of 2026-12-01) or an
+other-term of 0 (``"zero"``, the rule before, which treated an unseen cat as a harmed one)."""
 
 
 def _in_view(size: int, view: int) -> np.ndarray:
@@ -185,7 +188,7 @@ def coexistence_values(
     rule: str = "golden",
     in_view_only: bool = False,
     view: int = 5,
-    unseen: str = "own",
+    unseen: str = "continuation",
     gamma: float = 0.99,
     size: int = 7,
     tolerance: float = 1e-10,
@@ -197,8 +200,9 @@ def coexistence_values(
     robot's target ``y = r + c`` (``c = γ·(1 − done)·V*(s')``, its continuation) and the other-term
     ``o = γ·present'·V*(swap(s'))``, ``β·y + (1 − β)·o`` (``rule="golden"``) or
     ``y − (1 − β)·max(c − o, 0)`` (``rule="silver"``); with ``in_view_only``, where the cat is
-    present but outside the ``view × view`` window at t+1, ``y`` (``unseen="own"``) or the other-term
-    0 (``unseen="zero"``: the rule before 2026-12-01)."""
+    present but outside the ``view × view`` window at t+1, ``o = c`` (``unseen="continuation"``,
+    SPEC §4), the target ``y`` (``unseen="own"``: the rule of 2026-12-01) or the other-term 0
+    (``unseen="zero"``: the rule before)."""
     _check(selfishness=selfishness, gamma=gamma, size=size, tolerance=tolerance)
     if rule not in RULES:
         raise ValueError(f"rule must be one of {RULES}, got {rule!r}")
@@ -217,12 +221,15 @@ def coexistence_values(
         reward = (outcome != CAT_HARMS_ROBOT).astype(np.float64)
         continuation = np.select([outcome == NO_HARM, outcome == ROBOT_HARMS_CAT], [gamma * v[after], gamma / (1.0 - gamma)], 0.0)
         y = reward + continuation
+        # the cat is present (not harmed by the robot) but out of the robot's window
+        hidden = (outcome != ROBOT_HARMS_CAT) & ~_in_view(size, view)[after] if in_view_only else None
+        if hidden is not None and unseen == "continuation":  # the unseen cat fares as the robot does
+            other = np.where(hidden, continuation, other)
         if rule == "golden":
             change = (1.0 - selfishness) * (other - y)
         else:
             change = -(1.0 - selfishness) * np.maximum(continuation - other, 0.0)
-        if in_view_only:  # the cat is present (not harmed by the robot) but out of the robot's window
-            hidden = (outcome != ROBOT_HARMS_CAT) & ~_in_view(size, view)[after]
+        if hidden is not None and unseen != "continuation":
             change = np.where(hidden, 0.0 if unseen == "own" else -(1.0 - selfishness) * y, change)
         q_emp = q + change.mean(axis=2)
     alone = np.full((1, NUM_ACTIONS), 1.0 / (1.0 - gamma))
@@ -259,7 +266,7 @@ def coexistence_optimum(
     rule: str = "golden",
     in_view_only: bool = False,
     view: int = 5,
-    unseen: str = "own",
+    unseen: str = "continuation",
     gamma: float = 0.99,
     size: int = 7,
     max_cycles: int = 500,

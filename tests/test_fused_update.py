@@ -298,7 +298,8 @@ def test_the_compiled_targets_are_the_torch_targets(needs_numba: None, rule: str
 
 def test_the_compiled_targets_on_hand_made_numbers(needs_numba: None) -> None:
     """One run, β = 0.5, γ = 0.5, two others, four transitions by hand (the mean and the least
-    of the others that count; unseen ones count for nothing; all unseen: ``y_emp = y``)."""
+    of the others that count; unseen ones count for nothing; all unseen: the robot's own
+    continuation in their place, ``y_emp = y − (1 − β)·r``)."""
     q_next = np.array([[[0, 1], [2, 2], [5, 0], [0, 1]]], np.float32)  # argmax: 1, 0 (tie), 0, 1
     target_next = np.array([[[10, 20], [30, 40], [50, 60], [70, 80]]], np.float32)
     swapped = np.array([[[[4, 2], [8, 6]]] * 4], np.float32)  # maxima 4 and 8
@@ -313,13 +314,15 @@ def test_the_compiled_targets_on_hand_made_numbers(needs_numba: None) -> None:
             reward, terminated, q_next, target_next, swapped, present, 0.5, np.array([0.5]), rule, live, unseen
         )
         np.testing.assert_array_equal(y[0], y_expected)
-        expected = [y_expected[i] if o is None else 0.5 * y_expected[i] + 0.5 * o for i, o in enumerate(others)]
+        expected = [
+            y_expected[i] - 0.5 * reward[0, i] if o is None else 0.5 * y_expected[i] + 0.5 * o for i, o in enumerate(others)
+        ]
         np.testing.assert_array_equal(y_emp[0], expected)
     y, y_emp = fused_update.empathic_targets(
         reward, terminated, q_next, target_next, swapped[:, :, 0], present[:, :, 0], 0.5, np.array([0.5]), "closest",
         None, unseen[:, :, 0],
     )  # fmt: skip
-    np.testing.assert_array_equal(y_emp[0], [0.5 * y_expected[0] + 1, 0.5 * y_expected[1] + 1, y_expected[2], 0.5 * 44 + 1])
+    np.testing.assert_array_equal(y_emp[0], [0.5 * y_expected[0] + 1, 0.5 * y_expected[1] + 1, 0.5 * y_expected[2], 0.5 * 44 + 1])
     with pytest.raises(ValueError, match="others must be one of"):
         fused_update.empathic_targets(reward, terminated, q_next, target_next, swapped, present, 0.5, np.ones(1), "max")
 

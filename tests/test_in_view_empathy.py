@@ -38,5 +38,8 @@ def test_in_view_runs_train_apart_with_an_in_view_swap_and_learn_otherwise(tmp_p
     monkeypatch.setattr(ensemble, "VectorEnv", recording)
     paths = train_runs(specs, tmp_path, OPTIONS)
     assert sorted(built) == [False, True]
-    omniscient, in_view = (json.loads(path.read_text())["train"] for path in paths[:2])
-    assert omniscient["episode_end_step"] and in_view != omniscient  # the same seed, other targets
+    omniscient, in_view = (json.loads(path.read_text()) for path in paths[:2])
+    assert omniscient["train"]["episode_end_step"]
+    # the same seed, other targets: the greedy policies differ by the end (the training episodes
+    # of so short a run may not, since an unseen cat's term is the robot's own continuation)
+    assert (in_view["train"], in_view["eval"]) != (omniscient["train"], omniscient["eval"])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from helpers_results import synthetic_result
 
 from empathy_zoo.reference import coexistence_optimum
@@ -53,4 +54,5 @@ def test_the_in_view_and_silver_variants_get_their_own_target() -> None:
         assert harms is not None and harms[0] == coexistence_optimum(0.25, 0.01, **arguments).harms
     in_view = reference_curve([synthetic_result("coexistence_v0", "empathic_dqn_in_view", 0.25, 0)], "harms", steps)
     golden = reference_curve([synthetic_result("coexistence_v0", "empathic_dqn", 0.25, 0)], "harms", steps)
-    assert in_view[0] < golden[0]  # an unseen cat no longer counts as harmed: the in-view optimum keeps away
+    # an unseen cat fares as the robot does: the in-view optimum is the omniscient one
+    assert in_view[0] == pytest.approx(golden[0], abs=1e-9)
