@@ -41,6 +41,7 @@ import numpy as np
 import torch
 
 from empathy_zoo.atomic import read_json, write_bytes_atomic
+from empathy_zoo.bounded_read import check_json_depth, read_data
 from empathy_zoo.policies import plain_data_problem
 from empathy_zoo.result_file import AGENT_SUFFIXES
 from empathy_zoo.trained_agent import SB3Agent, TrainedAgent
@@ -78,6 +79,9 @@ RESULT_FIELD = "agent"
 HEADER_KEYS = ("method", "settings", "env", "env_kwargs")
 """Keys every header must have (it may hold more: ``run_id``, ``seed``, ``steps``, ``fixed``, ...)."""
 
+MEMBER_BYTES = 64 << 20
+"""Largest JSON member of a library's zip read (64 MiB; the suite's are a few KB)."""
+
 _HEAD_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
 _LIBRARIES = {"stable_baselines3": ("DQN", "PPO")}
 """Libraries (and their classes) whose own agent files :func:`load_agent` reads."""
@@ -93,8 +97,8 @@ def agent_path(result_file: str | Path) -> Path:
 
 
 def file_sha256(path: str | Path) -> str:
-    """The SHA-256 (hex) of the file at ``path``."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    """The SHA-256 (hex) of the agent file at ``path`` (read through the bounded reader)."""
+    return hashlib.sha256(read_data(path, "agent file")).hexdigest()
 
 
 # ---------------------------------------------------------------------------- building and checking
@@ -115,6 +119,8 @@ def _as_tensor(value: Any, where: str) -> torch.Tensor:
         value = torch.from_numpy(value)
     if not isinstance(value, torch.Tensor):
         raise ValueError(f"{where} is a {type(value).__name__}, not a tensor or numpy array")
+    if value.layout != torch.strided or value.is_quantized:
+        raise ValueError(f"{where} is a {value.layout} tensor, not a dense one")
     if value.dtype != torch.float32:
         raise ValueError(f"{where} is {value.dtype}, not float32 (convert it: an agent computes in float32)")
     return value.detach().to("cpu").clone().contiguous()  # (a copy of its own storage, not the ensemble's)
@@ -257,7 +263,7 @@ def load_agent(
     ``ValueError`` naming the agent file and, when given, ``result_file``; so does a file that is not
     an agent file, or one of a newer format version."""
     path = Path(path)
-    data = path.read_bytes()
+    data = read_data(path, "agent file")
     sha256 = hashlib.sha256(data).hexdigest()
     if expected_sha256 is not None and sha256 != str(expected_sha256).lower():
         recorded = f"its result file {result_file} records" if result_file is not None else "expected"
@@ -277,6 +283,9 @@ def load_agent(
     _check_format(path, document)
     try:
         heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"))
+        for name, layers in heads.items():
+            if not all(bool(torch.isfinite(layer).all()) for layer in layers):
+                raise ValueError(f"head {name!r} holds a weight that is no finite number")
         header = _check_header(document.get("header"))
         if (document.get("obs_size"), document.get("num_actions")) != (obs_size, num_actions):
             raise ValueError(
@@ -324,11 +333,21 @@ def _description(
     return {**header, "obs_size": obs_size, "num_actions": num_actions, "heads": heads, "acting": acting, **source}
 
 
-def _read_member(path: Path, archive: zipfile.ZipFile) -> dict[str, Any]:
+def _json_member(path: Path, archive: zipfile.ZipFile, name: str) -> Any:
+    """The JSON member ``name`` of a library's zip, at most :data:`MEMBER_BYTES` and nested no
+    deeper than the bounded reader allows (``ValueError`` naming the agent file otherwise)."""
+    if archive.getinfo(name).file_size > MEMBER_BYTES:
+        raise ValueError(f"agent file {path}: its member {name} is larger than {MEMBER_BYTES:,} bytes")
+    data = archive.read(name)
+    check_json_depth(data, f"agent file {path}: its member {name}")
     try:
-        member = json.loads(archive.read(LIBRARY_MEMBER))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ValueError(f"agent file {path}: its {LIBRARY_MEMBER} is corrupted ({error})") from None
+        return json.loads(data)
+    except (ValueError, RecursionError) as error:
+        raise ValueError(f"agent file {path}: its {name} is corrupted ({error})") from None
+
+
+def _read_member(path: Path, archive: zipfile.ZipFile) -> dict[str, Any]:
+    member = _json_member(path, archive, LIBRARY_MEMBER)
     _check_format(path, member)
     if member.get("library") not in _LIBRARIES or member.get("algorithm") not in _LIBRARIES.get(member.get("library"), ()):
         raise ValueError(
@@ -348,7 +367,7 @@ def _load_library_agent(path: Path, data: bytes, member: Mapping[str, Any], sour
         raise ImportError(f'{path} is a Stable-Baselines3 agent: install it with pip install "empathy-zoo[sb3]"') from None
     cls = getattr(sb3, member["algorithm"])
     with zipfile.ZipFile(io.BytesIO(data)) as archive:
-        saved = json.loads(archive.read("data"))
+        saved = _json_member(path, archive, "data")
     custom = _sb3_custom_objects(cls, member, saved)
     pickled = sorted(key for key, value in saved.items() if isinstance(value, dict) and ":serialized:" in value)
     unknown = [key for key in pickled if key not in custom]

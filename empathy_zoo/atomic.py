@@ -2,7 +2,12 @@
 
 :func:`check_output_dir` is asked before any long work starts: it refuses an output directory
 that is a file, cannot be created or cannot be written (as much as a result file and its agent file
-take: a full disk too), so no training is lost at the first write.
+take, or the largest file the caller will write there, a checkpoint: a full disk too), so no
+training is lost at the first write.
+
+Temporary files carry the suite's own marker (``.<name>.ezoo-<pid>-<8 hex>.tmp``, a probe
+``.ezoo-write-probe-<pid>-<8 hex>``): :func:`remove_stale_temp_files` deletes only names of exactly
+that form, whose writer is gone, never a file of the user's.
 """
 
 from __future__ import annotations
@@ -11,11 +16,14 @@ import json
 import os
 import re
 import secrets
+import shutil
 import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from empathy_zoo.bounded_read import read_json_data
+from empathy_zoo.limits import format_bytes
 from empathy_zoo.names import check_no_links
 
 __all__ = [
@@ -30,14 +38,21 @@ __all__ = [
 
 TEMP_SUFFIX = ".tmp"
 """Name suffix of the temporary file of an atomic write in progress (its name starts with ``.``)."""
-PROBE_PREFIX = ".write-probe-"
-"""Name prefix of the file :func:`check_output_dir` writes (atomically) and removes."""
+TEMP_MARKER = "ezoo"
+"""The suite's mark in the name of every temporary file it writes: ``.<name>.ezoo-<pid>-<8 hex>.tmp``."""
+PROBE_PREFIX = ".ezoo-write-probe-"
+"""Name prefix of the file :func:`check_output_dir` writes (atomically) and removes:
+``.ezoo-write-probe-<pid>-<8 hex>``."""
 PROBE_BYTES = 256 * 1024
 """Bytes :func:`check_output_dir` writes to each directory: as much as a run's result file and its
 agent file take (≈ 200 KB at the paper's settings), so a full disk is found before training, not
-after it."""
-_OURS = re.compile(rf"(?:\.(?P<pid>\d+)\.[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}|^{re.escape(PROBE_PREFIX)}(?P<prober>\d+))$")
-"""The end of a temporary file name this module writes, with the writer's process id."""
+after it. A caller that writes larger files (checkpoints) gives their size: that much free space
+is then asked for too."""
+_OURS = re.compile(
+    rf"\.(?:.+\.{TEMP_MARKER}-(?P<pid>\d+)-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}"
+    rf"|{re.escape(PROBE_PREFIX[1:])}(?P<prober>\d+)-[0-9a-f]{{8}})"
+)
+"""The whole name of a temporary file this module writes, with the writer's process id."""
 
 
 def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], object]) -> Path:
@@ -67,9 +82,10 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
 
 def _create_temp(path: Path) -> tuple[int, Path]:
     """A new, empty temporary file beside ``path`` (mode ``0666 & ~umask``), named
-    ``.<name>.<pid>.<random>.tmp`` so a later run can tell whose it is, and its descriptor."""
+    ``.<name>.ezoo-<pid>-<random>.tmp`` so a later run can tell it is the suite's and whose, and its
+    descriptor."""
     while True:
-        tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{TEMP_SUFFIX}"
+        tmp = path.parent / f".{path.name}.{TEMP_MARKER}-{os.getpid()}-{secrets.token_hex(4)}{TEMP_SUFFIX}"
         try:
             return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666), tmp
         except FileExistsError:
@@ -88,20 +104,19 @@ def write_json_atomic(path: str | os.PathLike[str], payload: Any) -> Path:
     return write_text_atomic(path, json.dumps(payload, indent=1, sort_keys=False) + "\n")
 
 
-def read_json(path: str | os.PathLike[str]) -> Any:
-    """Read a JSON file; a corrupted one raises ``ValueError`` naming the file (it is never rewritten)."""
-    path = Path(path)
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, RecursionError) as error:  # (bad JSON or UTF-8, an int of over 4,300 digits, nesting past the stack)
-        why = f"{type(error).__name__}: {str(error)[:200]}"
-        raise ValueError(f"{path} is corrupted ({why}); move it away to redo that run") from error
+def read_json(path: str | os.PathLike[str], kind: str = "result file") -> Any:
+    """Read a JSON file of ``kind`` (a kind of :data:`empathy_zoo.bounded_read.CAPS`) through the
+    bounded reader: no regular file, one past its cap or nested too deep, or a corrupted one raises
+    ``ValueError`` naming the file (it is never rewritten)."""
+    return read_json_data(path, kind)
 
 
-def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()) -> Path:
+def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = (), largest_file: int = PROBE_BYTES) -> Path:
     """``path`` (and ``path / sub`` for every name in ``subdirs``), created if missing, once a file of
-    :data:`PROBE_BYTES` was written there atomically and removed again; a ``ValueError`` naming the directory
-    and the reason when it is a file, cannot be created or cannot be written, or naming the link
+    :data:`PROBE_BYTES` was written there atomically and removed again, and (when ``largest_file``,
+    the largest file the caller will write, a checkpoint's estimated size, is more) once the file
+    system has that much free space; a ``ValueError`` naming the directory and the reason when it
+    is a file, cannot be created or cannot be written, or has too little room, or naming the link
     when a ``sub`` is (or passes through) a symbolic link (:func:`empathy_zoo.names.check_no_links`)."""
     root = Path(path)
     for directory in (root, *(root / sub for sub in subdirs)):
@@ -117,28 +132,37 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
             raise ValueError(
                 f"cannot create output directory {directory} ({error.strerror or error}); choose another output directory (--out)"
             ) from None
-        probe = directory / f"{PROBE_PREFIX}{os.getpid()}"
+        probe = directory / f"{PROBE_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
         try:
             write_bytes_atomic(probe, bytes(PROBE_BYTES))
             probe.unlink()
+            free = shutil.disk_usage(directory).free if largest_file > PROBE_BYTES else None
         except OSError as error:
             raise ValueError(
                 f"output directory {directory} is not writable ({error.strerror or error}); "
                 "choose another output directory (--out) or fix its permissions"
             ) from None
+        if free is not None and free < largest_file:
+            raise ValueError(
+                f"output directory {directory} has {format_bytes(free)} free, less than the {format_bytes(largest_file)} "
+                "of the largest file this run writes there (a checkpoint); free space or choose another output directory (--out)"
+            )
     return root
 
 
 def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:
-    """Remove the temporary files that writes killed mid-way left in ``directory`` (those of a live
-    process on this machine are kept: it may still be writing); returns what was removed."""
+    """Remove the temporary files that the suite's writes killed mid-way left in ``directory``;
+    returns what was removed. The suite deletes only names it made: a file whose whole name is of
+    the form it gives its temporary files and probes (``.<name>.ezoo-<pid>-<8 hex>.tmp``,
+    ``.ezoo-write-probe-<pid>-<8 hex>``), of a writer that is no live process on this machine (a
+    live one may still be writing). Any other name (``.notes.tmp``, a name of another program or of
+    an earlier version) is left alone."""
     removed = []
     for path in Path(directory).glob(".*"):
-        if not path.is_file() or not (path.name.endswith(TEMP_SUFFIX) or path.name.startswith(PROBE_PREFIX)):
+        match = _OURS.fullmatch(path.name)
+        if match is None or not path.is_file() or path.is_symlink():
             continue
-        match = _OURS.search(path.name)
-        pid = int(match["pid"] or match["prober"]) if match else None  # no pid: written before names carried one
-        if pid is not None and _alive(pid):
+        if _alive(int(match["pid"] or match["prober"])):
             continue
         path.unlink(missing_ok=True)
         removed.append(path)

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.metrics import INTEGER_METRICS, METRIC_RANGES
 from empathy_zoo.names import check_label, check_path_name
+from empathy_zoo.policies import parse_entry_label
 
 __all__ = ["DocumentChecker", "shown"]
 
@@ -77,6 +79,37 @@ class DocumentChecker:
             raise self.fail(field, "a number", value)
         return value
 
+    def finite(self, value: Any, field: str, low: float | None = None) -> float:
+        """A finite number (at least ``low`` where given)."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise self.fail(field, "a finite number", value)
+        if low is not None and value < low:
+            raise self.fail(field, f"a number >= {low}", value)
+        return value
+
+    def metric(self, value: Any, field: str, metric: str, max_cycles: int, length: int | None = None) -> list[Any]:
+        """An array of values of ``metric`` (of ``length`` items where given), each within what an
+        episode can give: a finite number within :data:`~empathy_zoo.metrics.METRIC_RANGES` (a
+        count, :data:`~empathy_zoo.metrics.INTEGER_METRICS`, at least 0; equality at most 1), a
+        survival of at most ``max_cycles`` steps: what the leaderboard can draw."""
+        low, high = METRIC_RANGES[metric]
+        high = max_cycles if metric == "survival" else high
+        kind = "a count" if metric in INTEGER_METRICS else "a finite number"
+        expected = f"{kind} >= {low:g}" + ("" if high is None else f" and <= {high:g}")
+        values = self.numbers(value, field, length=length)
+        for i, item in enumerate(values):
+            if not math.isfinite(item) or item < low or (high is not None and item > high):
+                raise self.fail(f"{field}[{i}]", f"{metric}, {expected}", item)
+        return values
+
+    def increasing(self, values: list[int], field: str, low: int, high: int) -> None:
+        """``values`` (integers) strictly increasing, each in ``[low, high]``."""
+        for i, item in enumerate(values):
+            if not low <= item <= high or (i and item <= values[i - 1]):
+                raise self.fail(
+                    f"{field}[{i}]", f"an increasing step in [{low:,}, {high:,}] (after {values[i - 1] if i else low - 1})", item
+                )
+
     def text(self, value: Any, field: str) -> str:
         if not isinstance(value, str) or not value or "\n" in value:
             raise self.fail(field, "a non-empty one-line string", value)
@@ -92,6 +125,16 @@ class DocumentChecker:
         except ValueError as error:
             raise self.fail(field, f"{expected} ({error})", value) from None
 
+    def policy_label(self, value: Any, field: str) -> str:
+        """A fixed policy's label as a run records it (``patrol``, ``patrol(period=3)``), parsed as
+        text by :func:`empathy_zoo.policies.parse_entry_label`: no policy is imported or resolved."""
+        self.text(value, field)
+        try:
+            parse_entry_label(value)
+        except ValueError as error:
+            raise self.fail(field, f"a fixed policy's label ({error})", value) from None
+        return value
+
     def name(self, value: Any, field: str) -> str:
         """A name that becomes part of file names (:func:`empathy_zoo.names.check_path_name`)."""
         try:
@@ -102,7 +145,7 @@ class DocumentChecker:
     def numbers(self, value: Any, field: str, integral: bool = False, length: int | None = None) -> list[Any]:
         """An array of numbers (integers where ``integral``; of ``length`` items where given)."""
         if not isinstance(value, list) or (length is not None and len(value) != length):
-            raise self.fail(field, "an array of numbers" + ("" if length is None else f" of {length} items"), value)
+            raise self.fail(field, "an array of numbers" + ("" if length is None else f" of {length:,} items"), value)
         for i, item in enumerate(value):
             self.number(item, f"{field}[{i}]")
             if integral and not isinstance(item, int) and not (math.isfinite(item) and item == int(item)):

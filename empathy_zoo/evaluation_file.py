@@ -30,6 +30,9 @@ from typing import Any
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.document_checks import DocumentChecker
+from empathy_zoo.engine.arguments import argument_defaults
+from empathy_zoo.environments import ENGINES
+from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
@@ -129,13 +132,16 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         )
     for field in ("run_id", "env"):
         check.name(evaluation[field], field)
+    if evaluation["env"] not in ENGINES:
+        raise check.fail("env", f"a registered environment ({', '.join(ENGINES)})", evaluation["env"])
+    default_cycles = argument_defaults(ENGINES[evaluation["env"]])["max_cycles"]
     if evaluation.get("variant") is not None:
         check.name(evaluation["variant"], "variant")
     for field in ("method", "method_label"):
         check.text(evaluation[field], field)
     if "version" in evaluation:
         check.text(evaluation["version"], "version")
-    check.integer(evaluation["seed"], "seed", 0)
+    check.integer(evaluation["seed"], "seed", 0, MAX_SEED)
     agent = check.table(evaluation["agent"], "agent")
     check.has(agent, ("file", "sha256"), "agent.")
     check.text(agent["file"], "agent.file")
@@ -148,7 +154,7 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
     if not isinstance(scenario_set["scenarios"], list):
         raise check.fail("scenario_set.scenarios", "an array of scenario definitions", scenario_set["scenarios"])
-    episodes = check.integer(evaluation["episodes"], "episodes", 1)
+    episodes = check.integer(evaluation["episodes"], "episodes", 1, MAX_EVAL_EPISODES)
     check.integer(evaluation["stream"], "stream", 0)
     scenarios = evaluation["scenarios"]
     if not isinstance(scenarios, list) or not scenarios:
@@ -162,13 +168,14 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         check.text(entry["reason"], f"{where}.reason")
         if not isinstance(entry["held_out"], bool):
             raise check.fail(f"{where}.held_out", "true or false", entry["held_out"])
-        check.table(entry["env_kwargs"], f"{where}.env_kwargs")
+        env_kwargs = check.table(entry["env_kwargs"], f"{where}.env_kwargs")
+        max_cycles = check.integer(env_kwargs.get("max_cycles", default_cycles), f"{where}.env_kwargs.max_cycles", 1, MAX_CYCLES)
         for agent_name, label in check.table(entry["fixed"], f"{where}.fixed").items():
-            check.text(label, f"{where}.fixed.{agent_name}")
+            check.policy_label(label, f"{where}.fixed.{agent_name}")
         metrics = check.table(entry["metrics"], f"{where}.metrics")
         check.has(metrics, METRIC_NAMES, f"{where}.metrics.")
         for metric in METRIC_NAMES:
-            check.numbers(metrics[metric], f"{where}.metrics.{metric}", length=episodes)
+            check.metric(metrics[metric], f"{where}.metrics.{metric}", metric, max_cycles, length=episodes)
     if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
         raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
     if len(set(names)) != len(names):
@@ -181,4 +188,4 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
 
 def read_evaluation(path: str | Path) -> dict[str, Any]:
     """Read an evaluation file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
-    return check_evaluation(read_json(path), path)
+    return check_evaluation(read_json(path, "evaluation file"), path)

@@ -14,18 +14,26 @@ This module imports nothing of the suite: every layer may read it.
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, BinaryIO
 
 __all__ = [
     "BOUNDS",
+    "MAX_AGENT_BYTES",
+    "MAX_CHECKPOINT_BYTES",
     "MAX_CONFIG_BYTES",
     "MAX_CYCLES",
     "MAX_EVALUATIONS",
     "MAX_EVAL_EPISODES",
+    "MAX_EVALUATION_BYTES",
+    "MAX_JOURNAL_BYTES",
+    "MAX_JSON_DEPTH",
     "MAX_LABEL",
     "MAX_NAME",
     "MAX_NOTE_BYTES",
+    "MAX_RESULT_BYTES",
+    "MAX_RUNS_LIST_BYTES",
     "MAX_RUNS",
     "MAX_SEED",
     "MAX_SEEDS",
@@ -37,6 +45,7 @@ __all__ = [
     "check_memory",
     "cpu_count",
     "format_bytes",
+    "open_regular",
     "read_bounded",
 ]
 
@@ -72,6 +81,24 @@ MAX_NOTE_BYTES = 1 << 20
 """Largest ``--note`` file of ``reproduction`` and ``sensitivity`` (1 MiB of prose)."""
 MAX_CONFIG_BYTES = 1 << 20
 """Largest sweep file or ``train --config`` file (1 MiB)."""
+MAX_RESULT_BYTES = 2 << 30
+"""Largest result file read (2 GiB): a run's file holds ≈ 60 bytes per training episode, 200 KB at
+the paper's settings, 0.6 GB for a run of 10⁹ steps in episodes of 100 steps."""
+MAX_EVALUATION_BYTES = 1 << 30
+"""Largest evaluation file read (1 GiB): ≈ 100 bytes per episode of each scenario, 10,000
+episodes of a few dozen scenarios take a few tens of MB."""
+MAX_AGENT_BYTES = 4 << 30
+"""Largest agent file read (4 GiB): its networks only, 0.2 MB at the paper's settings."""
+MAX_CHECKPOINT_BYTES = 1 << 40
+"""Largest checkpoint read (1 TiB): an ensemble's replay memories and networks, ≈ 1 GB for 25
+runs at the paper's settings; bounded in practice by the memory of the machine that wrote it."""
+MAX_RUNS_LIST_BYTES = 256 << 20
+"""Largest list of runs beside a checkpoint read (256 MiB): ≈ 1 KB per run of its ensemble."""
+MAX_JOURNAL_BYTES = 1 << 30
+"""Largest tuning journal (``study.journal``) read (1 GiB): a few KB per trial."""
+MAX_JSON_DEPTH = 64
+"""Deepest nesting of arrays and objects in a JSON file (or journal line) read: the suite's own
+nest at most 6 deep; a deeper one is refused before it is parsed."""
 
 BOUNDS: Mapping[str, int] = {
     "size": MAX_SIZE,
@@ -89,6 +116,13 @@ BOUNDS: Mapping[str, int] = {
     "labels": MAX_LABEL,
     "note file": MAX_NOTE_BYTES,
     "sweep and config files": MAX_CONFIG_BYTES,
+    "result file": MAX_RESULT_BYTES,
+    "evaluation file": MAX_EVALUATION_BYTES,
+    "agent file": MAX_AGENT_BYTES,
+    "checkpoint": MAX_CHECKPOINT_BYTES,
+    "list of runs": MAX_RUNS_LIST_BYTES,
+    "tuning journal": MAX_JOURNAL_BYTES,
+    "JSON nesting": MAX_JSON_DEPTH,
 }
 """Every fixed bound, by what docs/limits.md calls it (the machine's own, ``threads``, ``workers``
 and a learner's memory, are :func:`cpu_count` and :func:`available_memory`)."""
@@ -173,11 +207,44 @@ def check_memory(needed: int, device: str, what: str, advice: str) -> None:
         )
 
 
+def open_regular(path: str | os.PathLike[str], what: str) -> BinaryIO:
+    """``path`` opened for reading in binary, once it is known to be a regular file of at most the
+    size it has; anything else (a FIFO, a device, a directory, a socket) is refused with a
+    ``ValueError`` naming it, without waiting on it: it is opened with ``O_NONBLOCK`` (a FIFO with no
+    writer does not hang), then checked with ``fstat`` on the open descriptor."""
+    name = os.fspath(path)
+    try:
+        fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except OSError as error:
+        raise ValueError(f"cannot read {what} {name} ({error.strerror or error})") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = _KINDS.get(stat.S_IFMT(mode), "not a regular file")
+            raise ValueError(f"{what} {name} is {kind}, not a regular file; give a file")
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+_KINDS = {
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFDIR: "a directory",
+    stat.S_IFSOCK: "a socket",
+}
+"""What a file that is no regular file is, as a refusal says it."""
+
+
 def read_bounded(path: str | os.PathLike[str], bound: int, what: str) -> bytes:
-    """The bytes of the file ``path``, or a ``ValueError`` naming it when it holds more than
-    ``bound`` bytes (read at most ``bound + 1`` bytes: ``/dev/zero`` or a huge file is refused at
-    once, never read to the end)."""
-    with open(path, "rb") as handle:
+    """The bytes of the regular file ``path`` (:func:`open_regular`), or a ``ValueError`` naming it
+    when it holds more than ``bound`` bytes (read at most ``bound + 1`` bytes: a huge file is
+    refused at once, never read to the end)."""
+    with open_regular(path, what) as handle:
         data = handle.read(bound + 1)
     if len(data) > bound:
         raise ValueError(f"{what} {os.fspath(path)} is larger than {format_bytes(bound)}, the most it may be (docs/limits.md)")

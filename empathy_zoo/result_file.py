@@ -92,7 +92,8 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
             f"got {shown(result['schema'])}; move the file away"
         )
     check.name(result["run_id"], "run_id")
-    check.name(result["env"], "env")
+    if check.name(result["env"], "env") not in ENGINES:
+        raise check.fail("env", f"a registered environment ({', '.join(ENGINES)})", result["env"])
     if result.get("variant") is not None:
         check.name(result["variant"], "variant")
     check.text(result["method"], "method")
@@ -111,22 +112,36 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
         check.integer(count, f"memory_bytes.{name}", 0)
     _check_agent(check, result)
+    max_cycles = result["config"]["env_kwargs"].get("max_cycles", argument_defaults(ENGINES[result["env"]])["max_cycles"])
     train = check.table(result["train"], "train")
     check.has(train, ("episode_end_step", *METRIC_NAMES), "train.")
+    ends = check.numbers(train["episode_end_step"], "train.episode_end_step", integral=True)
+    check.increasing(ends, "train.episode_end_step", 1, steps)
     for name, column in train.items():
-        check.numbers(column, f"train.{name}", integral=name == "episode_end_step")
+        if name in METRIC_NAMES:
+            check.metric(column, f"train.{name}", name, max_cycles)
+        elif name != "episode_end_step":
+            check.numbers(column, f"train.{name}")
     lengths = {name: len(column) for name, column in train.items()}
     if len(set(lengths.values())) > 1:
         raise ResultFileError(f"{path}: field train: columns of different lengths {lengths}; move the file away")
     if not isinstance(result["eval"], list):
         raise check.fail("eval", "an array of evaluations", result["eval"])
+    episodes, previous = result["config"].get("eval_episodes"), 0
     for i, evaluation in enumerate(result["eval"]):
         entry = check.table(evaluation, f"eval[{i}]")
         check.has(entry, ("step", *METRIC_NAMES), f"eval[{i}].")
         if check.integer(entry["step"], f"eval[{i}].step", 1) > steps:
             raise check.fail(f"eval[{i}].step", f"a step <= steps ({steps})", entry["step"])
+        if entry["step"] <= previous:
+            raise check.fail(f"eval[{i}].step", f"a step after the evaluation before it (step {previous})", entry["step"])
+        previous = entry["step"]
         for name in METRIC_NAMES:
-            check.numbers(entry[name], f"eval[{i}].{name}")
+            values = check.metric(entry[name], f"eval[{i}].{name}", name, max_cycles, length=episodes)
+            episodes = len(values) if episodes is None else episodes
+        for name, value in entry.items():
+            if name != "step" and name not in METRIC_NAMES:
+                check.numbers(value, f"eval[{i}].{name}")
     return result
 
 
@@ -293,7 +308,7 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     if engine is not None:
         _check_grid(check, engine, env_kwargs)
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
-        check.text(policy, f"config.fixed.{agent}")
+        check.policy_label(policy, f"config.fixed.{agent}")
     _check_optional(
         check,
         config,

@@ -27,11 +27,25 @@ def to_safe(value: Any) -> Any:
     return value
 
 
+NUMERIC_KINDS = "biuf"
+"""Kinds of numpy dtype an array read back may have: booleans, integers, floats (no objects, no strings)."""
+
+
 def from_safe(value: Any) -> Any:
-    """Inverse of :func:`to_safe`."""
+    """Inverse of :func:`to_safe`; an array that is no tensor, or of a dtype that is no number (an
+    object, a string), raises ``ValueError``."""
     if isinstance(value, dict):
         if "__ndarray__" in value:
-            array = value["__ndarray__"].numpy()
+            tensor, dtype = value["__ndarray__"], value.get("dtype")
+            if not isinstance(tensor, torch.Tensor) or not isinstance(dtype, str):
+                raise ValueError(f"an array is stored as a {type(tensor).__name__} of dtype {dtype!r}, not a tensor")
+            try:
+                kind: str = np.dtype(dtype).kind
+            except TypeError:
+                kind = ""
+            if not kind or kind not in NUMERIC_KINDS:
+                raise ValueError(f"an array has dtype {dtype!r}, which is no number")
+            array = tensor.numpy()
             return array.view(np.uint64) if value["dtype"] == "uint64" else array.astype(value["dtype"], copy=False)
         return {key: from_safe(item) for key, item in value.items()}
     if isinstance(value, list):

@@ -34,13 +34,14 @@ evaluation steps; its ``DiagnoseData`` names what differs.
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs
@@ -171,12 +172,16 @@ def write_marl_eval(
     """Write the runs of ``results_dirs`` (read as
     :func:`leaderboard.sources.load_results_dirs` reads them, ``labels`` prefixing a directory's
     labels) to ``out`` in marl-eval's layout (:func:`marl_eval_layout`), atomically
-    (:func:`empathy_zoo.atomic.write_json_atomic`). ``ValueError`` for what those refuse and for an
+    (:func:`empathy_zoo.atomic.write_text_atomic`, strict JSON: no ``NaN``). ``ValueError`` for what those refuse and for an
     ``out`` that is no ``.json`` file name, is a directory, lies in a directory that is a file, or
     lies where result files are read (it would be read as one); nothing is written then."""
     check_export_path(out, results_dirs)
     layout = marl_eval_layout(load_results_dirs(results_dirs, labels).results)
-    path = write_json_atomic(out, layout)
+    try:
+        text = json.dumps(layout, indent=1, allow_nan=False) + "\n"
+    except ValueError as error:  # (the result-file checker refuses every value that is no finite number)
+        raise ValueError(f"cannot write {out}: a value is no finite number, which JSON cannot hold ({error})") from None
+    path = write_text_atomic(out, text)
     tasks = [algorithms for environment in layout.values() for algorithms in environment.values()]
     return MarlEvalExport(
         path=path,

@@ -8,7 +8,7 @@ import numpy as np
 
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import check_result, schema_2_description
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
@@ -38,7 +38,8 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
     train = {"episode_end_step": list(range(100, 100 * (episodes + 1), 100))}
     for metric in METRIC_NAMES:
         centre = means.get(metric, 0.0)
-        train[metric] = (centre + rng.normal(0, 0.01, episodes)).tolist()
+        low, high = METRIC_RANGES[metric]
+        train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
     settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS)) | SCHEMA_1_SHAPING.get(method, {})
     return {
         "schema": 1,

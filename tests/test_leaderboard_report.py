@@ -53,14 +53,17 @@ def write_synthetic_results(
                 def columns(k: int) -> dict[str, list[float]]:
                     base = progress if k == n else np.ones(k)
                     noise = rng.normal(0.0, 0.1, size=k)
+                    values = {
+                        "survival": 40 * base + m + noise,
+                        "harms": 1 - base / 2 + noise,
+                        "batteries": 3 * base + noise,
+                        "other_batteries": 4 - base + noise,
+                        "equality": 0.5 + base / 4 + noise,
+                        "return": base + noise,
+                        "other_return": 2 - base + noise,
+                    }  # (within what an episode gives: the result-file checker refuses the rest)
                     return {
-                        "survival": (40 * base + m + noise).tolist(),
-                        "harms": (1 - base / 2 + noise).tolist(),
-                        "batteries": (3 * base + noise).tolist(),
-                        "other_batteries": (4 - base + noise).tolist(),
-                        "equality": (0.5 + base / 4 + noise).tolist(),
-                        "return": (base + noise).tolist(),
-                        "other_return": (2 - base + noise).tolist(),
+                        name: np.clip(value, 0.0, 1.0 if name == "equality" else None).tolist() for name, value in values.items()
                     }
 
                 run_id = f"{env}__{method}__s{seed}"

@@ -151,16 +151,17 @@ def test_temporary_files_of_killed_writes_are_removed_on_the_next_run(tmp_path):
     out = tmp_path / "out"
     dead = 2**22 + 12345  # above Linux's default pid_max: no such process
     stale = [
-        out / "runs" / f".x.json.{dead}.abcd1234.tmp",
-        out / CHECKPOINT_DIR / f".c.pt.{dead}.0badc0de.tmp",
-        out / "runs" / ".x.json.k3j4h5.tmp",
-    ]  # the last: a name from before temporary files carried a pid
-    live = out / "runs" / f".y.json.{os.getpid()}.feedbeef.tmp"  # a write in progress in a live process
-    for path in [*stale, live]:
+        out / "runs" / f".x.json.ezoo-{dead}-abcd1234.tmp",
+        out / CHECKPOINT_DIR / f".c.pt.ezoo-{dead}-0badc0de.tmp",
+        out / f".ezoo-write-probe-{dead}-0badc0de",
+    ]
+    live = out / "runs" / f".y.json.ezoo-{os.getpid()}-feedbeef.tmp"  # a write in progress in a live process
+    foreign = [out / "runs" / ".x.json.k3j4h5.tmp", out / "runs" / f".x.json.{dead}.abcd1234.tmp"]  # not names the suite makes
+    for path in [*stale, live, *foreign]:
         write_bytes_atomic(path, b"half")
     notes = []
     train_runs(specs(seeds=(0,)), out, options(), on_note=notes.append)
-    assert [p for p in stale if p.exists()] == [] and live.exists()
+    assert [p for p in stale if p.exists()] == [] and live.exists() and all(p.exists() for p in foreign)
     assert any("3 temporary file(s)" in note for note in notes), notes
 
 
@@ -172,9 +173,9 @@ def test_temporary_files_beside_the_leaderboard_are_removed_when_it_is_written(t
 
     write_json_atomic(tmp_path / "runs" / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
     stale = [
-        tmp_path / ".LEADERBOARD.md.4194305.0badc0de.tmp",
-        tmp_path / "figures" / ".x.png.4194305.0badc0de.tmp",
-        tmp_path / ".write-probe-4194305",
+        tmp_path / ".LEADERBOARD.md.ezoo-4194305-0badc0de.tmp",
+        tmp_path / "figures" / ".x.png.ezoo-4194305-0badc0de.tmp",
+        tmp_path / ".ezoo-write-probe-4194305-0badc0de",
     ]
     for path in stale:
         write_bytes_atomic(path, b"half")

@@ -45,12 +45,12 @@ from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.names import check_path_name
 from empathy_zoo.result_file import result_path
-from empathy_zoo.training.checkpoint import CheckpointError, load_checkpoint
+from empathy_zoo.training.checkpoint import RUNS_LIST_SUFFIX, CheckpointError, load_checkpoint, runs_list_path
 
 __all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]
 
 CHECKPOINT_DIR = "checkpoints"
-MANIFEST_SUFFIX = ".runs.json"
+MANIFEST_SUFFIX = RUNS_LIST_SUFFIX
 """Suffix of the file beside a checkpoint that lists its runs' specs."""
 MANIFEST_FORMAT = 2
 """Format of that list: 2, each record a run's ``request()`` with its ``run_id``; 1 (read too): without it."""
@@ -73,7 +73,7 @@ def _checkpoint_file(out_dir: Path, env: str, run_ids: Sequence[str]) -> Path:
 
 
 def manifest_path(checkpoint: Path) -> Path:
-    return checkpoint.with_name(checkpoint.stem + MANIFEST_SUFFIX)
+    return runs_list_path(checkpoint)
 
 
 def write_manifest(checkpoint: Path, specs: Sequence[RunSpec]) -> None:
@@ -107,7 +107,7 @@ def read_manifest(manifest: Path, checkpoint: Path) -> list[dict[str, Any]]:
     """The records of the list of runs ``manifest`` beside ``checkpoint``, checked as data (a
     ``ValueError`` saying what is wrong): a table per run of the keys :meth:`RunSpec.request` gives
     and, in format 2, the run's id, the ids those of ``checkpoint``'s name."""
-    data = read_json(manifest)
+    data = read_json(manifest, "list of runs")  # (bounded: a regular file of at most MAX_RUNS_LIST_BYTES)
     if not isinstance(data, dict) or data.get("format") not in (1, MANIFEST_FORMAT):
         raise ValueError(f"not a list of runs of format 1 or {MANIFEST_FORMAT}")
     runs = data.get("runs")

@@ -56,6 +56,7 @@ in one line where it is missing.
 from __future__ import annotations
 
 import importlib
+import json
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -67,6 +68,7 @@ import numpy as np
 
 from empathy_zoo._version import __version__
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic, write_text_atomic
+from empathy_zoo.bounded_read import check_json_depth, read_data
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
@@ -166,12 +168,43 @@ def run_study(
         optuna.logging.set_verbosity(verbosity)
 
 
-def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str) -> Any:
-    """The study stored in ``out`` (created when there is none); one of another plan, or trained
-    with another update kernel (whose runs differ in their last bits), is refused."""
+def check_journal(path: Path, note: Callable[[str], None]) -> None:
+    """Check the study's journal ``path`` (when there is one) before Optuna reads it, through the
+    bounded reader (a regular file of at most :data:`~empathy_zoo.limits.MAX_JOURNAL_BYTES`): a last
+    line a kill cut short (no line break at its end) is dropped from the file, said through
+    ``note``; any other line that is no JSON object (or nests deeper than
+    :data:`~empathy_zoo.limits.MAX_JSON_DEPTH`) is refused with a ``ValueError`` naming the file and
+    the line."""
+    if not path.exists() and not path.is_symlink():
+        return
+    data = read_data(path, "tuning journal")
+    lines = data.split(b"\n")
+    torn = lines.pop()  # (b"" when the journal ends with a line break, as every complete write does)
+    for number, line in enumerate(lines, start=1):
+        where = f"tuning journal {path}, line {number}"
+        check_json_depth(line, where)
+        try:
+            entry = json.loads(line)
+        except (ValueError, RecursionError) as error:
+            raise ValueError(
+                f"{where} is no JSON ({str(error)[:200]}): the journal is damaged; move it away to start the study again"
+            ) from None
+        if not isinstance(entry, dict):
+            raise ValueError(f"{where} is no JSON object: the journal is damaged; move it away to start the study again")
+    if torn:
+        with open(path, "r+b") as handle:
+            handle.truncate(len(data) - len(torn))
+        note(f"dropped the last line of {path}: a write killed mid-way cut it short ({len(torn):,} bytes)")
+
+
+def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, note: Callable[[str], None]) -> Any:
+    """The study stored in ``out`` (created when there is none), its journal checked first
+    (:func:`check_journal`); one of another plan, or trained with another update kernel (whose
+    runs differ in their last bits), is refused."""
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
 
+    check_journal(out / JOURNAL_FILE, note)
     storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
     pruner = (
         optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
@@ -206,7 +239,7 @@ def _study(
 ) -> dict[str, Any]:
     from tqdm.auto import tqdm
 
-    study = _open_study(optuna, plan, out, options.update_kernel)
+    study = _open_study(optuna, plan, out, options.update_kernel, note)
     states = optuna.trial.TrialState
     done = sum(_counted(t, states) for t in study.trials)
     interrupted = [t.number for t in study.trials if not _counted(t, states)]

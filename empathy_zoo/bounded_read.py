@@ -1,0 +1,105 @@
+"""One bounded reader for every file the suite reads that it did not just write.
+
+A result, evaluation, agent, checkpoint or journal file may come from anyone. Each is read through
+:func:`read_data` (or, for a checkpoint streamed into ``torch.load``, :func:`open_data`): a file that
+is no regular file (a FIFO, a device, a directory) is refused without waiting on it, one larger than
+the cap of its kind (:data:`CAPS`, the bounds of :mod:`empathy_zoo.limits`) is refused without
+reading it to its end, and JSON nested deeper than :data:`~empathy_zoo.limits.MAX_JSON_DEPTH` is
+refused before it is parsed (:func:`check_json_depth`). Every refusal is one ``ValueError`` line
+naming the file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from empathy_zoo.limits import (
+    MAX_AGENT_BYTES,
+    MAX_CHECKPOINT_BYTES,
+    MAX_EVALUATION_BYTES,
+    MAX_JOURNAL_BYTES,
+    MAX_JSON_DEPTH,
+    MAX_RESULT_BYTES,
+    MAX_RUNS_LIST_BYTES,
+    format_bytes,
+    open_regular,
+    read_bounded,
+)
+
+__all__ = ["CAPS", "check_json_depth", "json_depth", "open_data", "read_data", "read_json_data"]
+
+CAPS: dict[str, int] = {
+    "result file": MAX_RESULT_BYTES,
+    "evaluation file": MAX_EVALUATION_BYTES,
+    "agent file": MAX_AGENT_BYTES,
+    "checkpoint": MAX_CHECKPOINT_BYTES,
+    "list of runs": MAX_RUNS_LIST_BYTES,
+    "tuning journal": MAX_JOURNAL_BYTES,
+}
+"""The largest file of each kind read, by what a refusal calls it."""
+
+_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')
+"""A JSON string (its brackets are no nesting)."""
+_NOT_BRACKET = bytes(code for code in range(256) if code not in b"[]{}")
+"""Every byte but the four brackets of JSON."""
+_CHUNK = 1 << 24
+"""Brackets counted at once (a hostile file of only brackets is counted in bounded memory)."""
+
+
+def read_data(path: str | os.PathLike[str], kind: str) -> bytes:
+    """The bytes of the file ``path`` of ``kind`` (a key of :data:`CAPS`): a regular file of at
+    most its cap, else a ``ValueError`` naming it."""
+    return read_bounded(path, CAPS[kind], kind)
+
+
+def open_data(path: str | os.PathLike[str], kind: str) -> BinaryIO:
+    """``path`` open for reading, once it is a regular file of at most the cap of ``kind``
+    (``ValueError`` naming it otherwise): for a file streamed into a reader, not read into memory."""
+    handle = open_regular(path, kind)
+    size = os.fstat(handle.fileno()).st_size
+    if size > CAPS[kind]:
+        handle.close()
+        raise ValueError(
+            f"{kind} {os.fspath(path)} is larger than {format_bytes(CAPS[kind])}, the most it may be (docs/limits.md)"
+        )
+    return handle
+
+
+def json_depth(data: bytes, limit: int = MAX_JSON_DEPTH) -> int:
+    """How deep arrays and objects nest in the JSON text ``data`` (brackets in strings do not
+    count), counted no further than past ``limit``."""
+    brackets = _STRING.sub(b"", data).translate(None, _NOT_BRACKET)
+    deepest, depth = 0, 0
+    for start in range(0, len(brackets), _CHUNK):
+        codes = np.frombuffer(brackets, np.uint8, count=min(_CHUNK, len(brackets) - start), offset=start)
+        steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1).astype(np.int64)
+        levels = depth + np.cumsum(steps)
+        deepest, depth = max(deepest, int(levels.max())), int(levels[-1])
+        if deepest > limit:
+            break
+    return deepest
+
+
+def check_json_depth(data: bytes, where: str, limit: int = MAX_JSON_DEPTH) -> None:
+    """Refuse (``ValueError`` naming ``where``) JSON text nested deeper than ``limit``."""
+    if json_depth(data, limit) > limit:
+        raise ValueError(
+            f"{where} nests arrays and objects more than {limit} deep, deeper than any file of the suite (docs/limits.md)"
+        )
+
+
+def read_json_data(path: str | os.PathLike[str], kind: str) -> Any:
+    """The JSON document of the file ``path`` of ``kind`` (:func:`read_data`, then
+    :func:`check_json_depth`); text that is no JSON raises ``ValueError`` naming the file."""
+    data = read_data(path, kind)
+    check_json_depth(data, f"{kind} {os.fspath(path)}")
+    try:
+        return json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError) as error:  # (bad JSON or UTF-8, an int of over 4,300 digits)
+        why = f"{type(error).__name__}: {str(error)[:200]}"
+        raise ValueError(f"{os.fspath(path)} is corrupted ({why}); move it away to redo that run") from None
