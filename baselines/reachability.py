@@ -24,16 +24,31 @@ learnt model of the cat, another method. It is also not needed for what this sui
 in Coexistence no effect is delayed, a harm happens, and is charged, on the step whose state it
 changes (the cat gone), and the rest of a state is where the two agents stand. So the method is
 named for what it is: *stepwise inaction baseline without rollouts*, a configuration their code
-offers (its ``step_noroll`` baseline), not its stepwise default.
+offers (its ``step_noroll`` baseline), not its default (the inaction baseline, ``baseline=
+"inaction"``; the stepwise baseline with rollouts in its first release).
 
-**The robot's own end.** The step on which the cat harms the robot carries no penalty (the
-reward is the environment's, 0), as in Krakovna et al.'s code, which gives the transition into
-a terminal state none. Charged, the end state (from which nothing is reachable) would deviate
-from its baseline by d ≈ 0.958 at ``size = 7`` (robot at (3, 3), cat at (1, 3), the robot moving
-up into it), more than harming the cat does (d ≈ 0.937): a penalty for being harmed, on top of
-the episode's end, that prices the robot's own harm above the cat's, a self-preservation
-bonus no other method of the suite gets. Only termination counts: a time-limit truncation is
-no end of the state (the learner bootstraps through it) and keeps its penalty.
+**The robot's own end** (``final_penalty``). By default (``"none"``) the step on which the cat
+harms the robot carries no penalty (the reward is the environment's, 0). Charged with its own
+deviation, the end state (from which nothing is reachable) would deviate from its baseline by
+d ≈ 0.958 at ``size = 7`` (robot at (3, 3), cat at (1, 3), the robot moving up into it), more
+than harming the cat does (d ≈ 0.937): a penalty for being harmed, on top of the episode's end,
+that prices the robot's own harm above the cat's, a self-preservation bonus no other method of
+the suite gets. Krakovna et al.'s code does not charge the end state's own deviation either, but
+it does charge the final transition (``SideEffectPenalty.calculate`` in ``side_effects_penalties``,
+called with no current state at the episode's end): at the full weight β, with the deviation of
+the last state before the end against that state's baseline, ``β·d(s_{T−1}; b_{T−1})``, while
+every other transition is charged ``w·β·d(s'; b')`` with ``w`` its ``nonterminal`` flag
+(``"disc"``, the default: ``w = 1 − γ = 0.01``; ``"full"``: 1; ``"none"``: 0). (Its first
+release charged every transition at full weight and the final one nothing.)
+``final_penalty="last_deviation"`` charges the step on which the robot is harmed that way: λ
+times the deviation the previous step of the episode measured (0 when the episode's first step
+ends it). Every other step is charged here at full weight, their ``nonterminal="full"``, so on
+Coexistence this repeats the last step's price on the robot's end: a fraction of a step's
+reward after a harmless move, nothing after a no-op. It is offered for comparison with their
+code; the default stays ``"none"``. Only termination counts, in both modes: a time-limit
+truncation is no end of the state (the learner bootstraps through it) and is charged its own
+deviation (their gridworlds end an episode at the time limit as at the goal, and their code
+charges that final transition as any other final one).
 
 **Reachability reading.** ``R`` is exact, from a table of the fewest steps between every two
 states built from the engine (:mod:`baselines.reachability_table`): a state is reachable when
@@ -48,9 +63,13 @@ transitions, each taken as available); (3) it bounds the paper's value from abov
 table. The robot harmed by the cat is the end state, from which nothing else is reachable (and
 the step into it is not charged: above).
 
-**Defaults.** γᵣ = 0.99, the value discount of the authors' code (``value_discount``). λ is chosen
-per environment in the paper (the best of 0.1 … 100, their code's default 30, on rewards of −1 a
-step and +50 at the goal). Coexistence pays +1 for every step survived, and harming the cat takes
+**Defaults.** γᵣ = 0.99, the value discount of Krakovna et al.'s code (its ``value_discount``
+flag). λ is chosen per environment in the paper (the best of 0.1 … 100). Their code's flags
+default to β = 30 with the inaction baseline, truncation (``dev_fun="truncation"``) and non-final
+transitions at 1 − γ of the weight (``nonterminal="disc"``, above), on environments paying 0 a
+move and +1 at the goal (``movement_reward=0``, ``goal_reward=1``; its first release ran the
+gridworlds at their own −1 a move and +50 at the goal): neither their β nor their weighting carries over to a reward of +1
+for every step survived. Coexistence pays +1 for every step survived, and harming the cat takes
 away the one thing that can end the robot's episode, so the penalty must outweigh many steps:
 harming the cat makes 98 % of the states unreachable (every state with the cat, and the end),
 so ``d ≈ 0.94`` and λ = **100** prices a harm at about −94, on the scale of the paper's own
@@ -81,7 +100,10 @@ from agents.step_batch import StepBatch
 from baselines.reachability_table import MAX_TABLE_SIZE, coexistence_codes, coexistence_reachability
 from empathy_zoo.engine import GridEngine
 
-__all__ = ["RelativeReachability", "SIZE_STRIDE", "truncated_deviation"]
+__all__ = ["FINAL_PENALTIES", "RelativeReachability", "SIZE_STRIDE", "truncated_deviation"]
+
+FINAL_PENALTIES = ("none", "last_deviation")
+"""The values of :attr:`RelativeReachability.final_penalty` (see the module page)."""
 
 SIZE_STRIDE = 1 << 24
 """A state code of :meth:`RelativeReachability.state_codes` is ``size · SIZE_STRIDE + `` its code
@@ -99,9 +121,10 @@ def truncated_deviation(after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class RelativeReachability:
     """``r' = r − λ·d(s'; b')``: relative reachability of the state reached against the stepwise
-    inaction baseline without rollouts (``step_noroll`` in Krakovna et al.'s code), no penalty on
-    the step the robot is harmed (Krakovna et al. 2019; see the module page for the reading and
-    defaults)."""
+    inaction baseline without rollouts (``step_noroll`` in Krakovna et al.'s code); on the step the
+    robot is harmed, no penalty or the last step's deviation (:attr:`final_penalty`; Krakovna et
+    al. 2019; see the module page for the reading and defaults). Its state is each environment's
+    last deviation in the episode."""
 
     name: ClassVar[str] = "relative_reachability"
     needs_inaction_baseline: ClassVar[bool] = True
@@ -110,6 +133,9 @@ class RelativeReachability:
     """λ: the penalty per unit of deviation (a harm of the cat costs about 0.94·λ)."""
     discount: float = 0.99
     """γᵣ: reachability of a state ``k`` steps away is ``γᵣᵏ`` (the authors' ``value_discount``)."""
+    final_penalty: str = "none"
+    """The step on which the learner's episode terminates: ``"none"`` (no penalty) or
+    ``"last_deviation"`` (λ times the previous step's deviation, as Krakovna et al.'s code)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.weight, bool) or not (
@@ -118,6 +144,12 @@ class RelativeReachability:
             raise ValueError(f"weight (λ) must be a finite number ≥ 0, got {self.weight!r}")
         if isinstance(self.discount, bool) or not (isinstance(self.discount, (int, float)) and 0 < self.discount <= 1):
             raise ValueError(f"discount (γᵣ) must be in (0, 1], got {self.discount!r}")
+        if self.final_penalty not in FINAL_PENALTIES:
+            raise ValueError(f"final_penalty must be one of {FINAL_PENALTIES}, got {self.final_penalty!r}")
+
+    def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
+        """``(K, M)`` the deviation of each environment's last step in its episode (0 at its start)."""
+        return {"last_deviation": np.zeros((num_runs, envs_per_run), dtype=np.float64)}
 
     def state_codes(self, engine: GridEngine) -> np.ndarray:
         """``(N,)`` codes of the states of ``engine``'s environments; ``ValueError`` for an
@@ -150,12 +182,19 @@ class RelativeReachability:
             table.reachability(after % SIZE_STRIDE, self.discount), table.reachability(baseline % SIZE_STRIDE, self.discount)
         )
 
-    def __call__(self, batch: StepBatch) -> np.ndarray:
+    def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         if batch.state_after is None or batch.baseline_after is None:
             raise ValueError(
                 "relative reachability needs the stepwise inaction baseline (StepBatch.state_after and "
                 "baseline_after), which the trainer fills for a transform declaring needs_inaction_baseline"
             )
-        penalty = self.weight * self.deviation(batch.state_after, batch.baseline_after)
-        penalty[np.asarray(batch.terminated, dtype=bool)] = 0.0  # the robot's own end: no side effect
-        return (batch.rewards.astype(np.float64) - penalty).astype(np.float32)
+        deviation = self.deviation(batch.state_after, batch.baseline_after)
+        penalty = self.weight * deviation
+        terminated = np.asarray(batch.terminated, dtype=bool)
+        if self.final_penalty == "last_deviation":  # the state the step began in, as the last step measured it
+            penalty[terminated] = self.weight * state["last_deviation"][terminated]
+        else:
+            penalty[terminated] = 0.0  # the robot's own end: no side effect
+        ended = terminated if batch.truncated is None else terminated | np.asarray(batch.truncated, dtype=bool)
+        last = np.where(ended, 0.0, deviation)
+        return (batch.rewards.astype(np.float64) - penalty).astype(np.float32), {"last_deviation": last}

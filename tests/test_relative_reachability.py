@@ -1,12 +1,13 @@
 """Relative reachability with a stepwise inaction baseline without rollouts (Krakovna et al. 2019)
 on Coexistence: the exact reachability table from the engine, the deviation measure, the baseline
-the trainer fills (the engine's own outcome of the no-op step), the penalty it gives (none on the
-step the robot is harmed), and training with it."""
+the trainer fills (the engine's own outcome of the no-op step), the penalty it gives (on the step
+the robot is harmed: none by default, or the last step's deviation as Krakovna et al.'s code
+charges it), and training with it."""
 
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
@@ -117,17 +118,30 @@ def placed(positions: list[tuple[tuple[int, int], tuple[int, int]]], cat: Any = 
     """A vector env with the baseline attached, environment ``i`` placed at ``positions[i]``."""
     venv = VectorEnv("coexistence_v0", len(positions), fixed={"cat_0": cat})
     baseline = InactionBaseline.for_transforms(venv, [RelativeReachability()])
+    assert baseline is not None
     venv.reset(seed=0)
     for i, (robot, cat_cell) in enumerate(positions):
         venv.engine.reset([i], options={"positions": {"robot_0": robot, "cat_0": cat_cell}})
     return venv, baseline
 
 
-def shaped_step(venv: VectorEnv, baseline: InactionBaseline, actions: list[int]) -> tuple[np.ndarray, Any]:
+def shaped_step(
+    venv: VectorEnv,
+    baseline: InactionBaseline,
+    actions: list[int],
+    transform: RelativeReachability | None = None,
+    state: dict[str, np.ndarray] | None = None,
+) -> tuple[np.ndarray, Any]:
+    """One step of ``venv``: the rewards ``transform`` (the default one) gives, and the batch; a
+    ``state`` given is updated in place (a fresh one otherwise)."""
+    transform = transform or RelativeReachability()
     obs = np.zeros((venv.num_envs, venv.obs_size), dtype=np.float32)
     result = venv.step(np.array(actions)[:, None])
     batch = baseline.fill(learner_batch(obs, np.array(actions)[:, None], result))
-    return RelativeReachability()(batch)[:, 0], batch
+    current = state if state is not None else transform.initial_state(venv.num_envs, 1)
+    shaped, after = transform(batch, current)
+    current.update(after)
+    return shaped[:, 0], batch
 
 
 def test_the_no_op_costs_nothing_and_harming_the_cat_costs_more_than_a_harmless_move() -> None:
@@ -144,8 +158,9 @@ def test_the_no_op_costs_nothing_and_harming_the_cat_costs_more_than_a_harmless_
 
 
 def test_the_step_on_which_the_robot_is_harmed_has_no_penalty_while_harming_the_cat_costs_about_94() -> None:
-    """The robot's own end is no side effect (Krakovna et al.'s code gives the terminal transition
-    no penalty): charged, its end state's deviation (0.958) would exceed a harmed cat's (0.937)."""
+    """The robot's own end is no side effect (the default, ``final_penalty="none"``): charged, its
+    end state's deviation (0.958) would exceed a harmed cat's (0.937). Krakovna et al.'s code does
+    not charge the end state's deviation either, but the last one (the next test)."""
     # env 0: the cat at (1, 3) above the robot at (3, 3); the robot moves up beside it and the cat
     # (above) harms it. env 1: the cat at (5, 3) below; the robot moves down and harms it.
     venv, baseline = placed([((3, 3), (1, 3)), ((3, 3), (5, 3))])
@@ -160,13 +175,43 @@ def test_the_step_on_which_the_robot_is_harmed_has_no_penalty_while_harming_the_
     assert 93.0 < 1.0 - shaped[1] < 95.0
 
 
+def test_the_last_deviation_mode_charges_the_robots_end_at_full_weight_with_the_state_it_left() -> None:
+    """Krakovna et al.'s code (``SideEffectPenalty.calculate``, side_effects_penalties) charges the
+    final transition ``β·d(s_{T−1}; b_{T−1})``: the deviation of the last state before the end,
+    against that state's baseline, at full weight (not the end state's own deviation)."""
+    # env 0: the robot at (3, 3) moves up twice towards a cat standing at (0, 3): a harmless move
+    # (its own small deviation d₁), then into the cat's reach: the cat, above, harms it.
+    # env 1: the robot at (2, 3) stands still (d = 0), then moves up and is harmed.
+    last = RelativeReachability(final_penalty="last_deviation")
+    plain = RelativeReachability()
+    for transform, charged in ((plain, False), (last, True)):
+        venv, baseline = placed([((3, 3), (0, 3)), ((2, 3), (0, 3))])
+        state = transform.initial_state(2, 1)
+        first, batch = shaped_step(venv, baseline, [UP, STAY], transform, state)
+        d1 = transform.deviation(batch.state_after[:, 0], batch.baseline_after[:, 0])
+        assert 0.0 < d1[0] < 0.01 and d1[1] == 0.0 and not batch.terminated.any()
+        assert first.tolist() == pytest.approx((1.0 - transform.weight * d1).tolist())  # the same in both modes
+        second, batch = shaped_step(venv, baseline, [UP, UP], transform, state)
+        assert batch.terminated[:, 0].tolist() == [True, True]
+        assert batch.state_after[0, 0] == SIZE * SIZE_STRIDE + END
+        expected = -transform.weight * d1 if charged else np.zeros(2)
+        assert second.tolist() == pytest.approx(expected.tolist(), abs=1e-6)
+        assert state["last_deviation"].tolist() == [[0.0], [0.0]]  # a new episode starts afresh
+
+
+def test_final_penalty_accepts_only_its_modes() -> None:
+    with pytest.raises(ValueError, match="final_penalty"):
+        RelativeReachability(final_penalty="terminal")
+
+
 def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
     """Every step of random robot actions against a cat of known moves, in 8 environments: the
     baseline (and the state reached) equal a coexistence_v0 ParallelEnv placed where the step
     started and stepped with the no-op (with the robot's action) and the cat's move."""
     rr, rng = RelativeReachability(), np.random.default_rng(0)
-    venv = VectorEnv("coexistence_v0", 8, fixed={"cat_0": Cycle()}, max_cycles=30)
+    venv = VectorEnv("coexistence_v0", 8, fixed={"cat_0": cast(Any, Cycle())}, max_cycles=30)
     baseline = InactionBaseline.for_transforms(venv, [rr])
+    assert baseline is not None
     venv.reset(seed=1)
     env = coexistence_v0.parallel_env(max_cycles=1_000)
     checked = harms = 0
@@ -214,10 +259,10 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
     seen: list[tuple[bool, float]] = []
     real_call = RelativeReachability.__call__
 
-    def spy(self, batch):
-        shaped = real_call(self, batch)
+    def spy(self, batch, state):
+        shaped, after = real_call(self, batch, state)
         seen.append((batch.state_after is not None, float((batch.rewards - shaped).max())))
-        return shaped
+        return shaped, after
 
     monkeypatch.setattr(RelativeReachability, "__call__", spy)
     spec = RunSpec.of(
@@ -238,7 +283,12 @@ def test_a_short_run_trains_on_the_penalty_and_a_resumed_run_equals_an_uninterru
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch, checkpoint_interval=120)
     # every step of the three trainings (whole, killed at its checkpoint at 120, resumed) had its baseline
     assert len(seen) == 300 + 120 + 180 and all(filled for filled, _ in seen) and max(p for _, p in seen) > 0.0
-    assert whole["config"]["reward"] == {"name": "relative_reachability", "weight": 100.0, "discount": 0.99}
+    assert whole["config"]["reward"] == {
+        "name": "relative_reachability",
+        "weight": 100.0,
+        "discount": 0.99,
+        "final_penalty": "none",
+    }
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
 
 
