@@ -61,7 +61,8 @@ begins, among the others present then, at the least torus (Manhattan) distance, 
 agent index (SPEC §3b): one harmed in the step is the one swapped with.
 
 ## Arguments
-`coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, num_cats=1)`
+`coexistence_v0.parallel_env(size=7, view=5, max_cycles=500, render_mode=None, rules="paper", num_cats=1)`
+(and the fidelity options below, each defaulting to `"rules"`)
 * `size`: side of the torus (≥ 5, so that "above" is never ambiguous; at most 255: the lookup
   tables take at most `600 + 24·view + 8·view²` bytes per cell, 57 MB at size 255 with view 5; see
   docs/limits.md).
@@ -72,12 +73,48 @@ agent index (SPEC §3b): one harmed in the step is the one swapped with.
   `size² − 5` (each starts on its own cell, not in contact with the robot); any other value
   raises `ValueError` naming `num_cats`. Give each cat its fixed policy:
   `FixedAgents(parallel_env(num_cats=3), {f"cat_{i}": "random_walk" for i in range(3)})`.
+* `rules`, `sideways`, `same_cell`, `seam_contact`, `start`, `observation_encoding`,
+  `harmed_step_reward`: see Fidelity options. Any other value raises `ValueError` naming the
+  argument and the allowed values.
+
+## Fidelity options
+The defaults are the behaviour contract (docs/SPEC.md §2), which follows the paper's text. The
+authors' public code (bartbussmann/empathicDQN, `GridworldCoexistenceGym.py`) plays otherwise.
+`rules="authors"` sets every option below as that code does; `rules="paper"` (default) as the
+text. An option given explicitly replaces what `rules` sets (its default, `"rules"`, defers).
+
+| option | paper (default) | authors' code |
+|---|---|---|
+| `sideways` | `"right_harms_left"` | `"left_harms_right"`: a cat directly left of the robot harms it; the robot harms a cat directly to its right |
+| `same_cell` | `"came_from_above"` | `"robot_unless_down_or_right"`: the robot is harmed unless its own action was down or right; the cat is never harmed there |
+| `seam_contact` | `"wrapped"` | `"not_wrapped"`: positions wrap, the contact test does not; agents on opposite edges never touch |
+| `start` | `"random"` | `"centre_corner"`: the robot in the centre cell `(size//2, size//2)`, the cat in `(0, 0)`; further cats on the next free cells, row by row |
+| `observation_encoding` | `"signed"` | `"authors"`: every agent, own cell included, drawn as `0.05` (5 / 100) |
+| `harmed_step_reward` | `"zero"` | `"paid"`: an agent still gets `+1` on the step it is harmed |
+
+Two differences of the authors' code are not the environment's. Their episodes end after step
+`max_cycles + 1` (`steps > max_steps`): pass `max_cycles=501`. Their learner treats that end as
+terminal, with no bootstrap.
+
+A uniformly random robot, 16,000 episodes per rule set
+(`python benchmarks/coexistence_rules.py --episodes 16000`; mean ± standard error):
+
+| rules | survival | harms per episode | robot harmed |
+|---|---:|---:|---:|
+| paper (`max_cycles=500`) | 262.2 ± 1.9 | 0.505 ± 0.004 | 49.5 % |
+| authors (`max_cycles=501`) | 222.5 ± 1.9 | 0.413 ± 0.004 | 58.7 % |
+
+The authors' own code, measured over 4,000 episodes, gave 231.9 steps, 0.433 harms and 56.7 %.
+That lies about 2.2 standard errors from this implementation on each figure. Either a rule
+difference remains, or chance: batches of 4,000 episodes here range from 217 to 233 steps.
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1–2.
 * v0, 2026-11-29: `size` is at most 255, and a `view` whose lookup tables would need more than
   1 GiB is refused (both with a `ValueError` stating the memory); the tables grow with the number
   of cells instead of its square (size 101 took 4.1 GB). Every observation and outcome unchanged.
+* v0, 2026-12-04: fidelity options (`rules="authors"` and one argument per difference). The
+  defaults play exactly as before.
 * v0, empathy-zoo 0.2.0: `infos[agent]["episode"]` holds each agent's episode metrics at the step
   that ends the episode; a fixed agent's context is the same on every face. Every observation,
   reward and outcome unchanged.
