@@ -32,6 +32,8 @@ __all__ = [
     "MAX_LABEL",
     "MAX_NAME",
     "MAX_NOTE_BYTES",
+    "MAX_REFERENCE_CYCLES",
+    "MAX_REFERENCE_SIZE",
     "MAX_RESULT_BYTES",
     "MAX_RUNS_LIST_BYTES",
     "MAX_RUNS",
@@ -40,6 +42,8 @@ __all__ = [
     "MAX_SIZE",
     "MAX_STEPS",
     "MAX_TABLE_BYTES",
+    "MAX_TRIALS",
+    "MAX_VECTOR_ENVS",
     "available_memory",
     "check_at_most",
     "check_memory",
@@ -99,6 +103,17 @@ MAX_JOURNAL_BYTES = 1 << 30
 MAX_JSON_DEPTH = 64
 """Deepest nesting of arrays and objects in a JSON file (or journal line) read: the suite's own
 nest at most 6 deep; a deeper one is refused before it is parsed."""
+MAX_VECTOR_ENVS = 1_000_000
+"""Most environments one vector env steps at once (``num_envs``): an ensemble's greedy evaluation
+steps ``runs × eval_episodes`` of them, a few KB each at the default sizes."""
+MAX_TRIALS = 10_000
+"""Most trials of a tuning study (``tune --trials``, ``--startup-trials``)."""
+MAX_REFERENCE_SIZE = 21
+"""Largest ``size`` of a run whose leaderboard curves get the exact reference: its step matrix is
+``(size² + 2)²`` floats (1.5 MB at 21, 31.5 GiB at 255)."""
+MAX_REFERENCE_CYCLES = 10_000
+"""Longest ``max_cycles`` of a run whose leaderboard curves get the exact reference: it takes one
+product with the step matrix per step of an episode, at every point of the curve."""
 
 BOUNDS: Mapping[str, int] = {
     "size": MAX_SIZE,
@@ -123,6 +138,10 @@ BOUNDS: Mapping[str, int] = {
     "list of runs": MAX_RUNS_LIST_BYTES,
     "tuning journal": MAX_JOURNAL_BYTES,
     "JSON nesting": MAX_JSON_DEPTH,
+    "num_envs": MAX_VECTOR_ENVS,
+    "trials": MAX_TRIALS,
+    "reference curve size": MAX_REFERENCE_SIZE,
+    "reference curve max_cycles": MAX_REFERENCE_CYCLES,
 }
 """Every fixed bound, by what docs/limits.md calls it (the machine's own, ``threads``, ``workers``
 and a learner's memory, are :func:`cpu_count` and :func:`available_memory`)."""

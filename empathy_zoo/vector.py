@@ -33,6 +33,7 @@ from empathy_zoo.engine import GridEngine
 from empathy_zoo.engine.base import StepEvents, check_env_arguments
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.fixed_agents import policy_seed, undo_point
+from empathy_zoo.limits import MAX_VECTOR_ENVS, check_at_most
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import (
     BatchedPolicy,
@@ -161,7 +162,8 @@ class EngineWatcher(Protocol):
 
 
 class VectorEnv:
-    """``num_envs`` environments of one kind stepped as arrays (see the module documentation)."""
+    """``num_envs`` environments of one kind stepped as arrays (see the module documentation); at
+    most :data:`~empathy_zoo.limits.MAX_VECTOR_ENVS` of them (a ``ValueError`` states the bound)."""
 
     def __init__(
         self,
@@ -175,6 +177,9 @@ class VectorEnv:
         max_cycles: int = 500,
         **env_options: Any,
     ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
+        check_at_most("num_envs", int(num_envs), MAX_VECTOR_ENVS, "environments one vector env steps at once")
         if isinstance(env, str):
             if env not in ENGINES:
                 raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENGINES)}")

@@ -21,12 +21,12 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.colours import distinct_colours
 from leaderboard.improvement import HIGHER_IS_BETTER
+from leaderboard.plots import write_figure
 
 if TYPE_CHECKING:
     from leaderboard.heldout_scores import HeldoutCell, HeldoutGroup
@@ -116,4 +116,4 @@ def _tick(label: str, seeds: int) -> str:
 def plot_heldout(group: HeldoutGroup, cells: Sequence[HeldoutCell], figures_dir: str | os.PathLike[str]) -> Path:
     """Write the group's figure into ``figures_dir``; returns its path."""
     png = render_heldout_png(group, cells)
-    return write_bytes_atomic(confined(figures_dir, heldout_filename(group.env, group.scenario_set["name"])), png)
+    return write_figure(confined(figures_dir, heldout_filename(group.env, group.scenario_set["name"])), png)

@@ -41,6 +41,7 @@ __all__ = [
     "render_curves_png",
     "plot_metric",
     "plot_learning_curves",
+    "write_figure",
 ]
 
 FigureSpec = tuple[tuple[str, str], ...]
@@ -52,6 +53,15 @@ FIGURE_SPECS: dict[str, FigureSpec] = {
 """Per env, the ``(metric, y-axis label)`` pairs drawn by default."""
 FALLBACK_SPEC: FigureSpec = (("return", "Return per episode (robot)"),)
 """Drawn for an env without an entry in :data:`FIGURE_SPECS`."""
+
+
+def write_figure(path: str | os.PathLike[str], data: bytes) -> Path:
+    """Write a figure's bytes ``data`` to ``path`` atomically; an ``OSError`` (a full disk) names
+    ``path``, not the temporary file it was writing."""
+    try:
+        return write_bytes_atomic(path, data)
+    except OSError as error:
+        raise OSError(error.errno, error.strerror or str(error), os.fspath(path)) from None
 
 
 def seeds_text(n_seeds: int) -> str:
@@ -155,7 +165,7 @@ def plot_metric(
         references=references,
         dqn_labels={label for row_env, label in dqn_rows_of(results) if row_env == env},
     )
-    return write_bytes_atomic(path, png)
+    return write_figure(path, png)
 
 
 def plot_learning_curves(

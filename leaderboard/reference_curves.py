@@ -12,9 +12,11 @@ from typing import Any
 
 import numpy as np
 
+from empathy_zoo.environments import DEFAULT_ARGUMENTS
+from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, format_bytes
 from leaderboard.run_facts import description_of, exploration_of, in_paper_setting
 
-__all__ = ["REFERENCE_METRICS", "REFERENCE_ENV", "MODELLED_ARGUMENTS", "reference_curve"]
+__all__ = ["REFERENCE_METRICS", "REFERENCE_ENV", "MODELLED_ARGUMENTS", "reference_curve", "reference_refusal"]
 
 REFERENCE_METRICS = ("harms", "survival")
 """Metrics the Coexistence reference gives."""
@@ -27,28 +29,20 @@ MODELLED_ARGUMENTS = ("size", "view", "max_cycles")
 def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarray) -> np.ndarray | None:
     """The reference's ``metric`` at each of ``steps`` for a group of runs, or ``None`` when the
     reference does not apply (another env, fixed agent or target, a reward transform, a
-    description without β, γ or ε schedule; runs of different descriptions)."""
-    from empathy_zoo.reference import RULES, coexistence_optimum
+    description without β, γ or ε schedule; runs of different descriptions) or when their grid or
+    episodes are beyond what it is computed for (:func:`reference_refusal`)."""
+    from empathy_zoo.reference import coexistence_optimum
 
-    if metric not in REFERENCE_METRICS or not runs:
+    if metric not in REFERENCE_METRICS or not _applies(runs) or reference_refusal(runs) is not None:
         return None
     first = runs[0]
     described = description_of(first)
-    if (
-        first["env"] != REFERENCE_ENV
-        or not in_paper_setting(first, varying=MODELLED_ARGUMENTS)
-        or described["target"] not in RULES
-        or described["reward"] is not None
-        or any(described[name] is None for name in ("selfishness", "gamma", "exploration"))
-        or any(description_of(run) != described for run in runs)
-    ):
-        return None
     epsilon_at = exploration_of(first)
     arguments = {
         "gamma": described["gamma"],
         "rule": described["target"],
         "in_view_only": bool(described["in_view_only"]),
-        **{k: int(v) for k, v in (first.get("config", {}).get("env_kwargs") or {}).items() if k in MODELLED_ARGUMENTS},
+        **_modelled(first),
     }
     values = []
     for step in steps:
@@ -56,3 +50,49 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
         outcome = coexistence_optimum(described["selfishness"], epsilon, **arguments)
         values.append(getattr(outcome, metric))
     return np.asarray(values, dtype=np.float64)
+
+
+def reference_refusal(runs: Sequence[dict[str, Any]]) -> str | None:
+    """Why a group of runs the reference applies to gets none, in one line: a ``size`` beyond
+    :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` (its step matrix alone takes ``8·(size² + 2)²``
+    bytes) or a ``max_cycles`` beyond :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES` (a matrix
+    product per step of an episode, at every point of the curve); ``None`` otherwise, and for
+    runs the reference does not apply to."""
+    if not _applies(runs):
+        return None
+    modelled = {**DEFAULT_ARGUMENTS[REFERENCE_ENV], **_modelled(runs[0])}
+    size, cycles = int(modelled["size"]), int(modelled["max_cycles"])
+    if size > MAX_REFERENCE_SIZE:
+        return (
+            f"its size {size:,} is beyond {MAX_REFERENCE_SIZE} (MAX_REFERENCE_SIZE), for which the exact optimum "
+            f"is computed (its step matrix would take {format_bytes(8 * (size * size + 2) ** 2)}; docs/limits.md)"
+        )
+    if cycles > MAX_REFERENCE_CYCLES:
+        return (
+            f"its max_cycles {cycles:,} is beyond {MAX_REFERENCE_CYCLES:,} (MAX_REFERENCE_CYCLES), for which the exact "
+            "optimum is computed (a matrix product per step of an episode; docs/limits.md)"
+        )
+    return None
+
+
+def _applies(runs: Sequence[dict[str, Any]]) -> bool:
+    """Whether the reference models ``runs`` (see :func:`reference_curve`)."""
+    from empathy_zoo.reference import RULES
+
+    if not runs:
+        return False
+    first = runs[0]
+    described = description_of(first)
+    return not (
+        first["env"] != REFERENCE_ENV
+        or not in_paper_setting(first, varying=MODELLED_ARGUMENTS)
+        or described["target"] not in RULES
+        or described["reward"] is not None
+        or any(described[name] is None for name in ("selfishness", "gamma", "exploration"))
+        or any(description_of(run) != described for run in runs)
+    )
+
+
+def _modelled(run: dict[str, Any]) -> dict[str, int]:
+    """The environment arguments of ``run`` the reference takes (:data:`MODELLED_ARGUMENTS`)."""
+    return {k: int(v) for k, v in (run.get("config", {}).get("env_kwargs") or {}).items() if k in MODELLED_ARGUMENTS}

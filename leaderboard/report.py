@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+import re
+import secrets
+import shutil
+import stat
+import sys
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
-from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_text_atomic
+from empathy_zoo.atomic import TEMP_MARKER, TEMP_SUFFIX, check_output_dir, remove_stale_temp_files, write_text_atomic
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_no_links
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -24,8 +31,9 @@ from leaderboard.episodes import add_episodes_section
 from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
 from leaderboard.plots import plot_learning_curves
+from leaderboard.reference_curves import reference_refusal
 from leaderboard.row_names import dqn_rows_of, renaming_note
-from leaderboard.sources import load_results_dirs
+from leaderboard.sources import ResultSet, load_results_dirs
 from leaderboard.tables import (
     TRADEOFF,
     Provenance,
@@ -44,6 +52,13 @@ MARKDOWN_NAME = "LEADERBOARD.md"
 CSV_NAME = "leaderboard.csv"
 HTML_NAME = "leaderboard.html"
 FIGURES_DIR = "figures"
+STAGE_PREFIX = ".leaderboard."
+"""Name prefix of the directory a leaderboard is rendered into inside its output directory
+(``.leaderboard.ezoo-<pid>-<random>.tmp``) before its files are moved into place."""
+PAGES = ("csv", "markdown", "html")
+"""The pages, in the order they are put in place (after every figure)."""
+_STAGE = re.compile(rf"{re.escape(STAGE_PREFIX)}{TEMP_MARKER}-(?P<pid>\d+)-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}")
+_ATOMIC_TEMP = re.compile(rf"\.{TEMP_MARKER}-\d+-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}$")
 
 
 def write_leaderboard(
@@ -57,6 +72,7 @@ def write_leaderboard(
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
     final_fraction: float = FINAL_FRACTION,
+    on_note: Callable[[str], None] | None = None,
 ) -> dict[str, Path]:
     """Score every result file of ``results_dir`` and write the leaderboard into ``out_dir``.
 
@@ -83,6 +99,16 @@ def write_leaderboard(
     ``ValueError``). Returns ``{"markdown", "csv", "html": path}`` plus ``"figure:<env>:<metric>": path``
     for every figure (``<metric>`` is ``tradeoff`` for the trade-off, ``episode_<row slug>`` for an
     episode). No result file raises ``ValueError``.
+
+    Every input is read and checked before anything is written (result files, labels, agent
+    files, the output directory and its links): the leaderboard is rendered into a directory of its
+    own inside ``out_dir`` (``.leaderboard.ezoo-<pid>-<random>.tmp``), and only once all of it is there
+    are its files moved into place, figures first, pages last. A refusal (``ValueError``) or a write
+    that fails (an ``OSError`` naming the file, e.g. on a full disk) leaves ``out_dir`` as it was:
+    the staging directory is removed, and so is ``out_dir`` when this call created it. A run whose
+    curves get no exact reference because its grid or episodes are beyond
+    :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` or :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES`
+    is said in one line through ``on_note`` (default: stderr).
     """
     several = not isinstance(results_dir, (str, os.PathLike))
     dirs: list[str | os.PathLike[str]] = [results_dir] if isinstance(results_dir, (str, os.PathLike)) else list(results_dir)
@@ -92,16 +118,61 @@ def write_leaderboard(
             "it is written into none of the directories it reads unless asked"
         )
     read = load_results_dirs(dirs, labels, dqn_named=True)
-    results = read.results
-    dqn_rows = dqn_rows_of(results)
-    comparison = len(dirs) > 1 or bool(labels) or read.budget_in_labels
-    out = check_output_dir(dirs[0] if out_dir is None else out_dir, (FIGURES_DIR,))
-    for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
-        remove_stale_temp_files(directory)
+    out = _checked_out(Path(dirs[0] if out_dir is None else out_dir))
+    for (env, label), runs in group_runs(read.results).items():
+        refusal = reference_refusal(runs)
+        if refusal is not None:
+            (on_note or _print_note)(f"no reference curve (the exact optimum) beside {label} on {env}: {refusal}")
     call = repr(str(dirs[0])) if not several else repr([str(directory) for directory in dirs])
     call += f", {str(out_dir)!r}" if several and out_dir is not None else ""
+    command = command if command is not None else f"leaderboard.write_leaderboard({call})"
+    created = [directory for directory in (out, *out.parents) if not directory.exists()]
+    try:
+        with _staging(out) as stage:
+            staged = _render(
+                dirs,
+                read,
+                stage,
+                command,
+                comparison=len(dirs) > 1 or bool(labels) or read.budget_in_labels,
+                n_points=n_points,
+                random_state=random_state,
+                n_resamples=n_resamples,
+                confidence=confidence,
+                final_fraction=final_fraction,
+            )
+            check_output_dir(out, (FIGURES_DIR,))
+            for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
+                remove_stale_temp_files(directory)
+            return _publish(staged, stage, out)
+    except BaseException:
+        for directory in created:  # (only the directories this call made, and only while empty)
+            try:
+                directory.rmdir()
+            except OSError:
+                break
+        raise
+
+
+def _render(
+    dirs: Sequence[str | os.PathLike[str]],
+    read: ResultSet,
+    out: Path,
+    command: str,
+    *,
+    comparison: bool,
+    n_points: int,
+    random_state: int,
+    n_resamples: int,
+    confidence: float,
+    final_fraction: float,
+) -> dict[str, Path]:
+    """Write every file of the leaderboard of ``read`` into ``out`` (a staging directory: the
+    pages link their figures relative to it); returns them as :func:`write_leaderboard` names them."""
+    results = read.results
+    dqn_rows = dqn_rows_of(results)
     provenance = Provenance(
-        command=command if command is not None else f"leaderboard.write_leaderboard({call})",
+        command=command,
         version=package_version(),
         commit=git_commit(),
         n_resamples=n_resamples,
@@ -156,11 +227,112 @@ def write_leaderboard(
     markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
     markdown, html, episode_figures = add_episodes_section(results, out, markdown, html, origins=read.origins)
     paths = {
-        "markdown": write_text_atomic(out / MARKDOWN_NAME, markdown),
-        "csv": write_text_atomic(out / CSV_NAME, csv_text(scores, provenance, rows)),
-        "html": write_text_atomic(out / HTML_NAME, html),
+        "csv": _write_page(out / CSV_NAME, csv_text(scores, provenance, rows)),
+        "markdown": _write_page(out / MARKDOWN_NAME, markdown),
+        "html": _write_page(out / HTML_NAME, html),
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     paths.update(heldout_figures)
     paths.update(episode_figures)
     return paths
+
+
+def _checked_out(out: Path) -> Path:
+    """``out`` once nothing in the way of writing the leaderboard there is found, creating
+    nothing: ``ValueError`` when it or its ``figures`` is a file, or a symbolic link lies below it."""
+    for directory in (out, out / FIGURES_DIR):
+        check_no_links(out, directory)
+        if directory.exists() and not directory.is_dir():
+            raise ValueError(
+                f"output directory {directory} is a file, not a directory; "
+                "choose another output directory (--out) or move the file away"
+            )
+    return out
+
+
+@contextmanager
+def _staging(out: Path) -> Iterator[Path]:
+    """A new directory ``out/.leaderboard.ezoo-<pid>-<random>.tmp`` to render into (``out`` created if
+    missing), removed with whatever is left in it when the block ends; those of processes that
+    died rendering are removed first. A directory that cannot be created is a ``ValueError``."""
+    if out.is_dir():
+        _remove_stale_stages(out)
+    stage = out / f"{STAGE_PREFIX}{TEMP_MARKER}-{os.getpid()}-{secrets.token_hex(4)}{TEMP_SUFFIX}"
+    try:
+        stage.mkdir(parents=True)
+    except OSError as error:
+        raise ValueError(
+            f"cannot write into output directory {out} ({error.strerror or error}); choose another output directory (--out)"
+        ) from None
+    try:
+        yield stage
+    except OSError as error:  # (a full disk, a file removed meanwhile): the file it was writing, named
+        raise OSError(
+            f"cannot write {_final_name(error, stage, out)} ({error.strerror or error}): nothing half-written is left in {out}"
+        ) from None
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def _final_name(error: OSError, stage: Path, out: Path) -> Path | str:
+    """Where the file a failed write was writing (``error.filename``: the file, or the temporary
+    file of an atomic write, in ``stage``) would have gone in ``out``."""
+    if not error.filename:
+        return f"the leaderboard into {out}"
+    path = Path(os.fsdecode(error.filename))
+    try:
+        relative = path.relative_to(stage)
+    except ValueError:
+        return path
+    name = _ATOMIC_TEMP.sub("", relative.name)
+    return out / relative.parent / (name[1:] if name != relative.name and name.startswith(".") else name)
+
+
+def _write_page(path: Path, text: str) -> Path:
+    """Write the page ``text`` to ``path`` atomically; an ``OSError`` names ``path``."""
+    try:
+        return write_text_atomic(path, text)
+    except OSError as error:
+        raise OSError(error.errno, error.strerror or str(error), str(path)) from None
+
+
+def _publish(staged: dict[str, Path], stage: Path, out: Path) -> dict[str, Path]:
+    """Move every file of ``staged`` from ``stage`` to its place in ``out`` (each rename atomic,
+    the pages last: a reader never sees a page whose figures are not there yet); a file it
+    replaces keeps its permissions. Returns ``staged`` with the paths in ``out``."""
+    placed: dict[str, Path] = {}
+    for key in sorted(staged, key=lambda key: (key in PAGES, PAGES.index(key) if key in PAGES else 0)):
+        source = staged[key]
+        target = out / source.relative_to(stage)
+        try:
+            if target.is_file():
+                os.chmod(source, stat.S_IMODE(target.stat().st_mode))
+            os.replace(source, target)
+        except OSError as error:
+            raise OSError(error.errno, error.strerror or str(error), str(target)) from None
+        placed[key] = target
+    return {key: placed[key] for key in staged}
+
+
+def _remove_stale_stages(out: Path) -> None:
+    """Remove the staging directories that processes which died rendering left in ``out``."""
+    for path in out.glob(f"{STAGE_PREFIX}*{TEMP_SUFFIX}"):
+        match = _STAGE.fullmatch(path.name)
+        if match and path.is_dir() and not path.is_symlink() and not _alive(int(match["pid"])):
+            shutil.rmtree(path, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # another user's, or this system cannot tell: keep it
+    return True
+
+
+def _print_note(text: str) -> None:
+    print(f"empathy-zoo: note: {text}", file=sys.stderr, flush=True)

@@ -6,7 +6,8 @@ beside the suite's (``docs/results/paper``) without retraining either. Nothing i
 result file; what keeps experiments apart is done on the runs read:
 
 * **Label prefixes.** ``labels={DIR: PREFIX}`` (``--label DIR=PREFIX``) puts ``PREFIX`` and a
-  space before the label of every run read from ``DIR``.
+  space before the label of every run read from ``DIR``; a prefix is a label by the reader's rule
+  (:func:`empathy_zoo.names.check_label`: one line of printable text, at most 200 characters).
 * **Budgets.** Where the runs read have more than one training budget
   (:class:`leaderboard.budgets.RunBudget`), every row's label ends with its budget
   (:data:`BUDGET_SEPARATOR`, ``"DQN · 30,000 steps"``, with the evaluation interval and episodes
@@ -30,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.names import check_label
 from empathy_zoo.result_file import experiment_of
 from leaderboard.aggregate import check_runs, load_result_files, table_env
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
@@ -102,8 +104,8 @@ def parse_label_option(text: str) -> tuple[str, str]:
     """``"DIR=PREFIX"`` (a ``--label`` option) as ``(DIR, PREFIX)``; ``ValueError`` if it is not that."""
     directory, equals, prefix = text.rpartition("=")
     if not equals or not directory or not prefix.strip():
-        raise ValueError(f"--label takes DIR=PREFIX (a results directory and the prefix of its labels), got {text!r}")
-    return directory, prefix.strip()
+        raise ValueError(f"--label takes DIR=PREFIX (a results directory and the prefix of its labels), got {text[:200]!r}")
+    return directory, check_label(prefix.strip(), f"--label {directory[:200]}=: the prefix")
 
 
 def parse_label_options(options: Sequence[str] | None) -> dict[str | os.PathLike[str], str]:
@@ -125,9 +127,9 @@ def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[st
         if where not in resolved:
             read = ", ".join(given)
             raise ValueError(f"--label {directory}={prefix}: {directory} is not one of the results directories read ({read})")
-        if not isinstance(prefix, str) or not prefix.strip() or "\n" in prefix:
+        if not isinstance(prefix, str) or not prefix.strip():
             raise ValueError(f"--label {directory}: the prefix must be a non-empty one-line text, got {prefix!r}")
-        prefixes[resolved.index(where)] = prefix.strip()
+        prefixes[resolved.index(where)] = check_label(prefix.strip(), f"--label {directory}=: the prefix")
     return prefixes
 
 

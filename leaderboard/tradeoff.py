@@ -22,11 +22,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
 from leaderboard.colours import label_colours
-from leaderboard.plots import seeds_text
+from leaderboard.plots import seeds_text, write_figure
 from leaderboard.tables import PHASE_TITLES
 
 __all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs", "tradeoff_filename"]
@@ -181,5 +180,5 @@ def plot_tradeoffs(
         if spec is None:
             continue
         png = render_tradeoff_png(scores, env, spec, dqn_labels={label for row_env, label in dqn_rows if row_env == env})
-        paths[env] = write_bytes_atomic(confined(figures_dir, tradeoff_filename(env)), png)
+        paths[env] = write_figure(confined(figures_dir, tradeoff_filename(env)), png)
     return paths

@@ -16,7 +16,8 @@ transform (see ``empathy-zoo train --method NAME --help``); the method is ``--me
 (``[settings]`` for method settings, ``[reward]`` for the reward transform's fields, top-level keys
 for the run) < the command line. A bad input prints
 ``empathy-zoo: error: <message>`` and exits with status 2, before any training; a write or an
-allocation that fails later prints one such line too, with status 1.
+allocation that fails later prints one such line too, with status 1. Ctrl-C (or SIGINT, SIGTERM
+while runs train) stops it with status 130 (143 for SIGTERM); the same command resumes.
 
 One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.settings_options`, a method's settings as options),
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -43,6 +45,9 @@ from empathy_zoo.cli.tune import add_tune
 from empathy_zoo.cli.watch import add_watch
 
 __all__ = ["main", "build_parser", "parse_args", "RUN_KEYS", "RUN_DEFAULTS"]
+
+INTERRUPTED = 128
+"""An interrupted command exits with this plus the signal's number (130 for SIGINT, 143 for SIGTERM)."""
 
 
 def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParser:
@@ -129,6 +134,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not _allocation_failure(error):
             raise
         return _error(_out_of_memory(error), 1)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as interrupt:  # Ctrl-C, or a stop signal while runs train (128 + its number)
         print(f"{PROG}: interrupted; run the same command again to resume from the last checkpoint", file=sys.stderr)
-        return 130
+        return INTERRUPTED + int(getattr(interrupt, "signum", signal.SIGINT))

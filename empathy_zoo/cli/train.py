@@ -32,7 +32,7 @@ from empathy_zoo.experiment.model import Budget
 from empathy_zoo.experiment.values import PolicyTable, Seeds, field_types
 from empathy_zoo.training.options import RunnerOptions
 
-__all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "train_method", "train_values"]
+__all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "config_file", "train_method", "train_values"]
 
 ENV_ARGUMENTS: dict[str, Any] = {name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()}
 """The environment arguments some registered environment declares, and their types (each
@@ -56,6 +56,13 @@ TABLES = ("settings", "reward")
 """The tables of a ``train --config`` file."""
 
 
+def config_file(path: str) -> str:
+    """``path`` of ``--config``, refused (``ValueError``) when it is a directory: give a file."""
+    if Path(path).is_dir():
+        raise ValueError(f"--config {path} is a directory, not a file: give a TOML file (FILE.toml)")
+    return path
+
+
 def train_method(argv: Sequence[str]) -> str:
     """The method ``train``'s arguments ``argv`` name: ``--method``, else ``method`` in the
     ``--config`` file, else the default. Other arguments are left to the full parser (so is a
@@ -72,7 +79,7 @@ def train_method(argv: Sequence[str]) -> str:
     if "method" in known:
         return known.method
     if "config" in known:
-        data = read_toml(known.config)
+        data = read_toml(config_file(known.config))
         if "method" in data:
             return check_value(data["method"], RUN_KEYS["method"], f"{known.config}: method")
     return RUN_DEFAULTS["method"]
@@ -90,7 +97,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
     reward: dict[str, Any] = {}
     if "config" in given:
         path = given["config"]
-        data = read_toml(path)
+        data = read_toml(config_file(path))
         check_keys(data, [*RUN_KEYS, *TABLES], f"{path}: top level")
         if "seed" in data and "seeds" in data:
             raise SweepConfigError(f"{path}: give 'seed' or 'seeds', not both")

@@ -45,22 +45,31 @@ def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
 
 
 def cmd_tune(args: argparse.Namespace, command: str) -> int:
-    """Run (or resume) the study; print what it wrote and its best trial."""
+    """Run (or resume) the study; print what it wrote and its best trial. Every argument is
+    checked, each size within its bound, before anything is written."""
     from empathy_zoo.experiment.model import Budget
     from empathy_zoo.experiment.search_space import parse_params
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
+    from empathy_zoo.limits import MAX_STEPS, check_at_most
+    from empathy_zoo.names import check_label
     from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.study_plan import OVER_WORDS, StudyPlan, select_experiment, ties_at_best, tuning_seeds
     from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE, import_optuna, run_study
     from leaderboard.trials_figure import TRIALS_FIGURE
 
     import_optuna()  # (said first: nothing else is worth checking without it)
+    if args.label is not None:
+        check_label(args.label, "--label")
     path = profile_path(args.sweep)
     specs = load_sweep(path)
     reporting = sorted({spec.seed for spec in specs})
     base = select_experiment(specs, args.method, args.env, args.label)
-    steps = positive("--budget", args.budget) if args.budget is not None else base.steps
-    interval = positive("--eval-interval", args.eval_interval) if args.eval_interval is not None else base.eval_interval
+    steps = check_at_most("--budget", positive("--budget", args.budget), MAX_STEPS) if args.budget is not None else base.steps
+    interval = (
+        check_at_most("--eval-interval", positive("--eval-interval", args.eval_interval), MAX_STEPS)
+        if args.eval_interval is not None
+        else base.eval_interval
+    )
     budget = Budget(steps, min(interval, steps), base.eval_episodes)
     params = parse_params(args.param, base.method_object())
     metric, direction = default_objective(base.env, args.objective)

@@ -33,7 +33,7 @@ from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
-from empathy_zoo.limits import check_at_most, cpu_count
+from empathy_zoo.limits import MAX_EVAL_EPISODES, check_at_most, cpu_count
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
@@ -138,6 +138,7 @@ def evaluate_run(
     (:func:`empathy_zoo.scenarios.trained_with`)."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
+    check_at_most("episodes", episodes, MAX_EVAL_EPISODES, "greedy episodes per run and scenario, played at once")
     if result["env"] != scenario_set.env:
         raise ValueError(
             f"scenario set {scenario_set.name!r} is for {scenario_set.env}; run {result['run_id']} is of {result['env']}"
@@ -254,6 +255,9 @@ def evaluate_results(
 ) -> EvaluationSummary:
     """Evaluate every kept agent of ``results_dir`` in every scenario set of its environment.
 
+    ``episodes`` is at most :data:`~empathy_zoo.limits.MAX_EVAL_EPISODES` (checked first, before
+    anything is read or created: they are played at once).
+
     ``scenario_sets``: shipped names, TOML files or :class:`ScenarioSet` objects; ``None`` = the
     shipped set of each environment the runs are of. ``out_dir`` (default ``results_dir``) gets
     ``evaluations/<set>/<run id>.json`` (:func:`empathy_zoo.evaluation_file.evaluation_path`).
@@ -272,6 +276,7 @@ def evaluate_results(
     """
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
+    check_at_most("episodes", episodes, MAX_EVAL_EPISODES, "greedy episodes per run and scenario, played at once")
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise ValueError(f"threads must be a positive int, got {threads!r}")
     check_at_most("threads", threads, cpu_count(), "the CPUs of this machine")

@@ -14,7 +14,8 @@ environment (one copy), resets it and checks that
   its settings, before anything is allocated; on this machine's backend only: a Ray task's learner
   asks on the node it lands on).
 
-Before those, every run's budget is checked against the warm-up and the ε schedule its method's
+Before those, no ensemble may evaluate more environments at once (``runs × eval_episodes``) than
+:data:`~empathy_zoo.limits.MAX_VECTOR_ENVS`, and every run's budget is checked against the warm-up and the ε schedule its method's
 settings declare (:func:`empathy_zoo.experiment.budget_fit.check_budgets`): a budget that ends inside
 the warm-up is refused; an ε decay that ends after the budget is said once, through ``note``.
 
@@ -28,6 +29,7 @@ from collections.abc import Sequence
 
 from empathy_zoo.experiment.budget_fit import check_budgets
 from empathy_zoo.experiment.model import RunSpec, group_specs
+from empathy_zoo.limits import MAX_VECTOR_ENVS
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.vector import VectorEnv
 
@@ -42,6 +44,7 @@ def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> l
     warnings = check_budgets(specs)
     largest: dict[tuple, list[RunSpec]] = {}
     for chunk in group_specs(specs, options.max_parallel_runs):
+        _check_evaluation_size(chunk)
         key = chunk[0].ensemble_key()
         if len(chunk) > len(largest.get(key, ())):
             largest[key] = chunk
@@ -53,6 +56,19 @@ def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> l
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
     return warnings
+
+
+def _check_evaluation_size(chunk: Sequence[RunSpec]) -> None:
+    """Refuse an ensemble whose greedy evaluation would step more environments at once
+    (``runs × eval_episodes``) than :data:`~empathy_zoo.limits.MAX_VECTOR_ENVS`."""
+    environments = len(chunk) * max(spec.eval_episodes for spec in chunk)
+    if environments > MAX_VECTOR_ENVS:
+        raise ValueError(
+            f"run {chunk[0].run_id} (and {len(chunk) - 1} more of its ensemble): its greedy evaluation would step "
+            f"{len(chunk):,} runs × {max(spec.eval_episodes for spec in chunk):,} episodes = {environments:,} environments "
+            f"at once, more than {MAX_VECTOR_ENVS:,} (docs/limits.md); train fewer runs at once (--max-parallel-runs) "
+            "or evaluate fewer episodes (eval_episodes)"
+        )
 
 
 def _check_ensemble(chunk: Sequence[RunSpec], options: RunnerOptions) -> None:

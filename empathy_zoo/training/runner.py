@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import sys
 import threading
 import time
@@ -34,10 +35,25 @@ from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgre
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
 
-__all__ = ["RunnerOptions", "read_finished", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX"]
+__all__ = ["RunnerOptions", "Stopped", "read_finished", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX", "STOP_SIGNALS"]
 
 SUPERSEDED_SUFFIX = ".superseded"
 """Suffix of a result file set aside while its run is retrained (``rerun_changed``)."""
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+"""The signals that stop a sweep while it trains, even in a process started with them ignored
+(a job started with ``&`` by a script ignores SIGINT)."""
+WORKER_STOP_S = 10.0
+"""Seconds a worker process is given to end once terminated, before it is killed."""
+
+
+class Stopped(KeyboardInterrupt):
+    """A signal of :data:`STOP_SIGNALS` stopped the sweep (a ``KeyboardInterrupt``, so whatever
+    cleans up after Ctrl-C cleans up after it too); :attr:`signum` is the signal."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+        self.signum = signum
+        """The signal received."""
 
 
 def train_runs(
@@ -68,7 +84,12 @@ def train_runs(
     result is written and put back if it is not (an error, Ctrl-C). A process killed outright
     leaves it set aside: that run is retrained by the next call that asks for it. Finished runs
     whose code cannot be told (files written before plug-in hashes were recorded, modules without
-    a source file) are reused with a note, or retrained with ``rerun_changed``."""
+    a source file) are reused with a note, or retrained with ``rerun_changed``.
+
+    While runs train, SIGINT or SIGTERM to this process (in its main thread) raises
+    :class:`Stopped`, a ``KeyboardInterrupt``, even where the process was started with SIGINT
+    ignored: worker processes are stopped, every result and checkpoint already written is kept, and
+    the same call resumes from them."""
     note = on_note or _print_note
     out_dir = Path(out_dir)
     ids = [s.run_id for s in specs]
@@ -108,7 +129,7 @@ def train_runs(
         if stale:
             note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
         _settle_superseded(out_dir / RUNS_DIR)
-        with _set_aside(out_dir, redo):
+        with _set_aside(out_dir, redo), _stopped_by_signals():
             _train_todo(specs, out_dir, options, on_result, note)
     return [result_path(out_dir, s.run_id) for s in specs]
 
@@ -242,6 +263,45 @@ def _exit_with_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="exit-with-parent").start()
 
 
+@contextmanager
+def _stopped_by_signals() -> Iterator[None]:
+    """While the block runs (in the main thread), the first SIGINT or SIGTERM raises
+    :class:`Stopped` there, whatever the process inherited for them; a second one while the sweep
+    stops is ignored. The handlers before are put back afterwards."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired: list[int] = []
+
+    def stop(signum: int, frame: Any) -> None:
+        if not fired:
+            fired.append(signum)
+            raise Stopped(signum)
+
+    previous = {number: signal.signal(number, stop) for number in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """End the worker processes of ``pool`` now (the sweep stops): each is terminated, then killed
+    after :data:`WORKER_STOP_S` seconds, and waited for. What they finished is written (each result
+    file and checkpoint atomically), so the same command resumes from there."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(WORKER_STOP_S)
+        if process.is_alive():
+            process.kill()
+            process.join()
+
+
 def _train_in_processes(
     chunks: list[list[RunSpec]],
     out_dir: Path,
@@ -250,7 +310,9 @@ def _train_in_processes(
     progress: SweepProgress,
 ) -> None:
     """Spread ensembles over ``options.workers`` processes (one torch thread each by default);
-    their progress comes back through a queue and is drawn here."""
+    their progress comes back through a queue and is drawn here. When an ensemble fails, those not
+    started are cancelled and the running ones finish; when this process is interrupted (Ctrl-C,
+    SIGINT or SIGTERM: :class:`Stopped`), the workers are stopped too (:func:`_stop_workers`)."""
     context = multiprocessing.get_context("spawn")
     workers = min(options.workers, len(chunks))
     manager = context.Manager() if options.progress else None
@@ -269,9 +331,11 @@ def _train_in_processes(
                     for result in future.result():
                         if on_result is not None:
                             on_result(result)
-            except BaseException:
+            except BaseException as error:
                 for future in futures:
                     future.cancel()
+                if isinstance(error, KeyboardInterrupt):  # (another error lets the running ensembles finish)
+                    _stop_workers(pool)
                 raise
     finally:
         if drain is not None:

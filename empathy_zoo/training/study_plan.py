@@ -15,6 +15,7 @@ import numpy as np
 
 from empathy_zoo.experiment.model import Budget, RunSpec
 from empathy_zoo.experiment.search_space import ParamSpec
+from empathy_zoo.limits import MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, check_at_most
 from empathy_zoo.metrics import METRIC_NAMES
 
 __all__ = [
@@ -56,7 +57,9 @@ OVER_WORDS = {"last": "of the last greedy evaluation", "curve": "over every gree
 @dataclass(frozen=True)
 class StudyPlan:
     """Everything a study's trials and outcome depend on (a resumed study must have the same,
-    but for :attr:`trials`)."""
+    but for :attr:`trials`). Every field is checked when a plan is made, each size within its bound
+    (:mod:`empathy_zoo.limits`: trials, tuning seeds, the sampler's seed, steps), before a study
+    writes anything."""
 
     source: str
     """The sweep file the experiment comes from."""
@@ -109,6 +112,12 @@ class StudyPlan:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive int, got {value!r}")
+            check_at_most(name, value, MAX_TRIALS, "trials of a study")
+        if isinstance(self.sampler_seed, bool) or not isinstance(self.sampler_seed, int) or self.sampler_seed < 0:
+            raise ValueError(f"sampler_seed (--sampler-seed) must be an int >= 0, got {self.sampler_seed!r}")
+        check_at_most("sampler_seed (--sampler-seed)", self.sampler_seed, MAX_SEED)
+        check_at_most("prune_from (--prune-from)", self.prune_from, MAX_STEPS)
+        check_at_most("tuning seeds", len(self.seeds), MAX_SEEDS, "seeds every trial trains")
         if not self.params:
             raise ValueError("a study needs at least one parameter to tune")
         overlap = sorted(set(self.seeds) & set(self.reporting_seeds))
@@ -154,9 +163,11 @@ class StudyPlan:
 
 
 def tuning_seeds(count: int, reporting: Sequence[int], first: int = TUNING_SEED_BASE) -> tuple[int, ...]:
-    """``count`` tuning seeds from ``first`` on; ``ValueError`` where one is a reporting seed."""
+    """``count`` tuning seeds from ``first`` on (at most :data:`~empathy_zoo.limits.MAX_SEEDS`);
+    ``ValueError`` where one is a reporting seed."""
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise ValueError(f"the number of tuning seeds must be a positive int, got {count!r}")
+    check_at_most("the number of tuning seeds (--tuning-seeds)", count, MAX_SEEDS, "seeds every trial trains")
     seeds = tuple(range(first, first + count))
     overlap = sorted(set(seeds) & set(reporting))
     if overlap:
