@@ -15,9 +15,10 @@ environment (one copy), resets it and checks that
   asks on the node it lands on).
 
 Before those, no ensemble may evaluate more environments at once (``runs × eval_episodes``) than
-:data:`~empathy_zoo.limits.MAX_VECTOR_ENVS`, and every run's budget is checked against the warm-up and the ε schedule its method's
-settings declare (:func:`empathy_zoo.experiment.budget_fit.check_budgets`): a budget that ends inside
-the warm-up is refused; an ε decay that ends after the budget is said once, through ``note``.
+:data:`~empathy_zoo.limits.MAX_VECTOR_ENVS`, and every run's budget is checked against the warm-up
+and the ε schedule its method's settings declare
+(:func:`empathy_zoo.experiment.budget_fit.check_budgets`): a budget that ends inside the warm-up is
+refused; an ε decay that ends after the budget is said once, through ``note``.
 
 :func:`~empathy_zoo.training.runner.train_runs` asks it for every run still to train, before it
 writes anything.
