@@ -252,6 +252,23 @@ class CoexistenceEngine(GridEngine):
         self.cells[env_ids, ROBOT] = robot
         self.cells[env_ids, CAT:] = cat_rc[..., 0] * self.size + cat_rc[..., 1]
 
+    def start_distribution(self) -> np.ndarray:
+        """``(cells, cells)``: the probability that an episode starts with the robot on flat cell
+        ``i`` and the one cat on flat cell ``j``, by this engine's start rule (a uniform cell for
+        the robot and a uniform cell among those not in contact with it, or the fixed cells of
+        ``start="centre_corner"``): what :mod:`empathy_zoo.exact_solver` starts from."""
+        if self.num_others != 1:
+            raise ValueError(f"the start distribution is tabulated for one cat, not {self.num_others}")
+        p = np.zeros((self.num_cells, self.num_cells))
+        if self.start_order is not None:
+            placed = self._start_rules(0).in_order(self.start_order, {}, range(self.num_agents))
+            p[self.flat_cell(*placed[ROBOT]), self.flat_cell(*placed[CAT])] = 1.0
+            return p
+        cat_rc = (self._cell_rc[:, None, :] + self._start_offsets[None, :, :]) % self.size
+        cats = cat_rc[..., 0] * self.size + cat_rc[..., 1]
+        np.add.at(p, (np.repeat(np.arange(self.num_cells), len(self._start_offsets)), cats.ravel()), 1.0 / cats.size)
+        return p
+
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
         present = self.present
         # (N, cats): each cat's outcome with the robot, looked up pair by pair

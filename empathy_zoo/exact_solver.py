@@ -1,0 +1,212 @@
+"""# Exact optimum of a small environment, built from its engine
+
+The tabular model of an environment of one learner and one fixed other agent, enumerated from the
+engine's own rules: every joint state is written into an engine of as many environments as
+there are states × joint actions, stepped once, and read back. No rule is written a second time,
+so every option of the environment (Coexistence's `rules="authors"`, say) is modelled as it plays.
+
+| | |
+|---|---|
+| Import | `from empathy_zoo.exact_solver import tabular_model, optimum` |
+| Model | `tabular_model("coexistence_v0", **env_kwargs) -> TabularModel` |
+| Outcome | `optimum(model, selfishness, epsilon, *, ties="uniform", gamma=0.99, max_cycles=None) -> ReferenceOutcome` |
+
+## Model
+* **States**: the robot's and the other's cells, both operative (`cells²` states, same cell
+  included: some rule sets let both stand there unharmed); *other gone* (the robot alone, never
+  harmed again: every step pays `+1`); *robot harmed* (terminal).
+* **Dynamics**: the robot's action, the other's uniformly random action (the default cat), one
+  engine step; the reward is the engine's reward to the robot.
+* **Values**: `Q*` by value iteration (infinite horizon, stopped at the same error bound as
+  :mod:`empathy_zoo.reference`), and the golden-rule target at its fixed point,
+  `Q_emp = β·Q* + (1 − β)·γ·E[other present' · V*(swap(s'))]`, `swap` exchanging the two cells.
+* **Policy and outcome**: greedy on `Q_emp`, ties within the reference's `TIE_TOLERANCE` split evenly (or to the
+  lowest index), executed ε-greedily; the start distribution is the engine's
+  (`start_distribution()`), pushed forward `max_cycles` steps. `harms` is the probability that the
+  robot harms the other; `survival` the expected steps at whose end it is operative.
+
+For the paper's Coexistence this gives :func:`empathy_zoo.reference.coexistence_optimum`'s
+figures (a test holds them equal); that module's displacement model is its translation-invariant
+quotient, which the authors' rules (contact not wrapped, a fixed start) do not have.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.actions import NUM_ACTIONS
+from empathy_zoo.environments import ENGINES
+from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
+
+__all__ = ["TabularModel", "tabular_model", "optimal_values", "empathic_values", "optimum", "MAX_STATES"]
+
+MAX_STATES = 200_000
+"""Most joint states a model is enumerated for (each stepped with every joint action)."""
+ROBOT, OTHER = 0, 1
+
+
+@dataclass(frozen=True)
+class TabularModel:
+    """One step of an environment from every joint state and joint action, read off its engine.
+
+    Arrays are indexed ``[state, robot action, other action]``; a state is
+    ``robot cell · cells + other cell``."""
+
+    env: str
+    """The environment's name."""
+    env_kwargs: dict[str, Any]
+    """The arguments its engine was built with."""
+    cells: int
+    """Cells of the grid."""
+    reward: np.ndarray
+    """The robot's reward of the step."""
+    robot_harmed: np.ndarray
+    """Whether the robot was harmed (its episode ends)."""
+    other_harmed: np.ndarray
+    """Whether the robot harmed the other (the other leaves)."""
+    after: np.ndarray
+    """The state after the move (the cells both stand on, whoever was harmed)."""
+    start: np.ndarray
+    """``(states,)``: the probability of each start state."""
+
+    @property
+    def states(self) -> int:
+        return self.cells * self.cells
+
+    @property
+    def swapped(self) -> np.ndarray:
+        """``(states,)``: the state with the robot's and the other's cells exchanged."""
+        robot, other = np.divmod(np.arange(self.states), self.cells)
+        return other * self.cells + robot
+
+
+def tabular_model(env: str = "coexistence_v0", **env_kwargs: Any) -> TabularModel:
+    """The :class:`TabularModel` of ``env`` built with ``env_kwargs`` (its engine stepped once from
+    every joint state with every joint action). ``ValueError`` for an environment whose engine
+    tabulates no start distribution, or a grid of more than :data:`MAX_STATES` joint states."""
+    if env not in ENGINES:
+        raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENGINES)}")
+    engine_class = ENGINES[env]
+    if not hasattr(engine_class, "start_distribution"):
+        raise ValueError(f"{env}'s engine tabulates no start distribution: it cannot be solved exactly here")
+    probe = engine_class(1, **env_kwargs)
+    cells = probe.num_cells
+    if probe.num_agents != 2:
+        raise ValueError(f"the exact model is for one learner and one other agent, {env} has {probe.num_agents} agents")
+    if cells * cells > MAX_STATES:
+        raise ValueError(f"{env} with {env_kwargs} has {cells * cells:,} joint states, more than {MAX_STATES:,}")
+    states = cells * cells
+    state, robot_action, other_action = (x.ravel() for x in np.indices((states, NUM_ACTIONS, NUM_ACTIONS)))
+    engine = engine_class(len(state), **env_kwargs)
+    engine.reset()
+    engine.cells = np.stack(np.divmod(state, cells), axis=1).astype(engine.cells.dtype)
+    events = engine.step(np.stack([robot_action, other_action], axis=1))
+    shape = (states, NUM_ACTIONS, NUM_ACTIONS)
+    after = (engine.cells[:, ROBOT] * cells + engine.cells[:, OTHER]).reshape(shape)
+    return TabularModel(
+        env=env,
+        env_kwargs=dict(env_kwargs),
+        cells=cells,
+        reward=events.rewards[:, ROBOT].astype(np.float64).reshape(shape),
+        robot_harmed=(events.harmed_by[:, ROBOT] >= 0).reshape(shape),
+        other_harmed=(events.harmed_by[:, OTHER] == ROBOT).reshape(shape),
+        after=after,
+        start=np.asarray(getattr(probe, "start_distribution")()).ravel(),  # (checked on the class above)
+    )
+
+
+def optimal_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray:
+    """``Q*``, ``(states, 5)``, by value iteration until ``γ/(1−γ)·‖V_{k+1} − V_k‖∞ < tolerance``."""
+    alone = 1.0 / (1.0 - gamma)  # V(other gone): +1 every step, never harmed again
+    going_on = ~model.robot_harmed & ~model.other_harmed
+    fixed = model.reward + gamma * np.where(model.other_harmed & ~model.robot_harmed, alone, 0.0)
+    v = np.zeros(model.states)
+    limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2) / math.log(gamma)) if gamma > 0 else 2
+    q = fixed.mean(axis=2)
+    for _ in range(limit):
+        q = (fixed + gamma * np.where(going_on, v[model.after], 0.0)).mean(axis=2)
+        v_next = q.max(axis=1)
+        change = float(np.abs(v_next - v).max())
+        v = v_next
+        if gamma / (1.0 - gamma) * change < tolerance:
+            break
+    return q
+
+
+def empathic_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
+    """The golden-rule ``Q_emp`` at ``Q*`` (see the module page), ``(states, 5)``."""
+    v_swapped = q.max(axis=1)[model.swapped]
+    other = gamma * np.where(model.other_harmed, 0.0, v_swapped[model.after])
+    return selfishness * q + (1.0 - selfishness) * other.mean(axis=2)
+
+
+def optimum(
+    model: TabularModel,
+    selfishness: float,
+    epsilon: float,
+    *,
+    ties: str = "uniform",
+    gamma: float = 0.99,
+    max_cycles: int | None = None,
+    tolerance: float = 1e-10,
+) -> ReferenceOutcome:
+    """Expected harms and survival per episode of the ε-greedy policy on the exact golden-rule
+    ``Q_emp`` of selfishness β (β = 1: DQN's ``Q*``), from the engine's start distribution, for
+    ``max_cycles`` steps (default: the model's environment's)."""
+    if ties not in TIES:
+        raise ValueError(f"ties must be one of {TIES}, got {ties!r}")
+    for name, value in (("selfishness", selfishness), ("epsilon", epsilon)):
+        if not 0.0 <= float(value) <= 1.0:
+            raise ValueError(f"{name} must lie in [0, 1], got {value!r}")
+    cycles = int(max_cycles if max_cycles is not None else ENGINES[model.env](1, **model.env_kwargs).max_cycles)
+    q = optimal_values(model, gamma, tolerance)
+    q_emp = empathic_values(model, float(selfishness), q, gamma)
+    policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(q_emp, ties)
+    gone, harmed = model.states, model.states + 1
+    destination = np.select([model.robot_harmed, model.other_harmed], [harmed, gone], model.after).ravel()
+    weight = np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, model.after.shape).ravel()
+    source = np.broadcast_to(np.arange(model.states)[:, None, None], model.after.shape).ravel()
+    distribution = np.concatenate([model.start, [0.0, 0.0]])
+    survival = 0.0
+    for _ in range(cycles):
+        moved = np.bincount(destination, weights=distribution[source] * weight, minlength=model.states + 2)
+        moved[gone] += distribution[gone]
+        moved[harmed] += distribution[harmed]
+        distribution = moved
+        survival += 1.0 - distribution[harmed]
+    return ReferenceOutcome(float(distribution[gone]), float(survival), float(selfishness), float(epsilon))
+
+
+def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons: tuple[float, ...]) -> str:
+    """A Markdown table of :func:`optimum`'s harms and survival for every β and ε (even ties)."""
+    lines = ["| β | ε | harms | survival |", "|---:|---:|---:|---:|"]
+    for beta in selfishness:
+        for epsilon in epsilons:
+            outcome = optimum(model, beta, epsilon)
+            lines.append(f"| {beta:g} | {epsilon:g} | {outcome.harms:.4f} | {outcome.survival:.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m empathy_zoo.exact_solver [ENV] [ARG=VALUE ...]``: the exact outcome table."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m empathy_zoo.exact_solver", description=main.__doc__)
+    parser.add_argument("env", nargs="?", default="coexistence_v0")
+    parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
+    args = parser.parse_args(argv)
+    kwargs: dict[str, Any] = {}
+    for item in args.arguments:
+        key, equals, value = item.partition("=")
+        if not equals:
+            parser.error(f"{item!r} is not ARG=VALUE")
+        kwargs[key] = int(value) if value.isdigit() else value
+    print(outcome_table(tabular_model(args.env, **kwargs), (1.0, 0.75, 0.5, 0.25, 0.0), (0.0, 0.01, 0.05)))
+
+
+if __name__ == "__main__":
+    main()
