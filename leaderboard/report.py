@@ -8,7 +8,7 @@ import secrets
 import shutil
 import stat
 import sys
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -73,6 +73,7 @@ def write_leaderboard(
     confidence: float = CONFIDENCE,
     final_fraction: float = FINAL_FRACTION,
     on_note: Callable[[str], None] | None = None,
+    allowed_imports: Collection[str] = (),
 ) -> dict[str, Path]:
     """Score every result file of ``results_dir`` and write the leaderboard into ``out_dir``.
 
@@ -108,7 +109,9 @@ def write_leaderboard(
     the staging directory is removed, and so is ``out_dir`` when this call created it. A run whose
     curves get no exact reference because its grid or episodes are beyond
     :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` or :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES`
-    is said in one line through ``on_note`` (default: stderr).
+    is said in one line through ``on_note`` (default: stderr). A run whose recorded partner is a
+    plug-in policy gets no greedy episode unless the plug-in is in ``allowed_imports``: a result
+    file never makes the leaderboard import code.
     """
     several = not isinstance(results_dir, (str, os.PathLike))
     dirs: list[str | os.PathLike[str]] = [results_dir] if isinstance(results_dir, (str, os.PathLike)) else list(results_dir)
@@ -140,6 +143,7 @@ def write_leaderboard(
                 n_resamples=n_resamples,
                 confidence=confidence,
                 final_fraction=final_fraction,
+                allowed_imports=allowed_imports,
             )
             check_output_dir(out, (FIGURES_DIR,))
             for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
@@ -166,6 +170,7 @@ def _render(
     n_resamples: int,
     confidence: float,
     final_fraction: float,
+    allowed_imports: Collection[str] = (),
 ) -> dict[str, Path]:
     """Write every file of the leaderboard of ``read`` into ``out`` (a staging directory: the
     pages link their figures relative to it); returns them as :func:`write_leaderboard` names them."""
@@ -225,7 +230,9 @@ def _render(
         reference_note=renaming_note(read.renamed, bool(dqn_rows)),
     )
     markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
-    markdown, html, episode_figures = add_episodes_section(results, out, markdown, html, origins=read.origins)
+    markdown, html, episode_figures = add_episodes_section(
+        results, out, markdown, html, origins=read.origins, allowed_imports=allowed_imports
+    )
     paths = {
         "csv": _write_page(out / CSV_NAME, csv_text(scores, provenance, rows)),
         "markdown": _write_page(out / MARKDOWN_NAME, markdown),

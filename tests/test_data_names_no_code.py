@@ -245,3 +245,13 @@ def test_a_misspelt_reset_option_is_refused_and_changes_nothing() -> None:
 def test_every_registered_policy_is_a_class_a_file_may_name() -> None:
     for name in POLICIES:
         assert recorded_entry(name, "x") == name
+
+
+def test_the_leaderboard_replays_a_plugin_partner_only_when_allowed(trained, tmp_path, capsys) -> None:
+    plugin = "helpers_policies:AlwaysLeft"
+    source = forged_copy(trained, tmp_path / "plugin", plugin)
+    assert exit_code(["leaderboard", str(source), "--out", str(tmp_path / "refused")]) == 0
+    assert not list((tmp_path / "refused").rglob("*_episode.gif"))
+    assert "not registered" in (tmp_path / "refused" / "LEADERBOARD.md").read_text()
+    assert exit_code(["leaderboard", str(source), "--out", str(tmp_path / "allowed"), "--allow-import", plugin]) == 0
+    assert list((tmp_path / "allowed").rglob("*_episode.gif"))

@@ -403,3 +403,30 @@ def test_a_fifo_in_the_journals_place_is_refused(tmp_path):
 def test_write_bytes_atomic_still_writes(tmp_path):
     write_bytes_atomic(tmp_path / "a.bin", b"x")
     assert (tmp_path / "a.bin").read_bytes() == b"x" and [p.name for p in tmp_path.iterdir()] == ["a.bin"]
+
+
+def test_training_asks_for_room_for_its_largest_checkpoint_before_it_starts(tmp_path, monkeypatch):
+    from empathy_zoo.experiment.model import RunSpec
+    from empathy_zoo.training import RunnerOptions, train_runs
+    from empathy_zoo.training.preflight import largest_checkpoint_bytes
+
+    specs = [
+        RunSpec.of(
+            steps=200,
+            eval_interval=100,
+            eval_episodes=1,
+            env_kwargs={"max_cycles": 40},
+            seed=seed,
+            settings={"learning_starts": 64},
+        )
+        for seed in (0, 1)
+    ]
+    options = RunnerOptions(progress=False, checkpoint_interval=100)
+    needed = largest_checkpoint_bytes(specs, options)
+    assert needed > 2 * 20_000_000  # (two runs' default replay of 500,000 steps)
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(atomic.shutil, "disk_usage", lambda path: usage._replace(free=needed // 2))
+    with pytest.raises(ValueError, match="less than the .* of the largest file"):
+        train_runs(specs, tmp_path / "out", options)
+    assert not list((tmp_path / "out").rglob("*.json"))
+    train_runs(specs, tmp_path / "without", RunnerOptions(progress=False, checkpoint_interval=0))  # (no checkpoint: no such room)

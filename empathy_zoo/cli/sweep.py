@@ -9,6 +9,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import (
     PROG,
     RUN_DEFAULTS,
@@ -151,7 +152,8 @@ def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
         )
     labels = parse_label_options(args.label)
     results = args.results[0] if len(args.results) == 1 else args.results
-    print_written(write_leaderboard(results, args.out, command=command, labels=labels or None))
+    allowed = frozenset(args.allow_import or ())
+    print_written(write_leaderboard(results, args.out, command=command, labels=labels or None, allowed_imports=allowed))
     return 0
 
 
@@ -185,6 +187,7 @@ def add_sweep_commands(sub: Any) -> None:
         action="append",
         help="put PREFIX before every label of DIR's runs (repeatable): tells apart two directories' rows of one label",
     )
+    add_allow_import(board)
     board.set_defaults(handler=cmd_leaderboard)
 
     report = sub.add_parser("reproduction", help="check the paper's claims on existing results (REPRODUCTION.md)")

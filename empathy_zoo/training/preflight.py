@@ -59,6 +59,31 @@ def check_before_training(specs: Sequence[RunSpec], options: RunnerOptions) -> l
     return warnings
 
 
+def largest_checkpoint_bytes(specs: Sequence[RunSpec], options: RunnerOptions) -> int:
+    """An upper bound of the largest checkpoint ``specs`` will write with ``options``: the memory
+    of its largest ensemble as its learner estimates it (``memory_needed``: replay, networks,
+    optimiser), 0 for a learner without an estimate. :func:`empathy_zoo.atomic.check_output_dir`
+    asks the disk for that much room before any training."""
+    largest = 0
+    biggest: dict[tuple, Sequence[RunSpec]] = {}
+    for chunk in group_specs(specs, options.max_parallel_runs):
+        key = chunk[0].ensemble_key()
+        if len(chunk) > len(biggest.get(key, ())):
+            biggest[key] = chunk
+    for ensemble in biggest.values():
+        first = ensemble[0]
+        method = first.method_object()
+        estimate = getattr(method.learner, "memory_needed", None)
+        if not callable(estimate):
+            continue
+        venv = VectorEnv(first.env, 1, fixed=first.fixed_policies(), in_view_only=method.in_view_only, **first.env_kwargs)
+        needed = estimate(
+            [spec.method_settings() for spec in chunk], venv.obs_size, venv.num_actions, num_others=len(venv.others[0])
+        )
+        largest = max(largest, int(needed.per_run) * len(chunk))
+    return largest
+
+
 def _check_evaluation_size(chunk: Sequence[RunSpec]) -> None:
     """Refuse an ensemble whose greedy evaluation would step more environments at once
     (``runs × eval_episodes``) than :data:`~empathy_zoo.limits.MAX_VECTOR_ENVS`."""

@@ -23,14 +23,14 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files
+from empathy_zoo.atomic import PROBE_BYTES, check_output_dir, remove_stale_temp_files
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, read_result, result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
-from empathy_zoo.training.preflight import check_before_training
+from empathy_zoo.training.preflight import check_before_training, largest_checkpoint_bytes
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
@@ -121,7 +121,9 @@ def train_runs(
         [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options
     )
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
-    check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())))
+    todo = [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo]
+    room = max(PROBE_BYTES, largest_checkpoint_bytes(todo, options)) if local_checkpoints and todo else PROBE_BYTES
+    check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())), largest_file=room)
     with hold_output_dir(out_dir, command_line(), note):
         for warning in warnings:  # (said once everything before training has passed)
             note(warning)
