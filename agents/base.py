@@ -145,6 +145,10 @@ class Method:
     dqn_reference: bool = False
     """Its runs on the environment's reward (no reward transform), at β = 1 where its settings
     have a β, are plain DQN: the reference the leaderboard compares every other method with."""
+    identical_to: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+    """``{environment: (method, why)}``: on that environment, at its defaults, this method's runs
+    are by construction those of the other registered method, seed for seed (Be Considerate's on
+    Sharing are DQN's), so a table may mark the row as that method's."""
 
     def describe(self, settings: Any, reward: RewardTransform | None) -> dict[str, Any]:
         """What a run of this method with ``settings`` and ``reward`` (its transform, as

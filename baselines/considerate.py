@@ -7,6 +7,8 @@ the other agents can still expect in the world it leaves them:
 
     r' = r + γ · α · F({V_j(s_T)})   on the learner's last step of an episode,   r' = r on every other step
 
+(here the last step at the time limit, not the learner's own harm: below)
+
 with ``V_j`` agent ``j``'s value (its expected discounted future return), ``α`` the caring
 coefficient, ``F`` the sum or the minimum over the others, and ``γ`` the discount. It is the
 closest relative of Empathic DQN: both care about the other's value, but Be Considerate learns the
@@ -17,10 +19,21 @@ place and asks its own value function.
   (its Eq. 1 with ``F = sum``, Eq. 2 with ``F = min``) adds ``γ·α₂·F(V(s'))`` to the reward of a
   transition into a terminal state ``s'`` and nothing to any other; the authors' code does so in
   the Q-update of the last transition (``q += alpha * (our_alpha * r + gamma * others)`` when the
-  episode ends). The robot's own reward keeps weight 1 (their ``α₁``, ``our_alpha`` = 1). Here
-  "the episode ends" is the learner's: it is terminated (a harmed robot) or truncated (the time
-  limit). The suite's learners still bootstrap their own value through a truncation (SPEC §6), so
-  at the time limit the bonus comes beside the robot's own future, not instead of it.
+  episode ends). The robot's own reward keeps weight 1 (their ``α₁``, ``our_alpha`` = 1).
+* **When it is paid: at the time limit, not at the learner's own harm.** In the paper the learner
+  finishes its task and the others carry on; the bonus values the world it leaves them. Here it
+  is paid when the learner's episode is truncated (the time limit), and not when it terminates:
+  in Coexistence the robot's episode terminates only when the cat harms it, an end the robot did
+  not reach by its task, and paying the others' future there paid the robot for getting itself
+  harmed beside a live cat (below: every bonus of the methods profile's runs before 2026-12-04
+  was paid so, none for sparing the cat; and from α = 1.26 the exact optimum sought that end). In
+  Sharing the episode terminates for everyone when the last battery is taken, when the human has
+  no future and the bonus would be 0. ``StepBatch`` does not say why a learner's episode
+  terminated, so an environment whose learner terminates by finishing its task while the others
+  go on (the paper's setting) sets ``bonus_on_termination=True``, which pays it at every end, the
+  learner's own harm included (the rule before 2026-12-04). The suite's learners bootstrap their
+  own value through a truncation (SPEC §6), so the bonus comes beside the robot's own future, not
+  instead of it.
 * **V_j, learned beside the run.** The paper's ``V_j`` are value functions learned before
   (Q-learning of each other agent on its own). Here the other agents are fixed policies whose
   value also depends on what the robot does, so ``V`` is learned online, by TD(0) on the
@@ -45,24 +58,47 @@ place and asks its own value function.
   at their defaults) ``F`` is its value, and sum and min coincide. An environment with several
   (``num_cats`` / ``num_humans`` > 1) is refused at the first step, naming the problem.
   :func:`considerate_bonus` itself takes any number.
-* **Warm-up.** No bonus until the run has made 20,000 transitions (the DQN warm-up of uniformly
-  random actions, SPEC §6), so ``V`` is learnt first, as :mod:`baselines.aup`'s penalty waits.
+* **Warm-up.** No bonus until the run has made 2,000 transitions (``bonus_starts``): the learner's
+  warm-up (``learning_starts``) in the methods profile, the one Be Considerate is run in, as
+  :mod:`baselines.aup`'s penalty waits, so every transition its replay holds past its own warm-up
+  carries the bonus where it is due; ``V`` has then made about 250 updates. (20,000 before 2026-12-04:
+  in the methods profile's 50,000-step runs, 354 of the 726 Coexistence episodes, 49 %, ended
+  before it.) The transform is told neither a run's budget nor its learner's settings, so this
+  is a number: for a learner of another warm-up, set it to that ``learning_starts``.
 * **α = 1**, the authors' value in their baseline comparison (``others_alpha = [1.0]``, their
   Table 1; their Fig. 2 sweeps α₂ from 0 to 700): the other's future weighs as much as the robot's
   own rewards. A cat earns 1 per step alive, so an unharmed cat's ``V`` is near
   ``1 / (1 − γ) = 100``; a harmed cat's is 0.
 
-What follows for the suite's environments (the formulation's, documented rather than changed):
+What follows for the suite's environments:
 
-* Coexistence: an episode that ends with the cat unharmed pays about ``α·γ·V ≈ 100·α``; one in
-  which the robot harmed it pays 0. The robot does not see the clock, so the bonus at the time
-  limit reaches its value as an expected bonus per step while the cat is unharmed. A robot that
-  is harmed itself ends its episode beside a live cat and is paid the bonus too: the
-  formulation pays for the world left behind however the episode ends.
-* Sharing: the episode ends for everyone when the last battery is taken; the human has no future
-  return then, and the bonus is 0. Only a time-limit truncation with batteries left pays it: Be
-  Considerate cares about what the others can still get once the learner is done, not about how
-  the rewards were shared.
+* Coexistence: an episode that reaches the time limit with the cat unharmed pays about
+  ``α·γ·V ≈ 99·α``; one in which the robot harmed it, or in which the cat harmed the robot, pays
+  0. The robot does not see the clock, so the bonus reaches its value as an expected bonus per
+  step while the cat is unharmed (about ``99·α / 500``). In the methods profile's runs under the
+  rule before 2026-12-04 (the bonus at any end, from the 20,000th step; 5 seeds), 372 episodes
+  ended after the bonus started: 78 paid it, every one ending with the robot harmed beside a live
+  cat; none reached the time limit with the cat unharmed; the other 294 had harmed the cat.
+* **The exact optimum and the cliff in α** (:mod:`baselines.considerate_exact`: Coexistence's
+  exact states and transitions from :mod:`empathy_zoo.reference`, full observability, ε = 0,
+  the time limit as a chance of 1/500 a step, ``V`` the cat's own value under the robot's
+  policy, ``1/(1 − γ)`` once the robot has left it alone; ``python -m baselines.considerate_exact``
+  prints the figures). Paid at any end, the optimum is harm-free at α = 1 but seeks its own harm
+  beside a live cat from **α = 1.2626** (``100 / (99 − 19.8)``: being harmed pays ``γ·α·100``
+  once, living on ``1 + γ·α·100/500`` a step for ever), 26 % above the default; without the
+  time-limit bonus (the infinite-horizon model of the reference) from **α = 1/γ = 1.0101**, and
+  from 1/γ² = 1.0203 if the cat's value at the robot's end counts one step less (``γ/(1 − γ)``).
+  Paid at the time limit only (now), the optimum is harm-free, for the robot and for the cat, at
+  every α tried from 0.1 to 700 (0.1, 1, 1.27, 2, 10, 700), and not harmed itself at 1,000:
+  **no cliff** (being harmed pays nothing).
+* Sharing: **identical to DQN by construction.** The episode ends for everyone when the last
+  battery is taken; the human has no future return then, and the bonus is 0. Only a time-limit
+  truncation with batteries left would pay it, and with the default patrolling human (who visits
+  every cell within 49 steps: the methods profile's longest episode lasted 48) none happens, so
+  every reward, and every run, is DQN's seed for seed (the shipped runs of the methods profile
+  are bit-identical to DQN's). The method's registry entry says so (``identical_to``, with
+  :data:`SHARING_IS_DQN`). Be Considerate cares about what the others can still get once the
+  learner is done, not about how the rewards were shared.
 
 The transform's state is its learner, as numpy arrays (networks, target copies, Adam's moments,
 the other agent's replay, the last swapped observation of every environment), so checkpoints keep
@@ -89,10 +125,17 @@ from agents.step_batch import StepBatch
 from baselines.side_network import train_side_network
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
-__all__ = ["AGGREGATES", "Considerate", "considerate_bonus"]
+__all__ = ["AGGREGATES", "SHARING_IS_DQN", "Considerate", "considerate_bonus"]
 
 AGGREGATES = ("sum", "min")
 """The values of :attr:`Considerate.aggregate` (the paper's Eq. 1 and Eq. 2)."""
+SHARING_IS_DQN = (
+    "Sharing ends for everyone when the last battery is taken, and the human then has no future return: the "
+    "bonus is 0 at the end of every episode; the patrolling human visits every cell within 49 steps, so no "
+    "episode reaches the time limit with a battery left, and every reward, hence every run, is DQN's"
+)
+"""Why Be Considerate's runs on Sharing (at its defaults) are DQN's seed for seed (the method's
+``identical_to``)."""
 STREAM = STREAMS["considerate_value"]
 _INIT, _SAMPLE = 0, 1  # the sub-streams of STREAM
 _LAYERS = 3  # obs → hidden → hidden → 1: three weight matrices and three biases
@@ -111,8 +154,9 @@ def considerate_bonus(values: np.ndarray, present: np.ndarray, caring: float, ag
 
 @dataclass(frozen=True)
 class Considerate:
-    """``r' = r + γ·α·F({V_j(s_T)})`` on the learner's last step of an episode, ``V_j`` the other
-    agent's value learnt beside the run from its own rewards (see the module page for the choices)."""
+    """``r' = r + γ·α·F({V_j(s_T)})`` on the learner's last step of an episode at the time limit
+    (at every end with :attr:`bonus_on_termination`), ``V_j`` the other agent's value learnt beside
+    the run from its own rewards (see the module page for the choices)."""
 
     name: ClassVar[str] = "considerate"
     caring: float = 1.0
@@ -133,8 +177,13 @@ class Considerate:
     """Env steps of a run before its first value update."""
     train_interval: int = 4
     """Env steps of a run per value update once they have started."""
-    bonus_starts: int = 20_000
-    """Env steps of a run before the bonus is paid (0 before: the value is learnt first)."""
+    bonus_starts: int = 2_000
+    """Env steps of a run before the bonus is paid (none before: the value is learnt first): the
+    learner's warm-up (``learning_starts``) in the methods profile, as AUP's ``penalty_starts``;
+    for a learner of another warm-up, set it to that ``learning_starts``."""
+    bonus_on_termination: bool = False
+    """Pay the bonus also when the learner's episode terminates, its own harm included (the rule
+    before 2026-12-04); ``False``: at the time limit only (see the module page)."""
     target_update_interval: int = 1_000
     """Value updates between copies of the value network into its target."""
 
@@ -233,16 +282,17 @@ class Considerate:
                 f"observations of {state['last_obs'].shape[2]} values, not {(runs, envs)} of {obs_size}"
             )
         present = np.asarray(batch.other_present, dtype=bool)
-        ended = np.asarray(batch.terminated, dtype=bool)
-        if batch.truncated is not None:
-            ended = ended | np.asarray(batch.truncated, dtype=bool)
+        terminated = np.asarray(batch.terminated, dtype=bool)
+        truncated = np.zeros_like(terminated) if batch.truncated is None else np.asarray(batch.truncated, dtype=bool)
+        ended = terminated | truncated
+        paid = ended if self.bonus_on_termination else truncated & ~terminated
         rewards = np.asarray(batch.rewards, dtype=np.float64)
         seen = int(state["seen"][0])
-        if seen >= self.bonus_starts and ended.any():
+        if seen >= self.bonus_starts and paid.any():
             bonus = considerate_bonus(
                 self.values(state, other_obs)[..., None], present[..., None], self.caring, self.aggregate, self.discount
             )
-            rewards = rewards + np.where(ended, bonus, 0.0)
+            rewards = rewards + np.where(paid, bonus, 0.0)
         self._store(state, batch, other_obs, present)
         state["last_obs"][...] = other_obs
         state["last_valid"][...] = present & ~ended

@@ -8,7 +8,8 @@ auxiliary rewards whose Q it learns beside the run, λ = 100/1.501: the paper's 
 Coexistence's task value), relative reachability with a stepwise inaction baseline without
 rollouts (:mod:`baselines.reachability`: Krakovna et al. 2019's ``step_noroll``).
 Be Considerate (:mod:`baselines.considerate`: Alizadeh Alamdari et al. 2022, ``r + γ·α·F(V_j(s_T))``
-when the learner's episode ends, the other's value learnt from its own rewards, α = 1) and the
+when the learner's episode reaches the time limit, the other's value learnt from its own rewards,
+α = 1; DQN itself on Sharing) and the
 Lagrangian constrained DQN (:mod:`baselines.lagrangian`: ``r − λ·harms``, ``λ ← max(0, λ + η·(Ĵ_C −
 d))`` per episode, d = 0.1 harms per episode, η = 1) close the table."""
 
@@ -18,7 +19,7 @@ from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from baselines.aup import AttainableUtility
-from baselines.considerate import Considerate
+from baselines.considerate import SHARING_IS_DQN, Considerate
 from baselines.lagrangian import Lagrangian
 from baselines.reachability import RelativeReachability
 from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion
@@ -104,8 +105,9 @@ BASELINE_METHODS: dict[str, Method] = {
         target="golden",
         reward=Considerate(),
         label=lambda s: "DQN + Be Considerate",
-        description="DQN paid 0.99·1·V_other(s_T) when its episode ends, the other agent's future return learnt "
-        "beside it from that agent's rewards (Alizadeh Alamdari et al. 2022)",
+        description="DQN paid 0.99·1·V_other(s_T) when its episode reaches the time limit, the other agent's future "
+        "return learnt beside it from that agent's rewards (Alizadeh Alamdari et al. 2022)",
+        identical_to={"sharing_v0": ("dqn", SHARING_IS_DQN)},
     ),
     "dqn_lagrangian": Method(
         name="dqn_lagrangian",

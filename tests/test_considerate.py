@@ -8,18 +8,24 @@ of its ensemble and drawn from its seed; a state that survives a checkpoint; the
 from __future__ import annotations
 
 import json
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from helpers_batches import one_other
 from helpers_cli_method import TINY
-from helpers_resume import small_run, whole_and_resumed
+from helpers_resume import SMALL_SETTINGS, small_run, whole_and_resumed
 
 from agents.base import Method, StepBatch
 from agents.empathic_dqn import EmpathicDQN
 from agents.rewards import TrainRewards
 from agents.settings import EmpathicDQNSettings
+from baselines.aup import AttainableUtility
 from baselines.considerate import Considerate, considerate_bonus
+from baselines.registry import METHODS
 from empathy_zoo.cli import main
 from empathy_zoo.result_file import read_result
 
@@ -41,10 +47,16 @@ SMALL_CONSIDERATE = Method(
     settings=EmpathicDQNSettings,
     preset={"selfishness": 1.0},
     reward=Considerate(
-        learning_starts=32, bonus_starts=64, train_interval=1, replay_capacity=500, target_update_interval=50, hidden_size=16
+        caring=20.0,
+        learning_starts=32,
+        bonus_starts=64,
+        train_interval=1,
+        replay_capacity=500,
+        target_update_interval=50,
+        hidden_size=16,
     ),
     label=lambda s: "DQN + Be Considerate (small)",
-    description="Be Considerate whose value learner starts after 32 steps",
+    description="Be Considerate whose value learner starts after 32 steps, its bonus weighed 20 times (its value is small yet)",
 )
 
 
@@ -108,17 +120,94 @@ def test_the_bonus_is_discount_times_caring_times_the_sum_or_the_min_of_the_othe
         considerate_bonus(values, present, 1.0, "mean", 0.99)
 
 
-def test_the_bonus_is_paid_on_the_last_step_of_an_episode_only_and_only_after_the_warm_up() -> None:
+def test_the_bonus_is_paid_at_the_time_limit_only_and_only_after_the_warm_up() -> None:
     state = SMALL.initial_state(4, 1, seeds=[0, 1, 2, 3])
     obs = np.stack([one_hot(i) for i in range(4)])
-    ended = dict(terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True])
+    ended: dict[str, Any] = dict(
+        terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True]
+    )
     shaped, state = SMALL(step(obs, **ended), state)
     assert shaped[:, 0].tolist() == [1.0] * 4  # before bonus_starts: the environment's reward
     state["seen"][...] = SMALL.bonus_starts
     constant_value(state, 30.0)
     shaped, state = SMALL(step(obs, rewards=[1.0, 2.0, 3.0, 4.0], **ended), state)
-    # terminated with the other there: 1 + 0.5·2·30; truncated: 2 + 30; terminated, other harmed: 3; going on: 4
+    # terminated (its own harm) beside the other: 1, no bonus; truncated: 2 + 0.5·2·30; terminated,
+    # other harmed: 3; going on: 4
+    assert shaped[:, 0].tolist() == [1.0, 32.0, 3.0, 4.0]
+
+
+def test_with_bonus_on_termination_the_learners_own_harm_is_paid_as_the_time_limit() -> None:
+    """The rule before: the bonus whenever the learner's episode ends, its own harm included."""
+    anywhere = replace(SMALL, bonus_on_termination=True)
+    state = anywhere.initial_state(4, 1, seeds=[0, 1, 2, 3])
+    obs = np.stack([one_hot(i) for i in range(4)])
+    ended: dict[str, Any] = dict(
+        terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True]
+    )
+    state["seen"][...] = 0
+    _, state = anywhere(step(obs, **ended), state)
+    state["seen"][...] = anywhere.bonus_starts
+    constant_value(state, 30.0)
+    shaped, state = anywhere(step(obs, rewards=[1.0, 2.0, 3.0, 4.0], **ended), state)
     assert shaped[:, 0].tolist() == [31.0, 32.0, 3.0, 4.0]
+
+
+def test_the_bonus_starts_with_the_learners_warm_up_of_the_methods_profile_and_may_be_set() -> None:
+    profile = tomllib.loads(Path("empathy_zoo/profiles/methods.toml").read_text())
+    assert Considerate().bonus_starts == profile["settings"]["learning_starts"] == 2_000
+    assert Considerate().bonus_starts == AttainableUtility().penalty_starts  # as AUP's penalty
+    assert Considerate(bonus_starts=5_000).bonus_starts == 5_000
+    assert not Considerate().bonus_on_termination
+
+
+def test_the_method_says_it_is_dqn_on_sharing() -> None:
+    assert METHODS["dqn_considerate"].identical_to.keys() == {"sharing_v0"}
+    other, reason = METHODS["dqn_considerate"].identical_to["sharing_v0"]
+    assert other == "dqn" and "last battery" in reason
+    assert METHODS["dqn"].identical_to == {} and METHODS["dqn_aup"].identical_to == {}
+
+
+@pytest.mark.parametrize("env", ["sharing_v0", "coexistence_v0"])
+def test_on_sharing_the_method_trains_as_dqn_seed_for_seed_and_on_coexistence_it_does_not(tmp_path, monkeypatch, env) -> None:
+    """Sharing ends for everyone when the last battery is taken (within 49 steps: the patrolling
+    human visits every cell), when the human has no future: the bonus is always 0 there."""
+    from empathy_zoo.experiment.model import RunSpec
+    from empathy_zoo.training import RunnerOptions, train_runs
+
+    bonuses: list[float] = []
+    real_call = Considerate.__call__
+
+    def spy(self, batch, state):
+        shaped, after = real_call(self, batch, state)
+        bonuses.extend((shaped - batch.rewards).ravel().tolist())
+        return shaped, after
+
+    monkeypatch.setattr(Considerate, "__call__", spy)
+    small = {"learning_starts": 32, "bonus_starts": 64, "train_interval": 1, "replay_capacity": 500, "hidden_size": 16}
+
+    def result(method: str) -> dict:
+        spec = RunSpec.of(
+            env=env,
+            method=method,
+            seed=3,
+            steps=400,
+            eval_interval=200,
+            eval_episodes=2,
+            settings=SMALL_SETTINGS,
+            env_kwargs={"max_cycles": 60 if env == "sharing_v0" else 40},
+            reward=small if method == "dqn_considerate" else None,
+        )
+        return json.loads(train_runs([spec], tmp_path / method, RunnerOptions(progress=False))[0].read_text())
+
+    considerate, dqn = result("dqn_considerate"), result("dqn")
+    assert len(bonuses) == 400
+    columns = ("train", "eval")
+    if env == "sharing_v0":
+        assert not any(bonuses) and len(considerate["train"]["survival"]) >= 8
+        assert [considerate[c] for c in columns] == [dqn[c] for c in columns]
+    else:
+        assert sum(b > 0.0 for b in bonuses) >= 2  # paid at the time limit, the cat unharmed
+        assert [considerate[c] for c in columns] != [dqn[c] for c in columns]
 
 
 def test_the_value_is_learnt_from_the_other_agents_rewards_not_the_robots() -> None:
@@ -170,7 +259,7 @@ def test_a_runs_rewards_are_the_same_alone_or_beside_other_runs_and_repeat_with_
             batch = step(
                 obs,
                 other_rewards=rng.random(3)[:rows].tolist(),
-                terminated=[t % 7 == 6] * rows,
+                truncated=[t % 7 == 6] * rows,
                 present=(rng.random(3) > 0.2)[:rows].tolist(),
             )
             mine.append(float(rewards(batch).rewards[0, 0]))
@@ -210,12 +299,13 @@ def test_bad_parameters_are_refused_naming_them(field: str, value) -> None:
 def test_a_resumed_considerate_run_equals_an_uninterrupted_one_and_differs_from_dqn(tmp_path, monkeypatch) -> None:
     from empathy_zoo.training import RunnerOptions, train_runs
 
-    spec = small_run("test_considerate:SMALL_CONSIDERATE")
+    spec = small_run("test_considerate:SMALL_CONSIDERATE", seed=1)  # (some episodes reach the time limit, the cat unharmed)
     whole, resumed = whole_and_resumed(spec, tmp_path, monkeypatch)
     assert resumed["train"] == whole["train"] and resumed["eval"] == whole["eval"]
     assert resumed["config"]["reward"]["name"] == "considerate" and resumed["config"]["reward"]["bonus_starts"] == 64
-    plain = json.loads(train_runs([small_run("dqn")], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
-    assert plain["eval"] != whole["eval"]  # the bonus was paid (from step 64), and changed what was learnt
+    plain = json.loads(train_runs([small_run("dqn", seed=1)], tmp_path / "dqn", RunnerOptions(progress=False))[0].read_text())
+    # the bonus was paid (from step 64, at the time limit), and changed what was learnt
+    assert (plain["train"], plain["eval"]) != (whole["train"], whole["eval"])
 
 
 @pytest.mark.parametrize("env", ["coexistence_v0", "sharing_v0"])
