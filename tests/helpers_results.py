@@ -56,5 +56,7 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
             "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
         },
         "train": train,
-        "eval": [{"step": 4000, **{m: [means.get(m, 0.0) + 0.01 * seed] * 3 for m in METRIC_NAMES}}],
+        "eval": [
+            {"step": 4000, **{m: [float(np.clip(means.get(m, 0.0) + 0.01 * seed, *METRIC_RANGES[m]))] * 3 for m in METRIC_NAMES}}
+        ],
     }
