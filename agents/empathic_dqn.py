@@ -9,6 +9,11 @@ gradient step, on a batch ``(s, a, r, s', done, s_emp', other_present)``:
     Q     ← Adam step on mean (Q(s, a) − y)²
     Q_emp ← Adam step on mean (Q_emp(s, a) − y_emp)²
 
+A run whose reward transform prices a cost when it is sampled (the Lagrangian method's harms,
+:class:`agents.rewards.PricedTransform`) trains on ``r = reward − price·cost`` in these targets:
+the replay keeps each transition's cost beside its reward, and the price is the run's at the time
+of the update (:meth:`EmpathicDQN.price_costs`), not the one it had when the step was stored.
+
 ``s_emp'`` is the robot's swapped observation at t+1 with the closest other agent when the step
 began (SPEC §3b); the other-term is 0 when that agent is terminal at t+1. With in-view-only swaps
 an other out of view at t+1 is *unseen*, not harmed: it is taken to fare as the robot does, and
@@ -220,17 +225,24 @@ class EmpathicDQN:
 
     @classmethod
     def memory_needed(
-        cls, settings: Sequence[EmpathicDQNSettings], obs_size: int, num_actions: int = 5, *, num_others: int = 1
+        cls,
+        settings: Sequence[EmpathicDQNSettings],
+        obs_size: int,
+        num_actions: int = 5,
+        *,
+        num_others: int = 1,
+        priced_costs: bool = False,
     ) -> MemoryEstimate:
         """The memory ``K = len(settings)`` runs of this learner will need (see :class:`MemoryEstimate`),
-        from the settings alone: the replay memories (one-byte codes, :mod:`agents.replay`), the
-        networks ``Q``, ``Q̂`` and, for the runs that have one, ``Q_emp`` (float32), and Adam's two
-        moments. The constructor refuses, before allocating anything, an ensemble that would not fit."""
+        from the settings alone: the replay memories (one-byte codes, :mod:`agents.replay`; with
+        ``priced_costs``, each transition's cost too: :meth:`price_costs`), the networks ``Q``,
+        ``Q̂`` and, for the runs that have one, ``Q_emp`` (float32), and Adam's two moments. The
+        constructor refuses, before allocating anything, an ensemble that would not fit."""
         config, k = settings[0], len(settings)
         overridden = cls.targets is not EmpathicDQN.targets
         empathic = sum(overridden or s.selfishness < 1.0 for s in settings)
         others = num_others if config.others != "closest" and num_others > 1 else 1
-        replay = config.replay_capacity * ((2 + others) * obs_size + (2 + others) + 4)
+        replay = config.replay_capacity * ((2 + others) * obs_size + (2 + others) + 4 + (4 if priced_costs else 0))
         sizes = [obs_size, config.hidden_size, config.hidden_size, num_actions]
         network = 4 * sum(fan_in * fan_out + fan_out for fan_in, fan_out in zip(sizes[:-1], sizes[1:]))
         per_run = replay + 3 * (network * (2 if empathic else 1) + network)
@@ -310,6 +322,10 @@ class EmpathicDQN:
         self.selfishness = torch.tensor([[s.selfishness] for s in settings], device=self.device)
         self._explore_keys = np.array([derive_key(s, STREAM_EXPLORE) for s in self.seeds], dtype=np.uint64)[:, None]
         self._sample_keys = np.array([derive_key(s, STREAM_SAMPLE) for s in self.seeds], dtype=np.uint64)[:, None]
+        self.prices: torch.Tensor | None = None
+        """``(K,)`` float32: each run's price of one unit of a sampled transition's cost, the latest
+        step's (``StepBatch.prices``); ``None`` unless the learner prices costs (:meth:`price_costs`)."""
+        self._priced_runs = np.zeros(k, dtype=bool)
         self.env_steps = 0  # per run
         self.grad_steps = 0
         self.last_loss = float("nan")
@@ -366,12 +382,39 @@ class EmpathicDQN:
         return np.where(explore, random_actions, actions)
 
     # ------------------------------------------------------------------ learning
+    def price_costs(self, runs: Sequence[bool] | np.ndarray | None = None) -> None:
+        """From the first step on, keep each transition's cost (``StepBatch.costs``) beside its
+        reward and train on ``reward − price·cost`` with each run's price at the time of the update
+        (:attr:`prices`, the latest ``StepBatch.prices``); ``runs`` says which runs' transforms
+        price costs (default all; the others store cost 0 at price 0, which changes none of their
+        numbers, and their memory is counted without the column). Called before the first step
+        (and before a checkpoint is loaded): the replay memory is built again, with the column."""
+        if self.replay.size:
+            raise ValueError("price_costs() must come before the first transition is stored")
+        priced = np.ones(self.num_runs, dtype=bool) if runs is None else np.asarray(runs, dtype=bool).reshape(-1)
+        if priced.shape != (self.num_runs,):
+            raise ValueError(f"expected one flag per run ({self.num_runs}), got {priced.shape}")
+        old = self.replay
+        self.replay = StackedReplay(old.num_runs, old.capacity, old.obs_size, self.device, others=old.others, costs=True)
+        self.prices = torch.zeros(self.num_runs, dtype=torch.float32, device=self.device)
+        self._priced_runs = priced
+
     def observe(self, batch: StepBatch) -> None:
         swapped, present, live, unseen = (
             x if self.aggregated or x.shape[2] == 1 else batch.of_closest(x)[:, :, None]  # (else the closest one's only)
             for x in (batch.others_swapped, batch.others_present, batch.others_live, batch.others_unseen)
         )
-        self.replay.add(batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present, live, unseen)
+        cost = None
+        if self.prices is not None:
+            if batch.costs is None or batch.prices is None:
+                raise ValueError("this learner prices costs when sampled: each step needs StepBatch.costs and prices")
+            cost = batch.costs
+            self.prices.copy_(torch.as_tensor(np.asarray(batch.prices, dtype=np.float32), device=self.device))
+        elif batch.costs is not None:
+            raise ValueError("this step carries costs to price when sampled: call price_costs() before training")
+        self.replay.add(
+            batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present, live, unseen, cost
+        )
         m = batch.actions.shape[1]
         for _ in range(m):
             self.env_steps += 1
@@ -392,12 +435,21 @@ class EmpathicDQN:
         ``others_swapped`` ``(K, B, O, V)``, ``others_present``, ``others_live`` and
         ``others_unseen`` ``(K, B, O)``; else the closest other agent's ``other_swapped``
         ``(K, B, V)``, ``other_present`` and ``other_unseen`` ``(K, B)`` (the names of
-        :class:`agents.step_batch.StepBatch`)."""
-        batch = self.replay.sample(self.sample_indices() if index is None else index)
+        :class:`agents.step_batch.StepBatch`). Where the learner prices costs (:meth:`price_costs`),
+        ``reward`` is the stored reward charged its cost at the run's price now."""
+        batch = self._charged(self.replay.sample(self.sample_indices() if index is None else index))
         if not self.aggregated:  # (the one other agent kept: the closest)
             for name in ("swapped", "present", "unseen"):
                 batch[f"other_{name}"] = batch.pop(f"others_{name}")[:, :, 0]
             del batch["others_live"]
+        return batch
+
+    def _charged(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """``batch`` with each sampled reward charged its cost at its run's price now, ``reward −
+        price·cost`` in float32 (the product rounded first), where the replay keeps costs."""
+        cost = batch.pop("cost", None)
+        if cost is not None and self.prices is not None:
+            batch["reward"] = batch["reward"] - self.prices[:, None] * cost
         return batch
 
     def update(self) -> float:
@@ -450,9 +502,10 @@ class EmpathicDQN:
         k, emp = self.num_runs, self._emp.size
         if not any(map(self._overridden, ("targets", "other_inputs", "sample_batch"))):  # (the default targets and batch)
             index = self.sample_indices().numpy() if self._overridden("sample_indices") else None  # (None: drawn there)
-            return fused.step(self.replay, self.grad_steps * self.config.batch_size, index)
+            prices = None if self.prices is None else self.prices.numpy()
+            return fused.step(self.replay, self.grad_steps * self.config.batch_size, index, prices)
         if not self._overridden("sample_batch"):
-            batch = fused.sample_batch(self.replay, self.sample_indices(), self.aggregated)
+            batch = self._charged(fused.sample_batch(self.replay, self.sample_indices(), self.aggregated))
         else:
             batch = self.sample_batch()
         if emp:
@@ -563,11 +616,18 @@ class EmpathicDQN:
         heads = 2 if self.empathic_runs[run] else 1
         params = sum(p[0].numel() * p.element_size() for p in self.online) * heads
         params += sum(p[0].numel() * p.element_size() for p in self.target)
-        return self.replay.nbytes_per_run() + 3 * params  # parameters + two Adam moments
+        return self.replay_bytes_of(run) + 3 * params  # parameters + two Adam moments
 
     def replay_bytes_per_run(self) -> int:
-        """Bytes of each run's replay memory (part of :meth:`memory_bytes_per_run`)."""
-        return self.replay.nbytes_per_run()
+        """Bytes of each run's replay memory (part of :meth:`memory_bytes_per_run`); where runs
+        differ, the largest run's."""
+        return max(self.replay_bytes_of(run) for run in range(self.num_runs))
+
+    def replay_bytes_of(self, run: int) -> int:
+        """Run ``run``'s replay memory's bytes, the cost column counted for a run that prices costs
+        only (:meth:`price_costs`): the same in any ensemble."""
+        column = 0 if self.replay.cost is None or self._priced_runs[run] else self.replay.cost[0].numel() * 4
+        return self.replay.nbytes_per_run() - column
 
     def check_observation_range(self, low: float, high: float) -> None:
         """Refuse, before any training, observations in ``[low, high]`` that the replay memory's
@@ -584,6 +644,7 @@ class EmpathicDQN:
             "grad_steps": self.grad_steps,
             "seeds": list(self.seeds),
             "update_kernel": self.update_kernel,
+            **({} if self.prices is None else {"prices": self.prices.clone()}),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -602,6 +663,11 @@ class EmpathicDQN:
                 p.copy_(saved)
         self.optimizer.load_state_dict(state["optimizer"])
         self.replay.load_state_dict(state["replay"])
+        if self.prices is not None:
+            prices = torch.as_tensor(state["prices"], dtype=torch.float32)
+            if tuple(prices.shape) != (self.num_runs,):
+                raise ValueError(f"checkpoint holds {tuple(prices.shape)} prices, not one per run ({self.num_runs})")
+            self.prices.copy_(prices)
         self.env_steps, self.grad_steps = int(state["env_steps"]), int(state["grad_steps"])
 
     # ------------------------------------------------------------------ keeping a trained agent

@@ -26,6 +26,7 @@ __all__ = [
     "gather_kernel",
     "gemm",
     "next_values_kernel",
+    "price_kernel",
     "targets_kernel",
     "train_kernel",
     "update_kernel",
@@ -403,6 +404,17 @@ def gather_kernel(codes, flags, stored_reward, table, index, decoded, action, te
                 unseen[run, i, o] = code == 3
 
 
+@jit
+def price_kernel(stored_cost, price, index, reward):  # type: ignore[no-untyped-def]
+    """``reward[r, i] = reward[r, i] − price[r]·stored_cost[r, index[r, i]]``: each sampled
+    transition's cost charged at its run's price now, in float32 (the product rounded, then the
+    difference), as :meth:`agents.empathic_dqn.EmpathicDQN.sample_batch` computes it."""
+    k, b = index.shape
+    for run in range(k):
+        for i in range(b):
+            reward[run, i] = reward[run, i] - price[run] * stored_cost[run, index[run, i]]
+
+
 # ---------------------------------------------------------------------------- the targets
 CLOSEST, MEAN, MIN = 0, 1, 2
 """How :func:`run_targets_kernel` takes the other agents (``others`` of :func:`agents.empathic_dqn.other_term`)."""
@@ -484,10 +496,11 @@ def targets_kernel(  # type: ignore[no-untyped-def]
 @jit
 def update_kernel(  # type: ignore[no-untyped-def]
     replay, keys, start, size, draw, index, batch, online, target, exp_avg, exp_avg_sq, steps, run_of_row, emp_row,
-    beta, gamma, rule, lr, beta1, beta2, eps, width, scratch, values, targets, grads, blas,
+    beta, gamma, rule, lr, beta1, beta2, eps, width, scratch, values, targets, grads, blas, stored_cost, price, priced,
 ):  # fmt: skip
     """One gradient step of every online row from the replay's arrays: the batch's indices (drawn
-    here where ``draw``, else ``index`` as given), its gather and decode, then run by run
+    here where ``draw``, else ``index`` as given), its gather and decode (where ``priced``, each
+    reward charged its stored cost at its run's ``price``: :func:`price_kernel`), then run by run
     ``Q(s')``, ``Q̂(s')`` (and ``Q̂(s_emp')`` where the run has ``Q_emp``, row ``emp_row[run] ≥ 0``)
     and its targets into ``targets (R, B)``, then :func:`train_kernel`. Returns the summed loss."""
     codes, flags, stored_reward, table = replay
@@ -495,6 +508,8 @@ def update_kernel(  # type: ignore[no-untyped-def]
     if draw:
         draw_indices_kernel(keys, start, size, index)
     gather_kernel(codes, flags, stored_reward, table, index, decoded, action, terminated, reward, present, live, unseen)
+    if priced:
+        price_kernel(stored_cost, price, index, reward)
     h1, h2 = scratch[0], scratch[1]
     q_next, target_next, target_swapped = values
     others = target_swapped.shape[1]

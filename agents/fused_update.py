@@ -31,7 +31,9 @@ accumulation); only the order in which sums are taken differs:
 * **the batch** (:func:`draw_indices`, :func:`gather`): the replay indices drawn from each run's
   sampling stream as :meth:`agents.empathic_dqn.EmpathicDQN.sample_indices` draws them (SplitMix64,
   the same integers), and the transitions gathered and decoded from the replay's one-byte codes,
-  bit for bit what :meth:`agents.replay.StackedReplay.sample` returns.
+  bit for bit what :meth:`agents.replay.StackedReplay.sample` returns; from a memory that keeps
+  costs, each reward charged its cost at its run's price, ``r − price·c`` in float32, as
+  :meth:`agents.empathic_dqn.EmpathicDQN.sample_batch` charges it.
 * **the targets** (:func:`empathic_targets`): the operations of
   :func:`agents.empathic_dqn.empathic_targets` in its order, in float32: bit for bit for the
   closest other agent and for two to four aggregated (tested); a mean is summed over the others
@@ -240,6 +242,7 @@ def _batch_buffers(k: int, b: int, others: int, obs_size: int) -> tuple[np.ndarr
 
 
 def _gather(kernels: dict[str, Any], replay: Any, index: np.ndarray) -> dict[str, torch.Tensor]:
+    """:func:`gather` with the given kernels (``cost`` too where the memory keeps costs)."""
     if replay.observations.device.type != "cpu":
         raise ValueError("the compiled gather reads replay memories on the CPU only")
     codes = replay.observations
@@ -249,7 +252,7 @@ def _gather(kernels: dict[str, Any], replay: Any, index: np.ndarray) -> dict[str
     buffers = _batch_buffers(k, b, codes.shape[2] - 2, codes.shape[3])
     kernels["gather"](*_replay_arrays(replay), np.ascontiguousarray(index), *buffers)
     decoded, action, terminated, reward, present, live, unseen = (torch.from_numpy(x) for x in buffers)
-    return {
+    batch = {
         "obs": decoded[:, :, 0],
         "next_obs": decoded[:, :, 1],
         "others_swapped": decoded[:, :, 2:],
@@ -260,6 +263,10 @@ def _gather(kernels: dict[str, Any], replay: Any, index: np.ndarray) -> dict[str
         "others_live": live,
         "others_unseen": unseen,
     }
+    cost = getattr(replay, "cost", None)
+    if cost is not None:  # (a copy of the stored values, at indices the gather found inside the memory)
+        batch["cost"] = torch.from_numpy(np.take_along_axis(cost.numpy(), index, axis=1))
+    return batch
 
 
 def empathic_targets(
@@ -419,14 +426,17 @@ class NumbaUpdate:
             np.zeros((b, num_others, actions), np.float32),
         )
         self._targets = np.zeros((self.run_of_row.shape[0], b), np.float32)
+        self._no_cost, self._no_price = np.zeros((k, 0), np.float32), np.zeros(k, np.float32)
+        """What :meth:`step` passes for a memory that keeps no costs."""
         self._replay: tuple[tuple[torch.Tensor, ...], tuple[np.ndarray, ...]] | None = None
         """The replay tensors :meth:`step` last read, and their numpy views."""
 
-    def step(self, replay: Any, start: int, index: np.ndarray | None = None) -> float:
+    def step(self, replay: Any, start: int, index: np.ndarray | None = None, prices: np.ndarray | None = None) -> float:
         """One whole gradient step of every online row in one compiled call (:func:`update_kernel`):
         the batch at ``index (K, B)``, or where ``None`` at the indices drawn from the keys at
         counter ``start`` (as :meth:`agents.empathic_dqn.EmpathicDQN.sample_indices` draws them),
-        gathered from ``replay`` (a CPU :class:`agents.replay.StackedReplay`), the targets of
+        gathered from ``replay`` (a CPU :class:`agents.replay.StackedReplay`; one that keeps costs
+        has each reward charged its cost at ``prices (K,)`` float32, its runs' prices now), the targets of
         :func:`agents.empathic_dqn.empathic_targets` (of ``Q`` only for a run without ``Q_emp``),
         forward, backward and Adam network after network (:meth:`setup_step` first). Returns the
         summed loss, as :meth:`train`."""
@@ -437,18 +447,25 @@ class NumbaUpdate:
             cached = self._replay = (tensors, _replay_arrays(replay))
         if index is not None:
             self._index[...] = index
+        cost = getattr(replay, "cost", None)
+        if cost is not None and prices is None:
+            raise ValueError("this replay memory keeps costs: give the runs' prices")
+        stored_cost = self._no_cost if cost is None else cost.numpy()
+        price = self._no_price if cost is None else np.ascontiguousarray(prices, dtype=np.float32).reshape(-1)
         total = self._k["update"](
             cached[1], self._keys, int(start), int(replay.size), index is None, self._index, self._batch,
             self.online, self.target, self.exp_avg, self.exp_avg_sq, self.steps, self.run_of_row, self._emp_row,
             self._beta, self._gamma, self._rule, self.lr, self.beta1, self.beta2, self.eps, self._width,
-            self._scratch, self._step_values, self._targets, self._grads, BLAS,
+            self._scratch, self._step_values, self._targets, self._grads, BLAS, stored_cost, price, cost is not None,
         )  # fmt: skip
         return float(total)
 
     def sample_batch(self, replay: Any, index: torch.Tensor, aggregated: bool) -> dict[str, torch.Tensor]:
-        """:meth:`agents.empathic_dqn.EmpathicDQN.sample_batch` at ``index`` by the compiled gather
-        (:func:`gather`; fresh tensors): with ``aggregated`` false, the closest other agent's
-        ``other_swapped``, ``other_present`` and ``other_unseen`` in place of the ``others_…``."""
+        """The transitions :meth:`agents.empathic_dqn.EmpathicDQN.sample_batch` takes at ``index``,
+        by the compiled gather (:func:`gather`; fresh tensors): with ``aggregated`` false, the
+        closest other agent's ``other_swapped``, ``other_present`` and ``other_unseen`` in place of
+        the ``others_…``; ``cost`` where the memory keeps costs, not yet charged (the learner
+        charges it)."""
         batch = _gather(self._k, replay, np.asarray(index.numpy(), dtype=np.int64))
         if not aggregated:
             for name in ("swapped", "present", "unseen"):

@@ -13,6 +13,11 @@ With one, each transition costs 3·V bytes of observations (s, s', s_emp' packed
 row), 3 bytes of flags (action, terminated, the other's code) and 4 bytes of reward: 82 bytes at
 V = 25, 41 MB per run at the paper's 500,000 transitions. Packing keeps a sample to three
 gathers and one table look-up.
+
+A memory built with ``costs=True`` (a learner that prices costs when they are sampled:
+:meth:`agents.empathic_dqn.EmpathicDQN.price_costs`) also keeps each transition's cost, 4 bytes of
+float32 beside the reward, sampled as ``cost``; every other memory, and its checkpoint, is as
+before.
 """
 
 from __future__ import annotations
@@ -39,7 +44,9 @@ class StackedReplay:
     """``K`` ring buffers of ``capacity`` transitions, filled in lockstep (one row per run per add);
     each keeps the swapped observation and the code of ``others`` other agents per transition."""
 
-    def __init__(self, num_runs: int, capacity: int, obs_size: int, device: torch.device, others: int = 1) -> None:
+    def __init__(
+        self, num_runs: int, capacity: int, obs_size: int, device: torch.device, others: int = 1, costs: bool = False
+    ) -> None:
         k, c = num_runs, capacity
         if others < 1:
             raise ValueError(f"others must be >= 1, got {others}")
@@ -55,6 +62,8 @@ class StackedReplay:
         done: its term is 0), 2 it is there at the end (its term bootstraps), 3 it is there but
         unseen (out of view with in-view-only swaps: it is taken to fare as the robot does, SPEC §4)."""
         self.reward = torch.zeros((k, c), dtype=torch.float32, device=device)
+        self.cost: torch.Tensor | None = torch.zeros((k, c), dtype=torch.float32, device=device) if costs else None
+        """(K, C) float32: each transition's cost, priced when it is sampled (``None``: not kept)."""
         self.position = 0
         self.size = 0
         self._first_row = torch.arange(k, device=device)[:, None] * c
@@ -84,12 +93,20 @@ class StackedReplay:
         present: np.ndarray,
         live: np.ndarray,
         unseen: np.ndarray,
+        cost: np.ndarray | None = None,
     ) -> None:
         """Append ``m`` transitions per run: ``obs``, ``next_obs`` ``(K, m, V)``; ``action``,
         ``reward``, ``terminated`` ``(K, m)``; and of the ``others`` other agents kept,
         ``swapped`` ``(K, m, others, V)`` and ``present``, ``live``, ``unseen`` ``(K, m, others)``
-        bool (as :class:`agents.step_batch.StepBatch` names them; coded as :attr:`flags` says)."""
+        bool (as :class:`agents.step_batch.StepBatch` names them; coded as :attr:`flags` says);
+        ``cost`` ``(K, m)`` exactly where the memory keeps costs."""
         m = action.shape[1]
+        if (cost is None) != (self.cost is None):
+            raise ValueError(
+                "this replay memory keeps costs: give each transition's cost"
+                if cost is None
+                else "this replay memory keeps no costs (built without costs=True)"
+            )
         expected = (*action.shape, self.others)
         shapes = [np.shape(x) for x in (present, live, unseen)]
         if swapped.shape[:3] != expected or any(shape != expected for shape in shapes):
@@ -106,10 +123,14 @@ class StackedReplay:
             observations[:, rows] = packed
             flag_array[:, rows] = flags
             rewards[:, rows] = np.asarray(reward, dtype=np.float32)
+            if cost is not None and self.cost is not None:
+                self.cost.numpy()[:, rows] = np.asarray(cost, dtype=np.float32)
         else:
             self.observations[:, rows] = torch.from_numpy(packed).to(self.device)
             self.flags[:, rows] = torch.from_numpy(flags).to(self.device)
             self.reward[:, rows] = torch.from_numpy(np.asarray(reward, dtype=np.float32)).to(self.device)
+            if self.cost is not None:
+                self.cost[:, rows] = torch.from_numpy(np.asarray(cost, dtype=np.float32)).to(self.device)
         self.position = int((self.position + m) % self.capacity)
         self.size = min(self.size + m, self.capacity)
 
@@ -118,7 +139,8 @@ class StackedReplay:
         (decoded by a look-up in :attr:`decode_table`: exactly the values that were added):
         ``obs``, ``next_obs`` ``(K, B, V)``, ``action``, ``terminated``, ``reward`` ``(K, B)``,
         ``others_swapped`` ``(K, B, others, V)`` and ``others_present``, ``others_live``,
-        ``others_unseen`` ``(K, B, others)``, as they were added."""
+        ``others_unseen`` ``(K, B, others)``, as they were added; and ``cost`` ``(K, B)`` where the
+        memory keeps costs."""
         rows = index + self._first_row  # (index_select on flat rows: the cheapest gathers)
         k, b = rows.shape
         rows = rows.reshape(-1)
@@ -127,7 +149,7 @@ class StackedReplay:
         observations = self.decode_table.index_select(0, codes.view(-1).int()).view(k, b, width, self.obs_size)
         flags = self.flags.view(k * self.capacity, width).index_select(0, rows).view(k, b, width)
         others = flags[:, :, OTHERS:]  # (see flags)
-        return {
+        batch = {
             "obs": observations[:, :, OBS],
             "next_obs": observations[:, :, NEXT_OBS],
             "others_swapped": observations[:, :, SWAPPED:],
@@ -138,10 +160,14 @@ class StackedReplay:
             "others_live": others >= LEFT_IN_STEP,
             "others_unseen": others == UNSEEN,
         }
+        if self.cost is not None:
+            batch["cost"] = self.cost.view(-1).index_select(0, rows).view(k, b)
+        return batch
 
     def nbytes_per_run(self) -> int:
         """Bytes of memory each run's buffer holds."""
-        return sum(t.element_size() * t[0].numel() for t in (self.observations, self.flags, self.reward))
+        kept = (self.observations, self.flags, self.reward, *(() if self.cost is None else (self.cost,)))
+        return sum(t.element_size() * t[0].numel() for t in kept)
 
     def state_dict(self) -> dict[str, torch.Tensor | int]:
         """The filled part of every buffer plus the write position (for checkpoints, written at once).
@@ -153,7 +179,7 @@ class StackedReplay:
         def filled(buffer: torch.Tensor) -> torch.Tensor:
             return buffer if self.size == self.capacity else buffer[:, : self.size].clone()
 
-        return {
+        state: dict[str, torch.Tensor | int] = {
             "observations": filled(self.observations),
             "flags": filled(self.flags),
             "reward": filled(self.reward),
@@ -161,6 +187,9 @@ class StackedReplay:
             "size": self.size,
             "layout": REPLAY_LAYOUT,
         }
+        if self.cost is not None:
+            state["cost"] = filled(self.cost)
+        return state
 
     def load_state_dict(self, state: dict) -> None:
         """Continue from :meth:`state_dict`. A checkpoint written before the codes (int8 integer
@@ -168,6 +197,14 @@ class StackedReplay:
         is one of layout 1 keeping one other agent (its codes 0, 1, 2 become 0, 2, 3: the same
         facts, see :data:`REPLAY_LAYOUT`)."""
         size = int(state["size"])
+        if self.cost is not None and "cost" not in state:
+            raise ValueError(
+                "replay checkpoint keeps no costs, and this memory prices each transition's cost when it is "
+                "sampled: it was made by another method, or by a version that priced costs when they were "
+                "stored; move it away to restart"
+            )
+        if self.cost is None and "cost" in state:
+            raise ValueError("replay checkpoint keeps each transition's cost, and this memory keeps none (another method)")
         layout = int(state.get("layout", 1))
         if layout not in (1, REPLAY_LAYOUT):
             raise ValueError(f"replay checkpoint of layout {layout}; this version reads layouts 1 and {REPLAY_LAYOUT}")
@@ -189,4 +226,6 @@ class StackedReplay:
         self.observations[:, :size] = observations
         self.flags[:, :size] = flags
         self.reward[:, :size] = state["reward"]
+        if self.cost is not None:
+            self.cost[:, :size] = state["cost"]
         self.position, self.size = int(state["position"]), size

@@ -28,6 +28,17 @@ no-op, the other agents acting as they did (:mod:`baselines.inaction_baseline` c
 the engine's ``state()``/``load_state()``, watching the vector env's engine steps; relative
 reachability, :mod:`baselines.reachability`, reads them). Without the declaration both fields are
 ``None``; transforms of one ensemble that declare it must code states alike (one ``state_codes``).
+
+Optional capability, **costs priced when sampled** (:class:`PricedTransform`): a stateful
+transform whose reward charges a cost at a price that moves as the run trains (the Lagrangian
+method's ``r − λ·harms``, :mod:`baselines.lagrangian`) declares ``priced_at_sample = True``; its
+call returns ``((rewards, costs), state)``, the rewards without the charge and each step's cost,
+and ``price(state)`` gives each of its runs' price of one unit of cost now. :class:`TrainRewards`
+hands both to the learner (:attr:`StepBatch.costs`, :attr:`StepBatch.prices`), which stores the
+cost beside the reward and trains on ``reward − price·cost`` with the price at the time of each
+update, not the one at the time the step was stored (the learner must offer ``price_costs``,
+:class:`agents.base.Learner`). Its runs' result files record the price after every training
+episode (``train.lambda``).
 """
 
 from __future__ import annotations
@@ -48,9 +59,11 @@ if TYPE_CHECKING:
 
 __all__ = [
     "InactionBaselineTransform",
+    "PricedTransform",
     "RewardTransform",
     "TrainRewards",
     "configure_transform",
+    "is_priced",
     "same_transform",
     "StatefulTransform",
     "transform_config",
@@ -94,6 +107,25 @@ class InactionBaselineTransform(RewardTransform, Protocol):
         """``(N,)`` int64 codes of the states of ``engine``'s ``N`` environments (equal states,
         equal codes); ``ValueError`` for an environment it cannot code (asked once before
         training)."""
+
+
+class PricedTransform(StatefulTransform, Protocol):
+    """A stateful reward transform whose costs are priced when a step is sampled (see the module
+    page; :class:`baselines.lagrangian.Lagrangian` is one)."""
+
+    priced_at_sample: ClassVar[bool]
+    """``True``: its call returns ``((rewards, costs), state)``, each ``(K, M)``: the rewards
+    without the cost's charge, and the cost of each step, which the learner charges at
+    :meth:`price` when it samples the step."""
+
+    def price(self, state: dict[str, np.ndarray]) -> np.ndarray:
+        """``(K,)`` each run's price of one unit of cost in ``state`` (finite, at least 0)."""
+        ...
+
+
+def is_priced(transform: RewardTransform | None) -> bool:
+    """Whether ``transform`` prices its costs when a step is sampled (:class:`PricedTransform`)."""
+    return transform is not None and getattr(transform, "priced_at_sample", False) is True
 
 
 def transform_config(transform: RewardTransform | None) -> dict[str, Any] | None:
@@ -195,6 +227,14 @@ class TrainRewards:
             self._initial_state(t, rows, envs_per_run, seeds) if isinstance(t, StatefulTransform) else None
             for t, rows in zip(self.distinct, self.rows)
         ]
+        for transform, state in zip(self.distinct, self.states):
+            if is_priced(transform) and (state is None or not callable(getattr(transform, "price", None))):
+                raise ValueError(
+                    f"reward transform {transform.name!r} prices its costs when sampled: it needs a state "
+                    "(initial_state) and price(state)"
+                )
+        self.priced_runs = np.array([is_priced(t) for t in self.transforms], dtype=bool)
+        """``(K,)`` whether each run's transform prices its costs when sampled (:class:`PricedTransform`)."""
 
     @staticmethod
     def _initial_state(
@@ -215,19 +255,47 @@ class TrainRewards:
         if len(self.transforms) != batch.rewards.shape[0]:
             raise ValueError(f"got {len(self.transforms)} reward transforms for {batch.rewards.shape[0]} runs")
         rewards = batch.rewards.copy()
+        costs = np.zeros(batch.rewards.shape, dtype=np.float32) if self.priced_runs.any() else None
         for i, (transform, rows) in enumerate(zip(self.distinct, self.rows)):
             part = batch if len(rows) == len(self.transforms) else batch.runs(rows)
             if self.states[i] is None:
                 shaped = transform(part)
             else:
                 shaped, self.states[i] = transform(part, self.states[i])
-            shaped = np.asarray(shaped)
-            if shaped.shape != part.rewards.shape:
-                raise ValueError(
-                    f"reward transform {transform.name!r} returned shape {shaped.shape}, expected {part.rewards.shape}"
-                )
-            rewards[rows] = shaped
-        return dataclasses.replace(batch, rewards=rewards)
+            if costs is not None and is_priced(transform):
+                shaped, cost = shaped
+                costs[rows] = self._checked(transform, "costs", cost, part.rewards.shape)
+            rewards[rows] = self._checked(transform, "rewards", shaped, part.rewards.shape)
+        if costs is None:
+            return dataclasses.replace(batch, rewards=rewards)
+        prices = self.prices()
+        assert prices is not None
+        return dataclasses.replace(batch, rewards=rewards, costs=costs, prices=prices.astype(np.float32))
+
+    @staticmethod
+    def _checked(transform: RewardTransform, what: str, values: Any, shape: tuple[int, ...]) -> np.ndarray:
+        """A transform's ``(K, M)`` rewards or costs, or ``ValueError`` naming it."""
+        values = np.asarray(values)
+        if values.shape != shape:
+            raise ValueError(f"reward transform {transform.name!r} returned {what} of shape {values.shape}, expected {shape}")
+        return values
+
+    def prices(self) -> np.ndarray | None:
+        """``(K,)`` float64: each run's price of one unit of cost now (:meth:`PricedTransform.price`;
+        0 for a run whose transform prices none), or ``None`` where no run's transform does."""
+        if not self.priced_runs.any():
+            return None
+        prices = np.zeros(len(self.transforms))
+        for transform, rows, state in zip(self.distinct, self.rows, self.states):
+            if is_priced(transform) and state is not None:
+                price = np.asarray(getattr(transform, "price")(state), dtype=np.float64)
+                if price.shape != (len(rows),) or not np.isfinite(price).all() or (price < 0).any():
+                    raise ValueError(
+                        f"reward transform {transform.name!r} priced its costs at {price!r}: expected {len(rows)} "
+                        "finite numbers >= 0, one per run"
+                    )
+                prices[rows] = price
+        return prices
 
     def state(self) -> list[dict[str, np.ndarray] | None]:
         """The stateful transforms' states (for checkpoints)."""

@@ -71,10 +71,29 @@ class StepBatch(ClosestOther):
     """(K, M) int64: the same code of the stepwise inaction baseline: the state the step would
     have ended in had the learner taken the no-op (action 4) and every other agent done what it
     did; filled with :attr:`state_after`."""
+    costs: np.ndarray | None = None
+    """(K, M) float32: the cost of each step that the run's reward transform prices when the step
+    is sampled, not when it is stored (``priced_at_sample``, :mod:`agents.rewards`; the Lagrangian
+    method's harms), 0 for a run whose transform prices none; ``None`` when no run's does. A
+    learner that prices costs stores it beside :attr:`rewards` and trains on
+    ``reward − price·cost`` (:attr:`prices`)."""
+    prices: np.ndarray | None = None
+    """(K,) float32: each run's price of one unit of :attr:`costs` now, after this step (the
+    Lagrangian multiplier λ; 0 for a run that prices none), which the learner's updates from this
+    step on charge every sampled transition's cost; ``None`` with :attr:`costs`."""
 
     def runs(self, rows: np.ndarray) -> StepBatch:
         """The same step for the runs ``rows`` only (every array's first axis indexed)."""
         return replace(self, **{f.name: getattr(self, f.name)[rows] for f in fields(self) if getattr(self, f.name) is not None})
+
+    @property
+    def priced_rewards(self) -> np.ndarray:
+        """(K, M) float32 :attr:`rewards` with this step's cost charged at this step's price,
+        ``reward − price·cost`` (:attr:`rewards` itself without costs)."""
+        if self.costs is None or self.prices is None:
+            return self.rewards
+        prices = np.asarray(self.prices, dtype=np.float32)[:, None]
+        return (self.rewards - prices * np.asarray(self.costs, dtype=np.float32)).astype(np.float32)
 
     @property
     def other_rewards(self) -> np.ndarray | None:

@@ -66,10 +66,14 @@ def dual_ascent(multiplier: np.ndarray, episode_cost: np.ndarray, cost_limit: fl
 
 @dataclass(frozen=True)
 class Lagrangian:
-    """``r' = r − λ·(harms this step)`` with each run's ``λ ← max(0, λ + η·(harms of the episode − d))``
-    at every episode's end (see the module page for the choices)."""
+    """``r' = r − λ·(harms this step)``, priced with each run's current ``λ`` whenever the step is
+    sampled, and ``λ ← max(0, λ + η·(harms of the episode − d))`` at every episode's end (see the
+    module page for the choices)."""
 
     name: ClassVar[str] = "lagrangian"
+    priced_at_sample: ClassVar[bool] = True
+    """The harms are stored as the cost of each step and priced at the run's ``λ`` of the update
+    that samples it (:class:`agents.rewards.PricedTransform`)."""
     cost_limit: float = 0.1
     """d: the harms per episode the learner may cause on average (the constraint's threshold)."""
     lambda_lr: float = 1.0
@@ -87,12 +91,15 @@ class Lagrangian:
         """Each run's multiplier ``λ`` and each environment's cost so far in its episode."""
         return {"multiplier": np.full(num_runs, float(self.lambda_init)), "episode_cost": np.zeros((num_runs, envs_per_run))}
 
-    def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    def __call__(
+        self, batch: StepBatch, state: dict[str, np.ndarray]
+    ) -> tuple[tuple[np.ndarray, np.ndarray], dict[str, np.ndarray]]:
+        """``((rewards, costs), state)``: the environment's rewards and the step's harms, each
+        ``(K, M)`` float32, and the state after the step (``λ`` updated where an episode ended)."""
         cost = np.asarray(batch.harms, dtype=np.float64)
         multiplier = state["multiplier"]
         if state["episode_cost"].shape != cost.shape:
             raise ValueError(f"this Lagrangian state is for {state['episode_cost'].shape} runs × environments, not {cost.shape}")
-        shaped = np.asarray(batch.rewards, dtype=np.float64) - multiplier[:, None] * cost
         episode_cost = state["episode_cost"] + cost
         ended = np.asarray(batch.terminated, dtype=bool)
         if batch.truncated is not None:
@@ -101,4 +108,9 @@ class Lagrangian:
             multiplier = np.where(
                 ended[:, m], dual_ascent(multiplier, episode_cost[:, m], self.cost_limit, self.lambda_lr), multiplier
             )
-        return shaped.astype(np.float32), {"multiplier": multiplier, "episode_cost": np.where(ended, 0.0, episode_cost)}
+        rewards = np.asarray(batch.rewards, dtype=np.float32)
+        return (rewards, cost.astype(np.float32)), {"multiplier": multiplier, "episode_cost": np.where(ended, 0.0, episode_cost)}
+
+    def price(self, state: dict[str, np.ndarray]) -> np.ndarray:
+        """``(K,)`` each run's ``λ`` now: what one harm costs in the updates from now on."""
+        return np.asarray(state["multiplier"], dtype=np.float64)

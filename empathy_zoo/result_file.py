@@ -36,6 +36,7 @@ from empathy_zoo.names import check_path_name
 
 __all__ = [
     "AGENT_SUFFIXES",
+    "PRICE_COLUMN",
     "SCHEMA",
     "REQUIRED_FIELDS",
     "RUNS_DIR",
@@ -54,6 +55,11 @@ REQUIRED_FIELDS = ("schema", "run_id", "env", "method", "method_label", "seed", 
 """Top-level fields every result file has (``variant``, ``memory_bytes``, ``wall_time_s``,
 ``version``, ``commit``, ``plugin_sha256``, ``update_kernel``, ``agent`` and ``created`` are written
 too, and checked when present, as are the fields of ``config`` beyond :data:`CONFIG_TABLES`)."""
+PRICE_COLUMN = "lambda"
+"""The optional ``train`` column of a run whose reward transform prices a cost when it is sampled
+(:class:`agents.rewards.PricedTransform`; the Lagrangian method's multiplier λ): the price of one
+unit of cost after each training episode, a finite number >= 0 per episode. Files without it
+(every other method's, and those made before it was recorded) are read as they are."""
 UPDATE_KERNELS_RECORDED = ("numba", "torch")
 """The update kernels a result file may name (``update_kernel``; ``null``: the learner has no choice)."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
@@ -120,6 +126,9 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     for name, column in train.items():
         if name in METRIC_NAMES:
             check.metric(column, f"train.{name}", name, max_cycles)
+        elif name == PRICE_COLUMN:
+            for i, value in enumerate(check.numbers(column, f"train.{name}")):
+                check.finite(value, f"train.{name}[{i}]", 0.0)
         elif name != "episode_end_step":
             check.numbers(column, f"train.{name}")
     lengths = {name: len(column) for name, column in train.items()}

@@ -1,6 +1,7 @@
 """The Lagrangian constrained DQN, harms as the cost: the dual update λ ← max(0, λ + η·(Ĵ_C − d)) on
-hand-made numbers, the training reward r − λ·harms with the λ from before the episode's update,
-λ rising while episodes harm more than d and falling back to 0 (and staying there) while they harm
+hand-made numbers, the transform handing the environment's reward and the step's harms as its cost
+(priced at the run's λ when sampled: tests/test_lagrangian_pricing.py) and λ after each episode's
+update as the price, λ rising while episodes harm more than d and falling back to 0 (and staying there) while they harm
 less, each run's λ its own, a state that survives a checkpoint, and the method through ``train``
 (in Sharing, where nobody is harmed, λ stays 0 and it trains as DQN does)."""
 
@@ -47,16 +48,19 @@ def test_the_dual_update_on_hand_made_numbers() -> None:
     assert dual_ascent(np.array([3.0, 3.0]), np.array([0.0, 1.0]), 0.25, 2.0).tolist() == [2.5, 4.5]
 
 
-def test_the_reward_is_penalised_with_the_multiplier_from_before_the_episodes_update() -> None:
+def test_the_transform_hands_the_reward_and_the_harms_and_prices_them_at_the_current_multiplier() -> None:
     lagrangian = Lagrangian(cost_limit=0.5, lambda_lr=2.0, lambda_init=1.0)
+    assert lagrangian.priced_at_sample
     state = lagrangian.initial_state(1, 1)
-    shaped, state = lagrangian(step([[1]], [[False]]), state)
-    assert shaped.tolist() == [[0.0]] and state["multiplier"].tolist() == [1.0]  # 1 − 1·1; no update mid-episode
-    shaped, state = lagrangian(step([[2]], [[True]]), state)
-    assert shaped.tolist() == [[-1.0]]  # 1 − 1·2, then the episode (3 harms) updates λ
+    (rewards, cost), state = lagrangian(step([[1]], [[False]]), state)
+    assert rewards.tolist() == [[1.0]] and cost.tolist() == [[1.0]] and rewards.dtype == cost.dtype == np.float32
+    assert lagrangian.price(state).tolist() == [1.0]  # no update mid-episode
+    (rewards, cost), state = lagrangian(step([[2]], [[True]]), state)
+    assert rewards.tolist() == [[1.0]] and cost.tolist() == [[2.0]]  # the episode (3 harms) updates λ
     assert state["multiplier"].tolist() == [1.0 + 2.0 * (3 - 0.5)] and state["episode_cost"].tolist() == [[0.0]]
-    shaped, state = lagrangian(step([[0]], [[True]]), state)
-    assert shaped.tolist() == [[1.0]] and state["multiplier"].tolist() == [6.0 - 2.0 * 0.5]
+    assert lagrangian.price(state).tolist() == [6.0]  # what every stored harm costs in the updates from now on
+    (rewards, cost), state = lagrangian(step([[0]], [[True]]), state)
+    assert cost.tolist() == [[0.0]] and lagrangian.price(state).tolist() == [6.0 - 2.0 * 0.5]
 
 
 def test_lambda_rises_while_harms_exceed_the_limit_and_falls_back_to_zero_while_below() -> None:
@@ -73,8 +77,9 @@ def test_lambda_rises_while_harms_exceed_the_limit_and_falls_back_to_zero_while_
         history.append(float(state["multiplier"][0]))
     assert history[10:100] == pytest.approx([max(0.0, 9.0 - 0.1 * (i + 1)) for i in range(90)], abs=1e-9)
     assert all(value == 0.0 for value in history[100:])
-    shaped, _ = lagrangian(step([[1]], [[False]]), state)
-    assert shaped.tolist() == [[1.0]]  # λ = 0: a harm costs nothing until an episode exceeds d again
+    (rewards, cost), state = lagrangian(step([[1]], [[False]]), state)
+    assert rewards.tolist() == [[1.0]] and cost.tolist() == [[1.0]]
+    assert lagrangian.price(state).tolist() == [0.0]  # λ = 0: a harm costs nothing until an episode exceeds d again
 
 
 def test_each_run_and_each_of_its_environments_counts_its_own_episodes() -> None:
@@ -87,8 +92,10 @@ def test_each_run_and_each_of_its_environments_counts_its_own_episodes() -> None
     alone = TrainRewards([lagrangian], seeds=[0])
     together = TrainRewards([None, lagrangian, lagrangian], seeds=[0, 1, 2])
     for harms in ([1], [0], [1], [1], [0]):
-        mine = alone(step([harms], [[True]])).rewards
-        assert np.array_equal(together(step([[0], harms, [0]], [[True]] * 3)).rewards[1], mine[0])
+        mine, theirs = alone(step([harms], [[True]])), together(step([[0], harms, [0]], [[True]] * 3))
+        assert mine.costs is not None and theirs.costs is not None and mine.prices is not None and theirs.prices is not None
+        assert np.array_equal(theirs.rewards[1], mine.rewards[0]) and np.array_equal(theirs.costs[1], mine.costs[0])
+        assert theirs.prices[1] == mine.prices[0] and theirs.prices[[0, 2]].tolist() == [0.0, 0.0]
 
 
 @pytest.mark.parametrize("field, value", [("cost_limit", -0.1), ("lambda_lr", float("inf")), ("lambda_init", -1.0)])
@@ -120,4 +127,5 @@ def test_the_method_trains_through_the_command_line_and_is_dqn_in_sharing(tmp_pa
         assert main(["train", "--method", method, "--env", "sharing_v0", "--out", str(target), *TINY]) == 0
         [path] = (target / "runs").glob("*.json")
         columns[method] = json.loads(path.read_text())["train"]
-    assert columns["dqn_lagrangian"] == columns["dqn"]  # nobody is harmed: every episode costs 0, λ stays 0
+    assert set(columns["dqn_lagrangian"].pop("lambda")) == {0.0}  # nobody is harmed: every episode costs 0, λ stays 0
+    assert columns["dqn_lagrangian"] == columns["dqn"]  # and r − 0·0 is r: it trains as DQN, bit for bit

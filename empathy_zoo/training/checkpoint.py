@@ -26,6 +26,7 @@ from empathy_zoo.bounded_read import open_data, read_json_data
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.limits import MAX_STEPS
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.result_file import PRICE_COLUMN
 from empathy_zoo.safe_data import from_safe, to_safe
 
 __all__ = [
@@ -59,7 +60,8 @@ TENSOR_DTYPES = frozenset(
 )
 """The dtypes a checkpoint's tensors may have."""
 LOG_COLUMNS = ("episode_end_step", *METRIC_NAMES)
-"""The columns of a run's training log in an ensemble's checkpoint."""
+"""The columns of a run's training log in an ensemble's checkpoint (and :data:`PRICE_COLUMN`, the
+price of its cost after each episode, for a run whose reward transform prices costs when sampled)."""
 
 
 class CheckpointError(ValueError):
@@ -229,8 +231,11 @@ def _value_problem(value: Any, metric: str, max_cycles: int | None, whole: bool)
 
 
 def _check_log(path: Path, where: str, log: Any, step: int, max_cycles: int | None) -> None:
-    if not isinstance(log, dict) or sorted(log) != sorted(LOG_COLUMNS) or not all(isinstance(c, list) for c in log.values()):
-        raise corrupted(path, f"{where} is no table of the columns {', '.join(LOG_COLUMNS)}")
+    columns = sorted(log) if isinstance(log, dict) else None
+    if columns not in (sorted(LOG_COLUMNS), sorted((*LOG_COLUMNS, PRICE_COLUMN))) or not all(
+        isinstance(c, list) for c in log.values()
+    ):
+        raise corrupted(path, f"{where} is no table of the columns {', '.join(LOG_COLUMNS)} (and {PRICE_COLUMN})")
     if len({len(column) for column in log.values()}) != 1:
         raise corrupted(path, f"{where} has columns of different lengths")
     ends = log["episode_end_step"]
@@ -241,6 +246,9 @@ def _check_log(path: Path, where: str, log: Any, step: int, max_cycles: int | No
         for i, value in enumerate(log[metric]):
             if _value_problem(value, metric, max_cycles, metric in INTEGER_METRICS):
                 raise corrupted(path, f"{where}[{metric!r}][{i}] is {value!r}, no {metric} of an episode")
+    for i, price in enumerate(log.get(PRICE_COLUMN, [])):
+        if isinstance(price, bool) or not isinstance(price, (int, float)) or not math.isfinite(price) or price < 0:
+            raise corrupted(path, f"{where}[{PRICE_COLUMN!r}][{i}] is {price!r}, no finite price >= 0")
 
 
 def _evaluation_steps(runs: Mapping[str, int] | None, step: int) -> list[int] | None:

@@ -28,7 +28,7 @@ from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
-from empathy_zoo.result_file import result_path
+from empathy_zoo.result_file import PRICE_COLUMN, result_path
 from empathy_zoo.training.checkpoint import (
     CheckpointError,
     check_checkpoint_keys,
@@ -63,16 +63,19 @@ CHECKPOINT_KEYS: dict[str, type | tuple[type, ...]] = {
 
 
 class _EpisodeLog:
-    """Training episodes of one run, as columns."""
+    """Training episodes of one run, as columns (with the price of its cost after each episode,
+    :data:`~empathy_zoo.result_file.PRICE_COLUMN`, where its reward transform prices costs when sampled)."""
 
-    def __init__(self) -> None:
-        self.columns = empty_columns()
+    def __init__(self, priced: bool = False) -> None:
+        self.columns = empty_columns(priced)
 
-    def add(self, end_step: int, metrics: dict[str, np.ndarray], row: int) -> None:
+    def add(self, end_step: int, metrics: dict[str, np.ndarray], row: int, price: float | None = None) -> None:
         self.columns["episode_end_step"].append(int(end_step))
         for name in METRIC_NAMES:
             value = metrics[name][row]
             self.columns[name].append(int(value) if name in INTEGER_METRICS else round(float(value), 6))
+        if price is not None:
+            self.columns[PRICE_COLUMN].append(round(float(price), 6))
 
     def recent(self, name: str, count: int = 100) -> float:
         values = self.columns[name][-count:]
@@ -152,8 +155,17 @@ def _train_ensemble(
         **kernel_argument(method.learner, options.update_kernel),
     )
     train_rewards = TrainRewards([s.reward_transform() for s in specs], seeds=seeds)
+    priced = train_rewards.priced_runs
+    if priced.any():  # (a transform that prices its costs when they are sampled: the learner keeps them)
+        price_costs = _optional(learner, "price_costs")
+        if price_costs is None:
+            raise ValueError(
+                f"method {first.method!r}: its reward transform prices costs when they are sampled, and its learner "
+                f"{type(learner).__name__} cannot (it has no price_costs)"
+            )
+        price_costs(priced)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
-    logs = [_EpisodeLog() for _ in specs]
+    logs = [_EpisodeLog(bool(p)) for p in priced]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
     if options.checkpoint_interval > 0:
@@ -166,11 +178,12 @@ def _train_ensemble(
     if check_range is not None:  # fail now, not mid-run
         check_range(venv.engine.obs_low, venv.engine.obs_high)
     replay_bytes = _optional(learner, "replay_bytes_per_run")
+    replay_of = _optional(learner, "replay_bytes_of")
     bytes_of = _optional(learner, "memory_bytes_of")
     largest = learner.memory_bytes_per_run()
     memory = [
         {
-            "replay_per_run": 0 if replay_bytes is None else replay_bytes(),
+            "replay_per_run": replay_of(r) if replay_of is not None else 0 if replay_bytes is None else replay_bytes(),
             "learner_per_run": largest if bytes_of is None else bytes_of(r),
         }
         for r in range(k)
@@ -208,10 +221,11 @@ def _train_ensemble(
         learner.observe(trained)
         step += 1
         finished = result.finished
+        prices = train_rewards.prices() if len(finished["env"]) else None  # (each run's price after the step)
         for j, env_id in enumerate(finished["env"]):
-            logs[env_id].add(step, finished, j)
+            logs[env_id].add(step, finished, j, prices[env_id] if prices is not None and priced[env_id] else None)
         if tracker is not None:
-            tracker.after_step(step, finished, batch.rewards, trained.rewards)
+            tracker.after_step(step, finished, batch.rewards, trained.priced_rewards)
         obs = result.observations[:, 0]
         if step % first.eval_interval == 0 or step == total:
             per_run = evaluate_greedy(learner, first.env, seeds, first.eval_episodes, fixed, env_kwargs)

@@ -9,7 +9,7 @@ from typing import Any
 
 from empathy_zoo.atomic import write_bytes_atomic, write_json_atomic
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.result_file import SCHEMA, result_path
+from empathy_zoo.result_file import PRICE_COLUMN, SCHEMA, result_path
 from empathy_zoo.training.fingerprint import run_fingerprint
 
 __all__ = ["KEPT_AGENT", "ResultWriteError", "build_result", "stored", "write_result", "empty_columns"]
@@ -19,8 +19,11 @@ KEPT_AGENT = "_agent_file"
 agent file (:func:`empathy_zoo.agent_file.agent_bytes`), written beside it and never stored."""
 
 
-def empty_columns() -> dict[str, list]:
-    return {"episode_end_step": [], **{name: [] for name in METRIC_NAMES}}
+def empty_columns(priced: bool = False) -> dict[str, list]:
+    """The ``train`` columns of a run with no episode yet: the end step and every metric, and,
+    where ``priced`` (its reward transform prices costs when sampled), the price of its cost after
+    each episode (:data:`~empathy_zoo.result_file.PRICE_COLUMN`, the Lagrangian method's λ)."""
+    return {"episode_end_step": [], **{name: [] for name in METRIC_NAMES}, **({PRICE_COLUMN: []} if priced else {})}
 
 
 def build_result(
