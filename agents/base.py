@@ -86,6 +86,21 @@ class Learner(Protocol):
         """Optional: the part of :meth:`memory_bytes_per_run` that is each run's replay memory, as
         the result file's ``memory.replay_per_run`` reports it (0 without this method)."""
 
+    def replay_bytes_of(self, run: int) -> int:
+        """Optional: run ``run``'s own replay bytes, as its result file's ``memory_bytes.replay_per_run``
+        records them, for a learner whose runs' memories differ (Empathic DQN: a run that prices
+        costs keeps a cost column, :meth:`price_costs`); without it every run records
+        :meth:`replay_bytes_per_run`."""
+
+    def price_costs(self, runs: Sequence[bool]) -> None:
+        """Optional: called once before training (before a checkpoint is loaded) where a run's
+        reward transform prices costs when they are sampled (``priced_at_sample``,
+        :class:`agents.rewards.PricedTransform`; ``runs`` says which runs' do): from then on every
+        :class:`StepBatch` carries ``costs`` and ``prices``; the learner stores each step's cost
+        beside its reward and trains on ``reward − price·cost`` with each run's price at the time
+        of the update (the latest ``prices``). A learner without it cannot train such a method (the
+        trainer refuses it, naming the method)."""
+
     def check_observation_range(self, low: float, high: float) -> None:
         """Optional: raise ``ValueError`` if observations with values in ``[low, high]`` (the
         environment's range, told once before training) are ones the learner cannot take, e.g.

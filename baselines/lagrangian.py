@@ -6,21 +6,30 @@ expected cost per episode and the cost of a step the number of agents the learne
 (``StepBatch.harms``); so ``d`` is the harms per episode the learner may cause on average.
 Its Lagrangian ``J_R − λ·(J_C − d)`` is maximised over the policy and minimised over ``λ ≥ 0``:
 
-* the policy (plain DQN) trains on the penalised reward ``r' = r − λ·c`` of every step, with the
-  run's current multiplier ``λ``;
+* the policy (plain DQN) trains on the penalised reward ``r' = r − λ·c`` of every transition it
+  samples, with the run's multiplier ``λ`` at the time of that update;
 * ``λ`` follows projected dual ascent, ``λ ← max(0, λ + η·(Ĵ_C − d))``, once at the end of every
   training episode of the run, with ``Ĵ_C`` that episode's cost (its harms): a stochastic estimate
-  of ``J_C`` whose average over episodes is the gradient of the dual. The step that ends an
-  episode is penalised with the multiplier from before the update.
+  of ``J_C`` whose average over episodes is the gradient of the dual. The updates that follow
+  the step that ends an episode already use the updated multiplier.
 
 ``λ`` is kept per run in the transform's state (so a checkpoint keeps it) and rises while the
-runs' episodes harm more than ``d`` on average, falls back towards 0 while they harm less.
+runs' episodes harm more than ``d`` on average, falls back towards 0 while they harm less. Each
+run's result file records it after every training episode (``train.lambda``, beside the episode's
+metrics), and :mod:`leaderboard.constraint` says whether the runs' final cost meets ``d``.
 
-A reward transform's reward is fixed when the step is stored, so the replay holds each step
-penalised with the ``λ`` of its time, not today's: an off-policy approximation (OmniSafe's PPO-Lag
-is on-policy, each batch priced afresh). With a replay of the methods profile's 50,000 steps and
-``λ`` moving by at most ``η`` per episode, the prices in one replay differ by what about a hundred
-episodes move ``λ``.
+The harms are priced when a step is sampled, not when it is stored: the transform declares
+``priced_at_sample`` (:class:`agents.rewards.PricedTransform`) and hands the environment's reward
+and the step's harms (its cost) separately; the replay keeps the cost beside the reward, and every
+gradient step's target uses ``r − λ_now·c`` with ``λ_now`` the run's multiplier when the update
+is taken (:meth:`agents.empathic_dqn.EmpathicDQN.price_costs`; both update kernels, in float32).
+So the whole replay is priced at today's ``λ``, as OmniSafe's on-policy PPO-Lag prices each batch
+afresh; an off-policy learner with a reward fixed at storage would train on a mix of the prices of
+the last hundred or so episodes (a replay of the methods profile's 50,000 steps), which in the
+runs before this change left the replay's mean price at about half the current one and ``λ``
+still rising at the end. A checkpoint of a Lagrangian run made before costs were priced when
+sampled holds no costs and is refused (move it away to restart); other methods' replays and
+checkpoints are as before.
 
 Defaults, and how they differ from OmniSafe's (``cost_limit = 25``, ``lagrangian_multiplier_init
 = 0.001``, ``lambda_lr = 0.035`` with Adam on λ, updated once per epoch from the mean cost of its

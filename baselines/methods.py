@@ -118,8 +118,9 @@ BASELINE_METHODS: dict[str, Method] = {
         target="golden",
         reward=Lagrangian(),
         label=lambda s: "DQN-Lagrangian",
-        description="DQN trained on reward − λ·harms, λ ← max(0, λ + 1·(episode harms − 0.1)) at each episode's end "
-        "(constrained RL: harms per episode ≤ 0.1, as OmniSafe's PPO-Lag)",
+        description="DQN trained on reward − λ·harms, each sampled step priced at the current λ, "
+        "λ ← max(0, λ + 1·(episode harms − 0.1)) at each episode's end (constrained RL: harms per episode ≤ 0.1, "
+        "as OmniSafe's PPO-Lag)",
     ),
 }
 """The baselines, by registry name."""
