@@ -342,3 +342,36 @@ def test_the_constraint_verdict_needs_runs_and_says_so() -> None:
         constraint_satisfaction([[1.0]], [[0.0], [1.0]], cost_limit=0.1)
     one = constraint_satisfaction([[1.0, 0.0, 0.0]], [[0.0]], cost_limit=0.1)
     assert one.final_training.mean == 0.0 and one.final_training.low == one.final_training.high == 0.0  # one seed: a point
+
+
+def test_a_lagrangian_checkpoint_from_before_costs_were_priced_when_sampled_is_refused(tmp_path, monkeypatch) -> None:
+    """A Lagrangian run's checkpoint whose replay holds no costs (as one written before they were
+    priced when sampled) is refused, saying it is from another version; the same checkpoint with
+    its costs resumes."""
+    from empathy_zoo.training import RunnerOptions, ensemble, train_runs
+    from empathy_zoo.training.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+    from empathy_zoo.training.resume import checkpoint_path
+
+    spec = small_run("dqn_lagrangian", reward={"cost_limit": 0.5, "lambda_lr": 2.0})
+    real = ensemble.save_checkpoint
+
+    def save_then_die(path, payload):  # type: ignore[no-untyped-def]
+        real(path, payload)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ensemble, "save_checkpoint", save_then_die)
+    options = RunnerOptions(progress=False, checkpoint_interval=250)
+    with pytest.raises(KeyboardInterrupt):
+        train_runs([spec], tmp_path, options)
+    monkeypatch.setattr(ensemble, "save_checkpoint", real)
+    path = checkpoint_path(tmp_path, [spec])
+    saved = load_checkpoint(path)
+    assert PRICE_COLUMN in saved["logs"][0] and "cost" in saved["learner"]["replay"]
+    old = copy.deepcopy(saved)
+    del old["learner"]["replay"]["cost"], old["learner"]["prices"]
+    save_checkpoint(path, {key: value for key, value in old.items() if key != "format"})
+    with pytest.raises(CheckpointError, match="another method, or by a version that priced costs when they were stored"):
+        train_runs([spec], tmp_path, options)
+    save_checkpoint(path, {key: value for key, value in saved.items() if key != "format"})
+    [result] = train_runs([spec], tmp_path, options)
+    assert len(json.loads(result.read_text())["train"][PRICE_COLUMN]) > 0
