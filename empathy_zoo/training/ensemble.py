@@ -160,7 +160,8 @@ def _train_ensemble(
         price_costs = _optional(learner, "price_costs")
         if price_costs is None:
             raise ValueError(
-                f"method {first.method!r}: its reward transform prices costs when they are sampled, and its learner "
+                f"method {specs[int(np.flatnonzero(priced)[0])].method!r}: its reward transform prices costs when they "
+                "are sampled, and its learner "
                 f"{type(learner).__name__} cannot (it has no price_costs)"
             )
         price_costs(priced)
