@@ -230,10 +230,13 @@ def open_regular(path: str | os.PathLike[str], what: str) -> BinaryIO:
     """``path`` opened for reading in binary, once it is known to be a regular file of at most the
     size it has; anything else (a FIFO, a device, a directory, a socket) is refused with a
     ``ValueError`` naming it, without waiting on it: it is opened with ``O_NONBLOCK`` (a FIFO with no
-    writer does not hang), then checked with ``fstat`` on the open descriptor."""
+    writer does not hang), then checked with ``fstat`` on the open descriptor. A missing file raises
+    ``FileNotFoundError``, as ``open`` does."""
     name = os.fspath(path)
     try:
         fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except FileNotFoundError:
+        raise  # (as open() raises it: a caller says which file is missing, and why it was looked for)
     except OSError as error:
         raise ValueError(f"cannot read {what} {name} ({error.strerror or error})") from None
     try:

@@ -31,6 +31,16 @@ def synthetic_result(env: str, method: str, beta: float, seed: int, fixed: dict 
     return check_result(synthetic_schema_1(env, method, beta, seed, fixed, **means), "synthetic.json")
 
 
+MAX_CYCLES = 500
+"""The episode length of every synthetic run (the environments' default ``max_cycles``)."""
+
+
+def bounded(metric: str) -> tuple[float, float | None]:
+    """The range of ``metric`` in a synthetic run: its own, survival at most :data:`MAX_CYCLES`."""
+    low, high = METRIC_RANGES[metric]
+    return low, float(MAX_CYCLES) if metric == "survival" else high
+
+
 def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
     """The result of :func:`synthetic_result` as a schema-1 file holds it."""
     rng = np.random.default_rng(seed)
@@ -38,7 +48,7 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
     train = {"episode_end_step": list(range(100, 100 * (episodes + 1), 100))}
     for metric in METRIC_NAMES:
         centre = means.get(metric, 0.0)
-        low, high = METRIC_RANGES[metric]
+        low, high = bounded(metric)
         train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
     settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS)) | SCHEMA_1_SHAPING.get(method, {})
     return {
@@ -56,7 +66,5 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
             "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
         },
         "train": train,
-        "eval": [
-            {"step": 4000, **{m: [float(np.clip(means.get(m, 0.0) + 0.01 * seed, *METRIC_RANGES[m]))] * 3 for m in METRIC_NAMES}}
-        ],
+        "eval": [{"step": 4000, **{m: [float(np.clip(means.get(m, 0.0) + 0.01 * seed, *bounded(m)))] * 3 for m in METRIC_NAMES}}],
     }

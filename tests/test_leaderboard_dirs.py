@@ -126,6 +126,10 @@ def test_evaluation_settings_join_the_budget_where_they_differ(tmp_path: Path) -
     other = [run("empathic_dqn", 1.0, seed) for seed in SEEDS]
     for result in other:
         result["config"]["eval_episodes"] = 10
+        result["eval"] = [
+            {key: [values[0]] * 10 if key != "step" else values for key, values in entry.items()} for entry in result["eval"]
+        ]
+        assert all(len(entry["survival"]) == 10 for entry in result["eval"])  # (ten episodes evaluated)
         result["run_id"] = result["run_id"].replace("4000", "4000-ten")
     read = load_results_dirs([write_dir(tmp_path / "a", dqn()), write_dir(tmp_path / "b", other)])
     assert sorted({result["method_label"] for result in read.results}) == [

@@ -264,9 +264,19 @@ def test_bad_values_raise_naming_the_argument_and_the_choices(kwargs, named):
         RunSpec.of(env="sharing_v0", env_kwargs=kwargs, steps=10, eval_interval=10, eval_episodes=1)
 
 
-@pytest.mark.parametrize("name", ["start", "inventory_encoding"])
+def test_coexistence_takes_no_sharing_start():
+    for make in (
+        lambda: coexistence_v0.parallel_env(start="centre"),
+        lambda: VectorEnv("coexistence_v0", 2, start="centre"),
+        lambda: make_single_agent_env("coexistence_v0", start="centre"),
+    ):
+        with pytest.raises(ValueError, match="start must be one of 'rules', 'random', 'centre_corner'"):
+            make()
+
+
+@pytest.mark.parametrize("name", ["inventory_encoding"])
 def test_coexistence_takes_no_fidelity_argument(name):
-    value = {"start": "centre", "inventory_encoding": "authors"}[name]
+    value = {"inventory_encoding": "authors"}[name]
     for make in (
         lambda: coexistence_v0.parallel_env(**{name: value}),
         lambda: coexistence_v0.env(**{name: value}),
@@ -332,7 +342,8 @@ def test_sweep_file_carries_the_options_into_the_run_specs(tmp_path):
 @pytest.mark.parametrize(
     ("table", "message"),
     [
-        ('[envs.c]\nenv = "coexistence_v0"\nstart = "centre"', "[envs.c] start: coexistence_v0 takes no argument 'start'"),
+        ('[envs.c]\nenv = "coexistence_v0"\nstart = "centre"', "start must be one of 'rules', 'random', 'centre_corner'"),
+        ('[envs.c]\nenv = "coexistence_v0"\ninventory_encoding = "authors"', "coexistence_v0 takes no argument 'inventory_encoding'"),
         ('[envs.s]\nenv = "sharing_v0"\nstart = "middle"', "start must be one of 'random', 'centre'; got 'middle'"),
         ('[envs.s]\nenv = "sharing_v0"\ninventory_encoding = "x"', "inventory_encoding must be one of"),
         ('[envs.s]\nenv = "sharing_v0"\nstart = 1', "[envs.s] start: expected str"),
