@@ -37,14 +37,16 @@ and the machine.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import shlex
 import statistics
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -54,8 +56,20 @@ sys.path.insert(0, str(ROOT))
 from machine import describe_machine  # noqa: E402  (benchmarks/machine.py, this directory is on sys.path)
 
 from empathy_zoo.atomic import read_json  # noqa: E402
-from leaderboard.aggregate import group_runs, mean_ci, result_files, run_scalars, student_t_interval  # noqa: E402
+from leaderboard.aggregate import (  # noqa: E402
+    PHASES,
+    final_episode_count,
+    group_runs,
+    load_results,
+    longest_episode,
+    mean_ci,
+    result_files,
+    run_scalars,
+    student_t_interval,
+    t_level,
+)
 from leaderboard.improvement import can_decide, improvement_interval  # noqa: E402
+from leaderboard.measured_coverage import ALL_PHASES, COVERAGE_FILE  # noqa: E402
 from leaderboard.tables import TABLE_METRICS  # noqa: E402
 
 MEAN_SEEDS = (3, 5, 10)
@@ -66,6 +80,10 @@ CONFIDENCE = 0.95
 """The claimed coverage of every interval measured here."""
 MEAN_CANDIDATES = ("percentile", "BCa", "bootstrap-t", "t 95 %", "t 97.5 % (leaderboard)", "t 99 %")
 """Intervals of a mean, in the table's column order."""
+TWO_LEVEL_METRICS = ("harms", "survival", "batteries", "equality")
+"""The metrics the leaderboard's verdicts read, whose coverage ``--two-level`` measures."""
+TWO_LEVEL_DIRECTORIES = ("quick", "methods", "paper")
+"""The shipped results directories (under ``docs/results``) that ``--two-level`` resamples."""
 SHIFT_SDS = 2.0
 """The alternative of the power columns: the method's values shifted by this many sds."""
 NORMAL = statistics.NormalDist()
@@ -151,6 +169,161 @@ def committed_population(values: list[np.ndarray], label: str) -> Population:
     return Population(label, draw, 0.0, 1.0)
 
 
+# --- two levels: the shipped rows as populations of runs, each run a population of episodes -----
+
+
+@dataclass(frozen=True)
+class RowEpisodes:
+    """One row's per-episode values of one phase and metric, one array per run: a population."""
+
+    directory: str
+    env: str
+    label: str
+    phase: str
+    metric: str
+    runs: tuple[np.ndarray, ...]
+    """The finite per-episode values of each run (the last greedy evaluation's episodes, or the
+    final 10 % of training episodes)."""
+    upper: float | None
+    """The bound the leaderboard cuts the interval at besides the metric's range (``max_cycles`` of
+    survival), or None."""
+
+    def mean(self) -> float:
+        """The population mean: the mean over runs of their full-episode means."""
+        return float(np.mean([values.mean() for values in self.runs]))
+
+
+def row_episodes(
+    results: Sequence[dict[str, Any]], directory: str, metrics: Sequence[str] = TWO_LEVEL_METRICS
+) -> list[RowEpisodes]:
+    """Every row of ``results`` with two or more runs, per scored phase and each of ``metrics`` its
+    environment's tables show, as :class:`RowEpisodes` (the episodes the leaderboard averages)."""
+    rows = []
+    for (env, label), runs in group_runs(results).items():
+        shown = TABLE_METRICS.get(runs[0]["env"], ())
+        for phase in PHASES:
+            for metric in (m for m in metrics if m in shown):
+                per_run = []
+                for run in runs:
+                    if phase == "eval":
+                        last = max(run["eval"], key=lambda evaluation: evaluation["step"]) if run["eval"] else {}
+                        values = np.asarray(last.get(metric, []), dtype=np.float64)
+                    else:
+                        column = np.asarray(run["train"].get(metric, []), dtype=np.float64)
+                        values = column[column.size - final_episode_count(column.size) :]
+                    values = values[np.isfinite(values)]
+                    if values.size:
+                        per_run.append(values)
+                if len(per_run) >= 2:
+                    upper = float(longest_episode(runs)) if metric == "survival" else None
+                    rows.append(RowEpisodes(directory, env, label, phase, metric, tuple(per_run), upper))
+    return rows
+
+
+def two_level_draws(runs: Sequence[np.ndarray], n: int, replicates: int, rng: np.random.Generator) -> np.ndarray:
+    """``(replicates, n)`` run means: each replicate draws ``n`` of ``runs`` with replacement, and
+    each drawn run's episodes are resampled with replacement (as many as it has) and averaged."""
+    picks = rng.integers(0, len(runs), (replicates, n)).ravel()
+    means = np.empty(picks.size)
+    for j, values in enumerate(runs):
+        slots = np.flatnonzero(picks == j)
+        step = max(1, 2_000_000 // values.size)
+        for start in range(0, slots.size, step):
+            chunk = slots[start : start + step]
+            means[chunk] = values[rng.integers(0, values.size, (chunk.size, values.size))].mean(axis=1)
+    return means.reshape(replicates, n)
+
+
+def two_level_coverage(row: RowEpisodes, n: int, replicates: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """``(covered, zero_width)`` per replicate: whether the leaderboard's interval
+    (:func:`leaderboard.aggregate.mean_ci`, the t interval at 97.5 % nominal cut to the metric's
+    range) of ``n`` two-level draws (:func:`two_level_draws`) contains the row's mean (to 1e-9,
+    relative: the rounding of a mean of equal values), and whether all ``n`` drawn run means were equal."""
+    draws = two_level_draws(row.runs, n, replicates, rng)
+    max_cycles = None if row.upper is None else int(row.upper)
+    _, low, high = mean_ci(draws.T, confidence=CONFIDENCE, metrics=row.metric, max_cycles=max_cycles)
+    truth = row.mean()
+    tolerance = 1e-9 * max(1.0, abs(truth))
+    covered = (low - tolerance <= truth) & (truth <= high + tolerance)
+    return covered, np.all(draws == draws[:, :1], axis=1)
+
+
+def two_level_summary(
+    rows: Sequence[RowEpisodes], seeds: Sequence[int], replicates: int, rng: np.random.Generator
+) -> list[dict[str, Any]]:
+    """Per metric, phase (and both phases pooled, phase ``"all"``) and seed count: the coverage
+    and the share of zero-width intervals, each the mean over rows of the row's share of
+    ``replicates`` (rows in the order given, seed counts within each row)."""
+    found: dict[tuple[str, str, int], list[tuple[float, float, str]]] = {}
+    for row in rows:
+        for n in seeds:
+            covered, flat = two_level_coverage(row, n, replicates, rng)
+            name = f"{row.directory}: {row.env} / {row.label}, {row.phase}"
+            for phase in (row.phase, ALL_PHASES):
+                found.setdefault((row.metric, phase, n), []).append((float(covered.mean()), float(flat.mean()), name))
+    summary = []
+    for (metric, phase, n), per_row in sorted(
+        found.items(), key=lambda item: (_metric_order(item[0][0]), item[0][1], item[0][2])
+    ):
+        coverage = np.array([c for c, _, _ in per_row])
+        lowest = int(np.argmin(coverage))
+        summary.append(
+            {
+                "metric": metric,
+                "phase": phase,
+                "seeds": n,
+                "rows": len(per_row),
+                "coverage": round(float(coverage.mean()), 4),
+                "zero_width": round(float(np.mean([z for _, z, _ in per_row])), 4),
+                "lowest_row": per_row[lowest][2],
+                "lowest_row_coverage": round(float(coverage[lowest]), 4),
+            }
+        )
+    return summary
+
+
+def _metric_order(metric: str) -> int:
+    return TWO_LEVEL_METRICS.index(metric) if metric in TWO_LEVEL_METRICS else len(TWO_LEVEL_METRICS)
+
+
+def write_two_level_json(path: Path, summary: list[dict[str, Any]], *, command: str, seed: int, replicates: int) -> None:
+    """The figures of :func:`two_level_summary` as the leaderboard reads them
+    (:func:`leaderboard.measured_coverage.read_measured_coverage`)."""
+    document = {
+        "command": command,
+        "claimed": CONFIDENCE,
+        "nominal_level": t_level(CONFIDENCE),
+        "interval": "two-sided Student-t over the drawn runs' means (leaderboard.aggregate.mean_ci)",
+        "resampling": "n runs of the row with replacement, then each drawn run's episodes with replacement",
+        "seed": seed,
+        "replicates": replicates,
+        "coverage": summary,
+    }
+    path.write_text(json.dumps(document, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+
+
+def two_level_table(summary: list[dict[str, Any]], seeds: Sequence[int]) -> str:
+    """Markdown: a row per metric and phase, a column per seed count, each cell ``coverage %
+    (zero-width %)``."""
+    cells: dict[tuple[str, str], dict[int, dict[str, Any]]] = {}
+    for entry in summary:
+        cells.setdefault((entry["metric"], entry["phase"]), {})[entry["seeds"]] = entry
+    titles = {"eval": "greedy evaluation", "train_final10": "training, final 10 %", ALL_PHASES: "both"}
+    rows = []
+    for (metric, phase), by_n in cells.items():
+        rows.append(
+            [
+                metric,
+                titles[phase],
+                str(next(iter(by_n.values()))["rows"]),
+                *(f"{100 * by_n[n]['coverage']:.1f} % ({100 * by_n[n]['zero_width']:.0f} %)" if n in by_n else "" for n in seeds),
+                *(f"{100 * by_n[n]['lowest_row_coverage']:.0f} %" if n in by_n else "" for n in seeds),
+            ]
+        )
+    header = ["metric", "phase", "rows", *(f"{n} seeds" for n in seeds), *(f"lowest row, {n}" for n in seeds)]
+    return markdown(header, rows)
+
+
 # --- intervals of a mean: data has shape (replicates, n) --------------------------------------
 
 
@@ -162,7 +335,7 @@ def _counts(rng: np.random.Generator, replicates: int, resamples: int, n: int) -
 
 def percentile_bootstrap(data: np.ndarray, rng: np.random.Generator, resamples: int) -> tuple[np.ndarray, ...]:
     """Today's interval: percentiles of the resampled means. Also returns the counts and the means."""
-    counts = _counts(rng, *data.shape[:1], resamples, data.shape[1])
+    counts = _counts(rng, data.shape[0], resamples, data.shape[1])
     means = np.einsum("rbn,rn->rb", counts, data) / data.shape[1]
     low, high = np.quantile(means, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2], axis=1)
     return low, high, counts, means
@@ -394,10 +567,21 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--replicates", type=int, default=2000, help="simulated cells per row (default 2000)")
     parser.add_argument("--resamples", type=int, default=1000, help="bootstrap resamples per interval (default 1000)")
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument(
+        "--two-level",
+        action="store_true",
+        help="measure the leaderboard's interval by resampling the shipped runs and their episodes (writes --json)",
+    )
+    parser.add_argument(
+        "--json", type=Path, default=COVERAGE_FILE, help=f"where --two-level writes its figures (default {COVERAGE_FILE.name})"
+    )
     args = parser.parse_args(argv)
     if args.replicates < 1 or args.resamples < 10:
         parser.error("--replicates must be at least 1 and --resamples at least 10")
     rng = np.random.default_rng(args.seed)
+    if args.two_level:
+        two_level_main(args.replicates, args.seed, args.json, rng)
+        return
     started = time.process_time()
     committed = committed_populations()
     populations = [*parametric_populations(), committed_population(committed, "committed per-seed values")]
@@ -452,6 +636,35 @@ def main(argv: list[str] | None = None) -> None:
         f"resamples per bootstrap, seed {args.seed}; {time.process_time() - started:.0f} CPU s."
     )
     command = " ".join(shlex.quote(a) for a in ["python", "benchmarks/interval_coverage.py", *sys.argv[1:]])
+    print(f"Command: `{command}`")
+    for line in describe_machine():
+        print(line)
+
+
+def two_level_main(replicates: int, seed: int, json_path: Path, rng: np.random.Generator) -> None:
+    """``--two-level``: every shipped row, phase and verdict metric as a population of runs of episodes."""
+    started, wall = time.process_time(), time.perf_counter()
+    rows = []
+    for name in TWO_LEVEL_DIRECTORIES:
+        directory = ROOT / "docs" / "results" / name / "runs"
+        rows += row_episodes(load_results(directory), directory.relative_to(ROOT).as_posix())
+    summary = two_level_summary(rows, MEAN_SEEDS, replicates, rng)
+    command = " ".join(shlex.quote(a) for a in ["python", "benchmarks/interval_coverage.py", *sys.argv[1:]])
+    write_two_level_json(json_path, summary, command=command, seed=seed, replicates=replicates)
+    print("## Coverage of the leaderboard's interval, resampling the shipped runs and their episodes\n")
+    print(
+        "Each row of docs/results/{quick,methods,paper}/runs is a population of runs, each run one of its "
+        "episodes; a replicate draws n runs with replacement, resamples each drawn run's episodes, and builds "
+        "the leaderboard's two-sided t interval at 97.5 % nominal over the n run means. Each cell: the share "
+        "of replicates whose interval contains the row's mean, averaged over rows (in brackets: the share of "
+        "zero-width intervals, all drawn runs equal); 'lowest row': the row that covered least.\n"
+    )
+    print(two_level_table(summary, MEAN_SEEDS))
+    print(
+        f"\n{len(rows)} populations (row × phase × metric) with at least two runs; {replicates} replicates per "
+        f"population and seed count, seed {seed}; {time.process_time() - started:.0f} CPU s, "
+        f"{time.perf_counter() - wall:.0f} s wall. Figures written to {json_path}."
+    )
     print(f"Command: `{command}`")
     for line in describe_machine():
         print(line)

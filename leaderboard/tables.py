@@ -14,7 +14,7 @@ import math
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
@@ -29,7 +29,23 @@ from leaderboard.aggregate import (
     t_level,
 )
 from leaderboard.budgets import RunBudget, shows_evaluation
-from leaderboard.improvement import TOO_FEW_SEEDS, VERDICT_MARKS, VERDICT_NOTE, Improvement, smallest_decidable_seeds
+from leaderboard.improvement import (
+    TOO_FEW_SEEDS,
+    VERDICT_MARKS,
+    VERDICT_NOTE,
+    Improvement,
+    can_decide,
+    smallest_decidable_seeds,
+)
+from leaderboard.measured_coverage import MeasuredCoverage, committed_coverage
+from leaderboard.multiplicity import (
+    FAMILY_LEVEL,
+    HOLM_MARK,
+    benjamini_hochberg_adjusted,
+    expected_false_marks,
+    holm_adjusted,
+    rejected,
+)
 from leaderboard.sources import BUDGET_SEPARATOR, ResultsDir
 
 __all__ = [
@@ -38,6 +54,12 @@ __all__ = [
     "place_before_definitions",
     "PHASE_TITLES",
     "SINGLE_SEED_MARK",
+    "ZERO_WIDTH_MARK",
+    "ZERO_WIDTH_NOTE",
+    "TWO_LEVEL_COMMAND",
+    "coverage_note",
+    "holm_survivors",
+    "multiplicity_note",
     "CSV_COLUMNS",
     "COMPARISON_CSV_COLUMNS",
     "RowFacts",
@@ -63,6 +85,15 @@ PHASE_TITLES: dict[str, str] = {
 """Heading of each scored phase."""
 SINGLE_SEED_MARK = "†"
 """Marks a method scored on a single seed, whose interval is the point itself."""
+ZERO_WIDTH_MARK = "="
+"""Marks a mean whose seeds all gave the same value (a zero-width interval), in place of ``[x, x]``."""
+ZERO_WIDTH_NOTE = (
+    f"{ZERO_WIDTH_MARK} every seed gave this value, so the t interval has zero width: the seeds show no spread, "
+    "which does not mean that another seed could not differ (the measured coverage says how often that misleads)."
+)
+"""The legend of :data:`ZERO_WIDTH_MARK`."""
+TWO_LEVEL_COMMAND = "python benchmarks/interval_coverage.py --two-level"
+"""The command that measures the coverage the legends print (:mod:`leaderboard.measured_coverage`)."""
 CSV_COLUMNS: tuple[str, ...] = (
     "env",
     "method_label",
@@ -120,9 +151,13 @@ class Provenance:
     def method_text(self) -> str:
         """One paragraph explaining what a cell means."""
         measured = f" {MEAN_INTERVAL_NOTE}" if self.confidence == CONFIDENCE else ""
+        nominal = t_level(self.confidence)
         return (
-            f"Each cell is the mean over seeds [its {self.confidence:.0%} interval over seeds: the Student-t "
-            f"interval mean ± t·s/√n at {t_level(self.confidence):.1%} nominal].{measured} "
+            f"Each cell is the mean over seeds [an interval over seeds: the two-sided Student-t interval "
+            f"mean ± t·s/√n at {100 * nominal:.1f} % nominal (t the {nominal + (1 - nominal) / 2:.4g} quantile with "
+            f"n − 1 degrees of freedom), computed at that level so that it covers the mean in at least "
+            f"{100 * self.confidence:.0f} % of cases on skewed data; the coverage measured on the shipped results "
+            f"is given under each table].{measured} "
             f"'{PHASE_TITLES['eval']}': mean over the episodes of each run's last greedy evaluation. "
             f"'{PHASE_TITLES['train_final10']}': mean over the last {self.final_fraction:.0%} of each run's "
             "training episodes (at least one)."
@@ -184,12 +219,17 @@ def format_interval(mean: float, low: float, high: float, digits: int = 2) -> st
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
 
 
-def format_mean(mean: float, low: float, high: float, n_seeds: int, digits: int = 2) -> str:
+def format_mean(mean: float, low: float, high: float, n_seeds: int, digits: int = 2, mark_equal: bool = False) -> str:
     """A mean over ``n_seeds`` seeds with its interval (:func:`format_interval`), or, below
-    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds, without it: ``"0.50 (n=2: no interval)"``."""
-    if n_seeds >= MIN_INTERVAL_SEEDS or math.isnan(mean):
-        return format_interval(mean, low, high, digits)
-    return f"{mean:.{digits}f} (n={n_seeds}: no interval)"
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds, without it: ``"0.50 (n=2: no interval)"``;
+    with ``mark_equal``, a zero-width interval (every seed equal) is :data:`ZERO_WIDTH_MARK`: ``"0.50 ="``."""
+    if math.isnan(mean):
+        return "n/a"
+    if n_seeds < MIN_INTERVAL_SEEDS:
+        return f"{mean:.{digits}f} (n={n_seeds}: no interval)"
+    if mark_equal and low == high:
+        return f"{mean:.{digits}f} {ZERO_WIDTH_MARK}"
+    return format_interval(mean, low, high, digits)
 
 
 TABLE_METRICS: dict[str, tuple[str, ...]] = {
@@ -230,7 +270,11 @@ def table_rows(
         row = [label, seeds]
         for metric in metrics:
             cell = by_metric.get(metric)
-            row.append("n/a" if cell is None else format_mean(cell.mean, cell.ci_low, cell.ci_high, cell.n_seeds, digits))
+            row.append(
+                "n/a"
+                if cell is None
+                else format_mean(cell.mean, cell.ci_low, cell.ci_high, cell.n_seeds, digits, mark_equal=True)
+            )
         rows.append(row)
     return header, rows
 
@@ -248,12 +292,57 @@ def _sections(
                 yield env, phase, header, rows
 
 
+def _family(cells: Sequence[Improvement]) -> list[int]:
+    """The indices of ``cells`` that can give a ▲ or ▼ (seed counts that can reach 5 %, a finite p):
+    the family of tests a page's marks come from."""
+    return [i for i, cell in enumerate(cells) if can_decide(cell.n_seeds, cell.n_baseline_seeds) and math.isfinite(cell.p_value)]
+
+
+def holm_survivors(cells: Sequence[Improvement], level: float = FAMILY_LEVEL) -> list[bool]:
+    """Per cell of ``cells`` (a page's), whether its ▲ / ▼ survives Holm's adjustment
+    (:func:`leaderboard.multiplicity.holm_adjusted`) over the cells that can give one, at family-wise ``level``."""
+    family = _family(cells)
+    adjusted = holm_adjusted([cells[i].p_value for i in family])
+    survives = [False] * len(cells)
+    for i, keep in zip(family, rejected(adjusted, level)):
+        survives[i] = bool(keep) and cells[i].verdict in ("better", "worse")
+    return survives
+
+
+def _number(value: float) -> str:
+    return f"{value:.2g}" if value < 10 else f"{value:.0f}"
+
+
+def multiplicity_note(
+    cells: Sequence[Improvement], level: float = FAMILY_LEVEL, where: str = "this page's P(improves on DQN) tables hold"
+) -> str:
+    """The sentence on a page's ▲ / ▼ as a family (``where`` names the tables, ending in a verb):
+    how many false marks its cells would give where no method differed from DQN, and how many
+    marks survive Holm (:data:`HOLM_MARK`) and Benjamini–Hochberg over them."""
+    family = _family(cells)
+    marked = [i for i in family if cells[i].verdict in ("better", "worse")]
+    holm = holm_survivors(cells, level)
+    bh = rejected(benjamini_hochberg_adjusted([cells[i].p_value for i in family]), level)
+    by_bh = sum(1 for i, keep in zip(family, bh) if keep and i in marked)
+    percent = f"{100 * level:.0f} %"
+    return (
+        f"Many cells, many chances: {where} {len(family)} cells that can give a "
+        f"▲ or ▼, so ≈ {_number(expected_false_marks(len(family), level))} false marks expected among {len(family)} "
+        f"cells at {percent} if no method differed from DQN at all (each test's size is at most {percent}). "
+        f"{HOLM_MARK}: the mark survives Holm's adjustment of the p-values over those {len(family)} cells (family-wise "
+        f"{percent}: the chance of even one false {HOLM_MARK} is at most {percent}); {sum(holm)} of the {len(marked)} "
+        f"marks do ({by_bh} survive Benjamini–Hochberg at a false discovery rate of {percent})."
+    )
+
+
 def improvement_sections(
     cells: Sequence[Improvement], env: str, digits: int = 2, against: bool = False
 ) -> list[tuple[str, list[str], list[list[str]]]]:
     """``[(phase, header, rows)]`` of ``env``'s probability-of-improvement tables: a row per method
     (and DQN row compared with), a column per metric, each cell ``P [interval] · IQM value``; with
-    ``against``, a column ``Against`` names the DQN row and its seeds."""
+    ``against``, a column ``Against`` names the DQN row and its seeds. ``cells`` are the page's: a
+    mark that survives Holm over them (:func:`holm_survivors`) is followed by :data:`HOLM_MARK`."""
+    holm = dict(zip(map(id, cells), holm_survivors(cells)))
     sections = []
     for phase in PHASES:
         mine = [c for c in cells if c.env == env and c.phase == phase]
@@ -266,7 +355,7 @@ def improvement_sections(
                 (cell.method_label, cell.baseline_label),
                 [cell.method_label, *named, str(cell.n_seeds)] + [""] * len(metrics),
             )
-            mark = VERDICT_MARKS[cell.verdict]
+            mark = VERDICT_MARKS[cell.verdict] + (HOLM_MARK if holm[id(cell)] else "")
             row[first + metrics.index(cell.metric)] = (
                 f"{mark}{' ' if mark else ''}{format_interval(cell.probability, cell.ci_low, cell.ci_high, digits)}"
                 f" · IQM {cell.iqm:.{digits}f}"
@@ -306,6 +395,51 @@ IMPROVEMENT_NOTE = (
     f"against 3) is the least that can give one. {VERDICT_NOTE} "
     "IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
 )
+
+
+def _table_seeds(scores: Sequence[Score], env: str, phase: str) -> list[int]:
+    """The seed counts of ``env``'s rows in ``phase`` that show an interval, ascending."""
+    rows: dict[str, int] = {}
+    for score in scores:
+        if score.env == env and score.phase == phase:
+            rows[score.method_label] = max(rows.get(score.method_label, 0), score.n_seeds)
+    return sorted({n for n in rows.values() if n >= MIN_INTERVAL_SEEDS})
+
+
+def coverage_note(measured: MeasuredCoverage | None, phase: str, metrics: Sequence[str], seeds: Sequence[int]) -> str:
+    """The legend of one table (Markdown, the command in backticks): per seed count of its rows, the
+    coverage of its interval measured per metric (:class:`leaderboard.measured_coverage.MeasuredCoverage`),
+    "not measured" where there is none."""
+    if not seeds:
+        return ""
+    parts = []
+    for n in seeds:
+        found = {metric: measured.coverage(metric, phase, n) if measured is not None else None for metric in metrics}
+        figures = []
+        for metric, figure in found.items():
+            if figure is not None:
+                coverage, flat = figure
+                zero = f" ({100 * flat:.0f} % zero-width)" if flat >= 0.005 else ""
+                figures.append(f"{metric} {100 * coverage:.1f} %{zero}")
+        missing = [metric for metric, figure in found.items() if figure is None]
+        if not figures:
+            parts.append(f"at {n} seeds: not measured")
+            continue
+        rest = f"; {', '.join(missing)} not measured" if missing else ""
+        parts.append(f"at {n} seeds: {', '.join(figures)}{rest}")
+    command = measured.command if measured is not None else TWO_LEVEL_COMMAND
+    return (
+        f"Coverage of these intervals (nominal 97.5 %, for a claimed 95 %) measured by `{command}` (each shipped "
+        f"row's runs resampled, then each drawn run's episodes): {'; '.join(parts)}."
+    )
+
+
+def _measured(coverage: MeasuredCoverage | Literal["committed"] | None) -> MeasuredCoverage | None:
+    return committed_coverage() if coverage == "committed" else coverage  # type: ignore[return-value]
+
+
+def _has_zero_width(rows: Sequence[Sequence[str]]) -> bool:
+    return any(cell.endswith(f" {ZERO_WIDTH_MARK}") for row in rows for cell in row[2:])
 
 
 def _has_single_seed(scores: Sequence[Score]) -> bool:
@@ -361,15 +495,19 @@ def markdown_report(
     improvements: Sequence[Improvement] = (),
     uncompared: Sequence[tuple[str, str]] = (),
     reference_note: str = "",
+    coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
 ) -> str:
     """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
 
     ``figures`` maps ``(env, metric)`` to a link (a path relative to the page); ``uncompared``
     names the ``(env, label)`` rows no DQN row is compared with (:func:`uncompared_note`);
     ``reference_note`` (Markdown) says which rows are the DQN reference, under the paragraph on
-    what a cell means (:func:`leaderboard.row_names.renaming_note`).
+    what a cell means (:func:`leaderboard.row_names.renaming_note`); ``coverage``: the measured
+    coverage each table's legend quotes (:func:`coverage_note`; by default the committed figures).
     """
     figures = figures or {}
+    measured = _measured(coverage)
+    zero_width = False
     against = names_baselines(provenance, improvements)
     lines = [
         "# empathy-zoo leaderboard",
@@ -389,10 +527,15 @@ def markdown_report(
             lines += ["", f"## {env}"]
             current_env = env
         lines += ["", f"### {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
+        note = coverage_note(measured, phase, header[2:], _table_seeds(scores, env, phase))
+        lines += ["", note] if note else []
+        zero_width = zero_width or _has_zero_width(rows)
     lines += _markdown_improvements(improvements, current_env, digits, against, uncompared)
     lines += _markdown_figures(figures, current_env)
     if _has_single_seed(scores):
         lines += ["", _single_seed_note()]
+    if zero_width:
+        lines += ["", ZERO_WIDTH_NOTE]
     if _has_few_seeds(scores):
         lines += ["", NO_INTERVAL_NOTE]
     lines += ["", "## Metric definitions", ""]
@@ -429,7 +572,8 @@ def _markdown_improvements(
     for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
         lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows, 2 if against else 1)]
     note = uncompared_note(uncompared, env, markdown=True)
-    return lines + (["", IMPROVEMENT_NOTE] if lines else []) + (["", note] if note else [])
+    legend = ["", IMPROVEMENT_NOTE, "", multiplicity_note(cells)] if lines else []
+    return lines + legend + (["", note] if note else [])
 
 
 def _csv_number(value: float) -> str:
@@ -512,7 +656,11 @@ def _html_improvements(
     note = uncompared_note(uncompared, env)
     return (
         lines
-        + ([f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>'] if lines else [])
+        + (
+            [f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>', f'<p class="note">{_text(multiplicity_note(cells))}</p>']
+            if lines
+            else []
+        )
         + ([f'<p class="note">{_text(note)}</p>'] if note else [])
     )
 
@@ -533,13 +681,16 @@ def html_report(
     improvements: Sequence[Improvement] = (),
     uncompared: Sequence[tuple[str, str]] = (),
     reference_note: str = "",
+    coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
 ) -> str:
     """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
 
-    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` as :func:`markdown_report`;
-    ``reference_note`` as there, in plain text (escaped here).
+    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` and ``coverage`` as
+    :func:`markdown_report`; ``reference_note`` as there, in plain text (escaped here).
     """
     figures = figures or {}
+    measured = _measured(coverage)
+    zero_width = False
     esc = _text
     against = names_baselines(provenance, improvements)
     lines = [
@@ -569,10 +720,15 @@ def html_report(
             lines.append(f"<h2>{esc(env)}</h2>")
             current_env = env
         lines += [f"<h3>{esc(PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
+        note = coverage_note(measured, phase, header[2:], _table_seeds(scores, env, phase))
+        lines += [f'<p class="note">{_html_code(note)}</p>'] if note else []
+        zero_width = zero_width or _has_zero_width(rows)
     lines += _html_improvements(improvements, current_env, digits, against, uncompared)
     lines += _html_figures(figures, current_env)
     if _has_single_seed(scores):
         lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
+    if zero_width:
+        lines.append(f'<p class="note">{esc(ZERO_WIDTH_NOTE)}</p>')
     if _has_few_seeds(scores):
         lines.append(f'<p class="note">{esc(NO_INTERVAL_NOTE)}</p>')
     lines += ["<h2>Metric definitions</h2>", "<dl>"]

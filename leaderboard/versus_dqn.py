@@ -1,6 +1,8 @@
 """Every method against DQN in one compact table per environment: for each metric, the mean of the
 last greedy evaluation and of the final 10 % of training episodes, each with its ▲ / ▼ / ⊘ marker
-(:func:`leaderboard.improvement.improvement_verdict`), DQN's own means in the heading.
+(:func:`leaderboard.improvement.improvement_verdict`), DQN's own means in the heading; a mark that
+survives Holm's adjustment over every cell shown is followed by ◆, and the legend says how many false
+marks the cells would give where nothing differed (:func:`leaderboard.tables.multiplicity_note`).
 
     python -m leaderboard.versus_dqn docs/results/methods
 
@@ -14,7 +16,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from leaderboard.aggregate import group_runs, load_results, score_runs
-from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
+from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
+from leaderboard.multiplicity import HOLM_MARK
+from leaderboard.tables import holm_survivors, multiplicity_note
 
 __all__ = ["versus_dqn_tables", "DEFAULT_METRICS"]
 
@@ -36,6 +40,17 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str
     metrics_of = {variant: (metrics_of or DEFAULT_METRICS).get(variant) or DEFAULT_METRICS[env] for variant, env in envs.items()}
     scores = {(s.env, s.method_label, s.phase, s.metric): s for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c for c in improvements_over_dqn(results, metrics_of)}
+    shown: list[Improvement] = []
+    for variant, metrics in metrics_of.items():
+        labels = [label for (env, label) in groups if env == variant]
+        shown += [
+            verdicts[key]
+            for label in labels
+            for metric in metrics
+            for phase in ("eval", "train_final10")
+            if (key := (variant, label, phase, metric)) in verdicts
+        ]
+    holm = {id(cell) for cell, keep in zip(shown, holm_survivors(shown)) if keep}
     lines: list[str] = []
     for variant, metrics in metrics_of.items():
         labels = [label for (env, label) in groups if env == variant]
@@ -67,10 +82,17 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str
                 for phase in ("eval", "train_final10"):
                     cell = verdicts.get((variant, label, phase, metric))
                     mark = VERDICT_MARKS.get(cell.verdict, "") if cell is not None else ""
+                    mark += HOLM_MARK if id(cell) in holm else ""
                     parts.append(f"{mark} {_format(scores[(variant, label, phase, metric)].mean, metric)}".strip())
                 cells.append(" / ".join(parts))
             lines.append(f"| {label} | {seeds[label]} | " + " | ".join(cells) + " |")
         lines.append("")
+    if shown:
+        lines += [
+            "▲ / ▼: better / worse than DQN by the exact two-sided Mann–Whitney permutation test at 5 %; "
+            "⊘: too few seeds for a verdict. " + multiplicity_note(shown, where="these tables hold"),
+            "",
+        ]
     return "\n".join(lines)
 
 
