@@ -11,7 +11,10 @@ import sys
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["resolve_name", "PLUGIN_NAME"]
+__all__ = ["resolve_name", "PLUGIN_NAME", "MAX_PLUGIN_NAME"]
+
+MAX_PLUGIN_NAME = 500
+"""Most characters a registered name or a ``package.module:Name`` may have (docs/limits.md)."""
 
 _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
 PLUGIN_NAME = re.compile(rf"{_IDENTIFIER}(?:\.{_IDENTIFIER})*:{_IDENTIFIER}")
@@ -28,6 +31,8 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
     """
     if not isinstance(spec, str) or not spec:
         raise ValueError(f"a {kind} is named by a non-empty string, got {spec!r}")
+    if len(spec) > MAX_PLUGIN_NAME:
+        raise ValueError(f"a {kind}'s name is at most {MAX_PLUGIN_NAME} characters, got {len(spec):,} ({spec[:40]!r}...)")
     if spec in registry:
         return registry[spec]
     if ":" not in spec:

@@ -255,3 +255,20 @@ def test_the_leaderboard_replays_a_plugin_partner_only_when_allowed(trained, tmp
     assert "not registered" in (tmp_path / "refused" / "LEADERBOARD.md").read_text()
     assert exit_code(["leaderboard", str(source), "--out", str(tmp_path / "allowed"), "--allow-import", plugin]) == 0
     assert list((tmp_path / "allowed").rglob("*_episode.gif"))
+
+
+def test_a_name_past_its_bound_is_refused_before_anything_is_imported() -> None:
+    from baselines.registry import get_method
+
+    with pytest.raises(ValueError, match=r"at most 500 characters, got 100,002"):
+        get_method("a" * 100_000 + ":X")
+    with pytest.raises(ValueError, match="at most 500 characters"):
+        make_policy("p" * 600 + ":Cat")
+
+
+def test_a_rising_exploration_schedule_is_refused() -> None:
+    from agents.settings import EmpathicDQNSettings
+
+    with pytest.raises(ValueError, match=r"epsilon_end must be in \[0, epsilon_start = 0.01\].*never rises"):
+        EmpathicDQNSettings(epsilon_start=0.01, epsilon_end=1.0)
+    assert EmpathicDQNSettings(epsilon_start=0.5, epsilon_end=0.5).epsilon_end == 0.5  # (a constant ε is allowed)
