@@ -25,7 +25,7 @@ from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.colours import distinct_colours
-from leaderboard.improvement import HIGHER_IS_BETTER
+from leaderboard.heldout_scores import HARMS_PER_100_STEPS, higher_is_better
 from leaderboard.plots import write_figure
 
 if TYPE_CHECKING:
@@ -74,8 +74,9 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
                     linewidth=1.0,
                     zorder=4,
                 )
-        better = "higher" if HIGHER_IS_BETTER.get(metric, True) else "lower"
-        axes.set_ylabel(f"{metric} per episode\n({better} is better)")
+        better = "higher" if higher_is_better(metric) else "lower"
+        unit = metric.replace("_", " ") if metric == HARMS_PER_100_STEPS else f"{metric} per episode"
+        axes.set_ylabel(f"{unit}\n({better} is better)")
         axes.set_xticks(range(len(labels)))
         axes.set_xticklabels(
             [_tick(label, len(group.runs[label])) for label in labels], rotation=20, ha="right", fontsize="small"

@@ -18,7 +18,7 @@ from leaderboard.heldout_scores import (
     UNDECIDED,
     heldout_cells,
     load_heldout,
-    reading_rule,
+    old_reading_rule,
     readings,
 )
 from leaderboard.improvement import TOO_FEW_SEEDS
@@ -127,7 +127,7 @@ def test_without_dqn_nothing_is_judged(synthetic) -> None:
     ],
 )
 def test_reading_rule_table(versus, low, high, expected) -> None:
-    assert reading_rule(versus, low, high, 0.1)[0] == expected
+    assert old_reading_rule(versus, low, high, 0.1)[0] == expected
 
 
 def test_equality_in_sharing_is_judged_towards_lower(tmp_path) -> None:

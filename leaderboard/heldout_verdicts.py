@@ -1,0 +1,56 @@
+"""Every held-out reading of a results directory by the old rule and by the new one, side by side:
+
+    python -m leaderboard.heldout_verdicts docs/results/methods
+
+The new rule (:func:`leaderboard.heldout_scores.reading_rule`) says "generalises" only where the
+method avoided the side effect beside its own partners (▲ against DQN there) and kept it beside
+the held-out one; the old one (:func:`leaderboard.heldout_scores.old_reading_rule`) asked only the
+second. Read from the directory's result and evaluation files; writes nothing.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import Counter
+from collections.abc import Sequence
+
+from leaderboard.aggregate import load_results
+from leaderboard.heldout_scores import Reading, heldout_cells, load_heldout, readings
+from leaderboard.tables import markdown_table
+
+__all__ = ["heldout_verdicts", "verdicts_markdown"]
+
+
+def heldout_verdicts(results_dir: str | os.PathLike[str]) -> list[Reading]:
+    """The readings (old and new verdicts) of every method and held-out scenario of the directory."""
+    groups, _ = load_heldout(results_dir, load_results(results_dir))
+    return [reading for group in groups for reading in readings(group, heldout_cells(group))]
+
+
+def verdicts_markdown(rows: Sequence[Reading]) -> str:
+    """A table of every reading's old and new verdict, and counts of each."""
+    header = ["environment", "method", "scenario", "vs DQN with own partners", "vs DQN here", "old rule", "new rule"]
+    body = [
+        [
+            r.env,
+            r.method_label,
+            r.scenario,
+            r.trained_versus_dqn or "no DQN",
+            r.versus_dqn or "no DQN",
+            r.old_verdict,
+            r.verdict + (" (changed)" if r.verdict != r.old_verdict else ""),
+        ]
+        for r in rows
+    ]
+    changed = sum(r.verdict != r.old_verdict for r in rows)
+    counts = Counter((r.env, r.old_verdict, r.verdict) for r in rows)
+    summary = [f"- {env}: {old} → {new}: {n}" for (env, old, new), n in sorted(counts.items())]
+    return "\n".join([markdown_table(header, body), "", f"changed: {changed} of {len(rows)}", *summary])
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m leaderboard.heldout_verdicts RESULTS_DIR")
+    print(verdicts_markdown(heldout_verdicts(sys.argv[1])))
