@@ -207,7 +207,7 @@ NO_INTERVAL_NOTE = (
     "its interval, which would not mean anything: with one seed there is no spread to measure, and with two the "
     "Student-t interval has one degree of freedom (t = 25.5 at 97.5 %), so it spans about ±18 standard deviations, "
     f"mostly the metric's whole range; {MIN_INTERVAL_SEEDS} seeds is the least at which its coverage was measured "
-    "(94–98 %)."
+    "(94–98 % on simulated continuous data; on the shipped results, under each table)."
 )
 """The legend of a cell with too few seeds for an interval (:func:`format_mean`)."""
 
@@ -325,13 +325,21 @@ def multiplicity_note(
     bh = rejected(benjamini_hochberg_adjusted([cells[i].p_value for i in family]), level)
     by_bh = sum(1 for i, keep in zip(family, bh) if keep and i in marked)
     percent = f"{100 * level:.0f} %"
+    smallest = min((2.0 / math.comb(cells[i].n_seeds + cells[i].n_baseline_seeds, cells[i].n_seeds) for i in family), default=0.0)
+    out_of_reach = (
+        f" No cell can: the smallest p these seed counts can give, {smallest:.2g}, is above {percent} / {len(family)}."
+        if family and smallest * len(family) > level + 1e-12
+        else ""
+    )
+    if not family:
+        return f"No cell of {where.rsplit(' ', 1)[0]} can give a ▲ or ▼ (too few seeds), so none can be a false mark."
     return (
         f"Many cells, many chances: {where} {len(family)} cells that can give a "
         f"▲ or ▼, so ≈ {_number(expected_false_marks(len(family), level))} false marks expected among {len(family)} "
         f"cells at {percent} if no method differed from DQN at all (each test's size is at most {percent}). "
         f"{HOLM_MARK}: the mark survives Holm's adjustment of the p-values over those {len(family)} cells (family-wise "
         f"{percent}: the chance of even one false {HOLM_MARK} is at most {percent}); {sum(holm)} of the {len(marked)} "
-        f"marks do ({by_bh} survive Benjamini–Hochberg at a false discovery rate of {percent})."
+        f"marks do ({by_bh} survive Benjamini–Hochberg at a false discovery rate of {percent}).{out_of_reach}"
     )
 
 

@@ -95,7 +95,7 @@ def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
     rows = [line for line in markdown.splitlines() if line.startswith("| ") and "· IQM" in line]
     assert rows and all("⊘" in row and "▲" not in row and "▼" not in row for row in rows)
     assert "⊘: too few seeds for a verdict" in markdown and "exact two-sided Mann–Whitney permutation test" in markdown
-    assert "the Student-t interval mean ± t·s/√n at 97.5% nominal" in markdown
+    assert "the two-sided Student-t interval mean ± t·s/√n at 97.5 % nominal" in markdown
     assert "percentile-bootstrap interval over seeds" not in markdown and "bootstrap interval, each" not in markdown
 
 

@@ -113,3 +113,17 @@ def test_versus_dqn_legend_counts_its_own_cells() -> None:
     assert "≈ 0.3 false marks expected among 6 cells" in text
     row = next(line for line in text.splitlines() if line.startswith("| empathic_dqn"))
     assert row.split("|")[3].count(f"▲{HOLM_MARK}") == 2  # p = 2/252 each: 6 × 0.0079 < 0.05
+
+
+def test_a_page_without_a_decidable_cell_says_so() -> None:
+    note = multiplicity_note([_cell("harms", 0.1, 0.0, 1.0, 3, 3)])
+    expected = "No cell of this page's P(improves on DQN) tables can give a ▲ or ▼ (too few seeds), so none can be a false mark."
+    assert note == expected
+
+
+def test_the_note_says_when_holm_is_out_of_reach_of_the_seed_counts() -> None:
+    # 5 against 5 gives p ≥ 2/252 ≈ 0.0079: over 7 cells Holm needs p ≤ 0.05/7 ≈ 0.0071 for the first
+    cells = [_cell(metric, 2 / 252, 0.6, 1.0, label=f"m{k}") for k in range(7) for metric in ("harms",)]
+    note = multiplicity_note(cells)
+    assert "0 of the 7 marks do" in note and "the smallest p these seed counts can give, 0.0079, is above 5 % / 7" in note
+    assert "No cell can" not in multiplicity_note(cells[:6])
