@@ -28,10 +28,21 @@ and the committed per-seed values themselves (every group, phase and table metri
 ``docs/results/*/runs`` with at least two distinct values is a population; each replicate draws one
 at random and resamples its values with replacement).
 
+With ``--two-level``, instead: the leaderboard's own interval measured on the shipped results.
+Every row of ``docs/results/{quick,methods,paper}/runs`` (two or more runs), per scored phase and
+per metric the verdicts read, is a population of runs, each run a population of episodes; a
+replicate draws ``n`` runs with replacement, resamples each drawn run's episodes with replacement,
+averages them, and builds the t interval at 97.5 % nominal (:func:`leaderboard.aggregate.mean_ci`)
+over the ``n`` run means; it covers when it contains the row's mean (of its runs' full-episode
+means). Prints coverage and the share of zero-width intervals per metric, phase and ``n``, and
+writes them to ``benchmarks/interval_coverage.json`` (``--json``), which the leaderboard's legends
+quote (:mod:`leaderboard.measured_coverage`).
+
 Everything comes from one ``numpy.random.default_rng(--seed)``. Prints Markdown tables, the command
 and the machine.
 
     python benchmarks/interval_coverage.py [--replicates 2000] [--resamples 1000] [--seed 2026]
+    python benchmarks/interval_coverage.py --two-level [--replicates 2000] [--seed 2026]
 """
 
 from __future__ import annotations
