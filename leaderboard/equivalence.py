@@ -1,5 +1,6 @@
-"""Whether two sets of runs of the same experiments are draws from one distribution: the check that a
-change of summation order (another update kernel, :attr:`RunnerOptions.update_kernel
+"""Whether two sets of runs of the same experiments differ detectably, and whether they are
+equivalent within stated margins: the check that a change of summation order (another update
+kernel, :attr:`RunnerOptions.update_kernel
 <empathy_zoo.training.options.RunnerOptions.update_kernel>`) changed nothing but the last bits.
 
 Two kernels that sum in another order give runs that part ways after a few hundred updates (a
@@ -17,9 +18,25 @@ rule, fixed before the runs it judges:
   against the other's (:func:`leaderboard.improvement.permutation_test`: midranks for ties, the
   exact null distribution of every split).
 * **Verdict.** Holm's step-down over every tested cell at a family-wise 5 %
-  (:func:`holm_rejections`): a cell *differs* when it is rejected. The two sets are
-  **equivalent** when no cell differs, else **different**, naming the cells. The family-wise level
-  holds whatever the dependence between cells (survival and return of one run, say).
+  (:func:`holm_rejections`): a cell *differs* when it is rejected. The verdict is **no difference
+  detected** when no cell differs, else **different**, naming the cells. The family-wise level
+  holds whatever the dependence between cells (survival and return of one run, say). "No
+  difference detected" is a failure to reject, not a finding of equivalence: its power is printed
+  beside it (:func:`smallest_p_value`: the smallest p the exact test can reach at the cells' seed
+  counts, ``2 / C(n + m, n)``; :func:`holm_can_reject`: whether Holm's first threshold, ``5 % /
+  cells``, is within reach at all). At 5 seeds a side the smallest p is 2/252 = 0.008, above
+  0.05/7 = 0.007 already: over 7 cells or more (77, say) no cell can be rejected whatever the
+  runs show.
+* **Equivalence (TOST), ``--tost``.** Equivalence is claimed only by two one-sided Welch t tests
+  per cell (:func:`leaderboard.tost.tost`) within margins stated here before any data
+  (:data:`TOST_MARGINS`: ±25 steps of survival, ±0.1 harms, ±0.5 batteries, ±0.05 equality per
+  episode; metrics without a margin are not tested). A cell is **equivalent** when both one-sided
+  tests reject at 5 % (its 90 % Welch interval of the difference lies inside the margins), and
+  the two sets are **equivalent** when every such cell is: an intersection–union test, whose level
+  is the per-cell 5 % without a multiplicity correction (Berger 1982), since the claim needs every
+  cell. Each cell's own verdict is at its 5 % (not family-wise). A cell with fewer than 2 seeds a
+  side gives **too few seeds**, and so does the set. The word "equivalent" is used only for this
+  test's verdict.
 * **Verdicts of the leaderboard.** Beside it, the verdicts against DQN
   (:func:`leaderboard.improvement.improvements_over_dqn`, ▲ / ▼ / no clear difference) of each set
   are listed where they differ (:func:`verdict_flips`): reported with their p-values, not folded
@@ -46,12 +63,22 @@ from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import run_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import TABLE_METRICS
+from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
 
 __all__ = [
     "FAMILY_LEVEL",
+    "NO_DIFFERENCE",
+    "TOST_MARGINS",
+    "TOST_LEVEL",
     "Cell",
     "Equivalence",
+    "TostCell",
+    "TostSummary",
     "equivalence",
+    "tost",
+    "tost_cells",
+    "smallest_p_value",
+    "holm_can_reject",
     "holm_rejections",
     "report",
     "simulated_power",
@@ -61,6 +88,13 @@ __all__ = [
 
 FAMILY_LEVEL = 0.05
 """The chance, when nothing differs, that any cell is called different (Holm's family-wise level)."""
+NO_DIFFERENCE = "no difference detected"
+"""The difference test's verdict when no cell is rejected (a failure to reject, not equivalence)."""
+TOST_MARGINS: dict[str, float] = {"survival": 25.0, "harms": 0.1, "batteries": 0.5, "equality": 0.05}
+"""Practical margins of the TOST, per episode, stated before any data: two sets whose means differ
+by less than these are equivalent for the suite's purposes (25 steps is 5 % of a 500-step episode)."""
+TOST_LEVEL = 0.05
+"""The level of each one-sided test of the TOST (its 90 % interval)."""
 
 
 @dataclass(frozen=True)
@@ -102,11 +136,92 @@ class Equivalence:
 
     @property
     def verdict(self) -> str:
-        """``"equivalent"`` when no tested cell differs, else ``"different"``; ``"nothing compared"``
-        when no cell could be tested."""
+        """:data:`NO_DIFFERENCE` when no tested cell differs, else ``"different"``; ``"nothing
+        compared"`` when no cell could be tested."""
         if not self.tested:
             return "nothing compared"
-        return "different" if self.differing else "equivalent"
+        return "different" if self.differing else NO_DIFFERENCE
+
+    @property
+    def seed_counts(self) -> list[tuple[int, int]]:
+        """``(n, m)``: the finite values of each tested cell on each side."""
+        return [(_finite(cell.old), _finite(cell.new)) for cell in self.tested]
+
+    @property
+    def can_reject(self) -> bool:
+        """Whether Holm over the tested cells could reject any cell at all (:func:`holm_can_reject`)."""
+        return holm_can_reject(self.seed_counts)
+
+
+def _finite(values: Sequence[float]) -> int:
+    return sum(math.isfinite(v) for v in values)
+
+
+def smallest_p_value(n: int, m: int) -> float:
+    """The smallest two-sided p the exact permutation test can reach with ``n`` runs against ``m``
+    (every run of one side beyond every run of the other, no ties): ``2 / C(n + m, n)``, at most 1."""
+    if n < 1 or m < 1:
+        return 1.0
+    return min(1.0, 2.0 / math.comb(n + m, n))
+
+
+def holm_can_reject(seed_counts: Sequence[tuple[int, int]], level: float = FAMILY_LEVEL) -> bool:
+    """Whether Holm's step-down over cells of these ``(n, m)`` seed counts can reject any cell,
+    whatever the runs show: its first step needs a p at most ``level / cells``."""
+    if not seed_counts:
+        return False
+    return min(smallest_p_value(n, m) for n, m in seed_counts) <= level / len(seed_counts) + 1e-15
+
+
+def power_line(result: Equivalence, level: float = FAMILY_LEVEL) -> str:
+    """What the difference test could find: the smallest reachable p at the cells' seed counts
+    beside Holm's first threshold."""
+    counts = result.seed_counts
+    if not counts:
+        return "Power: no cell tested."
+    pairs = sorted(set(counts))
+    smallest = min(smallest_p_value(n, m) for n, m in counts)
+    threshold = level / len(counts)
+    seeds = ", ".join(f"{n} v {m}" for n, m in pairs[:4]) + (" …" if len(pairs) > 4 else "")
+    can = "can reject" if result.can_reject else "cannot reject any cell, whatever the runs show"
+    return (
+        f"Power: at {seeds} seeds the smallest p the exact test can reach is {smallest:.2g}; Holm's first "
+        f"threshold over {len(counts)} cells is {level:g}/{len(counts)} = {threshold:.2g}, so it {can}. "
+        f'"{NO_DIFFERENCE}" is a failure to reject, not equivalence (for that: --tost).'
+    )
+
+
+@dataclass(frozen=True)
+class TostCell:
+    """One experiment, phase and metric with a margin: the TOST of the two sets' per-seed values."""
+
+    experiment: tuple
+    phase: str
+    metric: str
+    result: TostResult
+
+    @property
+    def verdict(self) -> str:
+        return self.result.verdict
+
+
+@dataclass(frozen=True)
+class TostSummary:
+    """The TOST of every cell with a margin, and the set's verdict (intersection–union)."""
+
+    cells: tuple[TostCell, ...]
+
+    @property
+    def verdict(self) -> str:
+        """:data:`~leaderboard.tost.EQUIVALENT` when every cell is; :data:`~leaderboard.tost.TOO_FEW`
+        when any cell has too few seeds; else :data:`~leaderboard.tost.NOT_SHOWN`
+        (``"nothing compared"`` without cells)."""
+        if not self.cells:
+            return "nothing compared"
+        verdicts = {cell.verdict for cell in self.cells}
+        if TOO_FEW in verdicts:
+            return TOO_FEW
+        return EQUIVALENT if verdicts == {EQUIVALENT} else NOT_SHOWN
 
 
 def holm_rejections(p_values: Sequence[float], level: float = FAMILY_LEVEL) -> list[bool]:
@@ -165,6 +280,57 @@ def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], le
     )
 
 
+def tost_cells(
+    old: Sequence[dict[str, Any]],
+    new: Sequence[dict[str, Any]],
+    margins: dict[str, float] | None = None,
+    level: float = TOST_LEVEL,
+) -> TostSummary:
+    """The TOST (:func:`leaderboard.tost.tost`) of every experiment found in both sets, both
+    phases and every metric of its tables that has a margin (``margins``, default
+    :data:`TOST_MARGINS`)."""
+    margins = TOST_MARGINS if margins is None else margins
+    a, b = _per_experiment(old), _per_experiment(new)
+    cells = []
+    for experiment in sorted(set(a) & set(b), key=repr):
+        env = table_env(a[experiment][0])
+        metrics = TABLE_METRICS.get(env) or TABLE_METRICS.get(a[experiment][0]["env"], ())
+        scalars_a = [run_scalars(run) for run in a[experiment]]
+        scalars_b = [run_scalars(run) for run in b[experiment]]
+        for phase in PHASES:
+            for metric in metrics:
+                if metric not in margins:
+                    continue
+                x = [float(s[phase][metric]) for s in scalars_a]
+                y = [float(s[phase][metric]) for s in scalars_b]
+                cells.append(TostCell(experiment, phase, metric, tost(x, y, margins[metric], level)))
+    return TostSummary(tuple(cells))
+
+
+def tost_report(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> str:
+    """Markdown: the TOST's verdict and every cell, with its difference, 90 % interval and p."""
+    summary = tost_cells(old, new)
+    counts = {v: sum(c.verdict == v for c in summary.cells) for v in (EQUIVALENT, NOT_SHOWN, TOO_FEW)}
+    margins = ", ".join(f"±{m:g} {metric}" for metric, m in TOST_MARGINS.items())
+    lines = [
+        f"**TOST: {summary.verdict}** ({counts[EQUIVALENT]} of {len(summary.cells)} cells equivalent, "
+        f"{counts[NOT_SHOWN]} not shown equivalent, {counts[TOO_FEW]} with too few seeds; margins {margins} per episode; "
+        f"two one-sided Welch t tests at {TOST_LEVEL:.0%} each, so a 90 % interval; the set is equivalent only when "
+        "every cell is, an intersection–union test at 5 %)",
+        "",
+        "| experiment | phase | metric | first − second | 90 % interval | margin | p | verdict |",
+        "|---|---|---|---:|---|---:|---:|---|",
+    ]
+    for cell in summary.cells:
+        r = cell.result
+        name = ", ".join(str(part) for part in cell.experiment if part not in (None, "closest"))
+        lines.append(
+            f"| {name} | {cell.phase} | {cell.metric} | {r.difference:.3f} | [{r.low:.3f}, {r.high:.3f}] "
+            f"| ±{r.margin:g} | {r.p_value:.4f} | {r.verdict} |"
+        )
+    return "\n".join(lines)
+
+
 def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> list[tuple[tuple, str, str, float, float]]:
     """The leaderboard's verdicts against DQN that differ between the sets: ``(cell key, old
     verdict, new verdict, old p, new p)``, the key ``(variant, label, phase, metric, DQN row)``."""
@@ -182,8 +348,8 @@ def split_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], tr
     """How many verdicts against DQN differ between two draws of the same process, for reading
     :func:`verdict_flips`: the runs of both sets pooled per row (variant and label), split at
     random into two halves of equal size (each row's seeds renumbered), and the halves' verdicts
-    compared; one count per split (``trials`` splits, seeded). Where the two sets are equivalent,
-    this is what redrawing the seeds alone does."""
+    compared; one count per split (``trials`` splits, seeded). Where the two sets are draws of one
+    process, this is what redrawing the seeds alone does."""
     rng = np.random.default_rng(seed)
     pooled: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for run in [*old, *new]:
@@ -214,10 +380,11 @@ def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, see
     return found / trials
 
 
-def report(old_dir: str, new_dir: str, every_cell: bool = False) -> str:
-    """Markdown: the verdict of :func:`equivalence` on two results directories, its ten smallest
-    p-values (every cell, in experiment order, with ``every_cell``), every differing cell and every
-    flipped verdict against DQN."""
+def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool = False) -> str:
+    """Markdown: the verdict of :func:`equivalence` on two results directories with its power, its
+    ten smallest p-values (every cell, in experiment order, with ``every_cell``), every differing
+    cell and every flipped verdict against DQN; with ``with_tost``, the TOST of every cell with a
+    margin (:func:`tost_report`)."""
     from leaderboard.aggregate import load_results
 
     old, new = load_results(old_dir), load_results(new_dir)
@@ -227,6 +394,8 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False) -> str:
         f"**{result.verdict}**: {len(result.differing)} of {len(tested)} tested cells differ at a family-wise "
         f"{FAMILY_LEVEL:.0%} (Holm; {len(result.cells) - len(tested)} constant cells not tested; "
         f"{len(old)} runs against {len(new)}; experiments without a partner: {len(result.only_old)} + {len(result.only_new)})",
+        "",
+        power_line(result),
         "",
         "| experiment | phase | metric | mean (first) | mean (second) | p | differs |",
         "|---|---|---|---:|---:|---:|---|",
@@ -247,15 +416,19 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False) -> str:
         f"For reading them (not part of the rule): between two random halves of the pooled runs, {len(redrawn)} splits, "
         f"{int(np.median(redrawn))} verdicts differ at the median (range {min(redrawn)}–{max(redrawn)}).",
     ]
+    if with_tost:
+        lines += ["", tost_report(old, new)]
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
     import sys
 
-    args = [a for a in sys.argv[1:] if a != "--all"]
+    options = {"--all", "--tost"}
+    args = [a for a in sys.argv[1:] if a not in options]
     if len(args) != 2:
         sys.exit(
-            "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all]   (--all: every cell, not the ten smallest p)"
+            "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]   "
+            "(--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS)"
         )
-    print(report(args[0], args[1], every_cell="--all" in sys.argv[1:]))
+    print(report(args[0], args[1], every_cell="--all" in sys.argv[1:], with_tost="--tost" in sys.argv[1:]))

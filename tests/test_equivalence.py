@@ -1,5 +1,5 @@
 """The equivalence rule of two sets of runs (leaderboard/equivalence.py) on hand-made and synthetic
-data: Holm's step-down, a set drawn from the same distribution is equivalent, a moved metric is
+data: Holm's step-down, a set drawn from the same distribution shows no difference, a moved metric is
 found and named, constant cells are not tested, the leaderboard's verdict flips are listed, and the
 simulated power behaves as a power must."""
 
@@ -41,9 +41,9 @@ def test_holm_on_hand_made_p_values() -> None:
     assert holm_rejections([]) == []
 
 
-def test_a_set_from_the_same_distribution_is_equivalent() -> None:
+def test_a_set_from_the_same_distribution_shows_no_difference() -> None:
     result = equivalence(runs(1), runs(2))
-    assert result.verdict == "equivalent"
+    assert result.verdict == "no difference detected"
     assert not result.differing
     # one experiment, 3 metrics, 2 phases; `return` is not a Coexistence table metric
     assert {(c.phase, c.metric) for c in result.cells} == {
@@ -69,7 +69,7 @@ def test_constant_cells_are_not_tested_and_unmatched_experiments_are_listed() ->
     eval_harms = next(c for c in result.cells if (c.phase, c.metric) == ("eval", "harms"))
     assert eval_harms.constant and not eval_harms.differs
     assert len(result.only_new) == 1 and result.only_new[0][2] == 0.25 and not result.only_old
-    assert result.verdict in ("equivalent", "nothing compared")
+    assert result.verdict in ("no difference detected", "nothing compared")
 
 
 def test_verdict_flips_are_listed_with_their_p_values() -> None:
