@@ -36,6 +36,7 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=HarmPenalty(),
         label=lambda s, reward: f"DQN + harm penalty ({reward.penalty:g})".replace("-", "−"),
         description="DQN trained on reward − 100 on every step the robot harms another agent",
+        identical_to={"sharing_v0": ("dqn", "nobody is harmed in Sharing: the penalty is always 0")},
     ),
     "dqn_equality": Method(
         name="dqn_equality",
@@ -47,6 +48,7 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=EqualityScaling(),
         label=lambda s: "DQN × equality",
         description="DQN trained on reward × the episode's current equality of battery rewards",
+        identical_to={"coexistence_v0": ("dqn", "Coexistence has no batteries: equality is always 1")},
     ),
     "dqn_inequity_aversion": Method(
         name="dqn_inequity_aversion",
@@ -121,6 +123,7 @@ BASELINE_METHODS: dict[str, Method] = {
         description="DQN trained on reward − λ·harms, each sampled step priced at the current λ, "
         "λ ← max(0, λ + 1·(episode harms − 0.1)) at each episode's end (constrained RL: harms per episode ≤ 0.1, "
         "as OmniSafe's PPO-Lag)",
+        identical_to={"sharing_v0": ("dqn", "nobody is harmed in Sharing: every cost is 0 and λ stays 0")},
     ),
 }
 """The baselines, by registry name."""

@@ -1,4 +1,5 @@
-"""What the suite offers: ``methods`` and ``policies`` list what is registered, ``play`` runs a
+"""What the suite offers: ``envs``, ``methods`` and ``policies`` list what is registered (a method
+identical to another on an environment by construction says so), ``play`` runs a
 random robot beside an environment's fixed agents and prints each episode's metrics."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 
 from empathy_zoo.cli.common import AgentPolicies, agent_policy, positive
 
-__all__ = ["add_browse_commands", "cmd_methods", "cmd_play", "cmd_policies"]
+__all__ = ["add_browse_commands", "cmd_envs", "cmd_methods", "cmd_play", "cmd_policies"]
 
 
 def cmd_methods(args: argparse.Namespace, command: str) -> int:
@@ -20,7 +21,20 @@ def cmd_methods(args: argparse.Namespace, command: str) -> int:
 
     width = max(map(len, METHODS))
     for name, method in METHODS.items():
-        print(f"{name:<{width}}  {method.description}")
+        marks = "".join(f" [≡ {other} on {env}: {why}]" for env, (other, why) in method.identical_to.items())
+        print(f"{name:<{width}}  {method.description}{marks}")
+    return 0
+
+
+def cmd_envs(args: argparse.Namespace, command: str) -> int:
+    """One line per registered environment: its Gymnasium id, fixed agents and arguments."""
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
+
+    width = max(map(len, ENVIRONMENT_TABLE))
+    for name, env in ENVIRONMENT_TABLE.items():
+        fixed = ", ".join(f"{agent}={policy}" for agent, policy in env.fixed.items())
+        arguments = ", ".join(f"{key}={value!r}" for key, value in env.arguments.items())
+        print(f"{name:<{width}}  {env.gym_id}; fixed: {fixed}; arguments: {arguments}")
     return 0
 
 
@@ -71,8 +85,9 @@ def cmd_play(args: argparse.Namespace, command: str) -> int:
 
 
 def add_browse_commands(sub: Any) -> None:
-    """The ``methods``, ``policies`` and ``play`` subcommands."""
+    """The ``envs``, ``methods``, ``policies`` and ``play`` subcommands."""
     sub.add_parser("methods", help="list the registered learning methods").set_defaults(handler=cmd_methods)
+    sub.add_parser("envs", help="list the registered environments").set_defaults(handler=cmd_envs)
     sub.add_parser("policies", help="list the registered fixed-agent policies").set_defaults(handler=cmd_policies)
 
     play = sub.add_parser("play", help="random robot beside the fixed agents; prints episode metrics")

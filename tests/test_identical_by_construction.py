@@ -1,0 +1,94 @@
+"""No method trains as another without saying so: every registered DQN-family method (empathic
+ones at β = 0.5) is trained beside DQN on both environments, seed for seed. A method equal to DQN
+in every column on every environment fails unless its registry entry says so
+(``Method.identical_to``), and wherever an entry says so the runs must be equal. (A short run can
+equal DQN's by chance on one environment, e.g. before AUP's auxiliary values move: that alone is
+no failure.)"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from baselines.registry import METHODS
+from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.training import RunnerOptions, train_runs
+
+ENVS = ("coexistence_v0", "sharing_v0")
+SETTINGS = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 300, "target_update_interval": 50}
+STEPS = 600
+DQN_FAMILY = [name for name, method in METHODS.items() if method.family in ("dqn", "empathic_dqn") and name != "dqn"]
+COLUMNS = ("train", "eval")
+ENV_KWARGS = {"coexistence_v0": {"max_cycles": 40}, "sharing_v0": {}}
+"""Short Coexistence episodes (many reach the time limit); Sharing at its default length, as the marks say."""
+REWARD_WARM_UPS = {
+    "dqn_aup": {"learning_starts": 64, "penalty_starts": 200},
+    "dqn_considerate": {"learning_starts": 32, "bonus_starts": 64},
+}
+"""Reward transforms whose own warm-up would outlast these short runs, started within them."""
+
+
+def spec(method: str, env: str) -> RunSpec:
+    empathic = METHODS[method].family == "empathic_dqn"  # (at β = 1 it is DQN by definition: the profiles' β)
+    return RunSpec.of(
+        env=env,
+        method=method,
+        settings={**SETTINGS, **({"selfishness": 0.5} if empathic else {})},
+        reward=REWARD_WARM_UPS.get(method),
+        steps=STEPS,
+        eval_interval=STEPS,
+        eval_episodes=2,
+        env_kwargs=ENV_KWARGS[env],
+        seed=3,
+    )
+
+
+@pytest.fixture(scope="module")
+def columns(tmp_path_factory) -> dict[tuple[str, str], dict]:
+    """``{(method, env): {column: ...}}`` of one short run of every method and DQN on both environments."""
+    out = tmp_path_factory.mktemp("identical")
+    options = RunnerOptions(progress=False, checkpoint_interval=0)
+    found = {}
+    for method in ["dqn", *DQN_FAMILY]:
+        for env in ENVS:
+            try:
+                (path,) = train_runs([spec(method, env)], out / f"{method}-{env}", options)
+            except ValueError:  # (a method that does not run on that environment: relative reachability on Sharing)
+                continue
+            result = json.loads(Path(path).read_text())
+            found[method, env] = {column: result[column] for column in COLUMNS}
+    return found
+
+
+def _without_extra_columns(columns: dict) -> dict:
+    """The columns every method records (a method's own extra training column, λ, left out)."""
+    train = {key: value for key, value in columns["train"].items() if key != "lambda"}
+    return {"train": train, "eval": columns["eval"]}
+
+
+@pytest.mark.parametrize("method", DQN_FAMILY)
+def test_no_method_trains_as_dqn_everywhere_and_every_mark_is_true(columns, method) -> None:
+    marked = METHODS[method].identical_to
+    same = {
+        env: _without_extra_columns(columns[method, env]) == _without_extra_columns(columns["dqn", env])
+        for env in ENVS
+        if (method, env) in columns
+    }
+    for env, (other, why) in marked.items():
+        assert other == "dqn" and why, f"{method}: a mark names the method and why"
+        assert same.get(env), f"{method} says it is DQN on {env} ({why}), but its runs differ"
+    unmarked = [env for env, equal in same.items() if equal and env not in marked]
+    assert len(unmarked) < len(ENVS), f"{method} trains as DQN on every environment and says so on none"
+
+
+def test_the_methods_and_envs_commands_say_it(capsys) -> None:
+    from empathy_zoo.cli import main
+
+    assert main(["methods"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
+    assert "[≡ dqn on sharing_v0:" in lines["dqn_considerate"] and "≡" not in lines["empathic_dqn"]
+    assert main(["envs"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("coexistence_v0") and "sharing_v0" in out and "rules='paper'" in out
