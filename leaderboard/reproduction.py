@@ -17,6 +17,23 @@ that the final 10 % of training episodes are (:func:`training_window_share`), th
 over every tie-break (:func:`tie_break_range`), and the learners' survival across the training
 phase beside the optimum's at the ε of the same episodes, which separates learning from the ε
 schedule (:func:`survival_rise`).
+
+Three claims are judged by :mod:`leaderboard.claim_rules`, not by the rules they were judged by
+before, and the report shows the old verdict beside the new one where it differs
+(:attr:`Verdict.old`; :func:`claim_verdicts_markdown` lists both for every claim, and ``python -m
+leaderboard.reproduction DIR`` prints that list without writing anything):
+
+* C3 (β = 0.5, 0.25 eventually survive without harming) on intervals
+  (:func:`leaderboard.claim_rules.reference_reading`): undecided where an interval straddles the
+  reference's threshold, where the old rule read the means alone.
+* C4 (the harm penalty harms less than DQN) and C7 (the equality-scaled DQN is more equal than
+  DQN) by the leaderboard's exact permutation test (:func:`leaderboard.claim_rules.less_than`),
+  where the old rule asked for non-overlapping 95 % intervals. Why this test rather than keeping
+  non-overlap and naming it the stricter rule: it is the test behind every ▲ / ▼ of the
+  leaderboard, so the report cannot call "not reproduced" what the leaderboard marks ▲ for the
+  same rows; its size is exactly at most 5 % with no assumption of normal data, where non-overlap
+  holds about a tenth of that and so misses real but modest differences (the measured rates are
+  in :data:`leaderboard.verdicts.BELOW_NOTE`).
 """
 
 from __future__ import annotations
@@ -32,6 +49,7 @@ import numpy as np
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from leaderboard.aggregate import final_episode_count, load_results, longest_episode, run_scalars
+from leaderboard.claim_rules import less_than, reference_reading
 from leaderboard.run_facts import description_of, empathic_selfishness, env_argument, exploration_of, in_paper_setting
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
@@ -45,6 +63,8 @@ __all__ = [
     "missing_paper_experiments",
     "assess_claims",
     "reproduction_markdown",
+    "claim_verdicts_markdown",
+    "CLAIM_RULES",
     "write_reproduction",
     "training_window_epsilons",
     "training_window_share",
@@ -71,17 +91,42 @@ class NotThePaperSweep(ValueError):
     """The results do not contain the paper's experiments, so there is no paper verdict to give."""
 
 
+CLAIM_RULES = """\
+**Rules changed since earlier reports** (`leaderboard/claim_rules.py`, tested in `tests/test_claim_rules.py`;
+where a verdict differs from the old rule's, the table says so):
+
+* *Harm-free and surviving* (C3) is judged on intervals: reproduced when the harms interval lies
+  wholly at or under the reference's + the tolerance and the survival interval wholly at or above
+  the reference's − the tolerance; not reproduced when either lies wholly beyond; **undecided**
+  when an interval straddles its threshold (the old rule read the means).
+* *A less than B* (C4, C7) is the leaderboard's exact two-sided permutation test at 5 % (the ▲ of
+  its P(improves on DQN) tables), not separated intervals (the old rule, about ten times stricter
+  than its 5 %)."""
+"""The text of the changed rules, printed after :data:`leaderboard.verdicts.RULES`."""
+
+
 @dataclass(frozen=True)
 class Verdict:
     """One phase's verdict on a claim."""
 
     ok: bool | None
-    """``None``: not testable (no finite numbers in this phase)."""
+    """``None``: not testable (no finite numbers in this phase), or undecided."""
     evidence: str
+    undecided: bool = False
+    """The numbers are there but their intervals straddle the rule's threshold."""
+    old: Verdict | None = None
+    """The verdict of the rule this claim was judged by before; ``None`` where the rule is unchanged."""
 
     @property
     def word(self) -> str:
+        if self.undecided:
+            return "undecided"
         return "not testable" if self.ok is None else ("reproduced" if self.ok else "not reproduced")
+
+    @property
+    def old_word(self) -> str:
+        """The old rule's word (the same as :attr:`word` where the rule is unchanged)."""
+        return (self.old or self).word
 
 
 @dataclass(frozen=True)
@@ -324,6 +369,10 @@ class _Table:
     def row(self, phase: str, metric: str, keys: Sequence[str], curve: bool = False) -> list[Cell]:
         return [(self.curve if curve else self.cell)(phase, metric, k) for k in keys]
 
+    def values(self, phase: str, metric: str, key: str) -> list[float]:
+        """The per-seed values of a cell."""
+        return [float(run_scalars(run, (metric,))[phase][metric]) for run in self.runs[key]]
+
 
 def _line(keys: Sequence[str], cells: Sequence[Cell]) -> str:
     return "; ".join(f"{k}: {c}" for k, c in zip(keys, cells))
@@ -331,6 +380,20 @@ def _line(keys: Sequence[str], cells: Sequence[Cell]) -> str:
 
 def _verdict(ok: bool, cells: Sequence[Cell], evidence: str) -> Verdict:
     return Verdict(ok if all(c.finite for c in cells) else None, evidence)
+
+
+def _changed(new: bool | None, old: bool, cells: Sequence[Cell], evidence: str) -> Verdict:
+    """A verdict of a changed rule (``new``: ``None`` for undecided) with the old rule's beside it."""
+    if not all(c.finite for c in cells):
+        return Verdict(None, evidence)
+    return Verdict(new, evidence, undecided=new is None, old=Verdict(old, evidence))
+
+
+def _less(a: Sequence[float], b: Sequence[float], names: Sequence[str]) -> tuple[bool | None, str]:
+    """:func:`leaderboard.claim_rules.less_than` and its evidence."""
+    verdict, p = less_than(a, b)
+    said = {True: "yes", False: "no", None: "too few seeds for the test"}[verdict]
+    return verdict, f"{names[0]} less than {names[1]} by the exact permutation test at 5 %: {said} (p = {p:.4f})"
 
 
 def assess_claims(
@@ -386,7 +449,9 @@ def assess_claims(
         )
 
         caring = ["β=0.5", "β=0.25"]
-        parts, ok, cells = [], True, []
+        parts: list[str] = []
+        ok, cells = True, []
+        readings: list[bool | None] = []
         for key in caring:
             h, s = coexistence.cell(phase, "harms", key), coexistence.cell(phase, "survival", key)
             group = runs[COEXISTENCE][key]
@@ -401,11 +466,14 @@ def assess_claims(
             max_cycles = int(env_argument(group[0], "max_cycles"))
             ref_harms, ref_survival = _reference_over(optimum, beta, epsilons, gamma, max_cycles)
             ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
+            reading = reference_reading(h, s, ref_harms, ref_survival, max_cycles)
+            readings.append(reading)
             cells += [h, s]
             mean_epsilon = sum(e * n for e, n in epsilons.items()) / max(sum(epsilons.values()), 1)
+            on_intervals = {True: "yes", False: "no", None: "undecided (an interval straddles its threshold)"}[reading]
             part = (
                 f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
-                f"mean ε {mean_epsilon:.4f}"
+                f"mean ε {mean_epsilon:.4f}; harm-free and surviving on intervals: {on_intervals}"
             )
             if phase != "eval":
                 shares = [training_window_share(run) for run in group]
@@ -432,16 +500,17 @@ def assess_claims(
             COEXISTENCE,
             "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
             name,
-            _verdict(ok, cells, "; ".join(parts) + "."),
+            _changed(False if False in readings else (True if all(readings) else None), ok, cells, "; ".join(parts) + "."),
         )
 
         pair = [PENALTY, "β=1"]
         penalty = coexistence.row(phase, "harms", pair)
+        fewer, test = _less(coexistence.values(phase, "harms", pair[0]), coexistence.values(phase, "harms", pair[1]), pair)
         judge(
             COEXISTENCE,
             "The −100 harm-penalty baseline harms the cat less than DQN.",
             name,
-            _verdict(below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}."),
+            _changed(fewer, below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}; {test}."),
         )
 
         batteries = sharing.row(phase, "batteries", betas)
@@ -467,11 +536,12 @@ def assess_claims(
 
         pair = ["β=1", EQUALITY_SHAPED]
         fair = sharing.row(phase, "equality", pair)
+        fairer, test = _less(sharing.values(phase, "equality", pair[0]), sharing.values(phase, "equality", pair[1]), pair)
         judge(
             SHARING,
             "The equality-scaled DQN baseline is more equal than DQN.",
             name,
-            _verdict(below(fair[0], fair[1]), fair, f"equality: {_line(pair, fair)}."),
+            _changed(fairer, below(fair[0], fair[1]), fair, f"equality: {_line(pair, fair)}; {test}."),
             papers=False,
         )
     return [Claim(env, text, verdicts, papers) for (env, text, papers), verdicts in claims.items()]
@@ -491,21 +561,42 @@ def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: st
     ]
     if note:
         lines += [note, ""]
-    lines += [RULES, "", "| environment | claim | greedy | training |", "|---|---|---|---|"]
+    lines += [RULES, "", CLAIM_RULES, "", "| environment | claim | greedy | training |", "|---|---|---|---|"]
     for papers, heading in ((True, None), (False, "The suite's own questions (not claims of the paper)")):
         chosen = [c for c in claims if c.papers == papers]
         if heading and chosen:
             lines += [f"| | *{heading}* | | |"]
-        lines += [f"| {c.env} | {c.text} | **{c.verdicts['greedy'].word}** | **{c.verdicts['training'].word}** |" for c in chosen]
+        lines += [f"| {c.env} | {c.text} | {_word(c.verdicts['greedy'])} | {_word(c.verdicts['training'])} |" for c in chosen]
     lines.append("")
     for c in claims:
         lines += [f"## {c.text} ({c.env}){'' if c.papers else ' — the suite’s own question'}", ""]
         for phase, verdict in c.verdicts.items():
             where = "last greedy evaluation" if phase == "greedy" else "final 10 % of training episodes"
-            lines += [f"* **{phase}** ({where}) — {verdict.word}: {verdict.evidence}"]
+            lines += [f"* **{phase}** ({where}) — {_word(verdict, bold=False)}: {verdict.evidence}"]
         lines.append("")
     if appendix:
         lines += [appendix, ""]
+    return "\n".join(lines)
+
+
+def _word(verdict: Verdict, bold: bool = True) -> str:
+    """The verdict's word, with the old rule's beside it where it differs."""
+    word = f"**{verdict.word}**" if bold else verdict.word
+    return word if verdict.old_word == verdict.word else f"{word} (old rule: {verdict.old_word})"
+
+
+def claim_verdicts_markdown(claims: Sequence[Claim]) -> str:
+    """Every claim (C1, C2, … in the report's order) with its old and new verdict in each phase."""
+    lines = [
+        "| claim | environment | text | greedy (old rule) | greedy | training (old rule) | training |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for number, claim in enumerate(claims, 1):
+        greedy, training = claim.verdicts["greedy"], claim.verdicts["training"]
+        lines.append(
+            f"| C{number} | {claim.env} | {claim.text} | {greedy.old_word} | {greedy.word} "
+            f"| {training.old_word} | {training.word} |"
+        )
     return "\n".join(lines)
 
 
@@ -524,3 +615,11 @@ def write_reproduction(
     path = Path(out_path) if out_path else Path(results_dir) / "REPRODUCTION.md"
     write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note, appendix))
     return path
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m leaderboard.reproduction RESULTS_DIR   (each claim's old and new verdict; writes nothing)")
+    print(claim_verdicts_markdown(assess_claims(load_results(sys.argv[1]))))
