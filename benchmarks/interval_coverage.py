@@ -35,7 +35,7 @@ replicate draws ``n`` runs with replacement, resamples each drawn run's episodes
 averages them, and builds the t interval at 97.5 % nominal (:func:`leaderboard.aggregate.mean_ci`)
 over the ``n`` run means; it covers when it contains the row's mean (of its runs' full-episode
 means). Prints coverage and the share of zero-width intervals per metric, phase and ``n``, and
-writes them to ``benchmarks/interval_coverage.json`` (``--json``), which the leaderboard's legends
+writes them to ``leaderboard/interval_coverage.json`` (``--json``), which the leaderboard's legends
 quote (:mod:`leaderboard.measured_coverage`).
 
 Everything comes from one ``numpy.random.default_rng(--seed)``. Prints Markdown tables, the command

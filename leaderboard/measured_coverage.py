@@ -16,7 +16,7 @@ from pathlib import Path
 
 __all__ = ["COVERAGE_FILE", "ALL_PHASES", "MeasuredCoverage", "read_measured_coverage", "committed_coverage"]
 
-COVERAGE_FILE = Path(__file__).resolve().parent.parent / "benchmarks" / "interval_coverage.json"
+COVERAGE_FILE = Path(__file__).resolve().parent / "interval_coverage.json"
 """The committed figures of ``python benchmarks/interval_coverage.py --two-level``."""
 ALL_PHASES = "all"
 """The phase of a figure pooled over both scored phases."""
