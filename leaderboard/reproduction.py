@@ -473,7 +473,7 @@ def assess_claims(
             on_intervals = {True: "yes", False: "no", None: "undecided (an interval straddles its threshold)"}[reading]
             part = (
                 f"{key}: harms {h} (reference {ref_harms:.3f}), survival {s} (reference {ref_survival:.1f}), "
-                f"mean ε {mean_epsilon:.4f}; harm-free and surviving on intervals: {on_intervals}"
+                f"mean ε {mean_epsilon:.4f}"
             )
             if phase != "eval":
                 shares = [training_window_share(run) for run in group]
@@ -495,7 +495,7 @@ def assess_claims(
                     f"{rise.reference[0]:.1f} → {rise.reference[1]:.1f} (the ε schedule alone), so the gap to it "
                     f"went {rise.gap[0]:.1f} → {rise.gap[1]:.1f}, wider in {rise.widened} of {rise.runs} runs"
                 )
-            parts.append(part)
+            parts.append(f"{part}; harm-free and surviving on intervals: {on_intervals}")
         judge(
             COEXISTENCE,
             "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
@@ -622,4 +622,7 @@ if __name__ == "__main__":
 
     if len(sys.argv) != 2:
         sys.exit("usage: python -m leaderboard.reproduction RESULTS_DIR   (each claim's old and new verdict; writes nothing)")
-    print(claim_verdicts_markdown(assess_claims(load_results(sys.argv[1]))))
+    try:
+        print(claim_verdicts_markdown(assess_claims(load_results(sys.argv[1]))))
+    except NotThePaperSweep as error:
+        sys.exit(f"{sys.argv[1]}: {error}")
