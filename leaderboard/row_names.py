@@ -22,7 +22,15 @@ from typing import Any
 from leaderboard.aggregate import table_env
 from leaderboard.run_facts import is_dqn_reference
 
-__all__ = ["DQN_NAME", "dqn_row_names", "rename_dqn_rows", "dqn_rows_of", "renaming_note"]
+__all__ = [
+    "DQN_NAME",
+    "IDENTICAL_MARK",
+    "dqn_row_names",
+    "identical_row_names",
+    "rename_dqn_rows",
+    "dqn_rows_of",
+    "renaming_note",
+]
 
 DQN_NAME = "DQN"
 """What a DQN reference row is called."""
@@ -49,6 +57,26 @@ def dqn_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str],
         if len(set(shown.values())) < len(shown) or set(shown.values()) & others:
             continue  # (a name another row has: this variant's rows keep their labels)
         names.update({(env, label): name for label, name in shown.items() if name != label})
+    return names
+
+
+IDENTICAL_MARK = " ≡ DQN"
+"""Appended to the name of a row whose method trains as DQN by construction on its environment."""
+
+
+def identical_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+    """``{(table env, label): label ≡ DQN}`` of every row of ``results`` whose method says it trains
+    as DQN by construction on the run's environment (``Method.identical_to``: Be Considerate in
+    Sharing, the harm penalty in Sharing, …); a method the registry does not hold is not marked."""
+    from baselines.registry import METHODS  # (what a method is by construction is the registry's fact)
+
+    names: dict[tuple[str, str], str] = {}
+    for run in results:
+        method = METHODS.get(str(run.get("method")))
+        other = method.identical_to.get(str(run.get("env"))) if method is not None else None
+        label = str(run["method_label"])
+        if other is not None and other[0] == "dqn" and not label.endswith(IDENTICAL_MARK):
+            names[table_env(dict(run)), label] = label + IDENTICAL_MARK
     return names
 
 
@@ -81,7 +109,12 @@ def renaming_note(names: Mapping[tuple[str, str], str], has_reference: bool = Tr
         "Rows named DQN are the DQN reference, the rows P(improves on DQN) compares every other row with: runs "
         "their result files describe as plain DQN on the environment's reward (config.description.dqn_reference)."
     )
-    pairs = list(dict.fromkeys((label, name) for (_, label), name in sorted(names.items())))
+    pairs = list(dict.fromkeys((label, name) for (_, label), name in sorted(names.items()) if not name.endswith(IDENTICAL_MARK)))
+    if any(name.endswith(IDENTICAL_MARK) for name in names.values()):
+        text += (
+            f" Rows marked{IDENTICAL_MARK} train as DQN by construction on their environment: their runs equal DQN's "
+            "seed for seed (`empathy-zoo methods` says why)."
+        )
     if pairs:
         shown = "; ".join(f"{escape(name)} is labelled “{escape(label)}”" for label, name in pairs)
         text += f" In their result files (and run ids) these rows keep their own labels: {shown}."

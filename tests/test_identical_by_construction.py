@@ -92,3 +92,21 @@ def test_the_methods_and_envs_commands_say_it(capsys) -> None:
     assert main(["envs"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("coexistence_v0") and "sharing_v0" in out and "rules='paper'" in out
+
+
+def test_the_leaderboard_marks_a_row_identical_by_construction(tmp_path) -> None:
+    from helpers_results import synthetic_result
+
+    from leaderboard.report import write_leaderboard
+    from leaderboard.row_names import IDENTICAL_MARK, identical_row_names
+
+    runs = [synthetic_result("sharing_v0", method, 1.0, seed) for method in ("dqn", "dqn_considerate") for seed in (0, 1)]
+    for run in runs:
+        run["method_label"] = {"dqn": "DQN", "dqn_considerate": "Be Considerate"}[run["method"]]
+    assert identical_row_names(runs) == {("sharing_v0", "Be Considerate"): "Be Considerate" + IDENTICAL_MARK}
+    out = tmp_path / "runs"
+    out.mkdir()
+    for run in runs:
+        (out / f"{run['run_id']}.json").write_text(json.dumps(run))
+    page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
+    assert "| Be Considerate ≡ DQN |" in page and "train as DQN by construction" in page
