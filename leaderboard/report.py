@@ -27,6 +27,7 @@ from leaderboard.aggregate import (
     table_env,
 )
 from leaderboard.budgets import budgets_of
+from leaderboard.constraint_section import add_constraint_section
 from leaderboard.episodes import add_episodes_section
 from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
@@ -229,6 +230,7 @@ def _render(
         uncompared=uncompared,
         reference_note=renaming_note(read.renamed, bool(dqn_rows)),
     )
+    markdown, html = add_constraint_section(results, markdown, html)
     markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
     markdown, html, episode_figures = add_episodes_section(
         results, out, markdown, html, origins=read.origins, allowed_imports=allowed_imports

@@ -1,0 +1,94 @@
+"""The leaderboard's "Constraint satisfaction" section: each row whose runs record a price per
+training episode (the Lagrangian method's λ, ``train.lambda``) against its cost limit ``d``.
+
+For every such row (variant and label), :func:`leaderboard.constraint.constraint_satisfaction`
+gives the final cost (harms per episode) in training (final 10 % of episodes) and in the last
+greedy evaluation, with its interval across seeds, and where ``d`` lies against it; beside it, λ
+at the end of training (mean over seeds) and whether it still rose over the final 10 % of
+episodes. A leaderboard without such rows has no such section.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.result_file import PRICE_COLUMN
+from leaderboard.aggregate import final_episode_count, group_runs
+from leaderboard.constraint import ConstraintCheck, PhaseCost, constraint_satisfaction
+from leaderboard.tables import markdown_table, place_before_definitions
+
+__all__ = ["SECTION_TITLE", "constraint_rows", "add_constraint_section"]
+
+SECTION_TITLE = "Constraint satisfaction"
+VERDICTS = {"above": "met", "inside": "undecided", "below": "violated"}
+"""What the position of ``d`` against a phase's interval says of the constraint."""
+
+
+def constraint_rows(results: Sequence[Mapping[str, Any]]) -> list[tuple[str, str, float, ConstraintCheck, list[float]]]:
+    """``(variant, label, d, check, λ at the end of each run)`` of every row whose runs record a price."""
+    rows = []
+    for (env, label), runs in group_runs([dict(run) for run in results]).items():
+        if not all(PRICE_COLUMN in run["train"] for run in runs):
+            continue
+        limits = {float((run["config"].get("reward") or {}).get("cost_limit", float("nan"))) for run in runs}
+        if len(limits) != 1 or not all(np.isfinite(list(limits))):
+            continue
+        (limit,) = limits
+        check = constraint_satisfaction(
+            [run["train"]["harms"] for run in runs], [run["eval"][-1]["harms"] for run in runs], limit
+        )
+        rows.append((env, label, limit, check, [float(run["train"][PRICE_COLUMN][-1]) for run in runs]))
+    return rows
+
+
+def _rising(runs_lambda: Sequence[Sequence[float]]) -> int:
+    """How many runs' λ is higher at the end than at the start of their final 10 % of episodes."""
+    return sum(values[-1] > values[-final_episode_count(len(values))] for values in runs_lambda if values)
+
+
+def _cell(phase: PhaseCost) -> str:
+    return f"{phase.mean:.2f} [{phase.low:.2f}, {phase.high:.2f}]: {VERDICTS[phase.limit_lies]}"
+
+
+def add_constraint_section(results: Sequence[Mapping[str, Any]], markdown: str, html_page: str) -> tuple[str, str]:
+    """``markdown`` and ``html_page`` with the section placed before their metric definitions;
+    unchanged where no row records a price."""
+    rows = constraint_rows(results)
+    if not rows:
+        return markdown, html_page
+    priced = {(env, label) for env, label, *_ in rows}
+    lambdas = {
+        key: [list(run["train"][PRICE_COLUMN]) for run in runs]
+        for key, runs in group_runs([dict(run) for run in results]).items()
+        if key in priced
+    }
+    header = ["Variant", "Method", "d", "training, final 10 %", "final greedy evaluation", "λ at the end", "λ still rising"]
+    table = [
+        [
+            env,
+            label,
+            f"{limit:g}",
+            _cell(check.final_training),
+            _cell(check.greedy),
+            f"{float(np.mean(ends)):.1f}",
+            f"{_rising(lambdas[env, label])} of {len(ends)} runs",
+        ]
+        for env, label, limit, check, ends in rows
+    ]
+    intro = (
+        "Harms per episode against the cost limit d of each row whose runs price their cost with a multiplier λ "
+        "(the Lagrangian method): the mean over seeds [its interval across seeds, as the tables'], and whether d lies "
+        "above the interval (met), inside it (undecided) or below it (violated)."
+    )
+    section_md = "\n".join(["", f"## {SECTION_TITLE}", "", intro, "", markdown_table(header, table), ""])
+    head = "".join(f"<th>{html.escape(cell)}</th>" for cell in header)
+    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in table)
+    section_html = (
+        f'<h2>{SECTION_TITLE}</h2>\n<p class="note">{html.escape(intro)}</p>\n'
+        f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>\n"
+    )
+    return place_before_definitions(markdown, html_page, section_md, section_html)
