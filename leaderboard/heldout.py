@@ -80,7 +80,14 @@ from leaderboard.heldout_scores import (
     readings,
 )
 from leaderboard.improvement import VERDICT_MARKS
-from leaderboard.tables import NO_INTERVAL_NOTE, format_interval, format_mean, markdown_table, place_before_definitions
+from leaderboard.tables import (
+    NO_INTERVAL_NOTE,
+    ZERO_WIDTH_NOTE,
+    format_interval,
+    format_mean,
+    markdown_table,
+    place_before_definitions,
+)
 
 __all__ = ["HeldoutSection", "heldout_section", "add_heldout_section"]
 
@@ -107,7 +114,7 @@ def _tables(group: HeldoutGroup, cells: Sequence[HeldoutCell], digits: int) -> l
                 cell = by_key[(label, scenario, metric)]
                 mark = VERDICT_MARKS.get(cell.versus_dqn or "", "")
                 same = f" {SAME_WORLD_MARK}" if scenario in group.same_world.get(label, set()) else ""
-                mean = format_mean(cell.mean, cell.ci_low, cell.ci_high, len(pairs), digits)
+                mean = format_mean(cell.mean, cell.ci_low, cell.ci_high, len(pairs), digits, mark_equal=True)
                 row.append(mean + (f" {mark}" if mark else "") + same)
             rows.append(row)
         tables.append((_metric_title(metric), header, rows))
@@ -160,7 +167,7 @@ def _rule_text(group: HeldoutGroup) -> str:
     )
 
 
-def _intro(group: HeldoutGroup) -> str:
+def _intro(group: HeldoutGroup, cells: Sequence[HeldoutCell] = ()) -> str:
     description = group.scenario_set.get("description") or ""
     seeds = "the runs' per-scenario means over seeds"
     return (
@@ -173,7 +180,13 @@ def _intro(group: HeldoutGroup) -> str:
         ).strip()
         + _references(group)
         + _few_seeds(group)
+        + _zero_width(cells)
     )
+
+
+def _zero_width(cells: Sequence[HeldoutCell]) -> str:
+    """The legend of a zero-width interval (:data:`~leaderboard.tables.ZERO_WIDTH_MARK`), where a cell has one."""
+    return f" {ZERO_WIDTH_NOTE}" if any(cell.ci_low == cell.ci_high for cell in cells) else ""
 
 
 def _few_seeds(group: HeldoutGroup) -> str:
@@ -232,8 +245,8 @@ def heldout_section(
         cells = heldout_cells(group)
         found = readings(group, cells)
         title = f"{group.env}: scenario set {group.scenario_set['name']}"
-        markdown += ["", f"### {title}", "", _intro(group), ""]
-        page += [f"<h3>{html.escape(title)}</h3>", f'<p class="note">{html.escape(_intro(group))}</p>']
+        markdown += ["", f"### {title}", "", _intro(group, cells), ""]
+        page += [f"<h3>{html.escape(title)}</h3>", f'<p class="note">{html.escape(_intro(group, cells))}</p>']
         reasons = [[TRAINED_WITH, "the run's own partners and world"]] + [
             [s["name"], s["reason"]] for s in group.scenario_set["scenarios"]
         ]
