@@ -92,8 +92,8 @@ READING_MARKS = {GENERALISES: "✓", DOES_NOT_GENERALISE: "✗", KEEPS_ITS_LEVEL
 """How the section marks a reading."""
 EFFECT_NAMES = {"harms": "harm avoidance", "equality": "fairness (equality of battery rewards)"}
 """What the reading rule calls keeping each side effect low (or equality high)."""
-SAME_WORLD_MARK = "="
-"""Marks a scenario that is a run's own world (not held out, not judged)."""
+SAME_WORLD_MARK = "⌂"
+"""Marks a scenario that is a run's own world (not held out, not judged); "=" marks a zero-width interval."""
 READING_RULE = (
     "Reading rule: a method's {effect_name} generalises to a held-out scenario when (1) it has some beside its own "
     "partners (▲ against DQN there, by the exact permutation test at 5 %) and (2) it keeps it beside the held-out "
