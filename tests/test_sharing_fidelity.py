@@ -343,7 +343,10 @@ def test_sweep_file_carries_the_options_into_the_run_specs(tmp_path):
     ("table", "message"),
     [
         ('[envs.c]\nenv = "coexistence_v0"\nstart = "centre"', "start must be one of 'rules', 'random', 'centre_corner'"),
-        ('[envs.c]\nenv = "coexistence_v0"\ninventory_encoding = "authors"', "coexistence_v0 takes no argument 'inventory_encoding'"),
+        (
+            '[envs.c]\nenv = "coexistence_v0"\ninventory_encoding = "authors"',
+            "coexistence_v0 takes no argument 'inventory_encoding'",
+        ),
         ('[envs.s]\nenv = "sharing_v0"\nstart = "middle"', "start must be one of 'random', 'centre'; got 'middle'"),
         ('[envs.s]\nenv = "sharing_v0"\ninventory_encoding = "x"', "inventory_encoding must be one of"),
         ('[envs.s]\nenv = "sharing_v0"\nstart = 1', "[envs.s] start: expected str"),
