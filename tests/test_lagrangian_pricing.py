@@ -30,7 +30,7 @@ from leaderboard.constraint import constraint_satisfaction
 
 SMALL: dict[str, Any] = {"hidden_size": 32, "replay_capacity": 600, "learning_starts": 32, "target_update_interval": 50}
 SHIPPED = Path(__file__).parent.parent / "docs/results/methods/runs/coexistence_v0__dqn_lagrangian-f418807a__s0.json"
-"""A shipped Lagrangian run's result file (from before λ was recorded)."""
+"""A shipped Lagrangian run's result file (its λ column is set or removed by :func:`_shipped`)."""
 
 
 @pytest.fixture(params=["torch", "numba"])
@@ -298,6 +298,7 @@ def _shipped(last: object | None = None, length: int = 0) -> dict:
     """The shipped result document with ``train.lambda``: zeros then ``last`` (``None``: without
     the column), ``length`` more or fewer values than episodes."""
     document = json.loads(SHIPPED.read_text())
+    document["train"].pop(PRICE_COLUMN, None)  # (as a file from before λ was recorded)
     if last is not None:
         episodes = len(document["train"]["harms"]) + length
         document["train"][PRICE_COLUMN] = [0.0] * (episodes - 1) + [last]
