@@ -41,7 +41,7 @@ import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.coexistence import CAT_HARMS_ROBOT, NO_HARM, ROBOT_HARMS_CAT
-from empathy_zoo.reference import coexistence_transitions, greedy_policy, start_distribution
+from empathy_zoo.reference import coexistence_transitions, epsilon_greedy_outcome, greedy_policy
 
 __all__ = ["ConsiderateOutcome", "considerate_cliff", "considerate_optimum", "considerate_values"]
 
@@ -160,22 +160,8 @@ def considerate_optimum(
         size=size,
         tolerance=tolerance,
     )
-    outcome, after = coexistence_transitions(size)
-    cells = size * size
-    gone, harmed = cells, cells + 1
-    policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(q, ties)
-    destination = np.select([outcome == ROBOT_HARMS_CAT, outcome == CAT_HARMS_ROBOT], [gone, harmed], after)
-    weight = np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, outcome.shape)
-    source = np.broadcast_to(np.arange(cells)[:, None, None], outcome.shape)
-    step = np.zeros((cells + 2, cells + 2))
-    np.add.at(step, (source.ravel(), destination.ravel()), weight.ravel())
-    step[gone, gone] = step[harmed, harmed] = 1.0
-    state = np.concatenate([start_distribution(size), [0.0, 0.0]])
-    survival = 0.0
-    for _ in range(max_cycles):
-        state = state @ step
-        survival += 1.0 - state[harmed]
-    return ConsiderateOutcome(float(caring), float(state[harmed]), float(state[gone]), float(survival))
+    gone, harmed, survival = epsilon_greedy_outcome(q, epsilon, ties, size, max_cycles)
+    return ConsiderateOutcome(float(caring), harmed, gone, survival)
 
 
 def considerate_cliff(

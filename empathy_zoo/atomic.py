@@ -34,6 +34,7 @@ __all__ = [
     "read_json",
     "check_output_dir",
     "remove_stale_temp_files",
+    "process_alive",
 ]
 
 TEMP_SUFFIX = ".tmp"
@@ -162,14 +163,16 @@ def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:
         match = _OURS.fullmatch(path.name)
         if match is None or not path.is_file() or path.is_symlink():
             continue
-        if _alive(int(match["pid"] or match["prober"])):
+        if process_alive(int(match["pid"] or match["prober"])):
             continue
         path.unlink(missing_ok=True)
         removed.append(path)
     return removed
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` may still be running on this machine (this process counts; a process
+    of another user, or one this system cannot tell of, counts as running)."""
     if pid == os.getpid():
         return True
     try:

@@ -83,6 +83,7 @@ __all__ = [
     "coexistence_optimum",
     "coexistence_transitions",
     "coexistence_values",
+    "epsilon_greedy_outcome",
     "greedy_actions",
     "greedy_policy",
     "start_distribution",
@@ -286,10 +287,20 @@ def coexistence_optimum(
         size=int(size),
         tolerance=float(tolerance),
     )
+    gone, _, survival = epsilon_greedy_outcome(q_emp[: size * size], epsilon, ties, size, max_cycles)
+    return ReferenceOutcome(gone, survival, float(selfishness), float(epsilon))
+
+
+def epsilon_greedy_outcome(
+    values: np.ndarray, epsilon: float, ties: str, size: int, max_cycles: int
+) -> tuple[float, float, float]:
+    """``(P(cat gone), P(robot harmed), expected survival)`` after ``max_cycles`` steps from the
+    engine's start distribution, acting ε-greedily on ``values`` (``(size², 5)``, rows the
+    displacements of :func:`coexistence_transitions`), ties split by ``ties``."""
     outcome, after = coexistence_transitions(size)
     cells = size * size
     gone, harmed = cells, cells + 1
-    policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(q_emp[:cells], ties)
+    policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(values, ties)
     destination = np.select([outcome == ROBOT_HARMS_CAT, outcome == CAT_HARMS_ROBOT], [gone, harmed], after)
     weight = np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, outcome.shape)
     source = np.broadcast_to(np.arange(cells)[:, None, None], outcome.shape)
@@ -301,7 +312,7 @@ def coexistence_optimum(
     for _ in range(max_cycles):
         state = state @ step
         survival += 1.0 - state[harmed]
-    return ReferenceOutcome(float(state[gone]), float(survival), float(selfishness), float(epsilon))
+    return float(state[gone]), float(state[harmed]), float(survival)
 
 
 def _check(**arguments: float) -> None:

@@ -12,7 +12,14 @@ from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from empathy_zoo.atomic import TEMP_MARKER, TEMP_SUFFIX, check_output_dir, remove_stale_temp_files, write_text_atomic
+from empathy_zoo.atomic import (
+    TEMP_MARKER,
+    TEMP_SUFFIX,
+    check_output_dir,
+    process_alive,
+    remove_stale_temp_files,
+    write_text_atomic,
+)
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_no_links
 from empathy_zoo.provenance import git_commit, package_version
@@ -327,20 +334,8 @@ def _remove_stale_stages(out: Path) -> None:
     """Remove the staging directories that processes which died rendering left in ``out``."""
     for path in out.glob(f"{STAGE_PREFIX}*{TEMP_SUFFIX}"):
         match = _STAGE.fullmatch(path.name)
-        if match and path.is_dir() and not path.is_symlink() and not _alive(int(match["pid"])):
+        if match and path.is_dir() and not path.is_symlink() and not process_alive(int(match["pid"])):
             shutil.rmtree(path, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True  # another user's, or this system cannot tell: keep it
-    return True
 
 
 def _print_note(text: str) -> None:
