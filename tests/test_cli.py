@@ -64,7 +64,7 @@ def test_train_writes_a_result_file_with_the_schema(tmp_path, capsys):
     assert len(result["train"]["survival"]) == len(result["train"]["episode_end_step"]) > 0
     printed = capsys.readouterr().out
     assert str(out / "runs") in printed
-    assert f"{result['run_id']} [Empathic DQN (β=0.5)]: final 10% of training: survival" in printed
+    assert f"{result['run_id']} [Empathic DQN (β=0.5)]: final 10% of training: batteries" in printed and "harms" not in printed
     assert "last eval (step 300)" in printed
 
 

@@ -110,3 +110,14 @@ def test_the_leaderboard_marks_a_row_identical_by_construction(tmp_path) -> None
         (out / f"{run['run_id']}.json").write_text(json.dumps(run))
     page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
     assert "| Be Considerate ≡ DQN |" in page and "train as DQN by construction" in page
+
+
+def test_a_runs_summary_names_only_its_environments_metrics() -> None:
+    from helpers_results import synthetic_result
+
+    from empathy_zoo.cli.common import run_summary
+
+    coexistence = run_summary(synthetic_result("coexistence_v0", "dqn", 1.0, 0, survival=400.0, harms=0.5))
+    sharing = run_summary(synthetic_result("sharing_v0", "dqn", 1.0, 0, batteries=4.0, equality=0.9))
+    assert "harms" in coexistence and "batteries" not in coexistence and "equality" not in coexistence
+    assert "batteries" in sharing and "equality" in sharing and "harms" not in sharing

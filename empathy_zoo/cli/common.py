@@ -148,12 +148,15 @@ def _fmt(value: float) -> str:
 
 
 def run_summary(result: dict[str, Any]) -> str:
-    """One line: the run's final-10 % training means and its last greedy evaluation."""
+    """One line: the run's final-10 % training means and its last greedy evaluation, of the
+    metrics that mean something in its environment (the leaderboard's table columns)."""
     from leaderboard.aggregate import run_scalars
+    from leaderboard.tables import TABLE_METRICS
 
-    scalars = run_scalars(result, SUMMARY_METRICS)
-    train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in SUMMARY_METRICS)
-    evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in SUMMARY_METRICS)
+    metrics = TABLE_METRICS.get(str(result["env"]), SUMMARY_METRICS)
+    scalars = run_scalars(result, metrics)
+    train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in metrics)
+    evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in metrics)
     last = max((e["step"] for e in result["eval"]), default=None)
     return (
         f"{result['run_id']} [{result['method_label']}]: final 10% of training: {train} | last eval (step {last}): {evaluation}"
