@@ -15,8 +15,9 @@ unless the user allows a plug-in by name), reset with
 on the labels beside it only where two would share a name).
 
 The section (:func:`episodes_section`) is a table per variant (the run, the steps shown and the
-episode's metrics) with each row's GIF, linked from ``LEADERBOARD.md`` and embedded as base64 in
-``leaderboard.html``; :func:`add_episodes_section` places it before the metric definitions. A
+episode's metrics) with each row's GIF, linked from ``LEADERBOARD.md`` and from ``leaderboard.html``
+(relative to it: keep ``figures/`` beside the page; its PNG figures stay embedded);
+:func:`add_episodes_section` places it before the metric definitions. A
 leaderboard whose runs kept no agent has no such section and no GIF. A row whose agent file is
 missing, or is a Stable-Baselines3 agent without Stable-Baselines3 installed, is named in a note
 instead of shown.
@@ -27,7 +28,6 @@ One episode illustrates what a method's robot does; it measures nothing (the tab
 
 from __future__ import annotations
 
-import base64
 import hashlib
 import html
 import unicodedata
@@ -342,9 +342,8 @@ def episodes_section(
             figures[f"figure:{env}:episode_{episode.slug}"] = path
             link = path.relative_to(out).as_posix()
             markdown += ["", f"![{_md_alt(_alt(episode))}]({link})"]
-            data = base64.b64encode(path.read_bytes()).decode("ascii")
             page.append(f"<h4>{html.escape(episode.label)}</h4>")
-            page.append(f'<img alt="{html.escape(_alt(episode))}" src="data:image/gif;base64,{data}">')
+            page.append(f'<img alt="{html.escape(_alt(episode))}" src="{html.escape(link)}">')  # (linked: GIFs are large)
     for note in notes:
         markdown += ["", f"Note: {note}"]
         page.append(f'<p class="note">Note: {html.escape(note)}</p>')
