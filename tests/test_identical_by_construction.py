@@ -121,3 +121,13 @@ def test_a_runs_summary_names_only_its_environments_metrics() -> None:
     sharing = run_summary(synthetic_result("sharing_v0", "dqn", 1.0, 0, batteries=4.0, equality=0.9))
     assert "harms" in coexistence and "batteries" not in coexistence and "equality" not in coexistence
     assert "batteries" in sharing and "equality" in sharing and "harms" not in sharing
+
+
+def test_reproduce_dry_run_plans_and_writes_nothing(tmp_path, capsys) -> None:
+    from empathy_zoo.cli import main
+
+    out = tmp_path / "plan"
+    assert main(["reproduce", "--profile", "quick", "--out", str(out), "--dry-run"]) == 0
+    printed = capsys.readouterr().out
+    assert "dry run: nothing is trained or written" in printed and "900,000 env steps left" in printed
+    assert "no estimate of the time" in printed and not out.exists()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +69,9 @@ def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
             f"(e.g. {others[0]}); the leaderboard includes them",
             flush=True,
         )
+    if args.dry_run:
+        print(dry_run_plan(specs, finished, out, group_specs(specs, values["max_parallel_runs"]), workers), flush=True)
+        return 0
     train_runs(specs, out, options, finished=finished)
     print_written(write_leaderboard(out, command=command))
     try:
@@ -139,6 +143,50 @@ def _read_note(path: str | None) -> str:
         raise ValueError(f"--note {path} is not UTF-8 text ({error})") from None
 
 
+def dry_run_plan(
+    specs: Sequence[Any], finished: Mapping[Path, Mapping[str, Any]], out: Path, ensembles: Sequence[Sequence[Any]], workers: int
+) -> str:
+    """What ``reproduce --dry-run`` prints: one line per experiment (its runs, steps, how many are
+    finished), the env steps left, and an estimate of the wall time from the rate the finished
+    runs of ``out`` were trained at (their ``wall_time_s`` per step, the median), where it has any.
+    Nothing is trained or written."""
+    from empathy_zoo.result_file import result_path
+
+    done_ids = {str(result.get("run_id")) for result in finished.values()}
+    lines = [f"{PROG}: dry run: nothing is trained or written"]
+    experiments: dict[str, list[Any]] = {}
+    for spec in specs:
+        experiments.setdefault(spec.experiment_id, []).append(spec)
+    for runs in experiments.values():
+        first = runs[0]
+        done = sum(spec.run_id in done_ids for spec in runs)
+        lines.append(
+            f"  {first.variant.label} · {first.display_label()}: {len(runs)} run(s) × {first.budget.steps:,} steps, "
+            f"{done} finished"
+        )
+    left = [ensemble for ensemble in ensembles if any(spec.run_id not in done_ids for spec in ensemble)]
+    steps_left = sum(spec.budget.steps for spec in specs if spec.run_id not in done_ids)
+    lines.append(f"{PROG}: {steps_left:,} env steps left in {len(left)} ensemble(s) on {workers} worker process(es)")
+    rates = sorted(
+        float(result["wall_time_s"]) / int(result["steps"])
+        for result in finished.values()
+        if isinstance(result.get("wall_time_s"), (int, float)) and result.get("steps")
+    )
+    if not rates:
+        lines.append(
+            f"{PROG}: no estimate of the time: {out} holds no finished run to measure the rate by "
+            "(train one first, e.g. --seeds 1, and ask again)"
+        )
+        return "\n".join(lines)
+    per_step = rates[len(rates) // 2]  # (seconds per env step of an ensemble, the median run's)
+    seconds = sum(max(spec.budget.steps for spec in ensemble) for ensemble in left) * per_step / max(1, workers)
+    lines.append(
+        f"{PROG}: about {seconds / 60:,.0f} min of wall time at the rate of the {len(rates)} finished run(s) here "
+        f"({per_step * 1000:.2f} ms per ensemble step); {result_path(out, 'x').parent} is where they are"
+    )
+    return "\n".join(lines)
+
+
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     """Write the leaderboard (Markdown, CSV, HTML) of existing results: one directory, or several
     into one leaderboard (``--out`` required; ``--label DIR=PREFIX`` prefixes a directory's labels)."""
@@ -168,6 +216,11 @@ def add_sweep_commands(sub: Any) -> None:
     )
     reproduce.add_argument("--seeds", type=int, metavar="N", help="replace the sweep's seeds with 0..N-1")
     reproduce.add_argument("--out", type=path_text, metavar="DIR", help="output directory (default: results/<profile>)")
+    reproduce.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="print the planned runs, what is finished and an estimate of the time; train nothing",
+    )
     add_runner_options(reproduce)
     reproduce.set_defaults(handler=cmd_reproduce)
 
