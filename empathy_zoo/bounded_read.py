@@ -19,13 +19,8 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from empathy_zoo.limits import (
-    MAX_AGENT_BYTES,
-    MAX_CHECKPOINT_BYTES,
-    MAX_EVALUATION_BYTES,
-    MAX_JOURNAL_BYTES,
+    BOUNDS,
     MAX_JSON_DEPTH,
-    MAX_RESULT_BYTES,
-    MAX_RUNS_LIST_BYTES,
     format_bytes,
     open_regular,
     read_bounded,
@@ -33,14 +28,9 @@ from empathy_zoo.limits import (
 
 __all__ = ["CAPS", "check_json_depth", "json_depth", "open_data", "read_data", "read_json_data"]
 
-CAPS: dict[str, int] = {
-    "result file": MAX_RESULT_BYTES,
-    "evaluation file": MAX_EVALUATION_BYTES,
-    "agent file": MAX_AGENT_BYTES,
-    "checkpoint": MAX_CHECKPOINT_BYTES,
-    "list of runs": MAX_RUNS_LIST_BYTES,
-    "tuning journal": MAX_JOURNAL_BYTES,
-}
+FILE_KINDS = ("result file", "evaluation file", "agent file", "checkpoint", "list of runs", "tuning journal")
+"""The kinds of file read through :func:`read_data`, as :data:`~empathy_zoo.limits.BOUNDS` names them."""
+CAPS: dict[str, int] = {kind: BOUNDS[kind] for kind in FILE_KINDS}
 """The largest file of each kind read, by what a refusal calls it."""
 
 _STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')
