@@ -94,11 +94,12 @@ class DocumentChecker:
         survival of at most ``max_cycles`` steps: what the leaderboard can draw."""
         low, high = METRIC_RANGES[metric]
         high = max_cycles if metric == "survival" else high
-        kind = "a count" if metric in INTEGER_METRICS else "a finite number"
+        kind = "a count (a whole number)" if metric in INTEGER_METRICS else "a finite number"
         expected = f"{kind} >= {low:g}" + ("" if high is None else f" and <= {high:g}")
         values = self.numbers(value, field, length=length)
         for i, item in enumerate(values):
-            if not math.isfinite(item) or item < low or (high is not None and item > high):
+            whole = metric not in INTEGER_METRICS or (math.isfinite(item) and item == int(item))
+            if not math.isfinite(item) or item < low or (high is not None and item > high) or not whole:
                 raise self.fail(f"{field}[{i}]", f"{metric}, {expected}", item)
         return values
 

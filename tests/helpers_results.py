@@ -8,7 +8,7 @@ import numpy as np
 
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import DEFAULT_POLICIES
-from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import check_result, schema_2_description
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
@@ -41,6 +41,28 @@ def bounded(metric: str) -> tuple[float, float | None]:
     return low, float(MAX_CYCLES) if metric == "survival" else high
 
 
+EVAL_EPISODES = 100
+"""Greedy episodes per evaluation of a synthetic run: a mean of counts is then exact to 0.01."""
+
+
+def whole_episodes(mean: float, episodes: int, rng: np.random.Generator, metric: str) -> list[float]:
+    """``episodes`` whole-number values of the count ``metric`` (within its range) whose mean is
+    ``mean`` to within ``1 / episodes``: each episode ``floor(mean)`` or one more, in ``rng``'s order."""
+    low, high = bounded(metric)
+    mean = float(np.clip(mean, low, high))
+    base = int(np.floor(mean))
+    more = min(int(round((mean - base) * episodes)), episodes) if high is None or base < high else 0
+    values = np.array([base + 1] * more + [base] * (episodes - more), dtype=float)
+    return rng.permutation(values).tolist()
+
+
+def greedy_episodes(mean: float, rng: np.random.Generator, metric: str) -> list[float]:
+    """The :data:`EVAL_EPISODES` greedy episodes of one evaluation, of mean ``mean`` (clipped to its range)."""
+    if metric in INTEGER_METRICS:
+        return whole_episodes(mean, EVAL_EPISODES, rng, metric)
+    return [float(np.clip(mean, *bounded(metric)))] * EVAL_EPISODES
+
+
 def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
     """The result of :func:`synthetic_result` as a schema-1 file holds it."""
     rng = np.random.default_rng(seed)
@@ -49,7 +71,10 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
     for metric in METRIC_NAMES:
         centre = means.get(metric, 0.0)
         low, high = bounded(metric)
-        train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
+        if metric in INTEGER_METRICS:
+            train[metric] = whole_episodes(centre + rng.normal(0, 0.01), episodes, rng, metric)
+        else:
+            train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
     settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS)) | SCHEMA_1_SHAPING.get(method, {})
     return {
         "schema": 1,
@@ -66,5 +91,5 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
             "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
         },
         "train": train,
-        "eval": [{"step": 4000, **{m: [float(np.clip(means.get(m, 0.0) + 0.01 * seed, *bounded(m)))] * 3 for m in METRIC_NAMES}}],
+        "eval": [{"step": 4000, **{m: greedy_episodes(means.get(m, 0.0) + 0.01 * seed, rng, m) for m in METRIC_NAMES}}],
     }

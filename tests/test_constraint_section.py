@@ -23,7 +23,7 @@ def lagrangian_runs(harms: float) -> list[dict]:
 
 
 def test_a_priced_row_is_set_against_its_limit() -> None:
-    ((env, label, limit, check, ends),) = constraint_rows(lagrangian_runs(harms=0.5))
+    ((env, label, limit, check, ends),) = constraint_rows(lagrangian_runs(harms=2.0))
     assert (env, label, limit) == ("coexistence_v0", "DQN-Lagrangian", 0.1)
     assert check.final_training.limit_lies == "below" and ends == [39.0] * 5
     ((_, _, _, met, _),) = constraint_rows(lagrangian_runs(harms=0.0))

@@ -52,8 +52,8 @@ def run(method: str, beta: float, seed: int, variant: str | None = None, label: 
     result["eval"] = [
         {
             "step": step,
-            **{  # (equality within [0, 1], as the result-file checker asks)
-                m: [(seed + 10.0 * j + 100.0 * i + 0.5 * e) / (1000.0 if m == "equality" else 1.0) for e in range(3)]
+            **{  # (counts whole, equality within [0, 1], as the result-file checker asks)
+                m: [(seed + 10.0 * j + 100.0 * i + e) / (1000.0 if m == "equality" else 1.0) for e in range(3)]
                 for j, m in enumerate(METRIC_NAMES)
             },
         }
@@ -112,7 +112,7 @@ def test_the_layout_of_synthetic_runs_nests_environment_task_algorithm_run_step(
             for steps in runs.values():
                 assert [steps[key][STEP_COUNT] for key in ("step_0", "step_1")] == list(EVAL_STEPS)
                 assert STEP_COUNT not in steps[ABSOLUTE_METRICS] and "elapsed_time" not in steps["step_0"]
-    assert layout[ENV]["coexistence_wide"]["empathic_dqn 1.0"]["seed_2"]["step_1"]["harms"] == [112.0, 112.5, 113.0]
+    assert layout[ENV]["coexistence_wide"]["empathic_dqn 1.0"]["seed_2"]["step_1"]["harms"] == [112.0, 113.0, 114.0]
     assert_layout_holds(layout, results)
 
 

@@ -160,6 +160,9 @@ RESULT_FORGERIES = {
     "eval harms inf": ("eval.0.harms.0", math.inf, "eval[0].harms[0]"),
     "eval harms -5": ("eval.0.harms.0", -5, "eval[0].harms[0]"),
     "train harms -5": ("train.harms.3", -5, "train.harms[3]"),
+    "fractional eval harms": ("eval.0.harms.0", 0.5, "eval[0].harms[0]"),
+    "fractional train survival": ("train.survival.2", 99.5, "train.survival[2]"),
+    "fractional batteries": ("train.batteries.0", 1.25, "train.batteries[0]"),
     "train return NaN": ("train.return.0", math.nan, "train.return[0]"),
     "equality 2": ("eval.0.equality.2", 2, "eval[0].equality[2]"),
     "survival past max_cycles": ("eval.0.survival.0", 501, "eval[0].survival[0]"),
@@ -218,6 +221,8 @@ def evaluation() -> dict[str, Any]:
 
 EVALUATION_FORGERIES = {
     "harms -5": ("scenarios.1.metrics.harms.0", -5, "scenarios[1].metrics.harms[0]"),
+    "fractional harms": ("scenarios.1.metrics.harms.0", 0.5, "scenarios[1].metrics.harms[0]"),
+    "fractional survival": ("scenarios.0.metrics.survival.1", 12.5, "scenarios[0].metrics.survival[1]"),
     "equality NaN": ("scenarios.0.metrics.equality.1", math.nan, "scenarios[0].metrics.equality[1]"),
     "survival past max_cycles": ("scenarios.0.metrics.survival.0", 10**6, "scenarios[0].metrics.survival[0]"),
     "unknown environment": ("env", "foo_v0", "env"),

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import EVAL_EPISODES, synthetic_result
 
 from leaderboard.aggregate import Score, run_scalars
 from leaderboard.measured_coverage import MeasuredCoverage, read_measured_coverage
@@ -64,7 +64,7 @@ def test_rows_read_the_episodes_the_leaderboard_scores() -> None:
         assert len(row.runs) == 3
         scored = [run_scalars(run)[row.phase][row.metric] for run in runs]
         assert [values.mean() for values in row.runs] == pytest.approx(scored)
-        assert row.runs[0].size == (3 if row.phase == "eval" else 4)  # 10 % of 40 training episodes
+        assert row.runs[0].size == (EVAL_EPISODES if row.phase == "eval" else 4)  # 10 % of 40 training episodes
         assert row.upper == (500 if row.metric == "survival" else None)
 
 

@@ -302,7 +302,7 @@ def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, 
 
 
 def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) -> None:
-    run = make_run("coexistence_v0", "DQN", 0, [1.0, 0.5])
+    run = make_run("coexistence_v0", "DQN", 0, [1.0, 0.0])
     run["train"]["harms"] = [0.0]
     write_runs(tmp_path / "a", [run])
     with pytest.raises(ValueError, match="different lengths"):

@@ -9,7 +9,7 @@ import io
 from pathlib import Path
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import EVAL_EPISODES, synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -36,7 +36,7 @@ def run(method: str, beta: float, seed: int, steps: int = 4000, experiment: str 
     label apart (their run ids differ by more than the seed)."""
     result = synthetic_result(ENV, method, beta, seed, **means)
     result["steps"] = steps
-    result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": 3}
+    result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": EVAL_EPISODES}
     result["run_id"] = f"{ENV}__{method}-{beta}-{steps}{experiment}__s{seed}"
     return result
 
@@ -73,7 +73,7 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     rows = table_lines(markdown, "Final greedy evaluation")
     assert [row.split(" | ")[0] for row in rows] == [f"| {PENALTY}", f"| {SHOWN}", f"| {EMPATHIC}"]
     assert f"- `{mine}`: 5 runs, 4,000 steps; empathy-zoo " in markdown and f"- `{shipped}`: 10 runs, 4,000 steps;" in markdown
-    assert "Every run has the same training budget: 4,000 steps, eval 2,000 × 3" in markdown
+    assert f"Every run has the same training budget: 4,000 steps, eval 2,000 × {EVAL_EPISODES}" in markdown
     # the other directory's method is compared with the shipped DQN, and the table says so
     compared = table_lines(markdown, "P(improves on DQN): Final greedy evaluation")
     against = [row.split(" | ")[:2] for row in compared]
@@ -84,20 +84,20 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     named = ("method_label", *COMPARISON_CSV_COLUMNS)
     facts = {tuple(row[column] for column in named) for row in table}
     assert facts == {
-        (PENALTY, "4000", "2000", "3", str(mine)),
-        (EMPATHIC, "4000", "2000", "3", str(shipped)),
-        (SHOWN, "4000", "2000", "3", str(shipped)),
+        (PENALTY, "4000", "2000", str(EVAL_EPISODES), str(mine)),
+        (EMPATHIC, "4000", "2000", str(EVAL_EPISODES), str(shipped)),
+        (SHOWN, "4000", "2000", str(EVAL_EPISODES), str(shipped)),
     }
     assert "Read from 2 results directories" in paths["html"].read_text(encoding="utf-8")
 
 
 def test_rows_of_different_budgets_are_kept_apart_and_compared_only_with_dqn_of_their_budget(tmp_path: Path) -> None:
-    # the short budget's DQN harms far less than the method, the long budget's far more: mixing the
-    # two DQN groups would flip (or blur) every verdict on harms
-    short = write_dir(tmp_path / "short", dqn(4000, harms=0.1) + empathic(4000))
-    long = write_dir(tmp_path / "long", dqn(8000, harms=5.0) + empathic(8000))
+    # the short budget's DQN never harms and the method does, the long budget's DQN harms far more:
+    # mixing the two DQN groups would flip (or blur) every verdict on harms
+    short = write_dir(tmp_path / "short", dqn(4000, harms=0.0) + empathic(4000, harms=1.0))
+    long = write_dir(tmp_path / "long", dqn(8000, harms=5.0) + empathic(8000, harms=1.0))
     read = load_results_dirs([short, long])
-    assert read.budgets == (RunBudget(4000, 2000, 3), RunBudget(8000, 2000, 3)) and read.budget_in_labels
+    assert read.budgets == (RunBudget(4000, 2000, EVAL_EPISODES), RunBudget(8000, 2000, EVAL_EPISODES)) and read.budget_in_labels
     cells = improvements_over_dqn(read.results, {ENV: ["harms"]})
     verdicts = {(cell.method_label, cell.baseline_label, cell.phase): cell.verdict for cell in cells}
     assert verdicts == {
@@ -134,7 +134,7 @@ def test_evaluation_settings_join_the_budget_where_they_differ(tmp_path: Path) -
     read = load_results_dirs([write_dir(tmp_path / "a", dqn()), write_dir(tmp_path / "b", other)])
     assert sorted({result["method_label"] for result in read.results}) == [
         f"{DQN} · 4,000 steps, eval 2,000 × 10",
-        f"{DQN} · 4,000 steps, eval 2,000 × 3",
+        f"{DQN} · 4,000 steps, eval 2,000 × {EVAL_EPISODES}",
     ]
     assert budget_of(other[0]).text() == "4,000 steps, eval 2,000 × 10"
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
+from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAMES
 from empathy_zoo.provenance import package_version
 from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
@@ -62,8 +62,9 @@ def write_synthetic_results(
                         "return": base + noise,
                         "other_return": 2 - base + noise,
                     }  # (within what an episode gives: the result-file checker refuses the rest)
-                    return {
-                        name: np.clip(value, 0.0, 1.0 if name == "equality" else None).tolist() for name, value in values.items()
+                    clipped = {name: np.clip(value, 0.0, 1.0 if name == "equality" else None) for name, value in values.items()}
+                    return {  # (a count's episodes are whole numbers)
+                        name: (np.round(value) if name in INTEGER_METRICS else value).tolist() for name, value in clipped.items()
                     }
 
                 run_id = f"{env}__{method}__s{seed}"
