@@ -413,13 +413,22 @@ class EmpathicDQN:
         elif batch.costs is not None:
             raise ValueError("this step carries costs to price when sampled: call price_costs() before training")
         self.replay.add(
-            batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, batch.terminated, present, live, unseen, cost
+            batch.obs, batch.next_obs, swapped, batch.actions, batch.rewards, self._ends(batch), present, live, unseen, cost
         )
         m = batch.actions.shape[1]
         for _ in range(m):
             self.env_steps += 1
             if self.env_steps >= self.config.learning_starts:
                 self.update()
+
+    def _ends(self, batch: StepBatch) -> np.ndarray:
+        """``(K, M)`` where each learner's target stops bootstrapping: its episode's end for good,
+        and with ``time_limit = "terminal"`` its time-limit truncation too."""
+        if self.config.time_limit == "bootstrap":
+            return batch.terminated
+        if batch.truncated is None:
+            raise ValueError('time_limit = "terminal" needs each step\'s truncations (StepBatch.truncated)')
+        return batch.terminated | batch.truncated
 
     def sample_indices(self) -> torch.Tensor:
         """``(K, B)`` replay indices for the next gradient step, from each run's own stream."""

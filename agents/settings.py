@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 from agents.phases import TrainingPhases
 from empathy_zoo.schedules import linear_schedule
 
-__all__ = ["EmpathicDQNSettings", "OTHERS_RULES", "PER_RUN_FIELDS"]
+__all__ = ["EmpathicDQNSettings", "OTHERS_RULES", "PER_RUN_FIELDS", "RECORDED_WHEN_SET", "TIME_LIMIT_ENDS"]
 
 OTHERS_RULES = ("closest", "mean", "min")
 """The values of :attr:`EmpathicDQNSettings.others`."""
+TIME_LIMIT_ENDS = ("bootstrap", "terminal")
+"""The values of :attr:`EmpathicDQNSettings.time_limit`."""
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,10 @@ class EmpathicDQNSettings:
     step counts with 0, as the single other agent does, so harming one of several is never free;
     one that had left before does not count, so the robot goes on caring for the rest. With one
     other agent the three are the same."""
+    time_limit: str = "bootstrap"
+    """A learner's episode cut by the time limit: its target bootstraps there (``"bootstrap"``,
+    SPEC §6) or that end counts as terminal, ``y = r`` (``"terminal"``, the authors' code; the
+    other-term is unchanged)."""
 
     def __post_init__(self) -> None:
         checks = {
@@ -67,6 +73,7 @@ class EmpathicDQNSettings:
             "epsilon_decay_steps": self.epsilon_decay_steps >= 1,
             "hidden_size": self.hidden_size >= 1,
             "others": self.others in OTHERS_RULES,
+            "time_limit": self.time_limit in TIME_LIMIT_ENDS,
         }
         expectations = {
             "selfishness": "in [0, 1]",
@@ -81,6 +88,7 @@ class EmpathicDQNSettings:
             "epsilon_decay_steps": ">= 1",
             "hidden_size": ">= 1",
             "others": f"one of {OTHERS_RULES}",
+            "time_limit": f"one of {TIME_LIMIT_ENDS}",
         }
         for name, ok in checks.items():
             if not ok:
@@ -104,6 +112,16 @@ class EmpathicDQNSettings:
             exploration_fix=lambda steps: f"epsilon_decay_steps = {steps - self.learning_starts:,}",
         )
 
+    def record(self) -> dict[str, Any]:
+        """Every field as a result file's ``config.settings`` holds it: those of
+        :data:`RECORDED_WHEN_SET` only where they differ from their default, so that adding one
+        changes no earlier run's record or id."""
+        record = asdict(self)
+        for name, default in RECORDED_WHEN_SET.items():
+            if record.get(name) == default:
+                del record[name]
+        return record
+
     def shared(self) -> tuple:
         """The settings runs must share to train in one ensemble (all but the per-run ones)."""
         return tuple(getattr(self, f.name) for f in fields(self) if f.name not in PER_RUN_FIELDS)
@@ -111,3 +129,6 @@ class EmpathicDQNSettings:
 
 PER_RUN_FIELDS = frozenset({"selfishness"})
 """Settings that may differ between the runs of one ensemble."""
+RECORDED_WHEN_SET: dict[str, Any] = {"time_limit": "bootstrap"}
+"""Settings added after runs were shipped, and their defaults: a run records one only where it
+differs (:meth:`EmpathicDQNSettings.record`); a record without one had the default."""

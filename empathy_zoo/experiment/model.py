@@ -307,7 +307,7 @@ class RunSpec:
             "env_kwargs": dict(self.variant.kwargs),
             "fixed": {agent: entry_label(entry) for agent, entry in self.fixed_policies().items()},
             "method": self.method,
-            "settings": asdict(self.entry.settings),
+            "settings": settings_record(self.entry.settings),
             "reward": transform_config(self.entry.reward),
             "description": self.entry.method.describe(self.entry.settings, self.entry.reward),
             "seed": self.seed,
@@ -363,6 +363,12 @@ def group_specs(specs: Iterable[RunSpec], max_parallel_runs: int) -> list[list[R
     for members in groups.values():
         chunks += [members[i : i + max_parallel_runs] for i in range(0, len(members), max_parallel_runs)]
     return chunks
+
+
+def settings_record(settings: Any) -> dict[str, Any]:
+    """``settings`` as a result file records them: ``settings.record()`` where the settings class
+    has one (it leaves out fields at their default that were added later), else every field."""
+    return settings.record() if hasattr(settings, "record") else asdict(settings)
 
 
 def _shared(settings: Any) -> Any:
