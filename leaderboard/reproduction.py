@@ -62,6 +62,8 @@ __all__ = [
     "paper_runs",
     "missing_paper_experiments",
     "assess_claims",
+    "coexistence_claims",
+    "method_key",
     "reproduction_markdown",
     "claim_verdicts_markdown",
     "CLAIM_RULES",
@@ -141,7 +143,7 @@ class Claim:
     """``False`` for the suite's own questions (not claimed by the paper)."""
 
 
-def _key(run: dict[str, Any]) -> str:
+def method_key(run: dict[str, Any]) -> str:
     """``β=…`` for a run of Empathic DQN's target (:func:`leaderboard.run_facts.empathic_selfishness`),
     else the method's name."""
     beta = empathic_selfishness(run)
@@ -154,7 +156,7 @@ def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[di
     out: dict[str, dict[str, list[dict[str, Any]]]] = {COEXISTENCE: {}, SHARING: {}}
     for run in results:
         if run["env"] in out and in_paper_setting(run):
-            out[run["env"]].setdefault(_key(run), []).append(run)
+            out[run["env"]].setdefault(method_key(run), []).append(run)
     return out
 
 
@@ -396,38 +398,24 @@ def _less(a: Sequence[float], b: Sequence[float], names: Sequence[str]) -> tuple
     return verdict, f"{names[0]} less than {names[1]} by the exact permutation test at 5 %: {said} (p = {p:.4f})"
 
 
-def assess_claims(
-    results: Sequence[dict[str, Any]], reference: Reference | None = None, tie_range: TieRangeOf | None = None
-) -> list[Claim]:
-    """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
-    ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing.
-
-    ``reference`` is the exact optimum the harm-free/surviving claim is judged against (default
-    ``empathy_zoo.reference.coexistence_optimum``, uniform ties); ``tie_range`` gives the range
-    of the optimum's figures over every tie-break, shown beside it (default
-    :func:`tie_break_range` when ``reference`` is the default one; with another reference and
-    no ``tie_range``, no range is shown)."""
-    missing = missing_paper_experiments(results)
-    if missing:
-        raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
-    if reference is None:
-        from empathy_zoo.reference import coexistence_optimum
-
-        reference = coexistence_optimum
-        tie_range = tie_break_range if tie_range is None else tie_range
-    optimum: Reference = reference
-    runs = paper_runs(results)
+def coexistence_claims(
+    runs: Mapping[str, list[dict[str, Any]]], reference: Reference, tie_range: TieRangeOf | None = None
+) -> dict[str, dict[str, Verdict]]:
+    """The paper's Coexistence claims (C1–C4), ``{claim: {phase: verdict}}``, judged on ``runs``
+    keyed as :func:`paper_runs` keys them (``β=1`` … ``β=0.25`` and :data:`PENALTY`), with
+    ``reference`` the exact optimum C3 is judged against and ``tie_range`` its range over every
+    tie-break (``None``: not shown). :func:`assess_claims` judges the paper sweep by it; a
+    sensitivity study judges each of its conditions by it."""
     betas = [f"β={b:g}" for b in BETAS]
-    coexistence, sharing = _Table(runs[COEXISTENCE]), _Table(runs[SHARING])
-    claims: dict[tuple[str, str, bool], dict[str, Verdict]] = {}
+    coexistence = _Table(runs)
+    claims: dict[str, dict[str, Verdict]] = {}
 
-    def judge(env: str, text: str, phase_name: str, verdict: Verdict, papers: bool = True) -> None:
-        claims.setdefault((env, text, papers), {})[phase_name] = verdict
+    def judge(text: str, phase_name: str, verdict: Verdict) -> None:
+        claims.setdefault(text, {})[phase_name] = verdict
 
     for name, phase in PHASES.items():
         harms = coexistence.row(phase, "harms", betas)
         judge(
-            COEXISTENCE,
             "Harms to the cat fall as β falls.",
             name,
             _verdict(falls(harms), harms, f"harms/episode: {_line(betas, harms)}."),
@@ -437,7 +425,6 @@ def assess_claims(
         area = coexistence.row(phase, "survival", betas, curve=True)
         slower = below(area[-1], area[0])
         judge(
-            COEXISTENCE,
             "Lower β survives worse and learns more slowly.",
             name,
             _verdict(
@@ -454,7 +441,7 @@ def assess_claims(
         readings: list[bool | None] = []
         for key in caring:
             h, s = coexistence.cell(phase, "harms", key), coexistence.cell(phase, "survival", key)
-            group = runs[COEXISTENCE][key]
+            group = runs[key]
             epsilons: dict[float, int] = {0.0: 1}
             if phase != "eval":
                 epsilons = {}
@@ -464,7 +451,7 @@ def assess_claims(
             described = description_of(group[0])
             beta, gamma = float(described["selfishness"]), float(described["gamma"])
             max_cycles = int(env_argument(group[0], "max_cycles"))
-            ref_harms, ref_survival = _reference_over(optimum, beta, epsilons, gamma, max_cycles)
+            ref_harms, ref_survival = _reference_over(reference, beta, epsilons, gamma, max_cycles)
             ok = ok and matches_reference(h, s, ref_harms, ref_survival, max_cycles)
             reading = reference_reading(h, s, ref_harms, ref_survival, max_cycles)
             readings.append(reading)
@@ -488,7 +475,7 @@ def assess_claims(
                     f"and its survival {spread.survival[0]:.1f}–{spread.survival[1]:.1f}"
                 )
             if phase != "eval":
-                rise = survival_rise(group, optimum, gamma=gamma, max_cycles=max_cycles)
+                rise = survival_rise(group, reference, gamma=gamma, max_cycles=max_cycles)
                 part += (
                     f"; across the final 10 % of training episodes (first half → second half) survival "
                     f"{rise.learner[0]:.1f} → {rise.learner[1]:.1f}, the reference at the ε of the same episodes "
@@ -497,7 +484,6 @@ def assess_claims(
                 )
             parts.append(f"{part}; harm-free and surviving on intervals: {on_intervals}")
         judge(
-            COEXISTENCE,
             "The less selfish agents (β = 0.5, 0.25) eventually survive without harming the cat.",
             name,
             _changed(False if False in readings else (True if all(readings) else None), ok, cells, "; ".join(parts) + "."),
@@ -507,12 +493,45 @@ def assess_claims(
         penalty = coexistence.row(phase, "harms", pair)
         fewer, test = _less(coexistence.values(phase, "harms", pair[0]), coexistence.values(phase, "harms", pair[1]), pair)
         judge(
-            COEXISTENCE,
             "The −100 harm-penalty baseline harms the cat less than DQN.",
             name,
             _changed(fewer, below(penalty[0], penalty[1]), penalty, f"harms/episode: {_line(pair, penalty)}; {test}."),
         )
 
+    return claims
+
+
+def assess_claims(
+    results: Sequence[dict[str, Any]], reference: Reference | None = None, tie_range: TieRangeOf | None = None
+) -> list[Claim]:
+    """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
+    ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing.
+
+    ``reference`` is the exact optimum the harm-free/surviving claim is judged against (default
+    ``empathy_zoo.reference.coexistence_optimum``, uniform ties); ``tie_range`` gives the range
+    of the optimum's figures over every tie-break, shown beside it (default
+    :func:`tie_break_range` when ``reference`` is the default one; with another reference and
+    no ``tie_range``, no range is shown)."""
+    missing = missing_paper_experiments(results)
+    if missing:
+        raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
+    if reference is None:
+        from empathy_zoo.reference import coexistence_optimum
+
+        reference = coexistence_optimum
+        tie_range = tie_break_range if tie_range is None else tie_range
+    runs = paper_runs(results)
+    betas = [f"β={b:g}" for b in BETAS]
+    sharing = _Table(runs[SHARING])
+    coexistence = coexistence_claims(runs[COEXISTENCE], reference, tie_range)
+    claims: dict[tuple[str, str, bool], dict[str, Verdict]] = {
+        (COEXISTENCE, text, True): verdicts for text, verdicts in coexistence.items()
+    }
+
+    def judge(env: str, text: str, phase_name: str, verdict: Verdict, papers: bool = True) -> None:
+        claims.setdefault((env, text, papers), {})[phase_name] = verdict
+
+    for name, phase in PHASES.items():
         batteries = sharing.row(phase, "batteries", betas)
         judge(
             SHARING,
