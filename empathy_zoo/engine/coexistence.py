@@ -25,8 +25,8 @@ takes it from ``rules``):
   ``"paid"`` (authors: it still gets that step's ``+1``).
 
 The authors' episodes end after step ``max_cycles + 1`` (``steps > max_steps``) and their learner
-treats that end as terminal: set ``max_cycles=501`` to match the first; the second is a learner's
-setting, not the environment's.
+treats that end as terminal: set ``max_cycles=501`` for the first, and the learner's setting
+``time_limit = "terminal"`` for the second.
 """
 
 from __future__ import annotations
