@@ -22,8 +22,11 @@ from baselines.aup import AttainableUtility
 from baselines.considerate import SHARING_IS_DQN, Considerate
 from baselines.lagrangian import Lagrangian
 from baselines.reachability import RelativeReachability
-from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion
+from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion, NegativeRewardEmpathy
 from baselines.social_value import SocialValueOrientation
+
+NO_NEGATIVE_REWARDS = "no agent's reward is ever negative here: the other's negative rewards add 0"
+"""Why the literal silver rule trains as DQN on the suite's environments."""
 
 BASELINE_METHODS: dict[str, Method] = {
     "dqn_harm_penalty": Method(
@@ -60,6 +63,18 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=InequityAversion(),
         label=lambda s: "DQN + inequity aversion",
         description="DQN trained on reward − 5·(other ahead) − 0.05·(self ahead), smoothed rewards (Hughes et al. 2018)",
+    ),
+    "dqn_silver_literal": Method(
+        name="dqn_silver_literal",
+        learner=EmpathicDQN,
+        settings=EmpathicDQNSettings,
+        preset={"selfishness": 1.0},
+        family="dqn",
+        target="golden",
+        reward=NegativeRewardEmpathy(),
+        label=lambda s, reward: f"DQN + the other's negative rewards ({reward.care:g})",
+        description="the paper's silver rule read literally: DQN trained on reward + 0.5·min(the other's reward, 0)",
+        identical_to={env: ("dqn", NO_NEGATIVE_REWARDS) for env in ("coexistence_v0", "sharing_v0")},
     ),
     "dqn_social_value": Method(
         name="dqn_social_value",

@@ -1,5 +1,6 @@
 """Reward transforms of the DQN baselines: a harm penalty (Coexistence) and equality scaling
-(Sharing), the paper's (SPEC §6); inequity aversion, from the literature. A transform changes
+(Sharing), the paper's (SPEC §6); the paper's silver rule read literally; inequity aversion, from
+the literature. A transform changes
 what a run trains on, never how it is scored: the suite's metrics come from the environment's
 events. Each is a :class:`agents.rewards.RewardTransform` that
 a :class:`agents.base.Method` composes (see :mod:`baselines.methods`)."""
@@ -14,7 +15,7 @@ import numpy as np
 from agents.base import StepBatch
 from empathy_zoo.metrics import equality
 
-__all__ = ["HarmPenalty", "EqualityScaling", "InequityAversion", "HARM_PENALTY"]
+__all__ = ["HarmPenalty", "EqualityScaling", "InequityAversion", "NegativeRewardEmpathy", "HARM_PENALTY"]
 
 HARM_PENALTY = -100.0
 """The Coexistence baseline's penalty for harming the cat."""
@@ -77,3 +78,33 @@ class InequityAversion:
         )
         ended = batch.terminated | (batch.truncated if batch.truncated is not None else False)
         return shaped.astype(np.float32), {"own": np.where(ended, 0.0, own), "other": np.where(ended, 0.0, other)}
+
+
+@dataclass(frozen=True)
+class NegativeRewardEmpathy:
+    """The paper's silver rule read literally: "considering only negative rewards as objects of
+    empathy" (its Discussion). The learner feels the other's bad rewards and nothing else:
+
+        r' = r + care · min(r_j, 0)
+
+    with ``r_j`` the reward of the learner's closest other agent this step, as the environment
+    reports it (``StepBatch.other_rewards``). In both of the suite's environments the other's reward
+    is the robot's reward function in the other's place (the swap Empathic DQN imagines), and it is
+    never negative: a harmed cat gets 0, a human's battery pays +1. So ``r' = r`` exactly, and the
+    method trains as DQN, bit for bit (its registry entry says so). Where an environment gives
+    negative rewards, the discounted sum of the other's along the robot's own episode is what the
+    robot's value weighs against its own."""
+
+    name: ClassVar[str] = "negative_reward_empathy"
+    care: float = 0.5
+    """Weight of the other's negative rewards beside the learner's own (whose weight is 1)."""
+
+    def __post_init__(self) -> None:
+        if isinstance(self.care, bool) or not (isinstance(self.care, int | float) and 0.0 <= float(self.care) < float("inf")):
+            raise ValueError(f"care must be a finite number >= 0, got {self.care!r}")
+
+    def __call__(self, batch: StepBatch) -> np.ndarray:
+        if batch.other_rewards is None:
+            raise ValueError("the literal silver rule needs the other agent's rewards (StepBatch.other_rewards)")
+        felt = np.minimum(batch.other_rewards.astype(np.float64), 0.0)
+        return (batch.rewards.astype(np.float64) + self.care * felt).astype(np.float32)

@@ -1,6 +1,8 @@
-"""The silver rule: Empathic DQN that empathizes only with the other's bad outcomes (the paper's
-Discussion: "Do not do unto others as you would not have them do unto you ... approximated by
-considering only negative rewards as objects of empathy").
+"""The silver rule as a value comparison: Empathic DQN that empathizes only with the other's bad
+outcomes, judged against the robot's own (the paper's Discussion: "Do not do unto others as you
+would not have them do unto you ... approximated by considering only negative rewards as objects of
+empathy"). The literal reading, the other's negative rewards alone, is
+:class:`baselines.shaping.NegativeRewardEmpathy` (method ``dqn_silver_literal``).
 
 Neither environment has a negative reward (a harmed cat gets 0 and leaves; the robot's own
 rewards are ≥ 0), so "only negative rewards" taken literally would leave nothing to empathize
