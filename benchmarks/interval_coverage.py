@@ -586,12 +586,23 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--json", type=Path, default=COVERAGE_FILE, help=f"where --two-level writes its figures (default {COVERAGE_FILE.name})"
     )
+    parser.add_argument(
+        "--seed-counts",
+        default=",".join(map(str, MEAN_SEEDS)),
+        help=f"with --two-level: the seed counts measured, comma-separated (default {','.join(map(str, MEAN_SEEDS))})",
+    )
     args = parser.parse_args(argv)
+    try:
+        seed_counts = tuple(int(count) for count in args.seed_counts.split(","))
+    except ValueError:
+        parser.error(f"--seed-counts takes whole numbers separated by commas, got {args.seed_counts!r}")
+    if any(count < 2 for count in seed_counts):
+        parser.error(f"--seed-counts must each be at least 2 (an interval needs two runs), got {args.seed_counts!r}")
     if args.replicates < 1 or args.resamples < 10:
         parser.error("--replicates must be at least 1 and --resamples at least 10")
     rng = np.random.default_rng(args.seed)
     if args.two_level:
-        two_level_main(args.replicates, args.seed, args.json, rng)
+        two_level_main(args.replicates, args.seed, args.json, rng, seed_counts)
         return
     started = time.process_time()
     committed = committed_populations()
@@ -652,14 +663,16 @@ def main(argv: list[str] | None = None) -> None:
         print(line)
 
 
-def two_level_main(replicates: int, seed: int, json_path: Path, rng: np.random.Generator) -> None:
+def two_level_main(
+    replicates: int, seed: int, json_path: Path, rng: np.random.Generator, seed_counts: Sequence[int] = MEAN_SEEDS
+) -> None:
     """``--two-level``: every shipped row, phase and verdict metric as a population of runs of episodes."""
     started, wall = time.process_time(), time.perf_counter()
     rows = []
     for name in TWO_LEVEL_DIRECTORIES:
         directory = ROOT / "docs" / "results" / name / "runs"
         rows += row_episodes(load_results(directory), directory.relative_to(ROOT).as_posix())
-    summary = two_level_summary(rows, MEAN_SEEDS, replicates, rng)
+    summary = two_level_summary(rows, seed_counts, replicates, rng)
     command = " ".join(shlex.quote(a) for a in ["python", "benchmarks/interval_coverage.py", *sys.argv[1:]])
     write_two_level_json(json_path, summary, command=command, seed=seed, replicates=replicates)
     print("## Coverage of the leaderboard's interval, resampling the shipped runs and their episodes\n")
@@ -670,7 +683,7 @@ def two_level_main(replicates: int, seed: int, json_path: Path, rng: np.random.G
         "of replicates whose interval contains the row's mean, averaged over rows (in brackets: the share of "
         "zero-width intervals, all drawn runs equal); 'lowest row': the row that covered least.\n"
     )
-    print(two_level_table(summary, MEAN_SEEDS))
+    print(two_level_table(summary, seed_counts))
     print(
         f"\n{len(rows)} populations (row × phase × metric) with at least two runs; {replicates} replicates per "
         f"population and seed count, seed {seed}; {time.process_time() - started:.0f} CPU s, "

@@ -11,15 +11,26 @@ from __future__ import annotations
 import functools
 import json
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["COVERAGE_FILE", "ALL_PHASES", "MeasuredCoverage", "read_measured_coverage", "committed_coverage"]
+__all__ = [
+    "COVERAGE_FILE",
+    "ALL_PHASES",
+    "SEED_TARGET",
+    "MeasuredCoverage",
+    "read_measured_coverage",
+    "committed_coverage",
+    "seeds_needed",
+]
 
 COVERAGE_FILE = Path(__file__).resolve().parent / "interval_coverage.json"
 """The committed figures of ``python benchmarks/interval_coverage.py --two-level``."""
 ALL_PHASES = "all"
 """The phase of a figure pooled over both scored phases."""
+SEED_TARGET = 0.93
+"""The coverage a profile's seed count must reach on every metric and phase its verdicts read."""
 
 
 @dataclass(frozen=True)
@@ -55,3 +66,18 @@ def read_measured_coverage(path: str | os.PathLike[str] = COVERAGE_FILE) -> Meas
 def committed_coverage() -> MeasuredCoverage | None:
     """:func:`read_measured_coverage` of the committed :data:`COVERAGE_FILE` (read once)."""
     return read_measured_coverage()
+
+
+def seeds_needed(coverage: MeasuredCoverage, reads: Iterable[tuple[str, str]], target: float = SEED_TARGET) -> int | None:
+    """The fewest seeds, among those measured for every ``(metric, phase)`` in ``reads``, at which
+    each of them is covered at least ``target`` (:data:`SEED_TARGET`); None where no measured
+    count reaches it (measure more seeds). ``ValueError`` for an empty ``reads``."""
+    wanted = sorted(set(reads))
+    if not wanted:
+        raise ValueError("seeds_needed needs at least one (metric, phase) that the verdicts read")
+    counts = {seeds for (_, _, seeds) in coverage.entries}
+    for seeds in sorted(counts):
+        figures = [coverage.coverage(metric, phase, seeds) for metric, phase in wanted]
+        if all(figure is not None for figure in figures) and all(f[0] >= target for f in figures if f is not None):
+            return seeds
+    return None
