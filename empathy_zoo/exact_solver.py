@@ -10,6 +10,7 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
 | Import | `from empathy_zoo.exact_solver import tabular_model, optimum` |
 | Model | `tabular_model("coexistence_v0", **env_kwargs) -> TabularModel` |
 | Outcome | `optimum(model, selfishness, epsilon, *, ties="uniform", gamma=0.99, max_cycles=None) -> ReferenceOutcome` |
+| Any policy | `outcome(model, policy, max_cycles) -> PolicyOutcome` (harms, robot harmed, survival) |
 
 ## Model
 * **States**: the robot's and the other's cells, both operative (`cells²` states, same cell
@@ -42,7 +43,17 @@ from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
-__all__ = ["TabularModel", "tabular_model", "optimal_values", "empathic_values", "optimum", "MAX_STATES"]
+__all__ = [
+    "TabularModel",
+    "PolicyOutcome",
+    "tabular_model",
+    "optimal_values",
+    "empathic_values",
+    "episode_steps",
+    "outcome",
+    "optimum",
+    "MAX_STATES",
+]
 
 MAX_STATES = 200_000
 """Most joint states a model is enumerated for (each stepped with every joint action)."""
@@ -119,13 +130,22 @@ def tabular_model(env: str = "coexistence_v0", **env_kwargs: Any) -> TabularMode
     )
 
 
-def optimal_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray:
-    """``Q*``, ``(states, 5)``, by value iteration until ``γ/(1−γ)·‖V_{k+1} − V_k‖∞ < tolerance``."""
+def optimal_values(
+    model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10, reward: np.ndarray | None = None
+) -> np.ndarray:
+    """``Q*``, ``(states, 5)``, by value iteration until ``γ/(1−γ)·‖V_{k+1} − V_k‖∞ < tolerance``.
+
+    ``reward`` (``(states, 5, 5)``, default the model's) replaces the robot's reward of each step
+    while the other is present; once the other is gone every step still pays ``+1``."""
+    rewards = model.reward if reward is None else np.asarray(reward, dtype=np.float64)
+    if rewards.shape != model.reward.shape:
+        raise ValueError(f"reward must have the model's shape {model.reward.shape}, got {rewards.shape}")
     alone = 1.0 / (1.0 - gamma)  # V(other gone): +1 every step, never harmed again
     going_on = ~model.robot_harmed & ~model.other_harmed
-    fixed = model.reward + gamma * np.where(model.other_harmed & ~model.robot_harmed, alone, 0.0)
+    fixed = rewards + gamma * np.where(model.other_harmed & ~model.robot_harmed, alone, 0.0)
     v = np.zeros(model.states)
-    limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2) / math.log(gamma)) if gamma > 0 else 2
+    scale = max(1.0, float(np.abs(rewards).max(initial=0.0)))  # more sweeps for larger rewards (1: the model's)
+    limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2 / scale) / math.log(gamma)) if gamma > 0 else 2
     q = fixed.mean(axis=2)
     for _ in range(limit):
         q = (fixed + gamma * np.where(going_on, v[model.after], 0.0)).mean(axis=2)
@@ -162,23 +182,50 @@ def optimum(
     for name, value in (("selfishness", selfishness), ("epsilon", epsilon)):
         if not 0.0 <= float(value) <= 1.0:
             raise ValueError(f"{name} must lie in [0, 1], got {value!r}")
-    cycles = int(max_cycles if max_cycles is not None else ENGINES[model.env](1, **model.env_kwargs).max_cycles)
+    cycles = episode_steps(model) if max_cycles is None else int(max_cycles)
     q = optimal_values(model, gamma, tolerance)
     q_emp = empathic_values(model, float(selfishness), q, gamma)
     policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(q_emp, ties)
+    result = outcome(model, policy, cycles)
+    return ReferenceOutcome(result.harms, result.survival, float(selfishness), float(epsilon))
+
+
+@dataclass(frozen=True)
+class PolicyOutcome:
+    """Expected per-episode figures of a policy of the robot in a :class:`TabularModel`."""
+
+    harms: float
+    """Probability that the robot harms the other (once at most: the other leaves)."""
+    robot_harmed: float
+    """Probability that the robot is harmed (its episode ends)."""
+    survival: float
+    """Expected steps at whose end the robot is operative (at most ``max_cycles``)."""
+
+
+def episode_steps(model: TabularModel) -> int:
+    """``max_cycles`` of the model's environment, as its engine was built."""
+    return int(ENGINES[model.env](1, **model.env_kwargs).max_cycles)
+
+
+def outcome(model: TabularModel, policy: np.ndarray, max_cycles: int) -> PolicyOutcome:
+    """The exact :class:`PolicyOutcome` of the robot acting by ``policy`` (``(states, 5)``
+    probabilities, the other acting uniformly at random), from the engine's start distribution
+    pushed forward ``max_cycles`` steps."""
+    if policy.shape != (model.states, NUM_ACTIONS):
+        raise ValueError(f"policy must have shape {(model.states, NUM_ACTIONS)}, got {policy.shape}")
     gone, harmed = model.states, model.states + 1
     destination = np.select([model.robot_harmed, model.other_harmed], [harmed, gone], model.after).ravel()
     weight = np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, model.after.shape).ravel()
     source = np.broadcast_to(np.arange(model.states)[:, None, None], model.after.shape).ravel()
     distribution = np.concatenate([model.start, [0.0, 0.0]])
     survival = 0.0
-    for _ in range(cycles):
+    for _ in range(max_cycles):
         moved = np.bincount(destination, weights=distribution[source] * weight, minlength=model.states + 2)
         moved[gone] += distribution[gone]
         moved[harmed] += distribution[harmed]
         distribution = moved
         survival += 1.0 - distribution[harmed]
-    return ReferenceOutcome(float(distribution[gone]), float(survival), float(selfishness), float(epsilon))
+    return PolicyOutcome(float(distribution[gone]), float(distribution[harmed]), float(survival))
 
 
 def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons: tuple[float, ...]) -> str:
