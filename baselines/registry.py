@@ -13,6 +13,7 @@ from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
 from baselines.methods import BASELINE_METHODS
 from baselines.sb3 import SB3_METHODS
+from baselines.sb3_transforms import SB3_REFUSED, SB3_TRANSFORM_METHODS
 from baselines.silver_rule import SilverRuleDQN
 from empathy_zoo.import_names import resolve_name
 
@@ -63,12 +64,16 @@ METHODS: dict[str, Method] = {
     ),
     **BASELINE_METHODS,
     **SB3_METHODS,
+    **SB3_TRANSFORM_METHODS,
 }
 """Registered methods."""
 
 
 def get_method(name: str) -> Method:
-    """The method registered as ``name``, or a ``package.module:NAME`` ``Method`` object."""
+    """The method registered as ``name``, or a ``package.module:NAME`` ``Method`` object; a
+    composition that cannot run (``sb3_dqn_lagrangian``) raises ``ValueError`` saying why."""
+    if name in SB3_REFUSED:
+        raise ValueError(SB3_REFUSED[name])
     method = resolve_name(name, METHODS, "method")
     if not isinstance(method, Method):
         raise ValueError(f"{name!r} is not an agents.base.Method")

@@ -25,8 +25,16 @@ networks bit-identical to ``model.learn()`` on the Gymnasium adapter for the sam
 running ``learn()`` in a thread fed by the runner: a suspended ``learn()`` cannot be
 checkpointed, and errors cross threads.) Each run keeps its own numpy-global and torch random
 states, swapped in around every call into SB3, so a run draws the same numbers alone or beside
-other runs, as the runner promises. SB3 reads only what ``StepBatch`` says happened (unshaped
-reward, termination, truncation), never the metrics.
+other runs, as the runner promises. SB3 reads only what ``StepBatch`` says happened (the reward
+the run trains on, termination, truncation), never the metrics.
+
+Reward transforms: the reward SB3 stores is ``StepBatch.rewards``, which the trainer has already
+made the run's method's reward transform of the environment's (:class:`agents.rewards.TrainRewards`),
+so SB3 DQN and PPO composed with any transform (``sb3_ppo_harm_penalty``, …:
+:mod:`baselines.sb3_transforms`) train on the shaped reward and are scored on the environment's
+events as every method is. A transform that prices its costs when sampled (the Lagrangian
+method) runs on PPO, which charges each rollout's costs at the run's price when it trains on it
+(:meth:`SB3Learner.price_costs`), and is refused on DQN, whose replay SB3 owns.
 """
 
 from __future__ import annotations
@@ -60,9 +68,18 @@ __all__ = [
     "make_sb3_model",
     "sb3_seed",
     "INSTALL_HINT",
+    "PRICED_AT_SAMPLE_ON_DQN",
 ]
 
 INSTALL_HINT = 'Stable-Baselines3 is not installed; install it with: pip install "empathy-zoo[sb3]"'
+PRICED_AT_SAMPLE_ON_DQN = (
+    "SB3 DQN cannot train a reward transform that prices its costs when sampled (the Lagrangian method, "
+    "priced_at_sample): SB3's DQN samples its updates from a replay buffer and a train() of its own, which hold "
+    "each step's reward as it was stored, so a cost could only be charged at the price of the step that stored it, "
+    "not at the run's current λ; train it with sb3_ppo_lagrangian (PPO prices each rollout when it trains on it) "
+    "or dqn_lagrangian"
+)
+"""Why SB3 DQN refuses the Lagrangian method (:meth:`SB3Learner.price_costs`, ``sb3_dqn_lagrangian``)."""
 STREAM_SB3 = STREAMS["sb3"]
 ALGORITHMS = ("dqn", "ppo")
 
@@ -302,12 +319,24 @@ class _OnPolicyRun:
         self._pending: tuple[np.ndarray, np.ndarray, torch.Tensor, torch.Tensor] | None = None
         """What :meth:`act` chose and :meth:`observe` stores: observations, actions ``(n, 1)``,
         values and log-probabilities (``None`` before the first act)."""
+        self.costs: np.ndarray | None = None
+        """``(n_steps, n_envs)`` float32 each stored step's cost, beside the rollout buffer's rewards,
+        where the run prices costs (:meth:`price_costs`); else ``None``."""
+        self.price = 0.0
+        """The run's latest price of one unit of cost (``StepBatch.prices``)."""
+
+    def price_costs(self) -> None:
+        """Keep each step's cost beside its reward and charge the rollout's costs at the price of
+        the moment it is trained on (OmniSafe's PPO-Lag prices each batch afresh)."""
+        self.costs = np.zeros(self.model.rollout_buffer.rewards.shape, dtype=np.float32)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         from stable_baselines3.common.utils import obs_as_tensor
 
         model = self.model
         if model.rollout_buffer.full:
+            if self.costs is not None:  # the whole rollout priced now, before its returns are computed
+                model.rollout_buffer.rewards -= np.float32(self.price) * self.costs
             with torch.no_grad():
                 last_values = model.policy.predict_values(obs_as_tensor(obs, model.device))
             model.rollout_buffer.compute_returns_and_advantage(last_values=last_values, dones=self.episode_starts)
@@ -321,10 +350,23 @@ class _OnPolicyRun:
         self._pending = (obs.copy(), actions.reshape(-1, 1), values, log_probs)
         return actions
 
-    def observe(self, reward: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, next_obs: np.ndarray) -> None:
+    def observe(
+        self,
+        reward: np.ndarray,
+        terminated: np.ndarray,
+        truncated: np.ndarray,
+        next_obs: np.ndarray,
+        cost: np.ndarray | None = None,
+        price: float = 0.0,
+    ) -> None:
         model = self.model
         if self._pending is None:
             raise RuntimeError("observe() before act(): no step of the rollout to store")
+        if self.costs is not None:
+            if cost is None:
+                raise ValueError("this run prices costs when they are sampled: its StepBatch must carry costs and prices")
+            self.costs[model.rollout_buffer.pos] = cost
+            self.price = float(price)
         obs, actions, values, log_probs = self._pending
         reward = reward.astype(np.float32)
         for i in np.flatnonzero(truncated & ~terminated):  # bootstrap a time-out, as SB3 does (same float32 arithmetic)
@@ -336,10 +378,17 @@ class _OnPolicyRun:
         model.num_timesteps += len(reward)
 
     def state(self) -> dict[str, Any]:
-        return {"episode_starts": self.episode_starts.copy()}
+        if self.costs is None:
+            return {"episode_starts": self.episode_starts.copy()}
+        return {"episode_starts": self.episode_starts.copy(), "costs": self.costs.copy(), "price": self.price}
 
     def load(self, state: Mapping[str, Any]) -> None:
         self.episode_starts = np.asarray(state["episode_starts"], dtype=bool).copy()
+        if ("costs" in state) != (self.costs is not None):
+            raise ValueError("this checkpoint's PPO run was made with another choice of pricing costs; move it away to restart")
+        if self.costs is not None:
+            self.costs = np.asarray(state["costs"], dtype=np.float32).copy()
+            self.price = float(state["price"])
 
 
 def _update_progress(model: Any, schedule_steps: int) -> None:
@@ -410,17 +459,48 @@ class SB3Learner:
 
     # ------------------------------------------------------------------ learning
     def observe(self, batch: StepBatch) -> None:
+        """Store one step in every run's SB3 buffer, with ``batch.rewards`` as its reward: the
+        reward the run trains on (its method's reward transform of the environment's, where it has
+        one: :class:`agents.rewards.TrainRewards` made it), and train where ``learn()`` would."""
         truncated = getattr(batch, "truncated", None)
         if truncated is None:
             raise ValueError("SB3 learners need StepBatch.truncated (the time-limit flag) from the runner")
         for r, (run, rng) in enumerate(zip(self._runs, self._randomness)):
+            signals = (
+                np.asarray(batch.rewards[r], dtype=np.float32),
+                np.asarray(batch.terminated[r], dtype=bool),
+                np.asarray(truncated[r], dtype=bool),
+                np.asarray(batch.next_obs[r], dtype=np.float32),
+            )
             with rng.active():
-                run.observe(
-                    np.asarray(batch.rewards[r], dtype=np.float32),
-                    np.asarray(batch.terminated[r], dtype=bool),
-                    np.asarray(truncated[r], dtype=bool),
-                    np.asarray(batch.next_obs[r], dtype=np.float32),
-                )
+                if isinstance(run, _OnPolicyRun) and run.costs is not None:
+                    costs, prices = batch.costs, batch.prices
+                    run.observe(
+                        *signals,
+                        None if costs is None else np.asarray(costs[r], dtype=np.float32),
+                        0.0 if prices is None else float(prices[r]),
+                    )
+                else:
+                    run.observe(*signals)
+
+    def price_costs(self, runs: Sequence[bool]) -> None:
+        """Train the runs ``runs`` says on ``reward − price·cost`` (a reward transform that prices
+        its costs when sampled, :class:`agents.rewards.PricedTransform`: the Lagrangian method).
+        SB3 PPO keeps each step's cost beside the rollout buffer's reward and charges the whole
+        rollout at the run's price when it trains on it (its update samples nothing older). SB3
+        DQN cannot: its replay buffer and its ``train()`` are SB3's, and they sample a stored
+        reward, fixed when the step was stored; a ``ValueError`` says so
+        (:data:`PRICED_AT_SAMPLE_ON_DQN`)."""
+        if len(runs) != len(self._runs):
+            raise ValueError(f"price_costs: got {len(runs)} flags for {len(self._runs)} runs")
+        for priced, run in zip(runs, self._runs):
+            if not priced:
+                continue
+            if not isinstance(run, _OnPolicyRun):
+                raise ValueError(PRICED_AT_SAMPLE_ON_DQN)
+            if run.model.num_timesteps:
+                raise ValueError("price_costs() must come before the first step is stored")
+            run.price_costs()
 
     # ------------------------------------------------------------------ bookkeeping
     def live_stats(self) -> dict[str, float]:

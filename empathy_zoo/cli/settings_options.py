@@ -18,8 +18,10 @@ another value is refused naming the method, as the same key in a ``--config`` fi
 
 The fields of the method's reward transform (``Method.reward``) are options too, read the same
 way, in a group of their own: ``--<field>``, or ``--reward-<field>`` where ``--<field>`` is a
-setting's or a run option's (``dqn_aup``'s ``--reward-learning-rate``); in a ``--config`` file
-they are keys of ``[reward]``.
+setting's or a run option's (``dqn_aup``'s ``--reward-learning-rate``), or names a setting of
+another registered method (``sb3_ppo_aup``'s ``--reward-hidden-size``, as on ``dqn_aup``: an
+option never reads as a learner's setting on one method and a transform's field on another); in
+a ``--config`` file they are keys of ``[reward]``.
 """
 
 from __future__ import annotations
@@ -156,6 +158,9 @@ def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
     kinds = method.reward_fields()
     if transform is None or not kinds or not is_dataclass(transform):  # (a transform with fields is a dataclass)
         return
+    from baselines.registry import METHODS  # (lazily: the registry imports the learners)
+
+    settings_anywhere = {f.name for registered in METHODS.values() for f in fields(registered.settings)}
     docs = field_docs(type(transform))
     defaults = {f.name: _default(f) for f in fields(transform)}
     description = f"the fields of {type(transform).__name__} ({transform.name!r}; also keys of [reward] in --config)"
@@ -167,7 +172,8 @@ def add_reward_options(parser: argparse.ArgumentParser, method: Method) -> None:
             in_config_only.append(name)
             continue
         text = help_text(f"{docs.get(name, '')} (default: {defaults[name]!r})".strip())
-        for option in ("--" + name.replace("_", "-"), "--reward-" + name.replace("_", "-")):
+        forms = ("--" + name.replace("_", "-"), "--reward-" + name.replace("_", "-"))
+        for option in forms[1:] if name in settings_anywhere else forms:
             try:
                 group.add_argument(option, dest=REWARD_DEST + name, help=text, **reading)
                 break
