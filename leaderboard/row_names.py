@@ -27,6 +27,8 @@ __all__ = [
     "IDENTICAL_MARK",
     "dqn_row_names",
     "identical_row_names",
+    "SAME_RUNS_MARK",
+    "same_runs_row_names",
     "rename_dqn_rows",
     "dqn_rows_of",
     "renaming_note",
@@ -80,6 +82,41 @@ def identical_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str,
     return names
 
 
+SAME_RUNS_MARK = " = DQN's runs"
+"""Appended to the name of a row whose every run equals the DQN run of its seed, though its method
+does not train as DQN by construction there."""
+OWN_COLUMNS = frozenset({"lambda"})
+"""Training columns a method records beside the shared metrics (the Lagrangian's λ): left out of
+the comparison with DQN."""
+
+
+def _columns(run: Mapping[str, Any]) -> tuple[dict[str, Any], Any]:
+    """A run's training columns (but :data:`OWN_COLUMNS`) and its evaluations."""
+    return {key: value for key, value in run["train"].items() if key not in OWN_COLUMNS}, run["eval"]
+
+
+def same_runs_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+    """``{(table env, label): label = DQN's runs}`` of every row of ``results`` that is no DQN
+    reference and whose every run has the training and evaluation columns of the DQN reference run
+    of its table, seed and budget, where such a run exists for each: a method that trained as DQN
+    in fact (Be Considerate where no episode paid its bonus). Rows marked by construction
+    (:func:`identical_row_names`) are left to that mark."""
+    runs = list(results)
+    by_construction = identical_row_names(runs)
+    dqn: dict[tuple[str, int, int], Mapping[str, Any]] = {}
+    for run in runs:
+        if is_dqn_reference(run):
+            dqn.setdefault((table_env(dict(run)), int(run["seed"]), int(run["steps"])), run)
+    rows: dict[tuple[str, str], bool] = {}
+    for run in runs:
+        key = (table_env(dict(run)), str(run["method_label"]))
+        if is_dqn_reference(run) or key in by_construction:
+            continue
+        reference = dqn.get((key[0], int(run["seed"]), int(run["steps"])))
+        rows[key] = rows.get(key, True) and reference is not None and _columns(run) == _columns(reference)
+    return {key: key[1] + SAME_RUNS_MARK for key, same in rows.items() if same}
+
+
 def rename_dqn_rows(results: Sequence[dict[str, Any]], names: Mapping[tuple[str, str], str]) -> list[dict[str, Any]]:
     """``results`` with the label of every run of a renamed row (``names``, from
     :func:`dqn_row_names`) replaced by its shown name; the others as they are (nothing is written)."""
@@ -109,11 +146,17 @@ def renaming_note(names: Mapping[tuple[str, str], str], has_reference: bool = Tr
         "Rows named DQN are the DQN reference, the rows P(improves on DQN) compares every other row with: runs "
         "their result files describe as plain DQN on the environment's reward (config.description.dqn_reference)."
     )
-    pairs = list(dict.fromkeys((label, name) for (_, label), name in sorted(names.items()) if not name.endswith(IDENTICAL_MARK)))
+    marks = (IDENTICAL_MARK, SAME_RUNS_MARK)
+    pairs = list(dict.fromkeys((label, name) for (_, label), name in sorted(names.items()) if not name.endswith(marks)))
     if any(name.endswith(IDENTICAL_MARK) for name in names.values()):
         text += (
             f" Rows marked{IDENTICAL_MARK} train as DQN by construction on their environment: their runs equal DQN's "
             "seed for seed (`empathy-zoo methods` says why)."
+        )
+    if any(name.endswith(SAME_RUNS_MARK) for name in names.values()):
+        text += (
+            f" Rows marked{SAME_RUNS_MARK} are not DQN by construction, but their runs equal DQN's seed for seed "
+            "in every training and evaluation column: on these runs the method trained as DQN."
         )
     if pairs:
         shown = "; ".join(f"{escape(name)} is labelled “{escape(label)}”" for label, name in pairs)

@@ -35,7 +35,7 @@ from empathy_zoo.names import check_label
 from empathy_zoo.result_file import experiment_of
 from leaderboard.aggregate import check_runs, load_result_files, table_env
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
-from leaderboard.row_names import dqn_row_names, identical_row_names, rename_dqn_rows
+from leaderboard.row_names import dqn_row_names, identical_row_names, rename_dqn_rows, same_runs_row_names
 
 __all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option", "parse_label_options"]
 
@@ -185,7 +185,11 @@ def load_results_dirs(
             "Python: labels={directory: prefix})"
         ) from None
     renamed = (
-        {**identical_row_names(result for _, _, result in files), **dqn_row_names(result for _, _, result in files)}
+        {
+            **identical_row_names(result for _, _, result in files),
+            **same_runs_row_names(result for _, _, result in files),
+            **dqn_row_names(result for _, _, result in files),
+        }
         if dqn_named
         else {}
     )

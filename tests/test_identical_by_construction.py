@@ -131,3 +131,38 @@ def test_reproduce_dry_run_plans_and_writes_nothing(tmp_path, capsys) -> None:
     printed = capsys.readouterr().out
     assert "dry run: nothing is trained or written" in printed and "900,000 env steps left" in printed
     assert "no estimate of the time" in printed and not out.exists()
+
+
+def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_path) -> None:
+    from helpers_results import synthetic_result
+
+    from leaderboard.report import write_leaderboard
+    from leaderboard.row_names import SAME_RUNS_MARK, same_runs_row_names
+
+    def row(method: str, label: str, survival: float = 400.0, seeds: tuple[int, ...] = (0, 1, 2, 3)) -> list[dict]:
+        made = [synthetic_result("coexistence_v0", method, 1.0, seed, survival=survival) for seed in seeds]
+        for run in made:
+            run["method_label"] = label
+            run["run_id"] = f"coexistence_v0__{label.replace(' ', '_')}__s{run['seed']}"
+        return made
+
+    dqn, considerate = row("dqn", "DQN"), row("dqn_considerate", "Be Considerate")
+    assert same_runs_row_names(dqn + considerate) == {("coexistence_v0", "Be Considerate"): "Be Considerate" + SAME_RUNS_MARK}
+    # one differing value, a seed DQN lacks, or another budget: not the same runs
+    differs = row("dqn_considerate", "Be Considerate")
+    differs[2]["eval"][0]["survival"][0] -= 1.0
+    assert same_runs_row_names(dqn + differs) == {}
+    assert same_runs_row_names(dqn + row("dqn_considerate", "Be Considerate", seeds=(0, 1, 2, 7))) == {}
+    longer = row("dqn_considerate", "Be Considerate")
+    for run in longer:
+        run["steps"] = 8000
+    assert same_runs_row_names(dqn + longer) == {}
+    # a row marked by construction keeps that mark (Be Considerate in Sharing)
+    sharing = [synthetic_result("sharing_v0", m, 1.0, s) for m in ("dqn", "dqn_considerate") for s in (0, 1)]
+    assert same_runs_row_names(sharing) == {}
+    out = tmp_path / "runs"
+    out.mkdir()
+    for run in dqn + considerate:
+        (out / f"{run['run_id']}.json").write_text(json.dumps(run))
+    page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
+    assert f"| Be Considerate{SAME_RUNS_MARK} |" in page and "on these runs the method trained as DQN" in page

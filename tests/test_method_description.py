@@ -241,7 +241,11 @@ def test_the_plug_in_gets_the_reference_of_its_beta() -> None:
 def test_the_leaderboard_shows_the_plug_in_s_rows(tmp_path: Path) -> None:
     from leaderboard.report import write_leaderboard
 
-    runs = [kind_result("coexistence_v0", beta, seed, survival=400.0) for beta in (1.0, 0.5) for seed in range(4)]
+    runs = [
+        kind_result("coexistence_v0", beta, seed, survival=400.0 if beta == 1.0 else 410.0)
+        for beta in (1.0, 0.5)
+        for seed in range(4)
+    ]
     runs += [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, seed, survival=450.0) for seed in range(4)]
     for run in runs:
         write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
