@@ -1,0 +1,424 @@
+"""# Separation table: which methods Coexistence tells apart, exactly
+
+Every method's exact optimum on Coexistence under full observability, its exact outcome, and for
+every pair of methods whether their optimal policies differ. Built on
+:class:`empathy_zoo.exact_solver.TabularModel`, so every rule set of the engine is modelled as it plays.
+
+| | |
+|---|---|
+| Import | `from empathy_zoo.separation import separation_table` |
+| Call | `separation_table(model, selfishness=(0.75, 0.5, 0.25, 0.0), epsilons=(0.0, 0.01, 0.05)) -> SeparationTable` |
+| Command | `python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]` |
+| Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`empathy_zoo.separation_render`) |
+
+## Rows and the values each acts on (at their fixed point, γ = 0.99)
+* `dqn`: `Q*`. `dqn_silver_literal` and `dqn_equality` are DQN by construction (their registry marks).
+* `empathic_dqn` at β: the golden rule's `Q_emp` (:func:`empathy_zoo.exact_solver.empathic_values`).
+* `empathic_dqn_in_view` at β: the in-view target, the robot's own continuation in the other's
+  place wherever the other is present but outside the engine's window at t+1 (SPEC §4).
+* `empathic_dqn_silver` at β: `Q* − (1 − β)·E[max(c − o, 0)]`, `c = γ·(1 − done)·V*(s')` and
+  `o = γ·present'·V*(swap(s'))` (:mod:`baselines.silver_rule`).
+* `dqn_harm_penalty`: `Q*` of the reward − 100 per harm.
+* `dqn_lagrangian`: `Q*` of the reward − λ per harm, λ the dual optimum for d harms per episode at ε
+  (bisection on a log scale; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
+* `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values`, the paper's rules only.
+
+## Policies, outcomes, pairs
+The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
+that policy's ε-greedy execution (:func:`empathy_zoo.exact_solver.outcome`). Two rows *differ*
+where their greedy policies differ in a state reachable from the start under either row's ε-greedy
+policy: at ε = 0 the states its tied greedy actions lead to, at ε > 0 every state some robot moves
+reach (every action has weight ε/5), the cat's five moves counted, with no time limit. Rows with
+the same policy on those states have the same outcome.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from baselines.considerate_exact import considerate_values
+from baselines.lagrangian import Lagrangian
+from baselines.registry import METHODS
+from baselines.shaping import HARM_PENALTY
+from empathy_zoo.actions import NUM_ACTIONS
+from empathy_zoo.engine.coexistence import RULE_SETS
+from empathy_zoo.environments import ENGINES
+from empathy_zoo.exact_solver import TabularModel, empathic_values, episode_steps, optimal_values, outcome
+from empathy_zoo.reference import greedy_policy
+
+__all__ = [
+    "SELFISHNESS",
+    "EPSILONS",
+    "LAMBDA_RANGE",
+    "Row",
+    "RowOutcome",
+    "Pair",
+    "Omission",
+    "SeparationTable",
+    "separation_table",
+    "silver_values",
+    "in_view_values",
+    "reachable_states",
+    "policies_differ",
+    "lagrangian_multiplier",
+]
+
+SELFISHNESS = (0.75, 0.5, 0.25, 0.0)
+"""β of the empathic rows (β = 1 is DQN)."""
+EPSILONS = (0.0, 0.01, 0.05)
+"""Exploration rates of the outcomes."""
+LAMBDA_RANGE = (1e-12, 1e4)
+"""Where the Lagrangian's multiplier is searched (λ above 0 and at most 10⁴)."""
+POLICY_TOLERANCE = 1e-12
+"""Action probabilities closer than this count as equal."""
+OMISSIONS = (
+    (
+        "dqn_aup",
+        "its exact penalty tables live in tests/test_aup_calibration.py; "
+        "they depend on each run's seed (30 random auxiliary rewards)",
+    ),
+    ("dqn_relative_reachability", "no exact optimum of its penalised reward is built yet"),
+)
+
+
+@dataclass(frozen=True)
+class Row:
+    """One method at one setting: a row of the table."""
+
+    name: str
+    """The row's name: the method, with β where it has one (``empathic_dqn β=0.5``)."""
+    method: str
+    """The registry name of the method."""
+    selfishness: float | None
+    """β of an empathic row, else ``None``."""
+    identical_to: str
+    """The row it equals by construction (``""`` when computed)."""
+    reason: str
+    """Why it equals that row (``""`` when computed)."""
+
+
+@dataclass(frozen=True)
+class RowOutcome:
+    """A row's exact optimum at one ε."""
+
+    row: str
+    """The row's name."""
+    epsilon: float
+    """Probability of a uniformly random action at every step."""
+    harms: float
+    """Expected harms of the other per episode."""
+    robot_harmed: float
+    """Probability that the robot is harmed in an episode."""
+    survival: float
+    """Expected steps at whose end the robot is operative."""
+    multiplier: float | None
+    """The Lagrangian's λ (``None`` for other rows, and where no λ meets the limit)."""
+    note: str
+    """What the figures mean where it needs saying (``""`` otherwise)."""
+
+
+@dataclass(frozen=True)
+class Pair:
+    """Two rows compared at one ε."""
+
+    first: str
+    """The first row's name."""
+    second: str
+    """The second row's name."""
+    epsilon: float
+    """Probability of a uniformly random action at every step."""
+    differ: bool
+    """Their greedy policies differ in a reachable state."""
+    differing_states: int
+    """Reachable states where they differ."""
+    reachable_states: int
+    """States reachable under either row's ε-greedy policy."""
+    harms_difference: float
+    """The first row's harms minus the second's."""
+    survival_difference: float
+    """The first row's survival minus the second's."""
+    by_construction: str
+    """Why the two are identical by construction (``""`` when computed)."""
+
+
+@dataclass(frozen=True)
+class Omission:
+    """A registered method the table does not hold."""
+
+    method: str
+    """Its registry name."""
+    reason: str
+    """Why it is not in the table."""
+
+
+@dataclass(frozen=True)
+class SeparationTable:
+    """Every row's exact outcome and every pair's comparison on one environment."""
+
+    env: str
+    """The environment's name."""
+    arguments: tuple[tuple[str, int | float | str], ...]
+    """The arguments its engine was built with, sorted by name."""
+    gamma: float
+    """The discount of every value."""
+    max_cycles: int
+    """Steps of an episode."""
+    cost_limit: float
+    """The Lagrangian's d: harms per episode allowed."""
+    rows: tuple[Row, ...]
+    """The rows, in order."""
+    outcomes: tuple[RowOutcome, ...]
+    """Every row's outcome at every ε, by ε then row."""
+    pairs: tuple[Pair, ...]
+    """Every two rows at every ε, by ε then row order."""
+    omitted: tuple[Omission, ...]
+    """Registered methods not in the table."""
+
+    @property
+    def epsilons(self) -> tuple[float, ...]:
+        """The ε of the outcomes, in order."""
+        return tuple(dict.fromkeys(o.epsilon for o in self.outcomes))
+
+    def outcome(self, row: str, epsilon: float) -> RowOutcome:
+        """The outcome of ``row`` at ``epsilon``."""
+        return next(o for o in self.outcomes if o.row == row and o.epsilon == epsilon)
+
+    def pair(self, first: str, second: str, epsilon: float) -> Pair | None:
+        """The comparison of two rows at ``epsilon`` in either order (``None`` for a row with itself)."""
+        return next((p for p in self.pairs if p.epsilon == epsilon and {p.first, p.second} == {first, second}), None)
+
+    def differ(self, first: str, second: str, epsilon: float) -> bool:
+        """Whether the two rows' greedy policies differ in a reachable state (never for a row with itself)."""
+        found = self.pair(first, second, epsilon)
+        return False if found is None else found.differ
+
+
+def silver_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
+    """The silver rule's ``Q_silver = Q* − (1 − β)·E[max(c − o, 0)]`` at ``Q*`` (the module page)."""
+    v = q.max(axis=1)
+    continuation = np.select([model.robot_harmed, model.other_harmed], [0.0, gamma / (1.0 - gamma)], gamma * v[model.after])
+    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
+    return q - (1.0 - selfishness) * np.maximum(continuation - other, 0.0).mean(axis=2)
+
+
+def in_view_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
+    """In-view Empathic DQN's target at ``Q*``: the golden rule, with the robot's own continuation
+    as the other-term where the other is present but outside the engine's window at t+1."""
+    engine = ENGINES[model.env](model.states, **model.env_kwargs)
+    engine.reset()
+    engine.cells = np.stack(np.divmod(np.arange(model.states), model.cells), axis=1).astype(engine.cells.dtype)
+    seen = np.asarray(engine.in_view(0, 1), dtype=bool)
+    v = q.max(axis=1)
+    continuation = np.select([model.robot_harmed, model.other_harmed], [0.0, gamma / (1.0 - gamma)], gamma * v[model.after])
+    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
+    other = np.where(~model.other_harmed & ~seen[model.after], continuation, other)
+    return q + (1.0 - selfishness) * (other - model.reward - continuation).mean(axis=2)
+
+
+def reachable_states(model: TabularModel, policy: np.ndarray) -> np.ndarray:
+    """``(states,)`` bool: the states the start distribution reaches by the actions ``policy``
+    gives weight and every move of the other, the other present and the robot not harmed."""
+    going_on = ~model.robot_harmed & ~model.other_harmed
+    taken = (policy > 0.0)[:, :, None] & going_on
+    reached = model.start > 0.0
+    frontier = reached.copy()
+    while frontier.any():
+        after = np.zeros(model.states, dtype=bool)
+        after[model.after[frontier][taken[frontier]]] = True
+        frontier = after & ~reached
+        reached |= after
+    return reached
+
+
+def policies_differ(model: TabularModel, first: np.ndarray, second: np.ndarray, epsilon: float) -> tuple[int, int]:
+    """``(differing, reachable)``: states reachable under either ε-greedy policy, and those where
+    the two greedy policies ``first`` and ``second`` differ."""
+    reach = _reachable(model, first, epsilon) | _reachable(model, second, epsilon)
+    differs = (np.abs(first - second) > POLICY_TOLERANCE).any(axis=1)
+    return int(np.count_nonzero(differs & reach)), int(np.count_nonzero(reach))
+
+
+def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.ndarray:
+    """:func:`reachable_states` of the ε-greedy policy (at ε > 0 every action has weight: one search)."""
+    return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
+
+
+def _acting(greedy: np.ndarray, epsilon: float) -> np.ndarray:
+    """The ε-greedy policy of a greedy one."""
+    return epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy
+
+
+def lagrangian_multiplier(
+    harms_at: Callable[[float], float], cost_limit: float, *, low: float = LAMBDA_RANGE[0], high: float = LAMBDA_RANGE[1]
+) -> float | None:
+    """The least λ (to a relative 10⁻³, by bisection on ``log λ``) at which ``harms_at(λ)`` is at
+    most ``cost_limit``: 0 when ``harms_at(0)`` is, ``None`` when ``harms_at(high)`` is not."""
+    if harms_at(0.0) <= cost_limit:
+        return 0.0
+    if harms_at(high) > cost_limit:
+        return None
+    if harms_at(low) <= cost_limit:
+        return low
+    while high / low > 1.001:
+        middle = math.sqrt(low * high)
+        low, high = (low, middle) if harms_at(middle) <= cost_limit else (middle, high)
+    return high
+
+
+def _rows(considerate: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
+    """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β."""
+    marks = {name: METHODS[name].identical_to.get("coexistence_v0") for name in ("dqn_silver_literal", "dqn_equality")}
+    rows = [Row("dqn", "dqn", None, "", "")]
+    rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
+    rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
+    rows += [Row("dqn_considerate", "dqn_considerate", None, "", "")] if considerate else []
+    for method in ("empathic_dqn", "empathic_dqn_in_view", "empathic_dqn_silver"):
+        rows += [Row(f"{method} β={beta:g}", method, beta, "", "") for beta in selfishness]
+    return tuple(rows)
+
+
+def _paper_rules(model: TabularModel) -> bool:
+    """Whether the model's engine plays the paper's rules (what Be Considerate's exact module models)."""
+    engine = ENGINES[model.env](1, **model.env_kwargs)
+    return model.env == "coexistence_v0" and getattr(engine, "options", None) == RULE_SETS["paper"]
+
+
+def _considerate_policy(model: TabularModel, epsilon: float, gamma: float) -> np.ndarray:
+    """Be Considerate's greedy policy (α = 1) on the model's states, from its displacement model."""
+    size = math.isqrt(model.cells)
+    q, _ = considerate_values(1.0, epsilon=epsilon, time_limit_rate=1.0 / episode_steps(model), gamma=gamma, size=size)
+    robot, other = np.divmod(np.arange(model.states), model.cells)
+    (robot_row, robot_col), (other_row, other_col) = np.divmod(robot, size), np.divmod(other, size)
+    displacement = ((other_row - robot_row) % size) * size + (other_col - robot_col) % size
+    return greedy_policy(q)[displacement]
+
+
+def separation_table(
+    model: TabularModel,
+    selfishness: tuple[float, ...] = SELFISHNESS,
+    epsilons: tuple[float, ...] = EPSILONS,
+    *,
+    gamma: float = 0.99,
+    cost_limit: float = Lagrangian().cost_limit,
+) -> SeparationTable:
+    """The :class:`SeparationTable` of ``model`` (see the module page)."""
+    cycles = episode_steps(model)
+    considerate = _paper_rules(model)
+    rows = _rows(considerate, tuple(float(beta) for beta in selfishness))
+    q = optimal_values(model, gamma)
+    penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
+    values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
+    for row in rows:
+        if row.selfishness is not None:
+            rule = {"empathic_dqn": empathic_values, "empathic_dqn_in_view": in_view_values, "empathic_dqn_silver": silver_values}
+            values[row.name] = rule[row.method](model, row.selfishness, q, gamma)
+    fixed = {name: greedy_policy(v) for name, v in values.items()}
+    outcomes: list[RowOutcome] = []
+    pairs: list[Pair] = []
+    for epsilon in epsilons:
+        policies = dict(fixed)
+        notes: dict[str, str] = {}
+        multiplier = _lagrangian(model, epsilon, gamma, cost_limit, cycles)
+        price = LAMBDA_RANGE[1] if multiplier is None else multiplier
+        policies["dqn_lagrangian"] = greedy_policy(_lagrangian_values(model, price, gamma, q))
+        notes["dqn_lagrangian"] = _lagrangian_note(multiplier, cost_limit)
+        if considerate:
+            try:
+                policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma)
+            except RuntimeError:  # no joint fixed point of the robot's optimum and the cat's value
+                pass
+        for row in rows:
+            if row.identical_to:
+                policies[row.name] = policies[row.identical_to]
+                notes[row.name] = f"identical to {row.identical_to} by construction: {row.reason}"
+        here = [r for r in rows if r.name in policies]
+        result = {r.name: outcome(model, _acting(policies[r.name], epsilon), cycles) for r in here}
+        for r in here:
+            lam = multiplier if r.name == "dqn_lagrangian" else None
+            o = result[r.name]
+            outcomes.append(RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, "")))
+        for a, b in combinations(here, 2):
+            reason = _by_construction(a, b)
+            differing, reachable = policies_differ(model, policies[a.name], policies[b.name], epsilon)
+            first, second = result[a.name], result[b.name]
+            pairs.append(
+                Pair(
+                    a.name,
+                    b.name,
+                    epsilon,
+                    differing > 0 and not reason,
+                    0 if reason else differing,
+                    reachable,
+                    first.harms - second.harms,
+                    first.survival - second.survival,
+                    reason,
+                )
+            )
+    names = {o.row for o in outcomes}
+    omitted = [Omission(m, why) for m, why in OMISSIONS]
+    if not considerate:
+        omitted.append(Omission("dqn_considerate", "its exact module models the paper's rules only"))
+    elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):
+        omitted.append(Omission("dqn_considerate", "at some ε its optimum and the cat's value find no joint fixed point"))
+    return SeparationTable(
+        env=model.env,
+        arguments=tuple(sorted(model.env_kwargs.items())),
+        gamma=gamma,
+        max_cycles=cycles,
+        cost_limit=cost_limit,
+        rows=tuple(r for r in rows if r.name in names),
+        outcomes=tuple(outcomes),
+        pairs=tuple(pairs),
+        omitted=tuple(omitted),
+    )
+
+
+def _by_construction(a: Row, b: Row) -> str:
+    """Why rows ``a`` and ``b`` are identical by construction (``""`` when they are not)."""
+    if a.identical_to == b.name:
+        return a.reason
+    if b.identical_to == a.name:
+        return b.reason
+    if a.identical_to and a.identical_to == b.identical_to:
+        return f"both are {a.identical_to}: {a.reason}; {b.reason}"
+    return ""
+
+
+def _lagrangian_values(model: TabularModel, multiplier: float, gamma: float, q: np.ndarray) -> np.ndarray:
+    """``Q*`` of the reward − λ per harm (``Q*`` itself at λ = 0)."""
+    return q if multiplier == 0.0 else optimal_values(model, gamma, reward=model.reward - multiplier * model.other_harmed)
+
+
+def _lagrangian(model: TabularModel, epsilon: float, gamma: float, cost_limit: float, cycles: int) -> float | None:
+    """The Lagrangian's λ at ε (:func:`lagrangian_multiplier`)."""
+    q = optimal_values(model, gamma)
+
+    def harms_at(multiplier: float) -> float:
+        policy = greedy_policy(_lagrangian_values(model, multiplier, gamma, q))
+        return outcome(model, _acting(policy, epsilon), cycles).harms
+
+    return lagrangian_multiplier(harms_at, cost_limit)
+
+
+def _lagrangian_note(multiplier: float | None, cost_limit: float) -> str:
+    """What the Lagrangian's row shows at its λ."""
+    if multiplier is None:
+        top = f"{LAMBDA_RANGE[1]:g}"
+        return (
+            f"no λ ≤ {top} meets {cost_limit:g} harms per episode: Q* prices a harm as the greedy robot meets it, "
+            f"not as its ε-greedy exploration does; shown at λ = {top}"
+        )
+    if multiplier == 0.0:
+        return f"λ = 0 meets {cost_limit:g} harms per episode: DQN itself"
+    return f"the least λ meeting {cost_limit:g} harms per episode, to a relative 10⁻³"
+
+
+if __name__ == "__main__":
+    from empathy_zoo.separation_render import main
+
+    main()

@@ -1,0 +1,156 @@
+"""# Separation table files: JSON, Markdown and the command that writes them
+
+:func:`to_json` and :func:`from_json` store a :class:`empathy_zoo.separation.SeparationTable`
+losslessly; :func:`to_markdown` renders it for the docs. The command
+
+    python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]
+
+builds the table of ``ENV`` (default ``coexistence_v0``) with the engine arguments given and writes
+``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default ``docs/results/separation``). ``<name>`` is
+the environment's name, followed by ``_<rules>`` when a ``rules`` argument is given.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.exact_solver import tabular_model
+from empathy_zoo.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
+
+__all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_name", "main"]
+
+OUT = Path("docs/results/separation")
+"""Where the command writes by default."""
+
+
+def to_json(table: SeparationTable) -> str:
+    """The table as JSON (every field, floats exact)."""
+    data = asdict(table)
+    data["arguments"] = [list(item) for item in table.arguments]
+    return json.dumps(data, ensure_ascii=False, indent=1) + "\n"
+
+
+def from_json(text: str) -> SeparationTable:
+    """The table :func:`to_json` wrote."""
+    data: dict[str, Any] = json.loads(text)
+    return SeparationTable(
+        env=str(data["env"]),
+        arguments=tuple((str(key), value) for key, value in data["arguments"]),
+        gamma=float(data["gamma"]),
+        max_cycles=int(data["max_cycles"]),
+        cost_limit=float(data["cost_limit"]),
+        rows=tuple(Row(**row) for row in data["rows"]),
+        outcomes=tuple(RowOutcome(**item) for item in data["outcomes"]),
+        pairs=tuple(Pair(**item) for item in data["pairs"]),
+        omitted=tuple(Omission(**item) for item in data["omitted"]),
+    )
+
+
+def equivalence_classes(table: SeparationTable, epsilon: float) -> tuple[tuple[str, ...], ...]:
+    """The rows at ``epsilon`` grouped by the same optimum (no pair of a group differs), in row order."""
+    names = [o.row for o in table.outcomes if o.epsilon == epsilon]
+    classes: list[list[str]] = []
+    for name in names:
+        home = next((c for c in classes if not table.differ(c[0], name, epsilon)), None)
+        if home is None:
+            classes.append([name])
+        else:
+            home.append(name)
+    return tuple(tuple(c) for c in classes)
+
+
+def file_name(env: str, arguments: dict[str, int | str]) -> str:
+    """``<env>`` or ``<env>_<rules>`` (the name of the files the command writes)."""
+    return f"{env}_{arguments['rules']}" if "rules" in arguments and arguments["rules"] != "paper" else env
+
+
+def _letter(index: int) -> str:
+    return chr(ord("A") + index)
+
+
+def to_markdown(table: SeparationTable) -> str:
+    """The table for the docs: rows, outcomes, the groups of rows with one optimum, and the pairs of groups."""
+    arguments = " ".join(f"{key}={value}" for key, value in table.arguments)
+    command = f"python -m empathy_zoo.separation {table.env} {arguments}".rstrip()
+    lines = [
+        f"# Separation table: {table.env}" + (f" ({arguments})" if arguments else ""),
+        "",
+        f"Exact optima under full observability; γ = {table.gamma:g}, {table.max_cycles} steps an episode,",
+        f"the Lagrangian's limit d = {table.cost_limit:g} harms per episode. Made by `{command}`.",
+        "",
+        "## Rows",
+        "",
+        "| row | method | β | identical by construction |",
+        "|---|---|---:|---|",
+    ]
+    for row in table.rows:
+        beta = "" if row.selfishness is None else f"{row.selfishness:g}"
+        same = f"to `{row.identical_to}`: {row.reason}" if row.identical_to else ""
+        lines.append(f"| `{row.name}` | `{row.method}` | {beta} | {same} |")
+    epsilons = table.epsilons
+    lines += ["", "## Outcomes (harms, robot harmed, survival per episode)", ""]
+    lines.append("| row | " + " | ".join(f"ε = {e:g}" for e in epsilons) + " |")
+    lines.append("|---|" + "---:|" * len(epsilons))
+    for row in table.rows:
+        cells = []
+        for epsilon in epsilons:
+            found = [o for o in table.outcomes if o.row == row.name and o.epsilon == epsilon]
+            cells.append(f"{found[0].harms:.4f}, {found[0].robot_harmed:.4f}, {found[0].survival:.1f}" if found else "—")
+        lines.append(f"| `{row.name}` | " + " | ".join(cells) + " |")
+    lagrangian = [o for o in table.outcomes if o.row == "dqn_lagrangian"]
+    if lagrangian:
+        lines += ["", "The Lagrangian's multiplier:", ""]
+        for o in lagrangian:
+            value = "none" if o.multiplier is None else f"{o.multiplier:.4g}"
+            lines.append(f"* ε = {o.epsilon:g}: λ = {value} ({o.note}).")
+    for epsilon in epsilons:
+        classes = equivalence_classes(table, epsilon)
+        lines += ["", f"## Groups with one optimum at ε = {epsilon:g}", ""]
+        lines += ["| group | rows | harms | robot harmed | survival |", "|---|---|---:|---:|---:|"]
+        for index, members in enumerate(classes):
+            o = table.outcome(members[0], epsilon)
+            names = ", ".join(f"`{m}`" for m in members)
+            lines.append(f"| {_letter(index)} | {names} | {o.harms:.4f} | {o.robot_harmed:.4f} | {o.survival:.1f} |")
+        if len(classes) > 1:
+            lines += ["", "States where two groups' greedy policies differ, of those reachable under either:", ""]
+            lines.append("| | " + " | ".join(_letter(j) for j in range(1, len(classes))) + " |")
+            lines.append("|---|" + "---:|" * (len(classes) - 1))
+            for i in range(len(classes) - 1):
+                cells = []
+                for j in range(1, len(classes)):
+                    pair = table.pair(classes[i][0], classes[j][0], epsilon)
+                    cells.append(f"{pair.differing_states} / {pair.reachable_states}" if pair is not None and j > i else "")
+                lines.append(f"| {_letter(i)} | " + " | ".join(cells) + " |")
+    if table.omitted:
+        lines += ["", "## Not in the table", ""]
+        lines += [f"* `{o.method}`: {o.reason}." for o in table.omitted]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m empathy_zoo.separation", description=main.__doc__)
+    parser.add_argument("env", nargs="?", default="coexistence_v0")
+    parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
+    parser.add_argument("--out", type=Path, default=OUT, help=f"folder of the files (default {OUT})")
+    args = parser.parse_args(argv)
+    kwargs: dict[str, int | str] = {}
+    for item in args.arguments:
+        key, equals, value = item.partition("=")
+        if not equals:
+            parser.error(f"{item!r} is not ARG=VALUE")
+        kwargs[key] = int(value) if value.isdigit() else value
+    table = separation_table(tabular_model(args.env, **kwargs))
+    args.out.mkdir(parents=True, exist_ok=True)
+    name = file_name(args.env, kwargs)
+    for suffix, text in ((".json", to_json(table)), (".md", to_markdown(table))):
+        path = args.out / f"{name}{suffix}"
+        partial = path.with_suffix(suffix + ".partial")
+        partial.write_text(text, encoding="utf-8")
+        partial.replace(path)
+        print(path)
