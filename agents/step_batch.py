@@ -71,6 +71,17 @@ class StepBatch(ClosestOther):
     """(K, M) int64: the same code of the stepwise inaction baseline: the state the step would
     have ended in had the learner taken the no-op (action 4) and every other agent done what it
     did; filled with :attr:`state_after`."""
+    position: np.ndarray | None = None
+    """(K, M, 2) int64: the learner's cell, ``(row, column)``, at the end of the step (before any
+    autoreset), ``(−1, −1)`` where it is no longer in the environment; the trainer fills it from the
+    engine (``None`` when the driver does not say)."""
+    others_position: np.ndarray | None = None
+    """(K, M, O, 2) int64: each other agent's cell at the end of the step, ``(−1, −1)`` for one no
+    longer in the environment (a harmed cat); filled with :attr:`position`."""
+    others_distance: np.ndarray | None = None
+    """(K, M, O) int64: the torus (Manhattan) distance between the learner's cell and each other
+    agent's at the end of the step, as the engine measures closeness (SPEC §3b), −1 where either
+    is no longer in the environment; filled with :attr:`position`."""
     costs: np.ndarray | None = None
     """(K, M) float32: the cost of each step that the run's reward transform prices when the step
     is sampled, not when it is stored (``priced_at_sample``, :mod:`agents.rewards`; the Lagrangian
@@ -94,6 +105,16 @@ class StepBatch(ClosestOther):
             return self.rewards
         prices = np.asarray(self.prices, dtype=np.float32)[:, None]
         return (self.rewards - prices * np.asarray(self.costs, dtype=np.float32)).astype(np.float32)
+
+    @property
+    def other_position(self) -> np.ndarray | None:
+        """(K, M, 2) :attr:`others_position` of the closest other agent (``None`` without them)."""
+        return None if self.others_position is None else self.of_closest(self.others_position)
+
+    @property
+    def other_distance(self) -> np.ndarray | None:
+        """(K, M) :attr:`others_distance` of the closest other agent (``None`` without them)."""
+        return None if self.others_distance is None else self.of_closest(self.others_distance)
 
     @property
     def other_rewards(self) -> np.ndarray | None:

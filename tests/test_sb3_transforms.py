@@ -177,3 +177,79 @@ def test_a_sweep_file_trains_sb3_ppo_with_a_harm_penalty_and_the_lagrangian(tmp_
         assert len(run["eval"]) == 2
     assert len(lagrangian["train"]["lambda"]) == len(lagrangian["train"]["survival"]) and "lambda" not in harm["train"]
     assert all(value >= 0 for value in lagrangian["train"]["lambda"])
+
+
+# ---------------------------------------------------------------------------- cells and distances
+def cells_after(env: str, positions: dict, fixed: dict, action: int, **kwargs: Any) -> Any:
+    """The learner's batch of one step from hand-placed agents, with the cells the trainer adds."""
+    from helpers_placed import placed, step
+
+    from empathy_zoo.training.ensemble import AgentCells
+
+    venv = placed(env, positions, fixed, **kwargs)
+    cells = AgentCells(venv)
+    return cells.fill(step(venv, action)[1])
+
+
+@pytest.mark.parametrize(
+    "robot, cat, action, after, cat_after, distance",
+    [
+        ((3, 3), (3, 6), 3, (3, 4), (3, 6), 2),  # right, beside no one
+        ((0, 0), (4, 6), 4, (0, 0), (4, 6), 4),  # across both edges of the torus: 3 rows + 1 column
+        ((2, 3), (4, 3), 1, (3, 3), (-1, -1), -1),  # down beside the cat: harmed, it has left
+    ],
+)
+def test_the_batch_gives_the_cells_and_torus_distance_at_the_end_of_the_step(robot, cat, action, after, cat_after, distance):
+    batch = cells_after("coexistence_v0", {"robot_0": robot, "cat_0": cat}, {"cat_0": "stay"}, action)
+    assert batch.position.tolist() == [[list(after)]]
+    assert batch.others_position.tolist() == [[[list(cat_after)]]]
+    assert batch.others_distance.tolist() == [[[distance]]]
+    assert batch.other_distance.tolist() == [[distance]] and batch.other_position.tolist() == [[list(cat_after)]]
+    assert int(batch.harms[0, 0]) == (distance == -1)
+
+
+def test_the_cells_are_taken_before_the_autoreset_and_for_every_other() -> None:
+    cut = cells_after("coexistence_v0", {"robot_0": (3, 3), "cat_0": (3, 6)}, {"cat_0": "stay"}, 3, max_cycles=1)
+    assert bool(cut.truncated[0, 0]) and cut.position.tolist() == [[[3, 4]]] and cut.others_distance.tolist() == [[[2]]]
+    two = cells_after(
+        "sharing_v0",
+        {"robot_0": (0, 0), "human_0": (0, 2), "human_1": (3, 3)},
+        {"human_0": "stay", "human_1": "stay"},
+        4,
+        env_kwargs={"num_humans": 2},
+        batteries=[(5, 5)],
+    )
+    assert two.others_position.tolist() == [[[[0, 2], [3, 3]]]]
+    assert two.others_distance.tolist() == [[[2, 6]]] and two.other_distance.tolist() == [[2]]
+
+
+@dataclass(frozen=True)
+class NeedsCells:
+    """Refuses a step without the cells (so a run that finishes was given them every step)."""
+
+    name: ClassVar[str] = "needs_cells"
+
+    def __call__(self, batch: Any) -> np.ndarray:
+        assert batch.others_distance is not None and batch.others_distance.shape == batch.rewards.shape + (1,)
+        assert batch.position is not None and ((batch.position >= 0) | (batch.terminated[..., None])).all()
+        return batch.rewards
+
+
+CELLS_PPO = with_transform(SB3_PPO, NeedsCells(), name="sb3_ppo_needs_cells")
+
+
+@needs_sb3
+def test_the_trainer_gives_every_step_the_cells(tmp_path: Path) -> None:
+    from empathy_zoo.experiment.model import RunSpec
+
+    spec = RunSpec.of(
+        env="coexistence_v0",
+        method="test_sb3_transforms:CELLS_PPO",
+        settings={"algorithm_kwargs": PPO_SMALL, "batch_size": 16},
+        steps=100,
+        eval_interval=100,
+        eval_episodes=1,
+        env_kwargs={"max_cycles": 30},
+    )
+    (path,) = train_runs([spec], tmp_path, OPTIONS)
+    assert len(json.loads(Path(path).read_text())["train"]["survival"]) >= 3

@@ -3,10 +3,11 @@
 :func:`train_ensemble` trains the runs of one ensemble (same env, learner and shared settings)
 step by step: the learner acts for every run at once, the vector env steps every run's
 environment, and :func:`learner_batch` hands the learner what happened, unshaped (with the
-stepwise inaction baseline of :mod:`baselines.inaction_baseline` when a reward transform needs
-it). It resumes from the ensemble's checkpoint, evaluates greedily every ``eval_interval``
-steps, and writes one result file per run (atomically) at the end, with the run's trained agent
-beside it (:mod:`empathy_zoo.agent_file`) when its learner keeps one. A run's numbers depend only
+agents' cells and distances at the end of the step, :class:`AgentCells`, and the stepwise inaction
+baseline of :mod:`baselines.inaction_baseline` when a reward transform needs it). It resumes from
+the ensemble's checkpoint, evaluates greedily every ``eval_interval`` steps, and writes one
+result file per run (atomically) at the end, with the run's trained agent beside it
+(:mod:`empathy_zoo.agent_file`) when its learner keeps one. A run's numbers depend only
 on its own spec.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +27,7 @@ from agents.rewards import TrainRewards
 from baselines.inaction_baseline import InactionBaseline
 from empathy_zoo.agent_file import agent_bytes
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.grid import torus_distance
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
@@ -47,7 +50,7 @@ from empathy_zoo.training.resume import checkpoint_path, remove_checkpoint, writ
 from empathy_zoo.training.tracking import LOG_INTERVAL, EnsembleTracker, open_tracker
 from empathy_zoo.vector import VectorEnv, VectorStep
 
-__all__ = ["train_ensemble", "learner_batch", "STREAM_ENV"]
+__all__ = ["train_ensemble", "learner_batch", "AgentCells", "STREAM_ENV"]
 
 STREAM_ENV = STREAMS["train_env"]
 CHECKPOINT_KEYS: dict[str, type | tuple[type, ...]] = {
@@ -165,6 +168,7 @@ def _train_ensemble(
                 f"{type(learner).__name__} cannot (it has no price_costs)"
             )
         price_costs(priced)
+    cells = AgentCells(venv)
     inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
     logs = [_EpisodeLog(bool(p)) for p in priced]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
@@ -215,7 +219,7 @@ def _train_ensemble(
     while step < total:
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
-        batch = learner_batch(obs, actions, result)
+        batch = cells.fill(learner_batch(obs, actions, result))
         if inaction is not None:
             batch = inaction.fill(batch)
         trained = train_rewards(batch)
@@ -377,6 +381,44 @@ def learner_batch(obs: np.ndarray, actions: np.ndarray, result: VectorStep) -> S
         truncated=result.learner_truncated,
         others_rewards=result.others_rewards,
     )
+
+
+class AgentCells:
+    """The cells of the learner and of its other agents at the end of every step of ``venv``, and
+    their torus distances, as the engine holds them before any autoreset: it watches ``venv``'s
+    engine steps (:meth:`empathy_zoo.vector.VectorEnv.watch_engine`) from its construction on, and
+    :meth:`fill` puts the last step's into a :class:`StepBatch` (``position``, ``others_position``,
+    ``others_distance``; one learner, one environment per run)."""
+
+    def __init__(self, venv: VectorEnv) -> None:
+        self._learner = int(venv.learner_index[0])
+        self._others = np.asarray(venv.engine.other_agents[self._learner], dtype=np.int64)
+        self._size = venv.engine.size
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
+        """The cells ``(N, A, 2)`` and presence ``(N, A)`` at the end of the last step, until :meth:`fill` takes them."""
+        venv.watch_engine(self)
+
+    def before_engine_step(self, engine: Any, actions: np.ndarray) -> None:
+        """Nothing: the cells are read after the step (:class:`empathy_zoo.vector.EngineWatcher`)."""
+
+    def after_engine_step(self, engine: Any, actions: np.ndarray, events: Any) -> None:
+        """Keep the cells and presence the step ended with (:class:`empathy_zoo.vector.EngineWatcher`)."""
+        self._last = (np.array(engine.pos, dtype=np.int64), engine.present.copy())
+
+    def fill(self, batch: StepBatch) -> StepBatch:
+        """``batch`` (of the step just taken) with the learner's and the others' cells and their
+        torus distances, ``(−1, −1)`` and −1 for an agent no longer in the environment."""
+        if self._last is None:
+            raise RuntimeError("no engine step has been watched since the last fill()")
+        pos, present = self._last
+        self._last = None
+        own, others = pos[:, self._learner], pos[:, self._others]
+        own_present, others_present = present[:, self._learner], present[:, self._others]
+        distance = torus_distance(own[:, None, :], others, self._size).astype(np.int64)
+        distance[~(own_present[:, None] & others_present)] = -1
+        own = np.where(own_present[:, None], own, -1)
+        others = np.where(others_present[:, :, None], others, -1)
+        return replace(batch, position=own[:, None], others_position=others[:, None], others_distance=distance[:, None])
 
 
 def _optional(learner: Any, name: str) -> Callable[..., Any] | None:
