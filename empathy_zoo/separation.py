@@ -22,6 +22,8 @@ every pair of methods whether their optimal policies differ. Built on
 * `dqn_lagrangian`: `Q*` of the reward − λ per harm, λ the dual optimum for d harms per episode at ε
   (bisection on a log scale; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
 * `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values`, the paper's rules only.
+* `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
+  inaction baseline (:mod:`empathy_zoo.separation_reachability`), the paper's rules only.
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -50,6 +52,7 @@ from empathy_zoo.engine.coexistence import RULE_SETS
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.exact_solver import TabularModel, empathic_values, episode_steps, optimal_values, outcome
 from empathy_zoo.reference import greedy_policy
+from empathy_zoo.separation_reachability import relative_reachability_reward
 
 __all__ = [
     "SELFISHNESS",
@@ -82,7 +85,6 @@ OMISSIONS = (
         "its exact penalty tables live in tests/test_aup_calibration.py; "
         "they depend on each run's seed (30 random auxiliary rewards)",
     ),
-    ("dqn_relative_reachability", "no exact optimum of its penalised reward is built yet"),
 )
 
 
@@ -270,20 +272,21 @@ def lagrangian_multiplier(
     return high
 
 
-def _rows(considerate: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
+def _rows(paper: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
     """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β."""
     marks = {name: METHODS[name].identical_to.get("coexistence_v0") for name in ("dqn_silver_literal", "dqn_equality")}
     rows = [Row("dqn", "dqn", None, "", "")]
     rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
     rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
-    rows += [Row("dqn_considerate", "dqn_considerate", None, "", "")] if considerate else []
+    rows += [Row(name, name, None, "", "") for name in ("dqn_considerate", "dqn_relative_reachability") if paper]
     for method in ("empathic_dqn", "empathic_dqn_in_view", "empathic_dqn_silver"):
         rows += [Row(f"{method} β={beta:g}", method, beta, "", "") for beta in selfishness]
     return tuple(rows)
 
 
 def _paper_rules(model: TabularModel) -> bool:
-    """Whether the model's engine plays the paper's rules (what Be Considerate's exact module models)."""
+    """Whether the model's engine plays the paper's rules (what Be Considerate's exact module and
+    the reachability table model)."""
     engine = ENGINES[model.env](1, **model.env_kwargs)
     return model.env == "coexistence_v0" and getattr(engine, "options", None) == RULE_SETS["paper"]
 
@@ -308,11 +311,13 @@ def separation_table(
 ) -> SeparationTable:
     """The :class:`SeparationTable` of ``model`` (see the module page)."""
     cycles = episode_steps(model)
-    considerate = _paper_rules(model)
-    rows = _rows(considerate, tuple(float(beta) for beta in selfishness))
+    paper = _paper_rules(model)
+    rows = _rows(paper, tuple(float(beta) for beta in selfishness))
     q = optimal_values(model, gamma)
     penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
     values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
+    if paper:
+        values["dqn_relative_reachability"] = optimal_values(model, gamma, reward=relative_reachability_reward(model))
     for row in rows:
         if row.selfishness is not None:
             rule = {"empathic_dqn": empathic_values, "empathic_dqn_in_view": in_view_values, "empathic_dqn_silver": silver_values}
@@ -327,7 +332,7 @@ def separation_table(
         price = LAMBDA_RANGE[1] if multiplier is None else multiplier
         policies["dqn_lagrangian"] = greedy_policy(_lagrangian_values(model, price, gamma, q))
         notes["dqn_lagrangian"] = _lagrangian_note(multiplier, cost_limit)
-        if considerate:
+        if paper:
             try:
                 policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma)
             except RuntimeError:  # no joint fixed point of the robot's optimum and the cat's value
@@ -361,8 +366,9 @@ def separation_table(
             )
     names = {o.row for o in outcomes}
     omitted = [Omission(m, why) for m, why in OMISSIONS]
-    if not considerate:
+    if not paper:
         omitted.append(Omission("dqn_considerate", "its exact module models the paper's rules only"))
+        omitted.append(Omission("dqn_relative_reachability", "its exact reachability table is built from the paper's rules"))
     elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):
         omitted.append(Omission("dqn_considerate", "at some ε its optimum and the cat's value find no joint fixed point"))
     return SeparationTable(

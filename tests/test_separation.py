@@ -21,6 +21,7 @@ from empathy_zoo.separation import (
     separation_table,
     silver_values,
 )
+from empathy_zoo.separation_reachability import NO_OP, relative_reachability_reward
 from empathy_zoo.separation_render import equivalence_classes, from_json, to_json, to_markdown
 
 RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
@@ -80,6 +81,16 @@ def test_the_harm_penalty_optimum_never_harms_at_epsilon_zero(paper) -> None:
 
 def test_q_star_of_the_models_own_reward_is_unchanged(paper) -> None:
     assert np.array_equal(optimal_values(paper), optimal_values(paper, reward=paper.reward))
+
+
+def test_relative_reachability_charges_no_op_nothing_and_a_harm_most(paper) -> None:
+    shaped = relative_reachability_reward(paper)
+    charged = paper.reward - shaped
+    assert np.array_equal(shaped[:, NO_OP, :], paper.reward[:, NO_OP, :])  # the baseline's own action
+    assert charged.min() >= 0.0 and not charged[paper.robot_harmed].any()
+    still = ~paper.other_harmed[:, NO_OP : NO_OP + 1, :] & ~paper.robot_harmed[:, NO_OP : NO_OP + 1, :]
+    harming = paper.other_harmed & ~paper.robot_harmed & still & (paper.start > 0)[:, None, None]  # the no-op: both stay
+    assert charged[harming].min() > 90.0 > 1.0 > charged[~paper.other_harmed & ~paper.robot_harmed].max()
 
 
 def test_the_lagrangian_bisection_finds_the_step_of_a_stated_harm_curve() -> None:
