@@ -37,7 +37,6 @@ the same policy on those states have the same outcome.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -47,17 +46,16 @@ from baselines.considerate_exact import considerate_values
 from baselines.lagrangian import Lagrangian
 from baselines.registry import METHODS
 from baselines.shaping import HARM_PENALTY
-from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine.coexistence import RULE_SETS
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.exact_solver import TabularModel, empathic_values, episode_steps, optimal_values, outcome
 from empathy_zoo.reference import greedy_policy
+from empathy_zoo.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from empathy_zoo.separation_reachability import relative_reachability_reward
 
 __all__ = [
     "SELFISHNESS",
     "EPSILONS",
-    "LAMBDA_RANGE",
     "Row",
     "RowOutcome",
     "Pair",
@@ -68,15 +66,12 @@ __all__ = [
     "in_view_values",
     "reachable_states",
     "policies_differ",
-    "lagrangian_multiplier",
 ]
 
 SELFISHNESS = (0.75, 0.5, 0.25, 0.0)
 """β of the empathic rows (β = 1 is DQN)."""
 EPSILONS = (0.0, 0.01, 0.05)
 """Exploration rates of the outcomes."""
-LAMBDA_RANGE = (1e-12, 1e4)
-"""Where the Lagrangian's multiplier is searched (λ above 0 and at most 10⁴)."""
 POLICY_TOLERANCE = 1e-12
 """Action probabilities closer than this count as equal."""
 OMISSIONS = (
@@ -250,28 +245,6 @@ def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.nd
     return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
 
 
-def _acting(greedy: np.ndarray, epsilon: float) -> np.ndarray:
-    """The ε-greedy policy of a greedy one."""
-    return epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy
-
-
-def lagrangian_multiplier(
-    harms_at: Callable[[float], float], cost_limit: float, *, low: float = LAMBDA_RANGE[0], high: float = LAMBDA_RANGE[1]
-) -> float | None:
-    """The least λ (to a relative 10⁻³, by bisection on ``log λ``) at which ``harms_at(λ)`` is at
-    most ``cost_limit``: 0 when ``harms_at(0)`` is, ``None`` when ``harms_at(high)`` is not."""
-    if harms_at(0.0) <= cost_limit:
-        return 0.0
-    if harms_at(high) > cost_limit:
-        return None
-    if harms_at(low) <= cost_limit:
-        return low
-    while high / low > 1.001:
-        middle = math.sqrt(low * high)
-        low, high = (low, middle) if harms_at(middle) <= cost_limit else (middle, high)
-    return high
-
-
 def _rows(paper: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
     """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β."""
     marks = {name: METHODS[name].identical_to.get("coexistence_v0") for name in ("dqn_silver_literal", "dqn_equality")}
@@ -328,10 +301,10 @@ def separation_table(
     for epsilon in epsilons:
         policies = dict(fixed)
         notes: dict[str, str] = {}
-        multiplier = _lagrangian(model, epsilon, gamma, cost_limit, cycles)
+        multiplier = lagrangian_dual(model, epsilon, gamma, cost_limit, cycles)
         price = LAMBDA_RANGE[1] if multiplier is None else multiplier
-        policies["dqn_lagrangian"] = greedy_policy(_lagrangian_values(model, price, gamma, q))
-        notes["dqn_lagrangian"] = _lagrangian_note(multiplier, cost_limit)
+        policies["dqn_lagrangian"] = greedy_policy(lagrangian_values(model, price, gamma, q))
+        notes["dqn_lagrangian"] = lagrangian_note(multiplier, cost_limit)
         if paper:
             try:
                 policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma)
@@ -342,7 +315,7 @@ def separation_table(
                 policies[row.name] = policies[row.identical_to]
                 notes[row.name] = f"identical to {row.identical_to} by construction: {row.reason}"
         here = [r for r in rows if r.name in policies]
-        result = {r.name: outcome(model, _acting(policies[r.name], epsilon), cycles) for r in here}
+        result = {r.name: outcome(model, epsilon_greedy(policies[r.name], epsilon), cycles) for r in here}
         for r in here:
             lam = multiplier if r.name == "dqn_lagrangian" else None
             o = result[r.name]
@@ -393,35 +366,6 @@ def _by_construction(a: Row, b: Row) -> str:
     if a.identical_to and a.identical_to == b.identical_to:
         return f"both are {a.identical_to}: {a.reason}; {b.reason}"
     return ""
-
-
-def _lagrangian_values(model: TabularModel, multiplier: float, gamma: float, q: np.ndarray) -> np.ndarray:
-    """``Q*`` of the reward − λ per harm (``Q*`` itself at λ = 0)."""
-    return q if multiplier == 0.0 else optimal_values(model, gamma, reward=model.reward - multiplier * model.other_harmed)
-
-
-def _lagrangian(model: TabularModel, epsilon: float, gamma: float, cost_limit: float, cycles: int) -> float | None:
-    """The Lagrangian's λ at ε (:func:`lagrangian_multiplier`)."""
-    q = optimal_values(model, gamma)
-
-    def harms_at(multiplier: float) -> float:
-        policy = greedy_policy(_lagrangian_values(model, multiplier, gamma, q))
-        return outcome(model, _acting(policy, epsilon), cycles).harms
-
-    return lagrangian_multiplier(harms_at, cost_limit)
-
-
-def _lagrangian_note(multiplier: float | None, cost_limit: float) -> str:
-    """What the Lagrangian's row shows at its λ."""
-    if multiplier is None:
-        top = f"{LAMBDA_RANGE[1]:g}"
-        return (
-            f"no λ ≤ {top} meets {cost_limit:g} harms per episode: Q* prices a harm as the greedy robot meets it, "
-            f"not as its ε-greedy exploration does; shown at λ = {top}"
-        )
-    if multiplier == 0.0:
-        return f"λ = 0 meets {cost_limit:g} harms per episode: DQN itself"
-    return f"the least λ meeting {cost_limit:g} harms per episode, to a relative 10⁻³"
 
 
 if __name__ == "__main__":

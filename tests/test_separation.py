@@ -16,11 +16,11 @@ from empathy_zoo.reference import coexistence_optimum, greedy_policy
 from empathy_zoo.separation import (
     EPSILONS,
     in_view_values,
-    lagrangian_multiplier,
     policies_differ,
     separation_table,
     silver_values,
 )
+from empathy_zoo.separation_lagrangian import lagrangian_multiplier
 from empathy_zoo.separation_reachability import NO_OP, relative_reachability_reward
 from empathy_zoo.separation_render import equivalence_classes, from_json, to_json, to_markdown
 
