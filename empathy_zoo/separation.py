@@ -20,7 +20,7 @@ every pair of methods whether their optimal policies differ. Built on
   `o = γ·present'·V*(swap(s'))` (:mod:`baselines.silver_rule`).
 * `dqn_harm_penalty`: `Q*` of the reward − 100 per harm.
 * `dqn_lagrangian`: `Q*` of the reward − λ per harm, λ the dual optimum for d harms per episode at ε
-  (bisection on a log scale; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
+  (:mod:`empathy_zoo.separation_lagrangian`; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
 * `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values`, the paper's rules only.
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
   inaction baseline (:mod:`empathy_zoo.separation_reachability`), the paper's rules only.
@@ -182,8 +182,11 @@ class SeparationTable:
         return tuple(dict.fromkeys(o.epsilon for o in self.outcomes))
 
     def outcome(self, row: str, epsilon: float) -> RowOutcome:
-        """The outcome of ``row`` at ``epsilon``."""
-        return next(o for o in self.outcomes if o.row == row and o.epsilon == epsilon)
+        """The outcome of ``row`` at ``epsilon`` (``KeyError`` when the table has none)."""
+        found = [o for o in self.outcomes if o.row == row and o.epsilon == epsilon]
+        if not found:
+            raise KeyError(f"no outcome of {row!r} at ε = {epsilon:g}")
+        return found[0]
 
     def pair(self, first: str, second: str, epsilon: float) -> Pair | None:
         """The comparison of two rows at ``epsilon`` in either order (``None`` for a row with itself)."""

@@ -12,7 +12,7 @@ import pytest
 
 from baselines.shaping import HARM_PENALTY
 from empathy_zoo.exact_solver import episode_steps, optimal_values, optimum, outcome, tabular_model
-from empathy_zoo.reference import coexistence_optimum, greedy_policy
+from empathy_zoo.reference import TIE_TOLERANCE, coexistence_optimum, greedy_policy
 from empathy_zoo.separation import (
     EPSILONS,
     in_view_values,
@@ -105,7 +105,9 @@ def test_the_lagrangian_bisection_finds_the_step_of_a_stated_harm_curve() -> Non
 
 def test_the_lagrangian_rows_say_which_case_they_are(committed) -> None:
     at = {e: committed.outcome("dqn_lagrangian", e) for e in EPSILONS}
-    assert at[0.0].multiplier is not None and 0.0 < at[0.0].multiplier < 1e-5 and at[0.0].harms == 0.0
+    # avoiding the cat costs Q* nothing, and a harming move harms with chance 1/5 at least: the
+    # greedy policy drops every harm once λ/5 exceeds the tie tolerance, at λ = 5·TIE_TOLERANCE
+    assert 5 * TIE_TOLERANCE < at[0.0].multiplier <= 5 * TIE_TOLERANCE * 1.001 and at[0.0].harms == 0.0
     assert at[0.01].harms <= committed.cost_limit
     assert at[0.05].multiplier is None and at[0.05].harms > committed.cost_limit and "no λ" in at[0.05].note
 
