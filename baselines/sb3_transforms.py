@@ -99,12 +99,15 @@ def from_baseline(sb3: Method, baseline: Method) -> Method:
     if baseline.reward is None:
         raise ValueError(f"{baseline.name!r} has no reward transform to compose with {sb3.name!r}")
     own = _sb3_label(sb3)
+    description = baseline.description.replace("DQN", own, 1)
+    if is_priced(baseline.reward):
+        description += f"; {own} charges each rollout's costs at the run's price when it trains on it"
     return with_transform(
         sb3,
         baseline.reward,
         name=sb3_name(sb3, baseline.name),
         label=_relabelled(baseline.label, own) if baseline.label is not None else None,
-        description=baseline.description.replace("DQN", own, 1),
+        description=description,
         identical_to={
             env: (sb3.name if other == "dqn" else other, why.replace("DQN", own))
             for env, (other, why) in baseline.identical_to.items()

@@ -253,3 +253,56 @@ def test_the_trainer_gives_every_step_the_cells(tmp_path: Path) -> None:
     )
     (path,) = train_runs([spec], tmp_path, OPTIONS)
     assert len(json.loads(Path(path).read_text())["train"]["survival"]) >= 3
+
+
+@needs_sb3
+def test_a_priced_ppo_run_continues_exactly_from_its_checkpoint() -> None:
+    import io
+
+    import torch
+
+    straight = drive("ppo", Lagrangian(lambda_init=3.0), 40, PPO_SMALL)  # mid-rollout: costs kept beside the rewards
+    state = io.BytesIO()
+    torch.save(straight.state_dict(), state)
+    state.seek(0)
+    resumed = SB3Learner([SB3Settings(algorithm="ppo", algorithm_kwargs=PPO_SMALL, batch_size=16)], [0], 25, 5)
+    resumed.price_costs([True])
+    resumed.load_state_dict(torch.load(state, weights_only=True))
+    a, b = straight._runs[0], resumed._runs[0]
+    np.testing.assert_array_equal(getattr(a, "costs"), getattr(b, "costs"))
+    assert getattr(a, "price") == getattr(b, "price") == 3.0
+    unpriced = SB3Learner([SB3Settings(algorithm="ppo", algorithm_kwargs=PPO_SMALL, batch_size=16)], [0], 25, 5)
+    with pytest.raises(ValueError, match="pricing costs"):
+        unpriced.load_state_dict(straight.state_dict())
+
+
+MARKED = sorted(
+    (name, env) for name, method in SB3_TRANSFORM_METHODS.items() for env in method.identical_to if name.startswith("sb3_ppo")
+)
+
+
+@needs_sb3
+@pytest.mark.parametrize("name, env", MARKED)
+def test_every_mark_of_identity_is_true_seed_for_seed(tmp_path: Path, name: str, env: str) -> None:
+    from empathy_zoo.experiment.model import RunSpec
+
+    other, why = SB3_TRANSFORM_METHODS[name].identical_to[env]
+    assert other == "sb3_ppo" and why
+    reward = {"bonus_starts": 64, "learning_starts": 32} if name.endswith("considerate") else None
+    specs = [
+        RunSpec.of(
+            env=env,
+            method=method,
+            settings={"algorithm_kwargs": PPO_SMALL, "batch_size": 16},
+            reward=reward if method == name else None,
+            steps=160,
+            eval_interval=160,
+            eval_episodes=1,
+            env_kwargs={"max_cycles": 40} if env == "coexistence_v0" else {},
+            seed=2,
+        )
+        for method in (name, other)
+    ]
+    shaped, plain = (json.loads(Path(p).read_text()) for p in train_runs(specs, tmp_path, OPTIONS))
+    shaped["train"].pop("lambda", None)
+    assert (shaped["train"], shaped["eval"]) == (plain["train"], plain["eval"])
