@@ -306,3 +306,20 @@ def test_every_mark_of_identity_is_true_seed_for_seed(tmp_path: Path, name: str,
     shaped, plain = (json.loads(Path(p).read_text()) for p in train_runs(specs, tmp_path, OPTIONS))
     shaped["train"].pop("lambda", None)
     assert (shaped["train"], shaped["eval"]) == (plain["train"], plain["eval"])
+
+
+@pytest.mark.parametrize(
+    "method, named, says",
+    [
+        ("sb3_ppo", "harm_penalty", 'write method = "sb3_ppo_harm_penalty"'),
+        ("sb3_dqn", "dqn_aup", 'write method = "sb3_dqn_aup"'),
+        ("dqn", "lagrangian", 'write method = "dqn_lagrangian"'),
+        ("sb3_dqn", "lagrangian", "sb3_dqn_lagrangian is not a method: SB3 DQN cannot"),
+        ("sb3_ppo", "envy", "empathy-zoo methods` lists the compositions"),
+    ],
+)
+def test_a_transform_named_beside_a_learner_points_to_the_composed_method(method: str, named: str, says: str) -> None:
+    sweep = {"envs": {"coexistence_v0": {}}, "methods": [{"method": method, "reward": named}]}
+    with pytest.raises(SweepConfigError, match=r"mine\.toml: \[\[methods\]\] #1 .* reward: a method's reward transform") as error:
+        parse_sweep(sweep, source="mine.toml")
+    assert says in str(error.value)

@@ -70,7 +70,8 @@ from pathlib import Path
 from typing import Any
 
 from agents.rewards import transform_config, transform_fields
-from baselines.registry import get_method
+from baselines.registry import METHODS, get_method
+from baselines.sb3_transforms import SB3_REFUSED
 from empathy_zoo.engine.arguments import argument_types, own_arguments
 from empathy_zoo.environments import ENGINES, default_policies
 from empathy_zoo.experiment.model import Budget, EnvVariant, MethodEntry, RunSpec
@@ -293,6 +294,8 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
     # the transform's fields that are keys of their own (a setting of the same name keeps its key)
     flat = {key: kind for key, kind in reward_types.items() if key not in types and key not in METHOD_KEYS}
     has_table = bool(reward_types) and REWARD_TABLE not in types
+    if isinstance(entry.get(REWARD_TABLE), str) and REWARD_TABLE not in types:
+        raise SweepConfigError(f"{where} {REWARD_TABLE}: {_composed_hint(name, entry[REWARD_TABLE])}")
     for key in entry:
         if key not in METHOD_KEYS and key not in types and key not in flat and not (key == REWARD_TABLE and has_table):
             raise SweepConfigError(f"{where}: unknown key {key!r}; {_method_keys(method, types, reward_types)}")
@@ -344,6 +347,21 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         "grid": grid,
         "swept_reward": swept,
     }
+
+
+def _composed_hint(method: str, transform: str) -> str:
+    """Why ``reward = "<transform>"`` names no transform, and the registered method that composes
+    ``method``'s learner with it, where there is one (``sb3_ppo`` and ``harm_penalty``: ``sb3_ppo_harm_penalty``)."""
+    composed = f"{method}_{transform.removeprefix('dqn_')}"
+    text = (
+        "a method's reward transform is part of the method (a registered method composes a learner with "
+        f"one); {REWARD_TABLE} holds the transform's fields, as {REWARD_TABLE}.<field> = value"
+    )
+    if composed in METHODS:
+        return f'{text}: write method = "{composed}"'
+    if composed in SB3_REFUSED:
+        return f"{text}; {SB3_REFUSED[composed]}"
+    return f"{text}; `empathy-zoo methods` lists the compositions (sb3_ppo_<name>, sb3_dqn_<name>, dqn_<name>)"
 
 
 def _method_keys(method: Any, types: Mapping[str, Any], reward_types: Mapping[str, Any]) -> str:
