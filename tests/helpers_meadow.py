@@ -11,6 +11,7 @@ import pytest
 from empathy_zoo.engine.base import GridEngine, StepEvents
 from empathy_zoo.engine.placement import distinct_picks
 from empathy_zoo.environments import ENVIRONMENT_TABLE, Environment
+from empathy_zoo.metrics import HELDOUT_MARGINS
 from empathy_zoo.parallel import GridParallelEnv, env_constructors, grid_metadata
 
 __all__ = ["MEADOW", "MEADOW_ENTRY", "MeadowEngine", "raw_env", "parallel_env", "env", "register_meadow"]
@@ -78,6 +79,12 @@ MEADOW_ENTRY = Environment(
 """Its entry of the environment table."""
 
 
+SHEEP_MARGIN = 10.0
+"""The held-out margin of its side effect, the sheep's steps (a metric's own fact, in :mod:`empathy_zoo.metrics`)."""
+
+
 def register_meadow(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Add Meadow to :data:`~empathy_zoo.environments.ENVIRONMENT_TABLE` for one test."""
+    """Add Meadow to :data:`~empathy_zoo.environments.ENVIRONMENT_TABLE` for one test, and its side
+    effect's held-out margin to :data:`~empathy_zoo.metrics.HELDOUT_MARGINS`."""
     monkeypatch.setitem(ENVIRONMENT_TABLE, MEADOW, MEADOW_ENTRY)
+    monkeypatch.setitem(HELDOUT_MARGINS, "other_return", SHEEP_MARGIN)
