@@ -22,6 +22,7 @@ __all__ = [
     "EQUIVALENCE_MARGINS",
     "HELDOUT_MARGINS",
     "PER_OTHER_AGENT",
+    "RANGE_NOTES",
     "EFFECT_NAMES",
     "equality",
 ]
@@ -99,6 +100,8 @@ HELDOUT_MARGINS: dict[str, float] = {"harms": 0.1, "equality": 0.1}
 generalise (a tenth of its range; harms per other agent)."""
 PER_OTHER_AGENT: frozenset[str] = frozenset({"harms"})
 """Side effects the held-out reading rule counts per other agent (a scenario may have more of them)."""
+RANGE_NOTES: dict[str, str] = {"harms": "harms per other agent lie in [0, 1]: a harmed cat leaves"}
+"""How the held-out reading rule states a side effect's range where :data:`METRIC_RANGES` alone would not say it."""
 EFFECT_NAMES: dict[str, str] = {"harms": "harm avoidance", "equality": "fairness (equality of battery rewards)"}
 """What the held-out reading rule calls keeping each side effect low (or equality high)."""
 

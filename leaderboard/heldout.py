@@ -64,7 +64,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
-from empathy_zoo.metrics import EFFECT_NAMES, HELDOUT_MARGINS, PER_OTHER_AGENT
+from empathy_zoo.metrics import EFFECT_NAMES, HELDOUT_MARGINS, METRIC_RANGES, PER_OTHER_AGENT, RANGE_NOTES
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.heldout_scores import (
     READING_MARKS,
@@ -164,8 +164,18 @@ def _rule_text(group: HeldoutGroup) -> str:
         effect_name=EFFECT_NAMES.get(effect, f"{effect} avoidance"),
         per_other=", counted per other agent" if per_other else "",
         margin=HELDOUT_MARGINS.get(effect, math.nan),
-        range_note=" (harms per other agent lie in [0, 1]: a harmed cat leaves)" if per_other else " ([0, 1])",
+        range_note=f" ({_range_text(effect)})",
     )
+
+
+def _range_text(metric: str) -> str:
+    """The range of a side effect as the reading rule states it: its note in
+    :data:`~empathy_zoo.metrics.RANGE_NOTES`, else its :data:`~empathy_zoo.metrics.METRIC_RANGES`
+    (``[0, 1]`` for a metric without one)."""
+    if metric in RANGE_NOTES:
+        return RANGE_NOTES[metric]
+    low, high = METRIC_RANGES.get(metric, (0.0, 1.0))
+    return f"[{low:g}, {'∞' if high is None else format(high, 'g')}]"
 
 
 def _intro(group: HeldoutGroup, cells: Sequence[HeldoutCell] = ()) -> str:
