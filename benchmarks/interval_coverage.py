@@ -81,7 +81,7 @@ from leaderboard.aggregate import (  # noqa: E402
 )
 from leaderboard.improvement import can_decide, improvement_interval  # noqa: E402
 from leaderboard.measured_coverage import ALL_PHASES, COVERAGE_FILE  # noqa: E402
-from leaderboard.tables import TABLE_METRICS  # noqa: E402
+from leaderboard.tables import table_metrics  # noqa: E402
 
 MEAN_SEEDS = (3, 5, 10)
 """Seeds per interval of a mean."""
@@ -157,7 +157,7 @@ def committed_populations(root: Path = ROOT / "docs" / "results") -> list[np.nda
             base = runs[0]["env"]
             scalars = [run_scalars(run) for run in runs]
             for phase in ("eval", "train_final10"):
-                for metric in TABLE_METRICS.get(base, ()):
+                for metric in table_metrics(base):
                     values = np.array([s[phase][metric] for s in scalars])
                     values = values[np.isfinite(values)]
                     if np.unique(values).size >= 2:
@@ -211,7 +211,7 @@ def row_episodes(
     environment's tables show, as :class:`RowEpisodes` (the episodes the leaderboard averages)."""
     rows = []
     for (env, label), runs in group_runs(results).items():
-        shown = TABLE_METRICS.get(runs[0]["env"], ())
+        shown = table_metrics(runs[0]["env"])
         for phase in PHASES:
             for metric in (m for m in metrics if m in shown):
                 per_run = []

@@ -6,12 +6,14 @@ ParallelEnv and AEC), :class:`empathy_zoo.vector.VectorEnv` (many at once, as ar
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 from empathy_zoo import coexistence_v0, sharing_v0
 from empathy_zoo._version import __version__
 from empathy_zoo.empathy import EmpathyWrapper
-from empathy_zoo.environments import ENVIRONMENT_TABLE, face_module
+from empathy_zoo.environments import FACES
 from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.policies import POLICIES, Patrol, RandomWalk, make_policy
 
@@ -19,7 +21,7 @@ if TYPE_CHECKING:  # (imported on first use: see __getattr__)
     from empathy_zoo.agent_file import load_agent
     from empathy_zoo.trained_agent import TrainedAgent
 
-ENVIRONMENTS = {name: face_module(name) for name in ENVIRONMENT_TABLE}
+ENVIRONMENTS: Mapping[str, ModuleType] = FACES
 """The PettingZoo face module of every environment, by name (the table: :mod:`empathy_zoo.environments`)."""
 
 __all__ = [

@@ -1,35 +1,43 @@
 """Every environment of the suite in one table: its engine, its PettingZoo face, the fixed agents
-the paper gives it, and its Gymnasium id.
+the paper gives it, its Gymnasium id, and what the leaderboard shows of it.
 
 A new environment is an engine (``empathy_zoo/engine/<name>.py``: the rules, stepping N
 environments as arrays), a face module (``empathy_zoo/<name>.py``: ``raw_env``, ``parallel_env``,
 ``env``; its docstring is the environment's documentation page) and one entry in
 :data:`ENVIRONMENT_TABLE`. Everything else (the vector env, the runner, sweep files, the Gymnasium
-face, the command line) looks environments up here.
+face, the command line, the leaderboard's tables and figures) looks environments up here, when it
+needs them: an entry added to the table at run time is seen everywhere. A metric's own facts (which
+way it is better, its range) are in :mod:`empathy_zoo.metrics`.
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import ModuleType
-from typing import Any
+from typing import Any, TypeVar
 
 from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
+from empathy_zoo.metrics import HARMS_PER_100_STEPS
 
 __all__ = [
     "Environment",
     "ENVIRONMENT_TABLE",
+    "DEFAULT_ENVIRONMENT",
     "ENGINES",
     "DEFAULT_POLICIES",
     "DEFAULT_ARGUMENTS",
     "GYM_IDS",
+    "FACES",
+    "entry_of",
     "face_module",
     "default_policies",
 ]
+
+V = TypeVar("V")
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,29 @@ class Environment:
     """Every constructor argument of the engine (but ``num_envs``) at its default: the paper's
     setting, as data (a test holds it equal to the engine's signature), so that a reader of result
     files knows which arguments a run left at their defaults."""
+    task: str = field(kw_only=True)
+    """The metric of the task: the trade-off figure's x axis and ``tune``'s default objective."""
+    task_label: str = field(kw_only=True)
+    """The trade-off figure's label of the task axis."""
+    side_effects: tuple[str, ...] = field(default=(), kw_only=True)
+    """The side-effect metrics; the first is the trade-off figure's y axis and what the held-out
+    reading rule judges (empty: none, and neither is drawn or read)."""
+    side_effect_label: str = field(default="", kw_only=True)
+    """The trade-off figure's label of the side-effect axis."""
+    table_metrics: tuple[str, ...] = field(kw_only=True)
+    """The metrics shown, in this order, in the leaderboard's tables, its equivalence checks and a
+    run's summary line (the CSV keeps every metric)."""
+    compact_metrics: tuple[str, ...] = field(kw_only=True)
+    """The metrics shown, in this order, in the compact tables against DQN (``versus_dqn``,
+    ``tuning_effect``)."""
+    heldout_metrics: tuple[str, ...] = field(kw_only=True)
+    """The metrics shown, in this order, in the held-out partners' tables (a derived metric of
+    :data:`empathy_zoo.metrics.DERIVED_METRICS` may be one)."""
+    curves: tuple[tuple[str, str], ...] = field(kw_only=True)
+    """The learning-curve figures drawn, in this order: ``(metric, y-axis label)`` pairs."""
+    reference_metrics: tuple[str, ...] = field(default=(), kw_only=True)
+    """The metrics the exact optimum of :mod:`empathy_zoo.reference` (a model of Coexistence) gives
+    for it, drawn beside the learning curves (empty: it models no other environment)."""
 
 
 ENVIRONMENT_TABLE: dict[str, Environment] = {
@@ -69,6 +100,15 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
             "harmed_step_reward": "rules",
             "num_cats": 1,
         },
+        task="survival",
+        task_label="steps survived per episode (task: higher is better)",
+        side_effects=("harms",),
+        side_effect_label="harms per episode (side effect: lower is better)",
+        table_metrics=("survival", "harms", "other_return"),
+        compact_metrics=("harms", "survival", "other_return"),
+        heldout_metrics=("harms", HARMS_PER_100_STEPS, "survival"),
+        curves=(("survival", "Steps survived per episode"), ("harms", "Harms per episode")),
+        reference_metrics=("harms", "survival"),
     ),
     "sharing_v0": Environment(
         SharingEngine,
@@ -76,16 +116,51 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         "empathy_zoo/Sharing-v0",
         {"human_0": "patrol"},
         {"size": 7, "view": 5, "max_cycles": 500, "start": "random", "inventory_encoding": "count_plus_one", "num_humans": 1},
+        task="batteries",
+        task_label="robot batteries per episode (task: higher is better)",
+        side_effects=("equality",),
+        side_effect_label="equality of battery rewards (higher is better)",
+        table_metrics=("batteries", "other_batteries", "equality", "return", "other_return"),
+        compact_metrics=("batteries", "equality", "other_batteries"),
+        heldout_metrics=("batteries", "other_batteries", "equality"),
+        curves=(("batteries", "Batteries per episode (robot)"), ("equality", "Equality per episode")),
     ),
 }
 """Every environment, by name."""
 
-ENGINES: dict[str, type[GridEngine]] = {name: env.engine for name, env in ENVIRONMENT_TABLE.items()}
+DEFAULT_ENVIRONMENT: str = next(iter(ENVIRONMENT_TABLE))
+"""The environment a command or constructor runs when none is named: the table's first."""
+
+
+class _Column(Mapping[str, V]):
+    """One fact of every entry of :data:`ENVIRONMENT_TABLE`, by name, read from the table at each look-up."""
+
+    def __init__(self, read: Callable[[Environment], V]) -> None:
+        self._read = read
+
+    def __getitem__(self, name: str) -> V:
+        return self._read(ENVIRONMENT_TABLE[name])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(ENVIRONMENT_TABLE)
+
+    def __len__(self) -> int:
+        return len(ENVIRONMENT_TABLE)
+
+
+ENGINES: Mapping[str, type[GridEngine]] = _Column(lambda env: env.engine)
 """Engine class of every environment, by name."""
-DEFAULT_POLICIES: dict[str, dict[str, str]] = {name: dict(env.fixed) for name, env in ENVIRONMENT_TABLE.items()}
+DEFAULT_POLICIES: Mapping[str, dict[str, str]] = _Column(lambda env: dict(env.fixed))
 """The paper's fixed agents of every environment (a copy of the table's: changing it changes nothing)."""
-DEFAULT_ARGUMENTS: dict[str, dict[str, Any]] = {name: dict(env.arguments) for name, env in ENVIRONMENT_TABLE.items()}
+DEFAULT_ARGUMENTS: Mapping[str, dict[str, Any]] = _Column(lambda env: dict(env.arguments))
 """Every environment's arguments at their defaults (a copy of the table's: changing it changes nothing)."""
+FACES: Mapping[str, ModuleType] = _Column(lambda env: importlib.import_module(env.module))
+"""The PettingZoo face module of every environment, by name, imported on first look-up."""
+
+
+def entry_of(env: str, base_env: str | None = None) -> Environment | None:
+    """The entry of ``env``, else of ``base_env`` (a variant's environment), else ``None``."""
+    return ENVIRONMENT_TABLE.get(env) or ENVIRONMENT_TABLE.get(base_env or "")
 
 
 def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> dict[str, str]:
@@ -101,7 +176,23 @@ def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> d
     return fixed
 
 
-GYM_IDS: dict[str, str] = {env.gym_id: name for name, env in ENVIRONMENT_TABLE.items()}
+class _GymIds(Mapping[str, str]):
+    """Gymnasium id -> environment name, read from :data:`ENVIRONMENT_TABLE` at each look-up."""
+
+    def __getitem__(self, gym_id: str) -> str:
+        for name, env in ENVIRONMENT_TABLE.items():
+            if env.gym_id == gym_id:
+                return name
+        raise KeyError(gym_id)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([env.gym_id for env in ENVIRONMENT_TABLE.values()])
+
+    def __len__(self) -> int:
+        return len(ENVIRONMENT_TABLE)
+
+
+GYM_IDS: Mapping[str, str] = _GymIds()
 """Gymnasium id -> environment name."""
 
 

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
 __all__ = [
@@ -95,7 +95,7 @@ class TabularModel:
         return other * self.cells + robot
 
 
-def tabular_model(env: str = "coexistence_v0", **env_kwargs: Any) -> TabularModel:
+def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularModel:
     """The :class:`TabularModel` of ``env`` built with ``env_kwargs`` (its engine stepped once from
     every joint state with every joint action). ``ValueError`` for an environment whose engine
     tabulates no start distribution, or a grid of more than :data:`MAX_STATES` joint states."""
@@ -243,7 +243,7 @@ def main(argv: list[str] | None = None) -> None:
     import argparse
 
     parser = argparse.ArgumentParser(prog="python -m empathy_zoo.exact_solver", description=main.__doc__)
-    parser.add_argument("env", nargs="?", default="coexistence_v0")
+    parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
     args = parser.parse_args(argv)
     kwargs: dict[str, Any] = {}

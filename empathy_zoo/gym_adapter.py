@@ -54,7 +54,7 @@ import numpy as np
 from gymnasium.utils import EzPickle
 
 from empathy_zoo import ENVIRONMENTS
-from empathy_zoo.environments import GYM_IDS, default_policies
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, GYM_IDS, default_policies
 from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.policies import FixedPolicy
 
@@ -68,7 +68,7 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
 
     def __init__(
         self,
-        env: str = "coexistence_v0",
+        env: str = DEFAULT_ENVIRONMENT,
         fixed: Mapping[str, FixedPolicy | str] | None = None,
         *,
         size: int = 7,

@@ -11,7 +11,7 @@ rule, fixed before the runs it judges:
 * **Cells.** Runs are matched by experiment (variant, method, β, aggregation of the others, reward
   transform and budget: :func:`leaderboard.compare_runs.run_key` without the seed, with the steps). For every experiment found
   in both sets, both phases (:data:`leaderboard.aggregate.PHASES`) and the metrics that mean
-  something in its environment (:data:`leaderboard.tables.TABLE_METRICS`), a cell holds each set's
+  something in its environment (:attr:`empathy_zoo.environments.Environment.table_metrics`), a cell holds each set's
   per-seed values (:func:`leaderboard.aggregate.run_scalars`). A cell whose values are all equal on
   both sides (every run harm-free, say) says nothing and is counted as *constant*, not tested.
 * **Test.** Each cell: the exact two-sided Mann–Whitney permutation test of one set's values
@@ -59,10 +59,11 @@ from typing import Any
 
 import numpy as np
 
+from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import run_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
-from leaderboard.tables import TABLE_METRICS
+from leaderboard.tables import table_metrics
 from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
 
 __all__ = [
@@ -90,9 +91,8 @@ FAMILY_LEVEL = 0.05
 """The chance, when nothing differs, that any cell is called different (Holm's family-wise level)."""
 NO_DIFFERENCE = "no difference detected"
 """The difference test's verdict when no cell is rejected (a failure to reject, not equivalence)."""
-TOST_MARGINS: dict[str, float] = {"survival": 25.0, "harms": 0.1, "batteries": 0.5, "equality": 0.05}
-"""Practical margins of the TOST, per episode, stated before any data: two sets whose means differ
-by less than these are equivalent for the suite's purposes (25 steps is 5 % of a 500-step episode)."""
+TOST_MARGINS: dict[str, float] = EQUIVALENCE_MARGINS
+"""Practical margins of the TOST, per episode (:data:`empathy_zoo.metrics.EQUIVALENCE_MARGINS`)."""
 TOST_LEVEL = 0.05
 """The level of each one-sided test of the TOST (its 90 % interval)."""
 
@@ -257,7 +257,7 @@ def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], le
     raw: list[Cell] = []
     for experiment in sorted(set(a) & set(b), key=repr):
         env = table_env(a[experiment][0])
-        metrics = TABLE_METRICS.get(env) or TABLE_METRICS.get(a[experiment][0]["env"], ())
+        metrics = table_metrics(env, a[experiment][0]["env"])
         scalars_a = [run_scalars(run) for run in a[experiment]]
         scalars_b = [run_scalars(run) for run in b[experiment]]
         for phase in PHASES:
@@ -294,7 +294,7 @@ def tost_cells(
     cells = []
     for experiment in sorted(set(a) & set(b), key=repr):
         env = table_env(a[experiment][0])
-        metrics = TABLE_METRICS.get(env) or TABLE_METRICS.get(a[experiment][0]["env"], ())
+        metrics = table_metrics(env, a[experiment][0]["env"])
         scalars_a = [run_scalars(run) for run in a[experiment]]
         scalars_b = [run_scalars(run) for run in b[experiment]]
         for phase in PHASES:
@@ -334,7 +334,7 @@ def tost_report(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) ->
 def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> list[tuple[tuple, str, str, float, float]]:
     """The leaderboard's verdicts against DQN that differ between the sets: ``(cell key, old
     verdict, new verdict, old p, new p)``, the key ``(variant, label, phase, metric, DQN row)``."""
-    metrics_of = {table_env(run): TABLE_METRICS.get(run["env"], ()) for run in [*old, *new]}
+    metrics_of = {table_env(run): table_metrics(run["env"]) for run in [*old, *new]}
     before = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(old, metrics_of)}
     after = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(new, metrics_of)}
     return [

@@ -25,7 +25,7 @@ final agent, and picking the best of its evaluations would choose on the numbers
 evaluation was made, and an invented time would be no measurement.
 
 Every metric is written as recorded, whichever way it is better
-(:data:`leaderboard.improvement.HIGHER_IS_BETTER`: fewer ``harms`` are better, every other
+(:data:`empathy_zoo.metrics.HIGHER_IS_BETTER`: fewer ``harms`` are better, every other
 metric is better higher); marl-eval's aggregates and probability of improvement take higher as
 better, so negate ``harms`` before handing it to them. marl-eval lower-cases every key and
 aggregates across the tasks of an environment only when they hold the same algorithms, runs and

@@ -1,6 +1,6 @@
 """The held-out figure: each method's score with its own partners against its held-out partners.
 
-One panel per metric of the environment (:data:`leaderboard.heldout_scores.HELDOUT_METRICS`), one slot per
+One panel per metric of the environment (its entry's :attr:`~empathy_zoo.environments.Environment.heldout_metrics`), one slot per
 method: a black line across the slot at the method's mean with its training partners (its 95 %
 interval shaded), and one coloured point per held-out scenario (its interval as a bar) joined to
 that line, so the generalisation gap reads as the length of the join. A scenario that is the
@@ -22,10 +22,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
+from empathy_zoo.metrics import HARMS_PER_100_STEPS
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.colours import distinct_colours
-from leaderboard.heldout_scores import HARMS_PER_100_STEPS, higher_is_better
+from leaderboard.heldout_scores import higher_is_better
 from leaderboard.plots import write_figure
 
 if TYPE_CHECKING:

@@ -5,7 +5,7 @@ method's mean per scenario and metric with its interval and its verdict against 
 :func:`reading_rule` (the rule is stated on :mod:`leaderboard.heldout`'s page), beside the rule
 it replaced (:func:`old_reading_rule`).
 
-Harms per 100 steps (:data:`HARMS_PER_100_STEPS`) stand beside harms per episode, since a robot
+Harms per 100 steps (:data:`empathy_zoo.metrics.HARMS_PER_100_STEPS`) stand beside harms per episode, since a robot
 that dies early harms less per episode: per run and scenario, the harms of all its episodes over
 the steps it survived in them, × 100 (a ratio of sums, so a short episode weighs as little as its
 steps, and one of no steps divides by nothing), then the mean over seeds as every other cell.
@@ -22,26 +22,28 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.environments import DEFAULT_ARGUMENTS
+from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
 from empathy_zoo.evaluation_file import TRAINED_WITH, evaluation_files, read_evaluation
-from empathy_zoo.metrics import METRIC_DEFINITIONS
+from empathy_zoo.metrics import (
+    DERIVED_DEFINITIONS,
+    DERIVED_METRICS,
+    EFFECT_NAMES,
+    HELDOUT_MARGINS,
+    HIGHER_IS_BETTER,
+    METRIC_DEFINITIONS,
+    PER_OTHER_AGENT,
+)
 from leaderboard.aggregate import group_runs, mean_ci, table_env
 from leaderboard.budgets import budgets_of
 from leaderboard.improvement import (
-    HIGHER_IS_BETTER,
     TOO_FEW_SEEDS,
     dqn_rows,
     improvement_interval,
     improvement_verdict,
     is_dqn,
 )
-from leaderboard.tradeoff import TRADEOFF_SPECS
 
 __all__ = [
-    "HELDOUT_METRICS",
-    "MARGINS",
-    "PER_OTHER_AGENT",
-    "HARMS_PER_100_STEPS",
     "GENERALISES",
     "DOES_NOT_GENERALISE",
     "KEEPS_ITS_LEVEL",
@@ -49,7 +51,6 @@ __all__ = [
     "UNDECIDED",
     "READING_MARKS",
     "READING_RULE",
-    "EFFECT_NAMES",
     "HeldoutGroup",
     "HeldoutCell",
     "Reading",
@@ -62,25 +63,6 @@ __all__ = [
     "readings",
 ]
 
-HARMS_PER_100_STEPS = "harms_per_100_steps"
-"""Harms per 100 steps survived: a run's harms over all its episodes of a scenario ÷ the steps it
-survived in them × 100 (a ratio of sums; see the module page)."""
-_DERIVED: dict[str, tuple[str, str, float]] = {HARMS_PER_100_STEPS: ("harms", "survival", 100.0)}
-"""Metrics of the held-out tables computed from two recorded ones: ``(numerator, denominator, scale)``."""
-_DERIVED_DEFINITIONS = {
-    HARMS_PER_100_STEPS: (
-        "harms per 100 steps the robot was operative (a run's harms ÷ its steps survived × 100, over all its episodes)"
-    )
-}
-HELDOUT_METRICS: dict[str, tuple[str, ...]] = {
-    "coexistence_v0": ("harms", HARMS_PER_100_STEPS, "survival"),
-    "sharing_v0": ("batteries", "other_batteries", "equality"),
-}
-"""The metrics of each environment's held-out tables (a variant's are its environment's)."""
-MARGINS: dict[str, float] = {"harms": 0.1, "equality": 0.1}
-"""How much worse than with its own partners a side effect may get and still generalise (see the module page)."""
-PER_OTHER_AGENT = frozenset({"harms"})
-"""Side effects the reading rule counts per other agent (a scenario may have more of them)."""
 GENERALISES = "generalises"
 DOES_NOT_GENERALISE = "does not generalise"
 KEEPS_ITS_LEVEL = "keeps its own level"
@@ -90,8 +72,6 @@ DOES_NOT_KEEP_ITS_LEVEL = "does not keep its own level"
 UNDECIDED = "undecided"
 READING_MARKS = {GENERALISES: "✓", DOES_NOT_GENERALISE: "✗", KEEPS_ITS_LEVEL: "·", DOES_NOT_KEEP_ITS_LEVEL: "↓", UNDECIDED: "?"}
 """How the section marks a reading."""
-EFFECT_NAMES = {"harms": "harm avoidance", "equality": "fairness (equality of battery rewards)"}
-"""What the reading rule calls keeping each side effect low (or equality high)."""
 SAME_WORLD_MARK = "⌂"
 """Marks a scenario that is a run's own world (not held out, not judged); "=" marks a zero-width interval."""
 READING_RULE = (
@@ -206,13 +186,15 @@ class HeldoutGroup:
 
     @property
     def metrics(self) -> tuple[str, ...]:
-        return HELDOUT_METRICS.get(self.base_env, ("survival", "harms"))
+        """The metrics of the group's tables: its environment's
+        :attr:`~empathy_zoo.environments.Environment.heldout_metrics`."""
+        return ENVIRONMENT_TABLE[self.base_env].heldout_metrics
 
     @property
     def effect(self) -> str | None:
         """The side effect the reading rule judges (``None`` for an environment without one)."""
-        spec = TRADEOFF_SPECS.get(self.base_env)
-        return None if spec is None else spec.effect
+        effects = ENVIRONMENT_TABLE[self.base_env].side_effects
+        return effects[0] if effects else None
 
 
 ResultsDirs = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
@@ -295,12 +277,12 @@ def load_heldout(
 
 def _per_run(evaluation: Mapping[str, Any], scenario: str, metric: str, per_other: bool = False) -> float:
     """A run's mean of ``metric`` over the episodes of ``scenario`` (per other agent with ``per_other``);
-    a derived metric (:data:`HARMS_PER_100_STEPS`) is the ratio of its two metrics' sums, scaled."""
+    a derived metric (:data:`~empathy_zoo.metrics.DERIVED_METRICS`) is the ratio of its two metrics' sums, scaled."""
     entry = next((e for e in evaluation["scenarios"] if e["name"] == scenario), None)
     if entry is None:
         return math.nan
-    if metric in _DERIVED:
-        numerator, denominator, scale = _DERIVED[metric]
+    if metric in DERIVED_METRICS:
+        numerator, denominator, scale = DERIVED_METRICS[metric]
         below = float(np.sum(entry["metrics"][denominator]))
         return scale * float(np.sum(entry["metrics"][numerator])) / below if below > 0 else math.nan
     mean = float(np.mean(entry["metrics"][metric]))
@@ -309,12 +291,12 @@ def _per_run(evaluation: Mapping[str, Any], scenario: str, metric: str, per_othe
 
 def higher_is_better(metric: str) -> bool:
     """Which way a metric of the held-out tables is better (a derived one as its numerator)."""
-    return HIGHER_IS_BETTER.get(_DERIVED[metric][0] if metric in _DERIVED else metric, True)
+    return HIGHER_IS_BETTER.get(DERIVED_METRICS[metric][0] if metric in DERIVED_METRICS else metric, True)
 
 
 def metric_definition(metric: str) -> str:
     """One-line definition of a metric of the held-out tables."""
-    return _DERIVED_DEFINITIONS.get(metric) or METRIC_DEFINITIONS.get(metric, "")
+    return DERIVED_DEFINITIONS.get(metric) or METRIC_DEFINITIONS.get(metric, "")
 
 
 @dataclass(frozen=True)
@@ -346,7 +328,7 @@ def heldout_cells(group: HeldoutGroup) -> list[HeldoutCell]:
         for scenario in group.scenarios:
             for metric in group.metrics:
                 values = np.array([_per_run(evaluation, scenario, metric) for _, evaluation in pairs])
-                bounded_as = _DERIVED[metric][0] if metric in _DERIVED else metric  # (no interval below 0)
+                bounded_as = DERIVED_METRICS[metric][0] if metric in DERIVED_METRICS else metric  # (no interval below 0)
                 mean, low, high = mean_ci(values, metrics=bounded_as, max_cycles=_longest(pairs))
                 extra: dict[str, Any] = {}
                 if dqn is not None:
@@ -436,8 +418,8 @@ def readings(group: HeldoutGroup, cells: Sequence[HeldoutCell] | None = None) ->
             versus = verdicts.get((label, scenario)) if compared else None
             trained = verdicts.get((label, TRAINED_WITH)) if compared else None
             bounds = (low, high) if n > 1 else (math.nan, math.nan)
-            verdict, why = reading_rule(trained, versus, *bounds, MARGINS[effect], effect_name)
-            old, _ = old_reading_rule(versus, *bounds, MARGINS[effect])
+            verdict, why = reading_rule(trained, versus, *bounds, HELDOUT_MARGINS[effect], effect_name)
+            old, _ = old_reading_rule(versus, *bounds, HELDOUT_MARGINS[effect])
             out.append(Reading(group.env, label, scenario, effect, versus, gap, low, high, n, verdict, why, trained, old))
     return out
 

@@ -4,7 +4,7 @@ For a metric and a phase, with runs ``x`` of a method and runs ``y`` of DQN (one
 as the tables use them), the probability of improvement is ``P(X > Y) + ½·P(X = Y)`` over every
 pair of runs (the Mann–Whitney statistic divided by ``n·m``, as in Agarwal et al. 2021,
 "Deep RL at the edge of the statistical precipice"), where "greater" means better for the metric
-(:data:`HIGHER_IS_BETTER`: fewer harms are better). 0.5 is a tie.
+(:data:`empathy_zoo.metrics.HIGHER_IS_BETTER`: fewer harms are better). 0.5 is a tie.
 
 The verdict (better ▲ / worse ▼ than DQN) is the exact two-sided Mann–Whitney permutation test
 at 5 % (:func:`permutation_test`): the statistic is this probability itself, its null
@@ -42,12 +42,12 @@ from typing import Any
 
 import numpy as np
 
+from empathy_zoo.metrics import HIGHER_IS_BETTER
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES, group_runs, run_scalars
 from leaderboard.budgets import RunBudget, budgets_of
 from leaderboard.run_facts import is_dqn_reference
 
 __all__ = [
-    "HIGHER_IS_BETTER",
     "Improvement",
     "probability_of_improvement",
     "permutation_test",
@@ -65,17 +65,6 @@ __all__ = [
     "TOO_FEW_SEEDS",
     "VERDICT_NOTE",
 ]
-
-HIGHER_IS_BETTER: dict[str, bool] = {
-    "survival": True,
-    "harms": False,
-    "batteries": True,
-    "other_batteries": True,
-    "equality": True,
-    "return": True,
-    "other_return": True,
-}
-"""Which way each metric is better."""
 
 
 @dataclass(frozen=True)

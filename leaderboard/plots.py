@@ -17,6 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.environments import entry_of
 from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -34,7 +35,7 @@ from leaderboard.reference_curves import reference_curve
 from leaderboard.row_names import dqn_rows_of
 
 __all__ = [
-    "FIGURE_SPECS",
+    "figure_spec",
     "FALLBACK_SPEC",
     "figure_filename",
     "seeds_text",
@@ -46,13 +47,16 @@ __all__ = [
 
 FigureSpec = tuple[tuple[str, str], ...]
 
-FIGURE_SPECS: dict[str, FigureSpec] = {
-    "coexistence_v0": (("survival", "Steps survived per episode"), ("harms", "Harms per episode")),
-    "sharing_v0": (("batteries", "Batteries per episode (robot)"), ("equality", "Equality per episode")),
-}
-"""Per env, the ``(metric, y-axis label)`` pairs drawn by default."""
 FALLBACK_SPEC: FigureSpec = (("return", "Return per episode (robot)"),)
-"""Drawn for an env without an entry in :data:`FIGURE_SPECS`."""
+"""Drawn for an env without an entry in the environment table."""
+
+
+def figure_spec(env: str, base_env: str) -> FigureSpec:
+    """The ``(metric, y-axis label)`` pairs drawn for ``env`` (a variant is drawn like its environment
+    ``base_env``): its entry's :attr:`~empathy_zoo.environments.Environment.curves`, else
+    :data:`FALLBACK_SPEC`."""
+    entry = entry_of(env, base_env)
+    return FALLBACK_SPEC if entry is None else entry.curves
 
 
 def write_figure(path: str | os.PathLike[str], data: bytes) -> Path:
@@ -172,13 +176,14 @@ def plot_learning_curves(
     results: Iterable[dict[str, Any]],
     figures_dir: str | os.PathLike[str],
     *,
-    specs: Mapping[str, FigureSpec] = FIGURE_SPECS,
+    specs: Mapping[str, FigureSpec] | None = None,
     n_points: int = N_POINTS,
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> dict[tuple[str, str], Path]:
-    """The default figures of every env present in ``results`` (see :data:`FIGURE_SPECS`).
+    """The figures of every env present in ``results``: ``specs``'s, by default the environment
+    table's (:func:`figure_spec`).
 
     Returns ``{(env, metric): path}``, envs sorted, metrics in spec order.
     """
@@ -187,7 +192,8 @@ def plot_learning_curves(
     base_env = {table_env(run): run["env"] for run in results}  # a variant is drawn like its env
     paths: dict[tuple[str, str], Path] = {}
     for env in envs:
-        for metric, ylabel in specs.get(env, specs.get(base_env[env], FALLBACK_SPEC)):
+        spec = figure_spec(env, base_env[env]) if specs is None else specs.get(env, specs.get(base_env[env], FALLBACK_SPEC))
+        for metric, ylabel in spec:
             paths[(env, metric)] = plot_metric(
                 results,
                 env,

@@ -12,16 +12,12 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.environments import DEFAULT_ARGUMENTS
+from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
 from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, format_bytes
 from leaderboard.run_facts import description_of, exploration_of, in_paper_setting
 
-__all__ = ["REFERENCE_METRICS", "REFERENCE_ENV", "MODELLED_ARGUMENTS", "reference_curve", "reference_refusal"]
+__all__ = ["MODELLED_ARGUMENTS", "reference_curve", "reference_refusal"]
 
-REFERENCE_METRICS = ("harms", "survival")
-"""Metrics the Coexistence reference gives."""
-REFERENCE_ENV = "coexistence_v0"
-"""The environment the reference solves."""
 MODELLED_ARGUMENTS = ("size", "view", "max_cycles")
 """Environment arguments the reference takes; every other must be at its default."""
 
@@ -33,7 +29,7 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
     episodes are beyond what it is computed for (:func:`reference_refusal`)."""
     from empathy_zoo.reference import coexistence_optimum
 
-    if metric not in REFERENCE_METRICS or not _applies(runs) or reference_refusal(runs) is not None:
+    if not _applies(runs) or metric not in ENVIRONMENT_TABLE[runs[0]["env"]].reference_metrics or reference_refusal(runs):
         return None
     first = runs[0]
     described = description_of(first)
@@ -60,7 +56,7 @@ def reference_refusal(runs: Sequence[dict[str, Any]]) -> str | None:
     runs the reference does not apply to."""
     if not _applies(runs):
         return None
-    modelled = {**DEFAULT_ARGUMENTS[REFERENCE_ENV], **_modelled(runs[0])}
+    modelled = {**DEFAULT_ARGUMENTS[runs[0]["env"]], **_modelled(runs[0])}
     size, cycles = int(modelled["size"]), int(modelled["max_cycles"])
     if size > MAX_REFERENCE_SIZE:
         return (
@@ -84,7 +80,8 @@ def _applies(runs: Sequence[dict[str, Any]]) -> bool:
     first = runs[0]
     described = description_of(first)
     return not (
-        first["env"] != REFERENCE_ENV
+        first["env"] not in ENVIRONMENT_TABLE
+        or not ENVIRONMENT_TABLE[first["env"]].reference_metrics
         or not in_paper_setting(first, varying=MODELLED_ARGUMENTS)
         or described["target"] not in RULES
         or described["reward"] is not None

@@ -16,6 +16,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from empathy_zoo.environments import entry_of
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -232,22 +233,20 @@ def format_mean(mean: float, low: float, high: float, n_seeds: int, digits: int 
     return format_interval(mean, low, high, digits)
 
 
-TABLE_METRICS: dict[str, tuple[str, ...]] = {
-    "coexistence_v0": ("survival", "harms", "other_return"),
-    "sharing_v0": ("batteries", "other_batteries", "equality", "return", "other_return"),
-}
-"""The metrics that mean something in each environment's tables (a variant's are its environment's):
-Coexistence has no batteries, and its ``return`` is its ``survival``; ``other_return`` is the
-cat's steps operative there, and the human's battery reward in Sharing, which has no harms.
-The CSV keeps every metric."""
+def table_metrics(env: str, base_env: str | None = None) -> tuple[str, ...]:
+    """The metrics that mean something in ``env``'s tables, in order: its entry's
+    :attr:`~empathy_zoo.environments.Environment.table_metrics`, else its environment's
+    (``base_env``), else none."""
+    entry = entry_of(env, base_env)
+    return () if entry is None else entry.table_metrics
 
 
 def env_metrics(env: str, base_env: Mapping[str, str] | None, metrics: Sequence[str]) -> Sequence[str]:
-    """The columns of ``env``'s tables: its :data:`TABLE_METRICS` when the caller asked for every
+    """The columns of ``env``'s tables: its :func:`table_metrics` when the caller asked for every
     metric (the default), else exactly ``metrics``."""
     if tuple(metrics) != METRIC_NAMES:
         return metrics
-    return TABLE_METRICS.get(env) or TABLE_METRICS.get((base_env or {}).get(env, "")) or metrics
+    return table_metrics(env, (base_env or {}).get(env)) or metrics
 
 
 def _envs(scores: Sequence[Score]) -> list[str]:

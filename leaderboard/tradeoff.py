@@ -1,9 +1,10 @@
 """Task performance against side effect: one point per method, its interval in both directions,
 the Pareto front marked — the picture a side-effect comparison is read from.
 
-Per environment (:data:`TRADEOFF_SPECS`): Coexistence plots steps survived (the task, higher is
-better) against harms per episode (the side effect, lower is better); Sharing plots the robot's
-batteries against equality (higher is better). Each figure has two panels, the greedy evaluations
+Per environment, its entry in the environment table names the task and the side effect
+(:func:`tradeoff_spec`): Coexistence plots steps survived (the task, higher is better) against harms
+per episode (the side effect, lower is better); Sharing plots the robot's batteries against equality
+(higher is better). Each figure has two panels, the greedy evaluations
 and the final 10 % of training, drawn from the leaderboard's own scores (the same means and 95 %
 intervals as its tables). A method is on the front when no other method is at least as good on
 both axes and better on one (:func:`pareto_front`, on the means).
@@ -22,13 +23,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from empathy_zoo.environments import entry_of
+from empathy_zoo.metrics import HIGHER_IS_BETTER
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
 from leaderboard.colours import label_colours
 from leaderboard.plots import seeds_text, write_figure
 from leaderboard.tables import PHASE_TITLES
 
-__all__ = ["TradeoffSpec", "TRADEOFF_SPECS", "pareto_front", "render_tradeoff_png", "plot_tradeoffs", "tradeoff_filename"]
+__all__ = ["TradeoffSpec", "tradeoff_spec", "pareto_front", "render_tradeoff_png", "plot_tradeoffs", "tradeoff_filename"]
 
 
 @dataclass(frozen=True)
@@ -47,23 +50,16 @@ class TradeoffSpec:
     """Whether more of the y metric is better (equality) or worse (harms)."""
 
 
-TRADEOFF_SPECS: dict[str, TradeoffSpec] = {
-    "coexistence_v0": TradeoffSpec(
-        "survival",
-        "steps survived per episode (task: higher is better)",
-        "harms",
-        "harms per episode (side effect: lower is better)",
-        False,
-    ),
-    "sharing_v0": TradeoffSpec(
-        "batteries",
-        "robot batteries per episode (task: higher is better)",
-        "equality",
-        "equality of battery rewards (higher is better)",
-        True,
-    ),
-}
-"""The trade-off of every environment that has one (a variant is drawn like its environment)."""
+def tradeoff_spec(env: str, base_env: str | None = None) -> TradeoffSpec | None:
+    """The trade-off of ``env`` (a variant is drawn like its environment ``base_env``): its entry's
+    task and first side effect (:class:`~empathy_zoo.environments.Environment`), the side effect's
+    direction from :data:`~empathy_zoo.metrics.HIGHER_IS_BETTER`; ``None`` for an environment
+    without a side effect or an entry."""
+    entry = entry_of(env, base_env)
+    if entry is None or not entry.side_effects:
+        return None
+    effect = entry.side_effects[0]
+    return TradeoffSpec(entry.task, entry.task_label, effect, entry.side_effect_label, HIGHER_IS_BETTER[effect])
 
 
 def tradeoff_filename(env: str) -> str:
@@ -176,7 +172,7 @@ def plot_tradeoffs(
     :func:`leaderboard.row_names.dqn_rows_of`); returns ``{env: path}``, envs sorted."""
     paths: dict[str, Path] = {}
     for env in sorted({s.env for s in scores}):
-        spec = TRADEOFF_SPECS.get(env) or TRADEOFF_SPECS.get((base_env or {}).get(env, ""))
+        spec = tradeoff_spec(env, (base_env or {}).get(env))
         if spec is None:
             continue
         png = render_tradeoff_png(scores, env, spec, dqn_labels={label for row_env, label in dqn_rows if row_env == env})

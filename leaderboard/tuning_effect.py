@@ -8,7 +8,7 @@ writes: :mod:`empathy_zoo.training.tuning`); its untuned row is ``<label>`` on t
 ``UNTUNED_DIR``. Each directory is scored alone, by the leaderboard's rule unchanged
 (:func:`leaderboard.improvement.improvements_over_dqn`: the exact two-sided Mann–Whitney test at
 5 %), so a tuned row is compared with the tuned DQN of its variant and never with an untuned one.
-Per metric (:data:`leaderboard.versus_dqn.DEFAULT_METRICS`) and phase the table gives both rows'
+Per metric (:func:`leaderboard.versus_dqn.compact_metrics`) and phase the table gives both rows'
 means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
 no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
 named, never dropped; a directory with two DQN rows in one variant is refused (a verdict would be
@@ -24,7 +24,7 @@ from typing import Any
 
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
-from leaderboard.versus_dqn import DEFAULT_METRICS
+from leaderboard.versus_dqn import compact_metrics
 
 __all__ = ["TUNED_SUFFIX", "VerdictPair", "TuningEffect", "tuning_effect", "tuning_effect_table"]
 
@@ -85,7 +85,7 @@ def tuning_effect(
     (result documents, as :func:`leaderboard.aggregate.load_results` reads them)."""
     groups = group_runs(tuned)
     variants = {env: runs[0]["env"] for (env, _), runs in groups.items()}
-    metrics = {v: tuple((metrics_of or DEFAULT_METRICS).get(v) or DEFAULT_METRICS[env]) for v, env in variants.items()}
+    metrics = {v: compact_metrics(v, env, metrics_of) for v, env in variants.items()}
     old_means, old_verdicts, old_references = _cells(untuned, metrics)
     new_means, new_verdicts, new_references = _cells(tuned, metrics)
     old_rows = set(group_runs(untuned))

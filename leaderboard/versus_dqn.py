@@ -15,29 +15,36 @@ import sys
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from empathy_zoo.environments import ENVIRONMENT_TABLE, entry_of
+from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
 from leaderboard.multiplicity import HOLM_MARK
 from leaderboard.tables import holm_survivors, multiplicity_note
 
-__all__ = ["versus_dqn_tables", "DEFAULT_METRICS"]
+__all__ = ["versus_dqn_tables", "compact_metrics"]
 
-DEFAULT_METRICS: dict[str, tuple[str, ...]] = {
-    "coexistence_v0": ("harms", "survival", "other_return"),
-    "sharing_v0": ("batteries", "equality", "other_batteries"),
-}
-"""The metrics shown per environment (a variant takes its environment's)."""
+
+def compact_metrics(variant: str, env: str, metrics_of: Mapping[str, Sequence[str]] | None = None) -> tuple[str, ...]:
+    """The metrics shown for ``variant`` of environment ``env``: ``metrics_of``'s, else the entry's
+    :attr:`~empathy_zoo.environments.Environment.compact_metrics` (without ``metrics_of``, the
+    variant's own entry first)."""
+    given = (metrics_of or {}).get(variant)
+    if given:
+        return tuple(given)
+    entry = entry_of(variant, env) if metrics_of is None else ENVIRONMENT_TABLE[env]
+    return () if entry is None else entry.compact_metrics
 
 
 def _format(value: float, metric: str) -> str:
-    return f"{value:.0f}" if metric in ("survival", "other_return", "return") else f"{value:.2f}"
+    return f"{value:.0f}" if metric in WHOLE_NUMBER_METRICS else f"{value:.2f}"
 
 
 def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
     """Markdown: per variant, one row per method, a cell per metric ``▲ greedy / ▼ training``."""
     groups = group_runs(results)
     envs = {env: runs[0]["env"] for (env, _), runs in groups.items()}
-    metrics_of = {variant: (metrics_of or DEFAULT_METRICS).get(variant) or DEFAULT_METRICS[env] for variant, env in envs.items()}
+    metrics_of = {variant: compact_metrics(variant, env, metrics_of) for variant, env in envs.items()}
     scores = {(s.env, s.method_label, s.phase, s.metric): s for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c for c in improvements_over_dqn(results, metrics_of)}
     shown: list[Improvement] = []

@@ -16,7 +16,7 @@ from helpers_results import synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_NAMES
 from leaderboard.aggregate import load_results, table_env
 from leaderboard.export_marl_eval import (
     ABSOLUTE_METRICS,
@@ -26,7 +26,6 @@ from leaderboard.export_marl_eval import (
     run_key,
     step_key,
 )
-from leaderboard.improvement import HIGHER_IS_BETTER
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "docs" / "results" / "quick"

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 
+from empathy_zoo.metrics import HELDOUT_MARGINS
 from leaderboard.heldout import add_heldout_section
 from leaderboard.heldout_scores import (
     DOES_NOT_GENERALISE,
     GENERALISES,
-    MARGINS,
     UNDECIDED,
     heldout_cells,
     load_heldout,
@@ -91,11 +91,11 @@ def test_why_each_verdict_was_given(synthetic) -> None:
     out, results = synthetic
     (group,), _ = load_heldout(out, results)
     found = {r.scenario: r for r in readings(group)}
-    assert found["lost"].versus_dqn == "better" and found["lost"].gap_low > MARGINS["harms"]
+    assert found["lost"].versus_dqn == "better" and found["lost"].gap_low > HELDOUT_MARGINS["harms"]
     assert found["below_dqn"].versus_dqn == "worse" and "DQN" in found["below_dqn"].why
     assert found["kept"].versus_dqn == "better" and found["kept"].gap == pytest.approx(0.02)
     assert found["two_cats"].gap == pytest.approx(0.0)  # harms per cat: 2·h over 2 cats is h
-    assert found["noisy"].gap_low <= MARGINS["harms"] < found["noisy"].gap_high
+    assert found["noisy"].gap_low <= HELDOUT_MARGINS["harms"] < found["noisy"].gap_high
 
 
 def test_fewer_seeds_than_the_test_needs_leave_every_reading_undecided(synthetic) -> None:

@@ -7,8 +7,9 @@ import math
 
 import pytest
 
+from empathy_zoo.environments import ENVIRONMENT_TABLE
 from leaderboard.aggregate import PHASES, Score
-from leaderboard.tradeoff import TRADEOFF_SPECS, pareto_front, render_tradeoff_png
+from leaderboard.tradeoff import pareto_front, render_tradeoff_png, tradeoff_spec
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -38,9 +39,10 @@ def _scores(env: str, spec, values: dict[str, tuple[float, float]]) -> list[Scor
     ]
 
 
-@pytest.mark.parametrize("env", sorted(TRADEOFF_SPECS))
+@pytest.mark.parametrize("env", sorted(ENVIRONMENT_TABLE))
 def test_the_figure_is_a_png(env: str) -> None:
-    spec = TRADEOFF_SPECS[env]
+    spec = tradeoff_spec(env)
+    assert spec is not None
     png = render_tradeoff_png(_scores(env, spec, {"A": (1.0, 0.5), "B": (2.0, 0.7), "C": (0.5, 0.1)}), env, spec)
     assert png.startswith(PNG_SIGNATURE) and len(png) > 10_000
 

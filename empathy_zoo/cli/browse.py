@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.cli.common import AgentPolicies, agent_policy, positive
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT
 
 __all__ = ["add_browse_commands", "cmd_envs", "cmd_methods", "cmd_play", "cmd_policies"]
 
@@ -91,7 +92,7 @@ def add_browse_commands(sub: Any) -> None:
     sub.add_parser("policies", help="list the registered fixed-agent policies").set_defaults(handler=cmd_policies)
 
     play = sub.add_parser("play", help="random robot beside the fixed agents; prints episode metrics")
-    play.add_argument("--env", default="coexistence_v0", help="environment (default: coexistence_v0)")
+    play.add_argument("--env", default=DEFAULT_ENVIRONMENT, help=f"environment (default: {DEFAULT_ENVIRONMENT})")
     play.add_argument("--episodes", type=int, default=1, help="episodes (default: 1)")
     play.add_argument("--seed", type=int, default=0, help="seed of the first episode (default: 0)")
     play.add_argument("--render", choices=["ansi"], default=None, help="print the grid every step")

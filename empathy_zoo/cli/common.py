@@ -17,7 +17,6 @@ from agents.empathic_dqn import UPDATE_KERNELS
 __all__ = [
     "PROG",
     "RUN_DEFAULTS",
-    "SUMMARY_METRICS",
     "add_runner_options",
     "AgentPolicies",
     "agent_policy",
@@ -32,7 +31,6 @@ __all__ = [
 ]
 
 PROG = "empathy-zoo"
-SUMMARY_METRICS = ("survival", "harms", "batteries", "equality")
 
 RUNNER_KEYS = ("device", "max_parallel_runs", "checkpoint_interval", "progress", "threads", "workers", "log", "update_kernel")
 """The fields of :class:`~empathy_zoo.training.options.RunnerOptions` that ``train`` options and
@@ -150,10 +148,10 @@ def _fmt(value: float) -> str:
 def run_summary(result: dict[str, Any]) -> str:
     """One line: the run's final-10 % training means and its last greedy evaluation, of the
     metrics that mean something in its environment (the leaderboard's table columns)."""
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
     from leaderboard.aggregate import run_scalars
-    from leaderboard.tables import TABLE_METRICS
 
-    metrics = TABLE_METRICS.get(str(result["env"]), SUMMARY_METRICS)
+    metrics = ENVIRONMENT_TABLE[str(result["env"])].table_metrics
     scalars = run_scalars(result, metrics)
     train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in metrics)
     evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in metrics)

@@ -8,9 +8,9 @@ The study (:mod:`empathy_zoo.training.tuning`) writes ``study.json``, ``tuned.to
 of the best settings on the sweep's reporting seeds: ``empathy-zoo reproduce --profile
 DIR/tuned.toml``) and ``trials.png`` (:mod:`leaderboard.trials_figure`) into ``--out``, after every
 trial; the same command resumes a stopped study. The objective is, unless ``--objective`` says
-otherwise, the environment's task metric as the leaderboard's trade-off figure names it
-(:data:`leaderboard.tradeoff.TRADEOFF_SPECS`: Coexistence's survival, Sharing's batteries),
-maximised or minimised as :data:`leaderboard.improvement.HIGHER_IS_BETTER` says. Optuna is the
+otherwise, the environment's task metric (its entry's
+:attr:`~empathy_zoo.environments.Environment.task`: Coexistence's survival, Sharing's batteries),
+maximised or minimised as :data:`empathy_zoo.metrics.HIGHER_IS_BETTER` says. Optuna is the
 ``tune`` extra. The protocol a fair comparison needs is docs/tuning.md.
 """
 
@@ -34,13 +34,13 @@ DEFAULT_TUNING_SEEDS = 2
 def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
     """``(metric, direction)`` of a study on environment ``env``: ``metric`` (default: the
     environment's task metric), maximised unless fewer is better."""
-    from leaderboard.improvement import HIGHER_IS_BETTER
-    from leaderboard.tradeoff import TRADEOFF_SPECS
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
+    from empathy_zoo.metrics import HIGHER_IS_BETTER
 
     if metric is None:
-        if env not in TRADEOFF_SPECS:
+        if env not in ENVIRONMENT_TABLE:
             raise ValueError(f"{env} has no task metric on record: name the objective with --objective METRIC")
-        metric = TRADEOFF_SPECS[env].task
+        metric = ENVIRONMENT_TABLE[env].task
     return metric, "maximize" if HIGHER_IS_BETTER.get(metric, True) else "minimize"
 
 
@@ -149,10 +149,14 @@ def _draw(study: dict[str, Any], path: Path) -> None:
 def add_tune(sub: Any) -> None:
     """The ``tune`` subcommand."""
     from agents.empathic_dqn import UPDATE_KERNELS
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
     from empathy_zoo.experiment.search_space import KINDS
-    from empathy_zoo.metrics import METRIC_NAMES
+    from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_NAMES
     from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.study_plan import OBJECTIVE_OVER, STARTUP_TRIALS, TUNING_SEED_BASE
+
+    task_metrics = ", ".join(f"{env.task} in {name}" for name, env in ENVIRONMENT_TABLE.items())
+    lower = ", ".join(metric for metric in METRIC_NAMES if not HIGHER_IS_BETTER[metric])
 
     tune = sub.add_parser(
         "tune",
@@ -204,7 +208,7 @@ def add_tune(sub: Any) -> None:
         choices=METRIC_NAMES,
         metavar="METRIC",
         help="the metric to optimise, in the greedy evaluations --objective-over names (default: the environment's task metric: "
-        "survival in coexistence_v0, batteries in sharing_v0); harms are minimised, the others maximised",
+        f"{task_metrics}); {lower} are minimised, the others maximised",
     )
     tune.add_argument(
         "--objective-over",

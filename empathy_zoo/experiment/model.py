@@ -20,7 +20,7 @@ from agents.base import Method
 from agents.rewards import RewardTransform, transform_config
 from baselines.registry import get_method
 from empathy_zoo.engine.arguments import check_choice, check_env_arguments
-from empathy_zoo.environments import ENGINES, default_policies
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, default_policies
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATIONS, MAX_SEED, MAX_STEPS, check_at_most
 from empathy_zoo.names import check_label, check_path_name
 from empathy_zoo.policies import PolicyEntry, entry_label, make_policy, policy_entry
@@ -35,8 +35,9 @@ DEFAULT_METHOD = "empathic_dqn"
 class EnvVariant:
     """An environment with its arguments and fixed agents; a sweep's ``[envs.<variant>]`` table."""
 
-    env: str = "coexistence_v0"
-    """Environment name (``coexistence_v0`` or ``sharing_v0``; see ``empathy-zoo envs``)."""
+    env: str = DEFAULT_ENVIRONMENT
+    """Environment name (``coexistence_v0``, ``sharing_v0``, any of :data:`~empathy_zoo.environments.ENVIRONMENT_TABLE`;
+    see ``empathy-zoo envs``)."""
     kwargs: Mapping[str, Any] = field(default_factory=dict)
     """Environment arguments (``size``, ``view``, ``max_cycles`` and the environment's own, e.g.
     Sharing's ``start`` and ``inventory_encoding``, Coexistence's ``num_cats``)."""
@@ -213,7 +214,7 @@ class RunSpec:
     @classmethod
     def of(
         cls,
-        env: str = "coexistence_v0",
+        env: str = DEFAULT_ENVIRONMENT,
         method: str = DEFAULT_METHOD,
         settings: Mapping[str, Any] | None = None,
         reward: Mapping[str, Any] | None = None,

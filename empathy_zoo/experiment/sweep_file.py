@@ -73,7 +73,7 @@ from agents.rewards import transform_config, transform_fields
 from baselines.registry import METHODS, get_method
 from baselines.sb3_transforms import SB3_REFUSED
 from empathy_zoo.engine.arguments import argument_types, own_arguments
-from empathy_zoo.environments import ENGINES, default_policies
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, default_policies
 from empathy_zoo.experiment.model import Budget, EnvVariant, MethodEntry, RunSpec
 from empathy_zoo.experiment.values import (
     PolicyTable,
@@ -183,7 +183,7 @@ def parse_sweep(data: Mapping[str, Any], source: str = "<sweep>", seeds: int | N
     defaults = _settings_table(data.get("settings", {}), methods, source)
     envs = data.get("envs", {})
     if not envs:
-        raise SweepConfigError(f"{source}: declare at least one [envs.<variant>] table (e.g. [envs.coexistence_v0])")
+        raise SweepConfigError(f"{source}: declare at least one [envs.<variant>] table (e.g. [envs.{DEFAULT_ENVIRONMENT}])")
     variants = {name: _env_table(name, table, methods, source) for name, table in envs.items()}
     for entry in methods:
         unknown = [v for v in entry["envs"] or () if v not in variants]

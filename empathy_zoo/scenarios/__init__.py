@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.engine.arguments import argument_types
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.sweep_file import variant_of_table
@@ -186,7 +186,9 @@ def parse_scenario_set(data: Mapping[str, Any], source: str = "<scenarios>", def
     check_keys(data, TOP_TABLES, f"{source}: top level")
     header = data.get("scenario_set")
     if not isinstance(header, dict):
-        raise SweepConfigError(f'{source}: declare a [scenario_set] table with env = "coexistence_v0" (or another environment)')
+        raise SweepConfigError(
+            f'{source}: declare a [scenario_set] table with env = "{DEFAULT_ENVIRONMENT}" (or another environment)'
+        )
     where = f"{source}: [scenario_set]"
     check_keys(header, SET_KEYS, where)
     values = {key: check_value(value, SET_KEYS[key], f"{where} {key}") for key, value in header.items()}
