@@ -1,4 +1,4 @@
-"""The separation table (empathy_zoo.separation): each row's exact values are the solvers' own (DQN
+"""The separation table (baselines.separation): each row's exact values are the solvers' own (DQN
 and the golden rule are exact_solver.optimum's, the silver rule is the reference module's), the
 harm penalty's greedy optimum never harms, the Lagrangian's bisection finds a stated λ, pairs
 identical by construction say so, and the committed files are the table's JSON and Markdown."""
@@ -10,19 +10,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from baselines.shaping import HARM_PENALTY
-from empathy_zoo.exact_solver import episode_steps, optimal_values, optimum, outcome, tabular_model
-from empathy_zoo.reference import TIE_TOLERANCE, coexistence_optimum, greedy_policy
-from empathy_zoo.separation import (
+from baselines.separation import (
     EPSILONS,
     in_view_values,
     policies_differ,
     separation_table,
     silver_values,
 )
-from empathy_zoo.separation_lagrangian import lagrangian_multiplier
-from empathy_zoo.separation_reachability import NO_OP, relative_reachability_reward
-from empathy_zoo.separation_render import equivalence_classes, from_json, to_json, to_markdown
+from baselines.separation_lagrangian import lagrangian_multiplier
+from baselines.separation_reachability import NO_OP, relative_reachability_reward
+from baselines.separation_render import equivalence_classes, from_json, to_json, to_markdown
+from baselines.shaping import HARM_PENALTY
+from empathy_zoo.exact_solver import episode_steps, optimal_values, optimum, outcome, tabular_model
+from empathy_zoo.reference import TIE_TOLERANCE, coexistence_optimum, greedy_policy
 
 RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
 

@@ -1,9 +1,9 @@
 """# Separation table files: JSON, Markdown and the command that writes them
 
-:func:`to_json` and :func:`from_json` store a :class:`empathy_zoo.separation.SeparationTable`
+:func:`to_json` and :func:`from_json` store a :class:`baselines.separation.SeparationTable`
 losslessly; :func:`to_markdown` renders it for the docs. The command
 
-    python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]
+    python -m baselines.separation [ENV] [ARG=VALUE ...] [--out DIR]
 
 builds the table of ``ENV`` (default ``coexistence_v0``) with the engine arguments given and writes
 ``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default ``docs/results/separation``). ``<name>`` is
@@ -17,8 +17,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT
 from empathy_zoo.exact_solver import tabular_model
-from empathy_zoo.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
 
 __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_name", "main"]
 
@@ -74,7 +75,7 @@ def _letter(index: int) -> str:
 def to_markdown(table: SeparationTable) -> str:
     """The table for the docs: rows, outcomes, the groups of rows with one optimum, and the pairs of groups."""
     arguments = " ".join(f"{key}={value}" for key, value in table.arguments)
-    command = f"python -m empathy_zoo.separation {table.env} {arguments}".rstrip()
+    command = f"python -m baselines.separation {table.env} {arguments}".rstrip()
     lines = [
         f"# Separation table: {table.env}" + (f" ({arguments})" if arguments else ""),
         "",
@@ -131,11 +132,11 @@ def to_markdown(table: SeparationTable) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
+    """``python -m baselines.separation [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
     import argparse
 
-    parser = argparse.ArgumentParser(prog="python -m empathy_zoo.separation", description=main.__doc__)
-    parser.add_argument("env", nargs="?", default="coexistence_v0")
+    parser = argparse.ArgumentParser(prog="python -m baselines.separation", description=main.__doc__)
+    parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"folder of the files (default {OUT})")
     args = parser.parse_args(argv)

@@ -6,10 +6,10 @@ every pair of methods whether their optimal policies differ. Built on
 
 | | |
 |---|---|
-| Import | `from empathy_zoo.separation import separation_table` |
+| Import | `from baselines.separation import separation_table` |
 | Call | `separation_table(model, selfishness=(0.75, 0.5, 0.25, 0.0), epsilons=(0.0, 0.01, 0.05)) -> SeparationTable` |
-| Command | `python -m empathy_zoo.separation [ENV] [ARG=VALUE ...] [--out DIR]` |
-| Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`empathy_zoo.separation_render`) |
+| Command | `python -m baselines.separation [ENV] [ARG=VALUE ...] [--out DIR]` |
+| Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`baselines.separation_render`) |
 
 ## Rows and the values each acts on (at their fixed point, γ = 0.99)
 * `dqn`: `Q*`. `dqn_silver_literal` and `dqn_equality` are DQN by construction (their registry marks).
@@ -20,10 +20,10 @@ every pair of methods whether their optimal policies differ. Built on
   `o = γ·present'·V*(swap(s'))` (:mod:`baselines.silver_rule`).
 * `dqn_harm_penalty`: `Q*` of the reward − 100 per harm.
 * `dqn_lagrangian`: `Q*` of the reward − λ per harm, λ the dual optimum for d harms per episode at ε
-  (:mod:`empathy_zoo.separation_lagrangian`; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
+  (:mod:`baselines.separation_lagrangian`; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
 * `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values`, the paper's rules only.
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
-  inaction baseline (:mod:`empathy_zoo.separation_reachability`), the paper's rules only.
+  inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules only.
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -45,13 +45,13 @@ import numpy as np
 from baselines.considerate_exact import considerate_values
 from baselines.lagrangian import Lagrangian
 from baselines.registry import METHODS
+from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
+from baselines.separation_reachability import relative_reachability_reward
 from baselines.shaping import HARM_PENALTY
-from empathy_zoo.engine.coexistence import RULE_SETS
+from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.exact_solver import TabularModel, empathic_values, episode_steps, optimal_values, outcome
 from empathy_zoo.reference import greedy_policy
-from empathy_zoo.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
-from empathy_zoo.separation_reachability import relative_reachability_reward
 
 __all__ = [
     "SELFISHNESS",
@@ -248,9 +248,9 @@ def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.nd
     return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
 
 
-def _rows(paper: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
+def _rows(env: str, paper: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
     """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β."""
-    marks = {name: METHODS[name].identical_to.get("coexistence_v0") for name in ("dqn_silver_literal", "dqn_equality")}
+    marks = {name: METHODS[name].identical_to.get(env) for name in ("dqn_silver_literal", "dqn_equality")}
     rows = [Row("dqn", "dqn", None, "", "")]
     rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
     rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
@@ -264,7 +264,7 @@ def _paper_rules(model: TabularModel) -> bool:
     """Whether the model's engine plays the paper's rules (what Be Considerate's exact module and
     the reachability table model)."""
     engine = ENGINES[model.env](1, **model.env_kwargs)
-    return model.env == "coexistence_v0" and getattr(engine, "options", None) == RULE_SETS["paper"]
+    return isinstance(engine, CoexistenceEngine) and getattr(engine, "options", None) == RULE_SETS["paper"]
 
 
 def _considerate_policy(model: TabularModel, epsilon: float, gamma: float) -> np.ndarray:
@@ -288,7 +288,7 @@ def separation_table(
     """The :class:`SeparationTable` of ``model`` (see the module page)."""
     cycles = episode_steps(model)
     paper = _paper_rules(model)
-    rows = _rows(paper, tuple(float(beta) for beta in selfishness))
+    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness))
     q = optimal_values(model, gamma)
     penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
     values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
@@ -372,6 +372,6 @@ def _by_construction(a: Row, b: Row) -> str:
 
 
 if __name__ == "__main__":
-    from empathy_zoo.separation_render import main
+    from baselines.separation_render import main
 
     main()
