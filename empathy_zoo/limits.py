@@ -27,9 +27,11 @@ __all__ = [
     "MAX_EVALUATIONS",
     "MAX_EVAL_EPISODES",
     "MAX_EVALUATION_BYTES",
+    "MAX_HIDDEN_SIZE",
     "MAX_JOURNAL_BYTES",
     "MAX_JSON_DEPTH",
     "MAX_LABEL",
+    "MAX_LEARNER_BYTES",
     "MAX_NAME",
     "MAX_NOTE_BYTES",
     "MAX_REFERENCE_CYCLES",
@@ -44,6 +46,7 @@ __all__ = [
     "MAX_TABLE_BYTES",
     "MAX_TRIALS",
     "MAX_VECTOR_ENVS",
+    "MAX_WALL_TIME_S",
     "available_memory",
     "check_at_most",
     "check_memory",
@@ -114,6 +117,14 @@ MAX_REFERENCE_SIZE = 21
 MAX_REFERENCE_CYCLES = 10_000
 """Longest ``max_cycles`` of a run whose leaderboard curves get the exact reference: it takes one
 product with the step matrix per step of an episode, at every point of the curve."""
+MAX_WALL_TIME_S = 10 * 365 * 24 * 3600
+"""Longest training time a result file records (``wall_time_s``), in seconds: ten years."""
+MAX_LEARNER_BYTES = 1 << 40
+"""Most memory of one run's learner a result file records (each figure of ``memory_bytes``), 1 TiB:
+the learner's networks and replay memory are what its checkpoint holds (:data:`MAX_CHECKPOINT_BYTES`)."""
+MAX_HIDDEN_SIZE = 1 << 19
+"""Widest hidden layer a result file records (``hidden_size`` of its settings): one layer of
+``hidden_size²`` float32 weights already takes :data:`MAX_LEARNER_BYTES`."""
 
 BOUNDS: Mapping[str, int] = {
     "size": MAX_SIZE,
@@ -142,6 +153,9 @@ BOUNDS: Mapping[str, int] = {
     "trials": MAX_TRIALS,
     "reference curve size": MAX_REFERENCE_SIZE,
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
+    "wall_time_s": MAX_WALL_TIME_S,
+    "memory_bytes": MAX_LEARNER_BYTES,
+    "hidden_size recorded": MAX_HIDDEN_SIZE,
 }
 """Every fixed bound, by what docs/limits.md calls it (the machine's own, ``threads``, ``workers``
 and a learner's memory, are :func:`cpu_count` and :func:`available_memory`)."""
