@@ -13,7 +13,8 @@ and writes, into its output directory:
   labelled ``<the method's label at those settings>, tuned``: ``empathy-zoo reproduce --profile
   DIR/tuned.toml`` trains the row to report;
 * ``study.journal``: Optuna's journal of the study (its storage), from which a study that was
-  stopped resumes.
+  stopped resumes; every line of it is checked against what the study writes
+  (:mod:`empathy_zoo.training.tuning_journal`) before anything is trained or written.
 
 Each is rewritten (atomically) after every trial. Decisions, and why (the plan's names,
 :class:`StudyPlan` and the functions that value a trial, are :mod:`empathy_zoo.training.study_plan`'s):
@@ -77,6 +78,7 @@ from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training
 from empathy_zoo.training.study_plan import OVER_WORDS, PRUNE_STARTUP_TRIALS, StudyPlan, curve_value, trial_value
+from empathy_zoo.training.tuning_journal import check_study_lines, stored_plan
 
 __all__ = [
     "JOURNAL_FILE",
@@ -85,6 +87,7 @@ __all__ = [
     "TRIALS_DIR",
     "TUNED_FILE",
     "TuningNotInstalledError",
+    "check_journal",
     "import_optuna",
     "run_study",
     "study_document",
@@ -161,25 +164,32 @@ def run_study(
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     try:
         with hold_output_dir(out, command or "run_study", note):
+            has_plan = check_journal(out / JOURNAL_FILE, note, plan, options.update_kernel)
             for stale in remove_stale_temp_files(out):
                 note(f"removed {stale}, a write killed mid-way")
-            return _study(optuna, plan, out, options, command, progress, on_trial, note)
+            return _study(optuna, plan, out, options, command, progress, on_trial, note, has_plan)
     finally:
         optuna.logging.set_verbosity(verbosity)
 
 
-def check_journal(path: Path, note: Callable[[str], None]) -> None:
+def check_journal(
+    path: Path, note: Callable[[str], None], plan: StudyPlan | None = None, update_kernel: str = RunnerOptions.update_kernel
+) -> bool:
     """Check the study's journal ``path`` (when there is one) before Optuna reads it, through the
-    bounded reader (a regular file of at most :data:`~empathy_zoo.limits.MAX_JOURNAL_BYTES`): a last
-    line a kill cut short (no line break at its end) is dropped from the file, said through
-    ``note``; any other line that is no JSON object (or nests deeper than
-    :data:`~empathy_zoo.limits.MAX_JSON_DEPTH`) is refused with a ``ValueError`` naming the file and
-    the line."""
+    bounded reader (a regular file of at most :data:`~empathy_zoo.limits.MAX_JOURNAL_BYTES`); any
+    line that is no JSON object (or nests deeper than :data:`~empathy_zoo.limits.MAX_JSON_DEPTH`)
+    but a last one a kill cut short (no line break at its end) is refused with a ``ValueError``
+    naming the file and the line. Given the ``plan`` of the study that opens it (trained with
+    ``update_kernel``), every line's every field is then checked against what that study writes
+    (:func:`~empathy_zoo.training.tuning_journal.check_study_lines`: a study of another plan, or a
+    forged line, is refused). Only once all of it passed is the cut last line dropped from the
+    file, said through ``note``. Returns whether the journal holds the plan already."""
     if not path.exists() and not path.is_symlink():
-        return
+        return False
     data = read_data(path, "tuning journal")
     lines = data.split(b"\n")
     torn = lines.pop()  # (b"" when the journal ends with a line break, as every complete write does)
+    entries: list[tuple[int, dict[str, Any]]] = []
     for number, line in enumerate(lines, start=1):
         where = f"tuning journal {path}, line {number}"
         check_json_depth(line, where)
@@ -191,20 +201,22 @@ def check_journal(path: Path, note: Callable[[str], None]) -> None:
             ) from None
         if not isinstance(entry, dict):
             raise ValueError(f"{where} is no JSON object: the journal is damaged; move it away to start the study again")
+        entries.append((number, entry))
+    if plan is not None:
+        check_study_lines(entries, path, plan, update_kernel)
     if torn:
         with open(path, "r+b") as handle:
             handle.truncate(len(data) - len(torn))
         note(f"dropped the last line of {path}: a write killed mid-way cut it short ({len(torn):,} bytes)")
+    return any(entry.get("op_code") == 2 for _, entry in entries)
 
 
-def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, note: Callable[[str], None]) -> Any:
-    """The study stored in ``out`` (created when there is none), its journal checked first
-    (:func:`check_journal`); one of another plan, or trained with another update kernel (whose
-    runs differ in their last bits), is refused."""
+def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, has_plan: bool) -> Any:
+    """The study stored in ``out`` (created when there is none), whose journal :func:`check_journal`
+    checked against ``plan`` (``has_plan``: it holds the plan already; else the plan is stored)."""
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
 
-    check_journal(out / JOURNAL_FILE, note)
     storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
     pruner = (
         optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
@@ -212,18 +224,8 @@ def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, not
         else optuna.pruners.NopPruner()
     )
     study = optuna.create_study(storage=storage, study_name="tune", direction=plan.direction, pruner=pruner, load_if_exists=True)
-    wanted = {key: value for key, value in plan.record().items() if key != "budget"}
-    wanted["budget"] = {k: v for k, v in plan.record()["budget"].items() if k not in ("trials", "env_steps_at_most")}
-    wanted["update_kernel"] = update_kernel
-    stored = study.user_attrs.get("plan")
-    if stored is None:
-        study.set_user_attr("plan", wanted)
-    elif stored != wanted:
-        differs = sorted(key for key in set(stored) | set(wanted) if stored.get(key) != wanted.get(key))
-        raise ValueError(
-            f"{out} holds a study of another plan ({', '.join(differs)} differ): give another --out, or the same "
-            "sweep file, method, parameters, objective, seeds and budget to resume it (--trials may change)"
-        )
+    if not has_plan:
+        study.set_user_attr("plan", stored_plan(plan, update_kernel))
     return study
 
 
@@ -236,10 +238,11 @@ def _study(
     progress: bool,
     on_trial: Callable[[dict[str, Any]], None] | None,
     note: Callable[[str], None],
+    has_plan: bool,
 ) -> dict[str, Any]:
     from tqdm.auto import tqdm
 
-    study = _open_study(optuna, plan, out, options.update_kernel, note)
+    study = _open_study(optuna, plan, out, options.update_kernel, has_plan)
     states = optuna.trial.TrialState
     done = sum(_counted(t, states) for t in study.trials)
     interrupted = [t.number for t in study.trials if not _counted(t, states)]

@@ -1,0 +1,254 @@
+"""A forged tuning journal (``study.journal``: a file anyone may hand over) is refused before
+anything is trained or written: one line ``empathy-zoo: error: …`` naming the journal and the
+line, exit status 2, and the journal and the output directory byte for byte as they were.
+
+Every forgery edits one line of a genuine journal: a study of two trials, the second resumed
+(two 300-step trials of one tuning seed, the smallest budget of tests/test_tune.py)."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+pytest.importorskip("optuna")
+
+from empathy_zoo.cli import main  # noqa: E402
+from empathy_zoo.training.tuning import JOURNAL_FILE, check_journal  # noqa: E402
+
+SWEEP = """
+[sweep]
+seeds = [0, 1]
+steps = 300
+eval_interval = 100
+eval_episodes = 1
+
+[settings]
+learning_starts = 32
+replay_capacity = 300
+hidden_size = 8
+target_update_interval = 50
+epsilon_decay_steps = 200
+
+[envs.coexistence_v0]
+max_cycles = 40
+
+[[methods]]
+method = "dqn_harm_penalty"
+"""
+"""One 300-step experiment on reporting seeds 0 and 1 (three greedy evaluations per run)."""
+
+PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4:1e-2"]
+"""The search space: penalty (uniform) and learning_rate (log-uniform, 1e-4 to 1e-2)."""
+
+
+def _tune(sweep: Path, out: Path, trials: int, params: list[str] = PARAMS) -> int:
+    return main(
+        ["tune", str(sweep), "--method", "dqn_harm_penalty", *params, "--trials", str(trials), "--tuning-seeds", "1"]
+        + ["--startup-trials", "2", "--no-progress", "--out", str(out)]
+    )
+
+
+@pytest.fixture(scope="module")
+def genuine(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """``(sweep file, study directory)`` of a genuine study: one trial, then a second resumed."""
+    root = tmp_path_factory.mktemp("genuine")
+    sweep = root / "tiny.toml"
+    sweep.write_text(SWEEP)
+    out = root / "study"
+    assert _tune(sweep, out, 1) == 0
+    assert _tune(sweep, out, 2) == 0
+    return sweep, out
+
+
+def _snapshot(directory: Path) -> dict[str, bytes | None]:
+    """Every path under ``directory``: a file's bytes, ``None`` for a directory."""
+    return {
+        str(path.relative_to(directory)): None if path.is_dir() else path.read_bytes() for path in sorted(directory.rglob("*"))
+    }
+
+
+Entry = dict[str, Any]
+
+
+def _nth(op_code: int, n: int = 0, has: str | None = None) -> Callable[[list[Entry]], int]:
+    """The index of the ``n``-th line of operation ``op_code`` (with a ``user_attr`` ``has``, where given)."""
+
+    def find(entries: list[Entry]) -> int:
+        found = [
+            i
+            for i, entry in enumerate(entries)
+            if entry["op_code"] == op_code and (has is None or has in entry.get("user_attr", {}))
+        ]
+        return found[n]
+
+    return find
+
+
+def _set(key: str, value: Any) -> Callable[[Entry], None]:
+    def forge(entry: Entry) -> None:
+        entry[key] = value
+
+    return forge
+
+
+def _curve(forge_point: Callable[[dict[str, Any]], None]) -> Callable[[Entry], None]:
+    def forge(entry: Entry) -> None:
+        forge_point(entry["user_attr"]["curve"][-1])
+
+    return forge
+
+
+def _curve_string(entry: Entry) -> None:
+    entry["user_attr"]["curve"] = "x"
+
+
+def _drop(key: str) -> Callable[[dict[str, Any]], None]:
+    def forge(point: dict[str, Any]) -> None:
+        del point[key]
+
+    return forge
+
+
+def _point(key: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def forge(point: dict[str, Any]) -> None:
+        point[key] = value
+
+    return forge
+
+
+PARAM, STATE, INTERMEDIATE, ATTR, CREATE = 5, 6, 7, 8, 4
+FORGERIES: dict[str, tuple[Callable[[list[Entry]], int], Callable[[Entry], None]]] = {
+    # d01: a parameter's value outside the study's own search space, or not finite
+    "param 1e300": (_nth(PARAM), _set("param_value_internal", 1e300)),
+    "learning_rate 0.5 outside log:1e-4:1e-2": (_nth(PARAM, 1), _set("param_value_internal", 0.5)),
+    "penalty 0 outside float:-200:-1": (_nth(PARAM), _set("param_value_internal", 0.0)),
+    "param NaN": (_nth(PARAM), _set("param_value_internal", float("nan"))),
+    "param -Infinity": (_nth(PARAM, 1), _set("param_value_internal", float("-inf"))),
+    "distribution widened": (
+        _nth(PARAM, 1),
+        _set(
+            "distribution",
+            json.dumps({"name": "FloatDistribution", "attributes": {"step": None, "low": 1e-4, "high": 1.0, "log": True}}),
+        ),
+    ),
+    # d02: non-finite or out-of-range values, trial ids the writer never writes
+    "values Infinity": (_nth(STATE), _set("values", [float("inf")])),
+    "values NaN": (_nth(STATE), _set("values", [float("nan")])),
+    "values -1e9": (_nth(STATE), _set("values", [-1e9])),
+    "values above max_cycles": (_nth(STATE), _set("values", [1e9])),
+    "values of another value": (_nth(STATE, 1), _set("values", [0.5])),
+    "intermediate NaN": (_nth(INTERMEDIATE), _set("intermediate_value", float("nan"))),
+    "intermediate string": (_nth(INTERMEDIATE, 1), _set("intermediate_value", "x")),
+    "intermediate step off the curve": (_nth(INTERMEDIATE), _set("step", 10**9)),
+    "curve per_seed NaN": (_nth(ATTR, 0, "curve"), _curve(_point("per_seed", [float("nan")]))),
+    "curve value -1": (_nth(ATTR, 0, "curve"), _curve(_point("value", -1.0))),
+    "curve step past the budget": (_nth(ATTR, 0, "curve"), _curve(_point("step", 301))),
+    "trial_id -5": (_nth(PARAM), _set("trial_id", -5)),
+    "trial_id 1e9": (_nth(ATTR), _set("trial_id", 1e9)),
+    "trial_id of an ended trial": (_nth(PARAM, 2), _set("trial_id", 0)),
+    "trial_id true": (_nth(STATE), _set("trial_id", True)),
+    "study_id 3": (_nth(CREATE), _set("study_id", 3)),
+    "wall time NaN": (_nth(ATTR, 0, "wall_time_s"), _set("user_attr", {"wall_time_s": float("nan")})),
+    "op_code 99": (_nth(CREATE, 1), _set("op_code", 99)),
+    "directions of another objective": (_nth(0, 1), _set("directions", [1])),
+    "datetime_start not a time": (_nth(CREATE), _set("datetime_start", "yesterday")),
+    "an extra field": (_nth(STATE), _set("exec", "evilmod:X")),
+    # d03: wrong types, which gave tracebacks after a trial was trained
+    "param string": (_nth(PARAM), _set("param_value_internal", "evilmod:X")),
+    "param list": (_nth(PARAM), _set("param_value_internal", [1.0])),
+    "param dict": (_nth(PARAM, 1), _set("param_value_internal", {"a": 1})),
+    "param_name unknown": (_nth(PARAM), _set("param_name", "evilmod:X")),
+    "curve string": (_nth(ATTR, 0, "curve"), _curve_string),
+    "curve entry without value": (_nth(ATTR, 0, "curve"), _curve(_drop("value"))),
+    "objective string": (_nth(STATE), _set("values", ["x"])),
+    "objective 400 digits": (_nth(STATE), _set("values", [10**400])),
+}
+"""Each forgery: ``(the line it edits, how)``."""
+
+
+def _forge(journal: Path, find: Callable[[list[Entry]], int], forge: Callable[[Entry], None]) -> int:
+    """Edit the journal's line ``find`` gives with ``forge``; return its line number."""
+    entries = [json.loads(line) for line in journal.read_text().splitlines()]
+    index = find(entries)
+    forge(entries[index])
+    journal.write_text("".join(json.dumps(entry) + "\n" for entry in entries))
+    return index + 1
+
+
+def _refused(out: Path, line: str, capsys: pytest.CaptureFixture[str], before: dict[str, bytes | None]) -> None:
+    """The command's one-line refusal starts with ``line``, and ``out`` is as ``before``."""
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"empathy-zoo: error: {line}"), err
+    assert "Traceback" not in err
+    assert _snapshot(out) == before
+
+
+@pytest.mark.parametrize("name", list(FORGERIES))
+def test_a_forged_journal_line_is_refused_naming_file_and_line_and_nothing_is_written(
+    name: str, genuine: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    sweep, study = genuine
+    out = tmp_path / "study"
+    shutil.copytree(study, out)
+    journal = out / JOURNAL_FILE
+    number = _forge(journal, *FORGERIES[name])
+    before = _snapshot(out)
+    capsys.readouterr()
+    assert _tune(sweep, out, 3) == 2
+    _refused(out, f"tuning journal {journal}, line {number}: ", capsys, before)
+
+
+@pytest.mark.parametrize("name", ["param 1e300", "values Infinity", "curve string"])
+def test_check_journal_refuses_a_forgery_and_keeps_a_torn_last_line(
+    name: str, genuine: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """The checker itself: a ``ValueError`` naming file and line; the cut last line is not dropped."""
+    from empathy_zoo.cli.tune import default_objective
+    from empathy_zoo.experiment import load_sweep
+    from empathy_zoo.experiment.search_space import parse_params
+    from empathy_zoo.training.study_plan import StudyPlan, select_experiment, tuning_seeds
+
+    sweep, study = genuine
+    journal = tmp_path / JOURNAL_FILE
+    shutil.copy(study / JOURNAL_FILE, journal)
+    number = _forge(journal, *FORGERIES[name])
+    with journal.open("a") as handle:
+        handle.write('{"op_code": 4, "worker_id"')
+    before = journal.read_bytes()
+    base = select_experiment(load_sweep(sweep), "dqn_harm_penalty")
+    stored = json.loads(journal.read_text().splitlines()[1])["user_attr"]["plan"]
+    plan = StudyPlan(
+        source=str(sweep),
+        base=base,
+        params=parse_params(PARAMS[1::2], base.method_object()),
+        metric="survival",
+        direction=default_objective(base.env)[1],
+        seeds=tuning_seeds(1, [0, 1]),
+        reporting_seeds=(0, 1),
+        reporting_budget=base.budget,
+        trials=3,
+        startup_trials=2,
+    )
+    notes: list[str] = []
+    with pytest.raises(ValueError, match=rf"^tuning journal {re.escape(str(journal))}, line {number}: ") as error:
+        check_journal(journal, notes.append, plan, stored["update_kernel"])
+    assert "\n" not in str(error.value) and not notes and journal.read_bytes() == before
+
+
+def test_a_study_of_another_plan_is_refused_before_the_journal_gains_a_line(
+    genuine: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    sweep, study = genuine
+    out = tmp_path / "study"
+    shutil.copytree(study, out)
+    before = _snapshot(out)
+    capsys.readouterr()
+    other = ["--param", "penalty=float:-100:-1", "--param", "learning_rate=log:1e-4:1e-2"]
+    assert _tune(sweep, out, 3, other) == 2
+    _refused(out, f"{out} holds a study of another plan (params differ)", capsys, before)
