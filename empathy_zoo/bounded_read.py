@@ -2,11 +2,11 @@
 
 A result, evaluation, agent, checkpoint or journal file may come from anyone. Each is read through
 :func:`read_data` (or, for a checkpoint streamed into ``torch.load``, :func:`open_data`): a file that
-is no regular file (a FIFO, a device, a directory) is refused without waiting on it, one larger than
-the cap of its kind (:data:`CAPS`, the bounds of :mod:`empathy_zoo.limits`) is refused without
-reading it to its end, and JSON nested deeper than :data:`~empathy_zoo.limits.MAX_JSON_DEPTH` is
-refused before it is parsed (:func:`check_json_depth`). Every refusal is one ``ValueError`` line
-naming the file.
+is no regular file (a FIFO, a device, a directory, a dangling symbolic link or a loop of links) is
+refused without waiting on it, one larger than the cap of its kind (:data:`CAPS`, the bounds of
+:mod:`empathy_zoo.limits`) is refused by its size before it is read, and JSON nested deeper than
+:data:`~empathy_zoo.limits.MAX_JSON_DEPTH` is refused before it is parsed (:func:`check_json_depth`).
+Every refusal is one ``ValueError`` line naming the file.
 """
 
 from __future__ import annotations
@@ -49,8 +49,17 @@ def read_data(path: str | os.PathLike[str], kind: str) -> bytes:
 
 def open_data(path: str | os.PathLike[str], kind: str) -> BinaryIO:
     """``path`` open for reading, once it is a regular file of at most the cap of ``kind``
-    (``ValueError`` naming it otherwise): for a file streamed into a reader, not read into memory."""
-    handle = open_regular(path, kind)
+    (``ValueError`` naming it otherwise, a dangling symbolic link in its place too): for a file
+    streamed into a reader, not read into memory."""
+    name = os.fspath(path)
+    try:
+        handle = open_regular(path, kind)
+    except FileNotFoundError:
+        if os.path.islink(name):
+            raise ValueError(
+                f"{kind} {name} is a dangling symbolic link (to {os.readlink(name)}), not a regular file; move it away"
+            ) from None
+        raise
     size = os.fstat(handle.fileno()).st_size
     if size > CAPS[kind]:
         handle.close()

@@ -278,10 +278,25 @@ _KINDS = {
 
 def read_bounded(path: str | os.PathLike[str], bound: int, what: str) -> bytes:
     """The bytes of the regular file ``path`` (:func:`open_regular`), or a ``ValueError`` naming it
-    when it holds more than ``bound`` bytes (read at most ``bound + 1`` bytes: a huge file is
-    refused at once, never read to the end)."""
-    with open_regular(path, what) as handle:
+    when it holds more than ``bound`` bytes: its size (``fstat`` of the open file) is compared with
+    ``bound`` before a byte is read, and at most ``bound + 1`` bytes are read (a file growing
+    meanwhile is refused too), so a huge file is refused at once, never read. A dangling symbolic
+    link in the file's place is a ``ValueError`` naming it; a missing file raises
+    ``FileNotFoundError``, as ``open`` does."""
+    name = os.fspath(path)
+    too_large = f"{what} {name} is larger than {format_bytes(bound)}, the most it may be (docs/limits.md)"
+    try:
+        handle = open_regular(path, what)
+    except FileNotFoundError:
+        if os.path.islink(name):
+            raise ValueError(
+                f"{what} {name} is a dangling symbolic link (to {os.readlink(name)}), not a regular file; move it away"
+            ) from None
+        raise
+    with handle:
+        if os.fstat(handle.fileno()).st_size > bound:
+            raise ValueError(too_large)
         data = handle.read(bound + 1)
     if len(data) > bound:
-        raise ValueError(f"{what} {os.fspath(path)} is larger than {format_bytes(bound)}, the most it may be (docs/limits.md)")
+        raise ValueError(too_large)
     return data

@@ -65,13 +65,23 @@ def check_label(value: Any, what: str) -> str:
 
 
 def confined(root: str | os.PathLike[str], *parts: str) -> Path:
-    """``root / parts…``, or a ``ValueError`` when that path would lie outside ``root`` or pass
-    through a symbolic link below it (:func:`check_no_links`)."""
+    """``root / parts…``, or a ``ValueError`` when that path would lie outside ``root``, pass
+    through a symbolic link below it (:func:`check_no_links`) or cannot be resolved (a loop of
+    symbolic links)."""
     base = Path(root)
     path = base.joinpath(*parts)
-    if not path.resolve().is_relative_to(base.resolve()):
+    try:
+        inside = path.resolve().is_relative_to(base.resolve())
+    except (RuntimeError, OSError) as error:  # (a loop of symbolic links: RuntimeError up to Python 3.12, OSError after)
+        raise ValueError(f"{path} cannot be resolved ({_first_line(error)}): a loop of symbolic links; move it away") from None
+    if not inside:
         raise ValueError(f"{path} lies outside {base}; refusing to write there")
     return check_no_links(base, path)
+
+
+def _first_line(error: BaseException) -> str:
+    """The first line of ``error``'s message (a message is one line of a refusal)."""
+    return (str(error).splitlines() or [type(error).__name__])[0]
 
 
 def check_no_links(root: str | os.PathLike[str], path: str | os.PathLike[str]) -> Path:

@@ -32,9 +32,10 @@ from typing import Any, TypeAlias
 import numpy as np
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.data_files import data_files
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label, check_result
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
-from empathy_zoo.result_file import check_one_experiment_per_label, check_result
 from leaderboard.ordering import label_order
 from leaderboard.run_facts import env_argument
 
@@ -140,7 +141,10 @@ class Curve:
 def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     """Sorted ``*.json`` result files of ``results_dir`` (or of its ``runs/`` subdirectory).
 
-    Names starting with ``.`` (temporary files of an atomic write in progress) are ignored.
+    Names starting with ``.`` (temporary files of an atomic write in progress) are ignored. A result
+    or agent file (``*.agent.pt``, ``*.agent.zip``) of that directory that is no regular file (a FIFO,
+    a device, a directory, a dangling symbolic link or a loop of links) raises ``ValueError`` naming
+    it (:func:`empathy_zoo.data_files.data_files`): no run is left out without a word.
     """
     root = Path(results_dir)
     if root.exists() and not root.is_dir():
@@ -149,7 +153,9 @@ def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
         raise ValueError(f"results directory {root} does not exist")
     if (root / "runs").is_dir():
         root = root / "runs"
-    return sorted(p for p in root.glob("*.json") if not p.name.startswith(".") and p.is_file())
+    for suffix in AGENT_SUFFIXES:
+        data_files(root, f"*{suffix}", "agent file")
+    return data_files(root, "*.json", "result file")
 
 
 def table_env(result: dict[str, Any]) -> str:

@@ -14,7 +14,7 @@ import argparse
 from typing import Any
 
 from empathy_zoo.cli.allow_import import add_allow_import
-from empathy_zoo.cli.common import PROG
+from empathy_zoo.cli.common import PROG, path_text
 
 __all__ = ["add_evaluate", "cmd_evaluate"]
 
@@ -60,7 +60,7 @@ def add_evaluate(sub: Any) -> None:
     from empathy_zoo.training.heldout import DEFAULT_EPISODES
 
     parser = sub.add_parser("evaluate", help="play every kept agent beside partners it never trained with")
-    parser.add_argument("results", metavar="RESULTS_DIR", help="results directory (with runs/ or *.json)")
+    parser.add_argument("results", type=path_text, metavar="RESULTS_DIR", help="results directory (with runs/ or *.json)")
     parser.add_argument(
         "--scenarios",
         action="append",
@@ -71,7 +71,7 @@ def add_evaluate(sub: Any) -> None:
     parser.add_argument(
         "--episodes", type=int, metavar="N", help=f"greedy episodes per run and scenario (default: {DEFAULT_EPISODES})"
     )
-    parser.add_argument("--out", metavar="DIR", help="where evaluations/ goes (default: RESULTS_DIR)")
+    parser.add_argument("--out", type=path_text, metavar="DIR", help="where evaluations/ goes (default: RESULTS_DIR)")
     parser.add_argument(
         "--threads",
         type=int,

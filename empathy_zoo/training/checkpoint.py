@@ -64,6 +64,10 @@ LOG_COLUMNS = ("episode_end_step", *METRIC_NAMES)
 price of its cost after each episode, for a run whose reward transform prices costs when sampled)."""
 
 
+MESSAGE_CHARS = 300
+"""Most characters of what was wrong that a refused checkpoint's message quotes."""
+
+
 class CheckpointError(ValueError):
     """A checkpoint exists but cannot be used."""
 
@@ -141,8 +145,12 @@ def _tensor_problem(tensor: torch.Tensor, finite: bool) -> str:
 
 
 def corrupted(path: Path, error: BaseException | str) -> CheckpointError:
-    """The error of checkpoint ``path``, unusable because of ``error`` (what was wrong in it)."""
+    """The error of checkpoint ``path``, unusable because of ``error`` (what was wrong in it), in one
+    line: ``error``'s message with its line breaks made spaces, cut at :data:`MESSAGE_CHARS`."""
     why = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
+    why = " ".join(why.split())  # (one line: torch's messages span several)
+    if len(why) > MESSAGE_CHARS:
+        why = why[: MESSAGE_CHARS - 3] + "..."
     return CheckpointError(
         f"checkpoint {path} is corrupted or unreadable ({why}); "
         "it was left untouched: delete or move it to restart those runs from scratch"

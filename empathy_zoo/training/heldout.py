@@ -19,6 +19,7 @@ and episode count; a file that was made otherwise is refused by name, never over
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +31,7 @@ from tqdm.auto import tqdm
 
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
+from empathy_zoo.data_files import data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
@@ -38,7 +40,7 @@ from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
 from empathy_zoo.randomness import STREAMS
-from empathy_zoo.result_file import RUNS_DIR, read_result
+from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, read_result
 from empathy_zoo.scenarios import Scenario, ScenarioSet, default_set_name, load_scenario_set, trained_with
 from empathy_zoo.training.evaluation import evaluate_greedy
 
@@ -98,12 +100,15 @@ class EvaluationSummary:
 def results_of(results_dir: str | Path) -> list[tuple[Path, dict[str, Any]]]:
     """``(result file, result)`` of every result file of ``results_dir`` (its ``runs/``, or itself
     when it holds the files), read and checked (:func:`empathy_zoo.result_file.read_result`), in
-    file-name order; a directory without result files raises ``ValueError``."""
+    file-name order; a directory without result files raises ``ValueError``, and so does a result or
+    agent file there that is no regular file (:func:`empathy_zoo.data_files.data_files`)."""
     root = Path(results_dir)
     if not root.is_dir():
         raise ValueError(f"results directory {root} does not exist")
     runs = root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
-    paths = sorted(p for p in runs.glob("*.json") if not p.name.startswith(".") and p.is_file())
+    for suffix in AGENT_SUFFIXES:
+        data_files(runs, f"*{suffix}", "agent file")
+    paths = data_files(runs, "*.json", "result file")
     if not paths:
         raise ValueError(f"no result files (*.json) in {runs}: train runs first")
     return [(path, read_result(path)) for path in paths]
@@ -121,6 +126,26 @@ def same_world(a: EnvVariant, b: EnvVariant) -> bool:
     return world(a) == world(b)
 
 
+def run_agent(result_file: Path, result: Mapping[str, Any], allowed_imports: Collection[str] = ()) -> Any:
+    """The trained agent of the run whose result file (read as ``result``) is ``result_file``: loaded
+    from the agent file it names and checked against the SHA-256 recorded there, of the run's
+    environment and observation window; else a ``ValueError`` naming the file."""
+    agent = load_run_agent(result_file)
+    described = agent.describe().get("env")
+    if described is not None and described != result["env"]:
+        raise ValueError(
+            f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result['env']}"
+        )
+    home = trained_with(result, allowed_imports).variant
+    view = int({**DEFAULT_ARGUMENTS[result["env"]], **home.kwargs}["view"])
+    if agent.obs_size != view * view:
+        raise ValueError(
+            f"agent file {agent.describe().get('file')} takes observations of {agent.obs_size} values, but its run "
+            f"{result_file} sees a {view}×{view} window ({view * view}): the agent file is not this run's"
+        )
+    return agent
+
+
 def evaluate_run(
     result_file: Path,
     result: Mapping[str, Any],
@@ -128,6 +153,7 @@ def evaluate_run(
     episodes: int = DEFAULT_EPISODES,
     on_scenario: Callable[[str], None] | None = None,
     allowed_imports: Collection[str] = (),
+    agent: Any = None,
 ) -> dict[str, Any]:
     """The evaluation document of one run (see :mod:`empathy_zoo.evaluation_file`): its agent,
     loaded from the agent file its result file names and checked against the SHA-256 recorded
@@ -135,7 +161,8 @@ def evaluate_run(
     ``scenario_set``; ``on_scenario(name)`` is called after each. ``ValueError`` for a run that kept
     no agent, an agent file changed since, or a scenario the run's world cannot hold. A partner the
     result file records resolves only to a registered policy or one of ``allowed_imports``
-    (:func:`empathy_zoo.scenarios.trained_with`)."""
+    (:func:`empathy_zoo.scenarios.trained_with`). ``agent``: the run's agent already loaded and
+    checked (:func:`run_agent`), else it is loaded here."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
     check_at_most("episodes", episodes, MAX_EVAL_EPISODES, "greedy episodes per run and scenario, played at once")
@@ -143,25 +170,15 @@ def evaluate_run(
         raise ValueError(
             f"scenario set {scenario_set.name!r} is for {scenario_set.env}; run {result['run_id']} is of {result['env']}"
         )
-    agent = load_run_agent(result_file)
-    described = agent.describe().get("env")
-    if described is not None and described != result["env"]:
-        raise ValueError(
-            f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result['env']}"
-        )
+    if agent is None:
+        agent = run_agent(result_file, result, allowed_imports)
     own = trained_with(result, allowed_imports)
     home = own.variant
-    view = int({**DEFAULT_ARGUMENTS[result["env"]], **home.kwargs}["view"])
-    if agent.obs_size != view * view:
-        raise ValueError(
-            f"agent file {agent.describe().get('file')} takes observations of {agent.obs_size} values, but its run "
-            f"{result_file} sees a {view}×{view} window ({view * view}): the agent file is not this run's"
-        )
     learner = GreedyAgent(agent)
     entries = []
     scenarios: list[Scenario] = [own, *scenario_set.scenarios]
-    for scenario in scenarios:
-        variant = scenario.for_run(home.kwargs)
+    variants = [scenario.for_run(home.kwargs) for scenario in scenarios]  # (every scenario checked before one is played)
+    for scenario, variant in zip(scenarios, variants):
         columns = evaluate_greedy(
             learner,
             result["env"],
@@ -280,6 +297,8 @@ def evaluate_results(
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise ValueError(f"threads must be a positive int, got {threads!r}")
     check_at_most("threads", threads, cpu_count(), "the CPUs of this machine")
+    if out_dir is not None and not os.fspath(out_dir):
+        raise ValueError("out_dir is an empty path: name the directory ('.' for the current one)")
     runs = results_of(results_dir)
     out = Path(results_dir if out_dir is None else out_dir)
     summary = EvaluationSummary()
@@ -317,46 +336,99 @@ def evaluate_results(
         )
     for _, result in kept:
         trained_with(result, allowed_imports)  # (every run's own partners, checked before anything is written)
-    for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
-        check_output_dir(out, (directory.relative_to(out).as_posix(),))  # (no link below out)
-    with hold_output_dir(evaluations_root(out), command_line(), on_note):  # (training may go on beside it)
-        for directory in sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()}):
-            remove_stale_temp_files(directory)
-        before = torch.get_num_threads()
-        torch.set_num_threads(threads)
-        try:
-            _evaluate_todo(work, out, episodes, progress, on_written, summary, allowed_imports)
-        finally:
-            torch.set_num_threads(before)
+    todo = _todo(work, out, episodes, summary)
+    agents = _checked_agents(todo, allowed_imports)
+    directories = sorted({evaluation_path(out, s.name, "x").parent for s in by_name.values()})
+    created = sorted(
+        {folder for directory in directories for folder in (directory, *directory.parents) if not folder.exists()},
+        key=lambda folder: len(folder.parts),
+        reverse=True,
+    )
+    try:
+        for directory in directories:
+            check_output_dir(out, (directory.relative_to(out).as_posix(),))  # (no link below out)
+        with hold_output_dir(evaluations_root(out), command_line(), on_note):  # (training may go on beside it)
+            for directory in directories:
+                remove_stale_temp_files(directory)
+            before = torch.get_num_threads()
+            torch.set_num_threads(threads)
+            try:
+                _evaluate_todo(todo, agents, episodes, progress, on_written, summary, allowed_imports)
+            finally:
+                torch.set_num_threads(before)
+    except BaseException:
+        for folder in created:  # (only the directories this call made, and only while empty)
+            try:
+                folder.rmdir()
+            except OSError:
+                continue
+        raise
     return summary
 
 
+def _todo(
+    work: Sequence[tuple[ScenarioSet, Path, dict[str, Any]]], out: Path, episodes: int, summary: EvaluationSummary
+) -> list[tuple[ScenarioSet, Path, dict[str, Any], Path]]:
+    """``(set, result file, result, evaluation file)`` of what of ``work`` has no evaluation file in
+    ``out`` yet; one already there is read and checked to be the one asked for (:func:`_check_done`,
+    which refuses anything but a regular file in its place) and counted in ``summary.done``."""
+    todo = []
+    for scenario_set, path, result in work:
+        target = evaluation_path(out, scenario_set.name, result["run_id"])
+        if os.path.lexists(target):
+            _check_done(target, path, result, scenario_set, episodes)
+            summary.done.append(target)
+        else:
+            todo.append((scenario_set, path, result, target))
+    return todo
+
+
+def _checked_agents(
+    todo: Sequence[tuple[ScenarioSet, Path, dict[str, Any], Path]], allowed_imports: Collection[str]
+) -> dict[Path, Any]:
+    """The agent of every run of ``todo`` (:func:`run_agent`), by result file, once every scenario
+    of its set fits the run's world: every input is checked before the first evaluation file is
+    written (``ValueError`` naming the first that is not)."""
+    agents: dict[Path, Any] = {}
+    for scenario_set, path, result, _ in todo:
+        if path not in agents:
+            agents[path] = run_agent(path, result, allowed_imports)
+        home = trained_with(result, allowed_imports).variant
+        for scenario in scenario_set.scenarios:
+            scenario.for_run(home.kwargs)
+    return agents
+
+
 def _evaluate_todo(
-    work: Sequence[tuple[ScenarioSet, Path, dict[str, Any]]],
-    out: Path,
+    todo: Sequence[tuple[ScenarioSet, Path, dict[str, Any], Path]],
+    agents: Mapping[Path, Any],
     episodes: int,
     progress: bool,
     on_written: Callable[[Path], None] | None,
     summary: EvaluationSummary,
     allowed_imports: Collection[str] = (),
 ) -> None:
-    """Evaluate what of ``work`` has no evaluation file in ``out`` yet (:func:`evaluate_results`
-    checked everything and holds the directory)."""
-    todo = []
-    for scenario_set, path, result in work:
-        target = evaluation_path(out, scenario_set.name, result["run_id"])
-        if target.exists():
-            _check_done(target, path, result, scenario_set, episodes)
-            summary.done.append(target)
-        else:
-            todo.append((scenario_set, path, result, target))
+    """Play and write every evaluation of ``todo`` with the ``agents`` checked before
+    (:func:`evaluate_results` holds the directory); one another process wrote meanwhile is checked
+    and skipped as done."""
     total = sum(1 + len(scenario_set.scenarios) for scenario_set, *_ in todo)
     bar_off = not progress or total == 0
     with tqdm(total=total, unit="scenario", desc="evaluate", disable=bar_off, dynamic_ncols=True, mininterval=1.0) as bar:
         for scenario_set, path, result, target in todo:
+            if os.path.lexists(target):
+                _check_done(target, path, result, scenario_set, episodes)
+                summary.done.append(target)
+                bar.update(1 + len(scenario_set.scenarios))
+                continue
             bar.set_postfix_str(f"{scenario_set.name}: {result['run_id']}", refresh=False)
             document = evaluate_run(
-                path, result, scenario_set, episodes, on_scenario=lambda _name: bar.update(1), allowed_imports=allowed_imports
+                path,
+                result,
+                scenario_set,
+                episodes,
+                on_scenario=lambda _name: bar.update(1),
+                allowed_imports=allowed_imports,
+                agent=agents[path],
             )
             write_json_atomic(target, document)
             summary.written.append(target)

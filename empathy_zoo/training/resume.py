@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json, write_json_atomic
+from empathy_zoo.data_files import data_files
 from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.names import check_path_name
 from empathy_zoo.result_file import result_path
@@ -243,8 +244,12 @@ def plan_ensembles(
     every_run: Sequence[RunSpec] | None = None,
 ) -> list[list[RunSpec]]:
     """The ensembles that train the runs ``todo`` (see the module documentation); ``every_run``:
-    every run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from."""
+    every run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from.
+    A checkpoint or list of runs in ``checkpoints/`` that is no regular file (a FIFO, a directory, a
+    dangling symbolic link or a loop of links) raises ``ValueError`` naming it, before anything is changed."""
     directory = Path(out_dir) / CHECKPOINT_DIR
+    data_files(directory, "*.pt", "checkpoint")  # (each a regular file, or refused before anything is changed)
+    data_files(directory, f"*{MANIFEST_SUFFIX}", "list of runs")
     pending = {spec.run_id: spec for spec in todo}
     claimed: dict[str, Path] = {}
     chunks: list[list[RunSpec]] = []
