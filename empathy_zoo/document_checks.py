@@ -9,13 +9,14 @@ document is and what to do with a damaged one.
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_RANGES
-from empathy_zoo.names import check_label, check_path_name
+from empathy_zoo.names import LABEL_REFUSED_CATEGORIES, check_label, check_path_name
 from empathy_zoo.policies import parse_entry_label
 
 __all__ = ["DocumentChecker", "shown"]
@@ -53,6 +54,7 @@ class DocumentChecker:
         )
 
     def table(self, value: Any, field: str) -> dict[str, Any]:
+        """An object (a JSON table whose keys are strings)."""
         if not isinstance(value, dict) or not all(isinstance(key, str) for key in value):
             raise self.fail(field, "an object", value)
         return value
@@ -75,6 +77,7 @@ class DocumentChecker:
         return self.integer(value, field, 1)
 
     def number(self, value: Any, field: str) -> float:
+        """A number (an int or a float, not a boolean)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.fail(field, "a number", value)
         return value
@@ -87,13 +90,15 @@ class DocumentChecker:
             raise self.fail(field, f"a number >= {low}", value)
         return value
 
-    def metric(self, value: Any, field: str, metric: str, max_cycles: int, length: int | None = None) -> list[Any]:
+    def metric(self, value: Any, field: str, metric: str, high: float | None = None, length: int | None = None) -> list[Any]:
         """An array of values of ``metric`` (of ``length`` items where given), each within what an
         episode can give: a finite number within :data:`~empathy_zoo.metrics.METRIC_RANGES` (a
-        count, :data:`~empathy_zoo.metrics.INTEGER_METRICS`, at least 0; equality at most 1), a
-        survival of at most ``max_cycles`` steps: what the leaderboard can draw."""
-        low, high = METRIC_RANGES[metric]
-        high = max_cycles if metric == "survival" else high
+        count, :data:`~empathy_zoo.metrics.INTEGER_METRICS`, at least 0; equality at most 1) and at
+        most ``high`` where given (the caller's bound for the episode's environment: a survival of at
+        most ``max_cycles`` steps, harms of at most the other agents): what the leaderboard can draw."""
+        low, fixed_high = METRIC_RANGES[metric]
+        if fixed_high is not None:
+            high = fixed_high if high is None else min(high, fixed_high)
         kind = "a count (a whole number)" if metric in INTEGER_METRICS else "a finite number"
         expected = f"{kind} >= {low:g}" + ("" if high is None else f" and <= {high:g}")
         values = self.numbers(value, field, length=length)
@@ -112,8 +117,15 @@ class DocumentChecker:
                 )
 
     def text(self, value: Any, field: str) -> str:
-        if not isinstance(value, str) or not value or "\n" in value:
+        """A non-empty string of printable text: no control or format character and no line break
+        (Unicode categories :data:`~empathy_zoo.names.LABEL_REFUSED_CATEGORIES`, as labels)."""
+        if not isinstance(value, str) or not value:
             raise self.fail(field, "a non-empty one-line string", value)
+        for position, character in enumerate(value):
+            category = unicodedata.category(character)
+            if category in LABEL_REFUSED_CATEGORIES:
+                name = unicodedata.name(character, f"U+{ord(character):04X}")
+                raise self.fail(field, f"one line of printable text (it holds {name}, {category}, at position {position})", value)
         return value
 
     def label(self, value: Any, field: str) -> str:

@@ -29,12 +29,13 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker
-from empathy_zoo.engine.arguments import argument_defaults
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
+from empathy_zoo.result_file import check_env_kwargs, episode_bounds
 
 __all__ = [
     "TRAINED_WITH",
@@ -100,11 +101,10 @@ def evaluation_path(results_dir: str | os.PathLike[str], scenario_set: str, run_
 
 def evaluation_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     """Every evaluation file of ``results_dir``, sorted (``[]`` when it has no ``evaluations/``);
-    names starting with ``.`` (writes in progress) are left out."""
-    root = evaluations_root(results_dir)
-    if not root.is_dir():
-        return []
-    return sorted(p for p in root.glob("*/*.json") if not p.name.startswith(".") and p.is_file())
+    names starting with ``.`` (writes in progress) are left out. Anything else named
+    ``evaluations/*/*.json`` that is no regular file (a FIFO, a directory, a dangling symbolic
+    link) raises ``ValueError`` naming it (:func:`empathy_zoo.data_files.data_files`)."""
+    return data_files(evaluations_root(results_dir), "*/*.json", "evaluation file")
 
 
 def _checker(path: Path) -> DocumentChecker:
@@ -134,11 +134,10 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         check.name(evaluation[field], field)
     if evaluation["env"] not in ENGINES:
         raise check.fail("env", f"a registered environment ({', '.join(ENGINES)})", evaluation["env"])
-    default_cycles = argument_defaults(ENGINES[evaluation["env"]])["max_cycles"]
     if evaluation.get("variant") is not None:
         check.name(evaluation["variant"], "variant")
-    for field in ("method", "method_label"):
-        check.text(evaluation[field], field)
+    check.text(evaluation["method"], "method")
+    check.label(evaluation["method_label"], "method_label")
     if "version" in evaluation:
         check.text(evaluation["version"], "version")
     check.integer(evaluation["seed"], "seed", 0, MAX_SEED)
@@ -150,10 +149,14 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     scenario_set = check.table(evaluation["scenario_set"], "scenario_set")
     check.has(scenario_set, ("name", "env", "scenarios"), "scenario_set.")
     check.name(scenario_set["name"], "scenario_set.name")
+    if scenario_set.get("description", "") != "":  # (a set may have none: "")
+        check.text(scenario_set["description"], "scenario_set.description")
     if scenario_set["env"] != evaluation["env"]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
     if not isinstance(scenario_set["scenarios"], list):
         raise check.fail("scenario_set.scenarios", "an array of scenario definitions", scenario_set["scenarios"])
+    for i, definition in enumerate(scenario_set["scenarios"]):
+        _check_scenario(check, evaluation["env"], definition, f"scenario_set.scenarios[{i}]", played=False)
     episodes = check.integer(evaluation["episodes"], "episodes", 1, MAX_EVAL_EPISODES)
     check.integer(evaluation["stream"], "stream", 0)
     scenarios = evaluation["scenarios"]
@@ -164,18 +167,17 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         where = f"scenarios[{i}]"
         entry = check.table(entry, where)
         check.has(entry, SCENARIO_FIELDS, f"{where}.")
-        names.append(check.name(entry["name"], f"{where}.name"))
-        check.text(entry["reason"], f"{where}.reason")
+        names.append(_check_scenario(check, evaluation["env"], entry, where, played=True))
         if not isinstance(entry["held_out"], bool):
             raise check.fail(f"{where}.held_out", "true or false", entry["held_out"])
-        env_kwargs = check.table(entry["env_kwargs"], f"{where}.env_kwargs")
-        max_cycles = check.integer(env_kwargs.get("max_cycles", default_cycles), f"{where}.env_kwargs.max_cycles", 1, MAX_CYCLES)
-        for agent_name, label in check.table(entry["fixed"], f"{where}.fixed").items():
-            check.policy_label(label, f"{where}.fixed.{agent_name}")
+        bounds = episode_bounds(evaluation["env"], entry["env_kwargs"])
         metrics = check.table(entry["metrics"], f"{where}.metrics")
         check.has(metrics, METRIC_NAMES, f"{where}.metrics.")
+        for metric in metrics:
+            if metric not in METRIC_NAMES:
+                raise check.fail(f"{where}.metrics.{metric}", f"no such metric (one of {', '.join(METRIC_NAMES)})", metric)
         for metric in METRIC_NAMES:
-            check.metric(metrics[metric], f"{where}.metrics.{metric}", metric, max_cycles, length=episodes)
+            check.metric(metrics[metric], f"{where}.metrics.{metric}", metric, bounds[metric], length=episodes)
     if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
         raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
     if len(set(names)) != len(names):
@@ -184,6 +186,23 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     if declared != names[1:]:
         raise check.fail("scenarios", f"the set's scenarios {declared} after {TRAINED_WITH!r}", names)
     return evaluation
+
+
+def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: str, played: bool) -> str:
+    """A scenario (a definition of the set, or an entry of ``scenarios``, ``played``) at ``where``:
+    its ``name``, ``reason`` (one line of printable text), ``env_kwargs`` (as a result file's
+    ``config.env_kwargs``: :func:`~empathy_zoo.result_file.check_env_kwargs`; a definition's are
+    its own arguments, laid over the run's when played, so only those played are checked together
+    against the grid) and ``fixed`` (agent names and policy labels); returns its name."""
+    entry = check.table(definition, where)
+    check.has(entry, ("name", "reason", "env_kwargs", "fixed"), f"{where}.")
+    name = check.name(entry["name"], f"{where}.name")
+    check.text(entry["reason"], f"{where}.reason")
+    check_env_kwargs(check, env, entry["env_kwargs"], f"{where}.env_kwargs", grid=played)
+    for agent_name, label in check.table(entry["fixed"], f"{where}.fixed").items():
+        check.name(agent_name, f"{where}.fixed (the agent {agent_name!r})")
+        check.policy_label(label, f"{where}.fixed.{agent_name}")
+    return name
 
 
 def read_evaluation(path: str | Path) -> dict[str, Any]:

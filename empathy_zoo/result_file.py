@@ -28,8 +28,18 @@ from typing import Any
 from empathy_zoo.atomic import read_json
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
+from empathy_zoo.engine.coexistence import CoexistenceEngine
+from empathy_zoo.engine.sharing import SharingEngine, battery_cells, battery_value
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED, MAX_STEPS
+from empathy_zoo.limits import (
+    MAX_CYCLES,
+    MAX_EVAL_EPISODES,
+    MAX_HIDDEN_SIZE,
+    MAX_LEARNER_BYTES,
+    MAX_SEED,
+    MAX_STEPS,
+    MAX_WALL_TIME_S,
+)
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
@@ -42,6 +52,8 @@ __all__ = [
     "RUNS_DIR",
     "ResultFileError",
     "check_result",
+    "check_env_kwargs",
+    "episode_bounds",
     "read_result",
     "result_path",
     "experiment_of",
@@ -107,30 +119,38 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     check.integer(result["seed"], "seed", 0, MAX_SEED)
     steps = check.integer(result["steps"], "steps", 1, MAX_STEPS)
     _check_config(check, result)
-    _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": check.number})
+    if "steps" in result["config"] and result["config"]["steps"] != steps:
+        raise check.fail("steps", f"the run's config.steps ({result['config']['steps']:,})", steps)
+    _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": _wall_time(check)})
     if result.get("commit") is not None:
         check.text(result["commit"], "commit")
     if result.get("update_kernel") is not None and result["update_kernel"] not in UPDATE_KERNELS_RECORDED:
         raise check.fail("update_kernel", f"one of {', '.join(UPDATE_KERNELS_RECORDED)} or null", result["update_kernel"])
     for module, digest in check.table(result.get("plugin_sha256", {}), "plugin_sha256").items():
+        check.text(module, f"plugin_sha256 (the name {module!r})")
         if digest is not None and not (isinstance(digest, str) and _SHA256.fullmatch(digest)):
             raise check.fail(f"plugin_sha256.{module}", "a SHA-256 (64 lowercase hex digits) or null", digest)
     for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
-        check.integer(count, f"memory_bytes.{name}", 0)
+        check.name(name, f"memory_bytes (the name {name!r})")
+        check.integer(count, f"memory_bytes.{name}", 0, MAX_LEARNER_BYTES)
     _check_agent(check, result)
-    max_cycles = result["config"]["env_kwargs"].get("max_cycles", argument_defaults(ENGINES[result["env"]])["max_cycles"])
+    bounds = episode_bounds(result["env"], result["config"]["env_kwargs"])
     train = check.table(result["train"], "train")
     check.has(train, ("episode_end_step", *METRIC_NAMES), "train.")
     ends = check.numbers(train["episode_end_step"], "train.episode_end_step", integral=True)
     check.increasing(ends, "train.episode_end_step", 1, steps)
     for name, column in train.items():
         if name in METRIC_NAMES:
-            check.metric(column, f"train.{name}", name, max_cycles)
+            check.metric(column, f"train.{name}", name, bounds[name])
         elif name == PRICE_COLUMN:
             for i, value in enumerate(check.numbers(column, f"train.{name}")):
                 check.finite(value, f"train.{name}[{i}]", 0.0)
         elif name != "episode_end_step":
-            check.numbers(column, f"train.{name}")
+            raise check.fail(
+                f"train.{name}",
+                f"no such column (a run records episode_end_step, {', '.join(METRIC_NAMES)}, {PRICE_COLUMN})",
+                name,
+            )
     lengths = {name: len(column) for name, column in train.items()}
     if len(set(lengths.values())) > 1:
         raise ResultFileError(f"{path}: field train: columns of different lengths {lengths}; move the file away")
@@ -145,12 +165,14 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
         if entry["step"] <= previous:
             raise check.fail(f"eval[{i}].step", f"a step after the evaluation before it (step {previous})", entry["step"])
         previous = entry["step"]
-        for name in METRIC_NAMES:
-            values = check.metric(entry[name], f"eval[{i}].{name}", name, max_cycles, length=episodes)
-            episodes = len(values) if episodes is None else episodes
-        for name, value in entry.items():
+        for name in entry:
             if name != "step" and name not in METRIC_NAMES:
-                check.numbers(value, f"eval[{i}].{name}")
+                raise check.fail(
+                    f"eval[{i}].{name}", f"no such metric (an evaluation records step, {', '.join(METRIC_NAMES)})", name
+                )
+        for name in METRIC_NAMES:
+            values = check.metric(entry[name], f"eval[{i}].{name}", name, bounds[name], length=episodes)
+            episodes = len(values) if episodes is None else episodes
     return result
 
 
@@ -297,27 +319,99 @@ def _check_optional(check: DocumentChecker, table: Mapping[str, Any], prefix: st
             check_field(table[name], f"{prefix}{name}")
 
 
+def _wall_time(check: DocumentChecker) -> Any:
+    """The check of ``wall_time_s``: a finite number of seconds in ``[0, MAX_WALL_TIME_S]``."""
+
+    def check_wall_time(value: Any, field: str) -> float:
+        if check.finite(value, field, 0.0) > MAX_WALL_TIME_S:
+            raise check.fail(field, f"seconds <= {MAX_WALL_TIME_S:,} (ten years; docs/limits.md)", value)
+        return value
+
+    return check_wall_time
+
+
+def check_env_kwargs(check: DocumentChecker, env: str, value: Any, field: str, grid: bool = True) -> dict[str, Any]:
+    """``value``, the arguments ``env`` was built with (``field`` names them in a message), if each
+    is an argument of its engine within its range: a grid argument or the count of other agents an
+    int in ``[1, MAX_CYCLES]``, then (with ``grid``) all of them within what the environment builds
+    (:func:`_check_grid`); an argument of choices one of them. Checked as data: nothing is built."""
+    env_kwargs = check.table(value, field)
+    engine = ENGINES.get(env)
+    if engine is None:
+        return env_kwargs
+    for name, argument in env_kwargs.items():
+        where = f"{field}.{name}"
+        if name in GRID_ARGUMENTS or name == engine.count_argument:
+            check.integer(argument, where, 1, MAX_CYCLES)
+        elif name in engine.extra_arguments:
+            if argument not in engine.extra_arguments[name]:
+                raise check.fail(where, f"one of {', '.join(engine.extra_arguments[name])}", argument)
+        else:
+            known = (*GRID_ARGUMENTS, *engine.extra_arguments, *filter(None, [engine.count_argument]))
+            raise check.fail(where, f"an argument of {env} ({', '.join(known)})", name)
+    if grid:
+        _check_grid(check, engine, env_kwargs, field)
+    return env_kwargs
+
+
+COEXISTENCE_STEP_REWARD = 1.0
+"""The most one step of Coexistence pays an agent: its reward is whether it is operative (``1``)."""
+
+
+def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float | None]:
+    """The most each metric of :data:`~empathy_zoo.metrics.METRIC_NAMES` can be in one episode of
+    ``env`` built with ``env_kwargs`` (checked by :func:`check_env_kwargs`; the others at their
+    defaults); ``None`` where the suite knows no bound beyond the metric's range.
+
+    * ``survival``: ``max_cycles`` steps.
+    * ``harms``: the other agents (the engine's count argument): a harmed cat leaves the episode,
+      so it is harmed once; nobody is harmed in Sharing.
+    * ``batteries``, ``other_batteries``: the batteries the grid starts with (Sharing's cells whose
+      row and column are both odd; none in Coexistence).
+    * ``return``: what the learner's steps can pay. Coexistence pays
+      :data:`COEXISTENCE_STEP_REWARD` per operative step, so at most ``max_cycles`` times that;
+      Sharing pays only for a battery collected, at most one per step, each worth at most the
+      first's (``battery_value(1)``: later ones are worth less), so at most
+      ``min(max_cycles, batteries)`` times that.
+    * ``other_return``: the same summed over the other agents (the batteries shared among them)."""
+    engine = ENGINES[env]
+    arguments = {**argument_defaults(engine), **env_kwargs}
+    max_cycles = int(arguments["max_cycles"])
+    others = int(arguments[engine.count_argument]) if engine.count_argument is not None else len(engine.agents) - 1
+    bounds: dict[str, float | None] = {name: None for name in METRIC_NAMES}
+    bounds["survival"] = max_cycles
+    if issubclass(engine, CoexistenceEngine):
+        return bounds | {
+            "harms": others,
+            "batteries": 0,
+            "other_batteries": 0,
+            "return": max_cycles * COEXISTENCE_STEP_REWARD,
+            "other_return": others * max_cycles * COEXISTENCE_STEP_REWARD,
+        }
+    if issubclass(engine, SharingEngine):
+        batteries = int(battery_cells(int(arguments["size"])).sum())
+        worth = float(battery_value(1))
+        return bounds | {
+            "harms": others,
+            "batteries": batteries,
+            "other_batteries": batteries,
+            "return": min(max_cycles, batteries) * worth,
+            "other_return": min(others * max_cycles, batteries) * worth,
+        }
+    return bounds
+
+
 def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
+    """``config``: its tables and fields, each within what a run is built with."""
     config = check.table(result["config"], "config")
     check.has(config, CONFIG_TABLES, "config.")
     settings = check.table(config["settings"], "config.settings")
-    env_kwargs = check.table(config["env_kwargs"], "config.env_kwargs")
-    engine = ENGINES.get(result["env"])
-    for name, value in env_kwargs.items() if engine is not None else ():
-        assert engine is not None
-        field = f"config.env_kwargs.{name}"
-        if name in GRID_ARGUMENTS or name == engine.count_argument:
-            check.integer(value, field, 1, MAX_CYCLES)
-        elif name in engine.extra_arguments:
-            if value not in engine.extra_arguments[name]:
-                raise check.fail(field, f"one of {', '.join(engine.extra_arguments[name])}", value)
-        else:
-            known = (*GRID_ARGUMENTS, *engine.extra_arguments, *filter(None, [engine.count_argument]))
-            raise check.fail(field, f"an argument of {result['env']} ({', '.join(known)})", name)
-    if engine is not None:
-        _check_grid(check, engine, env_kwargs)
+    check_env_kwargs(check, result["env"], config["env_kwargs"], "config.env_kwargs")
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
+        check.name(agent, f"config.fixed (the agent {agent!r})")
         check.policy_label(policy, f"config.fixed.{agent}")
+    if "hidden_size" in settings:
+        check.integer(settings["hidden_size"], "config.settings.hidden_size", 1, MAX_HIDDEN_SIZE)
     _check_optional(
         check,
         config,
@@ -352,7 +446,7 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
         ) from None
 
 
-def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, Any]) -> None:
+def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, Any], field: str = "config.env_kwargs") -> None:
     """The grid arguments of ``env_kwargs`` (each an int already) within what the environment
     builds (:func:`~empathy_zoo.engine.arguments.check_grid_arguments`: a size of at most
     :data:`~empathy_zoo.limits.MAX_SIZE`, an odd view below it, lookup tables within their bound),
@@ -361,10 +455,10 @@ def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, An
     try:
         check_grid_arguments(grid["size"], grid["view"], grid["max_cycles"], engine.min_size)
     except ValueError as error:
-        raise check.fail("config.env_kwargs", f"arguments {engine.name} is built with ({error})", dict(env_kwargs)) from None
+        raise check.fail(field, f"arguments {engine.name} is built with ({error})", dict(env_kwargs)) from None
     count = engine.count_argument
     if count is not None and count in env_kwargs and env_kwargs[count] > grid["size"] ** 2:
-        raise check.fail(f"config.env_kwargs.{count}", f"at most {grid['size'] ** 2} (the cells of the grid)", env_kwargs[count])
+        raise check.fail(f"{field}.{count}", f"at most {grid['size'] ** 2} (the cells of the grid)", env_kwargs[count])
 
 
 RUNS_DIR = "runs"

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.cli.common import AgentPolicies, agent_policy, positive
+from empathy_zoo.cli.common import AgentPolicies, agent_policy
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT
 
 __all__ = ["add_browse_commands", "cmd_envs", "cmd_methods", "cmd_play", "cmd_policies"]
@@ -56,13 +56,13 @@ def cmd_policies(args: argparse.Namespace, command: str) -> int:
 def cmd_play(args: argparse.Namespace, command: str) -> int:
     """Episodes of a uniformly random robot beside the fixed agents."""
     from empathy_zoo import ENVIRONMENTS, FixedAgents
+    from empathy_zoo.cli.watch import check_episodes
     from empathy_zoo.environments import DEFAULT_POLICIES
     from empathy_zoo.metrics import METRIC_NAMES
 
     if args.env not in ENVIRONMENTS:
         raise ValueError(f"unknown environment {args.env!r}; registered: {sorted(ENVIRONMENTS)}")
-    positive("--episodes", args.episodes)
-    positive("--seed", args.seed, allow_zero=True)
+    check_episodes(args.episodes, args.seed)  # (the bounds of watch's: before anything plays)
     fixed = {**DEFAULT_POLICIES.get(args.env, {}), **dict(args.fixed or [])}
     env = FixedAgents(ENVIRONMENTS[args.env].parallel_env(render_mode=args.render), fixed)
     engine = env.unwrapped.engine

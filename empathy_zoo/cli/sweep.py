@@ -29,7 +29,17 @@ PRODUCED_BY = "(the command that trained these runs is in each result file's con
 
 
 def cmd_reproduce(args: argparse.Namespace, command: str) -> int:
-    """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md."""
+    """Train a sweep's missing runs, then write its leaderboard and (for the paper's) REPRODUCTION.md.
+    SIGINT or SIGTERM stops the whole command, its reports as well as its training (exit 130 or
+    143), even in a process started with SIGINT ignored (:func:`~empathy_zoo.training.runner.stopped_by_signals`)."""
+    from empathy_zoo.training.runner import stopped_by_signals
+
+    with stopped_by_signals():
+        return _reproduce(args, command)
+
+
+def _reproduce(args: argparse.Namespace, command: str) -> int:
+    """What :func:`cmd_reproduce` does, once SIGINT and SIGTERM stop it."""
     from empathy_zoo.experiment.budget_fit import warmup_refusal
     from empathy_zoo.experiment.model import group_specs
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, sweep_log

@@ -23,7 +23,7 @@ from typing import Any
 from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, AgentPolicies, agent_policy, positive
 
-__all__ = ["add_watch", "check_gif_path", "cmd_watch", "find_agent"]
+__all__ = ["add_watch", "check_episodes", "check_gif_path", "cmd_watch", "find_agent", "write_gif"]
 
 GIF_PROBE_PREFIX = ".ezoo-gif-probe-"
 """Name prefix of the empty file ``--gif`` writes and removes to see that its directory takes a file."""
@@ -102,6 +102,34 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
         raise ValueError(str(error)) from None
 
 
+def check_episodes(episodes: int, seed: int) -> None:
+    """Refuse (``ValueError``) ``--episodes`` outside ``1 … MAX_EVAL_EPISODES`` (the bound of
+    ``evaluate --episodes``) and a ``--seed`` below 0 or so large that the last episode's seed,
+    ``seed + episodes - 1``, passes ``MAX_SEED``: checked before anything is played."""
+    from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED, check_at_most
+
+    positive("--episodes", episodes)
+    check_at_most("--episodes", episodes, MAX_EVAL_EPISODES, "the bound of evaluate --episodes")
+    positive("--seed", seed, allow_zero=True)
+    check_at_most(
+        "--seed",
+        seed,
+        MAX_SEED - episodes + 1,
+        f"the seed of the last of {episodes:,} episode(s), seed + {episodes - 1:,}, is at most 2⁶³ − 1",
+    )
+
+
+def write_gif(path: str, data: bytes) -> Path:
+    """Write the GIF ``data`` to ``path`` atomically; a write that fails (a full disk) raises
+    ``OSError`` naming the file, with the failed write's ``errno``."""
+    from empathy_zoo.atomic import write_bytes_atomic
+
+    try:
+        return write_bytes_atomic(path, data)
+    except OSError as error:
+        raise OSError(error.errno, f"cannot write the GIF {path} ({error.strerror or error})") from error
+
+
 def check_gif_path(path: str) -> Path:
     """``path`` if a GIF may be written there, checked before any episode is played: nothing or a
     regular file is there (never a directory, a link, a device or a pipe: only a regular file is
@@ -134,11 +162,13 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     """Greedy episodes of a trained agent, each one's metrics printed; a GIF of the first."""
     from empathy_zoo.episode_gif import EpisodeRecorder
     from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
+    from empathy_zoo.limits import MAX_CYCLES, check_at_most
     from empathy_zoo.policies import entry_label
     from empathy_zoo.render import render_text
 
-    positive("--episodes", args.episodes)
+    check_episodes(args.episodes, args.seed)
     positive("--gif-steps", args.gif_steps)
+    check_at_most("--gif-steps", args.gif_steps, MAX_CYCLES, "the bound of max_cycles: no episode is longer")
     if args.gif:
         check_gif_path(args.gif)
     agent = find_agent(args.target, args.dir)
@@ -166,10 +196,8 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
         outcome = play_greedy(agent, env, seed, on_step=on_step)
         print(f"episode {episode} (seed {seed}): {format_metrics(outcome.metrics)}", flush=True)
     if recorder is not None:
-        from empathy_zoo.atomic import write_bytes_atomic
-
         data = recorder.gif()
-        path = write_bytes_atomic(args.gif, data)
+        path = write_gif(args.gif, data)
         steps = recorder.frames - 1
         shown = f"the whole of episode 0, {steps} steps" if recorder.whole_episode else f"episode 0's first {steps} steps"
         print(f"{PROG}: wrote {path} ({recorder.frames} frames: {shown}; {len(data) / 1024:.0f} KB)")

@@ -35,7 +35,16 @@ from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgre
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
 
-__all__ = ["RunnerOptions", "Stopped", "read_finished", "train_runs", "CHECKPOINT_DIR", "SUPERSEDED_SUFFIX", "STOP_SIGNALS"]
+__all__ = [
+    "RunnerOptions",
+    "Stopped",
+    "read_finished",
+    "stopped_by_signals",
+    "train_runs",
+    "CHECKPOINT_DIR",
+    "SUPERSEDED_SUFFIX",
+    "STOP_SIGNALS",
+]
 
 SUPERSEDED_SUFFIX = ".superseded"
 """Suffix of a result file set aside while its run is retrained (``rerun_changed``)."""
@@ -131,7 +140,7 @@ def train_runs(
         if stale:
             note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
         _settle_superseded(out_dir / RUNS_DIR)
-        with _set_aside(out_dir, redo), _stopped_by_signals():
+        with _set_aside(out_dir, redo), stopped_by_signals():
             _train_todo(specs, out_dir, options, on_result, note)
     return [result_path(out_dir, s.run_id) for s in specs]
 
@@ -266,11 +275,14 @@ def _exit_with_parent(parent: int) -> None:
 
 
 @contextmanager
-def _stopped_by_signals() -> Iterator[None]:
+def stopped_by_signals() -> Iterator[None]:
     """While the block runs (in the main thread), the first SIGINT or SIGTERM raises
     :class:`Stopped` there, whatever the process inherited for them; a second one while the sweep
-    stops is ignored. The handlers before are put back afterwards."""
-    if threading.current_thread() is not threading.main_thread():
+    stops is ignored. The handlers before are put back afterwards. Inside a block of its own (a
+    command that trains, then writes its reports, all of it stoppable) it changes nothing."""
+    if threading.current_thread() is not threading.main_thread() or all(
+        getattr(signal.getsignal(number), "stops_sweep", False) for number in STOP_SIGNALS
+    ):
         yield
         return
     fired: list[int] = []
@@ -279,6 +291,8 @@ def _stopped_by_signals() -> Iterator[None]:
         if not fired:
             fired.append(signum)
             raise Stopped(signum)
+
+    stop.stops_sweep = True  # type: ignore[attr-defined]
 
     previous = {number: signal.signal(number, stop) for number in STOP_SIGNALS}
     try:
