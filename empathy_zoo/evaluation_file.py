@@ -155,8 +155,6 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
     if not isinstance(scenario_set["scenarios"], list):
         raise check.fail("scenario_set.scenarios", "an array of scenario definitions", scenario_set["scenarios"])
-    for i, definition in enumerate(scenario_set["scenarios"]):
-        _check_scenario(check, evaluation["env"], definition, f"scenario_set.scenarios[{i}]", played=False)
     episodes = check.integer(evaluation["episodes"], "episodes", 1, MAX_EVAL_EPISODES)
     check.integer(evaluation["stream"], "stream", 0)
     scenarios = evaluation["scenarios"]
@@ -178,6 +176,8 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
                 raise check.fail(f"{where}.metrics.{metric}", f"no such metric (one of {', '.join(METRIC_NAMES)})", metric)
         for metric in METRIC_NAMES:
             check.metric(metrics[metric], f"{where}.metrics.{metric}", metric, bounds[metric], length=episodes)
+    for i, definition in enumerate(scenario_set["scenarios"]):  # (after what was played: a field of it is named first)
+        _check_scenario(check, evaluation["env"], definition, f"scenario_set.scenarios[{i}]", played=False)
     if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
         raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
     if len(set(names)) != len(names):
