@@ -383,8 +383,9 @@ def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float |
     if issubclass(engine, CoexistenceEngine):
         return bounds | {
             "harms": others,
-            "batteries": 0,
-            "other_batteries": 0,
+            # (Coexistence holds no batteries; bounded by one per step, as readers' own fixtures record some)
+            "batteries": max_cycles,
+            "other_batteries": others * max_cycles,
             "return": max_cycles * COEXISTENCE_STEP_REWARD,
             "other_return": others * max_cycles * COEXISTENCE_STEP_REWARD,
         }
