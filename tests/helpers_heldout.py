@@ -21,12 +21,22 @@ EPISODES = 100
 
 
 def scenario_set(env: str, scenarios: Mapping[str, Mapping[str, str]], name: str = "synthetic") -> dict[str, Any]:
-    """A set's definition: ``{scenario: fixed}``, each with a reason."""
+    """A set's definition: ``{scenario: fixed}``, each with a reason; a scenario of several fixed
+    agents sets the engine's count argument to their number (``num_cats = 3``)."""
+    from empathy_zoo.environments import ENGINES
+
+    count = ENGINES[env].count_argument
+
+    def arguments(fixed: Mapping[str, str]) -> dict[str, Any]:
+        return {count: len(fixed)} if count and len(fixed) > 1 else {}
+
     return {
         "name": name,
         "env": env,
         "description": "Hand-made partners.",
-        "scenarios": [{"name": s, "reason": f"Why {s}.", "env_kwargs": {}, "fixed": dict(f)} for s, f in scenarios.items()],
+        "scenarios": [
+            {"name": s, "reason": f"Why {s}.", "env_kwargs": arguments(f), "fixed": dict(f)} for s, f in scenarios.items()
+        ],
     }
 
 
