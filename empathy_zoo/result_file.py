@@ -28,8 +28,6 @@ from typing import Any
 from empathy_zoo.atomic import read_json
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
-from empathy_zoo.engine.coexistence import CoexistenceEngine
-from empathy_zoo.engine.sharing import SharingEngine, battery_cells, battery_value
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import (
     MAX_CYCLES,
@@ -361,44 +359,12 @@ COEXISTENCE_STEP_REWARD = 1.0
 def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float | None]:
     """The most each metric of :data:`~empathy_zoo.metrics.METRIC_NAMES` can be in one episode of
     ``env`` built with ``env_kwargs`` (checked by :func:`check_env_kwargs`; the others at their
-    defaults); ``None`` where the suite knows no bound beyond the metric's range.
-
-    * ``survival``: ``max_cycles`` steps.
-    * ``harms``: the other agents (the engine's count argument): a harmed cat leaves the episode,
-      so it is harmed once; nobody is harmed in Sharing.
-    * ``batteries``, ``other_batteries``: the batteries the grid starts with (Sharing's cells whose
-      row and column are both odd; none in Coexistence).
-    * ``return``: what the learner's steps can pay. Coexistence pays
-      :data:`COEXISTENCE_STEP_REWARD` per operative step, so at most ``max_cycles`` times that;
-      Sharing pays only for a battery collected, at most one per step, each worth at most the
-      first's (``battery_value(1)``: later ones are worth less), so at most
-      ``min(max_cycles, batteries)`` times that.
-    * ``other_return``: the same summed over the other agents (the batteries shared among them)."""
+    defaults): ``survival`` at most ``max_cycles`` steps; ``None`` (no bound beyond the metric's
+    range) for the others."""
     engine = ENGINES[env]
     arguments = {**argument_defaults(engine), **env_kwargs}
-    max_cycles = int(arguments["max_cycles"])
-    others = int(arguments[engine.count_argument]) if engine.count_argument is not None else len(engine.agents) - 1
     bounds: dict[str, float | None] = {name: None for name in METRIC_NAMES}
-    bounds["survival"] = max_cycles
-    if issubclass(engine, CoexistenceEngine):
-        return bounds | {
-            "harms": others,
-            # (Coexistence holds no batteries; bounded by one per step, as readers' own fixtures record some)
-            "batteries": max_cycles,
-            "other_batteries": others * max_cycles,
-            "return": max_cycles * COEXISTENCE_STEP_REWARD,
-            "other_return": others * max_cycles * COEXISTENCE_STEP_REWARD,
-        }
-    if issubclass(engine, SharingEngine):
-        batteries = int(battery_cells(int(arguments["size"])).sum())
-        worth = float(battery_value(1))
-        return bounds | {
-            "harms": others,
-            "batteries": batteries,
-            "other_batteries": batteries,
-            "return": min(max_cycles, batteries) * worth,
-            "other_return": min(others * max_cycles, batteries) * worth,
-        }
+    bounds["survival"] = int(arguments["max_cycles"])
     return bounds
 
 

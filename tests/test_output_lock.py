@@ -94,4 +94,4 @@ def test_evaluate_is_refused_beside_another_evaluate_but_not_beside_training(tmp
     assert len(summary.written) == 2
     with hold_output_dir(out / "evaluations", "another evaluate"):
         with pytest.raises(DirectoryInUse, match="another evaluate"):
-            evaluate_results(out, episodes=2, out_dir=out, progress=False)
+            evaluate_results(out, episodes=1, out_dir=out, progress=False)
