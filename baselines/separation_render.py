@@ -3,7 +3,7 @@
 :func:`to_json` and :func:`from_json` store a :class:`baselines.separation.SeparationTable`
 losslessly; :func:`to_markdown` renders it for the docs. The command
 
-    python -m baselines.separation [ENV] [ARG=VALUE ...] [--out DIR]
+    python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]
 
 builds the table of ``ENV`` (default ``coexistence_v0``) with the engine arguments given and writes
 ``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default ``docs/results/separation``). ``<name>`` is
@@ -75,7 +75,7 @@ def _letter(index: int) -> str:
 def to_markdown(table: SeparationTable) -> str:
     """The table for the docs: rows, outcomes, the groups of rows with one optimum, and the pairs of groups."""
     arguments = " ".join(f"{key}={value}" for key, value in table.arguments)
-    command = f"python -m baselines.separation {table.env} {arguments}".rstrip()
+    command = f"python -m baselines.separation_render {table.env} {arguments}".rstrip()
     lines = [
         f"# Separation table: {table.env}" + (f" ({arguments})" if arguments else ""),
         "",
@@ -132,10 +132,10 @@ def to_markdown(table: SeparationTable) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m baselines.separation [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
+    """``python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
     import argparse
 
-    parser = argparse.ArgumentParser(prog="python -m baselines.separation", description=main.__doc__)
+    parser = argparse.ArgumentParser(prog="python -m baselines.separation_render", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"folder of the files (default {OUT})")
@@ -155,3 +155,7 @@ def main(argv: list[str] | None = None) -> None:
         partial.write_text(text, encoding="utf-8")
         partial.replace(path)
         print(path)
+
+
+if __name__ == "__main__":
+    main()
