@@ -2,7 +2,7 @@
 
 Name them as ``baselines.sb3:SB3_DQN`` / ``baselines.sb3:SB3_PPO`` (or register
 :data:`SB3_METHODS`); the runner trains them like any method and the suite scores them with its
-own metrics. Needs ``pip install "empathy-zoo[sb3]"``; Stable-Baselines3 is imported only when a
+own metrics. Needs ``pip install -e ".[sb3]"``; Stable-Baselines3 is imported only when a
 learner is built, so this module imports without it.
 
 Design: SB3's ``learn()`` owns an environment loop over its own ``VecEnv``, while the runner owns
@@ -55,6 +55,7 @@ import torch
 
 from agents.base import Method, StepBatch
 from agents.phases import TrainingPhases
+from empathy_zoo.extras import install_command
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.safe_data import from_safe, to_safe
 
@@ -71,7 +72,7 @@ __all__ = [
     "PRICED_AT_SAMPLE_ON_DQN",
 ]
 
-INSTALL_HINT = 'Stable-Baselines3 is not installed; install it with: pip install "empathy-zoo[sb3]"'
+INSTALL_HINT = f"Stable-Baselines3 is not installed; install it with: {install_command('sb3')}"
 PRICED_AT_SAMPLE_ON_DQN = (
     "SB3 DQN cannot train a reward transform that prices its costs when sampled (the Lagrangian method, "
     "priced_at_sample): SB3's DQN samples its updates from a replay buffer and a train() of its own, which hold "

@@ -42,6 +42,7 @@ import torch
 
 from empathy_zoo.atomic import read_json, write_bytes_atomic
 from empathy_zoo.bounded_read import check_json_depth, read_data
+from empathy_zoo.extras import install_command
 from empathy_zoo.policies import plain_data_problem
 from empathy_zoo.result_file import AGENT_SUFFIXES
 from empathy_zoo.trained_agent import SB3Agent, TrainedAgent
@@ -364,7 +365,7 @@ def _load_library_agent(path: Path, data: bytes, member: Mapping[str, Any], sour
     try:
         import stable_baselines3 as sb3
     except ImportError:
-        raise ImportError(f'{path} is a Stable-Baselines3 agent: install it with pip install "empathy-zoo[sb3]"') from None
+        raise ImportError(f"{path} is a Stable-Baselines3 agent: install it with {install_command('sb3')}") from None
     cls = getattr(sb3, member["algorithm"])
     with zipfile.ZipFile(io.BytesIO(data)) as archive:
         saved = _json_member(path, archive, "data")

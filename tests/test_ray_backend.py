@@ -136,7 +136,7 @@ def test_a_result_whose_file_exists_is_not_written_again(local_ray, local_result
 
 def test_without_ray_the_error_says_how_to_install_it(monkeypatch, tmp_path) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # makes ``import ray`` fail, installed or not
-    with pytest.raises(ImportError, match=r'pip install "empathy-zoo\[ray\]"'):
+    with pytest.raises(ImportError, match=r'pip install -e "\.\[ray\]"'):
         train_runs(SPECS, tmp_path, RAY)
     assert not (tmp_path / "runs").exists()
 

@@ -170,4 +170,4 @@ def test_missing_sb3_says_how_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)
     with pytest.raises(ImportError) as error:
         SB3Learner([SB3Settings()], [0], 25, 5)
-    assert str(error.value) == INSTALL_HINT and 'pip install "empathy-zoo[sb3]"' in INSTALL_HINT
+    assert str(error.value) == INSTALL_HINT and 'pip install -e ".[sb3]"' in INSTALL_HINT

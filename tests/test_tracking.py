@@ -187,11 +187,11 @@ def test_a_bad_log_value_is_one_clear_error_before_anything_is_written(tmp_path,
 
 def test_a_backend_whose_package_is_missing_names_the_extra(tmp_path, capsys, monkeypatch) -> None:
     monkeypatch.setitem(tracking.EXTRAS, "wandb", ("no_such_wandb_module", "wandb"))
-    with pytest.raises(tracking.TrackingNotInstalledError, match=r'pip install "empathy-zoo\[wandb\]"'):
+    with pytest.raises(tracking.TrackingNotInstalledError, match=r'pip install -e "\.\[wandb\]"'):
         RunnerOptions(log="csv,wandb")
     out = tmp_path / "out"
     assert main(["train", "--out", str(out), *TINY, "--log", "wandb"]) == 2
-    assert 'pip install "empathy-zoo[wandb]"' in capsys.readouterr().err and not out.exists()
+    assert 'pip install -e ".[wandb]"' in capsys.readouterr().err and not out.exists()
 
 
 def test_log_values_parse_in_order_and_none_logs_nothing() -> None:

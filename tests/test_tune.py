@@ -284,7 +284,7 @@ def test_without_optuna_tune_says_which_extra_to_install(sweep: Path, monkeypatc
     monkeypatch.setitem(sys.modules, "optuna", None)  # (an import of it fails)
     assert main(["tune", str(sweep), *TUNE]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and 'pip install "empathy-zoo[tune]"' in err
+    assert err.count("\n") == 1 and 'pip install -e ".[tune]"' in err
 
 
 def test_every_experiment_of_the_methods_profile_is_written_as_a_sweep_file_that_reads_back() -> None:

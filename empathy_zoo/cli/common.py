@@ -236,7 +236,7 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
         default=default,
         metavar="BACKENDS",
         help="log every run's scalars live to tensorboard, csv and/or wandb, comma-separated, under "
-        'OUT/logs/<backend>/<run id>/ (tensorboard, wandb: pip install "empathy-zoo[tensorboard]" / "[wandb]"; '
+        'OUT/logs/<backend>/<run id>/ (tensorboard, wandb: pip install -e ".[tensorboard]" / ".[wandb]"; '
         "none: no logging) (default: none)",
     )
     parser.add_argument(
@@ -257,7 +257,7 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
         "--backend",
         choices=["local", "ray"],
         default=default,
-        help='where ensembles train: this machine, or Ray tasks (pip install "empathy-zoo[ray]") (default: local)',
+        help='where ensembles train: this machine, or Ray tasks (pip install -e ".[ray]") (default: local)',
     )
     parser.add_argument(
         "--address",

@@ -160,7 +160,7 @@ def add_tune(sub: Any) -> None:
 
     tune = sub.add_parser(
         "tune",
-        help='tune a method\'s settings or reward fields with Optuna on tuning seeds (pip install "empathy-zoo[tune]")',
+        help='tune a method\'s settings or reward fields with Optuna on tuning seeds (pip install -e ".[tune]")',
         description=__doc__.splitlines()[0],
     )
     tune.add_argument(

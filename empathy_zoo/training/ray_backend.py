@@ -22,7 +22,7 @@ on its own spec, so they do not depend on the backend either.
   A worker that cannot create that directory keeps its checkpoints on its own disk
   (``<tmp>/empathy-zoo-checkpoints/<digest of out_dir>``) so a retry on the same node resumes.
 
-Ray is an optional extra: ``pip install "empathy-zoo[ray]"``. Every node of a cluster needs the
+Ray is an optional extra: ``pip install -e ".[ray]"``. Every node of a cluster needs the
 same version of empathy-zoo (and of any ``package.module:NAME`` method or policy the sweep uses).
 """
 
@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.extras import install_command
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
@@ -52,7 +53,7 @@ MAX_RETRIES = 3
 CONNECT_TIMEOUT_S = 10.0
 """Seconds to wait for an answer at a cluster address before the sweep gives up (:func:`check_ray_address`)."""
 
-INSTALL_HINT = 'the Ray backend needs Ray: pip install "empathy-zoo[ray]"'
+INSTALL_HINT = f"the Ray backend needs Ray: {install_command('ray')}"
 
 
 class RayNotInstalledError(ImportError, ValueError):

@@ -13,13 +13,13 @@ Backends (:data:`BACKENDS`); TensorBoard and W&B are optional extras, checked be
 trains (:func:`check_installed`):
 
 * ``tensorboard``: event files through ``torch.utils.tensorboard.SummaryWriter``
-  (``pip install "empathy-zoo[tensorboard]"``). A resumed ensemble purges the steps after its
+  (``pip install -e ".[tensorboard]"``). A resumed ensemble purges the steps after its
   checkpoint, so a curve is never drawn twice.
 * ``csv``: ``<out>/logs/csv/<run id>/scalars.csv`` with rows ``step,name,value`` (the standard
   library only), flushed every :data:`LOG_INTERVAL` steps and at each checkpoint: a crash loses at
   most the rows since the last flush, and a resumed ensemble, which first drops any rows after its
   checkpoint, logs those steps again.
-* ``wandb``: one W&B run per run (``pip install "empathy-zoo[wandb]"``), named by its run id,
+* ``wandb``: one W&B run per run (``pip install -e ".[wandb]"``), named by its run id,
   grouped by its experiment, with the run's config, and its result file logged as an artifact
   when it finishes. It runs online only where the user logged in (``wandb login`` or
   ``WANDB_API_KEY``) or asked for it (``WANDB_MODE``); otherwise it runs offline, with W&B's
@@ -54,6 +54,7 @@ from urllib.parse import urlparse
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.extras import install_command
 from empathy_zoo.metrics import METRIC_NAMES
 
 __all__ = [
@@ -137,7 +138,7 @@ def check_installed(backends: Sequence[str]) -> None:
             module, extra = EXTRAS[backend]
             if importlib.util.find_spec(module) is None:
                 raise TrackingNotInstalledError(
-                    f'--log {backend} needs the {module} package, which is not installed: pip install "empathy-zoo[{extra}]"'
+                    f"--log {backend} needs the {module} package, which is not installed: {install_command(extra)}"
                 )
 
 

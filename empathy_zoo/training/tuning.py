@@ -50,7 +50,7 @@ Each is rewritten (atomically) after every trial. Decisions, and why (the plan's
   budget, say) is a trial in state ``FAIL`` with the reason in ``study.json``; the ends of every
   range are checked before the study starts, so this is rare.
 
-Optuna is an optional extra (``pip install "empathy-zoo[tune]"``): :func:`import_optuna` says so
+Optuna is an optional extra (``pip install -e ".[tune]"``): :func:`import_optuna` says so
 in one line where it is missing.
 """
 
@@ -73,6 +73,7 @@ from empathy_zoo.bounded_read import check_json_depth, read_data
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
+from empathy_zoo.extras import install_command
 from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
@@ -115,7 +116,7 @@ def import_optuna() -> Any:
     try:
         return importlib.import_module("optuna")
     except ImportError:
-        raise TuningNotInstalledError('tuning needs Optuna, which is not installed: pip install "empathy-zoo[tune]"') from None
+        raise TuningNotInstalledError(f"tuning needs Optuna, which is not installed: {install_command('tune')}") from None
 
 
 class _Refused(Exception):
