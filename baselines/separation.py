@@ -1,7 +1,8 @@
-"""# Separation table: which methods Coexistence tells apart, exactly
+"""# Separation table: which methods an environment tells apart, exactly
 
-Every method's exact optimum on Coexistence under full observability, its exact outcome, and for
-every pair of methods whether their optimal policies differ. Built on
+Every method's exact optimum on an environment of one learner and one fixed other agent
+(Coexistence, the charger task) under full observability, its exact outcome, and for every pair
+of methods whether their optimal policies differ. Built on
 :class:`empathy_zoo.exact_solver.TabularModel`, so every rule set of the engine is modelled as it plays.
 
 | | |
@@ -21,7 +22,9 @@ every pair of methods whether their optimal policies differ. Built on
 * `dqn_harm_penalty`: `Q*` of the reward − 100 per harm.
 * `dqn_lagrangian`: `Q*` of the reward − λ per harm, λ the dual optimum for d harms per episode at ε
   (:mod:`baselines.separation_lagrangian`; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
-* `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values`, the paper's rules only.
+* `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values` on Coexistence
+  (the paper's rules only); :func:`baselines.considerate_tabular.considerate_model_values` on an
+  environment whose robot is never harmed.
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
   inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules only.
 
@@ -31,7 +34,9 @@ that policy's ε-greedy execution (:func:`empathy_zoo.exact_solver.outcome`). Tw
 where their greedy policies differ in a state reachable from the start under either row's ε-greedy
 policy: at ε = 0 the states its tied greedy actions lead to, at ε > 0 every state some robot moves
 reach (every action has weight ε/5), the cat's five moves counted, with no time limit. Rows with
-the same policy on those states have the same outcome.
+the same policy on those states have the same outcome. Once the other is gone every row acts
+alike (:func:`empathy_zoo.exact_solver.alone_policy`). Where the environment's task is the robot's
+return (its entry's ``task``), each outcome also holds the robot's and the other's expected return.
 """
 
 from __future__ import annotations
@@ -43,14 +48,23 @@ from itertools import combinations
 import numpy as np
 
 from baselines.considerate_exact import considerate_values
+from baselines.considerate_tabular import considerate_model_values
 from baselines.lagrangian import Lagrangian
 from baselines.registry import METHODS
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from baselines.separation_reachability import relative_reachability_reward
 from baselines.shaping import HARM_PENALTY
 from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
-from empathy_zoo.environments import ENGINES
-from empathy_zoo.exact_solver import TabularModel, empathic_values, episode_steps, optimal_values, outcome
+from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
+from empathy_zoo.exact_solver import (
+    TabularModel,
+    alone_policy,
+    empathic_values,
+    episode_steps,
+    gone_continuation,
+    optimal_values,
+    outcome,
+)
 from empathy_zoo.reference import greedy_policy
 
 __all__ = [
@@ -74,6 +88,10 @@ EPSILONS = (0.0, 0.01, 0.05)
 """Exploration rates of the outcomes."""
 POLICY_TOLERANCE = 1e-12
 """Action probabilities closer than this count as equal."""
+RETURN = "return"
+"""The task metric for which the outcomes hold both returns."""
+UNMARKED = "the methods registry marks no identity with DQN on this environment, and it has no exact model here"
+"""Why a method whose registry entry names no identity here is not in the table."""
 OMISSIONS = (
     (
         "dqn_aup",
@@ -117,6 +135,10 @@ class RowOutcome:
     """The Lagrangian's λ (``None`` for other rows, and where no λ meets the limit)."""
     note: str
     """What the figures mean where it needs saying (``""`` otherwise)."""
+    robot_return: float | None = None
+    """Expected undiscounted reward of the robot (``None`` where the environment's task is not its return)."""
+    other_return: float | None = None
+    """Expected undiscounted reward of the other (``None`` where the environment's task is not the robot's return)."""
 
 
 @dataclass(frozen=True)
@@ -198,10 +220,15 @@ class SeparationTable:
         return False if found is None else found.differ
 
 
+def _continuation(model: TabularModel, v: np.ndarray, gamma: float) -> np.ndarray:
+    """``c = γ·(1 − done)·V*(s')`` of every step, ``(states, 5, 5)``, the robot alone once the other leaves."""
+    return np.select([model.robot_harmed, model.other_harmed], [0.0, gone_continuation(model, gamma)], gamma * v[model.after])
+
+
 def silver_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
     """The silver rule's ``Q_silver = Q* − (1 − β)·E[max(c − o, 0)]`` at ``Q*`` (the module page)."""
     v = q.max(axis=1)
-    continuation = np.select([model.robot_harmed, model.other_harmed], [0.0, gamma / (1.0 - gamma)], gamma * v[model.after])
+    continuation = _continuation(model, v, gamma)
     other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
     return q - (1.0 - selfishness) * np.maximum(continuation - other, 0.0).mean(axis=2)
 
@@ -214,7 +241,7 @@ def in_view_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma
     engine.cells = np.stack(np.divmod(np.arange(model.states), model.cells), axis=1).astype(engine.cells.dtype)
     seen = np.asarray(engine.in_view(0, 1), dtype=bool)
     v = q.max(axis=1)
-    continuation = np.select([model.robot_harmed, model.other_harmed], [0.0, gamma / (1.0 - gamma)], gamma * v[model.after])
+    continuation = _continuation(model, v, gamma)
     other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
     other = np.where(~model.other_harmed & ~seen[model.after], continuation, other)
     return q + (1.0 - selfishness) * (other - model.reward - continuation).mean(axis=2)
@@ -248,16 +275,27 @@ def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.nd
     return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
 
 
-def _rows(env: str, paper: bool, selfishness: tuple[float, ...]) -> tuple[Row, ...]:
-    """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β."""
-    marks = {name: METHODS[name].identical_to.get(env) for name in ("dqn_silver_literal", "dqn_equality")}
+def _rows(env: str, paper: bool, selfishness: tuple[float, ...], considerate: bool = False) -> tuple[Row, ...]:
+    """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β
+    (``considerate``: Be Considerate's row where the environment is not Coexistence's paper rules)."""
+    marks = {name: METHODS[name].identical_to.get(env) for name in TWINS}
     rows = [Row("dqn", "dqn", None, "", "")]
     rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
     rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
     rows += [Row(name, name, None, "", "") for name in ("dqn_considerate", "dqn_relative_reachability") if paper]
+    rows += [Row("dqn_considerate", "dqn_considerate", None, "", "")] if considerate and not paper else []
     for method in ("empathic_dqn", "empathic_dqn_in_view", "empathic_dqn_silver"):
         rows += [Row(f"{method} β={beta:g}", method, beta, "", "") for beta in selfishness]
     return tuple(rows)
+
+
+TWINS = ("dqn_silver_literal", "dqn_equality")
+"""Methods a row shows only where the registry marks them identical to another on the environment."""
+
+
+def _coexistence(model: TabularModel) -> bool:
+    """Whether the model's engine is Coexistence's (under any rules)."""
+    return isinstance(ENGINES[model.env](1, **model.env_kwargs), CoexistenceEngine)
 
 
 def _paper_rules(model: TabularModel) -> bool:
@@ -267,8 +305,11 @@ def _paper_rules(model: TabularModel) -> bool:
     return isinstance(engine, CoexistenceEngine) and getattr(engine, "options", None) == RULE_SETS["paper"]
 
 
-def _considerate_policy(model: TabularModel, epsilon: float, gamma: float) -> np.ndarray:
-    """Be Considerate's greedy policy (α = 1) on the model's states, from its displacement model."""
+def _considerate_policy(model: TabularModel, epsilon: float, gamma: float, paper: bool) -> np.ndarray:
+    """Be Considerate's greedy policy (α = 1) on the model's states: from Coexistence's
+    displacement model under the paper's rules, else from the tabular model itself."""
+    if not paper:
+        return greedy_policy(considerate_model_values(model, epsilon, gamma=gamma))
     size = math.isqrt(model.cells)
     q, _ = considerate_values(1.0, epsilon=epsilon, time_limit_rate=1.0 / episode_steps(model), gamma=gamma, size=size)
     robot, other = np.divmod(np.arange(model.states), model.cells)
@@ -288,7 +329,9 @@ def separation_table(
     """The :class:`SeparationTable` of ``model`` (see the module page)."""
     cycles = episode_steps(model)
     paper = _paper_rules(model)
-    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness))
+    considerate = paper or not (model.robot_harmed.any() or _coexistence(model))
+    returns = ENVIRONMENT_TABLE[model.env].task == RETURN
+    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness), considerate)
     q = optimal_values(model, gamma)
     penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
     values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
@@ -308,9 +351,9 @@ def separation_table(
         price = LAMBDA_RANGE[1] if multiplier is None else multiplier
         policies["dqn_lagrangian"] = greedy_policy(lagrangian_values(model, price, gamma, q))
         notes["dqn_lagrangian"] = lagrangian_note(multiplier, cost_limit)
-        if paper:
+        if considerate:
             try:
-                policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma)
+                policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma, paper)
             except RuntimeError:  # no joint fixed point of the robot's optimum and the cat's value
                 pass
         for row in rows:
@@ -318,11 +361,15 @@ def separation_table(
                 policies[row.name] = policies[row.identical_to]
                 notes[row.name] = f"identical to {row.identical_to} by construction: {row.reason}"
         here = [r for r in rows if r.name in policies]
-        result = {r.name: outcome(model, epsilon_greedy(policies[r.name], epsilon), cycles) for r in here}
+        alone = alone_policy(model, epsilon, gamma)
+        result = {r.name: outcome(model, epsilon_greedy(policies[r.name], epsilon), cycles, alone) for r in here}
         for r in here:
             lam = multiplier if r.name == "dqn_lagrangian" else None
             o = result[r.name]
-            outcomes.append(RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, "")))
+            own, others = (o.robot_return, o.other_return) if returns else (None, None)
+            outcomes.append(
+                RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, ""), own, others)
+            )
         for a, b in combinations(here, 2):
             reason = _by_construction(a, b)
             differing, reachable = policies_differ(model, policies[a.name], policies[b.name], epsilon)
@@ -342,7 +389,14 @@ def separation_table(
             )
     names = {o.row for o in outcomes}
     omitted = [Omission(m, why) for m, why in OMISSIONS]
-    if not paper:
+    omitted += [Omission(name, UNMARKED) for name in TWINS if METHODS[name].identical_to.get(model.env) is None]
+    if not _coexistence(model):
+        omitted.append(Omission("dqn_relative_reachability", "its exact reachability table is built from Coexistence's rules"))
+        if not considerate:
+            omitted.append(Omission("dqn_considerate", "its exact modules model a robot that is never harmed, or Coexistence"))
+        elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):
+            omitted.append(Omission("dqn_considerate", "at some ε its optimum and the other's value find no joint fixed point"))
+    elif not paper:
         omitted.append(Omission("dqn_considerate", "its exact module models the paper's rules only"))
         omitted.append(Omission("dqn_relative_reachability", "its exact reachability table is built from the paper's rules"))
     elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):

@@ -15,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
-from empathy_zoo.exact_solver import TabularModel, optimal_values, outcome
+from empathy_zoo.exact_solver import TabularModel, alone_policy, optimal_values, outcome
 from empathy_zoo.reference import greedy_policy
 
 __all__ = ["LAMBDA_RANGE", "epsilon_greedy", "lagrangian_multiplier", "lagrangian_values", "lagrangian_dual", "lagrangian_note"]
@@ -54,10 +54,11 @@ def lagrangian_values(model: TabularModel, multiplier: float, gamma: float, q: n
 def lagrangian_dual(model: TabularModel, epsilon: float, gamma: float, cost_limit: float, cycles: int) -> float | None:
     """The Lagrangian's λ at ε (:func:`lagrangian_multiplier`)."""
     q = optimal_values(model, gamma)
+    alone = alone_policy(model, epsilon, gamma)
 
     def harms_at(multiplier: float) -> float:
         policy = greedy_policy(lagrangian_values(model, multiplier, gamma, q))
-        return outcome(model, epsilon_greedy(policy, epsilon), cycles).harms
+        return outcome(model, epsilon_greedy(policy, epsilon), cycles, alone).harms
 
     return lagrangian_multiplier(harms_at, cost_limit)
 

@@ -7,7 +7,8 @@ losslessly; :func:`to_markdown` renders it for the docs. The command
 
 builds the table of ``ENV`` (default ``coexistence_v0``) with the engine arguments given and writes
 ``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default ``docs/results/separation``). ``<name>`` is
-the environment's name, followed by ``_<rules>`` when a ``rules`` argument is given.
+the environment's name, followed by ``_<rules>`` when a ``rules`` argument is given. The returns of
+an outcome appear where the table holds them (the environment's task is the robot's return).
 """
 
 from __future__ import annotations
@@ -25,12 +26,18 @@ __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_n
 
 OUT = Path("docs/results/separation")
 """Where the command writes by default."""
+RETURNS = ("robot_return", "other_return")
+"""The outcome fields a table holds only where the environment's task is the robot's return."""
 
 
 def to_json(table: SeparationTable) -> str:
     """The table as JSON (every field, floats exact)."""
     data = asdict(table)
     data["arguments"] = [list(item) for item in table.arguments]
+    for item in data["outcomes"]:  # (returns only where the table holds them)
+        for key in RETURNS:
+            if item[key] is None:
+                del item[key]
     return json.dumps(data, ensure_ascii=False, indent=1) + "\n"
 
 
@@ -72,6 +79,12 @@ def _letter(index: int) -> str:
     return chr(ord("A") + index)
 
 
+def _figures(o: RowOutcome, returns: bool) -> list[str]:
+    """An outcome's figures as the Markdown shows them (with both returns where ``returns``)."""
+    shown = [f"{o.harms:.4f}", f"{o.robot_harmed:.4f}", f"{o.survival:.1f}"]
+    return shown + [f"{o.robot_return or 0.0:.1f}", f"{o.other_return or 0.0:.1f}"] if returns else shown
+
+
 def to_markdown(table: SeparationTable) -> str:
     """The table for the docs: rows, outcomes, the groups of rows with one optimum, and the pairs of groups."""
     arguments = " ".join(f"{key}={value}" for key, value in table.arguments)
@@ -92,14 +105,16 @@ def to_markdown(table: SeparationTable) -> str:
         same = f"to `{row.identical_to}`: {row.reason}" if row.identical_to else ""
         lines.append(f"| `{row.name}` | `{row.method}` | {beta} | {same} |")
     epsilons = table.epsilons
-    lines += ["", "## Outcomes (harms, robot harmed, survival per episode)", ""]
+    returns = any(o.robot_return is not None for o in table.outcomes)
+    figures = "harms, robot harmed, survival, robot return, other return" if returns else "harms, robot harmed, survival"
+    lines += ["", f"## Outcomes ({figures} per episode)", ""]
     lines.append("| row | " + " | ".join(f"ε = {e:g}" for e in epsilons) + " |")
     lines.append("|---|" + "---:|" * len(epsilons))
     for row in table.rows:
         cells = []
         for epsilon in epsilons:
             found = [o for o in table.outcomes if o.row == row.name and o.epsilon == epsilon]
-            cells.append(f"{found[0].harms:.4f}, {found[0].robot_harmed:.4f}, {found[0].survival:.1f}" if found else "—")
+            cells.append(", ".join(_figures(found[0], returns)) if found else "—")
         lines.append(f"| `{row.name}` | " + " | ".join(cells) + " |")
     lagrangian = [o for o in table.outcomes if o.row == "dqn_lagrangian"]
     if lagrangian:
@@ -110,11 +125,12 @@ def to_markdown(table: SeparationTable) -> str:
     for epsilon in epsilons:
         classes = equivalence_classes(table, epsilon)
         lines += ["", f"## Groups with one optimum at ε = {epsilon:g}", ""]
-        lines += ["| group | rows | harms | robot harmed | survival |", "|---|---|---:|---:|---:|"]
+        columns = ["harms", "robot harmed", "survival"] + (["robot return", "other return"] if returns else [])
+        lines += ["| group | rows | " + " | ".join(columns) + " |", "|---|---|" + "---:|" * len(columns)]
         for index, members in enumerate(classes):
             o = table.outcome(members[0], epsilon)
             names = ", ".join(f"`{m}`" for m in members)
-            lines.append(f"| {_letter(index)} | {names} | {o.harms:.4f} | {o.robot_harmed:.4f} | {o.survival:.1f} |")
+            lines.append(f"| {_letter(index)} | {names} | " + " | ".join(_figures(o, returns)) + " |")
         if len(classes) > 1:
             lines += ["", "States where two groups' greedy policies differ, of those reachable under either:", ""]
             lines.append("| | " + " | ".join(_letter(j) for j in range(1, len(classes))) + " |")

@@ -10,12 +10,16 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
 | Import | `from empathy_zoo.exact_solver import tabular_model, optimum` |
 | Model | `tabular_model("coexistence_v0", **env_kwargs) -> TabularModel` |
 | Outcome | `optimum(model, selfishness, epsilon, *, ties="uniform", gamma=0.99, max_cycles=None) -> ReferenceOutcome` |
-| Any policy | `outcome(model, policy, max_cycles) -> PolicyOutcome` (harms, robot harmed, survival) |
+| Any policy | `outcome(model, policy, max_cycles, alone_policy=None) -> PolicyOutcome` (harms, survival, returns) |
 
 ## Model
 * **States**: the robot's and the other's cells, both operative (`cells²` states, same cell
   included: some rule sets let both stand there unharmed); *other gone* (the robot alone, never
-  harmed again: every step pays `+1`); *robot harmed* (terminal).
+  harmed again); *robot harmed* (terminal).
+* **The robot alone**: the engine stepped from every cell with every action, the other absent.
+  Where every such step pays the same (Coexistence: `+1`), *other gone* is one state of value
+  `pay/(1 − γ)`. Elsewhere (the charger task: only the bench and the charger pay) it is one state
+  per robot cell, with its own `Q*` by value iteration, and the robot acts alone by `alone_policy`.
 * **Dynamics**: the robot's action, the other's uniformly random action (the default cat), one
   engine step; the reward is the engine's reward to the robot.
 * **Values**: `Q*` by value iteration (infinite horizon, stopped at the same error bound as
@@ -24,7 +28,8 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
 * **Policy and outcome**: greedy on `Q_emp`, ties within the reference's `TIE_TOLERANCE` split evenly (or to the
   lowest index), executed ε-greedily; the start distribution is the engine's
   (`start_distribution()`), pushed forward `max_cycles` steps. `harms` is the probability that the
-  robot harms the other; `survival` the expected steps at whose end it is operative.
+  robot harms the other; `survival` the expected steps at whose end it is operative;
+  `robot_return` and `other_return` the expected undiscounted rewards of the robot and the other.
 
 For the paper's Coexistence this gives :func:`empathy_zoo.reference.coexistence_optimum`'s
 figures (a test holds them equal); that module's displacement model is its translation-invariant
@@ -53,6 +58,9 @@ __all__ = [
     "outcome",
     "optimum",
     "MAX_STATES",
+    "alone_values",
+    "alone_policy",
+    "gone_continuation",
 ]
 
 MAX_STATES = 200_000
@@ -83,6 +91,19 @@ class TabularModel:
     """The state after the move (the cells both stand on, whoever was harmed)."""
     start: np.ndarray
     """``(states,)``: the probability of each start state."""
+    other_reward: np.ndarray
+    """The other's reward of the step."""
+    alone_reward: np.ndarray
+    """``(cells, 5)``: the robot's reward of a step alone (the other gone), by cell and action."""
+    alone_after: np.ndarray
+    """``(cells, 5)``: the robot's cell after a step alone."""
+
+    @property
+    def alone_pay(self) -> float | None:
+        """The reward of every step of the robot alone where it is one number (Coexistence: 1),
+        else ``None``: then where the robot stands matters once the other is gone."""
+        first = float(self.alone_reward.flat[0])
+        return first if bool(np.all(self.alone_reward == first)) else None
 
     @property
     def states(self) -> int:
@@ -118,6 +139,7 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     events = engine.step(np.stack([robot_action, other_action], axis=1))
     shape = (states, NUM_ACTIONS, NUM_ACTIONS)
     after = (engine.cells[:, ROBOT] * cells + engine.cells[:, OTHER]).reshape(shape)
+    alone_reward, alone_after = _alone_steps(engine_class, cells, env_kwargs)
     return TabularModel(
         env=env,
         env_kwargs=dict(env_kwargs),
@@ -127,7 +149,58 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
         other_harmed=(events.harmed_by[:, OTHER] == ROBOT).reshape(shape),
         after=after,
         start=np.asarray(getattr(probe, "start_distribution")()).ravel(),  # (checked on the class above)
+        other_reward=events.rewards[:, OTHER].astype(np.float64).reshape(shape),
+        alone_reward=alone_reward,
+        alone_after=alone_after,
     )
+
+
+def _alone_steps(engine_class: Any, cells: int, env_kwargs: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """``(reward, after)``, each ``(cells, 5)``: one step of the robot alone from every cell with
+    every action (the other absent), read off the engine."""
+    cell, action = (x.ravel() for x in np.indices((cells, NUM_ACTIONS)))
+    engine = engine_class(len(cell), **env_kwargs)
+    engine.reset()
+    engine.cells = np.stack([cell, np.zeros_like(cell)], axis=1).astype(engine.cells.dtype)
+    engine.present[:, OTHER] = False
+    events = engine.step(np.stack([action, np.full_like(action, NUM_ACTIONS - 1)], axis=1))
+    shape = (cells, NUM_ACTIONS)
+    return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), engine.cells[:, ROBOT].reshape(shape).astype(np.int64)
+
+
+def alone_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray:
+    """``Q*`` of the robot alone, ``(cells, 5)``, by value iteration to the same bound as
+    :func:`optimal_values`."""
+    v = np.zeros(model.cells)
+    q = model.alone_reward.copy()
+    scale = max(1.0, float(np.abs(model.alone_reward).max(initial=0.0)))
+    limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2 / scale) / math.log(gamma)) if gamma > 0 else 2
+    for _ in range(limit):
+        q = model.alone_reward + gamma * v[model.alone_after]
+        v_next = q.max(axis=1)
+        change = float(np.abs(v_next - v).max())
+        v = v_next
+        if gamma / (1.0 - gamma) * change < tolerance:
+            break
+    return q
+
+
+def alone_policy(model: TabularModel, epsilon: float, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray | None:
+    """The robot's ε-greedy policy alone, ``(cells, 5)``, greedy on :func:`alone_values` (every
+    method's: with the other gone no penalty, bonus or other-term is left), or ``None`` where
+    every step alone pays the same (:attr:`TabularModel.alone_pay`)."""
+    if model.alone_pay is not None:
+        return None
+    return epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(alone_values(model, gamma, tolerance))
+
+
+def gone_continuation(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> float | np.ndarray:
+    """``γ·V*`` after a step in which the other leaves: ``γ·pay/(1 − γ)`` where every step alone pays
+    the same, else ``(states, 5, 5)``: ``γ·V*_alone`` of the robot's cell after the step."""
+    pay = model.alone_pay
+    if pay is not None:
+        return gamma * pay / (1.0 - gamma)
+    return gamma * alone_values(model, gamma, tolerance).max(axis=1)[model.after // model.cells]
 
 
 def optimal_values(
@@ -136,11 +209,16 @@ def optimal_values(
     """``Q*``, ``(states, 5)``, by value iteration until ``γ/(1−γ)·‖V_{k+1} − V_k‖∞ < tolerance``.
 
     ``reward`` (``(states, 5, 5)``, default the model's) replaces the robot's reward of each step
-    while the other is present; once the other is gone every step still pays ``+1``."""
+    while the other is present; once the other is gone the robot is paid as the engine pays it
+    alone (:func:`gone_continuation`)."""
     rewards = model.reward if reward is None else np.asarray(reward, dtype=np.float64)
     if rewards.shape != model.reward.shape:
         raise ValueError(f"reward must have the model's shape {model.reward.shape}, got {rewards.shape}")
-    alone = 1.0 / (1.0 - gamma)  # V(other gone): +1 every step, never harmed again
+    pay = model.alone_pay
+    if pay is not None:
+        alone: float | np.ndarray = pay / (1.0 - gamma)  # V(other gone): the same pay every step, never harmed again
+    else:
+        alone = alone_values(model, gamma, tolerance).max(axis=1)[model.after // model.cells]
     going_on = ~model.robot_harmed & ~model.other_harmed
     fixed = rewards + gamma * np.where(model.other_harmed & ~model.robot_harmed, alone, 0.0)
     v = np.zeros(model.states)
@@ -186,7 +264,7 @@ def optimum(
     q = optimal_values(model, gamma, tolerance)
     q_emp = empathic_values(model, float(selfishness), q, gamma)
     policy = epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(q_emp, ties)
-    result = outcome(model, policy, cycles)
+    result = outcome(model, policy, cycles, alone_policy(model, epsilon, gamma, tolerance))
     return ReferenceOutcome(result.harms, result.survival, float(selfishness), float(epsilon))
 
 
@@ -200,6 +278,10 @@ class PolicyOutcome:
     """Probability that the robot is harmed (its episode ends)."""
     survival: float
     """Expected steps at whose end the robot is operative (at most ``max_cycles``)."""
+    robot_return: float
+    """Expected undiscounted reward of the robot."""
+    other_return: float
+    """Expected undiscounted reward of the other."""
 
 
 def episode_steps(model: TabularModel) -> int:
@@ -207,25 +289,67 @@ def episode_steps(model: TabularModel) -> int:
     return int(ENGINES[model.env](1, **model.env_kwargs).max_cycles)
 
 
-def outcome(model: TabularModel, policy: np.ndarray, max_cycles: int) -> PolicyOutcome:
+def outcome(model: TabularModel, policy: np.ndarray, max_cycles: int, alone_policy: np.ndarray | None = None) -> PolicyOutcome:
     """The exact :class:`PolicyOutcome` of the robot acting by ``policy`` (``(states, 5)``
     probabilities, the other acting uniformly at random), from the engine's start distribution
-    pushed forward ``max_cycles`` steps."""
+    pushed forward ``max_cycles`` steps. ``alone_policy`` (``(cells, 5)``, :func:`alone_policy`) is
+    how the robot acts once the other is gone: required where its cell then matters
+    (:attr:`TabularModel.alone_pay` is ``None``), unused elsewhere."""
     if policy.shape != (model.states, NUM_ACTIONS):
         raise ValueError(f"policy must have shape {(model.states, NUM_ACTIONS)}, got {policy.shape}")
+    acting = policy[:, :, None] / NUM_ACTIONS
+    own_reward, others_reward = (acting * model.reward).sum(axis=(1, 2)), (acting * model.other_reward).sum(axis=(1, 2))
+    weight = np.broadcast_to(acting, model.after.shape).ravel()
+    source = np.broadcast_to(np.arange(model.states)[:, None, None], model.after.shape).ravel()
+    pay = model.alone_pay
+    if pay is None:
+        return _outcome_alone_by_cell(model, policy, max_cycles, alone_policy, (weight, source, own_reward, others_reward))
     gone, harmed = model.states, model.states + 1
     destination = np.select([model.robot_harmed, model.other_harmed], [harmed, gone], model.after).ravel()
-    weight = np.broadcast_to(policy[:, :, None] / NUM_ACTIONS, model.after.shape).ravel()
-    source = np.broadcast_to(np.arange(model.states)[:, None, None], model.after.shape).ravel()
     distribution = np.concatenate([model.start, [0.0, 0.0]])
-    survival = 0.0
+    survival = robot_return = other_return = 0.0
     for _ in range(max_cycles):
+        robot_return += float(distribution[: model.states] @ own_reward) + float(distribution[gone]) * pay
+        other_return += float(distribution[: model.states] @ others_reward)
         moved = np.bincount(destination, weights=distribution[source] * weight, minlength=model.states + 2)
         moved[gone] += distribution[gone]
         moved[harmed] += distribution[harmed]
         distribution = moved
         survival += 1.0 - distribution[harmed]
-    return PolicyOutcome(float(distribution[gone]), float(distribution[harmed]), float(survival))
+    return PolicyOutcome(float(distribution[gone]), float(distribution[harmed]), float(survival), robot_return, other_return)
+
+
+def _outcome_alone_by_cell(
+    model: TabularModel,
+    policy: np.ndarray,
+    max_cycles: int,
+    alone_policy: np.ndarray | None,
+    joint: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> PolicyOutcome:
+    """:func:`outcome` where the robot alone is paid by where it stands: one state per robot cell
+    once the other is gone (``joint``: the joint states' step weights, sources and expected rewards)."""
+    if alone_policy is None:
+        raise ValueError(f"{model.env}'s robot is paid by where it stands once the other is gone: give alone_policy")
+    if alone_policy.shape != (model.cells, NUM_ACTIONS):
+        raise ValueError(f"alone_policy must have shape {(model.cells, NUM_ACTIONS)}, got {alone_policy.shape}")
+    weight, source, own_reward, others_reward = joint
+    states, alone, harmed = model.states, slice(model.states, model.states + model.cells), model.states + model.cells
+    destination = np.select([model.robot_harmed, model.other_harmed], [harmed, states + model.after // model.cells], model.after)
+    destination = np.concatenate([destination.ravel(), states + model.alone_after.ravel()])
+    weight = np.concatenate([weight, alone_policy.ravel()])
+    source = np.concatenate([source, states + np.repeat(np.arange(model.cells), NUM_ACTIONS)])
+    alone_reward = (alone_policy * model.alone_reward).sum(axis=1)
+    distribution = np.concatenate([model.start, np.zeros(model.cells + 1)])
+    survival = robot_return = other_return = 0.0
+    for _ in range(max_cycles):
+        robot_return += float(distribution[:states] @ own_reward) + float(distribution[alone] @ alone_reward)
+        other_return += float(distribution[:states] @ others_reward)
+        moved = np.bincount(destination, weights=distribution[source] * weight, minlength=harmed + 1)
+        moved[harmed] += distribution[harmed]
+        distribution = moved
+        survival += 1.0 - distribution[harmed]
+    gone = float(distribution[alone].sum())
+    return PolicyOutcome(gone, float(distribution[harmed]), float(survival), robot_return, other_return)
 
 
 def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons: tuple[float, ...]) -> str:
