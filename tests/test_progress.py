@@ -27,7 +27,7 @@ class Recorder:
 
     made: list[Recorder] = []
 
-    def __init__(self, ensembles, enabled=True):
+    def __init__(self, ensembles, enabled=True, style="auto"):
         self.ensembles, self.reports, self.closed = list(ensembles), [], False
         Recorder.made.append(self)
 
@@ -55,6 +55,6 @@ def test_ensembles_report_to_the_sweeps_process_and_workers_draw_nothing(tmp_pat
 
 
 def test_the_sweep_bar_counts_env_steps_of_the_runs_to_train(tmp_path, capfd):
-    train_runs(specs(), tmp_path, RunnerOptions(progress=True, workers=1, checkpoint_interval=0))
+    train_runs(specs(), tmp_path, RunnerOptions(progress=True, progress_style="bars", workers=1, checkpoint_interval=0))
     err = capfd.readouterr().err
     assert "sweep: 100%" in err and "4.00k/4.00k" in err, err  # 4 runs × 1,000 steps

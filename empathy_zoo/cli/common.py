@@ -17,6 +17,7 @@ from agents.empathic_dqn import UPDATE_KERNELS
 __all__ = [
     "PROG",
     "RUN_DEFAULTS",
+    "add_progress_style",
     "add_runner_options",
     "AgentPolicies",
     "agent_policy",
@@ -176,6 +177,7 @@ def runner_options(args: argparse.Namespace, values: dict[str, Any]) -> Any:
         max_parallel_runs=positive("max_parallel_runs", values["max_parallel_runs"]),
         checkpoint_interval=positive("checkpoint_interval", values["checkpoint_interval"], allow_zero=True),
         progress=values["progress"],
+        progress_style=getattr(args, "progress_style", None) or "auto",
         workers=positive("workers", values["workers"]),
         threads=positive("threads", values["threads"]),
         backend=getattr(args, "backend", None) or "local",
@@ -191,6 +193,20 @@ def _ray_address(args: argparse.Namespace) -> str | None:
     if address is not None and getattr(args, "backend", None) != "ray":
         raise ValueError("--address is the Ray cluster to join: use it with --backend ray")
     return address
+
+
+def add_progress_style(parser: argparse.ArgumentParser) -> None:
+    """``--progress STYLE``: bars on a terminal and plain lines elsewhere (``auto``), or either."""
+    from empathy_zoo.training.progress import PROGRESS_STYLES
+
+    parser.add_argument(
+        "--progress",
+        dest="progress_style",
+        choices=PROGRESS_STYLES,
+        default="auto",
+        metavar="STYLE",
+        help="how progress shows: auto (bars on a terminal, else a plain line every 30 s), bars or plain (default: auto)",
+    )
 
 
 def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> None:
@@ -231,6 +247,7 @@ def add_runner_options(parser: argparse.ArgumentParser, default: Any = None) -> 
         help="env steps between checkpoints (0 = never)" + d("checkpoint_interval"),
     )
     parser.add_argument("--no-progress", action="store_true", default=default, help="no progress bars")
+    add_progress_style(parser)
     parser.add_argument(
         "--log",
         default=default,

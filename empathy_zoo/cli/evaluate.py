@@ -14,7 +14,7 @@ import argparse
 from typing import Any
 
 from empathy_zoo.cli.allow_import import add_allow_import
-from empathy_zoo.cli.common import PROG, path_text
+from empathy_zoo.cli.common import PROG, add_progress_style, path_text
 
 __all__ = ["add_evaluate", "cmd_evaluate"]
 
@@ -31,6 +31,7 @@ def cmd_evaluate(args: argparse.Namespace, command: str) -> int:
         args.scenarios,
         out_dir=args.out,
         progress=not args.no_progress,
+        progress_style=args.progress_style,
         threads=args.threads,
         allowed_imports=frozenset(args.allow_import or ()),
         **options,
@@ -81,5 +82,6 @@ def add_evaluate(sub: Any) -> None:
         "are much slower on a busy machine; what is computed does not depend on it)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_progress_style(parser)
     add_allow_import(parser)
     parser.set_defaults(handler=cmd_evaluate)

@@ -21,7 +21,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.cli.common import PROG, check_device, help_text, path_text, positive
+from empathy_zoo.cli.common import PROG, add_progress_style, check_device, help_text, path_text, positive
 
 __all__ = ["DEFAULT_TRIALS", "DEFAULT_TUNING_SEEDS", "add_tune", "cmd_tune", "default_objective"]
 
@@ -93,6 +93,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         device=check_device(args.device),
         threads=positive("--threads", args.threads),
         progress=False,
+        progress_style=args.progress_style,
         update_kernel=args.update_kernel,
     )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
@@ -248,4 +249,5 @@ def add_tune(sub: Any) -> None:
         f"runs differ in their last bits; a study resumes only with its own) (default: {RunnerOptions.update_kernel})",
     )
     tune.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_progress_style(tune)
     tune.set_defaults(handler=cmd_tune)

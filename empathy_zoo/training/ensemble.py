@@ -105,7 +105,9 @@ def train_ensemble(
     and an exception it raises stops the ensemble there."""
     git_commit()  # read (and kept for this process) now: the code that trains is the code checked out now
     tracker = open_tracker(options.log, out_dir, specs)
-    own = SweepProgress([(len(specs), specs[0].steps)]) if options.progress and report is None else None
+    own = None
+    if options.progress and report is None:
+        own = SweepProgress([(len(specs), specs[0].steps)], style=options.progress_style)
     try:
         return _train_ensemble(
             specs,

@@ -27,7 +27,6 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm.auto import tqdm
 
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
@@ -43,6 +42,7 @@ from empathy_zoo.randomness import STREAMS
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, read_result
 from empathy_zoo.scenarios import Scenario, ScenarioSet, default_set_name, load_scenario_set, trained_with
 from empathy_zoo.training.evaluation import evaluate_greedy
+from empathy_zoo.training.progress import progress_bar
 
 __all__ = [
     "STREAM_HELDOUT",
@@ -265,6 +265,7 @@ def evaluate_results(
     episodes: int = DEFAULT_EPISODES,
     out_dir: str | Path | None = None,
     progress: bool = True,
+    progress_style: str = "auto",
     on_written: Callable[[Path], None] | None = None,
     on_note: Callable[[str], None] | None = None,
     threads: int = 1,
@@ -285,7 +286,8 @@ def evaluate_results(
     has to say (nothing on Linux and macOS). ``threads``: torch's CPU threads while playing (1, as
     training: the agents' small products gain nothing from more, and extra threads are many times
     slower on a busy machine; at most :func:`empathy_zoo.limits.cpu_count`); what is computed does
-    not depend on it. ``progress`` draws a bar counting the scenarios played. A run's recorded
+    not depend on it. ``progress`` draws a bar counting the scenarios played
+    (``progress_style``: :data:`~empathy_zoo.training.progress.PROGRESS_STYLES`). A run's recorded
     partners resolve only to registered policies or names in ``allowed_imports`` (a result file
     never makes the suite import code); every run's are checked before anything is written.
     Raises ``ValueError`` when nothing could be evaluated (no run kept an agent, or no set is for
@@ -353,7 +355,7 @@ def evaluate_results(
             before = torch.get_num_threads()
             torch.set_num_threads(threads)
             try:
-                _evaluate_todo(todo, agents, episodes, progress, on_written, summary, allowed_imports)
+                _evaluate_todo(todo, agents, episodes, (progress, progress_style), on_written, summary, allowed_imports)
             finally:
                 torch.set_num_threads(before)
     except BaseException:
@@ -403,7 +405,7 @@ def _evaluate_todo(
     todo: Sequence[tuple[ScenarioSet, Path, dict[str, Any], Path]],
     agents: Mapping[Path, Any],
     episodes: int,
-    progress: bool,
+    progress: tuple[bool, str],
     on_written: Callable[[Path], None] | None,
     summary: EvaluationSummary,
     allowed_imports: Collection[str] = (),
@@ -412,8 +414,8 @@ def _evaluate_todo(
     (:func:`evaluate_results` holds the directory); one another process wrote meanwhile is checked
     and skipped as done."""
     total = sum(1 + len(scenario_set.scenarios) for scenario_set, *_ in todo)
-    bar_off = not progress or total == 0
-    with tqdm(total=total, unit="scenario", desc="evaluate", disable=bar_off, dynamic_ncols=True, mininterval=1.0) as bar:
+    shown, style = progress
+    with progress_bar(style, total=total, unit="scenario", desc="evaluate", disable=not shown or total == 0) as bar:
         for scenario_set, path, result, target in todo:
             if os.path.lexists(target):
                 _check_done(target, path, result, scenario_set, episodes)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from agents.empathic_dqn import UPDATE_KERNELS
 from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
+from empathy_zoo.training.progress import PROGRESS_STYLES
 from empathy_zoo.training.tracking import check_installed, parse_log
 
 __all__ = ["BACKENDS", "RunnerOptions"]
@@ -30,6 +31,9 @@ class RunnerOptions:
     progress: bool = True
     """Show progress bars (drawn by this process only: one per running ensemble, and one for the
     sweep's env steps when it has several ensembles; see :mod:`empathy_zoo.training.progress`)."""
+    progress_style: str = "auto"
+    """How progress shows: ``auto`` (bars on a terminal, plain lines where standard error is not
+    one: a log file), ``bars`` or ``plain`` (:data:`empathy_zoo.training.progress.PROGRESS_STYLES`)."""
     threads: int | None = 1
     """Torch CPU threads per process (``None`` = torch's default, every core), at most the CPUs of
     this machine: these small networks gain nothing from more than one, and extra threads are much
@@ -74,6 +78,8 @@ class RunnerOptions:
             value = getattr(self, name)
             if value is not None:
                 check_at_most(name, value, cpu_count(), "the CPUs of this machine, os.cpu_count()")
+        if self.progress_style not in PROGRESS_STYLES:
+            raise ValueError(f"progress_style must be one of {', '.join(PROGRESS_STYLES)}, got {self.progress_style!r}")
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
         if self.update_kernel not in UPDATE_KERNELS:

@@ -195,7 +195,9 @@ def _train_todo(
     wanted = {s.run_id for s in todo}
     if on_result is not None:  # (a resumed ensemble may finish runs not asked for here)
         given, on_result = on_result, lambda result: given(result) if result["run_id"] in wanted else None
-    progress = SweepProgress([(len(chunk), chunk[0].steps) for chunk in chunks], enabled=options.progress)
+    progress = SweepProgress(
+        [(len(chunk), chunk[0].steps) for chunk in chunks], enabled=options.progress, style=options.progress_style
+    )
     try:
         if options.backend == "ray":  # (the tasks report nothing: the sweep bar counts finished runs' steps)
             train_with_ray(chunks, out_dir, options, _counting(on_result, progress))

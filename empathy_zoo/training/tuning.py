@@ -241,7 +241,7 @@ def _study(
     note: Callable[[str], None],
     has_plan: bool,
 ) -> dict[str, Any]:
-    from tqdm.auto import tqdm
+    from empathy_zoo.training.progress import progress_bar
 
     study = _open_study(optuna, plan, out, options.update_kernel, has_plan)
     states = optuna.trial.TrialState
@@ -252,8 +252,13 @@ def _study(
             f"resuming the study in {out}: {done} of {plan.trials} trial(s) done"
             + (f"; trial(s) {interrupted} were interrupted and do not count" if interrupted else "")
         )
-    bar = tqdm(
-        total=plan.trials, initial=min(done, plan.trials), desc=f"tune {plan.base.method}", unit="trial", disable=not progress
+    bar = progress_bar(
+        options.progress_style,
+        total=plan.trials,
+        initial=min(done, plan.trials),
+        desc=f"tune {plan.base.method}",
+        unit="trial",
+        disable=not progress,
     )
     try:
         while done < plan.trials:
