@@ -25,6 +25,9 @@ class TrainingPhases:
     learning_starts_setting: str
     """The setting that sets :attr:`learning_starts`, as a sweep file's ``[settings]`` names it
     (``learning_starts``; ``algorithm_kwargs.learning_starts`` for an SB3 method)."""
+    learning_starts_option: str = ""
+    """The ``train`` option that sets it, ``{}`` standing for the value (``--learning-starts {}``;
+    ``--algorithm-kwargs learning_starts={}`` for an SB3 method); ``""``: none is named."""
     learning_starts_least: int = 0
     """The smallest value the settings class accepts for it (Empathic DQN: its ``batch_size``)."""
     exploration_ends: int | None = None

@@ -170,6 +170,7 @@ class SB3Settings:
         return TrainingPhases(
             learning_starts=int(kwargs["learning_starts"]),
             learning_starts_setting="algorithm_kwargs.learning_starts",
+            learning_starts_option="--algorithm-kwargs learning_starts={}",
             exploration_ends=math.ceil(fraction * self.schedule_steps),
             exploration_rule="exploration_fraction × schedule_steps",
             exploration_fix=lambda steps: f"schedule_steps = {max(1, math.floor(steps / fraction)):,}" if fraction > 0 else "",

@@ -67,7 +67,7 @@ class OddSettings:
     seed: int = 0
     """A field named like a run option (``--seed`` is the run's)."""
     extras: Mapping[str, Any] = field(default_factory=dict)
-    """A table: no option reads one."""
+    """A table, read as KEY=VALUE pairs."""
     rate: float | None = None
     """A number or nothing."""
 

@@ -133,12 +133,15 @@ def test_a_method_named_by_a_non_string_in_the_config_file_is_a_clean_error(tmp_
 
 def test_fields_no_option_can_read_are_config_keys(tmp_path, capsys):
     text = help_of(capsys, "--method", ODD)
-    assert "in [settings] only: seed, extras" in text and "--rate FLOAT" in text
+    assert "in [settings] only: seed " in text and "--rate FLOAT" in text
+    assert "--extras KEY=VALUE [KEY=VALUE ...]" in text  # (a table reads KEY=VALUE pairs)
     config = tmp_path / "run.toml"
     config.write_text("[settings]\nseed = 4\nextras = { depth = 2 }\n")
     run, settings = values("--method", ODD, "--config", str(config), "--seed", "7", "--rate", "0.5")
     assert run["seeds"] == [7]  # --seed is the run's
     assert settings == {"seed": 4, "extras": {"depth": 2}, "rate": 0.5}
+    _, settings = values("--method", ODD, "--config", str(config), "--extras", "width=3", "depth=5")
+    assert settings == {"seed": 4, "extras": {"depth": 5, "width": 3}}
 
 
 def test_the_console_script_and_python_dash_m_run_the_command_line():

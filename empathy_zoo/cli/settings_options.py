@@ -9,6 +9,9 @@ A field's type says how its option reads values:
 ``int``, ``float``, ``str``     one value of that type
 ``tuple[T, ...]``, ``list[T]``  one or more values of type ``T`` (``int``, ``float``, ``str``)
 ``T | None``                    as ``T``
+``dict[str, T]``, ``Mapping``    one or more ``KEY=VALUE``, each value a TOML value
+                                (``--algorithm-kwargs learning_starts=300 policy='"MlpPolicy"'``),
+                                merged over the ``--config`` file's table
 anything else                   no option: set it in ``[settings]`` of ``--config``
 ==============================  ==================================================
 
@@ -30,7 +33,9 @@ import argparse
 import ast
 import inspect
 import textwrap
+import tomllib
 import types
+from collections.abc import Mapping
 from dataclasses import MISSING, Field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any, Union, get_args, get_origin
 
@@ -47,6 +52,7 @@ __all__ = [
     "field_docs",
     "given_reward",
     "given_settings",
+    "merged_settings",
     "option_reading",
 ]
 
@@ -90,6 +96,29 @@ class _StoreAs(argparse.Action):
         setattr(namespace, self.dest, self.sequence(values))
 
 
+class _StoreMapping(argparse.Action):
+    """Store ``KEY=VALUE`` values as a dict, each value read as a TOML value (``300``, ``0.5``,
+    ``true``, ``"text"``, ``[64, 64]``); anything else is refused naming the option."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any, option_string: str | None = None
+    ) -> None:
+        table: dict[str, Any] = {}
+        for item in values:
+            key, equals, text = item.partition("=")
+            if not equals or not key.strip():
+                raise argparse.ArgumentError(self, f"{item!r} is no KEY=VALUE")
+            if key.strip() in table:
+                raise argparse.ArgumentError(self, f"{key.strip()} given twice")
+            try:
+                table[key.strip()] = tomllib.loads(f"value = {text}")["value"]
+            except tomllib.TOMLDecodeError:
+                raise argparse.ArgumentError(
+                    self, f"{key.strip()}={text}: the value is no TOML value (a string needs quotes: {key.strip()}='\"{text}\"')"
+                ) from None
+        setattr(namespace, self.dest, table)
+
+
 def option_reading(kind: Any) -> dict[str, Any] | None:
     """``add_argument`` keywords that read a value of type ``kind``; ``None`` if no option can."""
     arguments = get_args(kind)
@@ -101,6 +130,8 @@ def option_reading(kind: Any) -> dict[str, Any] | None:
     if kind in _SCALARS:
         return {"type": kind, "metavar": kind.__name__.upper()}
     container = get_origin(kind)
+    if container in (dict, Mapping) and arguments and arguments[0] is str:
+        return {"nargs": "+", "metavar": "KEY=VALUE", "action": _StoreMapping}
     if container is tuple and len(arguments) == 2 and arguments[1] is Ellipsis or container is list and arguments:
         if arguments[0] in _SCALARS:
             return {
@@ -192,6 +223,17 @@ def given_reward(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def given_settings(args: argparse.Namespace) -> dict[str, Any]:
-    """The settings given as options (the namespace holds only those given)."""
+    """The settings given as options (the namespace holds only those given); a table's keys are
+    merged over the ``--config`` file's by :func:`merged_settings`."""
     given = vars(args)
     return {key.removeprefix(SETTINGS_DEST): value for key, value in given.items() if key.startswith(SETTINGS_DEST)}
+
+
+def merged_settings(settings: Mapping[str, Any], given: Mapping[str, Any]) -> dict[str, Any]:
+    """``settings`` (a ``--config`` file's) with the options ``given`` over them: a table option
+    (``--algorithm-kwargs``) replaces the keys it names and keeps the file's others."""
+    merged = dict(settings)
+    for name, value in given.items():
+        before = merged.get(name)
+        merged[name] = {**before, **value} if isinstance(value, dict) and isinstance(before, Mapping) else value
+    return merged

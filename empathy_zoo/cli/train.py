@@ -25,7 +25,13 @@ from empathy_zoo.cli.common import (
     run_summary,
     runner_options,
 )
-from empathy_zoo.cli.settings_options import add_reward_options, add_settings_options, given_reward, given_settings
+from empathy_zoo.cli.settings_options import (
+    add_reward_options,
+    add_settings_options,
+    given_reward,
+    given_settings,
+    merged_settings,
+)
 from empathy_zoo.engine.arguments import argument_defaults, argument_help, argument_types
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.experiment.model import Budget
@@ -135,7 +141,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
     if "no_progress" in given:
         run["progress"] = False
     run["reward"] = reward | given_reward(args)
-    return run, settings | given_settings(args)
+    return run, merged_settings(settings, given_settings(args))
 
 
 def cmd_train(args: argparse.Namespace, command: str) -> int:

@@ -35,7 +35,8 @@ def _lower_to(phases: TrainingPhases, steps: int) -> str:
     if suggested >= steps:
         return raise_steps
     why = "a tenth of the budget" if suggested == steps // 10 else "the least it may be"
-    return f"lower {phases.learning_starts_setting} to {suggested:,} ({why}) or {raise_steps}"
+    option = f", train's {phases.learning_starts_option.format(suggested)}" if phases.learning_starts_option else ""
+    return f"lower {phases.learning_starts_setting} to {suggested:,} ({why}{option}) or {raise_steps}"
 
 
 def warmup_refusal(spec: RunSpec) -> str | None:
