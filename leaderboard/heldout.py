@@ -238,14 +238,15 @@ def heldout_section(
     digits: int = 2,
     title: str = "Held-out partners",
     lead: str = "",
+    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
 ) -> HeldoutSection | None:
-    """The "Held-out partners" section of the evaluation files of ``results_dirs`` (``None`` when
-    they have none; ``origins`` as :func:`load_heldout` takes it), its figures written into
+    """The "Held-out partners" section of the evaluation files of ``results_dirs`` and ``extra``
+    (``None`` when there are none; ``origins`` and ``extra`` as :func:`load_heldout` takes them), its figures written into
     ``out_dir / figures_dir`` and linked relative to ``out_dir``; headed ``title``, with ``lead``
     (a paragraph) before its first table."""
     from leaderboard.heldout_plot import plot_heldout
 
-    groups, notes = load_heldout(results_dirs, results, origins)
+    groups, notes = load_heldout(results_dirs, results, origins, extra)
     if not groups and not notes:
         return None
     out = Path(out_dir)
@@ -297,12 +298,14 @@ def add_heldout_section(
     markdown: str,
     html_page: str,
     origins: Sequence[str] | None = None,
+    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
 ) -> tuple[str, str, dict[str, Path]]:
     """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Held-out partners" section
     placed before their metric definitions, and the section's figures; the pages unchanged and no
-    figures when ``results_dirs`` hold no evaluation files. ``origins``: as :func:`load_heldout`
-    takes it (needed with several directories)."""
-    section = heldout_section(results_dirs, results, out_dir, origins)
+    figures when ``results_dirs`` hold no evaluation files and ``extra`` is empty. ``origins`` and
+    ``extra`` (evaluations read from elsewhere, matched to their runs): as :func:`load_heldout`
+    takes them (``origins`` needed with several directories)."""
+    section = heldout_section(results_dirs, results, out_dir, origins, extra=extra)
     if section is None:
         return markdown, html_page, {}
     markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)

@@ -206,7 +206,10 @@ def _dirs(results_dirs: ResultsDirs) -> list[str | os.PathLike[str]]:
 
 
 def load_heldout(
-    results_dirs: ResultsDirs, results: Sequence[dict[str, Any]], origins: Sequence[str] | None = None
+    results_dirs: ResultsDirs,
+    results: Sequence[dict[str, Any]],
+    origins: Sequence[str] | None = None,
+    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
 ) -> tuple[list[HeldoutGroup], list[str]]:
     """The evaluation files of ``results_dirs`` grouped by environment and scenario set, each matched
     with its run among ``results`` (as :func:`leaderboard.aggregate.load_results` gives them), and
@@ -215,7 +218,9 @@ def load_heldout(
     directories, ``origins`` (:attr:`leaderboard.sources.ResultSet.origins`: the directory, as
     given, each result was read from) matches an evaluation only with a run of its own directory.
     A malformed evaluation file raises ``ValueError`` naming it; so do two of one set made with
-    different definitions of it."""
+    different definitions of it. ``extra``: ``(run, evaluation, path)`` of evaluations read from
+    elsewhere and matched to their runs already (:func:`leaderboard.evaluation_dirs.match_evaluations`),
+    counted as if they lay beside them; one run evaluated twice in one set raises ``ValueError``."""
     dirs = _dirs(results_dirs)
     if origins is None and len(dirs) > 1:
         raise ValueError("the evaluations of several results directories need each result's origin (origins=)")
@@ -239,6 +244,14 @@ def load_heldout(
                 continue
             key = (table_env(run), evaluation["scenario_set"]["name"])
             found.setdefault(key, []).append((run, evaluation, path))
+    for run, evaluation, path in extra:
+        found.setdefault((table_env(run), evaluation["scenario_set"]["name"]), []).append((run, evaluation, path))
+    for members in found.values():
+        seen: dict[int, Path] = {}
+        for run, _, path in members:
+            if id(run) in seen:
+                raise ValueError(f"{path} and {seen[id(run)]} evaluate run {run['run_id']} in one scenario set; move one away")
+            seen[id(run)] = path
     groups = []
     for (env, set_name), members in sorted(found.items()):
         first = members[0]

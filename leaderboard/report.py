@@ -36,9 +36,11 @@ from leaderboard.aggregate import (
 from leaderboard.budgets import budgets_of
 from leaderboard.constraint_section import add_constraint_section
 from leaderboard.episodes import add_episodes_section
+from leaderboard.evaluation_dirs import MatchedEvaluation, match_evaluations
 from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
 from leaderboard.plots import plot_learning_curves
+from leaderboard.profile_section import add_profile_section
 from leaderboard.reference_curves import reference_refusal
 from leaderboard.row_names import dqn_rows_of, renaming_note
 from leaderboard.sources import ResultSet, load_results_dirs
@@ -82,6 +84,7 @@ def write_leaderboard(
     final_fraction: float = FINAL_FRACTION,
     on_note: Callable[[str], None] | None = None,
     allowed_imports: Collection[str] = (),
+    evaluations: Sequence[str | os.PathLike[str]] = (),
 ) -> dict[str, Path]:
     """Score every result file of ``results_dir`` and write the leaderboard into ``out_dir``.
 
@@ -102,12 +105,14 @@ def write_leaderboard(
 
     Writes, all atomically: ``LEADERBOARD.md``, ``leaderboard.csv``, ``leaderboard.html`` and
     ``figures/<env>_<metric>.png`` (learning curves) and ``figures/<env>_tradeoff.png`` (task against
-    side effect, :mod:`leaderboard.tradeoff`); where runs kept their trained agents, one greedy
+    side effect, :mod:`leaderboard.tradeoff`); ``figures/<env>_profiles.png`` (performance profiles,
+    beside an optimality-gap table, where the env has a normalized metric:
+    :mod:`leaderboard.profile_section`); where runs kept their trained agents, one greedy
     episode per variant and row, ``figures/<env>_<row slug>_episode.gif``, in a "Greedy episodes"
     section (:mod:`leaderboard.episodes`; an agent file changed since its run wrote it raises
     ``ValueError``). Returns ``{"markdown", "csv", "html": path}`` plus ``"figure:<env>:<metric>": path``
-    for every figure (``<metric>`` is ``tradeoff`` for the trade-off, ``episode_<row slug>`` for an
-    episode). No result file raises ``ValueError``.
+    for every figure (``<metric>`` is ``tradeoff`` for the trade-off, ``profiles`` for the
+    performance profiles, ``episode_<row slug>`` for an episode). No result file raises ``ValueError``.
 
     Every input is read and checked before anything is written (result files, labels, agent
     files, the output directory and its links): the leaderboard is rendered into a directory of its
@@ -120,6 +125,13 @@ def write_leaderboard(
     is said in one line through ``on_note`` (default: stderr). A run whose recorded partner is a
     plug-in policy gets no greedy episode unless the plug-in is in ``allowed_imports``: a result
     file never makes the leaderboard import code.
+
+    ``evaluations`` names directories of evaluation files kept apart from their runs (what
+    ``empathy-zoo evaluate --out DIR`` wrote): each file is read, checked and matched to its run by
+    run id and agent hash (:func:`leaderboard.evaluation_dirs.match_evaluations`) before anything is
+    written, and the "Held-out partners" section reads it as if it lay beside its run. An
+    evaluation of no run read, or of another agent than its run's result file records, raises
+    ``ValueError`` naming the file.
     """
     several = not isinstance(results_dir, (str, os.PathLike))
     dirs: list[str | os.PathLike[str]] = [results_dir] if isinstance(results_dir, (str, os.PathLike)) else list(results_dir)
@@ -129,6 +141,7 @@ def write_leaderboard(
             "it is written into none of the directories it reads unless asked"
         )
     read = load_results_dirs(dirs, labels, dqn_named=True)
+    matched = match_evaluations(evaluations, read.results, dirs, read.origins)
     out = _checked_out(Path(dirs[0] if out_dir is None else out_dir))
     for (env, label), runs in group_runs(read.results).items():
         refusal = reference_refusal(runs)
@@ -152,6 +165,7 @@ def write_leaderboard(
                 confidence=confidence,
                 final_fraction=final_fraction,
                 allowed_imports=allowed_imports,
+                evaluations=matched,
             )
             check_output_dir(out, (FIGURES_DIR,))
             for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
@@ -179,6 +193,7 @@ def _render(
     confidence: float,
     final_fraction: float,
     allowed_imports: Collection[str] = (),
+    evaluations: Sequence[MatchedEvaluation] = (),
 ) -> dict[str, Path]:
     """Write every file of the leaderboard of ``read`` into ``out`` (a staging directory: the
     pages link their figures relative to it); returns them as :func:`write_leaderboard` names them."""
@@ -238,7 +253,12 @@ def _render(
         reference_note=renaming_note(read.renamed, bool(dqn_rows)),
     )
     markdown, html = add_constraint_section(results, markdown, html)
-    markdown, html, heldout_figures = add_heldout_section(dirs, results, out, markdown, html, origins=read.origins)
+    markdown, html, profile_figures = add_profile_section(
+        results, out, markdown, html, random_state=random_state, n_resamples=n_resamples, confidence=confidence
+    )
+    markdown, html, heldout_figures = add_heldout_section(
+        dirs, results, out, markdown, html, origins=read.origins, extra=evaluations
+    )
     markdown, html, episode_figures = add_episodes_section(
         results, out, markdown, html, origins=read.origins, allowed_imports=allowed_imports
     )
@@ -248,6 +268,7 @@ def _render(
         "html": _write_page(out / HTML_NAME, html),
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
+    paths.update(profile_figures)
     paths.update(heldout_figures)
     paths.update(episode_figures)
     return paths

@@ -157,10 +157,12 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     figures = {key: path for key, path in paths.items() if key.startswith("figure:")}
     assert sorted(figures) == [
         "figure:coexistence_v0:harms",
+        "figure:coexistence_v0:profiles",
         "figure:coexistence_v0:survival",
         "figure:coexistence_v0:tradeoff",
         "figure:sharing_v0:batteries",
         "figure:sharing_v0:equality",
+        "figure:sharing_v0:profiles",
         "figure:sharing_v0:tradeoff",
     ]
     for path in paths.values():
@@ -171,14 +173,15 @@ def test_write_leaderboard_writes_every_file(tmp_path: Path) -> None:
     assert "`empathy-zoo leaderboard sweep`" in markdown and f"empathy-zoo {package_version()}" in markdown
     for path in figures.values():
         assert f"]({path.relative_to(out).as_posix()})" in markdown
-    assert markdown.count("| DQN | 3 |") == 4 and "single seed" not in markdown
+    tables = markdown.split("## Performance profiles and optimality gap", 1)[0]
+    assert tables.count("| DQN | 3 |") == 4 and "single seed" not in markdown
     rows = list(csv.DictReader(io.StringIO(paths["csv"].read_text(encoding="utf-8"))))
     assert len(rows) == 2 * 2 * 2 * len(METRIC_NAMES)
     assert {row["n_seeds"] for row in rows} == {"3"} and all(row["command"] == "empathy-zoo leaderboard sweep" for row in rows)
     for row in rows:
         assert float(row["ci_low"]) <= float(row["mean"]) <= float(row["ci_high"])
     html = paths["html"].read_text(encoding="utf-8")
-    assert html.count('<img alt="') == 6 and "<style>" in html
+    assert html.count('<img alt="') == len(figures) and "<style>" in html
     assert (
         markdown.count("### Task against side effect") == 2
         and html.count("<h3>Task against side effect</h3>") == 2

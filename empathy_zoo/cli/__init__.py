@@ -2,7 +2,7 @@
 
     empathy-zoo train --env coexistence_v0 --method empathic_dqn --selfishness 0.5 --steps 1000000 --seed 0 --out runs/
     empathy-zoo reproduce --profile quick            # sweep + leaderboard into results/quick/
-    empathy-zoo leaderboard results/quick [--out DIR]
+    empathy-zoo leaderboard results/quick [--out DIR] [--evaluations EVAL_DIR]
     empathy-zoo methods | policies                   # what is registered
     empathy-zoo play --env sharing_v0 --episodes 3 --render ansi
     empathy-zoo watch RUN_ID [--dir runs] [--gif episode.gif]   # a trained agent's greedy episodes

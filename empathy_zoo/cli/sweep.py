@@ -199,7 +199,8 @@ def dry_run_plan(
 
 def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     """Write the leaderboard (Markdown, CSV, HTML) of existing results: one directory, or several
-    into one leaderboard (``--out`` required; ``--label DIR=PREFIX`` prefixes a directory's labels)."""
+    into one leaderboard (``--out`` required; ``--label DIR=PREFIX`` prefixes a directory's labels);
+    ``--evaluations DIR`` adds evaluation files kept apart from their runs."""
     from leaderboard.report import write_leaderboard
     from leaderboard.sources import parse_label_options
 
@@ -211,7 +212,12 @@ def cmd_leaderboard(args: argparse.Namespace, command: str) -> int:
     labels = parse_label_options(args.label)
     results = args.results[0] if len(args.results) == 1 else args.results
     allowed = frozenset(args.allow_import or ())
-    print_written(write_leaderboard(results, args.out, command=command, labels=labels or None, allowed_imports=allowed))
+    evaluations = args.evaluations or ()
+    print_written(
+        write_leaderboard(
+            results, args.out, command=command, labels=labels or None, allowed_imports=allowed, evaluations=evaluations
+        )
+    )
     return 0
 
 
@@ -249,6 +255,15 @@ def add_sweep_commands(sub: Any) -> None:
         metavar="DIR=PREFIX",
         action="append",
         help="put PREFIX before every label of DIR's runs (repeatable): tells apart two directories' rows of one label",
+    )
+    board.add_argument(
+        "--evaluations",
+        type=path_text,
+        metavar="EVAL_DIR",
+        action="append",
+        help="evaluation files kept apart from the runs (the --out of empathy-zoo evaluate; repeatable): each is "
+        "matched to its run by run id and agent hash and shown in the held-out section as if it lay beside it; "
+        "one of no run read, or of another agent than its run's result file records, is refused",
     )
     add_allow_import(board)
     board.set_defaults(handler=cmd_leaderboard)
