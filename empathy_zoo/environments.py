@@ -19,6 +19,7 @@ from types import ModuleType
 from typing import Any, TypeVar
 
 from empathy_zoo.engine.base import GridEngine
+from empathy_zoo.engine.charger import ChargerEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
 from empathy_zoo.metrics import HARMS_PER_100_STEPS
@@ -124,6 +125,21 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         compact_metrics=("batteries", "equality", "other_batteries"),
         heldout_metrics=("batteries", "other_batteries", "equality"),
         curves=(("batteries", "Batteries per episode (robot)"), ("equality", "Equality per episode")),
+    ),
+    "charger_v0": Environment(
+        ChargerEngine,
+        "empathy_zoo.charger_v0",
+        "empathy_zoo/Charger-v0",
+        {"cat_0": "random_walk"},
+        {"size": 7, "view": 5, "max_cycles": 500},
+        task="return",
+        task_label="robot reward per episode (task: higher is better)",
+        side_effects=("harms",),
+        side_effect_label="cats harmed by the charger per episode (side effect: lower is better)",
+        table_metrics=("return", "harms", "other_return"),
+        compact_metrics=("harms", "return", "other_return"),
+        heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
+        curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
     ),
 }
 """Every environment, by name."""

@@ -68,6 +68,8 @@ class StartRules:
     """Flat cells (``row * size + col``) where no agent may start (batteries)."""
     conflict: Conflict
     """The environment's rule for two agents on distinct cells (see :data:`Conflict`)."""
+    blocked_what: str = "a battery"
+    """What stands on a blocked cell, as a refusal names it."""
 
     def hand_placed(self, positions: Any) -> dict[int, np.ndarray]:
         """The cells of ``options["positions"]`` (agent name -> ``(row, col)``, or ``None``: none),
@@ -83,7 +85,7 @@ class StartRules:
             placed[self.agents.index(agent)] = check_cell(cell, f"options['positions'][{agent!r}]", self.size)
         for index, cell in placed.items():
             if int(cell[0] * self.size + cell[1]) in self.blocked:
-                raise ValueError(f"{self.agents[index]} is placed on a battery at {tuple(cell.tolist())}")
+                raise ValueError(f"{self.agents[index]} is placed on {self.blocked_what} at {tuple(cell.tolist())}")
         indices = sorted(placed)
         for x in range(len(indices)):
             for y in range(x + 1, len(indices)):
