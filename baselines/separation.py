@@ -53,6 +53,7 @@ from baselines.lagrangian import Lagrangian
 from baselines.registry import METHODS
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from baselines.separation_reachability import relative_reachability_reward
+from baselines.separation_values import in_view_values, silver_values
 from baselines.shaping import HARM_PENALTY
 from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
 from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
@@ -61,7 +62,6 @@ from empathy_zoo.exact_solver import (
     alone_policy,
     empathic_values,
     episode_steps,
-    gone_continuation,
     optimal_values,
     outcome,
 )
@@ -218,33 +218,6 @@ class SeparationTable:
         """Whether the two rows' greedy policies differ in a reachable state (never for a row with itself)."""
         found = self.pair(first, second, epsilon)
         return False if found is None else found.differ
-
-
-def _continuation(model: TabularModel, v: np.ndarray, gamma: float) -> np.ndarray:
-    """``c = γ·(1 − done)·V*(s')`` of every step, ``(states, 5, 5)``, the robot alone once the other leaves."""
-    return np.select([model.robot_harmed, model.other_harmed], [0.0, gone_continuation(model, gamma)], gamma * v[model.after])
-
-
-def silver_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
-    """The silver rule's ``Q_silver = Q* − (1 − β)·E[max(c − o, 0)]`` at ``Q*`` (the module page)."""
-    v = q.max(axis=1)
-    continuation = _continuation(model, v, gamma)
-    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
-    return q - (1.0 - selfishness) * np.maximum(continuation - other, 0.0).mean(axis=2)
-
-
-def in_view_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
-    """In-view Empathic DQN's target at ``Q*``: the golden rule, with the robot's own continuation
-    as the other-term where the other is present but outside the engine's window at t+1."""
-    engine = ENGINES[model.env](model.states, **model.env_kwargs)
-    engine.reset()
-    engine.cells = np.stack(np.divmod(np.arange(model.states), model.cells), axis=1).astype(engine.cells.dtype)
-    seen = np.asarray(engine.in_view(0, 1), dtype=bool)
-    v = q.max(axis=1)
-    continuation = _continuation(model, v, gamma)
-    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
-    other = np.where(~model.other_harmed & ~seen[model.after], continuation, other)
-    return q + (1.0 - selfishness) * (other - model.reward - continuation).mean(axis=2)
 
 
 def reachable_states(model: TabularModel, policy: np.ndarray) -> np.ndarray:
