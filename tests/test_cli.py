@@ -192,12 +192,36 @@ def test_cuda_unavailable_is_a_clear_error(tmp_path, capsys):
     assert "CUDA is not available" in capsys.readouterr().err
 
 
-def test_usage_errors_exit_2(capsys):
-    assert main(["train", "--seed", "1", "--seeds", "2"]) == 2
-    assert main(["train", "--no-such-option", "1"]) == 2
-    assert main(["train", "--steps", "many"]) == 2
-    assert main([]) == 2
-    assert "usage: empathy-zoo" in capsys.readouterr().err
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (
+            ["train", "--seed", "1", "--seeds", "2"],
+            "empathy-zoo train: error: argument --seeds: not allowed with argument --seed",
+        ),
+        (
+            ["train", "--no-such-option", "1"],
+            "empathy-zoo: error: unrecognized arguments: --no-such-option 1 (the settings of method",
+        ),
+        (["train", "--steps", "many"], "empathy-zoo train: error: argument --steps: invalid int value: 'many'"),
+        (["train", "--fixed", "cat_0=stay", "--fixed", "cat_0=chase"], "cat_0 is given twice"),
+        (["tune", "--objective", "nope"], "empathy-zoo tune: error: argument --objective: invalid choice: 'nope'"),
+        ([], "empathy-zoo: error: the following arguments are required: COMMAND (see empathy-zoo --help)"),
+    ],
+)
+def test_a_usage_error_is_one_line_and_exits_2(capsys, argv, said):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err and "usage:" not in err, err
+
+
+def test_train_bounds_its_command_line_seeds_before_writing(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["train", "--out", str(out), "--seeds", *map(str, range(10_001))]) == 2
+    assert "--seeds: an experiment has at most 10,000 seeds" in capsys.readouterr().err
+    assert main(["train", "--out", str(out), "--seeds", "3", "3"]) == 2
+    assert "--seeds" in capsys.readouterr().err
+    assert not out.exists()
 
 
 def test_methods_policies_and_play(capsys):

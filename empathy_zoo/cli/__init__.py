@@ -34,6 +34,7 @@ import shlex
 import signal
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from empathy_zoo.cli.browse import add_browse_commands
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS
@@ -50,9 +51,20 @@ INTERRUPTED = 128
 """An interrupted command exits with this plus the signal's number (130 for SIGINT, 143 for SIGTERM)."""
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose usage error is one line on standard error, ``PROG COMMAND: error:
+    MESSAGE (see PROG COMMAND --help)`` (the hint left out where the message names a help already),
+    status 2 (argparse's own prints the whole usage first);
+    its subcommands' parsers are of the same class."""
+
+    def error(self, message: str) -> NoReturn:
+        see = "" if "--help" in message else f" (see {self.prog} --help)"
+        self.exit(2, f"{self.prog}: error: {message}{see}\n")
+
+
 def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParser:
     """The whole command line, ``train`` with the settings options of ``method``."""
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog=PROG, description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_train(sub, method)
     add_sweep_commands(sub)

@@ -35,7 +35,7 @@ from empathy_zoo.cli.settings_options import (
 from empathy_zoo.engine.arguments import argument_defaults, argument_help, argument_types
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.experiment.model import Budget
-from empathy_zoo.experiment.values import PolicyTable, Seeds, field_types
+from empathy_zoo.experiment.values import PolicyTable, Seeds, check_seeds, field_types
 from empathy_zoo.training.options import RunnerOptions
 
 __all__ = ["RUN_KEYS", "ENV_ARGUMENTS", "add_train", "cmd_train", "config_file", "train_method", "train_values"]
@@ -136,6 +136,8 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
             run[key] = given[key]
     if "seed" in given:
         run["seeds"] = [given["seed"]]
+    if "seed" in given or "seeds" in given:  # (a --config file's are checked as it is read)
+        run["seeds"] = check_seeds(list(run["seeds"]), "--seed" if "seed" in given else "--seeds")
     if "fixed" in given:
         run["fixed"] = dict(given["fixed"])
     if "no_progress" in given:
