@@ -35,7 +35,7 @@ the reward.
 ``self.np_random`` is seeded too (Gymnasium's contract) but the dynamics never draw from it.
 
 ## Arguments
-`SingleAgentEnv(env="coexistence_v0", fixed=None, size=7, view=5, max_cycles=500, render_mode=None, **env_options)`
+`SingleAgentEnv(env="coexistence_v0", fixed=None, size=None, view=None, max_cycles=None, render_mode=None, **env_options)` (`None`: the environment's default)
 * `env`: `"coexistence_v0"` or `"sharing_v0"`.
 * `fixed`: `{agent: policy}` (a `FixedPolicy`, a registered name or `"package.module:ClassName"`);
   `None` = the paper's (`empathy_zoo.environments.DEFAULT_POLICIES`). Exactly one agent must be left.
@@ -71,17 +71,18 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         env: str = DEFAULT_ENVIRONMENT,
         fixed: Mapping[str, FixedPolicy | str] | None = None,
         *,
-        size: int = 7,
-        view: int = 5,
-        max_cycles: int = 500,
+        size: int | None = None,
+        view: int | None = None,
+        max_cycles: int | None = None,
         render_mode: str | None = None,
         **env_options: Any,
     ) -> None:
         EzPickle.__init__(self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
         if env not in ENVIRONMENTS:
             raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENVIRONMENTS)}")
+        given = {"size": size, "view": view, "max_cycles": max_cycles}  # (None: the environment's default)
         parallel = ENVIRONMENTS[env].parallel_env(
-            size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options
+            render_mode=render_mode, **{k: v for k, v in given.items() if v is not None}, **env_options
         )
         self.fixed = default_policies(env, env_options) if fixed is None else dict(fixed)
         self._env = FixedAgents(parallel, self.fixed)

@@ -31,9 +31,15 @@ class GridParallelEnv(ParallelEnv, EzPickle):
     metadata: ClassVar[dict[str, Any]]
 
     def __init__(
-        self, size: int = 7, view: int = 5, max_cycles: int = 500, render_mode: str | None = None, **env_options: Any
+        self,
+        size: int | None = None,
+        view: int | None = None,
+        max_cycles: int | None = None,
+        render_mode: str | None = None,
+        **env_options: Any,
     ) -> None:
-        """``env_options``: the environment's own arguments (``engine_class.extra_arguments``, and
+        """``size``, ``view`` and ``max_cycles`` left ``None`` are the engine's defaults.
+        ``env_options``: the environment's own arguments (``engine_class.extra_arguments``, and
         its ``count_argument``: how many other agents); any other keyword raises
         :class:`~empathy_zoo.engine.arguments.UnknownArgumentError` (a ``ValueError`` and a
         ``TypeError``) naming it."""
@@ -42,7 +48,8 @@ class GridParallelEnv(ParallelEnv, EzPickle):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
-        self.engine = self.engine_class(1, size=size, view=view, max_cycles=max_cycles, **env_options)
+        given = {"size": size, "view": view, "max_cycles": max_cycles}
+        self.engine = self.engine_class(1, **{k: v for k, v in given.items() if v is not None}, **env_options)
         self.possible_agents: list[AgentID] = list(self.engine.agents)
         self.agents: list[AgentID] = []
         obs_space = spaces.Box(

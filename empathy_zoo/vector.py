@@ -172,11 +172,13 @@ class VectorEnv:
         *,
         fixed: Mapping[str, FixedPolicy | PolicyEntry] | None = None,
         in_view_only: bool = False,
-        size: int = 7,
-        view: int = 5,
-        max_cycles: int = 500,
+        size: int | None = None,
+        view: int | None = None,
+        max_cycles: int | None = None,
         **env_options: Any,
     ) -> None:
+        """``size``, ``view`` and ``max_cycles`` left ``None`` are the environment's defaults (its
+        entry's ``arguments``), as every other argument in ``env_options``."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         check_at_most("num_envs", int(num_envs), MAX_VECTOR_ENVS, "environments one vector env steps at once")
@@ -185,7 +187,8 @@ class VectorEnv:
                 raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENGINES)}")
             env = ENGINES[env]
         check_env_arguments(env, env_options)
-        self.engine: GridEngine = env(num_envs, size=size, view=view, max_cycles=max_cycles, **env_options)
+        given = {"size": size, "view": view, "max_cycles": max_cycles}
+        self.engine: GridEngine = env(num_envs, **{k: v for k, v in given.items() if v is not None}, **env_options)
         self.num_envs = self.engine.num_envs
         self.agents = list(self.engine.agents)
         fixed = dict(fixed or {})

@@ -1,0 +1,87 @@
+"""# Verdicts against DQN, one page beside another
+
+Reads the "P(improves on DQN)" tables of two leaderboard pages (``LEADERBOARD.md``: say the same
+profile at 5 seeds and at 10) and lists every cell, variant × phase × method × metric, whose mark
+differs: ▲ (better than DQN), ▼ (worse) or none. A mark that appears on the new page only reads
+as power; one that changes sign is a finding.
+
+    python -m leaderboard.verdict_changes OLD/LEADERBOARD.md NEW/LEADERBOARD.md
+
+Pure text: the pages are read as Markdown, nothing is recomputed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+__all__ = ["Cell", "verdicts", "changes", "changes_markdown", "main"]
+
+Cell = tuple[str, str, str, str]
+"""(variant, phase, method row, metric)."""
+
+_TABLE = "### P(improves on DQN): "
+_MARK = re.compile(r"^\s*([▲▼]?)")
+
+
+def verdicts(page: str) -> dict[Cell, str]:
+    """Every cell of the page's "P(improves on DQN)" tables and its mark (``▲``, ``▼`` or ``""``)."""
+    cells: dict[Cell, str] = {}
+    variant = phase = ""
+    header: list[str] = []
+    for line in page.splitlines():
+        if line.startswith("## "):
+            variant, phase, header = line[3:].strip(), "", []
+        elif line.startswith("### "):
+            phase = line[len(_TABLE) :].strip() if line.startswith(_TABLE) else ""
+            header = []
+        elif phase and line.startswith("|"):
+            parts = [part.strip() for part in line.strip().strip("|").split("|")]
+            if not header:
+                header = parts
+            elif not set(parts[0]) <= set(":-"):
+                for metric, value in zip(header[2:], parts[2:]):
+                    match = _MARK.match(value)
+                    cells[(variant, phase, parts[0], metric)] = match.group(1) if match else ""
+    return cells
+
+
+def changes(old: dict[Cell, str], new: dict[Cell, str]) -> list[tuple[Cell, str, str]]:
+    """The cells of both pages whose marks differ: ``(cell, old mark, new mark)``, in the new page's order."""
+    return [(cell, old[cell], mark) for cell, mark in new.items() if cell in old and old[cell] != mark]
+
+
+def _kind(before: str, after: str) -> str:
+    if before and after:
+        return "sign changed"
+    return "new mark" if after else "mark gone"
+
+
+def changes_markdown(old_page: str, new_page: str) -> str:
+    """A Markdown table of the marks that differ, with a count of the cells compared."""
+    old, new = verdicts(old_page), verdicts(new_page)
+    changed = changes(old, new)
+    common = sum(1 for cell in new if cell in old)
+    lines = [
+        f"{common} cells on both pages; {len(changed)} marks differ ({sum(1 for _, b, a in changed if b and a)} change sign).",
+        "",
+        "| variant | phase | method | metric | old | new | change |",
+        "|---|---|---|---|:-:|:-:|---|",
+    ]
+    for (variant, phase, method, metric), before, after in changed:
+        lines.append(f"| {variant} | {phase} | {method} | {metric} | {before or '–'} | {after or '–'} | {_kind(before, after)} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m leaderboard.verdict_changes", description=__doc__.splitlines()[0])
+    parser.add_argument("old", type=Path, help="the older LEADERBOARD.md")
+    parser.add_argument("new", type=Path, help="the newer LEADERBOARD.md")
+    args = parser.parse_args(argv)
+    print(changes_markdown(args.old.read_text(encoding="utf-8"), args.new.read_text(encoding="utf-8")), end="")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
