@@ -7,7 +7,8 @@ paper's claims and marked as the suite's own question.
 
 adds it when ``docs/results/paper/evaluations/`` holds evaluation files (``empathy-zoo evaluate``);
 its figures are written beside the leaderboard's, in the results directory's ``figures/``, and
-linked relative to the report.
+linked relative to the report: the same figures, rows named as the leaderboard names them (β = 1 as
+DQN), so either command leaves the same files.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from leaderboard.aggregate import load_results
 from leaderboard.heldout import heldout_section
+from leaderboard.sources import load_results_dirs
 
 __all__ = ["BEYOND_TITLE", "BEYOND_LEAD", "beyond_the_paper"]
 
@@ -38,7 +39,7 @@ def beyond_the_paper(results_dir: str | os.PathLike[str], report_path: str | os.
     figures = Path(results_dir).resolve() / "figures"
     section = heldout_section(
         results_dir,
-        load_results(results_dir),
+        list(load_results_dirs([results_dir], dqn_named=True).results),  # (rows named as the leaderboard's)
         report_dir,
         figures_dir=os.path.relpath(figures, report_dir),
         title=BEYOND_TITLE,

@@ -22,6 +22,7 @@ from leaderboard.coexistence_sensitivity import (
     hinge,
     judge_conditions,
     main,
+    reproduction_section,
     sensitivity_markdown,
 )
 from leaderboard.reproduction import Verdict
@@ -107,3 +108,12 @@ def test_the_page_names_each_condition_and_answers_each_claim(tmp_path, capsys):
     with pytest.raises(SystemExit) as refused:
         main([str(tmp_path / "nothing")])
     assert refused.value.code == 2 and "error:" in capsys.readouterr().err
+
+
+def test_the_reproduction_section_holds_the_verdict_table_without_the_evidence():
+    results = condition("coexistence_v0", {}, 0.0) + condition("coexistence_authors", AUTHORS, 1.5)
+    section = reproduction_section(results, "the command", lenient)
+    assert section.startswith("## Do C1–C4 depend on the rules? Coexistence under the authors' rules")
+    assert "    the command" in section
+    assert f"| {C3} | greedy | reproduced | not reproduced | **{HINGES}** |" in section
+    assert "## Evidence" not in section and section.count("- `coexistence_") == 2

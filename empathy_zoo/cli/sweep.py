@@ -92,7 +92,7 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
 
 
 def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
-    """Write REPRODUCTION.md of existing results (with the sensitivity sweep's table if given)."""
+    """Write REPRODUCTION.md of existing results (with the sensitivity sweeps' tables if given)."""
     from leaderboard.aggregate import load_results
     from leaderboard.beyond_paper import beyond_the_paper
     from leaderboard.reproduction import NotThePaperSweep, missing_paper_experiments, write_reproduction
@@ -106,6 +106,15 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
             f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
         )
+    if args.coexistence_sensitivity:
+        from leaderboard.coexistence_sensitivity import reproduction_section
+
+        rules = reproduction_section(
+            load_results(args.coexistence_sensitivity),
+            f"empathy-zoo reproduce --profile coexistence_sensitivity --out {args.coexistence_sensitivity}   "
+            f"(result files in {args.coexistence_sensitivity}; its LEADERBOARD.md names the exact command)",
+        )
+        appendix = "\n\n".join(part for part in (appendix, rules) if part)
     out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"
     missing = missing_paper_experiments(load_results(args.results))
     if missing:  # (refused before any figure of the held-out section is drawn)
@@ -274,6 +283,12 @@ def add_sweep_commands(sub: Any) -> None:
         "--sensitivity",
         metavar="DIR",
         help="results of the Sharing fidelity sweep (profile sharing_sensitivity): adds C5's table per condition",
+    )
+    report.add_argument(
+        "--coexistence-sensitivity",
+        metavar="DIR",
+        help="results of the Coexistence rules sweep (profile coexistence_sensitivity): adds C1–C4's verdicts "
+        "under the paper's and the authors' rules",
     )
     report.set_defaults(handler=cmd_reproduction)
 
