@@ -73,7 +73,7 @@ def test_aggregating_runs_train_apart_and_learn_otherwise(tmp_path) -> None:
 
 def test_the_methods_profile_runs_every_method_on_every_variant() -> None:
     specs = load_sweep(profile_path("methods"))
-    assert len(specs) == 140 and {s.seed for s in specs} == set(range(5))
+    assert len(specs) == 280 and {s.seed for s in specs} == set(range(10))
     methods = {(s.variant.label, s.method) for s in specs}
     for method in (
         "dqn_aup",
