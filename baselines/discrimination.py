@@ -1,0 +1,200 @@
+"""# The discrimination matrix: which task tells which two methods apart
+
+Reads every separation table (`docs/results/separation/<task>.json`, written by
+:mod:`baselines.separation_render`) and writes one matrix: a row per pair of methods, a column per
+task, each cell what that task's exact optima say about the pair at one ε.
+
+| cell | meaning |
+|---|---|
+| `separated (N states, Δharms x)` | optimal policies differ in `N` reachable states; `x`: harms per episode, first − second |
+| `identical by construction` | the table labels the pair identical, with its reason |
+| `not separated` | the same policy in every reachable state: no run of this task can tell them apart |
+| `–` | one of the two is not in that task's table (the table says why) |
+
+A method with a selfishness weight enters at one β (:data:`MATRIX_BETA`, the paper's middle value).
+A second table says, per method with β and task, how many distinct optima its β values give: one
+means β changes nothing there.
+
+    python -m baselines.discrimination                       # -> docs/results/separation/DISCRIMINATION.md
+    python -m baselines.discrimination DIR --epsilon 0.05 --out FILE
+
+The cells come from exact optima only. Whether trained runs separate a pair is the leaderboard's
+question (its verdicts against DQN), asked once every method has trained rows on every task.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.limits import read_bounded
+
+__all__ = [
+    "DEFAULT_DIR",
+    "MATRIX_BETA",
+    "Cell",
+    "beta_groups",
+    "cell",
+    "discrimination_markdown",
+    "load_tables",
+    "main",
+    "method_rows",
+]
+
+DEFAULT_DIR = Path("docs/results/separation")
+"""Where the shipped separation tables lie."""
+MATRIX_BETA = "0.5"
+"""The β at which a method with a selfishness weight enters the matrix."""
+MAX_TABLE_BYTES = 64 * 1024 * 1024
+"""The largest separation table read (the shipped ones are under 1 MB)."""
+
+
+@dataclass(frozen=True)
+class Cell:
+    """What one task says about one pair of methods."""
+
+    kind: str
+    """``separated``, ``identical by construction``, ``not separated`` or ``absent``."""
+    states: int = 0
+    """Reachable states where their optimal policies differ."""
+    harms_difference: float = 0.0
+    """Difference in expected harms per episode (first − second)."""
+
+    def text(self) -> str:
+        """The cell as the matrix shows it."""
+        if self.kind == "separated":
+            return f"separated ({self.states:,} states, Δharms {self.harms_difference:+.3f})"
+        return "–" if self.kind == "absent" else self.kind
+
+
+def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
+    """Every ``*.json`` separation table of ``directory``, by task name (its file's stem), sorted."""
+    tables = {}
+    for path in sorted(directory.glob("*.json")):
+        table = json.loads(read_bounded(path, MAX_TABLE_BYTES, "separation table"))
+        if not isinstance(table, dict) or not {"rows", "pairs"} <= set(table):
+            raise ValueError(f"{path}: not a separation table (no rows and pairs)")
+        tables[path.stem] = table
+    if not tables:
+        raise ValueError(f"{directory}: no separation table (*.json); make one with python -m baselines.separation_render")
+    return tables
+
+
+def method_rows(table: Mapping[str, Any]) -> dict[str, str]:
+    """``{method: row name}``: each method's row in ``table``, at :data:`MATRIX_BETA` where it has a β."""
+    rows: dict[str, str] = {}
+    for row in table["rows"]:
+        beta = row.get("selfishness")
+        if beta is None or _beta(beta) == MATRIX_BETA:
+            rows.setdefault(row["method"], row["name"])
+    return rows
+
+
+def _beta(value: float) -> str:
+    return f"{value:g}"
+
+
+def cell(table: Mapping[str, Any], first: str, second: str, epsilon: float) -> Cell:
+    """What ``table`` says about methods ``first`` and ``second`` at ``epsilon``."""
+    rows = method_rows(table)
+    if first not in rows or second not in rows:
+        return Cell("absent")
+    names = {rows[first], rows[second]}
+    for pair in table["pairs"]:
+        if {pair["first"], pair["second"]} == names and pair["epsilon"] == epsilon:
+            if pair["by_construction"]:
+                return Cell("identical by construction")
+            if not pair["differ"]:
+                return Cell("not separated")
+            sign = 1.0 if pair["first"] == rows[first] else -1.0
+            return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]))
+    raise ValueError(f"no pair {rows[first]} / {rows[second]} at ε = {epsilon} in the table of {table.get('env')}")
+
+
+def beta_groups(table: Mapping[str, Any], method: str, epsilon: float) -> int | None:
+    """How many distinct optima ``method``'s β values give in ``table`` at ``epsilon`` (rows joined
+    by "not separated" pairs); ``None`` when the method has no β rows there."""
+    names = [row["name"] for row in table["rows"] if row["method"] == method and row.get("selfishness") is not None]
+    if not names:
+        return None
+    group = {name: name for name in names}
+
+    def root(name: str) -> str:
+        while group[name] != name:
+            name = group[name]
+        return name
+
+    for pair in table["pairs"]:
+        if pair["epsilon"] == epsilon and pair["first"] in group and pair["second"] in group and not pair["differ"]:
+            group[root(pair["first"])] = root(pair["second"])
+    return len({root(name) for name in names})
+
+
+def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: float, command: str) -> str:
+    """The page: the matrix of every pair of methods over every task, then β's groups."""
+    methods: list[str] = []
+    for table in tables.values():
+        methods += [method for method in method_rows(table) if method not in methods]
+    tasks = list(tables)
+    lines = [
+        "# Discrimination matrix: which task tells which methods apart",
+        "",
+        f"Exact optima only, at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}. Made by `{command}`",
+        "(`baselines/discrimination.py`) from the separation tables beside this page.",
+        "A pair no task separates cannot be told apart by any run of these tasks.",
+        "",
+        "| pair | " + " | ".join(f"`{task}`" for task in tasks) + " | separated by |",
+        "|---|" + "---|" * len(tasks) + "---:|",
+    ]
+    for first, second in itertools.combinations(methods, 2):
+        cells = [cell(tables[task], first, second, epsilon) for task in tasks]
+        count = sum(c.kind == "separated" for c in cells)
+        lines.append(f"| `{first}` / `{second}` | " + " | ".join(c.text() for c in cells) + f" | {count} of {len(tasks)} |")
+    lines += [
+        "",
+        "## Does β change the optimum?",
+        "",
+        "Distinct optima among each method's β rows (β = 0.75, 0.5, 0.25, 0 where the table has them);",
+        "1 means β changes nothing on that task.",
+        "",
+        "| method | " + " | ".join(f"`{task}`" for task in tasks) + " |",
+        "|---|" + "---:|" * len(tasks),
+    ]
+    for method in methods:
+        groups = [beta_groups(tables[task], method, epsilon) for task in tasks]
+        if any(group is not None for group in groups):
+            lines.append(f"| `{method}` | " + " | ".join("–" if g is None else str(g) for g in groups) + " |")
+    omitted = [(task, entry) for task, table in tables.items() for entry in table.get("omitted", [])]
+    if omitted:
+        lines += ["", "## Not in a table", ""]
+        lines += [f"* `{entry['method']}` on `{task}`: {entry['reason']}" for task, entry in omitted]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``."""
+    parser = argparse.ArgumentParser(prog="python -m baselines.discrimination", description=__doc__.splitlines()[0])
+    parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
+    parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the pairs read (default: 0.01)")
+    parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
+    args = parser.parse_args(argv)
+    out = args.out or args.directory / "DISCRIMINATION.md"
+    command = "python -m baselines.discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
+    if args.epsilon != 0.01:
+        command += f" --epsilon {args.epsilon:g}"
+    try:
+        page = discrimination_markdown(load_tables(args.directory), args.epsilon, command)
+    except ValueError as error:
+        parser.error(str(error))
+    print(f"wrote {write_text_atomic(out, page)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

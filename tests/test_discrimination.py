@@ -1,0 +1,95 @@
+"""The discrimination matrix reads separation tables: a pair's cell on a task says whether the
+task's exact optima separate it (and by how much), label it identical by construction, or cannot
+tell it apart; a method's β rows are grouped by the optima they share."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from baselines.discrimination import Cell, beta_groups, cell, discrimination_markdown, load_tables, main, method_rows
+
+
+def row(name: str, method: str, beta: float | None = None) -> dict:
+    return {"name": name, "method": method, "selfishness": beta, "identical_to": "", "reason": ""}
+
+
+def pair(first: str, second: str, differ: bool, states: int = 0, harms: float = 0.0, why: str = "") -> dict:
+    return {
+        "first": first,
+        "second": second,
+        "epsilon": 0.01,
+        "differ": differ,
+        "differing_states": states,
+        "reachable_states": 100,
+        "harms_difference": harms,
+        "survival_difference": 0.0,
+        "by_construction": why,
+    }
+
+
+TABLE = {
+    "env": "toy_v0",
+    "rows": [
+        row("dqn", "dqn"),
+        row("twin", "twin"),
+        row("e β=0.5", "e", 0.5),
+        row("e β=0.25", "e", 0.25),
+        row("e β=0", "e", 0.0),
+    ],
+    "pairs": [
+        pair("dqn", "twin", False, why="twin is DQN here"),
+        pair("dqn", "e β=0.5", True, 12, 0.75),
+        pair("twin", "e β=0.5", True, 12, 0.75),
+        pair("e β=0.5", "e β=0.25", False),
+        pair("e β=0.5", "e β=0", True, 3, -0.5),
+        pair("e β=0.25", "e β=0", True, 3, -0.5),
+    ],
+    "omitted": [{"method": "far", "reason": "no exact model"}],
+}
+
+
+def test_a_method_enters_at_the_matrix_beta():
+    assert method_rows(TABLE) == {"dqn": "dqn", "twin": "twin", "e": "e β=0.5"}
+
+
+def test_each_kind_of_cell_and_the_sign_of_the_harms_difference():
+    assert cell(TABLE, "dqn", "e", 0.01) == Cell("separated", 12, 0.75)
+    assert cell(TABLE, "e", "dqn", 0.01) == Cell("separated", 12, -0.75)
+    assert cell(TABLE, "dqn", "twin", 0.01).kind == "identical by construction"
+    assert cell(TABLE, "dqn", "far", 0.01).text() == "–"
+    with pytest.raises(ValueError, match="no pair dqn / e β=0.5 at ε = 0.05"):
+        cell(TABLE, "dqn", "e", 0.05)
+
+
+def test_beta_rows_that_share_an_optimum_are_one_group():
+    assert beta_groups(TABLE, "e", 0.01) == 2
+    assert beta_groups(TABLE, "dqn", 0.01) is None
+
+
+def test_the_page_counts_the_tasks_that_separate_each_pair():
+    page = discrimination_markdown({"toy_v0": TABLE, "copy_v0": TABLE}, 0.01, "cmd")
+    assert "| `dqn` / `e` | separated (12 states, Δharms +0.750) | separated (12 states, Δharms +0.750) | 2 of 2 |" in page
+    assert "| `dqn` / `twin` | identical by construction | identical by construction | 0 of 2 |" in page
+    assert "| `e` | 2 | 2 |" in page and "* `far` on `toy_v0`: no exact model" in page
+
+
+def test_the_command_writes_the_page_and_refuses_a_directory_without_tables(tmp_path, capsys):
+    (tmp_path / "toy_v0.json").write_text(json.dumps(TABLE))
+    assert main([str(tmp_path)]) == 0
+    assert (tmp_path / "DISCRIMINATION.md").read_text().startswith("# Discrimination matrix")
+    assert load_tables(tmp_path).keys() == {"toy_v0"}
+    with pytest.raises(SystemExit):
+        main([str(tmp_path / "empty")])
+    assert "no separation table" in capsys.readouterr().err
+
+
+def test_the_shipped_page_is_what_the_command_makes(tmp_path):
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
+    out = tmp_path / "page.md"
+    assert main([str(shipped), "--out", str(out)]) == 0
+    made = out.read_text().replace(f"`python -m baselines.discrimination {shipped}`", "`python -m baselines.discrimination`")
+    assert made == (shipped / "DISCRIMINATION.md").read_text()
