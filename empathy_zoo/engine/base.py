@@ -426,13 +426,24 @@ class GridEngine:
         return np.asarray(other_indices)[choice], np.isfinite(dist[self._rows, choice])
 
     # ------------------------------------------------------------------ infos
+    harm_infos: ClassVar[bool] = False
+    """Whether an agent's infos say who harmed it and whom it harmed (``harmed_by``, ``harmed``):
+    an environment where agents harm one another sets it."""
+
     def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
-        """The ``infos[agent]`` entry after a reset."""
-        return {}
+        """The ``infos[agent]`` entry after a reset (nobody harmed yet, with :attr:`harm_infos`)."""
+        return {"harmed_by": None, "harmed": []} if self.harm_infos else {}
 
     def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
-        """The ``infos[agent]`` entry after a step."""
-        return {}
+        """The ``infos[agent]`` entry after a step: with :attr:`harm_infos`, the agent that harmed
+        ``agent`` this step (``None``: none) and the agents ``agent`` harmed."""
+        if not self.harm_infos:
+            return {}
+        by = events.harmed_by[env_id].tolist()
+        return {
+            "harmed_by": None if by[agent] < 0 else self.agents[by[agent]],
+            "harmed": [self.agents[victim] for victim, harmer in enumerate(by) if harmer == agent],
+        }
 
     # ------------------------------------------------------------------ metrics
     def episode_metrics(self, env_ids: np.ndarray, learner: int = 0) -> dict[str, np.ndarray]:

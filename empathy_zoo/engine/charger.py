@@ -10,7 +10,7 @@ off it, and a robot stepping onto the charger as the cat does keeps it off too.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -64,6 +64,7 @@ class ChargerEngine(GridEngine):
     symbols = ("R", "C")
     colors = ((40, 110, 220), (230, 140, 30))
     min_size: ClassVar[int] = 3
+    harm_infos: ClassVar[bool] = True
     obs_low = -1.0
     obs_high = 1.0
 
@@ -119,16 +120,6 @@ class ChargerEngine(GridEngine):
         rewards[:, ROBOT] = np.where(present[:, ROBOT], self.pay.take(self.cells[:, ROBOT]), 0.0)
         rewards[:, CAT] = self.present[:, CAT] & events.present_before[:, CAT]  # (0 on the step it is harmed)
         events.rewards = rewards
-
-    def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
-        return {"harmed_by": None, "harmed": []}
-
-    def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
-        by = events.harmed_by[env_id].tolist()
-        return {
-            "harmed_by": None if by[agent] < 0 else self.agents[by[agent]],
-            "harmed": [self.agents[victim] for victim, harmer in enumerate(by) if harmer == agent],
-        }
 
     def _paint_background(self, env_ids: np.ndarray, centre: np.ndarray, out: np.ndarray) -> None:
         self._picture.take(self.window.cells.take(centre, 0), out=out, mode="clip")  # (valid indices; "clip" avoids a buffer)

@@ -32,7 +32,7 @@ treats that end as terminal: set ``max_cycles=501`` for the first, and the learn
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -141,6 +141,7 @@ class CoexistenceEngine(GridEngine):
     symbols = ("R", "C")
     colors = ((40, 110, 220), (230, 140, 30))
     min_size: ClassVar[int] = 5
+    harm_infos: ClassVar[bool] = True
     obs_low = -1.0
     obs_high = 1.0
     count_argument = "num_cats"
@@ -314,16 +315,6 @@ class CoexistenceEngine(GridEngine):
         events.episode_over = robot_harmed
         self.episode_harms[:, ROBOT] += cats_harmed.sum(axis=1)
         self.episode_harms[:, CAT:] += harmed_by[:, ROBOT, None] == self._cat_ids
-
-    def reset_info(self, env_id: int, agent: int) -> dict[str, Any]:
-        return {"harmed_by": None, "harmed": []}
-
-    def step_info(self, events: StepEvents, env_id: int, agent: int) -> dict[str, Any]:
-        by = events.harmed_by[env_id].tolist()
-        return {
-            "harmed_by": None if by[agent] < 0 else self.agents[by[agent]],
-            "harmed": [self.agents[victim] for victim, harmer in enumerate(by) if harmer == agent],
-        }
 
     def _appearance(self, inventory: np.ndarray, viewer: np.ndarray) -> float:
         return OTHER_AGENT if self._agent_drawn is None else float(self._agent_drawn)
