@@ -6,28 +6,31 @@ used: read through the bounded reader (a regular file of at most
 :data:`~empathy_zoo.limits.MAX_CHECKPOINT_BYTES`), every tensor dense, of a numeric dtype, and every
 floating one finite; an ensemble's checkpoint (:func:`check_checkpoint_keys`) also has every
 counter within its range and consistent with the others and with the settings of its runs (from
-the list of runs beside it, when there is one), every log entry and evaluation of its type and
-range, every array of the environments of its shape and dtype, every cell on the grid. Anything
-else is refused as corrupted, naming the file (:func:`corrupted`).
-"""
+the list of runs beside it, when there is one): its elapsed time within a result file's
+``wall_time_s`` (:data:`~empathy_zoo.limits.MAX_WALL_TIME_S`), every log entry and evaluation of its
+type and within what one episode of its runs can hold (the result reader's bounds), every random
+state one numpy makes, the learner's counters and copies of its networks consistent with its
+networks and its updates, and the environments' state what its runs would hold
+(:mod:`empathy_zoo.training.checkpoint_state`). Numbers are compared exactly: an ``int`` of any size
+is never made a float. Anything else is refused as corrupted, naming the file and the field
+(:func:`corrupted`)."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 
 from empathy_zoo.atomic import write_with_atomic
 from empathy_zoo.bounded_read import open_data, read_json_data
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
-from empathy_zoo.limits import MAX_STEPS
+from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_STEPS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.result_file import PRICE_COLUMN
+from empathy_zoo.result_file import PRICE_COLUMN, episode_bounds
 from empathy_zoo.safe_data import from_safe, to_safe
+from empathy_zoo.training.checkpoint_state import ForgedState, bit_generator_problem, check_vector, number, rng_states, shown
 
 __all__ = [
     "save_checkpoint",
@@ -48,6 +51,8 @@ TENSOR_DTYPES = frozenset(
     {
         torch.bool,
         torch.uint8,
+        torch.uint16,
+        torch.uint32,
         torch.int8,
         torch.int16,
         torch.int32,
@@ -59,6 +64,8 @@ TENSOR_DTYPES = frozenset(
     }
 )
 """The dtypes a checkpoint's tensors may have."""
+ADAM_MOMENTS = ("exp_avg", "exp_avg_sq")
+"""The lists of Adam's moments in a learner's optimiser state, each of the shapes of its networks."""
 LOG_COLUMNS = ("episode_end_step", *METRIC_NAMES)
 """The columns of a run's training log in an ensemble's checkpoint (and :data:`PRICE_COLUMN`, the
 price of its cost after each episode, for a run whose reward transform prices costs when sampled)."""
@@ -126,7 +133,7 @@ def _tensors(value: Any, where: str) -> Iterator[tuple[str, torch.Tensor]]:
         yield where, value
     elif isinstance(value, dict):
         for key, item in value.items():
-            yield from _tensors(item, f"{where}[{key!r}]")
+            yield from _tensors(item, f"{where}[{shown(key)}]")
     elif isinstance(value, (list, tuple)):
         for index, item in enumerate(value):
             yield from _tensors(item, f"{where}[{index}]")
@@ -168,39 +175,49 @@ def check_checkpoint_keys(path: Path, payload: dict[str, Any], keys: dict[str, t
         raise corrupted(path, f"it holds no {', '.join(map(repr, missing))}")
     wrong = [key for key, kind in keys.items() if isinstance(payload[key], bool) or not isinstance(payload[key], kind)]
     if wrong:
-        raise corrupted(path, ", ".join(f"{key!r} is a {type(payload[key]).__name__}" for key in wrong))
+        raise corrupted(path, ", ".join(f"{shown(key)} is a {type(payload[key]).__name__}" for key in wrong))
     if {"run_ids", "step", "elapsed", "learner", "vector", "logs", "evaluations"} <= set(keys):  # (an ensemble's)
         _check_ensemble(path, payload)
     return payload
 
 
-def _runs_settings(path: Path) -> dict[str, int] | None:
-    """The settings of checkpoint ``path``'s runs that bound what it may hold (``steps``,
-    ``eval_interval``, ``eval_episodes``, ``max_cycles``, ``cells``), from the list of runs beside
-    it; ``None`` when there is none, or it cannot tell them (the list is checked where it is read)."""
+def _runs_settings(path: Path, run_ids: list[str]) -> dict[str, Any] | None:
+    """The settings of checkpoint ``path``'s runs that bound what it may hold, from the list of
+    runs beside it: ``steps``, ``eval_interval``, ``eval_episodes``, ``max_cycles``, ``cells``, the
+    most each metric can be in an episode (``bounds``, the result reader's own), the environment
+    and its arguments (``env``, ``env_kwargs``) and each run's ``seed``; ``None`` when there is
+    no list, or it cannot tell them (the list is checked where it is read)."""
     try:
-        document = read_json_data(runs_list_path(path), "list of runs")
-        records = document["runs"]
-        settings = []
+        records = read_json_data(runs_list_path(path), "list of runs")["runs"]
+        shared, seeds = [], []
         for record in records:
             kwargs = {**DEFAULT_ARGUMENTS[record["env"]], **record["env_kwargs"]}
-            settings.append(
+            shared.append(
                 {
                     "steps": record["steps"],
                     "eval_interval": record["eval_interval"],
                     "eval_episodes": record["eval_episodes"],
                     "max_cycles": kwargs["max_cycles"],
                     "cells": kwargs["size"] ** 2,
+                    "env": record["env"],
+                    "env_kwargs": dict(record["env_kwargs"]),
                 }
             )
-    except (ValueError, OSError, KeyError, TypeError):
+            seeds.append(record["seed"])
+        if len(records) != len(run_ids) or any(
+            record.get("run_id", run_id) != run_id for record, run_id in zip(records, run_ids)
+        ):
+            return None
+        first = shared[0]
+        if any(one != first for one in shared) or not all(number(seed, 0, MAX_SEED, whole=True) for seed in seeds):
+            return None
+        if not all(
+            number(first[key], 1, whole=True) for key in ("steps", "eval_interval", "eval_episodes", "max_cycles", "cells")
+        ):
+            return None
+        return {**first, "seeds": seeds, "bounds": episode_bounds(first["env"], first["env_kwargs"])}
+    except (ValueError, OSError, KeyError, TypeError, IndexError, AttributeError):
         return None
-    if not settings or any(one != settings[0] for one in settings):
-        return None
-    first = settings[0]
-    if not all(isinstance(value, int) and not isinstance(value, bool) and value >= 1 for value in first.values()):
-        return None
-    return first
 
 
 def _check_ensemble(path: Path, payload: Mapping[str, Any]) -> None:
@@ -208,37 +225,46 @@ def _check_ensemble(path: Path, payload: Mapping[str, Any]) -> None:
     ids = payload["run_ids"]
     if not ids or not all(isinstance(run_id, str) for run_id in ids):
         raise corrupted(path, "its run ids are no list of names")
-    runs = _runs_settings(path)
+    runs = _runs_settings(path, ids)
     step, steps = payload["step"], (runs["steps"] if runs else MAX_STEPS)
     if not 1 <= step <= steps:
-        raise corrupted(path, f"its step {step!r} is not in [1, {steps:,}] (the runs' steps)")
-    if not math.isfinite(payload["elapsed"]) or payload["elapsed"] < 0:
-        raise corrupted(path, f"its elapsed time {payload['elapsed']!r} is no finite number >= 0")
+        raise corrupted(path, f"its step {shown(step)} is not in [1, {steps:,}] (the runs' steps)")
+    if not number(payload["elapsed"], 0, MAX_WALL_TIME_S):
+        raise corrupted(
+            path, f"elapsed is {shown(payload['elapsed'])}, no number of seconds in [0, {MAX_WALL_TIME_S:,}] (ten years)"
+        )
     if not len(payload["logs"]) == len(payload["evaluations"]) == len(ids):
         counts = len(payload["logs"]), len(payload["evaluations"])
         raise corrupted(path, f"it holds the logs of {counts[0]} runs and the evaluations of {counts[1]}, not {len(ids)}")
-    max_cycles = runs["max_cycles"] if runs else None
+    bounds = runs["bounds"] if runs else {"survival": MAX_CYCLES}
     for run, log in enumerate(payload["logs"]):
-        _check_log(path, f"logs[{run}]", log, step, max_cycles)
+        _check_log(path, f"logs[{run}]", log, step, bounds)
     expected = _evaluation_steps(runs, step)
     for run, evaluations in enumerate(payload["evaluations"]):
         _check_evaluations(
-            path, f"evaluations[{run}]", evaluations, step, expected, runs["eval_episodes"] if runs else None, max_cycles
+            path, f"evaluations[{run}]", evaluations, step, expected, runs["eval_episodes"] if runs else None, bounds
         )
-    _check_learner(path, payload["learner"], step)
-    _check_vector(path, payload["vector"], payload.get("obs"), len(ids), runs)
+    for where, state in rng_states(payload, ""):
+        problem = bit_generator_problem(state)
+        if problem:
+            raise corrupted(path, f"{where} {problem}")
+    _check_learner(path, payload["learner"], step, len(ids))
+    learner_seeds = payload["learner"].get("seeds")
+    seeds = runs["seeds"] if runs else learner_seeds if isinstance(learner_seeds, list) else None
+    try:
+        check_vector(payload["vector"], payload.get("obs"), len(ids), runs, seeds)
+    except ForgedState as error:
+        raise corrupted(path, str(error)) from None
 
 
-def _value_problem(value: Any, metric: str, max_cycles: int | None, whole: bool) -> bool:
-    """Whether ``value`` is no value ``metric`` takes in an episode (an ``int`` where ``whole``)."""
-    if isinstance(value, bool) or not isinstance(value, int if whole else (int, float)):
-        return True
-    low, high = METRIC_RANGES[metric]
-    high = max_cycles if metric == "survival" else high
-    return not math.isfinite(value) or value < low or (high is not None and value > high)
+def _value_problem(value: Any, metric: str, high: float | None, whole: bool) -> bool:
+    """Whether ``value`` is no value ``metric`` takes in an episode (an ``int`` where ``whole``),
+    at most ``high`` (the run's own bound; ``None``: the metric's range)."""
+    low, top = METRIC_RANGES[metric]
+    return not number(value, low, top if high is None else high, whole)
 
 
-def _check_log(path: Path, where: str, log: Any, step: int, max_cycles: int | None) -> None:
+def _check_log(path: Path, where: str, log: Any, step: int, bounds: Mapping[str, float | None]) -> None:
     columns = sorted(log) if isinstance(log, dict) else None
     if columns not in (sorted(LOG_COLUMNS), sorted((*LOG_COLUMNS, PRICE_COLUMN))) or not all(
         isinstance(c, list) for c in log.values()
@@ -248,18 +274,18 @@ def _check_log(path: Path, where: str, log: Any, step: int, max_cycles: int | No
         raise corrupted(path, f"{where} has columns of different lengths")
     ends = log["episode_end_step"]
     for i, end in enumerate(ends):
-        if isinstance(end, bool) or not isinstance(end, int) or not (ends[i - 1] if i else 0) < end <= step:
-            raise corrupted(path, f"{where}['episode_end_step'][{i}] is {end!r}, no step after the one before and <= {step}")
+        if not number(end, (ends[i - 1] if i else 0) + 1, step, whole=True):
+            raise corrupted(path, f"{where}['episode_end_step'][{i}] is {shown(end)}, no step after the one before and <= {step}")
     for metric in METRIC_NAMES:
         for i, value in enumerate(log[metric]):
-            if _value_problem(value, metric, max_cycles, metric in INTEGER_METRICS):
-                raise corrupted(path, f"{where}[{metric!r}][{i}] is {value!r}, no {metric} of an episode")
+            if _value_problem(value, metric, bounds.get(metric), metric in INTEGER_METRICS):
+                raise corrupted(path, f"{where}[{metric!r}][{i}] is {shown(value)}, no {metric} of an episode")
     for i, price in enumerate(log.get(PRICE_COLUMN, [])):
-        if isinstance(price, bool) or not isinstance(price, (int, float)) or not math.isfinite(price) or price < 0:
-            raise corrupted(path, f"{where}[{PRICE_COLUMN!r}][{i}] is {price!r}, no finite price >= 0")
+        if not number(price, 0):
+            raise corrupted(path, f"{where}[{PRICE_COLUMN!r}][{i}] is {shown(price)}, no finite price >= 0")
 
 
-def _evaluation_steps(runs: Mapping[str, int] | None, step: int) -> list[int] | None:
+def _evaluation_steps(runs: Mapping[str, Any] | None, step: int) -> list[int] | None:
     """The steps a run was evaluated at up to ``step`` (every ``eval_interval``, and the last)."""
     if runs is None:
         return None
@@ -268,7 +294,13 @@ def _evaluation_steps(runs: Mapping[str, int] | None, step: int) -> list[int] | 
 
 
 def _check_evaluations(
-    path: Path, where: str, evaluations: Any, step: int, expected: list[int] | None, episodes: int | None, max_cycles: int | None
+    path: Path,
+    where: str,
+    evaluations: Any,
+    step: int,
+    expected: list[int] | None,
+    episodes: int | None,
+    bounds: Mapping[str, float | None],
 ) -> None:
     if not isinstance(evaluations, list):
         raise corrupted(path, f"{where} is no list of evaluations")
@@ -277,68 +309,69 @@ def _check_evaluations(
             raise corrupted(path, f"{where}[{i}] is no table of step and {', '.join(METRIC_NAMES)}")
         at = entry["step"]
         before = evaluations[i - 1]["step"] if i else 0
-        if isinstance(at, bool) or not isinstance(at, int) or not before < at <= step:
-            raise corrupted(path, f"{where}[{i}]['step'] is {at!r}, no step after {before} and <= {step}")
+        if not number(at, before + 1, step, whole=True):
+            raise corrupted(path, f"{where}[{i}]['step'] is {shown(at)}, no step after {before} and <= {step}")
         for metric in METRIC_NAMES:
             values = entry[metric]
             count = episodes if episodes is not None else len(evaluations[0][metric])
             if not isinstance(values, list) or len(values) != count:
                 raise corrupted(path, f"{where}[{i}][{metric!r}] is no list of {count} values")
-            if any(_value_problem(value, metric, max_cycles, False) for value in values):
+            if any(_value_problem(value, metric, bounds.get(metric), False) for value in values):
                 raise corrupted(path, f"{where}[{i}][{metric!r}] holds a value that is no {metric} of an episode")
     if expected is not None and [entry["step"] for entry in evaluations] != expected:
         raise corrupted(path, f"{where} holds evaluations at other steps than every eval_interval up to step {step}")
 
 
-def _check_learner(path: Path, state: Mapping[str, Any], step: int) -> None:
+def _check_learner(path: Path, state: Mapping[str, Any], step: int, runs: int) -> None:
     """Empathic DQN's counters (and those of a learner keeping the same names) within their range
-    and consistent with ``step`` and with each other, its replay memory's size and position with
-    its buffers."""
+    and consistent with ``step`` and with each other: its updates as many as its optimiser's steps,
+    its networks' copies (target, Adam's moments) of its networks' shapes, its replay memory's size
+    and position those of one transition a step, its buffers of its runs and size."""
     env_steps, grad_steps = state.get("env_steps"), state.get("grad_steps")
-    if "env_steps" in state and (isinstance(env_steps, bool) or env_steps != step):
-        raise corrupted(path, f"its learner has taken {env_steps!r} steps, its ensemble {step}")
-    if "grad_steps" in state and (isinstance(grad_steps, bool) or not isinstance(grad_steps, int) or not 0 <= grad_steps <= step):
-        raise corrupted(path, f"its learner has made {grad_steps!r} updates in {step} steps")
+    if "env_steps" in state and not number(env_steps, step, step, whole=True):
+        raise corrupted(
+            path, f"learner.env_steps is {shown(env_steps)}: its learner has taken other steps than its ensemble's {step}"
+        )
+    if "grad_steps" in state and not number(grad_steps, 0, step, whole=True):
+        raise corrupted(path, f"learner.grad_steps is {shown(grad_steps)}, not in [0, {step}] (its updates in {step} steps)")
+    _check_networks(path, state, runs)
     replay = state.get("replay")
     if isinstance(replay, dict) and {"size", "position"} <= set(replay):
         size, position = replay["size"], replay["position"]
-        if not isinstance(size, int) or not isinstance(position, int) or not 0 <= position <= size <= step:
-            raise corrupted(
-                path, f"its replay memory's size {size!r} and position {position!r} are not 0 <= position <= size <= step {step}"
-            )
+        if not number(size, 1, step, whole=True) or not number(position, 0, size, whole=True):
+            both = f"size {shown(size)} and position {shown(position)}"
+            raise corrupted(path, f"learner.replay: {both} are not 0 <= position <= size <= step {step}")
+        if "env_steps" in state and not (position == step % size if size < step else position in (0, size)):
+            raise corrupted(path, f"learner.replay.position is {position}, not where {step} steps leave a memory of {size}")
         for key, buffer in replay.items():
-            if isinstance(buffer, torch.Tensor) and (buffer.dim() < 2 or buffer.shape[1] != size):
-                raise corrupted(path, f"its replay memory's {key!r} has shape {tuple(buffer.shape)}, not (runs, {size}, ...)")
+            if isinstance(buffer, torch.Tensor) and (buffer.dim() < 2 or buffer.shape[:2] != (runs, size)):
+                raise corrupted(path, f"learner.replay.{key} has shape {tuple(buffer.shape)}, not ({runs}, {size}, ...)")
 
 
-def _check_vector(path: Path, saved: Any, obs: Any, runs: int, settings: Mapping[str, int] | None) -> None:
-    """The environments' state: each array's shape and dtype, every cell on the grid, every clock
-    within an episode, every floating value finite."""
-    try:
-        state, observations = from_safe(saved), from_safe(obs)
-    except (ValueError, TypeError, KeyError, AttributeError) as error:
-        raise corrupted(path, f"its environments' state cannot be read ({error})") from None
-    engine = state.get("engine") if isinstance(state, dict) else None
-    if not isinstance(engine, dict):
-        raise corrupted(path, "it holds no state of its environments' engine")
-    for key, array in engine.items():
-        if isinstance(array, np.ndarray) and (array.ndim == 0 or array.shape[0] != runs):
-            raise corrupted(path, f"its engine's {key!r} has shape {array.shape}, not ({runs}, ...) for its {runs} runs")
-        if isinstance(array, np.ndarray) and array.dtype.kind == "f" and not np.isfinite(array).all():
-            raise corrupted(path, f"its engine's {key!r} holds a value that is no finite number")
-    for key, high in (
-        ("cells", settings["cells"] - 1 if settings else None),
-        ("t", settings["max_cycles"] if settings else None),
+def _check_networks(path: Path, state: Mapping[str, Any], runs: int) -> None:
+    """A learner's copies of its networks of their shapes: the target networks those of its runs'
+    (the first ``runs`` of ``online``), Adam's moments those of every network; and Adam's step
+    count of each network its number of updates (``grad_steps``)."""
+    online, optimizer = state.get("online"), state.get("optimizer")
+    if not isinstance(online, list) or not online or not all(isinstance(p, torch.Tensor) and p.dim() for p in online):
+        return
+    optimizer = optimizer if isinstance(optimizer, dict) else {}
+    every = [tuple(p.shape) for p in online]
+    for name, copies, shapes in (
+        ("target", state.get("target"), [(min(runs, shape[0]), *shape[1:]) for shape in every]),
+        *((f"optimizer.{key}", optimizer.get(key), every) for key in ADAM_MOMENTS),
     ):
-        array = engine.get(key)
-        if not isinstance(array, np.ndarray) or array.dtype.kind not in "iu":
-            raise corrupted(path, f"its engine's {key!r} is no array of whole numbers")
-        if array.size and (array.min() < 0 or (high is not None and array.max() > high)):
-            raise corrupted(path, f"its engine's {key!r} holds {array.min()} … {array.max()}, not within [0, {high}]")
-    for name, array in (("observations", observations), ("the environments' observations", state.get("observations"))):
-        if array is None:
-            continue
-        if not isinstance(array, np.ndarray) or array.dtype != np.float32 or array.ndim < 1 or array.shape[0] != runs:
-            raise corrupted(path, f"its {name} are no float32 array of {runs} runs")
-        if not np.isfinite(array).all():
-            raise corrupted(path, f"its {name} hold a value that is no finite number")
+        if copies is None:
+            continue  # (the learner's own load says what it misses)
+        if not isinstance(copies, list) or len(copies) != len(shapes) or not all(isinstance(c, torch.Tensor) for c in copies):
+            raise corrupted(path, f"learner.{name} is no list of {len(shapes)} tensors (one per network parameter)")
+        for i, (copy, shape) in enumerate(zip(copies, shapes)):
+            if tuple(copy.shape) != shape:
+                raise corrupted(path, f"learner.{name}[{i}] has shape {tuple(copy.shape)}, not {shape} (its networks')")
+    counts, updates = optimizer.get("steps"), state.get("grad_steps")
+    if counts is None:
+        return
+    if not isinstance(counts, torch.Tensor) or tuple(counts.shape) != (every[0][0],):
+        raise corrupted(path, f"learner.optimizer.steps is no tensor of ({every[0][0]},) step counts (one per network)")
+    if isinstance(updates, int) and not bool(torch.all(counts.double() == float(updates))):
+        raise corrupted(path, f"learner.optimizer.steps holds {counts.tolist()[:4]}, not its {updates} updates (grad_steps)")
