@@ -38,7 +38,7 @@ from leaderboard.improvement import (
     can_decide,
     smallest_decidable_seeds,
 )
-from leaderboard.measured_coverage import MeasuredCoverage, committed_coverage
+from leaderboard.measured_coverage import SEED_TARGET, MeasuredCoverage, committed_coverage, seeds_needed
 from leaderboard.multiplicity import (
     FAMILY_LEVEL,
     HOLM_MARK,
@@ -438,6 +438,25 @@ def coverage_note(measured: MeasuredCoverage | None, phase: str, metrics: Sequen
     return (
         f"Coverage of these intervals (nominal 97.5 %, for a claimed 95 %) measured by `{command}` (each shipped "
         f"row's runs resampled, then each drawn run's episodes): {'; '.join(parts)}."
+        + _provisional(measured, phase, metrics, seeds)
+    )
+
+
+def _provisional(measured: MeasuredCoverage | None, phase: str, metrics: Sequence[str], seeds: Sequence[int]) -> str:
+    """A sentence saying the table's intervals and verdicts are provisional where a row has fewer
+    seeds than :func:`~leaderboard.measured_coverage.seeds_needed` asks for its measured metrics
+    (``""`` otherwise, or where nothing is measured)."""
+    if measured is None:
+        return ""
+    measured_reads = {(metric, kind) for (metric, kind, _) in measured.entries}
+    reads = [(metric, phase) for metric in metrics if (metric, phase) in measured_reads]
+    needed = seeds_needed(measured, reads, SEED_TARGET) if reads else None
+    if needed is None or min(seeds) >= needed:
+        return ""
+    return (
+        f" With fewer than {needed} seeds these intervals, and the verdicts that read them, are provisional: "
+        f"{needed} is the fewest at which every metric here was measured to be covered at least "
+        f"{100 * SEED_TARGET:.0f} % (`leaderboard.measured_coverage.seeds_needed`)."
     )
 
 

@@ -38,3 +38,26 @@ def test_none_where_no_measured_count_reaches_it():
 def test_an_empty_reading_is_refused():
     with pytest.raises(ValueError, match="at least one"):
         seeds_needed(figures(harms_eval_3=1.0), [])
+
+
+def test_a_table_with_fewer_seeds_than_its_metrics_need_says_it_is_provisional():
+    from leaderboard.measured_coverage import MeasuredCoverage
+    from leaderboard.tables import coverage_note
+
+    measured = MeasuredCoverage(
+        "cmd",
+        {
+            ("harms", "eval", 3): (0.85, 0.0),
+            ("harms", "eval", 10): (0.95, 0.0),
+            ("survival", "eval", 3): (0.94, 0.0),
+            ("survival", "eval", 10): (0.96, 0.0),
+        },
+    )
+    note = coverage_note(measured, "eval", ["survival", "harms", "other_return"], [3])
+    assert note.endswith(
+        "With fewer than 10 seeds these intervals, and the verdicts that read them, are provisional: 10 is the fewest "
+        "at which every metric here was measured to be covered at least 93 % (`leaderboard.measured_coverage.seeds_needed`)."
+    )
+    assert "provisional" not in coverage_note(measured, "eval", ["survival", "harms"], [10])
+    assert "provisional" not in coverage_note(measured, "eval", ["survival"], [3])  # (survival is covered at 3)
+    assert "provisional" not in coverage_note(None, "eval", ["survival"], [3])
