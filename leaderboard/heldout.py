@@ -54,7 +54,6 @@ that nothing changed.
 
 from __future__ import annotations
 
-import base64
 import html
 import math
 import os
@@ -80,6 +79,7 @@ from leaderboard.heldout_scores import (
     metric_definition,
     readings,
 )
+from leaderboard.html_images import img_tag
 from leaderboard.improvement import VERDICT_MARKS
 from leaderboard.tables import (
     NO_INTERVAL_NOTE,
@@ -283,8 +283,7 @@ def heldout_section(
         figures[key] = path
         link = path.relative_to(out).as_posix()
         markdown += ["", f"![{title}: with its own partners against held-out ones]({link})"]
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
-        page.append(f'<img alt="{html.escape(title)}" src="data:image/png;base64,{data}">')
+        page.append(img_tag(path, title))
     for note in notes:
         markdown += ["", f"Note: {note}"]
         page.append(f'<p class="note">Note: {html.escape(note)}</p>')

@@ -22,7 +22,6 @@ environments have no normalized metric has no such section.
 
 from __future__ import annotations
 
-import base64
 import html
 import math
 import os
@@ -35,6 +34,7 @@ import numpy as np
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_RANGES, PER_OTHER_AGENT
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, group_runs, run_scalars, table_env
+from leaderboard.html_images import img_tag
 from leaderboard.profile_plot import plot_profiles
 from leaderboard.profiles import GAMMA, Profile, optimality_gaps, performance_profiles
 from leaderboard.row_names import dqn_rows_of
@@ -188,12 +188,11 @@ def add_profile_section(
         md += ["", f"### {env}", "", f"#### {heading}", "", markdown_table(header, rows), "", f"![{alt}]({link})"]
         head = "".join(f"<th>{html.escape(cell)}</th>" for cell in header)
         body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in rows)
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
         page += [
             f"<h3>{html.escape(env)}</h3>",
             f"<h4>{html.escape(heading)}</h4>",
             f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>",
-            f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">',
+            img_tag(path, alt),
         ]
     markdown, html_page = place_before_definitions(markdown, html_page, "\n".join(md) + "\n", "\n".join(page) + "\n")
     return markdown, html_page, figures

@@ -6,7 +6,6 @@ carries the metric definitions and its :class:`Provenance` (command, package ver
 
 from __future__ import annotations
 
-import base64
 import csv
 import html
 import io
@@ -30,6 +29,7 @@ from leaderboard.aggregate import (
     t_level,
 )
 from leaderboard.budgets import RunBudget, shows_evaluation
+from leaderboard.html_images import img_tag
 from leaderboard.improvement import (
     TOO_FEW_SEEDS,
     VERDICT_MARKS,
@@ -668,8 +668,7 @@ def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> 
     for heading, items in _figure_sections(figures, env):
         lines.append(f"<h3>{html.escape(heading)}</h3>")
         for alt, png in items:
-            data = base64.b64encode(png).decode("ascii")
-            lines.append(f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">')
+            lines.append(img_tag(png, alt))
     return lines
 
 
