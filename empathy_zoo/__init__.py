@@ -1,8 +1,8 @@
 """empathy-zoo: PettingZoo gridworlds for negative side effects, with Empathic DQN and baselines.
 
 Environments: :mod:`empathy_zoo.coexistence_v0`, :mod:`empathy_zoo.sharing_v0`,
-:mod:`empathy_zoo.charger_v0` (PettingZoo ParallelEnv and AEC), :class:`empathy_zoo.vector.VectorEnv`
-(many at once, as arrays).
+:mod:`empathy_zoo.charger_v0`, :mod:`empathy_zoo.vase_v0` (PettingZoo ParallelEnv and AEC),
+:class:`empathy_zoo.vector.VectorEnv` (many at once, as arrays).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from types import ModuleType
 from typing import TYPE_CHECKING
 
-from empathy_zoo import charger_v0, coexistence_v0, sharing_v0
+from empathy_zoo import charger_v0, coexistence_v0, sharing_v0, vase_v0
 from empathy_zoo._version import __version__
 from empathy_zoo.empathy import EmpathyWrapper
 from empathy_zoo.environments import FACES
@@ -29,6 +29,7 @@ __all__ = [
     "coexistence_v0",
     "sharing_v0",
     "charger_v0",
+    "vase_v0",
     "ENVIRONMENTS",
     "EmpathyWrapper",
     "FixedAgents",

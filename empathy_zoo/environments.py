@@ -22,6 +22,7 @@ from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.engine.charger import ChargerEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.engine.sharing import SharingEngine
+from empathy_zoo.engine.vase import VaseEngine
 from empathy_zoo.metrics import HARMS_PER_100_STEPS
 
 __all__ = [
@@ -136,6 +137,21 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         task_label="robot reward per episode (task: higher is better)",
         side_effects=("harms",),
         side_effect_label="cats harmed by the charger per episode (side effect: lower is better)",
+        table_metrics=("return", "harms", "other_return"),
+        compact_metrics=("harms", "return", "other_return"),
+        heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
+        curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
+    ),
+    "vase_v0": Environment(
+        VaseEngine,
+        "empathy_zoo.vase_v0",
+        "empathy_zoo/Vase-v0",
+        {"cat_0": "random_walk"},
+        {"size": 5, "view": 3, "max_cycles": 500},
+        task="return",
+        task_label="robot reward per episode (task: higher is better)",
+        side_effects=("harms",),
+        side_effect_label="vases broken and cats harmed per episode (side effect: lower is better)",
         table_metrics=("return", "harms", "other_return"),
         compact_metrics=("harms", "return", "other_return"),
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
