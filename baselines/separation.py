@@ -26,7 +26,10 @@ of methods whether their optimal policies differ. Built on
   (the paper's rules only); :func:`baselines.considerate_tabular.considerate_model_values` on an
   environment whose robot is never harmed.
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
-  inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules only.
+  inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules; on an
+  environment with a state beyond the cells (the vase task), :mod:`baselines.separation_world`'s.
+* `dqn_aup`: on an environment with a state beyond the cells only, `Q*` of the reward less AUP's
+  penalty with exact auxiliary values, seed 0's (:mod:`baselines.separation_world`).
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -54,6 +57,8 @@ from baselines.registry import METHODS
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from baselines.separation_reachability import relative_reachability_reward
 from baselines.separation_values import in_view_values, silver_values
+from baselines.separation_world import attainable_utility_reward
+from baselines.separation_world import relative_reachability_reward as world_reachability_reward
 from baselines.shaping import HARM_PENALTY
 from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
 from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
@@ -139,6 +144,9 @@ class RowOutcome:
     """Expected undiscounted reward of the robot (``None`` where the environment's task is not its return)."""
     other_return: float | None = None
     """Expected undiscounted reward of the other (``None`` where the environment's task is not the robot's return)."""
+    changed: float | None = None
+    """Probability that the state beyond the cells has changed by the episode's end (the vase
+    broken; ``None`` where the environment has no such state)."""
 
 
 @dataclass(frozen=True)
@@ -248,20 +256,26 @@ def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.nd
     return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
 
 
-def _rows(env: str, paper: bool, selfishness: tuple[float, ...], considerate: bool = False) -> tuple[Row, ...]:
+def _rows(
+    env: str, paper: bool, selfishness: tuple[float, ...], considerate: bool = False, world: bool = False
+) -> tuple[Row, ...]:
     """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β
-    (``considerate``: Be Considerate's row where the environment is not Coexistence's paper rules)."""
+    (``considerate``: Be Considerate's row where the environment is not Coexistence's paper rules;
+    ``world``: relative reachability's and AUP's where it has a state beyond the cells)."""
     marks = {name: METHODS[name].identical_to.get(env) for name in TWINS}
     rows = [Row("dqn", "dqn", None, "", "")]
     rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
     rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
     rows += [Row(name, name, None, "", "") for name in ("dqn_considerate", "dqn_relative_reachability") if paper]
     rows += [Row("dqn_considerate", "dqn_considerate", None, "", "")] if considerate and not paper else []
+    rows += [Row(name, name, None, "", "") for name in WORLD_ROWS if world]
     for method in ("empathic_dqn", "empathic_dqn_in_view", "empathic_dqn_silver"):
         rows += [Row(f"{method} β={beta:g}", method, beta, "", "") for beta in selfishness]
     return tuple(rows)
 
 
+WORLD_ROWS = ("dqn_relative_reachability", "dqn_aup")
+"""The rows an environment with a state beyond the cells adds (:mod:`baselines.separation_world`)."""
 TWINS = ("dqn_silver_literal", "dqn_equality")
 """Methods a row shows only where the registry marks them identical to another on the environment."""
 
@@ -304,12 +318,16 @@ def separation_table(
     paper = _paper_rules(model)
     considerate = paper or not (model.robot_harmed.any() or _coexistence(model))
     returns = ENVIRONMENT_TABLE[model.env].task == RETURN
-    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness), considerate)
+    world = model.layers > 1
+    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness), considerate, world)
     q = optimal_values(model, gamma)
     penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
     values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
     if paper:
         values["dqn_relative_reachability"] = optimal_values(model, gamma, reward=relative_reachability_reward(model))
+    if world:
+        values["dqn_relative_reachability"] = optimal_values(model, gamma, reward=world_reachability_reward(model))
+        values["dqn_aup"] = optimal_values(model, gamma, reward=attainable_utility_reward(model, gamma))
     for row in rows:
         if row.selfishness is not None:
             rule = {"empathic_dqn": empathic_values, "empathic_dqn_in_view": in_view_values, "empathic_dqn_silver": silver_values}
@@ -340,8 +358,9 @@ def separation_table(
             lam = multiplier if r.name == "dqn_lagrangian" else None
             o = result[r.name]
             own, others = (o.robot_return, o.other_return) if returns else (None, None)
+            changed = o.changed if world else None
             outcomes.append(
-                RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, ""), own, others)
+                RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, ""), own, others, changed)
             )
         for a, b in combinations(here, 2):
             reason = _by_construction(a, b)
@@ -361,10 +380,13 @@ def separation_table(
                 )
             )
     names = {o.row for o in outcomes}
-    omitted = [Omission(m, why) for m, why in OMISSIONS]
+    omitted = [Omission(m, why) for m, why in OMISSIONS if not (world and m in WORLD_ROWS)]
     omitted += [Omission(name, UNMARKED) for name in TWINS if METHODS[name].identical_to.get(model.env) is None]
     if not _coexistence(model):
-        omitted.append(Omission("dqn_relative_reachability", "its exact reachability table is built from Coexistence's rules"))
+        if not world:
+            omitted.append(
+                Omission("dqn_relative_reachability", "its exact reachability table is built from Coexistence's rules")
+            )
         if not considerate:
             omitted.append(Omission("dqn_considerate", "its exact modules model a robot that is never harmed, or Coexistence"))
         elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):

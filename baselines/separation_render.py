@@ -26,8 +26,9 @@ __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_n
 
 OUT = Path("docs/results/separation")
 """Where the command writes by default."""
-RETURNS = ("robot_return", "other_return")
-"""The outcome fields a table holds only where the environment's task is the robot's return."""
+RETURNS = ("robot_return", "other_return", "changed")
+"""The outcome fields a table holds only where the environment's task is the robot's return (the
+returns) or where it has a state beyond the cells (``changed``: the vase broken)."""
 
 
 def to_json(table: SeparationTable) -> str:
@@ -82,7 +83,8 @@ def _letter(index: int) -> str:
 def _figures(o: RowOutcome, returns: bool) -> list[str]:
     """An outcome's figures as the Markdown shows them (with both returns where ``returns``)."""
     shown = [f"{o.harms:.4f}", f"{o.robot_harmed:.4f}", f"{o.survival:.1f}"]
-    return shown + [f"{o.robot_return or 0.0:.1f}", f"{o.other_return or 0.0:.1f}"] if returns else shown
+    shown += [f"{o.robot_return or 0.0:.1f}", f"{o.other_return or 0.0:.1f}"] if returns else []
+    return shown + ([f"{o.changed:.4f}"] if o.changed is not None else [])
 
 
 def to_markdown(table: SeparationTable) -> str:
@@ -107,6 +109,8 @@ def to_markdown(table: SeparationTable) -> str:
     epsilons = table.epsilons
     returns = any(o.robot_return is not None for o in table.outcomes)
     figures = "harms, robot harmed, survival, robot return, other return" if returns else "harms, robot harmed, survival"
+    changed = any(o.changed is not None for o in table.outcomes)
+    figures += ", vase broken" if changed else ""
     lines += ["", f"## Outcomes ({figures} per episode)", ""]
     lines.append("| row | " + " | ".join(f"ε = {e:g}" for e in epsilons) + " |")
     lines.append("|---|" + "---:|" * len(epsilons))
@@ -126,6 +130,7 @@ def to_markdown(table: SeparationTable) -> str:
         classes = equivalence_classes(table, epsilon)
         lines += ["", f"## Groups with one optimum at ε = {epsilon:g}", ""]
         columns = ["harms", "robot harmed", "survival"] + (["robot return", "other return"] if returns else [])
+        columns += ["vase broken"] if changed else []
         lines += ["| group | rows | " + " | ".join(columns) + " |", "|---|---|" + "---:|" * len(columns)]
         for index, members in enumerate(classes):
             o = table.outcome(members[0], epsilon)

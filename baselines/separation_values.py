@@ -38,7 +38,9 @@ def in_view_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma
     as the other-term where the other is present but outside the engine's window at t+1."""
     engine = ENGINES[model.env](model.states, **model.env_kwargs)
     engine.reset()
-    engine.cells = np.stack(np.divmod(np.arange(model.states), model.cells), axis=1).astype(engine.cells.dtype)
+    engine.cells = np.stack(np.divmod(np.arange(model.states) % (model.cells * model.cells), model.cells), axis=1).astype(
+        engine.cells.dtype
+    )
     seen = np.asarray(engine.in_view(0, 1), dtype=bool)
     v = q.max(axis=1)
     continuation = _continuation(model, v, gamma)

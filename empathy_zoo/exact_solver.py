@@ -15,11 +15,15 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
 ## Model
 * **States**: the robot's and the other's cells, both operative (`cells²` states, same cell
   included: some rule sets let both stand there unharmed); *other gone* (the robot alone, never
-  harmed again); *robot harmed* (terminal).
+  harmed again); *robot harmed* (terminal). An engine with a state beyond the two cells (the vase
+  task: the vase standing or broken) names how many values it takes (`tabular_layers`) and reads
+  and sets it (`tabular_layer()`, `set_tabular_layer(layer)`): every state then comes once per
+  value, the start in value 0.
 * **The robot alone**: the engine stepped from every cell with every action, the other absent.
   Where every such step pays the same (Coexistence: `+1`), *other gone* is one state of value
   `pay/(1 − γ)`. Elsewhere (the charger task: only the bench and the charger pay) it is one state
-  per robot cell, with its own `Q*` by value iteration, and the robot acts alone by `alone_policy`.
+  per robot cell (and value of the state beyond the cells), with its own `Q*` by value iteration,
+  and the robot acts alone by `alone_policy`.
 * **Dynamics**: the robot's action, the other's uniformly random action (the default cat), one
   engine step; the reward is the engine's reward to the robot.
 * **Values**: `Q*` by value iteration (infinite horizon, stopped at the same error bound as
@@ -29,7 +33,9 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
   lowest index), executed ε-greedily; the start distribution is the engine's
   (`start_distribution()`), pushed forward `max_cycles` steps. `harms` is the probability that the
   robot harms the other; `survival` the expected steps at whose end it is operative;
-  `robot_return` and `other_return` the expected undiscounted rewards of the robot and the other.
+  `robot_return` and `other_return` the expected undiscounted rewards of the robot and the other;
+  `changed` the probability that the state beyond the cells is no longer 0 at the end (the vase
+  broken).
 
 For the paper's Coexistence this gives :func:`empathy_zoo.reference.coexistence_optimum`'s
 figures (a test holds them equal); that module's displacement model is its translation-invariant
@@ -73,7 +79,8 @@ class TabularModel:
     """One step of an environment from every joint state and joint action, read off its engine.
 
     Arrays are indexed ``[state, robot action, other action]``; a state is
-    ``robot cell · cells + other cell``."""
+    ``layer · cells² + robot cell · cells + other cell``, ``layer`` the value of the state beyond
+    the two cells (0 where the engine has none)."""
 
     env: str
     """The environment's name."""
@@ -94,9 +101,12 @@ class TabularModel:
     other_reward: np.ndarray
     """The other's reward of the step."""
     alone_reward: np.ndarray
-    """``(cells, 5)``: the robot's reward of a step alone (the other gone), by cell and action."""
+    """``(layers · cells, 5)``: the robot's reward of a step alone (the other gone), by
+    ``layer · cells + cell`` and action."""
     alone_after: np.ndarray
-    """``(cells, 5)``: the robot's cell after a step alone."""
+    """``(layers · cells, 5)``: ``layer · cells + cell`` after a step alone."""
+    layers: int = 1
+    """Values of the state beyond the two cells (1: the engine has none)."""
 
     @property
     def alone_pay(self) -> float | None:
@@ -107,13 +117,24 @@ class TabularModel:
 
     @property
     def states(self) -> int:
-        return self.cells * self.cells
+        return self.layers * self.cells * self.cells
+
+    @property
+    def alone_states(self) -> int:
+        """States of the robot alone: one per cell and layer."""
+        return self.layers * self.cells
 
     @property
     def swapped(self) -> np.ndarray:
-        """``(states,)``: the state with the robot's and the other's cells exchanged."""
-        robot, other = np.divmod(np.arange(self.states), self.cells)
-        return other * self.cells + robot
+        """``(states,)``: the state with the robot's and the other's cells exchanged (its layer kept)."""
+        layer, pair = np.divmod(np.arange(self.states), self.cells * self.cells)
+        robot, other = np.divmod(pair, self.cells)
+        return layer * self.cells * self.cells + other * self.cells + robot
+
+    @property
+    def layer(self) -> np.ndarray:
+        """``(states,)``: each state's layer (the value of the state beyond the two cells)."""
+        return np.arange(self.states) // (self.cells * self.cells)
 
 
 def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularModel:
@@ -129,17 +150,25 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     cells = probe.num_cells
     if probe.num_agents != 2:
         raise ValueError(f"the exact model is for one learner and one other agent, {env} has {probe.num_agents} agents")
-    if cells * cells > MAX_STATES:
-        raise ValueError(f"{env} with {env_kwargs} has {cells * cells:,} joint states, more than {MAX_STATES:,}")
-    states = cells * cells
+    layers = int(getattr(engine_class, "tabular_layers", 1))
+    states = layers * cells * cells
+    if states > MAX_STATES:
+        raise ValueError(f"{env} with {env_kwargs} has {states:,} joint states, more than {MAX_STATES:,}")
     state, robot_action, other_action = (x.ravel() for x in np.indices((states, NUM_ACTIONS, NUM_ACTIONS)))
     engine = engine_class(len(state), **env_kwargs)
     engine.reset()
-    engine.cells = np.stack(np.divmod(state, cells), axis=1).astype(engine.cells.dtype)
+    layer, pair = np.divmod(state, cells * cells)
+    engine.cells = np.stack(np.divmod(pair, cells), axis=1).astype(engine.cells.dtype)
+    if layers > 1:
+        getattr(engine, "set_tabular_layer")(layer)
     events = engine.step(np.stack([robot_action, other_action], axis=1))
     shape = (states, NUM_ACTIONS, NUM_ACTIONS)
-    after = (engine.cells[:, ROBOT] * cells + engine.cells[:, OTHER]).reshape(shape)
-    alone_reward, alone_after = _alone_steps(engine_class, cells, env_kwargs)
+    after = engine.cells[:, ROBOT] * cells + engine.cells[:, OTHER]
+    if layers > 1:
+        after = after + getattr(engine, "tabular_layer")() * cells * cells
+    after = after.reshape(shape)
+    alone_reward, alone_after = _alone_steps(engine_class, cells, layers, env_kwargs)
+    start = np.asarray(getattr(probe, "start_distribution")()).ravel()  # (checked on the class above)
     return TabularModel(
         env=env,
         env_kwargs=dict(env_kwargs),
@@ -148,30 +177,35 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
         robot_harmed=(events.harmed_by[:, ROBOT] >= 0).reshape(shape),
         other_harmed=(events.harmed_by[:, OTHER] == ROBOT).reshape(shape),
         after=after,
-        start=np.asarray(getattr(probe, "start_distribution")()).ravel(),  # (checked on the class above)
+        start=np.concatenate([start, np.zeros(states - len(start))]),
         other_reward=events.rewards[:, OTHER].astype(np.float64).reshape(shape),
         alone_reward=alone_reward,
         alone_after=alone_after,
+        layers=layers,
     )
 
 
-def _alone_steps(engine_class: Any, cells: int, env_kwargs: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """``(reward, after)``, each ``(cells, 5)``: one step of the robot alone from every cell with
-    every action (the other absent), read off the engine."""
-    cell, action = (x.ravel() for x in np.indices((cells, NUM_ACTIONS)))
+def _alone_steps(engine_class: Any, cells: int, layers: int, env_kwargs: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """``(reward, after)``, each ``(layers · cells, 5)``: one step of the robot alone from every
+    cell and layer with every action (the other absent), read off the engine."""
+    alone, action = (x.ravel() for x in np.indices((layers * cells, NUM_ACTIONS)))
+    layer, cell = np.divmod(alone, cells)
     engine = engine_class(len(cell), **env_kwargs)
     engine.reset()
     engine.cells = np.stack([cell, np.zeros_like(cell)], axis=1).astype(engine.cells.dtype)
     engine.present[:, OTHER] = False
+    if layers > 1:
+        getattr(engine, "set_tabular_layer")(layer)
     events = engine.step(np.stack([action, np.full_like(action, NUM_ACTIONS - 1)], axis=1))
-    shape = (cells, NUM_ACTIONS)
-    return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), engine.cells[:, ROBOT].reshape(shape).astype(np.int64)
+    shape = (layers * cells, NUM_ACTIONS)
+    after = engine.cells[:, ROBOT] + (getattr(engine, "tabular_layer")() * cells if layers > 1 else 0)
+    return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), after.reshape(shape).astype(np.int64)
 
 
 def alone_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray:
-    """``Q*`` of the robot alone, ``(cells, 5)``, by value iteration to the same bound as
+    """``Q*`` of the robot alone, ``(layers · cells, 5)``, by value iteration to the same bound as
     :func:`optimal_values`."""
-    v = np.zeros(model.cells)
+    v = np.zeros(model.alone_states)
     q = model.alone_reward.copy()
     scale = max(1.0, float(np.abs(model.alone_reward).max(initial=0.0)))
     limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2 / scale) / math.log(gamma)) if gamma > 0 else 2
@@ -186,7 +220,7 @@ def alone_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e
 
 
 def alone_policy(model: TabularModel, epsilon: float, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray | None:
-    """The robot's ε-greedy policy alone, ``(cells, 5)``, greedy on :func:`alone_values` (every
+    """The robot's ε-greedy policy alone, ``(layers · cells, 5)``, greedy on :func:`alone_values` (every
     method's: with the other gone no penalty, bonus or other-term is left), or ``None`` where
     every step alone pays the same (:attr:`TabularModel.alone_pay`)."""
     if model.alone_pay is not None:
@@ -282,6 +316,8 @@ class PolicyOutcome:
     """Expected undiscounted reward of the robot."""
     other_return: float
     """Expected undiscounted reward of the other."""
+    changed: float = 0.0
+    """Probability that the state beyond the two cells is no longer 0 at the end (the vase broken)."""
 
 
 def episode_steps(model: TabularModel) -> int:
@@ -292,7 +328,7 @@ def episode_steps(model: TabularModel) -> int:
 def outcome(model: TabularModel, policy: np.ndarray, max_cycles: int, alone_policy: np.ndarray | None = None) -> PolicyOutcome:
     """The exact :class:`PolicyOutcome` of the robot acting by ``policy`` (``(states, 5)``
     probabilities, the other acting uniformly at random), from the engine's start distribution
-    pushed forward ``max_cycles`` steps. ``alone_policy`` (``(cells, 5)``, :func:`alone_policy`) is
+    pushed forward ``max_cycles`` steps. ``alone_policy`` (``(layers · cells, 5)``, :func:`alone_policy`) is
     how the robot acts once the other is gone: required where its cell then matters
     (:attr:`TabularModel.alone_pay` is ``None``), unused elsewhere."""
     if policy.shape != (model.states, NUM_ACTIONS):
@@ -330,16 +366,17 @@ def _outcome_alone_by_cell(
     once the other is gone (``joint``: the joint states' step weights, sources and expected rewards)."""
     if alone_policy is None:
         raise ValueError(f"{model.env}'s robot is paid by where it stands once the other is gone: give alone_policy")
-    if alone_policy.shape != (model.cells, NUM_ACTIONS):
-        raise ValueError(f"alone_policy must have shape {(model.cells, NUM_ACTIONS)}, got {alone_policy.shape}")
+    if alone_policy.shape != (model.alone_states, NUM_ACTIONS):
+        raise ValueError(f"alone_policy must have shape {(model.alone_states, NUM_ACTIONS)}, got {alone_policy.shape}")
     weight, source, own_reward, others_reward = joint
-    states, alone, harmed = model.states, slice(model.states, model.states + model.cells), model.states + model.cells
+    count = model.alone_states
+    states, alone, harmed = model.states, slice(model.states, model.states + count), model.states + count
     destination = np.select([model.robot_harmed, model.other_harmed], [harmed, states + model.after // model.cells], model.after)
     destination = np.concatenate([destination.ravel(), states + model.alone_after.ravel()])
     weight = np.concatenate([weight, alone_policy.ravel()])
-    source = np.concatenate([source, states + np.repeat(np.arange(model.cells), NUM_ACTIONS)])
+    source = np.concatenate([source, states + np.repeat(np.arange(count), NUM_ACTIONS)])
     alone_reward = (alone_policy * model.alone_reward).sum(axis=1)
-    distribution = np.concatenate([model.start, np.zeros(model.cells + 1)])
+    distribution = np.concatenate([model.start, np.zeros(count + 1)])
     survival = robot_return = other_return = 0.0
     for _ in range(max_cycles):
         robot_return += float(distribution[:states] @ own_reward) + float(distribution[alone] @ alone_reward)
@@ -349,7 +386,8 @@ def _outcome_alone_by_cell(
         distribution = moved
         survival += 1.0 - distribution[harmed]
     gone = float(distribution[alone].sum())
-    return PolicyOutcome(gone, float(distribution[harmed]), float(survival), robot_return, other_return)
+    changed = float(distribution[:states][model.layer > 0].sum() + distribution[alone][np.arange(count) >= model.cells].sum())
+    return PolicyOutcome(gone, float(distribution[harmed]), float(survival), robot_return, other_return, changed)
 
 
 def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons: tuple[float, ...]) -> str:
