@@ -19,16 +19,42 @@ from empathy_zoo.metrics import INTEGER_METRICS, METRIC_RANGES
 from empathy_zoo.names import LABEL_REFUSED_CATEGORIES, check_label, check_path_name
 from empathy_zoo.policies import parse_entry_label
 
-__all__ = ["DocumentChecker", "shown"]
+__all__ = ["DocumentChecker", "finite_float", "one_line", "shown"]
 
 SHOWN = 60
 """Characters of a bad value quoted in a message."""
+HUGE_DIGITS = 30
+"""An integer of more digits than this is shown by its number of digits, not its digits."""
 
 
 def shown(value: Any) -> str:
-    """``repr(value)``, cut to :data:`SHOWN` characters."""
+    """``repr(value)``, cut to :data:`SHOWN` characters; an integer of more than :data:`HUGE_DIGITS`
+    digits by its number of digits (``repr`` of one of over 4,300 digits raises ``ValueError``)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value).bit_length() > HUGE_DIGITS * 3.33:
+        return f"an integer of about {int(abs(value).bit_length() * 0.30103) + 1:,} digits"
     text = repr(value)
     return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
+
+
+def one_line(text: str, limit: int = 300) -> str:
+    """``text`` as one line of at most ``limit`` characters: its line breaks and runs of white space
+    made single spaces (a library's message, torch's, spans several lines), cut with ``...``."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def finite_float(value: Any) -> float | None:
+    """``value`` as a ``float`` when it is a number (an int or a float, not a boolean) that a float
+    holds as a finite number, else ``None``: NaN, an infinity, and an int past the range of a float
+    (``10**400``: ``math.isfinite`` raises ``OverflowError`` on it, and every reader that computes
+    with it would) are no finite number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
 
 
 @dataclass(frozen=True)
@@ -83,8 +109,9 @@ class DocumentChecker:
         return value
 
     def finite(self, value: Any, field: str, low: float | None = None) -> float:
-        """A finite number (at least ``low`` where given)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        """A finite number (at least ``low`` where given): an int or a float a float holds finitely
+        (:func:`finite_float`: an int of any size is checked, never converted blindly)."""
+        if finite_float(value) is None:
             raise self.fail(field, "a finite number", value)
         if low is not None and value < low:
             raise self.fail(field, f"a number >= {low}", value)
@@ -103,8 +130,9 @@ class DocumentChecker:
         expected = f"{kind} >= {low:g}" + ("" if high is None else f" and <= {high:g}")
         values = self.numbers(value, field, length=length)
         for i, item in enumerate(values):
-            whole = metric not in INTEGER_METRICS or (math.isfinite(item) and item == int(item))
-            if not math.isfinite(item) or item < low or (high is not None and item > high) or not whole:
+            finite = finite_float(item) is not None
+            whole = metric not in INTEGER_METRICS or (finite and item == int(item))
+            if not finite or item < low or (high is not None and item > high) or not whole:
                 raise self.fail(f"{field}[{i}]", f"{metric}, {expected}", item)
         return values
 
@@ -126,6 +154,23 @@ class DocumentChecker:
             if category in LABEL_REFUSED_CATEGORIES:
                 name = unicodedata.name(character, f"U+{ord(character):04X}")
                 raise self.fail(field, f"one line of printable text (it holds {name}, {category}, at position {position})", value)
+        return value
+
+    def plain(self, value: Any, field: str) -> Any:
+        """Plain data a method records (a reward transform's fields, a description): objects, arrays,
+        ``null``, booleans, finite numbers (:func:`finite_float`) and strings of printable text (as
+        :meth:`text`, empty allowed), at any depth; the first value that is not is named."""
+        if isinstance(value, dict):
+            for key, item in self.table(value, field).items():
+                self.plain(item, f"{field}.{key}")
+        elif isinstance(value, list):
+            for i, item in enumerate(value):
+                self.plain(item, f"{field}[{i}]")
+        elif isinstance(value, str):
+            if value:
+                self.text(value, field)
+        elif value is not None and not isinstance(value, bool) and finite_float(value) is None:
+            raise self.fail(field, "plain data (an object, array, string, boolean, null or finite number)", value)
         return value
 
     def label(self, value: Any, field: str) -> str:
