@@ -23,15 +23,17 @@ import math
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.document_checks import DocumentChecker, shown
+from empathy_zoo.document_checks import DocumentChecker, one_line, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import (
     MAX_CYCLES,
     MAX_EVAL_EPISODES,
+    MAX_EVALUATIONS,
     MAX_HIDDEN_SIZE,
     MAX_LEARNER_BYTES,
     MAX_SEED,
@@ -52,6 +54,8 @@ __all__ = [
     "check_result",
     "check_env_kwargs",
     "episode_bounds",
+    "evaluation_steps",
+    "others_room",
     "read_result",
     "result_path",
     "experiment_of",
@@ -119,6 +123,7 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     _check_config(check, result)
     if "steps" in result["config"] and result["config"]["steps"] != steps:
         raise check.fail("steps", f"the run's config.steps ({result['config']['steps']:,})", steps)
+    schedule = evaluation_steps(steps, result["config"].get("eval_interval"))
     _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": _wall_time(check)})
     if result.get("commit") is not None:
         check.text(result["commit"], "commit")
@@ -171,7 +176,35 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
         for name in METRIC_NAMES:
             values = check.metric(entry[name], f"eval[{i}].{name}", name, bounds[name], length=episodes)
             episodes = len(values) if episodes is None else episodes
+    made = [entry["step"] for entry in result["eval"]]
+    if schedule is not None and made != schedule:
+        interval = result["config"]["eval_interval"]
+        raise check.fail(
+            "eval",
+            f"the run's {len(schedule):,} evaluation(s), every config.eval_interval ({interval:,}) steps and at its "
+            f"last step {steps:,} (evaluations at steps {_steps_shown(schedule)})",
+            f"evaluations at steps {_steps_shown(made)}" if made else "no evaluation",
+        )
     return result
+
+
+def evaluation_steps(steps: int, eval_interval: Any) -> list[int] | None:
+    """The steps a run of ``steps`` steps evaluated at, ``eval_interval`` apart and at its last step
+    (as :mod:`empathy_zoo.training.ensemble` evaluates), or ``None`` when ``eval_interval`` is not
+    recorded (files made before it was); counted before they are listed (at most
+    :data:`~empathy_zoo.limits.MAX_EVALUATIONS`, checked with the config)."""
+    if eval_interval is None:
+        return None
+    every = list(range(eval_interval, steps + 1, eval_interval))
+    return every if every and every[-1] == steps else [*every, steps]
+
+
+def _steps_shown(steps: list[int]) -> str:
+    """A list of steps for a message: the first and last three of a long one."""
+    shown_steps = [f"{step:,}" for step in steps]
+    if len(steps) > 6:
+        shown_steps = [*shown_steps[:3], "...", *shown_steps[-3:]]
+    return ", ".join(shown_steps)
 
 
 AGENT_SUFFIXES = (".agent.pt", ".agent.zip")
@@ -352,19 +385,28 @@ def check_env_kwargs(check: DocumentChecker, env: str, value: Any, field: str, g
     return env_kwargs
 
 
-COEXISTENCE_STEP_REWARD = 1.0
-"""The most one step of Coexistence pays an agent: its reward is whether it is operative (``1``)."""
+STEP_REWARD_BOUND = float.fromhex("0x1.fffffep+127")
+"""The most one step can pay an agent as the engines pay it: its reward is a float32
+(:attr:`empathy_zoo.engine.base.StepEvents.rewards`), so at most float32's largest value. The
+environment table records no tighter per-step bound (Coexistence, Sharing and Charger pay at most 1
+a step), so returns are bounded by this one: what keeps a forged return from overflowing the
+leaderboard's sums (docs/limits.md)."""
 
 
 def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float | None]:
     """The most each metric of :data:`~empathy_zoo.metrics.METRIC_NAMES` can be in one episode of
     ``env`` built with ``env_kwargs`` (checked by :func:`check_env_kwargs`; the others at their
-    defaults): ``survival`` at most ``max_cycles`` steps; ``None`` (no bound beyond the metric's
-    range) for the others."""
+    defaults): ``survival`` at most ``max_cycles`` steps; ``return`` at most ``max_cycles`` times
+    :data:`STEP_REWARD_BOUND`, ``other_return`` that for each other agent (it is their sum);
+    ``None`` (no bound beyond the metric's range) for the others."""
     engine = ENGINES[env]
     arguments = {**argument_defaults(engine), **env_kwargs}
+    cycles = int(arguments["max_cycles"])
+    others = int(arguments[engine.count_argument]) if engine.count_argument else 1
     bounds: dict[str, float | None] = {name: None for name in METRIC_NAMES}
-    bounds["survival"] = int(arguments["max_cycles"])
+    bounds["survival"] = cycles
+    bounds["return"] = cycles * STEP_REWARD_BOUND
+    bounds["other_return"] = others * cycles * STEP_REWARD_BOUND
     return bounds
 
 
@@ -373,6 +415,8 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     config = check.table(result["config"], "config")
     check.has(config, CONFIG_TABLES, "config.")
     settings = check.table(config["settings"], "config.settings")
+    if "env" in config and config["env"] != result["env"]:
+        raise check.fail("config.env", f"the run's env ({result['env']!r})", config["env"])
     check_env_kwargs(check, result["env"], config["env_kwargs"], "config.env_kwargs")
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.name(agent, f"config.fixed (the agent {agent!r})")
@@ -395,22 +439,37 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     )
     if config.get("variant") is not None:
         check.name(config["variant"], "config.variant")
+    for name, top in (("seed", "seed"), ("method", "method"), ("label", "method_label"), ("variant", "variant")):
+        if config.get(name) is not None and result.get(top) is not None and config[name] != result[top]:
+            raise check.fail(f"config.{name}", f"the run's {top} ({shown(result[top])})", config[name])
+    if "eval_interval" in config:
+        evaluations = -(-result["steps"] // config["eval_interval"])
+        if evaluations > MAX_EVALUATIONS:
+            raise check.fail(
+                "config.eval_interval",
+                f"at most {MAX_EVALUATIONS:,} evaluations of the run's {result['steps']:,} steps (docs/limits.md)",
+                config["eval_interval"],
+            )
     if config.get("reward") is not None:
         check.text(check.table(config["reward"], "config.reward").get("name"), "config.reward.name")
+        check.plain(config["reward"], "config.reward")
     from baselines.registry import METHODS  # lazily: the method registry imports the learners
 
     method = METHODS.get(result["method"])
     if method is not None:
         try:
             method.settings(**settings)
-        except (TypeError, ValueError) as error:
-            raise check.fail("config.settings", f"settings of {result['method']} ({error})", settings) from None
+        except (TypeError, ValueError, OverflowError) as error:
+            raise check.fail(
+                "config.settings", f"settings of {result['method']} ({one_line(str(error), 200)})", settings
+            ) from None
     try:
         check_description(config["description"])
     except DescriptionError as error:
         raise check.fail(
             "config.description" + ("" if error.field.startswith("(") else f".{error.field}"), error.expected, error.value
         ) from None
+    check.plain(config["description"], "config.description")
 
 
 def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, Any], field: str = "config.env_kwargs") -> None:
@@ -424,8 +483,18 @@ def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, An
     except ValueError as error:
         raise check.fail(field, f"arguments {engine.name} is built with ({error})", dict(env_kwargs)) from None
     count = engine.count_argument
-    if count is not None and count in env_kwargs and env_kwargs[count] > grid["size"] ** 2:
-        raise check.fail(f"{field}.{count}", f"at most {grid['size'] ** 2} (the cells of the grid)", env_kwargs[count])
+    if count is not None and count in env_kwargs:
+        most, room = others_room(engine, grid["size"])
+        if env_kwargs[count] > most:
+            raise check.fail(f"{field}.{count}", f"at most {most:,} ({room})", env_kwargs[count])
+
+
+def others_room(engine: Any, size: int) -> tuple[int, str]:
+    """The most other agents ``engine``'s environment starts on a grid of side ``size``, and why: the
+    engine's own bound (its ``_room_for_others``, which reads the size alone), asked of a stand-in
+    holding only ``size``, so nothing is built."""
+    most, room = engine._room_for_others(SimpleNamespace(size=size))
+    return int(most), str(room)
 
 
 RUNS_DIR = "runs"

@@ -35,7 +35,7 @@ EVAL_STEPS = (2000, 4000)
 
 
 def run(method: str, beta: float, seed: int, variant: str | None = None, label: str | None = None, steps: int = 4000) -> dict:
-    """A synthetic run with a greedy evaluation at each of :data:`EVAL_STEPS` (within ``steps``),
+    """A synthetic run with a greedy evaluation at each of :data:`EVAL_STEPS` before ``steps`` and at ``steps``,
     each metric's episodes distinct per run, evaluation, metric and episode."""
     result = synthetic_result(ENV, method, beta, seed)
     result["steps"] = steps
@@ -56,7 +56,7 @@ def run(method: str, beta: float, seed: int, variant: str | None = None, label: 
                 for j, m in enumerate(METRIC_NAMES)
             },
         }
-        for i, step in enumerate(s for s in EVAL_STEPS if s <= steps)
+        for i, step in enumerate([*(s for s in EVAL_STEPS if s < steps), steps])  # (every 2,000 steps and the last, as trained)
     ]
     return result
 

@@ -37,6 +37,7 @@ def run(method: str, beta: float, seed: int, steps: int = 4000, experiment: str 
     result = synthetic_result(ENV, method, beta, seed, **means)
     result["steps"] = steps
     result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": EVAL_EPISODES}
+    result["eval"] = [{**result["eval"][-1], "step": step} for step in range(2000, steps + 1, 2000)]  # (as trained: every 2,000)
     result["run_id"] = f"{ENV}__{method}-{beta}-{steps}{experiment}__s{seed}"
     return result
 
