@@ -39,6 +39,7 @@ __all__ = [
     "MAX_RESULT_BYTES",
     "MAX_RUNS_LIST_BYTES",
     "MAX_RUNS",
+    "MAX_SCENARIOS",
     "MAX_SEED",
     "MAX_SEEDS",
     "MAX_SIZE",
@@ -52,6 +53,7 @@ __all__ = [
     "check_memory",
     "cpu_count",
     "format_bytes",
+    "not_a_regular_file",
     "open_regular",
     "read_bounded",
 ]
@@ -78,6 +80,10 @@ MAX_SEED = 2**63 - 1
 MAX_RUNS = 100_000
 """Most runs one sweep declares (environment variants × grid points × seeds): checked before
 the runs are built."""
+MAX_SCENARIOS = 1_000
+"""Most scenarios of one scenario set (``[scenarios.*]`` tables of a scenario file, the scenarios of
+an evaluation file): each is played ``episodes`` times for every run evaluated and is a row of
+the held-out tables; the shipped sets hold a few. Counted before any scenario is read."""
 MAX_NAME = 200
 """Longest name that becomes part of a file name (a variant, a run id), in characters (file
 names are at most 255 bytes on common file systems)."""
@@ -138,6 +144,7 @@ BOUNDS: Mapping[str, int] = {
     "seeds per experiment": MAX_SEEDS,
     "seed": MAX_SEED,
     "runs per sweep": MAX_RUNS,
+    "scenarios per set": MAX_SCENARIOS,
     "names": MAX_NAME,
     "labels": MAX_LABEL,
     "note file": MAX_NOTE_BYTES,
@@ -274,6 +281,27 @@ _KINDS = {
     stat.S_IFSOCK: "a socket",
 }
 """What a file that is no regular file is, as a refusal says it."""
+
+
+def not_a_regular_file(path: str | os.PathLike[str]) -> str | None:
+    """What is at ``path`` when it is no regular file (or link to one), as a refusal says it after
+    the file's name (``"does not exist"``, ``"is a FIFO (named pipe), not a regular file"``, ``"is a
+    dangling symbolic link (to x), not a regular file"``), or ``None`` for a regular file. Nothing is
+    opened: a FIFO or a device is told apart by ``stat`` alone."""
+    name = os.fspath(path)
+    try:
+        mode = os.stat(name).st_mode
+    except FileNotFoundError:
+        if os.path.islink(name):
+            return f"is a dangling symbolic link (to {os.readlink(name)}), not a regular file"
+        return "does not exist"
+    except OSError as error:
+        return f"cannot be examined ({error.strerror or error})"
+    if stat.S_ISREG(mode):
+        return None
+    kind = _KINDS.get(stat.S_IFMT(mode), "not a regular file")
+    link = f" (a symbolic link to {os.readlink(name)})" if os.path.islink(name) else ""
+    return f"is {kind}{link}, not a regular file"
 
 
 def read_bounded(path: str | os.PathLike[str], bound: int, what: str) -> bytes:

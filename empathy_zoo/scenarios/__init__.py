@@ -35,6 +35,7 @@ naming the file, the table and the key.
 
 from __future__ import annotations
 
+import os
 import unicodedata
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
@@ -47,6 +48,7 @@ from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.sweep_file import variant_of_table
 from empathy_zoo.experiment.values import PolicyTable, SweepConfigError, check_keys, check_value, read_toml, type_name
+from empathy_zoo.limits import MAX_SCENARIOS, not_a_regular_file
 from empathy_zoo.names import LABEL_REFUSED_CATEGORIES, check_path_name
 from empathy_zoo.policies import entry_label, parse_entry_label, recorded_entry
 
@@ -166,9 +168,10 @@ def scenario_set_path(name_or_path: str | Path) -> Path:
     if text in shipped_sets():
         return SCENARIO_DIR / f"{text}.toml"
     path = Path(text)
-    if path.suffix == ".toml" or path.exists():
-        if not path.is_file():
-            raise SweepConfigError(f"scenario file {path} does not exist")
+    if path.suffix == ".toml" or os.path.lexists(path):
+        problem = not_a_regular_file(path)
+        if problem:
+            raise SweepConfigError(f"scenario file {path} {problem}")
         return path
     raise SweepConfigError(
         f"unknown scenario set {text!r}; shipped: {', '.join(shipped_sets())} (or give a path to a .toml file)"
@@ -211,6 +214,11 @@ def parse_scenario_set(data: Mapping[str, Any], source: str = "<scenarios>", def
     tables = data.get("scenarios")
     if not isinstance(tables, dict) or not tables:
         raise SweepConfigError(f"{source}: declare at least one [scenarios.<name>] table (reason = ..., fixed = ...)")
+    if len(tables) > MAX_SCENARIOS:
+        raise SweepConfigError(
+            f"{source}: {len(tables):,} [scenarios.*] tables; a scenario set holds at most {MAX_SCENARIOS:,} "
+            "(each is played for every run evaluated; docs/limits.md)"
+        )
     scenarios = tuple(_scenario(key, table, env, source) for key, table in tables.items())
     return ScenarioSet(name, env, scenarios, description, source)
 
