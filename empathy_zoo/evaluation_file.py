@@ -25,16 +25,18 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
-from empathy_zoo.document_checks import DocumentChecker
+from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
+from empathy_zoo.randomness import STREAMS
 from empathy_zoo.result_file import check_env_kwargs, episode_bounds
 
 __all__ = [
@@ -47,6 +49,7 @@ __all__ = [
     "evaluations_root",
     "evaluation_files",
     "check_evaluation",
+    "evaluation_mismatch",
     "read_evaluation",
 ]
 
@@ -77,6 +80,9 @@ REQUIRED_FIELDS = (
 """Top-level fields every evaluation file has (``variant`` and ``version`` are written too)."""
 SCENARIO_FIELDS = ("name", "reason", "held_out", "env_kwargs", "fixed", "metrics")
 """Fields of every entry of ``scenarios``."""
+STREAM = STREAMS["heldout_eval"]
+"""The random stream of every evaluation's start seeds (``stream``): ``empathy-zoo evaluate`` plays
+every scenario from ``derive_key(seed, STREAM, episode)`` and refuses a file made with another."""
 _SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
@@ -140,7 +146,9 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     check.label(evaluation["method_label"], "method_label")
     if "version" in evaluation:
         check.text(evaluation["version"], "version")
-    check.integer(evaluation["seed"], "seed", 0, MAX_SEED)
+    seed = check.integer(evaluation["seed"], "seed", 0, MAX_SEED)
+    if not evaluation["run_id"].endswith(f"__s{seed}"):
+        raise check.fail("seed", f"the seed its run id {evaluation['run_id']!r} ends with (__s<seed>)", seed)
     agent = check.table(evaluation["agent"], "agent")
     check.has(agent, ("file", "sha256"), "agent.")
     check.text(agent["file"], "agent.file")
@@ -153,13 +161,16 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         check.text(scenario_set["description"], "scenario_set.description")
     if scenario_set["env"] != evaluation["env"]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
-    if not isinstance(scenario_set["scenarios"], list):
-        raise check.fail("scenario_set.scenarios", "an array of scenario definitions", scenario_set["scenarios"])
+    if not isinstance(scenario_set["scenarios"], list) or len(scenario_set["scenarios"]) > MAX_SCENARIOS:
+        raise check.fail(
+            "scenario_set.scenarios", f"an array of at most {MAX_SCENARIOS:,} scenario definitions", scenario_set["scenarios"]
+        )
     episodes = check.integer(evaluation["episodes"], "episodes", 1, MAX_EVAL_EPISODES)
-    check.integer(evaluation["stream"], "stream", 0)
+    if check.integer(evaluation["stream"], "stream", 0) != STREAM:
+        raise check.fail("stream", f"{STREAM}, the stream empathy-zoo evaluate plays every evaluation from", evaluation["stream"])
     scenarios = evaluation["scenarios"]
-    if not isinstance(scenarios, list) or not scenarios:
-        raise check.fail("scenarios", "a non-empty array of scenarios", scenarios)
+    if not isinstance(scenarios, list) or not scenarios or len(scenarios) > MAX_SCENARIOS + 1:
+        raise check.fail("scenarios", f"a non-empty array of at most {MAX_SCENARIOS + 1:,} scenarios", scenarios)
     names = []
     for i, entry in enumerate(scenarios):
         where = f"scenarios[{i}]"
@@ -205,6 +216,45 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
     return name
 
 
+def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -> str | None:
+    """What of ``evaluation`` (checked by :func:`check_evaluation`) is not of ``run`` (a result as
+    :func:`~empathy_zoo.result_file.read_result` gives it), as ``"<what>: <found>, its run has
+    <value>"``, or ``None`` when it is that run's: its run id, environment, variant, method, seed,
+    the agent file's SHA-256 its result file records, and its :data:`TRAINED_WITH` scenario the run's
+    own world and partners (what ``empathy-zoo evaluate`` writes of the run)."""
+    agent = run.get("agent")
+    recorded = run.get("config")
+    config: Mapping[str, Any] = recorded if isinstance(recorded, Mapping) else {}
+    own = evaluation["scenarios"][0]
+    expected: list[tuple[str, Any, Any]] = [
+        ("run_id", evaluation["run_id"], run.get("run_id")),
+        ("env", evaluation["env"], run.get("env")),
+        ("variant", evaluation.get("variant"), run.get("variant") or run.get("env")),
+        ("method", evaluation["method"], run.get("method")),
+        ("seed", evaluation["seed"], run.get("seed")),
+        ("agent.sha256", evaluation["agent"]["sha256"], agent.get("sha256") if isinstance(agent, Mapping) else None),
+        (f"scenarios[0].env_kwargs ({TRAINED_WITH})", own["env_kwargs"], config.get("env_kwargs")),
+        (f"scenarios[0].fixed ({TRAINED_WITH})", own["fixed"], config.get("fixed")),
+    ]
+    for what, found, value in expected:
+        if what == "variant" and found is None:
+            continue  # (a file may leave it out: the run's environment)
+        if found != value:
+            return f"{what}: {shown(found)}, its run has {shown(value)}"
+    return None
+
+
 def read_evaluation(path: str | Path) -> dict[str, Any]:
-    """Read an evaluation file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
-    return check_evaluation(read_json(path, "evaluation file"), path)
+    """Read an evaluation file; a corrupted or malformed one raises ``ValueError`` naming it (and the
+    field), as does one whose name is not ``<scenario set>/<run id>.json`` of the set and run it
+    holds (:func:`evaluation_path`: where ``empathy-zoo evaluate`` writes it)."""
+    evaluation = check_evaluation(read_json(path, "evaluation file"), path)
+    where = Path(path)
+    expected = f"{evaluation['scenario_set']['name']}/{evaluation['run_id']}.json"
+    if f"{where.parent.name}/{where.name}" != expected:
+        raise EvaluationFileError(
+            f"{path}: field run_id: its file is named {where.parent.name}/{where.name}, but it holds the evaluation of run "
+            f"{evaluation['run_id']} in scenario set {evaluation['scenario_set']['name']} ({expected}): renamed or copied; "
+            "move it away (empathy-zoo evaluate writes it again)"
+        )
+    return evaluation

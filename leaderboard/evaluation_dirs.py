@@ -5,17 +5,21 @@ id>.json``, away from the runs it evaluated. :func:`match_evaluations` reads suc
 that ``evaluations`` folder itself) for a leaderboard: every file is read through the bounded
 reader and checked as an evaluation file (:func:`empathy_zoo.evaluation_file.read_evaluation`),
 then matched to the run it names among the runs read. The match is by run id and by the agent
-file's SHA-256: the one the evaluation records must be the one the run's result file records.
+file's SHA-256: the one the evaluation records must be the one the run's result file records; so
+must its environment, variant, method, seed and its own partners and world (its ``trained_with``
+scenario), as ``empathy-zoo evaluate`` writes them of the run
+(:func:`empathy_zoo.evaluation_file.evaluation_mismatch`).
 Matched, an evaluation counts as if it lay beside its run
 (:func:`leaderboard.heldout_scores.load_heldout`'s ``extra``).
 
 Refused, each with one ``ValueError`` line naming the file: an evaluation whose run is not among
-the runs read, one of another agent than its run's result file records (the run was trained
-again), one of a run and scenario set already evaluated beside the runs or in another
-``--evaluations`` directory, and one that is not an evaluation file of this suite. So are a
-directory that does not exist, holds no evaluation file, is given twice, or is one of the results
-directories read (its evaluations are read beside its runs already). Evaluation files beside the
-runs keep their own rule: one that matches no run is left out with a note.
+the runs read, one of another agent than its run's result file records (the run was trained again),
+one that records another seed, method or world than its run's, one of a run and scenario set
+already evaluated beside the runs or in another ``--evaluations`` directory, and one that is not an
+evaluation file of this suite. So are a directory that does not exist, holds no evaluation file, is
+given twice, or is one of the results directories read (its evaluations are read beside its runs
+already). Evaluation files beside the runs keep their own rule: one that matches no run is left out
+with a note.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.data_files import data_files
-from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, read_evaluation
+from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evaluation_mismatch, read_evaluation
 
 __all__ = ["MatchedEvaluation", "evaluation_dir_files", "match_evaluations"]
 
@@ -130,6 +134,12 @@ def match_evaluations(
                 )
             if len(same_agent) > 1:
                 raise ValueError(f"{path}: run {run_id} is read from {len(same_agent)} results directories; read it from one")
+            mismatch = evaluation_mismatch(evaluation, same_agent[0])
+            if mismatch is not None:
+                raise ValueError(
+                    f"{path}: not the evaluation of run {run_id} its result file records ({mismatch}); "
+                    "move it away and evaluate the run again"
+                )
             key = (run_id, evaluation["scenario_set"]["name"])
             if key in taken:
                 raise ValueError(
