@@ -33,6 +33,7 @@ import json
 import math
 import re
 import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -42,12 +43,16 @@ import torch
 
 from empathy_zoo.atomic import read_json, write_bytes_atomic
 from empathy_zoo.bounded_read import check_json_depth, read_data
+from empathy_zoo.document_checks import DocumentChecker, one_line, shown
+from empathy_zoo.environments import ENGINES
 from empathy_zoo.extras import install_command
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED, MAX_SIZE, MAX_STEPS
 from empathy_zoo.policies import plain_data_problem
-from empathy_zoo.result_file import AGENT_SUFFIXES
+from empathy_zoo.result_file import AGENT_SUFFIXES, check_env_kwargs
 from empathy_zoo.trained_agent import SB3Agent, TrainedAgent
 
 __all__ = [
+    "AgentFileError",
     "FORMAT",
     "VERSION",
     "AGENT_SUFFIX",
@@ -82,6 +87,25 @@ HEADER_KEYS = ("method", "settings", "env", "env_kwargs")
 
 MEMBER_BYTES = 64 << 20
 """Largest JSON member of a library's zip read (64 MiB; the suite's are a few KB)."""
+MAX_OBSERVATION = (MAX_SIZE - 1) ** 2
+"""Most values of an observation an agent file may say its agent takes (``obs_size``, ``view²``
+with ``view < size <= MAX_SIZE``); ``num_actions`` is bounded by it too."""
+MESSAGE_CHARS = 300
+"""Most characters of a library's error (torch's, a zip's) quoted in a refusal, in one line."""
+_ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError, RuntimeError, OSError)
+"""What reading a damaged zip raises (a bad CRC, a truncated member, an unknown compression, an
+encrypted member)."""
+
+
+class AgentFileError(ValueError):
+    """An agent file is not what this suite writes; the message names the file (and the field)."""
+
+
+def _why(error: BaseException) -> str:
+    """A library's ``error`` (torch's, a zip's) as a refusal quotes it: its kind and message in one
+    line (torch's weights-only message spans several), cut at :data:`MESSAGE_CHARS`."""
+    return one_line(f"{type(error).__name__}: {error}", MESSAGE_CHARS)
+
 
 _HEAD_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
 _LIBRARIES = {"stable_baselines3": ("DQN", "PPO")}
@@ -115,7 +139,11 @@ def _check_header(header: Any) -> dict[str, Any]:
     return json.loads(json.dumps(dict(header)))  # (tuples become lists, as when it is read back)
 
 
-def _as_tensor(value: Any, where: str) -> torch.Tensor:
+def _as_tensor(value: Any, where: str, budget: list[int] | None = None) -> torch.Tensor:
+    """``value`` (a float32 dense tensor or numpy array) as a CPU copy of its own. With ``budget``
+    (``[bytes left]``), its elements are counted first and the copy refused when it would take
+    more bytes than are left (they are then taken): a tensor expanded from one stored value (stride
+    0) is tiny in a file and huge once copied."""
     if isinstance(value, np.ndarray):
         value = torch.from_numpy(value)
     if not isinstance(value, torch.Tensor):
@@ -124,14 +152,25 @@ def _as_tensor(value: Any, where: str) -> torch.Tensor:
         raise ValueError(f"{where} is a {value.layout} tensor, not a dense one")
     if value.dtype != torch.float32:
         raise ValueError(f"{where} is {value.dtype}, not float32 (convert it: an agent computes in float32)")
+    if budget is not None:
+        size = math.prod(int(n) for n in value.shape) * value.element_size()  # (Python ints: no overflow)
+        if size > budget[0]:
+            raise ValueError(
+                f"{where} of shape {tuple(value.shape)} takes {size:,} bytes, more than the file's weights can hold "
+                f"({budget[0]:,} bytes left of its size: an agent file stores every weight it has)"
+            )
+        budget[0] -= size
     return value.detach().to("cpu").clone().contiguous()  # (a copy of its own storage, not the ensemble's)
 
 
-def _check_heads(heads: Any, acting: Any) -> tuple[dict[str, list[torch.Tensor]], int, int]:
+def _check_heads(heads: Any, acting: Any, budget: int | None = None) -> tuple[dict[str, list[torch.Tensor]], int, int]:
     """``heads`` as ``{name: [W (in, out), b (out,), ...]}`` float32 CPU copies, and ``(V, A)``;
-    anything else raises ``ValueError`` naming the head and the layer."""
+    anything else raises ``ValueError`` naming the head and the layer. With ``budget`` (the bytes of
+    the file they were read from), their elements together may take no more bytes than that, each
+    counted before it is copied."""
     if not isinstance(heads, Mapping) or not heads:
         raise ValueError("'heads' must be a non-empty dict {name: [W1, b1, W2, b2, ...]}")
+    left = None if budget is None else [budget]
     checked: dict[str, list[torch.Tensor]] = {}
     sizes: set[tuple[int, int]] = set()
     for name, layers in heads.items():
@@ -142,8 +181,8 @@ def _check_heads(heads: Any, acting: Any) -> tuple[dict[str, list[torch.Tensor]]
         tensors: list[torch.Tensor] = []
         width = None
         for layer in range(len(layers) // 2):
-            weight = _as_tensor(layers[2 * layer], f"head {name!r} weight {layer + 1}")
-            bias = _as_tensor(layers[2 * layer + 1], f"head {name!r} bias {layer + 1}")
+            weight = _as_tensor(layers[2 * layer], f"head {name!r} weight {layer + 1}", left)
+            bias = _as_tensor(layers[2 * layer + 1], f"head {name!r} bias {layer + 1}", left)
             if weight.dim() != 2:
                 raise ValueError(f"head {name!r} weight {layer + 1} must be (in, out), got shape {tuple(weight.shape)}")
             if width is not None and weight.shape[0] != width:
@@ -273,30 +312,34 @@ def load_agent(
             "it was changed or replaced after the run wrote it; refusing to load it"
         )
     source = {"file": str(path), "sha256": sha256}
-    if zipfile.is_zipfile(io.BytesIO(data)):
-        with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            if LIBRARY_MEMBER in archive.namelist():
-                return _load_library_agent(path, data, _read_member(path, archive), source)
+    member = _library_member(path, data)
+    if member is not None:
+        return _load_library_agent(path, data, member, source)
     try:
         document = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as error:  # (torch raises several kinds for a file that is no torch.save)
-        raise ValueError(f"{path} is not an empathy-zoo agent file (torch.load with weights_only=True fails: {error})") from None
+        raise AgentFileError(
+            f"{path} is not an empathy-zoo agent file (torch.load with weights_only=True fails: {_why(error)})"
+        ) from None
     _check_format(path, document)
     try:
-        heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"))
+        heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"), budget=len(data))
         for name, layers in heads.items():
             if not all(bool(torch.isfinite(layer).all()) for layer in layers):
                 raise ValueError(f"head {name!r} holds a weight that is no finite number")
         header = _check_header(document.get("header"))
         if (document.get("obs_size"), document.get("num_actions")) != (obs_size, num_actions):
             raise ValueError(
-                f"its sizes {document.get('obs_size')}→{document.get('num_actions')} "
+                f"its sizes {shown(document.get('obs_size'))}→{shown(document.get('num_actions'))} "
                 f"are not its networks' {obs_size}→{num_actions}"
             )
         if document.get("activation") != "relu":
-            raise ValueError(f"activation {document.get('activation')!r} (this version knows 'relu')")
+            raise ValueError(f"activation {shown(document.get('activation'))} (this version knows 'relu')")
+    except RecursionError:
+        raise AgentFileError(f"agent file {path} is malformed: its data is nested too deep") from None
     except ValueError as error:
-        raise ValueError(f"agent file {path} is malformed: {error}") from None
+        raise AgentFileError(f"agent file {path} is malformed: {one_line(str(error), MESSAGE_CHARS)}") from None
+    header = _check_header_fields(path, header)
     description = _description(header, obs_size, num_actions, list(heads), document["acting"], source)
     description["layers"] = [obs_size] + [int(t.shape[0]) for t in heads[document["acting"]][1::2]]
     return TrainedAgent(heads, document["acting"], description)
@@ -321,11 +364,65 @@ def load_run_agent(result_file: str | Path) -> TrainedAgent | SB3Agent:
 
 def _check_format(path: Path, document: Any) -> None:
     if not isinstance(document, Mapping) or document.get("format") != FORMAT:
-        found = document.get("format") if isinstance(document, Mapping) else type(document).__name__
-        raise ValueError(f"{path} is not an empathy-zoo agent file (format {found!r}, expected {FORMAT!r})")
+        found = shown(document.get("format")) if isinstance(document, Mapping) else repr(type(document).__name__)
+        raise AgentFileError(f"{path} is not an empathy-zoo agent file (format {found}, expected {FORMAT!r})")
     version = document.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version <= VERSION:
-        raise ValueError(f"agent file {path} has format version {version!r}; this empathy-zoo reads versions 1 to {VERSION}")
+        raise AgentFileError(
+            f"agent file {path} has format version {shown(version)}; this empathy-zoo reads versions 1 to {VERSION}"
+        )
+
+
+def _checker(path: Path) -> DocumentChecker:
+    """Checks of one agent file's header, each raising :class:`AgentFileError` naming ``path`` and the field."""
+    return DocumentChecker(
+        path,
+        AgentFileError,
+        "an agent file's header",
+        "an agent of this suite",
+        "move it away (train the run again to make it anew)",
+    )
+
+
+def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
+    """``header`` (plain data with :data:`HEADER_KEYS`, read from the agent file at ``path``) if each
+    field a reader uses is what the trainer writes (the run's configuration, as its result file's
+    ``config``): ``method`` one line of printable text; ``settings`` an object; ``env`` a registered
+    environment and ``env_kwargs`` its arguments, within what it builds (as a result file's,
+    :func:`~empathy_zoo.result_file.check_env_kwargs`); where present, ``run_id`` and ``variant``
+    file-name-safe names, ``label`` a label, ``fixed`` agent names and policy labels (parsed as
+    text, nothing resolved), ``seed``, ``steps``, ``eval_interval`` and ``eval_episodes`` within
+    their bounds, ``reward`` and ``description`` plain data of finite numbers and printable text.
+    Anything else raises :class:`AgentFileError` naming the file and the field; nothing read from
+    it is printed or built before."""
+    check = _checker(path)
+    check.text(header["method"], "header.method")
+    check.table(header["settings"], "header.settings")
+    env = check.name(header["env"], "header.env")
+    if env not in ENGINES:
+        raise check.fail("header.env", f"a registered environment ({', '.join(ENGINES)})", env)
+    check_env_kwargs(check, env, header["env_kwargs"], "header.env_kwargs")
+    if header.get("fixed") is not None:
+        for agent, policy in check.table(header["fixed"], "header.fixed").items():
+            check.name(agent, f"header.fixed (the agent {agent!r})")
+            check.policy_label(policy, f"header.fixed.{agent}")
+    for name in ("run_id", "variant"):
+        if header.get(name) is not None:
+            check.name(header[name], f"header.{name}")
+    if header.get("label") is not None:
+        check.label(header["label"], "header.label")
+    bounds = {
+        "seed": (0, MAX_SEED),
+        "steps": (1, MAX_STEPS),
+        "eval_interval": (1, MAX_STEPS),
+        "eval_episodes": (1, MAX_EVAL_EPISODES),
+    }
+    for name, (low, high) in bounds.items():
+        if header.get(name) is not None:
+            check.integer(header[name], f"header.{name}", low, high)
+    for name in ("reward", "description"):
+        check.plain(header.get(name), f"header.{name}")
+    return header
 
 
 def _description(
@@ -334,28 +431,60 @@ def _description(
     return {**header, "obs_size": obs_size, "num_actions": num_actions, "heads": heads, "acting": acting, **source}
 
 
+def _library_member(path: Path, data: bytes) -> dict[str, Any] | None:
+    """The :data:`LIBRARY_MEMBER` of an agent file kept in a library's zip (checked by
+    :func:`_read_member`), or ``None`` when ``data`` is no such zip (a ``torch.save`` file is a zip
+    too, without that member). A damaged zip raises :class:`AgentFileError` naming the file."""
+    if not zipfile.is_zipfile(io.BytesIO(data)):
+        return None
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            if LIBRARY_MEMBER not in archive.namelist():
+                return None
+            return _read_member(path, archive)
+    except _ZIP_ERRORS as error:
+        raise AgentFileError(f"agent file {path} is a damaged zip ({_why(error)})") from None
+
+
 def _json_member(path: Path, archive: zipfile.ZipFile, name: str) -> Any:
     """The JSON member ``name`` of a library's zip, at most :data:`MEMBER_BYTES` and nested no
-    deeper than the bounded reader allows (``ValueError`` naming the agent file otherwise)."""
+    deeper than the bounded reader allows (``ValueError`` naming the agent file otherwise; a zip's
+    own errors, a bad CRC, are the caller's to name)."""
+    if name not in archive.namelist():
+        raise AgentFileError(f"agent file {path} has no member {name!r}: it is not a whole agent file of its library")
     if archive.getinfo(name).file_size > MEMBER_BYTES:
-        raise ValueError(f"agent file {path}: its member {name} is larger than {MEMBER_BYTES:,} bytes")
+        raise AgentFileError(f"agent file {path}: its member {name} is larger than {MEMBER_BYTES:,} bytes")
     data = archive.read(name)
     check_json_depth(data, f"agent file {path}: its member {name}")
     try:
         return json.loads(data)
     except (ValueError, RecursionError) as error:
-        raise ValueError(f"agent file {path}: its {name} is corrupted ({error})") from None
+        raise AgentFileError(f"agent file {path}: its {name} is corrupted ({one_line(str(error), MESSAGE_CHARS)})") from None
 
 
 def _read_member(path: Path, archive: zipfile.ZipFile) -> dict[str, Any]:
     member = _json_member(path, archive, LIBRARY_MEMBER)
     _check_format(path, member)
     if member.get("library") not in _LIBRARIES or member.get("algorithm") not in _LIBRARIES.get(member.get("library"), ()):
-        raise ValueError(
-            f"agent file {path} holds a {member.get('library')!r} {member.get('algorithm')!r} model, "
+        raise AgentFileError(
+            f"agent file {path} holds a {shown(member.get('library'))} {shown(member.get('algorithm'))} model, "
             "which this empathy-zoo does not read"
         )
-    return member
+    check = _checker(path)
+    for name in ("obs_size", "num_actions"):
+        check.integer(member.get(name), f"{LIBRARY_MEMBER}.{name}", 1, MAX_OBSERVATION)
+    heads = member.get("heads")
+    if not isinstance(heads, list) or not all(isinstance(head, str) and _HEAD_NAME.match(head) for head in heads):
+        raise check.fail(f"{LIBRARY_MEMBER}.heads", "an array of head names (lower-case identifiers)", heads)
+    acting = member.get("acting")
+    if not (isinstance(acting, str) and _HEAD_NAME.match(acting)) or (heads and acting not in heads):
+        raise check.fail(f"{LIBRARY_MEMBER}.acting", f"one of its heads {heads} (a policy's name without heads)", acting)
+    check.text(member.get("policy"), f"{LIBRARY_MEMBER}.policy")
+    try:
+        header = _check_header(member.get("header"))
+    except (ValueError, RecursionError) as error:
+        raise AgentFileError(f"agent file {path} is malformed: {one_line(str(error), MESSAGE_CHARS)}") from None
+    return {**member, "header": _check_header_fields(path, header)}
 
 
 def _load_library_agent(path: Path, data: bytes, member: Mapping[str, Any], source: Mapping[str, str]) -> SB3Agent:
@@ -367,17 +496,30 @@ def _load_library_agent(path: Path, data: bytes, member: Mapping[str, Any], sour
     except ImportError:
         raise ImportError(f"{path} is a Stable-Baselines3 agent: install it with {install_command('sb3')}") from None
     cls = getattr(sb3, member["algorithm"])
-    with zipfile.ZipFile(io.BytesIO(data)) as archive:
-        saved = _json_member(path, archive, "data")
+    if member["policy"] not in cls.policy_aliases:
+        raise AgentFileError(
+            f"agent file {path}: its {LIBRARY_MEMBER} names policy {shown(member['policy'])}; "
+            f"{member['algorithm']} has {', '.join(cls.policy_aliases)}"
+        )
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            saved = _json_member(path, archive, "data")
+    except _ZIP_ERRORS as error:
+        raise AgentFileError(f"agent file {path} is a damaged zip ({_why(error)})") from None
+    if not isinstance(saved, dict):
+        raise AgentFileError(f"agent file {path}: its member 'data' is a {type(saved).__name__}, not an object")
     custom = _sb3_custom_objects(cls, member, saved)
     pickled = sorted(key for key, value in saved.items() if isinstance(value, dict) and ":serialized:" in value)
     unknown = [key for key in pickled if key not in custom]
     if unknown:
-        raise ValueError(
-            f"agent file {path} holds pickled objects {unknown} this loader does not rebuild; refusing to unpickle them"
+        raise AgentFileError(
+            f"agent file {path} holds pickled objects {shown(unknown)} this loader does not rebuild; refusing to unpickle them"
         )
-    model = cls.load(io.BytesIO(data), device="cpu", custom_objects=custom)
-    header = _check_header(member["header"])
+    try:
+        model = cls.load(io.BytesIO(data), device="cpu", custom_objects=custom)
+    except Exception as error:  # (SB3 and torch raise many kinds for a damaged zip)
+        raise AgentFileError(f"agent file {path}: {member['library']} cannot load it ({_why(error)})") from None
+    header = member["header"]
     description = _description(
         header, int(member["obs_size"]), int(member["num_actions"]), list(member["heads"]), member["acting"], source
     )
