@@ -402,3 +402,13 @@ def test_a_report_given_an_existing_directory_as_out_is_written_into_it(tmp_path
     assert capsys.readouterr().out.strip() == f"empathy-zoo: wrote {tmp_path / report}"
     assert (tmp_path / report).read_text().startswith("#")
     assert [p.name for p in tmp_path.iterdir()] == [report]
+
+
+def test_a_fifo_given_as_a_sweep_file_is_refused_as_what_it_is(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "sweep.toml"
+    os.mkfifo(fifo)
+    assert main(["reproduce", "--profile", str(fifo), "--out", str(tmp_path / "out")]) == 2
+    assert f"sweep file {fifo} is a FIFO (named pipe), not a regular file" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

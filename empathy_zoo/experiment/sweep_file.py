@@ -85,7 +85,7 @@ from empathy_zoo.experiment.values import (
     read_toml,
     type_name,
 )
-from empathy_zoo.limits import MAX_RUNS, MAX_SEEDS
+from empathy_zoo.limits import MAX_RUNS, MAX_SEEDS, not_a_regular_file
 from empathy_zoo.names import check_path_name
 
 __all__ = [
@@ -149,8 +149,9 @@ def profile_path(profile: str | Path) -> Path:
     if path.suffix == ".toml" or path.exists():
         if path.is_dir():
             raise SweepConfigError(f"{path} is a directory, not a sweep file (give a .toml file or a shipped profile)")
-        if not path.is_file():
-            raise SweepConfigError(f"sweep file {path} does not exist")
+        what = not_a_regular_file(path)
+        if what is not None:  # (a FIFO, a device, a dangling link: said as what it is)
+            raise SweepConfigError(f"sweep file {path} {what}")
         return path
     raise SweepConfigError(f"unknown profile {text!r}; shipped: {', '.join(profiles())} (or give a path to a .toml file)")
 
