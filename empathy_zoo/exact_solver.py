@@ -23,7 +23,7 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
   Where every such step pays the same (Coexistence: `+1`), *other gone* is one state of value
   `pay/(1 − γ)`. Elsewhere (the charger task: only the bench and the charger pay) it is one state
   per robot cell (and value of the state beyond the cells), with its own `Q*` by value iteration,
-  and the robot acts alone by `alone_policy`.
+  and the robot acts alone by `alone_policy` (both in :mod:`empathy_zoo.exact_alone`).
 * **Dynamics**: the robot's action, the other's uniformly random action (the default cat), one
   engine step; the reward is the engine's reward to the robot.
 * **Values**: `Q*` by value iteration (infinite horizon, stopped at the same error bound as
@@ -52,6 +52,7 @@ import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
+from empathy_zoo.exact_alone import alone_policy, alone_steps, alone_values, gone_continuation
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
 __all__ = [
@@ -167,7 +168,7 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     if layers > 1:
         after = after + getattr(engine, "tabular_layer")() * cells * cells
     after = after.reshape(shape)
-    alone_reward, alone_after = _alone_steps(engine_class, cells, layers, env_kwargs)
+    alone_reward, alone_after = alone_steps(engine_class, cells, layers, env_kwargs)
     start = np.asarray(getattr(probe, "start_distribution")()).ravel()  # (checked on the class above)
     return TabularModel(
         env=env,
@@ -183,58 +184,6 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
         alone_after=alone_after,
         layers=layers,
     )
-
-
-def _alone_steps(engine_class: Any, cells: int, layers: int, env_kwargs: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """``(reward, after)``, each ``(layers · cells, 5)``: one step of the robot alone from every
-    cell and layer with every action (the other absent), read off the engine."""
-    alone, action = (x.ravel() for x in np.indices((layers * cells, NUM_ACTIONS)))
-    layer, cell = np.divmod(alone, cells)
-    engine = engine_class(len(cell), **env_kwargs)
-    engine.reset()
-    engine.cells = np.stack([cell, np.zeros_like(cell)], axis=1).astype(engine.cells.dtype)
-    engine.present[:, OTHER] = False
-    if layers > 1:
-        getattr(engine, "set_tabular_layer")(layer)
-    events = engine.step(np.stack([action, np.full_like(action, NUM_ACTIONS - 1)], axis=1))
-    shape = (layers * cells, NUM_ACTIONS)
-    after = engine.cells[:, ROBOT] + (getattr(engine, "tabular_layer")() * cells if layers > 1 else 0)
-    return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), after.reshape(shape).astype(np.int64)
-
-
-def alone_values(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray:
-    """``Q*`` of the robot alone, ``(layers · cells, 5)``, by value iteration to the same bound as
-    :func:`optimal_values`."""
-    v = np.zeros(model.alone_states)
-    q = model.alone_reward.copy()
-    scale = max(1.0, float(np.abs(model.alone_reward).max(initial=0.0)))
-    limit = 100 + math.ceil(math.log(tolerance * (1.0 - gamma) ** 2 / scale) / math.log(gamma)) if gamma > 0 else 2
-    for _ in range(limit):
-        q = model.alone_reward + gamma * v[model.alone_after]
-        v_next = q.max(axis=1)
-        change = float(np.abs(v_next - v).max())
-        v = v_next
-        if gamma / (1.0 - gamma) * change < tolerance:
-            break
-    return q
-
-
-def alone_policy(model: TabularModel, epsilon: float, gamma: float = 0.99, tolerance: float = 1e-10) -> np.ndarray | None:
-    """The robot's ε-greedy policy alone, ``(layers · cells, 5)``, greedy on :func:`alone_values` (every
-    method's: with the other gone no penalty, bonus or other-term is left), or ``None`` where
-    every step alone pays the same (:attr:`TabularModel.alone_pay`)."""
-    if model.alone_pay is not None:
-        return None
-    return epsilon / NUM_ACTIONS + (1.0 - epsilon) * greedy_policy(alone_values(model, gamma, tolerance))
-
-
-def gone_continuation(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> float | np.ndarray:
-    """``γ·V*`` after a step in which the other leaves: ``γ·pay/(1 − γ)`` where every step alone pays
-    the same, else ``(states, 5, 5)``: ``γ·V*_alone`` of the robot's cell after the step."""
-    pay = model.alone_pay
-    if pay is not None:
-        return gamma * pay / (1.0 - gamma)
-    return gamma * alone_values(model, gamma, tolerance).max(axis=1)[model.after // model.cells]
 
 
 def optimal_values(
