@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
-from empathy_zoo.evaluation_file import TRAINED_WITH, evaluation_files, read_evaluation
+from empathy_zoo.evaluation_file import TRAINED_WITH, evaluation_files, evaluation_mismatch, read_evaluation
 from empathy_zoo.metrics import (
     DERIVED_DEFINITIONS,
     DERIVED_METRICS,
@@ -242,6 +242,9 @@ def load_heldout(
             if recorded != evaluation["agent"]["sha256"]:
                 notes.append(f"{path}: made of another agent than its result file records (trained again?); left out")
                 continue
+            mismatch = evaluation_mismatch(evaluation, run)
+            if mismatch is not None:  # (the agent is the run's, the rest is not: a forged or damaged file)
+                raise ValueError(f"{path}: not an evaluation of run {run['run_id']} ({mismatch})")
             key = (table_env(run), evaluation["scenario_set"]["name"])
             found.setdefault(key, []).append((run, evaluation, path))
     for run, evaluation, path in extra:

@@ -162,3 +162,26 @@ def test_bad_evaluation_directories_are_refused_in_one_line(apart, tmp_path: Pat
             err = err.splitlines()[-1] + "\n"
         assert err.startswith("empathy-zoo") and err.count("\n") == 1 and expected in err, (given, err)
         assert not (tmp_path / "out").exists()
+
+
+def test_an_evaluation_beside_its_runs_that_is_not_its_runs_is_refused(tmp_path, capsys):
+    """Beside the runs too (not only through --evaluations), an evaluation of the run's agent whose
+    other fields are not the run's (a forged seed) is refused naming the file, nothing written."""
+    import json
+    import shutil
+
+    from empathy_zoo.evaluation_file import evaluation_files
+
+    source = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"
+    results = tmp_path / "quick"
+    shutil.copytree(source / "runs", results / "runs")
+    shutil.copytree(source / "evaluations", results / "evaluations")
+    path = evaluation_files(results)[0]
+    document = json.loads(path.read_text())
+    document["scenarios"][0]["fixed"] = {"cat_0": "stay"}
+    path.write_text(json.dumps(document))
+    out = tmp_path / "page"
+    assert main(["leaderboard", str(results), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "not an evaluation of run" in err and err.count("\n") == 1
+    assert not out.exists()
