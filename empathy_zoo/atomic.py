@@ -24,7 +24,7 @@ from typing import Any, BinaryIO
 
 from empathy_zoo.bounded_read import read_json_data
 from empathy_zoo.limits import format_bytes
-from empathy_zoo.names import check_no_links
+from empathy_zoo.names import check_no_links, check_replaceable
 
 __all__ = [
     "write_bytes_atomic",
@@ -59,9 +59,12 @@ _OURS = re.compile(
 def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], object]) -> Path:
     """Call ``write(file)`` on a temporary file beside ``path``, fsync it, then rename it over ``path``.
 
-    The file gets the permissions an ordinary write would give it: a new file ``0666 & ~umask``
-    (the kernel applies the umask), a rewritten one the mode it had."""
-    path = Path(path)
+    Only nothing or a regular file is replaced: a link, a directory, a FIFO or a device in
+    ``path``'s place is a ``ValueError`` naming it (:func:`empathy_zoo.names.check_replaceable`,
+    asked before the directory is created and again just before the rename), and nothing is
+    left behind. The file gets the permissions an ordinary write would give it: a new file
+    ``0666 & ~umask`` (the kernel applies the umask), a rewritten one the mode it had."""
+    path = check_replaceable(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = _create_temp(path)
     try:
@@ -71,7 +74,7 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
             write(handle)
             handle.flush()
             os.fsync(handle.fileno())
-        os.replace(tmp, path)
+        os.replace(tmp, check_replaceable(path))
     except BaseException:
         try:
             os.unlink(tmp)
@@ -118,37 +121,57 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
     the largest file the caller will write, a checkpoint's estimated size, is more) once the file
     system has that much free space; a ``ValueError`` naming the directory and the reason when it
     is a file, cannot be created or cannot be written, or has too little room, or naming the link
-    when a ``sub`` is (or passes through) a symbolic link (:func:`empathy_zoo.names.check_no_links`)."""
+    when a ``sub`` is (or passes through) a symbolic link (:func:`empathy_zoo.names.check_no_links`).
+    Every directory is checked before the first is created, and a refusal removes again the
+    directories this call created (while empty): a refused call leaves the file system as it was."""
     root = Path(path)
-    for directory in (root, *(root / sub for sub in subdirs)):
+    directories = (root, *(root / sub for sub in subdirs))
+    for directory in directories:  # (all of them before any is created)
         check_no_links(root, directory)  # (the output directory itself may be a link; nothing below it)
         if directory.exists() and not directory.is_dir():
             raise ValueError(
                 f"output directory {directory} is a file, not a directory; "
                 "choose another output directory (--out) or move the file away"
             )
-        try:
-            directory.mkdir(parents=True, exist_ok=True)
-        except OSError as error:
-            raise ValueError(
-                f"cannot create output directory {directory} ({error.strerror or error}); choose another output directory (--out)"
-            ) from None
-        probe = directory / f"{PROBE_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
-        try:
-            write_bytes_atomic(probe, bytes(PROBE_BYTES))
-            probe.unlink()
-            free = shutil.disk_usage(directory).free if largest_file > PROBE_BYTES else None
-        except OSError as error:
-            raise ValueError(
-                f"output directory {directory} is not writable ({error.strerror or error}); "
-                "choose another output directory (--out) or fix its permissions"
-            ) from None
-        if free is not None and free < largest_file:
-            raise ValueError(
-                f"output directory {directory} has {format_bytes(free)} free, less than the {format_bytes(largest_file)} "
-                "of the largest file this run writes there (a checkpoint); free space or choose another output directory (--out)"
-            )
+    missing = [folder for directory in directories for folder in (*reversed(directory.parents), directory) if not folder.exists()]
+    created = list(dict.fromkeys(missing))
+    try:
+        for directory in directories:
+            _check_directory(directory, largest_file)
+    except BaseException:
+        for folder in reversed(created):  # (only what this call made, deepest first, and only while empty)
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        raise
     return root
+
+
+def _check_directory(directory: Path, largest_file: int) -> None:
+    """Create ``directory`` if missing, write a probe of :data:`PROBE_BYTES` there and remove it, and
+    see that the file system has ``largest_file`` free; a ``ValueError`` saying what failed."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise ValueError(
+            f"cannot create output directory {directory} ({error.strerror or error}); choose another output directory (--out)"
+        ) from None
+    probe = directory / f"{PROBE_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
+    try:
+        write_bytes_atomic(probe, bytes(PROBE_BYTES))
+        probe.unlink()
+        free = shutil.disk_usage(directory).free if largest_file > PROBE_BYTES else None
+    except OSError as error:
+        raise ValueError(
+            f"output directory {directory} is not writable ({error.strerror or error}); "
+            "choose another output directory (--out) or fix its permissions"
+        ) from None
+    if free is not None and free < largest_file:
+        raise ValueError(
+            f"output directory {directory} has {format_bytes(free)} free, less than the {format_bytes(largest_file)} "
+            "of the largest file this run writes there (a checkpoint); free space or choose another output directory (--out)"
+        )
 
 
 def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 import unicodedata
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,7 @@ __all__ = [
     "check_label",
     "check_no_links",
     "check_path_name",
+    "check_replaceable",
     "confined",
 ]
 
@@ -105,3 +107,41 @@ def check_no_links(root: str | os.PathLike[str], path: str | os.PathLike[str]) -
                 "or choose another output directory"
             )
     return target
+
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO (a named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+"""What may lie in a file's place but a regular file or a link, as a refusal names it."""
+
+
+def check_replaceable(path: str | os.PathLike[str]) -> Path:
+    """``path`` if the suite may write a file there: nothing is there, or a regular file that is
+    no symbolic link (which the write replaces, or appends to); else a ``ValueError`` naming
+    ``path`` and what is there (a link with its target, a directory, a FIFO, a device, a socket).
+    Every writer asks it of every file before it writes the first (:mod:`empathy_zoo.atomic`
+    asks it again of each file it writes): the suite never replaces, and never writes through,
+    anything but a regular file. A path whose directory is missing (or cannot be looked into)
+    has nothing there: creating or writing it says what is wrong."""
+    target = Path(path)
+    try:
+        mode = os.lstat(target).st_mode
+    except OSError:
+        return target
+    if stat.S_ISREG(mode):
+        return target
+    if stat.S_ISLNK(mode):
+        try:
+            kind = f"a symbolic link (to {os.readlink(target)})"
+        except OSError:
+            kind = "a symbolic link"
+    else:
+        kind = next((name for test, name in _KINDS if test(mode)), "no regular file")
+    raise ValueError(
+        f"{target} is {kind}, not a regular file: the suite replaces only a regular file it may write, "
+        "and never writes through a link; move it away or choose another path"
+    )

@@ -43,6 +43,7 @@ from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_replaceable
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs
 from leaderboard.sources import load_results_dirs
@@ -129,13 +130,16 @@ def marl_eval_layout(results: Iterable[dict[str, Any]]) -> dict[str, dict[str, d
 
 def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | os.PathLike[str]] = ()) -> Path:
     """``out`` as a path if an export can be written there; ``ValueError`` naming it otherwise: a name
-    not ending in ``.json``, an existing directory, a parent that is a file, or the folder the result
-    files of one of ``results_dirs`` are read from (:func:`leaderboard.aggregate.result_files`)."""
+    not ending in ``.json``, an existing directory, anything but a regular file in its place (a
+    symbolic link, named with its target, a FIFO, a device: :func:`empathy_zoo.names.check_replaceable`),
+    a parent that is a file, or the folder the result files of one of ``results_dirs`` are read
+    from (:func:`leaderboard.aggregate.result_files`)."""
     path = Path(out)
-    if path.is_dir():
+    if path.is_dir() and not path.is_symlink():
         raise ValueError(f"{out} is a directory: name the JSON file to write (e.g. {path / 'marl_eval.json'})")
     if path.suffix.lower() != ".json":
         raise ValueError(f"{out} is no JSON file name: name the file to write, ending in .json (e.g. marl_eval.json)")
+    check_replaceable(path)  # (only nothing or a regular file is replaced: never a link, a FIFO or a device)
     parent = next((folder for folder in path.absolute().parents if folder.exists()), None)
     if parent is not None and not parent.is_dir():
         raise ValueError(f"{out} cannot be written: {parent} is a file, not a directory")
@@ -173,8 +177,9 @@ def write_marl_eval(
     :func:`leaderboard.sources.load_results_dirs` reads them, ``labels`` prefixing a directory's
     labels) to ``out`` in marl-eval's layout (:func:`marl_eval_layout`), atomically
     (:func:`empathy_zoo.atomic.write_text_atomic`, strict JSON: no ``NaN``). ``ValueError`` for what those refuse and for an
-    ``out`` that is no ``.json`` file name, is a directory, lies in a directory that is a file, or
-    lies where result files are read (it would be read as one); nothing is written then."""
+    ``out`` that is no ``.json`` file name, is a directory, a link, a FIFO or a device, lies in a
+    directory that is a file, or lies where result files are read (it would be read as one);
+    nothing is written then."""
     check_export_path(out, results_dirs)
     layout = marl_eval_layout(load_results_dirs(results_dirs, labels).results)
     try:

@@ -21,7 +21,7 @@ from empathy_zoo.atomic import (
     write_text_atomic,
 )
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_no_links
+from empathy_zoo.names import check_no_links, check_replaceable
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -167,6 +167,7 @@ def write_leaderboard(
                 allowed_imports=allowed_imports,
                 evaluations=matched,
             )
+            _check_targets(staged, stage, out)  # (every file's place, before a directory is made or a file moved)
             check_output_dir(out, (FIGURES_DIR,))
             for directory in (out, out / FIGURES_DIR):  # what writes killed mid-way left here
                 remove_stale_temp_files(directory)
@@ -333,10 +334,23 @@ def _write_page(path: Path, text: str) -> Path:
         raise OSError(error.errno, error.strerror or str(error), str(path)) from None
 
 
+def _check_targets(staged: dict[str, Path], stage: Path, out: Path) -> None:
+    """Refuse (``ValueError`` naming it) the first place in ``out`` of a file of ``staged`` that is
+    anything but nothing or a regular file (a link, named with its target; a directory; a FIFO;
+    a device), or that passes through a link below ``out``: asked of every file before the first
+    is moved, so a refusal publishes nothing (:func:`empathy_zoo.names.check_replaceable`)."""
+    for source in staged.values():
+        target = out / source.relative_to(stage)
+        check_no_links(out, target)
+        check_replaceable(target)
+
+
 def _publish(staged: dict[str, Path], stage: Path, out: Path) -> dict[str, Path]:
     """Move every file of ``staged`` from ``stage`` to its place in ``out`` (each rename atomic,
-    the pages last: a reader never sees a page whose figures are not there yet); a file it
-    replaces keeps its permissions. Returns ``staged`` with the paths in ``out``."""
+    the pages last: a reader never sees a page whose figures are not there yet), once
+    :func:`_check_targets` passed; a file it replaces keeps its permissions (only a regular file is
+    replaced: each place is checked again just before its rename). Returns ``staged`` with the
+    paths in ``out``."""
     placed: dict[str, Path] = {}
     for key in sorted(staged, key=lambda key: (key in PAGES, PAGES.index(key) if key in PAGES else 0)):
         source = staged[key]
@@ -344,7 +358,7 @@ def _publish(staged: dict[str, Path], stage: Path, out: Path) -> dict[str, Path]
         try:
             if target.is_file():
                 os.chmod(source, stat.S_IMODE(target.stat().st_mode))
-            os.replace(source, target)
+            os.replace(source, check_replaceable(target))
         except OSError as error:
             raise OSError(error.errno, error.strerror or str(error), str(target)) from None
         placed[key] = target

@@ -111,6 +111,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         command=command,
         progress=not args.no_progress,
         on_trial=lambda study: _draw(study, figure),
+        also_writes=(TRIALS_FIGURE,),
     )
     _draw(document, figure)
     for name in (STUDY_FILE, TRIALS_FIGURE):

@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import difflib
 import os
-import stat
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -131,25 +130,34 @@ def write_gif(path: str, data: bytes) -> Path:
 
 
 def check_gif_path(path: str) -> Path:
-    """``path`` if a GIF may be written there, checked before any episode is played: nothing or a
+    """``path`` if a GIF may be written there, checked before any episode is played and creating
+    nothing: a path is given (``""`` is refused, not read as the current directory), nothing or a
     regular file is there (never a directory, a link, a device or a pipe: only a regular file is
-    ever replaced), and its directory takes a file (created if missing, probed with a file of the
-    suite's own name, removed at once); else a ``ValueError`` naming it."""
+    ever replaced, :func:`empathy_zoo.names.check_replaceable`), and its directory takes a file
+    (probed with a file of the suite's own name, removed at once; where the directory is missing,
+    its nearest existing parent is probed and the directory is made only when the GIF is
+    written); else a ``ValueError`` naming it."""
+    from empathy_zoo.names import check_replaceable
+
+    if not path:
+        raise ValueError("--gif '': an empty path; name the GIF's file (e.g. --gif episode.gif)")
     target = Path(path)
     try:
-        mode = target.lstat().st_mode
+        target.lstat()
     except FileNotFoundError:
-        mode = None
+        pass
     except OSError as error:
         raise ValueError(f"--gif {path}: cannot be examined ({error.strerror or error})") from None
-    if mode is not None and stat.S_ISDIR(mode):
+    if target.is_dir() and not target.is_symlink():
         raise ValueError(f"--gif {path} is a directory; give the GIF's file name")
-    if mode is not None and not stat.S_ISREG(mode):
-        kind = "a symbolic link" if stat.S_ISLNK(mode) else "not a regular file (a device, a pipe or a socket)"
-        raise ValueError(f"--gif {path} is {kind}: only a regular file is ever replaced; give another file name")
-    parent = target.parent
     try:
-        parent.mkdir(parents=True, exist_ok=True)
+        check_replaceable(target)
+    except ValueError as error:
+        raise ValueError(f"--gif {error}") from None
+    parent = next((folder for folder in target.absolute().parents if folder.exists() or folder.is_symlink()), None)
+    try:
+        if parent is None or not parent.is_dir():
+            raise NotADirectoryError(20, "not a directory", str(parent))
         descriptor, probe = tempfile.mkstemp(prefix=GIF_PROBE_PREFIX, dir=parent)
         os.close(descriptor)
         os.unlink(probe)
@@ -169,8 +177,8 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     check_episodes(args.episodes, args.seed)
     positive("--gif-steps", args.gif_steps)
     check_at_most("--gif-steps", args.gif_steps, MAX_CYCLES, "the bound of max_cycles: no episode is longer")
-    if args.gif:
-        check_gif_path(args.gif)
+    if args.gif is not None:
+        check_gif_path(args.gif)  # (its directory is made when the GIF is written: a refusal creates none)
     agent = find_agent(args.target, args.dir)
     fixed = dict(args.fixed or [])
     allowed = frozenset(args.allow_import or ())

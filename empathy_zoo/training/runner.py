@@ -34,6 +34,7 @@ from empathy_zoo.training.preflight import check_before_training, largest_checkp
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
+from empathy_zoo.training.tracking import check_log_places, log_subdirs
 
 __all__ = [
     "RunnerOptions",
@@ -132,7 +133,9 @@ def train_runs(
     local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     todo = [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo]
     room = max(PROBE_BYTES, largest_checkpoint_bytes(todo, options)) if local_checkpoints and todo else PROBE_BYTES
-    check_output_dir(out_dir, (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ())), largest_file=room)
+    check_log_places(out_dir, options.log, [s.run_id for s in todo])  # (no link where a run logs)
+    subdirs = (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ()), *log_subdirs(options.log))
+    check_output_dir(out_dir, subdirs, largest_file=room)
     with hold_output_dir(out_dir, command_line(), note):
         for warning in warnings:  # (said once everything before training has passed)
             note(warning)

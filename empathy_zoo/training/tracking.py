@@ -56,6 +56,7 @@ import numpy as np
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.extras import install_command
 from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.names import check_no_links, check_replaceable
 
 __all__ = [
     "BACKENDS",
@@ -68,7 +69,9 @@ __all__ = [
     "RunLogger",
     "TrackingNotInstalledError",
     "check_installed",
+    "check_log_places",
     "log_dir",
+    "log_subdirs",
     "open_tracker",
     "parse_log",
 ]
@@ -147,6 +150,31 @@ def log_dir(out_dir: str | Path, backend: str, run_id: str) -> Path:
     return Path(out_dir) / LOG_DIR / backend / run_id
 
 
+def log_subdirs(backends: Sequence[str]) -> tuple[str, ...]:
+    """The directories of an output directory that runs logging to ``backends`` write into
+    (``logs/<backend>``), for :func:`empathy_zoo.atomic.check_output_dir` to check (no symbolic
+    link among them) before anything is written."""
+    return tuple(f"{LOG_DIR}/{backend}" for backend in backends)
+
+
+def check_log_places(out_dir: str | Path, backends: Sequence[str], run_ids: Sequence[str]) -> None:
+    """Refuse (``ValueError`` naming it) a place the runs ``run_ids`` would log to that is a
+    symbolic link below ``out_dir`` (named with its target) or a file where a directory goes, and a
+    CSV file (``scalars.csv``) that is anything but nothing or a regular file
+    (:func:`empathy_zoo.names.check_replaceable`): asked of every run and backend before the first
+    logger creates its directory, so nothing is ever written through a link."""
+    for run_id in run_ids:
+        for backend in backends:
+            directory = check_no_links(out_dir, log_dir(out_dir, backend, run_id))
+            for folder in (directory, *directory.parents):
+                if folder == Path(out_dir):
+                    break
+                if folder.exists() and not folder.is_dir():
+                    raise ValueError(f"{folder} is a file, not a directory: runs log into it; move the file away")
+            if backend == "csv":
+                check_replaceable(directory / CSV_FILE)
+
+
 class RunLogger(Protocol):
     """One run's logger of one backend."""
 
@@ -168,8 +196,8 @@ class CsvLogger:
     """``<dir>/scalars.csv``: a header ``step,name,value`` and one row per scalar."""
 
     def __init__(self, directory: Path, start_step: int) -> None:
+        self.path = check_replaceable(directory / CSV_FILE)  # (appended to: never through a link, never a FIFO)
         directory.mkdir(parents=True, exist_ok=True)
-        self.path = directory / CSV_FILE
         if start_step > 0 and self.path.exists():
             _keep_rows_up_to(self.path, start_step)
         fresh = not self.path.exists() or self.path.stat().st_size == 0
@@ -329,7 +357,9 @@ class EnsembleTracker:
 
     def start(self, step: int, transforms: Sequence[Any]) -> None:
         """Open every run's loggers, the ensemble at env step ``step`` (``> 0``: resumed from a
-        checkpoint there); ``transforms`` are the runs' reward transforms (``None``: none)."""
+        checkpoint there); ``transforms`` are the runs' reward transforms (``None``: none). Every
+        place a run logs to is checked before the first is opened (:func:`check_log_places`)."""
+        check_log_places(self.out_dir, self.backends, [spec.run_id for spec in self.specs])
         mode = wandb_mode() if "wandb" in self.backends else ""
         if mode == "offline":  # (nothing leaves the machine: no error reports either, unless the user asked)
             os.environ.setdefault("WANDB_ERROR_REPORTING", "false")

@@ -74,6 +74,7 @@ from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
 from empathy_zoo.extras import install_command
+from empathy_zoo.names import check_no_links, check_replaceable
 from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
@@ -83,6 +84,7 @@ from empathy_zoo.training.tuning_journal import check_study_lines, stored_plan
 
 __all__ = [
     "JOURNAL_FILE",
+    "OUTPUT_FILES",
     "STUDY_FILE",
     "STUDY_SCHEMA",
     "TRIALS_DIR",
@@ -98,6 +100,8 @@ __all__ = [
 STUDY_FILE = "study.json"
 TUNED_FILE = "tuned.toml"
 JOURNAL_FILE = "study.journal"
+OUTPUT_FILES = (STUDY_FILE, TUNED_FILE, JOURNAL_FILE)
+"""The files a study writes (or appends to) in its output directory."""
 TRIALS_DIR = "trials"
 """Where a trial's ensemble would keep a checkpoint (it keeps none: an interrupted trial is rerun)."""
 STUDY_SCHEMA = 1
@@ -149,10 +153,16 @@ def run_study(
     progress: bool = True,
     on_trial: Callable[[dict[str, Any]], None] | None = None,
     on_note: Callable[[str], None] | None = None,
+    also_writes: Sequence[str] = (),
 ) -> dict[str, Any]:
     """Run (or resume) the study ``plan`` in ``out_dir`` and return its ``study.json`` document
     (see the module documentation); ``on_trial`` gets that document after every trial (the
-    command line draws its figure), ``on_note`` what is said on the way (default: stderr)."""
+    command line draws its figure), ``on_note`` what is said on the way (default: stderr).
+    ``also_writes`` names the files the caller writes into ``out_dir`` too (``trials.png``): each
+    is checked with the study's own files (:data:`OUTPUT_FILES`) before anything is trained or
+    written: only nothing or a regular file is ever replaced or appended to, never a link (named
+    with its target), a directory, a FIFO or a device (``ValueError``,
+    :func:`empathy_zoo.names.check_replaceable`)."""
     optuna = import_optuna()
     note = on_note or (lambda text: print(f"empathy-zoo: {text}", file=sys.stderr, flush=True))
     out = Path(out_dir)
@@ -160,6 +170,8 @@ def run_study(
     first = point_runs(plan.base, plan.params, {p.name: p.ends()[0] for p in plan.params}, plan.seeds)
     for warning in check_before_training(first, options):
         note(warning)
+    for name in (*OUTPUT_FILES, *also_writes):
+        check_replaceable(check_no_links(out, out / name))
     check_output_dir(out, (TRIALS_DIR,))
     verbosity = optuna.logging.get_verbosity()
     optuna.logging.set_verbosity(optuna.logging.ERROR)
@@ -187,6 +199,7 @@ def check_journal(
     file, said through ``note``. Returns whether the journal holds the plan already."""
     if not path.exists() and not path.is_symlink():
         return False
+    check_replaceable(path)  # (Optuna appends to it: never through a link, never to a FIFO or a device)
     data = read_data(path, "tuning journal")
     lines = data.split(b"\n")
     torn = lines.pop()  # (b"" when the journal ends with a line break, as every complete write does)
