@@ -21,11 +21,17 @@ PALETTE_COLOURS = 256
 
 def embedded_png(png: bytes) -> bytes:
     """``png`` reduced to a palette of :data:`PALETTE_COLOURS` colours (median cut, no dithering),
-    saved optimised; the original where that is no smaller. Deterministic for the same bytes."""
-    from PIL import Image
+    saved optimised; the original where that is no smaller or where the bytes are no image PIL
+    reads. Deterministic for the same bytes."""
+    from PIL import Image, UnidentifiedImageError
 
-    with Image.open(io.BytesIO(png)) as image:
-        reduced = image.convert("RGB").quantize(colors=PALETTE_COLOURS, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    try:
+        with Image.open(io.BytesIO(png)) as image:
+            reduced = image.convert("RGB").quantize(
+                colors=PALETTE_COLOURS, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+            )
+    except (UnidentifiedImageError, OSError):  # (bytes no image reader takes: embedded as they are)
+        return png
     out = io.BytesIO()
     reduced.save(out, "PNG", optimize=True)
     small = out.getvalue()

@@ -46,3 +46,7 @@ def test_the_img_tag_holds_the_copy_and_escapes_its_alt_text():
     assert tag.startswith('<img alt="a &quot;quoted&quot; &lt;title&gt;" src="data:image/png;base64,')
     data = tag.split("base64,", 1)[1].removesuffix('">')
     assert base64.b64decode(data) == embedded_png(png)
+
+
+def test_bytes_that_are_no_image_are_embedded_as_they_are():
+    assert embedded_png(b"not a png") == b"not a png"
