@@ -8,15 +8,36 @@ with its own ``Q*`` by value iteration; the robot then acts by :func:`alone_poli
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.reference import greedy_policy
 
-if TYPE_CHECKING:
-    from empathy_zoo.exact_solver import TabularModel
+
+class TabularModel(Protocol):
+    """What this module reads of :class:`empathy_zoo.exact_solver.TabularModel` (a protocol, so
+    the solver imports this module and not the other way round)."""
+
+    @property
+    def cells(self) -> int: ...
+
+    @property
+    def after(self) -> np.ndarray: ...
+
+    @property
+    def alone_reward(self) -> np.ndarray: ...
+
+    @property
+    def alone_after(self) -> np.ndarray: ...
+
+    @property
+    def alone_pay(self) -> float | None: ...
+
+    @property
+    def alone_states(self) -> int: ...
+
 
 __all__ = ["alone_steps", "alone_values", "alone_policy", "gone_continuation"]
 
