@@ -20,10 +20,16 @@ from agents.rewards import RewardTransform, configure_transform, transform_confi
 from agents.step_batch import StepBatch
 from empathy_zoo.method_description import check_description, default_description
 
-__all__ = ["StepBatch", "Learner", "Method", "SETTINGS_DESCRIBE"]
+__all__ = ["StepBatch", "Learner", "Method", "SETTINGS_DESCRIBE", "UPDATE_KERNELS"]
 
 SETTINGS_DESCRIBE = ("selfishness", "gamma", "exploration")
 """The description fields a settings class may give through its ``describe()`` (:meth:`Method.describe`)."""
+
+UPDATE_KERNELS = ("auto", "numba", "torch")
+"""The gradient-step kernels a learner with a choice offers (its ``resolved_update_kernel`` and its
+``update_kernel`` keyword, :class:`agents.empathic_dqn.EmpathicDQN`): compiled (``"numba"``),
+PyTorch (``"torch"``), or ``"auto"``, the learner's own pick. A learner without the choice has
+neither."""
 
 
 class Learner(Protocol):

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
-from agents.base import StepBatch
+from agents.base import UPDATE_KERNELS, StepBatch
 from agents.replay import StackedReplay
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
@@ -54,7 +54,6 @@ from empathy_zoo.schedules import linear_epsilon
 __all__ = [
     "EmpathicDQN",
     "MemoryEstimate",
-    "UPDATE_KERNELS",
     "double_dqn_target",
     "continuation_value",
     "empathic_targets",
@@ -173,10 +172,6 @@ def other_term(
         return (terms * live).sum(dim=2) / live.sum(dim=2).clamp(min=1)
     least = torch.where(live, terms, torch.full_like(terms, torch.inf)).min(dim=2).values
     return torch.where(anyone, least, torch.zeros_like(least))
-
-
-UPDATE_KERNELS = ("auto", "numba", "torch")
-"""The names :attr:`EmpathicDQN.update_kernel` takes."""
 
 
 @dataclass(frozen=True)

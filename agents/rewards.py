@@ -29,6 +29,14 @@ the engine's ``state()``/``load_state()``, watching the vector env's engine step
 reachability, :mod:`baselines.reachability`, reads them). Without the declaration both fields are
 ``None``; transforms of one ensemble that declare it must code states alike (one ``state_codes``).
 
+Optional capability, **a step watcher** (:class:`WatchedTransform`): a transform that needs more
+of each step than the batch carries names the factory of what fills it, ``step_watcher(venv,
+transforms) -> BatchFiller | None`` (a class attribute). The trainer asks it once per ensemble
+(:func:`step_watcher`) and passes every training step's batch through the filler's ``fill``
+before the transforms see it. A transform declaring ``needs_inaction_baseline`` names
+:meth:`baselines.inaction_baseline.InactionBaseline.for_transforms`; the trainer itself names no
+baseline.
+
 Optional capability, **costs priced when sampled** (:class:`PricedTransform`): a stateful
 transform whose reward charges a cost at a price that moves as the run trains (the Lagrangian
 method's ``r − λ·harms``, :mod:`baselines.lagrangian`) declares ``priced_at_sample = True``; its
@@ -47,7 +55,7 @@ import dataclasses
 import inspect
 import math
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
@@ -56,8 +64,10 @@ from agents.step_batch import StepBatch
 
 if TYPE_CHECKING:
     from empathy_zoo.engine import GridEngine
+    from empathy_zoo.vector import VectorEnv
 
 __all__ = [
+    "BatchFiller",
     "InactionBaselineTransform",
     "PricedTransform",
     "RewardTransform",
@@ -68,6 +78,9 @@ __all__ = [
     "StatefulTransform",
     "transform_config",
     "transform_fields",
+    "step_watcher",
+    "StepWatcherFactory",
+    "WatchedTransform",
 ]
 
 
@@ -107,6 +120,56 @@ class InactionBaselineTransform(RewardTransform, Protocol):
         """``(N,)`` int64 codes of the states of ``engine``'s ``N`` environments (equal states,
         equal codes); ``ValueError`` for an environment it cannot code (asked once before
         training)."""
+
+
+class BatchFiller(Protocol):
+    """Fills in what a training step's batch lacks (the stepwise inaction baseline's codes)."""
+
+    def fill(self, batch: StepBatch) -> StepBatch:
+        """``batch`` (the last step of every environment) with the fields this filler owns."""
+        ...
+
+
+StepWatcherFactory = Callable[["VectorEnv", Sequence["RewardTransform | None"]], "BatchFiller | None"]
+"""``(venv, transforms) -> filler``: the filler an ensemble's transforms need, or ``None``."""
+
+
+class WatchedTransform(RewardTransform, Protocol):
+    """A reward transform whose training steps pass through a :class:`BatchFiller` it names
+    (see the module page)."""
+
+    step_watcher: ClassVar[StepWatcherFactory]
+    """Builds the filler for a vector env and the ensemble's distinct transforms; it starts
+    watching the vector env when built."""
+
+
+def step_watcher(venv: VectorEnv, transforms: Sequence[RewardTransform | None]) -> BatchFiller | None:
+    """The one filler the transforms ``transforms`` of an ensemble on ``venv`` need: ``None`` when
+    none names a :attr:`WatchedTransform.step_watcher`. Transforms that name different factories
+    are refused (train them in separate ensembles), and so is a transform that declares
+    ``needs_inaction_baseline`` but names no factory."""
+    factories: list[StepWatcherFactory] = []
+    for transform in transforms:
+        if transform is None:
+            continue
+        factory = getattr(type(transform), "step_watcher", None)
+        if factory is None:
+            if getattr(transform, "needs_inaction_baseline", False):
+                raise ValueError(
+                    f"reward transform {transform.name!r} declares needs_inaction_baseline but names no step_watcher "
+                    "(set step_watcher = InactionBaseline.for_transforms, from baselines.inaction_baseline)"
+                )
+            continue
+        if not callable(factory):
+            raise ValueError(f"reward transform {transform.name!r}: step_watcher is not callable ({factory!r})")
+        if factory not in factories:
+            factories.append(factory)
+    if not factories:
+        return None
+    if len(factories) > 1:
+        names = sorted({t.name for t in transforms if t is not None and getattr(type(t), "step_watcher", None) is not None})
+        raise ValueError(f"reward transforms {names} need different step watchers; train them in separate ensembles")
+    return factories[0](venv, transforms)
 
 
 class PricedTransform(StatefulTransform, Protocol):

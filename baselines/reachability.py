@@ -96,7 +96,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from agents.rewards import StepWatcherFactory
 from agents.step_batch import StepBatch
+from baselines.inaction_baseline import InactionBaseline
 from baselines.reachability_table import MAX_TABLE_SIZE, coexistence_codes, coexistence_reachability
 from empathy_zoo.engine import GridEngine
 
@@ -129,6 +131,8 @@ class RelativeReachability:
     name: ClassVar[str] = "relative_reachability"
     needs_inaction_baseline: ClassVar[bool] = True
     """The trainer fills :attr:`StepBatch.state_after` and :attr:`StepBatch.baseline_after`."""
+    step_watcher: ClassVar[StepWatcherFactory] = InactionBaseline.for_transforms
+    """What fills them: the stepwise inaction baseline (:mod:`baselines.inaction_baseline`)."""
     weight: float = 100.0
     """λ: the penalty per unit of deviation (a harm of the cat costs about 0.94·λ)."""
     discount: float = 0.99

@@ -53,8 +53,7 @@ import gymnasium
 import numpy as np
 from gymnasium.utils import EzPickle
 
-from empathy_zoo import ENVIRONMENTS
-from empathy_zoo.environments import DEFAULT_ENVIRONMENT, GYM_IDS, default_policies
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, FACES, GYM_IDS, default_policies
 from empathy_zoo.fixed_agents import FixedAgents
 from empathy_zoo.policies import FixedPolicy
 
@@ -78,10 +77,10 @@ class SingleAgentEnv(gymnasium.Env, EzPickle):
         **env_options: Any,
     ) -> None:
         EzPickle.__init__(self, env, fixed, size=size, view=view, max_cycles=max_cycles, render_mode=render_mode, **env_options)
-        if env not in ENVIRONMENTS:
-            raise ValueError(f"unknown environment {env!r}; registered: {sorted(ENVIRONMENTS)}")
+        if env not in FACES:
+            raise ValueError(f"unknown environment {env!r}; registered: {sorted(FACES)}")
         given = {"size": size, "view": view, "max_cycles": max_cycles}  # (None: the environment's default)
-        parallel = ENVIRONMENTS[env].parallel_env(
+        parallel = FACES[env].parallel_env(
             render_mode=render_mode, **{k: v for k, v in given.items() if v is not None}, **env_options
         )
         self.fixed = default_policies(env, env_options) if fixed is None else dict(fixed)

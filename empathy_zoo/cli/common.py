@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 # (the names only: agents.empathic_dqn imports torch, which the command line loads anyway)
-from agents.empathic_dqn import UPDATE_KERNELS
+from agents.base import UPDATE_KERNELS
 
 __all__ = [
     "PROG",

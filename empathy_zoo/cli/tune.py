@@ -150,7 +150,7 @@ def _draw(study: dict[str, Any], path: Path) -> None:
 
 def add_tune(sub: Any) -> None:
     """The ``tune`` subcommand."""
-    from agents.empathic_dqn import UPDATE_KERNELS
+    from agents.base import UPDATE_KERNELS
     from empathy_zoo.environments import ENVIRONMENT_TABLE
     from empathy_zoo.experiment.search_space import KINDS
     from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_NAMES

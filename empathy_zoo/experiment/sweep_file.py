@@ -74,6 +74,7 @@ from baselines.registry import METHODS, get_method
 from baselines.sb3_transforms import SB3_REFUSED
 from empathy_zoo.engine.arguments import argument_types, own_arguments
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, default_policies
+from empathy_zoo.experiment.log_backends import parse_log
 from empathy_zoo.experiment.model import Budget, EnvVariant, MethodEntry, RunSpec
 from empathy_zoo.experiment.values import (
     PolicyTable,
@@ -114,7 +115,7 @@ DEFAULT_SEEDS = 5
 
 SWEEP_KEYS: dict[str, Any] = {"name": str, "seeds": Seeds, **field_types(Budget), "log": str | list[str]}
 """Keys of ``[sweep]`` and their types (the run budget's fields, the sweep's name and seeds, and
-where runs log their scalars: :mod:`empathy_zoo.training.tracking`)."""
+where runs log their scalars: :mod:`empathy_zoo.experiment.log_backends`)."""
 ENV_KEYS: dict[str, Any] = {
     "env": str,
     **{name: kind for engine in ENGINES.values() for name, kind in argument_types(engine).items()},
@@ -261,8 +262,6 @@ def _sweep_table(table: dict[str, Any], source: str) -> dict[str, Any]:
         if SWEEP_KEYS[key] is int and value < 1:
             raise SweepConfigError(f"{where} {key}: expected a positive int, got {value}")
     if "log" in run:
-        from empathy_zoo.training.tracking import parse_log  # (here: the training package imports this module)
-
         try:
             run["log"] = parse_log(run["log"], f"{where} log")
         except ValueError as error:

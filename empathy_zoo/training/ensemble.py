@@ -3,8 +3,8 @@
 :func:`train_ensemble` trains the runs of one ensemble (same env, learner and shared settings)
 step by step: the learner acts for every run at once, the vector env steps every run's
 environment, and :func:`learner_batch` hands the learner what happened, unshaped (with the
-agents' cells and distances at the end of the step, :class:`AgentCells`, and the stepwise inaction
-baseline of :mod:`baselines.inaction_baseline` when a reward transform needs it). It resumes from
+agents' cells and distances at the end of the step, :class:`AgentCells`, and whatever the step
+watcher a reward transform names fills in, :func:`agents.rewards.step_watcher`). It resumes from
 the ensemble's checkpoint, evaluates greedily every ``eval_interval`` steps, and writes one
 result file per run (atomically) at the end, with the run's trained agent beside it
 (:mod:`empathy_zoo.agent_file`) when its learner keeps one. A run's numbers depend only
@@ -23,8 +23,7 @@ import numpy as np
 import torch
 
 from agents.base import StepBatch
-from agents.rewards import TrainRewards
-from baselines.inaction_baseline import InactionBaseline
+from agents.rewards import TrainRewards, step_watcher
 from empathy_zoo.agent_file import agent_bytes
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.grid import torus_distance
@@ -171,7 +170,7 @@ def _train_ensemble(
             )
         price_costs(priced)
     cells = AgentCells(venv)
-    inaction = InactionBaseline.for_transforms(venv, train_rewards.distinct)  # None unless a transform needs it
+    watcher = step_watcher(venv, train_rewards.distinct)  # None unless a transform needs one
     logs = [_EpisodeLog(bool(p)) for p in priced]
     evaluations: list[list[dict[str, Any]]] = [[] for _ in specs]
     obs = venv.reset(seed=[derive_key(s, STREAM_ENV) for s in seeds])[:, 0]
@@ -222,8 +221,8 @@ def _train_ensemble(
         actions = learner.act(obs[:, None, :])
         result = venv.step(actions.reshape(k, 1))
         batch = cells.fill(learner_batch(obs, actions, result))
-        if inaction is not None:
-            batch = inaction.fill(batch)
+        if watcher is not None:
+            batch = watcher.fill(batch)
         trained = train_rewards(batch)
         learner.observe(trained)
         step += 1

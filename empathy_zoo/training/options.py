@@ -6,10 +6,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from agents.empathic_dqn import UPDATE_KERNELS
+from agents.base import UPDATE_KERNELS
+from empathy_zoo.experiment.log_backends import parse_log
 from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
 from empathy_zoo.training.progress import PROGRESS_STYLES
-from empathy_zoo.training.tracking import check_installed, parse_log
+from empathy_zoo.training.tracking import check_installed
 
 __all__ = ["BACKENDS", "RunnerOptions"]
 

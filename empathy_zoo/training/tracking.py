@@ -54,6 +54,7 @@ from urllib.parse import urlparse
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.experiment.log_backends import BACKENDS, parse_log
 from empathy_zoo.extras import install_command
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_no_links, check_replaceable
@@ -76,8 +77,6 @@ __all__ = [
     "parse_log",
 ]
 
-BACKENDS = ("tensorboard", "csv", "wandb")
-"""Where runs may log their scalars (:attr:`~empathy_zoo.training.options.RunnerOptions.log`)."""
 EXTRAS = {"tensorboard": ("tensorboard", "tensorboard"), "wandb": ("wandb", "wandb")}
 """``{backend: (module it imports, empathy-zoo extra that installs it)}`` (CSV needs none)."""
 LOG_DIR = "logs"
@@ -86,8 +85,6 @@ LOG_INTERVAL = 500
 """Env steps between two logs of the learner's figures and the speed (the progress bar's cadence)."""
 CSV_FILE = "scalars.csv"
 """A run's CSV file, in ``<out>/logs/csv/<run id>/``."""
-NO_LOG = "none"
-"""The value of ``--log`` that logs nothing (over a sweep file's ``log``)."""
 
 EPISODE_SCALARS: dict[str, str] = {name: f"charts/{'episodic_return' if name == 'return' else name}" for name in METRIC_NAMES}
 """The name of each episode metric in the logs (the return by CleanRL's name)."""
@@ -111,26 +108,6 @@ SCALARS: dict[str, str] = {
 
 class TrackingNotInstalledError(ImportError, ValueError):
     """A logging backend's package is missing (a ``ValueError`` too: the command line reports it as a usage error)."""
-
-
-def parse_log(value: str | Sequence[str] | None, where: str = "log") -> tuple[str, ...]:
-    """The backends ``value`` names: a comma-separated string (``"tensorboard,csv"``) or a sequence
-    of names, in the order given; ``"none"``, an empty sequence and ``None`` log nothing. An unknown
-    name, an empty one or one given twice raises ``ValueError`` naming ``where`` and the choices."""
-    if value is None:
-        return ()
-    names = [part.strip() for part in value.split(",")] if isinstance(value, str) else list(value)
-    if names == [NO_LOG]:
-        return ()
-    choices = f"choose from {', '.join(BACKENDS)}, comma-separated (or {NO_LOG})"
-    for name in names:
-        if not isinstance(name, str) or name not in BACKENDS:
-            shown = "an empty name" if name == "" else f"unknown backend {name!r}"
-            raise ValueError(f"{where}: {shown}; {choices}")
-    repeated = sorted({name for name in names if names.count(name) > 1})
-    if repeated:
-        raise ValueError(f"{where}: {', '.join(repeated)} given twice; {choices}")
-    return tuple(names)
 
 
 def check_installed(backends: Sequence[str]) -> None:
