@@ -218,7 +218,7 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
 
 def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -> str | None:
     """What of ``evaluation`` (checked by :func:`check_evaluation`) is not of ``run`` (a result as
-    :func:`~empathy_zoo.result_file.read_result` gives it), as ``"<what>: <found>, its run has
+    :func:`~empathy_zoo.experiment.result_reader.read_result` gives it), as ``"<what>: <found>, its run has
     <value>"``, or ``None`` when it is that run's: its run id, environment, variant, method, seed,
     the agent file's SHA-256 its result file records, and its :data:`TRAINED_WITH` scenario the run's
     own world and partners (what ``empathy-zoo evaluate`` writes of the run)."""

@@ -2,14 +2,16 @@
 
 A sweep writes one JSON file per finished run, ``<out_dir>/runs/<run id>.json`` (the schema is
 documented field by field in ``docs/formats.md``); everything that reads results (the leaderboard,
-the verdicts, the command line) reads them through :func:`read_result`, never the training code.
+the verdicts, the command line) reads them through
+:func:`empathy_zoo.experiment.result_reader.read_result`, never the training code.
 
-:func:`check_result` accepts exactly what :func:`empathy_zoo.training.results.build_result`
-writes (and what the leaderboard, the verdicts and the command line read from it); anything else
-raises one ``ValueError`` line naming the file and the field, e.g.
-``runs/x.json: field eval[2].step: expected an int >= 1, got 'late'``. A result file is data, so
-checking it never imports a plug-in: the settings of a registered method are checked by its
-settings class, those of a ``package.module:NAME`` method only for their shape.
+:func:`check_result_fields` checks every field against what
+:func:`empathy_zoo.training.results.build_result` writes; anything else raises one ``ValueError``
+line naming the file and the field, e.g.
+``runs/x.json: field eval[2].step: expected an int >= 1, got 'late'``. The reader adds the one
+check this layer cannot make: a registered method's settings, by its settings class (the method
+registry sits above the environments). A result file is data, so checking it never imports a
+plug-in: the settings of a ``package.module:NAME`` method are checked only for their shape.
 
 Since schema 3, ``config.description`` says what the run was, as its method describes it
 (:mod:`empathy_zoo.method_description`): the leaderboard reads that, never a method's name. A file
@@ -26,8 +28,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from empathy_zoo.atomic import read_json
-from empathy_zoo.document_checks import DocumentChecker, one_line, shown
+from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import (
@@ -51,12 +52,12 @@ __all__ = [
     "REQUIRED_FIELDS",
     "RUNS_DIR",
     "ResultFileError",
-    "check_result",
+    "check_result_fields",
+    "result_checker",
     "check_env_kwargs",
     "episode_bounds",
     "evaluation_steps",
     "others_room",
-    "read_result",
     "result_path",
     "experiment_of",
     "check_one_experiment_per_label",
@@ -86,7 +87,7 @@ class ResultFileError(ValueError):
     """A result file is not what this suite writes; the message names the file and the field."""
 
 
-def _checker(path: Path) -> DocumentChecker:
+def result_checker(path: Path) -> DocumentChecker:
     """Checks of one result file, each raising :class:`ResultFileError` naming ``path`` and the field."""
     return DocumentChecker(
         path,
@@ -97,9 +98,11 @@ def _checker(path: Path) -> DocumentChecker:
     )
 
 
-def check_result(document: Any, path: str | Path) -> dict[str, Any]:
-    """``document`` (a parsed result file) if it follows the schema, else :class:`ResultFileError`."""
-    check = _checker(Path(path))
+def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
+    """``document`` (a parsed result file) if it follows the schema, else :class:`ResultFileError`;
+    a registered method's settings are checked by :func:`empathy_zoo.experiment.result_reader.check_result`,
+    which every reader calls (the method registry sits above this module)."""
+    check = result_checker(Path(path))
     result = dict(check.table(document, "(the whole file)"))
     check.has(result, REQUIRED_FIELDS, "")
     if result["schema"] == 1 and not isinstance(result["schema"], bool):
@@ -453,16 +456,6 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     if config.get("reward") is not None:
         check.text(check.table(config["reward"], "config.reward").get("name"), "config.reward.name")
         check.plain(config["reward"], "config.reward")
-    from baselines.registry import METHODS  # lazily: the method registry imports the learners
-
-    method = METHODS.get(result["method"])
-    if method is not None:
-        try:
-            method.settings(**settings)
-        except (TypeError, ValueError, OverflowError) as error:
-            raise check.fail(
-                "config.settings", f"settings of {result['method']} ({one_line(str(error), 200)})", settings
-            ) from None
     try:
         check_description(config["description"])
     except DescriptionError as error:
@@ -503,11 +496,6 @@ RUNS_DIR = "runs"
 def result_path(out_dir: Path, run_id: str) -> Path:
     """Where the result file of ``run_id`` lives (a ``run_id`` that is no file name raises ``ValueError``)."""
     return Path(out_dir) / RUNS_DIR / f"{check_path_name(run_id, 'run id')}.json"
-
-
-def read_result(path: Path) -> dict[str, Any]:
-    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
-    return check_result(read_json(path), path)
 
 
 def experiment_of(run_id: str) -> str:

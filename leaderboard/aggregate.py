@@ -33,8 +33,9 @@ import numpy as np
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label, check_result
+from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
 from leaderboard.ordering import label_order
 from leaderboard.run_facts import env_argument
@@ -168,7 +169,7 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
 
     A directory without result files raises ``ValueError``; a corrupted or malformed file raises
     ``ValueError`` naming it and the field
-    (:func:`empathy_zoo.result_file.check_result`); so do two runs with the same
+    (:func:`empathy_zoo.experiment.result_reader.check_result`); so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
     with one ``(env, method_label)``, which would be mixed in one row. Several directories are
     read into one leaderboard by :func:`leaderboard.sources.load_results_dirs`.

@@ -45,7 +45,7 @@ def _optional_int(value: Any) -> int | None:
 
 
 def budget_of(run: Mapping[str, Any]) -> RunBudget:
-    """The budget of ``run`` (a result as :func:`empathy_zoo.result_file.read_result` gives it)."""
+    """The budget of ``run`` (a result as :func:`empathy_zoo.experiment.result_reader.read_result` gives it)."""
     config = run.get("config") or {}
     return RunBudget(int(run["steps"]), _optional_int(config.get("eval_interval")), _optional_int(config.get("eval_episodes")))
 

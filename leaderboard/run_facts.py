@@ -3,7 +3,7 @@ method's own description (``config.description``, :mod:`empathy_zoo.method_descr
 environment's arguments, and whether it ran in the paper's setting.
 
 Nothing here knows a method: a plug-in method is grouped, compared and given a reference by what
-its description declares. Every reader takes runs as :func:`empathy_zoo.result_file.read_result`
+its description declares. Every reader takes runs as :func:`empathy_zoo.experiment.result_reader.read_result`
 gives them (files of every schema get a description there).
 """
 
@@ -31,11 +31,11 @@ def _name(run: Mapping[str, Any]) -> str:
 
 def description_of(run: Mapping[str, Any]) -> Mapping[str, Any]:
     """The run's ``config.description``; ``ValueError`` for a run that has none (one not read
-    through :func:`empathy_zoo.result_file.read_result`)."""
+    through :func:`empathy_zoo.experiment.result_reader.read_result`)."""
     description = (run.get("config") or {}).get("description")
     if not isinstance(description, Mapping):
         raise ValueError(
-            f"{_name(run)} has no config.description: read result files with empathy_zoo.result_file.read_result "
+            f"{_name(run)} has no config.description: read result files with empathy_zoo.experiment.result_reader.read_result "
             "(or leaderboard.aggregate.load_results), which gives files of every schema one"
         )
     return description

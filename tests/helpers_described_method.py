@@ -10,7 +10,7 @@ from typing import Any
 from helpers_results import SETTINGS, synthetic_schema_1
 
 from agents.base import Method
-from empathy_zoo.result_file import check_result
+from empathy_zoo.experiment.result_reader import check_result
 
 NAME = "helpers_described_method:KIND_DQN"
 """How a result file names the method."""

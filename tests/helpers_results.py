@@ -8,8 +8,9 @@ import numpy as np
 
 from agents.settings import EmpathicDQNSettings
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.result_file import check_result, schema_2_description
+from empathy_zoo.result_file import schema_2_description
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 """Schedule of the synthetic runs: 4,000 steps, ε at its floor on the last one."""

@@ -26,8 +26,8 @@ from helpers_results import synthetic_schema_1
 import leaderboard.report as report
 from empathy_zoo.agent_file import RESULT_FIELD
 from empathy_zoo.cli import main
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, MAX_SEEDS, MAX_VECTOR_ENVS
-from empathy_zoo.result_file import check_result
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.vector import VectorEnv
 from leaderboard import write_leaderboard

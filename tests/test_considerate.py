@@ -27,7 +27,7 @@ from baselines.aup import AttainableUtility
 from baselines.considerate import Considerate, considerate_bonus
 from baselines.registry import METHODS
 from empathy_zoo.cli import main
-from empathy_zoo.result_file import read_result
+from empathy_zoo.experiment.result_reader import read_result
 
 V = 25
 SMALL = Considerate(

@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.provenance import package_version
-from empathy_zoo.result_file import ResultFileError, check_result, read_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.training import RunnerOptions, fingerprint, runner, train_runs
 from empathy_zoo.training.fingerprint import CodeFingerprint, module_sha256, plugin_names
 from empathy_zoo.training.results import write_result

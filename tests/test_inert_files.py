@@ -32,8 +32,9 @@ from empathy_zoo.atomic import check_output_dir, read_json, remove_stale_temp_fi
 from empathy_zoo.bounded_read import json_depth
 from empathy_zoo.evaluation_file import check_evaluation, read_evaluation
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.limits import MAX_JSON_DEPTH, read_bounded
-from empathy_zoo.result_file import ResultFileError, check_result, read_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.training import RunnerOptions, ensemble, train_runs
 from empathy_zoo.training.checkpoint import load_checkpoint
 from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, manifest_path

@@ -19,7 +19,7 @@ from agents.base import StepBatch
 from agents.rewards import TrainRewards
 from baselines.lagrangian import Lagrangian, dual_ascent
 from empathy_zoo.cli import main
-from empathy_zoo.result_file import read_result
+from empathy_zoo.experiment.result_reader import read_result
 
 
 def step(harms: list[list[int]], ended: list[list[bool]], rewards: float = 1.0) -> StepBatch:

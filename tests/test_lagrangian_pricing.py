@@ -25,7 +25,8 @@ from agents.rewards import TrainRewards
 from agents.settings import EmpathicDQNSettings
 from agents.step_batch import StepBatch
 from baselines.lagrangian import Lagrangian, dual_ascent
-from empathy_zoo.result_file import PRICE_COLUMN, ResultFileError, check_result
+from empathy_zoo.experiment.result_reader import check_result
+from empathy_zoo.result_file import PRICE_COLUMN, ResultFileError
 from leaderboard.constraint import constraint_satisfaction
 
 SMALL: dict[str, Any] = {"hidden_size": 32, "replay_capacity": 600, "learning_starts": 32, "target_update_interval": 50}
@@ -274,7 +275,7 @@ def test_train_rewards_hand_over_the_reward_the_cost_and_the_multiplier_after_th
 def test_a_lagrangian_run_records_lambda_after_every_training_episode(tmp_path) -> None:
     """A 600-step run's result file holds ``train.lambda``, one value per training episode: the dual
     ascent recomputed from its own ``train.harms`` from ``lambda_init``; plain DQN's holds none."""
-    from empathy_zoo.result_file import read_result
+    from empathy_zoo.experiment.result_reader import read_result
     from empathy_zoo.training import RunnerOptions, train_runs
 
     spec = small_run("dqn_lagrangian", reward={"cost_limit": 0.5, "lambda_lr": 2.0, "lambda_init": 0.25})

@@ -18,8 +18,9 @@ from agents.rewards import transform_config
 from agents.settings import EmpathicDQNSettings
 from baselines.registry import METHODS, get_method
 from empathy_zoo.atomic import read_json, write_json_atomic
+from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.method_description import DESCRIPTION_FIELDS, check_description
-from empathy_zoo.result_file import SCHEMA_2_METHODS, ResultFileError, check_result, read_result, schema_2_description
+from empathy_zoo.result_file import SCHEMA_2_METHODS, ResultFileError, schema_2_description
 from empathy_zoo.schedules import epsilon_at, linear_epsilon
 from leaderboard.improvement import improvements_over_dqn, is_dqn
 from leaderboard.reference_curves import reference_curve

@@ -49,7 +49,8 @@ def in_tmp(tmp_path, monkeypatch):
 
 
 def test_the_plugin_page_runs_and_its_runs_are_scored(in_tmp: Path) -> None:
-    from empathy_zoo.result_file import RUNS_DIR, read_result
+    from empathy_zoo.experiment.result_reader import read_result
+    from empathy_zoo.result_file import RUNS_DIR
 
     page = blocks("plugins.md")
     assert [name for name, _ in page if name] == ["my_plugins.py"] * 3 + ["my_sweep.toml"]

@@ -30,8 +30,9 @@ from test_check_then_write import agent_file_of, one_line_refusal
 
 from empathy_zoo.cli import main
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation, evaluation_files
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.limits import MAX_CYCLES, MAX_EVAL_EPISODES, MAX_SEED, MAX_WALL_TIME_S
-from empathy_zoo.result_file import ResultFileError, check_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.training.heldout import evaluate_results
 
 trained = check_then_write.trained

@@ -23,9 +23,10 @@ from test_check_then_write import agent_file_of, one_line_refusal
 from empathy_zoo.agent_file import FORMAT, LIBRARY_MEMBER, VERSION, load_agent
 from empathy_zoo.cli import main
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation, evaluation_files, read_evaluation
+from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.limits import MAX_SCENARIOS
-from empathy_zoo.result_file import ResultFileError, check_result, read_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.scenarios import load_scenario_set
 from empathy_zoo.training.heldout import evaluate_results
 from leaderboard.evaluation_dirs import match_evaluations

@@ -28,11 +28,12 @@ from empathy_zoo import coexistence_v0, sharing_v0
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.experiment.sweep_file import parse_sweep
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.gym_adapter import make_single_agent_env
 from empathy_zoo.names import confined
-from empathy_zoo.result_file import ResultFileError, check_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.checkpoint import save_checkpoint
 from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, plan_ensembles

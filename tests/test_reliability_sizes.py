@@ -26,6 +26,7 @@ from empathy_zoo.cli import main
 from empathy_zoo.engine.arguments import table_bytes
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.experiment.model import Budget, RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.sweep_file import load_sweep, parse_sweep
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.limits import (
@@ -39,7 +40,6 @@ from empathy_zoo.limits import (
     MAX_SEEDS,
     MAX_STEPS,
 )
-from empathy_zoo.result_file import read_result
 from empathy_zoo.training import RunnerOptions
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -251,7 +251,8 @@ def test_unparseable_json_is_refused_naming_the_file(tmp_path, text):
 def test_huge_environment_arguments_in_a_result_file_are_refused(name, value):
     document = synthetic_schema_1("coexistence_v0", "dqn", 1.0, 0)
     document["config"]["env_kwargs"][name] = value if name != "max_cycles" else value * 10**9
-    from empathy_zoo.result_file import ResultFileError, check_result
+    from empathy_zoo.experiment.result_reader import check_result
+    from empathy_zoo.result_file import ResultFileError
 
     with pytest.raises(ResultFileError, match="config.env_kwargs"):
         check_result(document, "huge.json")

@@ -24,11 +24,12 @@ import empathy_zoo.training.runner as runner
 from empathy_zoo import atomic
 from empathy_zoo.cli import main
 from empathy_zoo.experiment.model import EnvVariant, MethodEntry, RunSpec
+from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.experiment.sweep_file import load_sweep, parse_sweep
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.limits import MAX_LABEL
 from empathy_zoo.names import check_label
-from empathy_zoo.result_file import ResultFileError, check_result, read_result
+from empathy_zoo.result_file import ResultFileError
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training import results as results_module
 from empathy_zoo.training.checkpoint import load_checkpoint

@@ -142,7 +142,7 @@ def test_a_malformed_result_file_is_one_line_naming_file_and_field(tmp_path, cap
 
 
 def test_reading_a_result_checks_its_schema(tmp_path):
-    from empathy_zoo.result_file import read_result
+    from empathy_zoo.experiment.result_reader import read_result
 
     document, expected = malformed("eval entry without step")
     write_json_atomic(tmp_path / "r.json", document)
@@ -227,7 +227,8 @@ def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() ->
     from pathlib import Path
 
     from empathy_zoo.atomic import read_json
-    from empathy_zoo.result_file import SCHEMA, read_result
+    from empathy_zoo.experiment.result_reader import read_result
+    from empathy_zoo.result_file import SCHEMA
 
     runs = Path(__file__).resolve().parent / "data" / "schema_1"  # files the paper profile of 0.1.0 wrote
     expected = {

@@ -17,8 +17,8 @@ from agents.rewards import TrainRewards
 from baselines.lagrangian import Lagrangian
 from baselines.methods import BASELINE_METHODS
 from baselines.registry import METHODS, get_method
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.experiment.sweep_file import SweepConfigError, parse_sweep
-from empathy_zoo.result_file import check_result
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv

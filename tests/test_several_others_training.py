@@ -10,9 +10,10 @@ import textwrap
 import pytest
 
 from empathy_zoo.environments import default_policies
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.sweep_file import profile_path
 from empathy_zoo.experiment.values import SweepConfigError
-from empathy_zoo.result_file import read_result, result_path
+from empathy_zoo.result_file import result_path
 from empathy_zoo.training import RunnerOptions, load_sweep, train_runs
 
 SWEEP = """

@@ -20,9 +20,9 @@ from baselines.shaping import HarmPenalty, InequityAversion
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.train import train_values
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.sweep_file import load_sweep
 from empathy_zoo.experiment.values import SweepConfigError
-from empathy_zoo.result_file import read_result
 from leaderboard.aggregate import group_runs
 from leaderboard.ordering import label_order
 

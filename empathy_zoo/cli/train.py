@@ -150,7 +150,7 @@ def cmd_train(args: argparse.Namespace, command: str) -> int:
     """Train the runs and print one summary line each."""
     from empathy_zoo.environments import default_policies
     from empathy_zoo.experiment.model import EnvVariant, MethodEntry, RunSpec
-    from empathy_zoo.result_file import read_result
+    from empathy_zoo.experiment.result_reader import read_result
     from empathy_zoo.training.runner import train_runs
 
     run, settings = train_values(args)

@@ -268,7 +268,7 @@ def _unprintable(text: str) -> str | None:
 def trained_with(result: Mapping[str, Any], allowed_imports: Collection[str] = ()) -> Scenario:
     """The scenario of a run's own partners and world (:data:`TRAINED_WITH`): its environment, its
     ``config.env_kwargs`` and its fixed agents (``config.fixed``), from its result file as
-    :func:`empathy_zoo.result_file.read_result` gives it; ``ValueError`` naming the run when they
+    :func:`empathy_zoo.experiment.result_reader.read_result` gives it; ``ValueError`` naming the run when they
     do not make an environment variant. A recorded policy resolves only to a registered one or a
     name in ``allowed_imports`` (:func:`~empathy_zoo.policies.recorded_entry`): nothing a result
     file names is imported unless the user allowed it."""

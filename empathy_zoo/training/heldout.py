@@ -34,12 +34,13 @@ from empathy_zoo.data_files import data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.limits import MAX_EVAL_EPISODES, check_at_most, cpu_count
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
 from empathy_zoo.randomness import STREAMS
-from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, read_result
+from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR
 from empathy_zoo.scenarios import Scenario, ScenarioSet, default_set_name, load_scenario_set, trained_with
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.progress import progress_bar
@@ -99,7 +100,7 @@ class EvaluationSummary:
 
 def results_of(results_dir: str | Path) -> list[tuple[Path, dict[str, Any]]]:
     """``(result file, result)`` of every result file of ``results_dir`` (its ``runs/``, or itself
-    when it holds the files), read and checked (:func:`empathy_zoo.result_file.read_result`), in
+    when it holds the files), read and checked (:func:`empathy_zoo.experiment.result_reader.read_result`), in
     file-name order; a directory without result files raises ``ValueError``, and so does a result or
     agent file there that is no regular file (:func:`empathy_zoo.data_files.data_files`)."""
     root = Path(results_dir)

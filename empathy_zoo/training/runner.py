@@ -25,8 +25,9 @@ from typing import Any
 
 from empathy_zoo.atomic import PROBE_BYTES, check_output_dir, remove_stale_temp_files
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.output_lock import command_line, hold_output_dir
-from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, read_result, result_path
+from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
