@@ -51,11 +51,18 @@ def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -
     return outcome
 
 
-if __name__ == "__main__":
-    if len(sys.argv) != 3:
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.compare_runs OLD_DIR NEW_DIR``: one line per matched pair, then the counts."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 2:
         sys.exit("usage: python -m leaderboard.compare_runs OLD_DIR NEW_DIR")
-    result = compare_runs(load_results(sys.argv[1]), load_results(sys.argv[2]))
+    result = compare_runs(load_results(args[0]), load_results(args[1]))
     for verdict in ("same", "different"):
         for key in result[verdict]:
             print(f"{verdict:9s} {key}")
     print(", ".join(f"{name}: {len(keys)}" for name, keys in result.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -421,14 +421,21 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool
     return "\n".join(lines)
 
 
-if __name__ == "__main__":
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]``: the report, printed."""
     import sys
 
+    given = list(sys.argv[1:] if argv is None else argv)
     options = {"--all", "--tost"}
-    args = [a for a in sys.argv[1:] if a not in options]
+    args = [a for a in given if a not in options]
     if len(args) != 2:
         sys.exit(
             "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]   "
             "(--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS)"
         )
-    print(report(args[0], args[1], every_cell="--all" in sys.argv[1:], with_tost="--tost" in sys.argv[1:]))
+    print(report(args[0], args[1], every_cell="--all" in given, with_tost="--tost" in given))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -48,9 +48,16 @@ def verdicts_markdown(rows: Sequence[Reading]) -> str:
     return "\n".join([markdown_table(header, body), "", f"changed: {changed} of {len(rows)}", *summary])
 
 
-if __name__ == "__main__":
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.heldout_verdicts RESULTS_DIR``: every held-out reading, old rule beside new."""
     import sys
 
-    if len(sys.argv) != 2:
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 1:
         sys.exit("usage: python -m leaderboard.heldout_verdicts RESULTS_DIR")
-    print(verdicts_markdown(heldout_verdicts(sys.argv[1])))
+    print(verdicts_markdown(heldout_verdicts(args[0])))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -103,7 +103,14 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str
     return "\n".join(lines)
 
 
-if __name__ == "__main__":
-    if len(sys.argv) != 2:
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.versus_dqn RESULTS_DIR``: the tables against DQN, printed."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 1:
         sys.exit("usage: python -m leaderboard.versus_dqn RESULTS_DIR")
-    print(versus_dqn_tables(load_results(sys.argv[1])))
+    print(versus_dqn_tables(load_results(args[0])))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

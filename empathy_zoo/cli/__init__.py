@@ -9,6 +9,7 @@
     empathy-zoo evaluate results/quick                # kept agents beside partners they never met
     empathy-zoo export results/quick --format marl-eval --out quick.json   # results in marl-eval's JSON
     empathy-zoo tune methods --method dqn --env coexistence_v0 --param learning_rate=log:1e-4:3e-3   # Optuna
+    empathy-zoo analyse compare-runs OLD_DIR NEW_DIR    # the analysis tools (analyse --help lists them)
 
 ``train`` takes one ``--<field>`` option per field of the method's settings and of its reward
 transform (see ``empathy-zoo train --method NAME --help``); the method is ``--method``, else
@@ -24,7 +25,8 @@ One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 :mod:`~empathy_zoo.cli.sweep` (reproduce, leaderboard, reproduction, sensitivity),
 :mod:`~empathy_zoo.cli.browse` (methods, policies, play), :mod:`~empathy_zoo.cli.watch` (watch),
 :mod:`~empathy_zoo.cli.evaluate` (evaluate), :mod:`~empathy_zoo.cli.export` (export),
-:mod:`~empathy_zoo.cli.tune` (tune); what they share is in :mod:`~empathy_zoo.cli.common`.
+:mod:`~empathy_zoo.cli.tune` (tune), :mod:`~empathy_zoo.cli.analyse` (analyse); what they share is in
+:mod:`~empathy_zoo.cli.common`.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+from empathy_zoo.cli.analyse import add_analyse
 from empathy_zoo.cli.browse import add_browse_commands
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS
 from empathy_zoo.cli.evaluate import add_evaluate
@@ -73,6 +76,7 @@ def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParse
     add_evaluate(sub)
     add_export(sub)
     add_tune(sub)
+    add_analyse(sub)
     return parser
 
 

@@ -1,0 +1,71 @@
+"""``analyse``: the suite's analysis tools, one command each, run as ``python -m MODULE`` runs them.
+
+    empathy-zoo analyse TOOL [ARGS ...]
+    empathy-zoo analyse compare-runs OLD_DIR NEW_DIR
+
+Each tool is a module's ``main(argv)`` (:data:`TOOLS`); ``analyse`` hands it the arguments after
+its name, unchanged, so ``empathy-zoo analyse TOOL --help`` prints the tool's own help. The
+modules stay runnable as ``python -m MODULE`` too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from dataclasses import dataclass
+from typing import Any
+
+from empathy_zoo.cli.common import PROG
+
+__all__ = ["TOOLS", "Tool", "add_analyse", "cmd_analyse"]
+
+
+@dataclass(frozen=True)
+class Tool:
+    """One analysis tool: the module whose ``main(argv)`` runs it, and what it does in one line."""
+
+    module: str
+    summary: str
+
+
+TOOLS: dict[str, Tool] = {
+    "compare-runs": Tool("leaderboard.compare_runs", "which runs of two results directories computed the same thing"),
+    "equivalence": Tool("leaderboard.equivalence", "per-cell tests of a difference (and TOST) between two run sets"),
+    "versus-dqn": Tool("leaderboard.versus_dqn", "each method against DQN, seed for seed, as tables"),
+    "verdict-changes": Tool("leaderboard.verdict_changes", "the ▲/▼ marks that differ between two leaderboard pages"),
+    "heldout-verdicts": Tool("leaderboard.heldout_verdicts", "every held-out reading of a directory, old rule beside new"),
+    "coexistence-sensitivity": Tool("leaderboard.coexistence_sensitivity", "the claims under the authors' Coexistence rules"),
+    "tuning-summary": Tool("leaderboard.tuning_summary", "what each tuned method chose, and its trials figure"),
+    "tuning-effect": Tool("leaderboard.tuning_effect", "tuned against untuned rows, verdict by verdict"),
+    "separation": Tool("baselines.separation_render", "a task's exact separation table (JSON and Markdown)"),
+    "discrimination": Tool("baselines.discrimination", "method pairs × tasks from the exact separation tables"),
+}
+"""Every tool ``analyse`` runs, by the name it takes."""
+
+
+def cmd_analyse(args: argparse.Namespace, command: str) -> int:
+    """Run the chosen tool's ``main`` on the remaining arguments; its exit status is the command's."""
+    tool = TOOLS[args.tool]
+    main = importlib.import_module(tool.module).main
+    try:
+        status = main(list(args.args))
+    except SystemExit as exit_:  # a tool's own usage message (a string) or status
+        if isinstance(exit_.code, str):
+            print(exit_.code.replace(f"python -m {tool.module}", f"{PROG} analyse {args.tool}"), file=sys.stderr)
+            return 2
+        return int(exit_.code or 0)
+    return int(status or 0)
+
+
+def add_analyse(sub: Any) -> None:
+    """The ``analyse`` subcommand."""
+    listing = "; ".join(f"{name}: {tool.summary}" for name, tool in TOOLS.items())
+    parser = sub.add_parser(
+        "analyse",
+        help="the analysis tools (compare runs, equivalence, separation tables, ...): TOOL --help for each",
+        description=f"Run one of the suite's analysis tools. {listing}.",
+    )
+    parser.add_argument("tool", choices=list(TOOLS), metavar="TOOL", help=f"one of {', '.join(TOOLS)}")
+    parser.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS", help="the tool's own arguments")
+    parser.set_defaults(handler=cmd_analyse)

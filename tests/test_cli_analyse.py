@@ -1,0 +1,47 @@
+"""``empathy-zoo analyse TOOL``: each analysis tool runs as ``python -m MODULE`` runs it."""
+
+from __future__ import annotations
+
+import importlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from empathy_zoo.cli import main
+from empathy_zoo.cli.analyse import TOOLS
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = ROOT / "docs" / "results" / "quick"
+
+
+@pytest.mark.parametrize("name", list(TOOLS))
+def test_every_tool_has_a_main(name: str) -> None:
+    assert callable(importlib.import_module(TOOLS[name].module).main)
+
+
+def test_compare_runs_prints_what_python_m_prints(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "compare-runs", str(QUICK), str(QUICK)]) == 0
+    ours = capsys.readouterr().out
+    theirs = subprocess.run(
+        [sys.executable, "-m", "leaderboard.compare_runs", str(QUICK), str(QUICK)], capture_output=True, text=True, check=True
+    ).stdout
+    assert ours == theirs
+    assert ours.splitlines()[-1] == "same: 30, different: 0, only_old: 0, only_new: 0"
+
+
+def test_a_usage_error_names_the_subcommand(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "compare-runs", str(QUICK)]) == 2
+    assert capsys.readouterr().err.strip() == "usage: empathy-zoo analyse compare-runs OLD_DIR NEW_DIR"
+
+
+def test_a_tool_help_exits_zero(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "verdict-changes", "--help"]) == 0
+    assert "old" in capsys.readouterr().out
+
+
+def test_an_unknown_tool_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "no-such-tool"]) == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'no-such-tool'" in err and len(err.strip().splitlines()) == 1
