@@ -56,7 +56,7 @@ import inspect
 import math
 import typing
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeGuard, runtime_checkable
 
 import numpy as np
 
@@ -186,7 +186,7 @@ class PricedTransform(StatefulTransform, Protocol):
         ...
 
 
-def is_priced(transform: RewardTransform | None) -> bool:
+def is_priced(transform: RewardTransform | None) -> TypeGuard[PricedTransform]:
     """Whether ``transform`` prices its costs when a step is sampled (:class:`PricedTransform`)."""
     return transform is not None and getattr(transform, "priced_at_sample", False) is True
 
@@ -351,7 +351,7 @@ class TrainRewards:
         prices = np.zeros(len(self.transforms))
         for transform, rows, state in zip(self.distinct, self.rows, self.states):
             if is_priced(transform) and state is not None:
-                price = np.asarray(getattr(transform, "price")(state), dtype=np.float64)
+                price = np.asarray(transform.price(state), dtype=np.float64)
                 if price.shape != (len(rows),) or not np.isfinite(price).all() or (price < 0).any():
                     raise ValueError(
                         f"reward transform {transform.name!r} priced its costs at {price!r}: expected {len(rows)} "

@@ -74,7 +74,7 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=NegativeRewardEmpathy(),
         label=lambda s, reward: f"DQN + the other's negative rewards ({reward.care:g})",
         description="the paper's silver rule read literally: DQN trained on reward + 0.5·min(the other's reward, 0)",
-        identical_to={env: ("dqn", NO_NEGATIVE_REWARDS) for env in ("coexistence_v0", "sharing_v0")},
+        identical_to=dict.fromkeys(("coexistence_v0", "sharing_v0"), ("dqn", NO_NEGATIVE_REWARDS)),
     ),
     "dqn_social_value": Method(
         name="dqn_social_value",

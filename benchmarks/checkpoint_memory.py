@@ -37,7 +37,7 @@ def _status(field: str) -> int:
     return int(match.group(1)) * 1024
 
 
-def _learner():  # noqa: ANN202 (the tree's own Learner type)
+def _learner():  # the tree's own Learner type
     import torch
 
     from empathy_zoo.experiment.model import RunSpec

@@ -62,7 +62,7 @@ def parallel_rates(name: str, wrapped: bool, steps: int, repeats: int) -> tuple[
 
     def run() -> int:
         for action in actions:
-            env.step({agent: action for agent in env.agents})
+            env.step(dict.fromkeys(env.agents, action))
             if not env.agents:
                 env.reset()
         return steps

@@ -54,10 +54,10 @@ def alone_steps(engine_class: Any, cells: int, layers: int, env_kwargs: dict[str
     engine.cells = np.stack([cell, np.zeros_like(cell)], axis=1).astype(engine.cells.dtype)
     engine.present[:, OTHER] = False
     if layers > 1:
-        getattr(engine, "set_tabular_layer")(layer)
+        engine.set_tabular_layer(layer)
     events = engine.step(np.stack([action, np.full_like(action, NUM_ACTIONS - 1)], axis=1))
     shape = (layers * cells, NUM_ACTIONS)
-    after = engine.cells[:, ROBOT] + (getattr(engine, "tabular_layer")() * cells if layers > 1 else 0)
+    after = engine.cells[:, ROBOT] + (engine.tabular_layer() * cells if layers > 1 else 0)
     return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), after.reshape(shape).astype(np.int64)
 
 

@@ -48,12 +48,12 @@ def undo_point(policy: Any) -> Callable[[], None]:
         else:
             try:
                 saved = copy.deepcopy(saved)  # (a state may share its arrays with the policy)
-            except Exception:  # noqa: BLE001 - a state that cannot be copied is given back as it was taken
+            except Exception:  # a state that cannot be copied is given back as it was taken
                 pass
             return lambda: policy.load_state(saved)
     try:
         attributes = copy.deepcopy(vars(policy))
-    except Exception:  # noqa: BLE001 - no attributes to copy (slots), or ones that cannot be copied
+    except Exception:  # no attributes to copy (slots), or ones that cannot be copied
         return lambda: None
 
     def restore() -> None:

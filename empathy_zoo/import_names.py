@@ -49,7 +49,7 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
         module = importlib.import_module(module_name)
     except ImportError as error:
         raise ValueError(f"cannot import module {module_name!r} for {kind} {spec!r}: {error}") from error
-    except Exception as error:  # noqa: BLE001 - a plug-in's own code failed while it was imported
+    except Exception as error:  # a plug-in's own code failed while it was imported
         raise ValueError(
             f"importing module {module_name!r} for {kind} {spec!r} raised {type(error).__name__}: {error}"
         ) from error

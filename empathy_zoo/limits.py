@@ -220,7 +220,7 @@ def available_memory(device: str = "cpu") -> tuple[int | None, str]:
             import torch
 
             return int(torch.cuda.mem_get_info(torch.device(device))[0]), f"free on {device}"
-        except Exception as error:  # noqa: BLE001 - no CUDA here: the device check says so elsewhere
+        except Exception as error:  # no CUDA here: the device check says so elsewhere
             return None, f"{device} cannot tell ({type(error).__name__})"
     if device != "cpu" and not device.startswith("cpu:"):
         return None, f"{device} cannot tell"

@@ -58,7 +58,7 @@ class GridParallelEnv(ParallelEnv, EzPickle):
             shape=(self.engine.obs_size,),
             dtype=np.float32,
         )
-        self.observation_spaces = {agent: obs_space for agent in self.possible_agents}
+        self.observation_spaces = dict.fromkeys(self.possible_agents, obs_space)
         self.action_spaces = {agent: spaces.Discrete(NUM_ACTIONS) for agent in self.possible_agents}
         self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
         # Every observation and every swapped observation of a step is painted at once, as the rows

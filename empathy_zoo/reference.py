@@ -69,7 +69,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -115,7 +115,7 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     return array
 
 
-@lru_cache(maxsize=None)
+@cache
 def coexistence_transitions(size: int = 7) -> tuple[np.ndarray, np.ndarray]:
     """``(outcome, after)``, each ``(size², 5, 5)`` indexed by ``[displacement, robot action, cat
     action]``: the engine's outcome (``NO_HARM``, ``ROBOT_HARMS_CAT``, ``CAT_HARMS_ROBOT``) and the
@@ -135,7 +135,7 @@ def _negated(size: int) -> np.ndarray:
     return (-dr % size) * size + (-dc % size)
 
 
-@lru_cache(maxsize=None)
+@cache
 def start_distribution(size: int = 7) -> np.ndarray:
     """Probability of every start displacement, as the engine draws it (uniform over its
     ``_start_offsets``, the displacements not in contact)."""
@@ -145,7 +145,7 @@ def start_distribution(size: int = 7) -> np.ndarray:
     return _frozen(p)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _optimal_values(gamma: float, size: int, tolerance: float) -> np.ndarray:
     """``Q*`` over the ``size²`` displacements with the cat present, ``(size², 5)``."""
     outcome, after = coexistence_transitions(size)
@@ -182,7 +182,7 @@ def _in_view(size: int, view: int) -> np.ndarray:
     return (np.minimum(dr, size - dr) <= reach) & (np.minimum(dc, size - dc) <= reach)
 
 
-@lru_cache(maxsize=None)
+@cache
 def coexistence_values(
     selfishness: float,
     *,

@@ -406,7 +406,7 @@ def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float |
     arguments = {**argument_defaults(engine), **env_kwargs}
     cycles = int(arguments["max_cycles"])
     others = int(arguments[engine.count_argument]) if engine.count_argument else 1
-    bounds: dict[str, float | None] = {name: None for name in METRIC_NAMES}
+    bounds: dict[str, float | None] = dict.fromkeys(METRIC_NAMES)
     bounds["survival"] = cycles
     bounds["return"] = cycles * STEP_REWARD_BOUND
     bounds["other_return"] = others * cycles * STEP_REWARD_BOUND

@@ -49,7 +49,7 @@ class MeadowEngine(GridEngine):
         return 1.0
 
 
-class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
+class raw_env(GridParallelEnv):  # PettingZoo naming
     """Meadow as a ``ParallelEnv``."""
 
     engine_class = MeadowEngine

@@ -102,7 +102,7 @@ def test_a_loaded_agent_gives_the_learners_values_bit_for_bit(trained) -> None:
         else:
             assert np.array_equal(values["q"], acting[run]), "DQN (β = 1) acts on Q"
         one = load_agent(path).q_values(observations[3])
-        assert {name: v.shape for name, v in one.items()} == {name: (5,) for name in values}
+        assert {name: v.shape for name, v in one.items()} == dict.fromkeys(values, (5,))
         assert all(np.array_equal(one[name], values[name][3]) for name in values)
 
 

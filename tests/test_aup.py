@@ -87,7 +87,7 @@ def test_the_penalty_is_the_summed_shift_against_the_no_op_over_the_summed_no_op
 
 def test_the_defaults_are_the_calibration_of_the_module_page() -> None:
     aup = AttainableUtility()
-    assert TASK_VALUE == pytest.approx(100.0)  # +1 a step for ever at γ = 0.99
+    assert TASK_VALUE == pytest.approx(100.0)  # noqa: SIM300 - the constant under test; +1 a step for ever at γ = 0.99
     assert aup.penalty_weight == pytest.approx(100.0 / 1.501) and aup.num_rewards == 30
     assert aup.penalty_starts == 2_000  # the learning_starts of the quick and methods profiles
     weights = auxiliary_reward_map(0, V, 30)

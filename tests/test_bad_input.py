@@ -108,7 +108,7 @@ def test_step_before_reset_and_after_the_end_raises(module):
     with pytest.raises(RuntimeError, match="reset"):
         env.step({ROBOT: 4})
     env.reset(seed=0)
-    env.step({agent: 4 for agent in env.agents})
+    env.step(dict.fromkeys(env.agents, 4))
     assert env.agents == []
     with pytest.raises(RuntimeError, match="reset"):
         env.step({ROBOT: 4})

@@ -189,7 +189,7 @@ SEVERAL = [(coexistence_v0, {"num_cats": 3}), (sharing_v0, {"num_humans": 2})]
 def test_vector_env_equals_parallel_envs_with_several_others(module, env_kwargs):
     (policy,) = DEFAULT_POLICIES[env_name(module)].values()
     others = module.parallel_env(**env_kwargs).possible_agents[1:]
-    finished = lockstep(module, {agent: policy for agent in others}, seeds=[0, 1, 17], steps=1000, action_seed=9, **env_kwargs)
+    finished = lockstep(module, dict.fromkeys(others, policy), seeds=[0, 1, 17], steps=1000, action_seed=9, **env_kwargs)
     assert finished >= 3
 
 

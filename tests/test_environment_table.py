@@ -10,7 +10,7 @@ import pytest
 from helpers_meadow import MEADOW, MEADOW_ENTRY, register_meadow
 
 import empathy_zoo
-import empathy_zoo.gym_adapter  # noqa: F401 - registers the Gymnasium ids
+import empathy_zoo.gym_adapter  # registers the Gymnasium ids
 from empathy_zoo.environments import (
     DEFAULT_ARGUMENTS,
     DEFAULT_POLICIES,

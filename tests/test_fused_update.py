@@ -218,7 +218,7 @@ def test_the_compiled_indices_are_sample_indices(needs_numba: None, size: int) -
         learner.grad_steps = grad_steps
         drawn = fused_update.draw_indices(learner._sample_keys[:, 0], grad_steps * 32, size, 32)
         np.testing.assert_array_equal(drawn, learner.sample_indices().numpy())
-        assert drawn.dtype == np.int64 and 0 <= drawn.min() and drawn.max() < size
+        assert drawn.dtype == np.int64 and drawn.min() >= 0 and drawn.max() < size
 
 
 @pytest.mark.parametrize("others", [1, 3])

@@ -241,7 +241,7 @@ def result_change(draw: st.DrawFn, base: dict[str, Any]) -> tuple[dict[str, Any]
         isinstance(path[-1], str)
         and draw(st.integers(0, 3)) == 0
         and (len(path) == 1 or path[0] != "config")
-        and (path[0] in REQUIRED_FIELDS and len(path) == 1 or path[0] in ("train", "eval"))
+        and ((path[0] in REQUIRED_FIELDS and len(path) == 1) or path[0] in ("train", "eval"))
     ):
         changed = mutate(base, path, "delete", None)
     else:

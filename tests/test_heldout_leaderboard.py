@@ -54,7 +54,7 @@ def method_harms(seed: int) -> dict[str, float]:
 
 def dqn_harms(seed: int) -> dict[str, float]:
     base = DQN_HARMS + 0.01 * seed
-    return {**{s: base for s in ("trained_with", *SCENARIOS)}, "below_dqn": 0.0}
+    return {**dict.fromkeys(("trained_with", *SCENARIOS), base), "below_dqn": 0.0}
 
 
 @pytest.fixture

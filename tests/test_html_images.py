@@ -9,10 +9,10 @@ import matplotlib
 import numpy as np
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from PIL import Image  # noqa: E402
+import matplotlib.pyplot as plt
+from PIL import Image
 
-from leaderboard.html_images import embedded_png, img_tag  # noqa: E402
+from leaderboard.html_images import embedded_png, img_tag
 
 
 def figure_png() -> bytes:

@@ -84,7 +84,7 @@ def call_within(seconds: float, call: Callable[[], Any]) -> BaseException | None
         try:
             call()
             caught.append(None)
-        except BaseException as error:  # noqa: BLE001 - handed back to the test
+        except BaseException as error:  # handed back to the test
             caught.append(error)
 
     thread = threading.Thread(target=run, daemon=True)

@@ -17,7 +17,7 @@ from leaderboard.measured_coverage import MeasuredCoverage, read_measured_covera
 from leaderboard.tables import Provenance, format_mean, html_report, markdown_report, table_rows
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-import interval_coverage as ic  # noqa: E402  (benchmarks/interval_coverage.py)
+import interval_coverage as ic  # benchmarks/interval_coverage.py
 
 
 def _row(runs: list[list[float]], metric: str = "harms") -> ic.RowEpisodes:

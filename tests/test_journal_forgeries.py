@@ -18,8 +18,8 @@ import pytest
 
 pytest.importorskip("optuna")
 
-from empathy_zoo.cli import main  # noqa: E402
-from empathy_zoo.training.tuning import JOURNAL_FILE, check_journal  # noqa: E402
+from empathy_zoo.cli import main
+from empathy_zoo.training.tuning import JOURNAL_FILE, check_journal
 
 SWEEP = """
 [sweep]

@@ -33,7 +33,7 @@ def run_page(page: str, directory: Path, run: bool = True) -> None:
             files[name] = files.get(name, "") + code + "\n"
             (directory / name).write_text(files[name], encoding="utf-8")
         elif run:
-            exec(compile(code, f"{page} block", "exec"), {"__name__": "__doc_block__"})  # noqa: S102
+            exec(compile(code, f"{page} block", "exec"), {"__name__": "__doc_block__"})
 
 
 def write_files(page: str, directory: Path) -> None:

@@ -87,8 +87,8 @@ def test_ppo_prices_the_lagrangian_cost_when_it_trains_on_the_rollout(monkeypatc
     learner = drive("ppo", Lagrangian(lambda_init=7.0), 32, PPO_SMALL)
     run = learner._runs[0]
     np.testing.assert_array_equal(learner.models[0].rollout_buffer.rewards, 1.0)  # stored unpriced, cost beside it
-    costs = getattr(run, "costs").copy()
-    assert getattr(run, "price") == 7.0  # no episode has ended: λ is its start
+    costs = run.costs.copy()
+    assert run.price == 7.0  # no episode has ended: λ is its start
     learner.act(np.zeros((1, 1, learner.models[0].observation_space.shape[0]), dtype=np.float32))
     assert len(seen) == 1
     np.testing.assert_array_equal(seen[0], (1.0 - np.float32(7.0) * costs).astype(np.float32))
@@ -269,8 +269,8 @@ def test_a_priced_ppo_run_continues_exactly_from_its_checkpoint() -> None:
     resumed.price_costs([True])
     resumed.load_state_dict(torch.load(state, weights_only=True))
     a, b = straight._runs[0], resumed._runs[0]
-    np.testing.assert_array_equal(getattr(a, "costs"), getattr(b, "costs"))
-    assert getattr(a, "price") == getattr(b, "price") == 3.0
+    np.testing.assert_array_equal(a.costs, b.costs)
+    assert a.price == b.price == 3.0
     unpriced = SB3Learner([SB3Settings(algorithm="ppo", algorithm_kwargs=PPO_SMALL, batch_size=16)], [0], 25, 5)
     with pytest.raises(ValueError, match="pricing costs"):
         unpriced.load_state_dict(straight.state_dict())

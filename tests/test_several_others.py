@@ -126,7 +126,7 @@ def tie_digest(**kwargs: Any) -> str:
     digest = hashlib.sha256()
     for seed in range(200):
         feed(digest, env.reset(seed=seed, options={"positions": {"robot_0": (0, 1), "human_0": (1, 0)}}))
-        stay = {agent: STAY for agent in env.agents}
+        stay = dict.fromkeys(env.agents, STAY)
         feed(digest, env.step({**stay, "robot_0": DOWN, "human_0": RIGHT}))  # both onto the battery at (1, 1)
         feed(digest, env.step({**stay, "robot_0": RIGHT, "human_0": RIGHT}))
     return digest.hexdigest()
@@ -386,7 +386,7 @@ def test_vector_swaps_with_the_closest_and_with_every_other():
     ``other_swapped`` is its swap."""
     env = coexistence_v0.parallel_env(num_cats=3)
     env.reset(seed=0, options={"positions": {ROBOT: (0, 0), "cat_0": (3, 3), "cat_1": (6, 6), "cat_2": (0, 2)}})
-    env.step({agent: STAY for agent in env.agents})
+    env.step(dict.fromkeys(env.agents, STAY))
     vector = VectorEnv("coexistence_v0", 1, num_cats=3)
     vector.reset(seed=0)
     vector.engine.load_state(env.unwrapped.engine.state())
@@ -540,7 +540,7 @@ def fixed_others(name: str, kwargs: dict) -> dict[str, str]:
     """Every other agent with the paper's fixed policy of the first one."""
     (policy,) = DEFAULT_POLICIES[name].values()
     agents = VectorEnv(name, 1, **kwargs).agents
-    return {agent: policy for agent in agents[1:]}
+    return dict.fromkeys(agents[1:], policy)
 
 
 @pytest.mark.parametrize("in_view_only", [False, True], ids=["omniscient", "in-view"])

@@ -81,7 +81,7 @@ def test_harmed_robot_still_has_its_final_swapped_observation():
 
 @pytest.mark.parametrize("module", MODULES, ids=IDS)
 def test_in_view_only(module):
-    other = env_name(module) == "coexistence_v0" and CAT or HUMAN
+    other = (env_name(module) == "coexistence_v0" and CAT) or HUMAN
     env = module.parallel_env()
     # far apart (3 rows and 3 columns away): outside the 5x5 window
     obs, _ = env.reset(seed=0, options={"positions": {ROBOT: (0, 0), other: (3, 4)}})

@@ -62,8 +62,8 @@ def argument_types(engine: TakesArguments) -> dict[str, Any]:
     strings is a ``str``, its values checked by :func:`check_choice`): what a configuration file
     and the command line accept for it."""
     return {
-        **{name: int for name in GRID_ARGUMENTS},
-        **{name: str for name in engine.extra_arguments},
+        **dict.fromkeys(GRID_ARGUMENTS, int),
+        **dict.fromkeys(engine.extra_arguments, str),
         **({engine.count_argument: int} if engine.count_argument else {}),
     }
 

@@ -173,7 +173,7 @@ def check_vector(saved: Any, obs: Any, runs: int, settings: Mapping[str, Any] | 
     if not isinstance(engine, dict):
         raise ForgedState("vector.engine is missing: it holds no state of its environments' engine")
     template = _template(settings)
-    expected = template["engine"] if template else {key: None for key in (*BASE_AGENT_ARRAYS, "t", "running", "streams")}
+    expected = template["engine"] if template else dict.fromkeys((*BASE_AGENT_ARRAYS, "t", "running", "streams"))
     missing, extra = sorted(set(expected) - set(engine)), sorted(set(engine) - set(expected)) if template else []
     if missing or extra:
         wrong = ", ".join([*(f"no {shown(key)}" for key in missing), *(shown(key) for key in extra)])

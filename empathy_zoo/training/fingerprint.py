@@ -41,7 +41,7 @@ import inspect
 import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -180,7 +180,7 @@ def recorded_fingerprint(result: Mapping[str, Any]) -> CodeFingerprint:
     return CodeFingerprint(result.get("version"), result.get("commit"), result.get("plugin_sha256"), result.get("update_kernel"))
 
 
-@lru_cache(maxsize=None)
+@cache
 def module_sha256(module: ModuleType) -> str | None:
     """SHA-256 (hex) of the file ``module`` was loaded from: its source file, else the file itself
     (a compiled extension, a sourceless ``.pyc``); ``None`` for a module without a file. Once per

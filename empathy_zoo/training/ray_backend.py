@@ -203,7 +203,7 @@ def _run_tasks(
         for ref in pending:
             try:
                 ray.cancel(ref, force=True)
-            except Exception:  # noqa: BLE001 - Ray may be going down; the original error matters
+            except Exception:  # Ray may be going down; the original error matters
                 pass
         raise
     if failures:

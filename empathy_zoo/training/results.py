@@ -59,7 +59,7 @@ def build_result(
         **run_fingerprint(spec, update_kernel).fields(),
         "agent": kept,
         **({KEPT_AGENT: agent} if agent is not None else {}),
-        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
     }
 
 

@@ -275,7 +275,7 @@ def plan_ensembles(
         overlap = [run_id for run_id in ids if run_id in claimed]
         if specs is not None and asked and not overlap:
             chunks.append(specs)
-            claimed.update({run_id: checkpoint for run_id in ids})
+            claimed.update(dict.fromkeys(ids, checkpoint))
             others = [run_id for run_id in ids if run_id not in pending and run_id not in finished]
             if ids not in usual:  # a plain resume goes without saying
                 on_note(
