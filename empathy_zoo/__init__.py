@@ -1,7 +1,8 @@
 """empathy-zoo: PettingZoo gridworlds for negative side effects, with Empathic DQN and baselines.
 
 Environments: :mod:`empathy_zoo.coexistence_v0`, :mod:`empathy_zoo.sharing_v0`,
-:mod:`empathy_zoo.charger_v0`, :mod:`empathy_zoo.vase_v0` (PettingZoo ParallelEnv and AEC),
+:mod:`empathy_zoo.charger_v0`, :mod:`empathy_zoo.vase_v0`, :mod:`empathy_zoo.helping_v0` (PettingZoo
+ParallelEnv and AEC),
 :class:`empathy_zoo.vector.VectorEnv` (many at once, as arrays).
 """
 
@@ -11,7 +12,7 @@ from collections.abc import Mapping
 from types import ModuleType
 from typing import TYPE_CHECKING
 
-from empathy_zoo import charger_v0, coexistence_v0, sharing_v0, vase_v0
+from empathy_zoo import charger_v0, coexistence_v0, helping_v0, sharing_v0, vase_v0
 from empathy_zoo._version import __version__
 from empathy_zoo.empathy import EmpathyWrapper
 from empathy_zoo.environments import FACES
@@ -30,6 +31,7 @@ __all__ = [
     "sharing_v0",
     "charger_v0",
     "vase_v0",
+    "helping_v0",
     "ENVIRONMENTS",
     "EmpathyWrapper",
     "FixedAgents",

@@ -21,6 +21,7 @@ from typing import Any, TypeVar
 from empathy_zoo.engine.base import GridEngine
 from empathy_zoo.engine.charger import ChargerEngine
 from empathy_zoo.engine.coexistence import CoexistenceEngine
+from empathy_zoo.engine.helping import HelpingEngine
 from empathy_zoo.engine.sharing import SharingEngine
 from empathy_zoo.engine.vase import VaseEngine
 from empathy_zoo.metrics import HARMS_PER_100_STEPS
@@ -156,6 +157,25 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         compact_metrics=("harms", "return", "other_return"),
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
         curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
+    ),
+    "helping_v0": Environment(
+        HelpingEngine,
+        "empathy_zoo.helping_v0",
+        "empathy_zoo/Helping-v0",
+        {"human_0": "random_walk"},
+        {"size": 5, "view": 3, "max_cycles": 500},
+        task="return",
+        task_label="robot reward per episode: batteries it used (task: higher is better)",
+        side_effects=("harms",),
+        side_effect_label="humans harmed per episode (side effect: lower is better)",
+        table_metrics=("return", "harms", "other_return"),
+        compact_metrics=("harms", "return", "other_return"),
+        heldout_metrics=("harms", HARMS_PER_100_STEPS, "return", "other_return"),
+        curves=(
+            ("return", "Robot reward per episode"),
+            ("harms", "Harms per episode"),
+            ("other_return", "Human reward per episode"),
+        ),
     ),
 }
 """Every environment, by name."""

@@ -39,7 +39,7 @@ SHARING_PARTNERS = {
 
 
 def test_one_set_ships_per_environment() -> None:
-    assert shipped_sets() == ["charger_v0", "coexistence_v0", "sharing_v0", "vase_v0"]
+    assert shipped_sets() == ["charger_v0", "coexistence_v0", "helping_v0", "sharing_v0", "vase_v0"]
 
 
 @pytest.mark.parametrize("name, partners", [("coexistence_v0", COEXISTENCE_PARTNERS), ("sharing_v0", SHARING_PARTNERS)])
@@ -114,7 +114,7 @@ def test_a_bad_set_header_is_refused(text, message, tmp_path) -> None:
 
 
 def test_an_unknown_set_name_lists_the_shipped_ones() -> None:
-    shipped = "charger_v0, coexistence_v0, sharing_v0, vase_v0"
+    shipped = "charger_v0, coexistence_v0, helping_v0, sharing_v0, vase_v0"
     with pytest.raises(SweepConfigError, match=f"unknown scenario set 'mine'; shipped: {shipped}"):
         load_scenario_set("mine")
 
