@@ -146,7 +146,8 @@ class RowOutcome:
     """Expected undiscounted reward of the other (``None`` where the environment's task is not the robot's return)."""
     changed: float | None = None
     """Probability that the state beyond the cells has changed by the episode's end (the vase
-    broken; ``None`` where the environment has no such state)."""
+    broken; ``None`` where the environment has no such state, or where it is the agents' own: who
+    carries a battery in the helping task)."""
 
 
 @dataclass(frozen=True)
@@ -358,7 +359,7 @@ def separation_table(
             lam = multiplier if r.name == "dqn_lagrangian" else None
             o = result[r.name]
             own, others = (o.robot_return, o.other_return) if returns else (None, None)
-            changed = o.changed if world else None
+            changed = o.changed if world and model.layer_swap is None else None  # (the world's state, not what agents hold)
             outcomes.append(
                 RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, ""), own, others, changed)
             )

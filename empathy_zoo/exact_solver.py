@@ -18,7 +18,9 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
   harmed again); *robot harmed* (terminal). An engine with a state beyond the two cells (the vase
   task: the vase standing or broken) names how many values it takes (`tabular_layers`) and reads
   and sets it (`tabular_layer()`, `set_tabular_layer(layer)`): every state then comes once per
-  value, the start in value 0.
+  value, the start in value 0. Where that state is in part the agents' own (the helping task: who
+  carries a battery), the engine also names the value with the two agents' situations exchanged
+  (`swapped_tabular_layer(layer)`), and the swap exchanges it with the cells.
 * **The robot alone**: the engine stepped from every cell with every action, the other absent.
   Where every such step pays the same (Coexistence: `+1`), *other gone* is one state of value
   `pay/(1 − γ)`. Elsewhere (the charger task: only the bench and the charger pay) it is one state
@@ -28,7 +30,8 @@ so every option of the environment (Coexistence's `rules="authors"`, say) is mod
   engine step; the reward is the engine's reward to the robot.
 * **Values**: `Q*` by value iteration (infinite horizon, stopped at the same error bound as
   :mod:`empathy_zoo.reference`), and the golden-rule target at its fixed point,
-  `Q_emp = β·Q* + (1 − β)·γ·E[other present' · V*(swap(s'))]`, `swap` exchanging the two cells.
+  `Q_emp = β·Q* + (1 − β)·γ·E[other present' · V*(swap(s'))]`, `swap` exchanging the two cells
+  (and the agents' own part of the state beyond them).
 * **Policy and outcome**: greedy on `Q_emp`, ties within the reference's `TIE_TOLERANCE` split evenly (or to the
   lowest index), executed ε-greedily; the start distribution is the engine's
   (`start_distribution()`), pushed forward `max_cycles` steps. `harms` is the probability that the
@@ -108,6 +111,10 @@ class TabularModel:
     """``(layers · cells, 5)``: ``layer · cells + cell`` after a step alone."""
     layers: int = 1
     """Values of the state beyond the two cells (1: the engine has none)."""
+    layer_swap: tuple[int, ...] | None = None
+    """``[layer]``: the layer with the two agents' situations exchanged, where the state beyond the
+    cells is in part the agents' own (the helping task: who carries a battery); ``None``: the
+    world's alone (the vase), kept by the swap."""
 
     @property
     def alone_pay(self) -> float | None:
@@ -127,9 +134,12 @@ class TabularModel:
 
     @property
     def swapped(self) -> np.ndarray:
-        """``(states,)``: the state with the robot's and the other's cells exchanged (its layer kept)."""
+        """``(states,)``: the state with the robot's and the other's cells exchanged, its layer kept
+        or, with :attr:`layer_swap`, exchanged too."""
         layer, pair = np.divmod(np.arange(self.states), self.cells * self.cells)
         robot, other = np.divmod(pair, self.cells)
+        if self.layer_swap is not None:
+            layer = np.asarray(self.layer_swap, dtype=np.int64)[layer]
         return layer * self.cells * self.cells + other * self.cells + robot
 
     @property
@@ -170,6 +180,8 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     after = after.reshape(shape)
     alone_reward, alone_after = alone_steps(engine_class, cells, layers, env_kwargs)
     start = np.asarray(getattr(probe, "start_distribution")()).ravel()  # (checked on the class above)
+    swap_layer = getattr(engine_class, "swapped_tabular_layer", None)
+    layer_swap = None if swap_layer is None else tuple(int(x) for x in swap_layer(np.arange(layers)))
     return TabularModel(
         env=env,
         env_kwargs=dict(env_kwargs),
@@ -183,6 +195,7 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
         alone_reward=alone_reward,
         alone_after=alone_after,
         layers=layers,
+        layer_swap=layer_swap,
     )
 
 
