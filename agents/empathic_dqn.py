@@ -34,6 +34,7 @@ nothing else: each has its own seed, replay memory, ε stream and target copies.
 from __future__ import annotations
 
 import importlib
+import itertools
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -239,7 +240,7 @@ class EmpathicDQN:
         others = num_others if config.others != "closest" and num_others > 1 else 1
         replay = config.replay_capacity * ((2 + others) * obs_size + (2 + others) + 4 + (4 if priced_costs else 0))
         sizes = [obs_size, config.hidden_size, config.hidden_size, num_actions]
-        network = 4 * sum(fan_in * fan_out + fan_out for fan_in, fan_out in zip(sizes[:-1], sizes[1:]))
+        network = 4 * sum(fan_in * fan_out + fan_out for fan_in, fan_out in itertools.pairwise(sizes))
         per_run = replay + 3 * (network * (2 if empathic else 1) + network)
         online = k + empathic
         batch = online * config.batch_size * 4 * ((3 + others) * obs_size + 4 * config.hidden_size + 2 * num_actions) * 2
@@ -297,7 +298,7 @@ class EmpathicDQN:
         self._emp = np.flatnonzero(self.empathic_runs)
         if self._emp.size:
             q_emp = init_stacked_mlp(sizes, [generators[i] for i in self._emp], self.device)
-            q = [torch.cat([a, b]) for a, b in zip(q, q_emp)]
+            q = [torch.cat([a, b]) for a, b in zip(q, q_emp, strict=True)]
         # online parameters: rows 0..K-1 are every run's Q, the rows after them the Q_emp of the
         # runs that have one (in run order): one batched pass serves both
         self.online = [p.requires_grad_() for p in q]
@@ -571,7 +572,7 @@ class EmpathicDQN:
     def sync_target(self) -> None:
         """Copy every run's ``Q`` into its ``Q̂``."""
         with torch.no_grad():
-            for target, online in zip(self.target, self.online):
+            for target, online in zip(self.target, self.online, strict=True):
                 target.copy_(online[: self.num_runs])
 
     # ------------------------------------------------------------------ bookkeeping
@@ -661,9 +662,9 @@ class EmpathicDQN:
                 "made by another version or other settings (β = 1 runs train one network since 0.2); move it away to restart"
             )
         with torch.no_grad():
-            for p, saved in zip(self.online, state["online"]):
+            for p, saved in zip(self.online, state["online"], strict=True):
                 p.copy_(saved)
-            for p, saved in zip(self.target, state["target"]):
+            for p, saved in zip(self.target, state["target"], strict=True):
                 p.copy_(saved)
         self.optimizer.load_state_dict(state["optimizer"])
         self.replay.load_state_dict(state["replay"])

@@ -441,7 +441,7 @@ class NumbaUpdate:
         forward, backward and Adam network after network (:meth:`setup_step` first). Returns the
         summed loss, as :meth:`train`."""
         tensors, cached = (replay.observations, replay.flags, replay.reward, replay.decode_table), self._replay
-        if cached is None or any(a is not b for a, b in zip(cached[0], tensors)):
+        if cached is None or any(a is not b for a, b in zip(cached[0], tensors, strict=True)):
             if any(t.device.type != "cpu" for t in tensors):
                 raise ValueError("the compiled step reads replay memories on the CPU only")
             cached = self._replay = (tensors, _replay_arrays(replay))

@@ -288,9 +288,9 @@ class TrainRewards:
             raise ValueError(f"got {len(seeds)} seeds for {len(self.transforms)} runs")
         self.states: list[dict[str, np.ndarray] | None] = [
             self._initial_state(t, rows, envs_per_run, seeds) if isinstance(t, StatefulTransform) else None
-            for t, rows in zip(self.distinct, self.rows)
+            for t, rows in zip(self.distinct, self.rows, strict=True)
         ]
-        for transform, state in zip(self.distinct, self.states):
+        for transform, state in zip(self.distinct, self.states, strict=True):
             if is_priced(transform) and (state is None or not callable(getattr(transform, "price", None))):
                 raise ValueError(
                     f"reward transform {transform.name!r} prices its costs when sampled: it needs a state "
@@ -319,7 +319,7 @@ class TrainRewards:
             raise ValueError(f"got {len(self.transforms)} reward transforms for {batch.rewards.shape[0]} runs")
         rewards = batch.rewards.copy()
         costs = np.zeros(batch.rewards.shape, dtype=np.float32) if self.priced_runs.any() else None
-        for i, (transform, rows) in enumerate(zip(self.distinct, self.rows)):
+        for i, (transform, rows) in enumerate(zip(self.distinct, self.rows, strict=True)):
             part = batch if len(rows) == len(self.transforms) else batch.runs(rows)
             if self.states[i] is None:
                 shaped = transform(part)
@@ -349,7 +349,7 @@ class TrainRewards:
         if not self.priced_runs.any():
             return None
         prices = np.zeros(len(self.transforms))
-        for transform, rows, state in zip(self.distinct, self.rows, self.states):
+        for transform, rows, state in zip(self.distinct, self.rows, self.states, strict=True):
             if is_priced(transform) and state is not None:
                 price = np.asarray(transform.price(state), dtype=np.float64)
                 if price.shape != (len(rows),) or not np.isfinite(price).all() or (price < 0).any():
@@ -366,6 +366,6 @@ class TrainRewards:
 
     def load_state(self, states: Sequence[Any]) -> None:
         """Continue from :meth:`state`."""
-        if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states)):
+        if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states, strict=True)):
             raise ValueError("this checkpoint holds the state of other reward transforms; move it away to restart")
         self.states = [None if state is None else {key: np.array(value) for key, value in state.items()} for state in states]

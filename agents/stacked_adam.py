@@ -110,6 +110,6 @@ class StackedAdam:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        for mine, saved in zip(self.exp_avg + self.exp_avg_sq, state["exp_avg"] + state["exp_avg_sq"]):
+        for mine, saved in zip(self.exp_avg + self.exp_avg_sq, state["exp_avg"] + state["exp_avg_sq"], strict=True):
             mine.copy_(saved)
         self._step_table.copy_(state["steps"].expand_as(self._step_table))

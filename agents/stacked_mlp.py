@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import torch
@@ -14,7 +15,7 @@ def init_stacked_mlp(sizes: list[int], generators: list[torch.Generator], device
     ``b: (K, 1, out)``), each run drawn from its own generator like ``torch.nn.Linear`` does:
     uniform in ``±1/sqrt(fan_in)`` for weights and biases."""
     params: list[torch.Tensor] = []
-    for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+    for fan_in, fan_out in itertools.pairwise(sizes):
         bound = 1.0 / math.sqrt(fan_in)
         w = torch.stack([(torch.rand(fan_in, fan_out, generator=g) * 2 - 1) * bound for g in generators])
         b = torch.stack([(torch.rand(1, fan_out, generator=g) * 2 - 1) * bound for g in generators])

@@ -433,7 +433,7 @@ class SB3Learner:
         self._randomness: list[_RunRandomness] = []
         outer_python = random.getstate()
         outer = _RunRandomness(self.device)
-        for config, seed in zip(self.settings, self.seeds):
+        for config, seed in zip(self.settings, self.seeds, strict=True):
             env = DummyVecEnv([lambda: _Spaces(obs_size, num_actions)] * self.envs_per_run)
             model = make_sb3_model(config, env, sb3_seed(seed), device)  # seeds the global generators
             model.set_logger(Logger(folder=None, output_formats=[]))
@@ -448,7 +448,7 @@ class SB3Learner:
     def act(self, observations: np.ndarray, greedy: bool = False) -> np.ndarray:
         k, m = observations.shape[:2]
         actions = np.empty((k, m), dtype=np.int64)
-        for r, (model, run, rng) in enumerate(zip(self.models, self._runs, self._randomness)):
+        for r, (model, run, rng) in enumerate(zip(self.models, self._runs, self._randomness, strict=True)):
             obs = np.asarray(observations[r], dtype=np.float32)
             if greedy:
                 actions[r] = model.policy.predict(obs, deterministic=True)[0]
@@ -467,7 +467,7 @@ class SB3Learner:
         truncated = getattr(batch, "truncated", None)
         if truncated is None:
             raise ValueError("SB3 learners need StepBatch.truncated (the time-limit flag) from the runner")
-        for r, (run, rng) in enumerate(zip(self._runs, self._randomness)):
+        for r, (run, rng) in enumerate(zip(self._runs, self._randomness, strict=True)):
             signals = (
                 np.asarray(batch.rewards[r], dtype=np.float32),
                 np.asarray(batch.terminated[r], dtype=bool),
@@ -495,7 +495,7 @@ class SB3Learner:
         (:data:`PRICED_AT_SAMPLE_ON_DQN`)."""
         if len(runs) != len(self._runs):
             raise ValueError(f"price_costs: got {len(runs)} flags for {len(self._runs)} runs")
-        for priced, run in zip(runs, self._runs):
+        for priced, run in zip(runs, self._runs, strict=True):
             if not priced:
                 continue
             if not isinstance(run, _OnPolicyRun):
@@ -522,7 +522,7 @@ class SB3Learner:
     def state_dict(self) -> dict[str, Any]:
 
         runs = []
-        for model, run, rng in zip(self.models, self._runs, self._randomness):
+        for model, run, rng in zip(self.models, self._runs, self._randomness, strict=True):
             buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
             runs.append(
                 {
@@ -540,7 +540,7 @@ class SB3Learner:
 
         if list(state["seeds"]) != self.seeds:
             raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")
-        for model, run, rng, saved in zip(self.models, self._runs, self._randomness, state["runs"]):
+        for model, run, rng, saved in zip(self.models, self._runs, self._randomness, state["runs"], strict=True):
             model.policy.load_state_dict(saved["policy"])
             model.policy.optimizer.load_state_dict(saved["optimizer"])
             for name, value in saved["counters"].items():

@@ -43,8 +43,8 @@ def main() -> None:
         eager.update()
         compiled_update()
     print(f"compiling and 60 updates of each: {time.perf_counter() - start:.1f} s")
-    same = all(torch.equal(a, b) for a, b in zip(eager.online, compiled.online))
-    diff = max(float((a - b).detach().abs().max()) for a, b in zip(eager.online, compiled.online))
+    same = all(torch.equal(a, b) for a, b in zip(eager.online, compiled.online, strict=True))
+    diff = max(float((a - b).detach().abs().max()) for a, b in zip(eager.online, compiled.online, strict=True))
     print(f"parameters after 60 updates: {'bit for bit equal' if same else 'differ'} (largest difference {diff:.3g})")
     timings = []
     for _ in range(args.repeats):

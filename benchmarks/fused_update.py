@@ -83,7 +83,7 @@ def update_table(repeats: int, updates: int) -> None:
                 learner.update()
         times: list[list[float]] = [[] for _ in kinds]
         for _ in range(repeats):
-            for row, learner in zip(times, learners):
+            for row, learner in zip(times, learners, strict=True):
                 row.append(cpu_ms(learner.update, calls) * 1e3)
         a, split, whole = (np.array(x) for x in times)
         rows.append(
@@ -91,7 +91,9 @@ def update_table(repeats: int, updates: int) -> None:
         )
         print(
             f"{name}: "
-            + "; ".join(f"{kind} " + " ".join(f"{x:.0f}" for x in row) + " µs" for (kind, _), row in zip(kinds, times))
+            + "; ".join(
+                f"{kind} " + " ".join(f"{x:.0f}" for x in row) + " µs" for (kind, _), row in zip(kinds, times, strict=True)
+            )
         )
     print(
         "\n| setup | torch µs/update | numba, split µs/update | numba, one call µs/update | one call vs torch (median, min–max) |"

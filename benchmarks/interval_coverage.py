@@ -527,7 +527,7 @@ def verdict_rates(
             lo, hi = bootstrap_probability(xs, y, rng, resamples)
             p = _probability(xs, y)
             nlo, nhi = newcombe(p, n, m)
-            exact = np.array([improvement_interval(a, b, confidence=CONFIDENCE) for a, b in zip(xs, y)])
+            exact = np.array([improvement_interval(a, b, confidence=CONFIDENCE) for a, b in zip(xs, y, strict=True)])
             intervals = {"today": (lo, hi), "Newcombe": (nlo, nhi), "exact": (exact[:, 1], exact[:, 2])}
             for key, (a, b) in intervals.items():
                 record[key].append((a > 0.5) if shifted else ((a > 0.5) | (b < 0.5)))

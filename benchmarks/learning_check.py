@@ -70,7 +70,7 @@ def main() -> None:
     paths = train_runs(specs, args.out, RunnerOptions(threads=args.threads))
     print(f"trained {len(specs)} runs × {args.steps:,} steps in {time.perf_counter() - start:.0f} s")
     table: dict[float, list[tuple[float, float]]] = {}
-    for spec, path in zip(specs, paths):
+    for spec, path in zip(specs, paths, strict=True):
         last = json.loads(Path(path).read_text())["eval"][-1]
         table.setdefault(spec.method_settings().selfishness, []).append((np.mean(last["survival"]), np.mean(last["harms"])))
     baseline = random_robot()

@@ -124,11 +124,11 @@ def main() -> None:
     for name, runs in (("A: no logging", plain), (f"B: --log {','.join(BACKENDS)}", logged)):
         walls, cpus = [run[0] for run in runs], [run[1] for run in runs]
         print(f"| {name} | {statistics.median(walls):.2f} | {min(walls):.2f} | {statistics.median(cpus):.2f} | {min(cpus):.2f} |")
-    wall_ratio = statistics.median(b[0] / a[0] for a, b in zip(plain, logged))
-    cpu_ratio = statistics.median(b[1] / a[1] for a, b in zip(plain, logged))
+    wall_ratio = statistics.median(b[0] / a[0] for a, b in zip(plain, logged, strict=True))
+    cpu_ratio = statistics.median(b[1] / a[1] for a, b in zip(plain, logged, strict=True))
     fastest = [min(x[i] for x in logged) / min(x[i] for x in plain) for i in (0, 1)]
     print(f"| B / A (median of pairs; fastest) | {wall_ratio:.3f} | {fastest[0]:.3f} | {cpu_ratio:.3f} | {fastest[1]:.3f} |")
-    print("pairs B / A, CPU: " + ", ".join(f"{b[1] / a[1]:.3f}" for a, b in zip(plain, logged)))
+    print("pairs B / A, CPU: " + ", ".join(f"{b[1] / a[1]:.3f}" for a, b in zip(plain, logged, strict=True)))
     total = sum(run[1] for run in logged)
     threads = sum(run[2] for run in logged) - sum(run[2] for run in plain)  # (B's other threads, less A's)
     print(f"inside the tracker's calls: {INSIDE[0]:.3f} CPU s of B's {total:.1f} CPU s = {INSIDE[0] / total:.2%}")

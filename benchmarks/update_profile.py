@@ -90,7 +90,7 @@ class ManualBackward(EmpathicDQN):
             loss_e, grad = self._loss_grad(out_e, action if rows is None else action.index_select(0, rows), y_emp)
             loss = loss + loss_e
             _backward(e_params, inputs_e, grad, b, self._grads, slice(k, k + emp))
-        for p, g in zip(self.online, self._grads):
+        for p, g in zip(self.online, self._grads, strict=True):
             p.grad = g
         self.optimizer.step()
         self.grad_steps += 1
@@ -110,7 +110,7 @@ def main() -> None:
     ours, manual = filled_learner(EmpathicDQN), filled_learner(ManualBackward)
     for _ in range(120):
         ours.update(), manual.update()
-    same = all(torch.equal(a.detach(), b) for a, b in zip(ours.online, manual.online))
+    same = all(torch.equal(a.detach(), b) for a, b in zip(ours.online, manual.online, strict=True))
     times: dict[str, list[float]] = {"autograd (as trained)": [], "hand-written backward": []}
     for _ in range(10):
         times["autograd (as trained)"].append(cpu_ms(ours.update, args.updates))

@@ -62,7 +62,7 @@ class CounterStreamBatch:
         self.counts = np.zeros(num_envs, dtype=np.uint64)
 
     def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
-        for i, seed in zip(env_ids, seeds):
+        for i, seed in zip(env_ids, seeds, strict=True):
             if seed is not None:
                 self.keys[i], self.counts[i] = derive_key(seed), 0
 

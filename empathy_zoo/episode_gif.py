@@ -207,7 +207,7 @@ class EpisodeRecorder:
         if last:
             text("episode over" if step.over else f"first {step.step} steps shown")
         canvas = np.asarray(image).copy()
-        for entry, row in zip(self._legend, swatch_rows):
+        for entry, row in zip(self._legend, swatch_rows, strict=True):
             canvas[row : row + SWATCH, left : left + SWATCH] = swatch(entry, SWATCH)
         return canvas
 

@@ -142,7 +142,7 @@ class _PolicyCopies:
         self.needs_state = bool(getattr(policy, "needs_state", False))
 
     def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
-        for i, seed in zip(env_ids, seeds):
+        for i, seed in zip(env_ids, seeds, strict=True):
             self.copies[i].reset(seed)
 
     def act(
@@ -173,7 +173,7 @@ class _PolicyCopies:
             raise ValueError(
                 f"state of {len(states)} copies of {policy_name(self.copies[0])} for {len(self.copies)} environments"
             )
-        for policy, saved in zip(self.copies, states):
+        for policy, saved in zip(self.copies, states, strict=True):
             load_policy_state(policy, saved)
 
 

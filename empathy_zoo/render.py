@@ -81,7 +81,7 @@ def legend(engine: GridEngine) -> list[LegendEntry]:
     """What the image of ``engine`` shows, in agent order: one entry per agent colour (agents
     drawn alike share one, e.g. ``cat_0 … cat_2``), then ``battery`` for an engine with batteries."""
     groups: dict[tuple[int, int, int], list[str]] = {}
-    for name, color in zip(engine.agents, engine.colors):
+    for name, color in zip(engine.agents, engine.colors, strict=True):
         groups.setdefault(color, []).append(name)
     entries = [
         LegendEntry(", ".join(names) if len(names) <= 2 else f"{names[0]} … {names[-1]}", color, False)

@@ -361,7 +361,7 @@ class VectorEnv:
         engine, events = self.engine, self._events
         with_positions = bool(getattr(policy, "needs_state", False))
         contexts: list[dict[str, Any] | None] = []
-        for env_id, (present, fresh) in enumerate(zip(engine.present[:, index].tolist(), self._fresh.tolist())):
+        for env_id, (present, fresh) in enumerate(zip(engine.present[:, index].tolist(), self._fresh.tolist(), strict=True)):
             if not present:
                 contexts.append(None)
                 continue
@@ -389,13 +389,13 @@ class VectorEnv:
         if self._only_other:  # (one other agent: no stacking)
             swapped, valid, hidden = (
                 _by_learner(list(x))
-                for x in zip(*(self._swap(viewer, self._only_other[viewer]) for viewer in self.learner_index))
+                for x in zip(*(self._swap(viewer, self._only_other[viewer]) for viewer in self.learner_index), strict=True)
             )
             return swapped[:, :, None], valid[:, :, None], hidden[:, :, None]
         pictures, seen, unseen = [], [], []
         for viewer in self.learner_index:
             each, each_seen, each_unseen = zip(
-                *(self._swap(viewer, other) for other in self.engine.other_agents[viewer].tolist())
+                *(self._swap(viewer, other) for other in self.engine.other_agents[viewer].tolist()), strict=True
             )
             pictures.append(np.stack(each, axis=1))
             seen.append(np.stack(each_seen, axis=1))

@@ -56,7 +56,8 @@ def label_colours(labels: Iterable[str], dqn_labels: Collection[str] = ()) -> di
     ``dqn_labels`` are its DQN reference rows."""
     unique = sorted(dict.fromkeys(labels), key=label_order)
     references = [label for label in unique if label in dqn_labels]
-    colours = dict(zip(references, DQN_COLOURS))
+    # (unequal on purpose: the first three references take DQN_COLOURS, a fourth and more take palette colours)
+    colours = dict(zip(references, DQN_COLOURS, strict=False))
     rest = [label for label in unique if label not in colours]
     spare = [c for c in distinct_colours(len(rest) + len(PALETTE)) if c not in PALETTE and c not in DQN_COLOURS]
     taken: set[str] = set()

@@ -100,7 +100,7 @@ def constraint_satisfaction(
     if not 0.0 < final_fraction <= 1.0:
         raise ValueError(f"final_fraction must lie in (0, 1], got {final_fraction!r}")
     final, greedy = [], []
-    for run, (train, evaluation) in enumerate(zip(training_costs, greedy_costs)):
+    for run, (train, evaluation) in enumerate(zip(training_costs, greedy_costs, strict=True)):
         for name, costs in (("training", train), ("greedy", evaluation)):
             values = np.asarray(costs, dtype=np.float64)
             if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all() or (values < 0).any():

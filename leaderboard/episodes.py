@@ -175,7 +175,7 @@ def chosen_runs(results: Sequence[dict[str, Any]], origins: Sequence[str]) -> di
     are in the tables' order (:func:`leaderboard.aggregate.group_runs`)."""
     if len(origins) != len(results):
         raise ValueError(f"{len(origins)} origins for {len(results)} results")
-    origin_of = {id(run): origin for run, origin in zip(results, origins)}
+    origin_of = {id(run): origin for run, origin in zip(results, origins, strict=True)}
     chosen = {}
     for row, runs in group_runs(results).items():
         kept = [run for run in runs if _kept_agent(run) is not None]

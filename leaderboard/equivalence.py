@@ -270,7 +270,7 @@ def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], le
     tested = [i for i, cell in enumerate(raw) if not cell.constant]
     rejected = holm_rejections([raw[i].p_value for i in tested], level)
     cells = list(raw)
-    for i, reject in zip(tested, rejected):
+    for i, reject in zip(tested, rejected, strict=True):
         if reject:
             cells[i] = Cell(**{**raw[i].__dict__, "differs": True})
     return Equivalence(

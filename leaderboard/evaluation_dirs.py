@@ -76,7 +76,7 @@ def _beside_runs(
     result file records."""
     beside: dict[tuple[str, str], Path] = {}
     for directory in results_dirs:
-        mine = results if origins is None else [r for r, o in zip(results, origins) if o == os.fspath(directory)]
+        mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == os.fspath(directory)]
         recorded = {(str(run["run_id"]), _recorded_sha(run)) for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)

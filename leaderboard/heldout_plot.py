@@ -51,7 +51,7 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
     FigureCanvasAgg(figure)
     panels = figure.subplots(len(group.metrics), 1, squeeze=False)[:, 0]
     half = 0.38
-    for axes, metric in zip(panels, group.metrics):
+    for axes, metric in zip(panels, group.metrics, strict=True):
         for x, label in enumerate(labels):
             own = by_key[(label, TRAINED_WITH, metric)]
             interval = len(group.runs[label]) >= MIN_INTERVAL_SEEDS  # (below: no band, no bars, as the tables say)

@@ -229,7 +229,7 @@ def load_heldout(
     notes: list[str] = []
     found: dict[tuple[str, str], list[tuple[dict[str, Any], dict[str, Any], Path]]] = {}
     for directory in dirs:
-        mine = results if origins is None else [r for r, o in zip(results, origins) if o == str(directory)]
+        mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == str(directory)]
         by_id = {run["run_id"]: run for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)

@@ -230,8 +230,8 @@ def improvement_interval(
     support, tails = _null_tails(tuple(sorted(int(r) for r in ranks)), a.size)
     probability = (int(ranks[: a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
     alpha = 1.0 - confidence + 1e-12
-    accepted = [d for d, tail in zip(support, tails) if tail > alpha]
-    rejected = [d for d, tail in zip(support, tails) if tail <= alpha]
+    accepted = [d for d, tail in zip(support, tails, strict=True) if tail > alpha]
+    rejected = [d for d, tail in zip(support, tails, strict=True) if tail <= alpha]
     scale = 2.0 * a.size * b.size  # D / scale is the distance of the probability from 0.5
     if rejected:
         half = 0.5 * (max(accepted, default=0) + min(rejected)) / scale

@@ -100,14 +100,14 @@ def render_curves_png(
     axes = figure.add_subplot()
     by_label = label_colours([curve.method_label for curve in curves], dqn_labels)
     colours = [by_label[curve.method_label] for curve in curves]
-    for curve, colour in zip(curves, colours):
+    for curve, colour in zip(curves, colours, strict=True):
         role = ", the DQN reference" if curve.method_label in dqn_labels else ""
         label = f"{curve.method_label} ({seeds_text(curve.n_seeds)}{role})"
         axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)
         if curve.n_seeds >= MIN_INTERVAL_SEEDS:
             axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
     drawn = [reference for reference in references or [] if reference is not None]
-    for curve, colour, reference in zip(curves, colours, references or [None] * len(curves)):
+    for curve, colour, reference in zip(curves, colours, references or [None] * len(curves), strict=True):
         if reference is not None:
             axes.plot(curve.steps, reference, color=colour, linewidth=1.2, linestyle="--")
     if drawn:  # one neutral legend entry for every dashed line

@@ -377,7 +377,7 @@ class _Table:
 
 
 def _line(keys: Sequence[str], cells: Sequence[Cell]) -> str:
-    return "; ".join(f"{k}: {c}" for k, c in zip(keys, cells))
+    return "; ".join(f"{k}: {c}" for k, c in zip(keys, cells, strict=True))
 
 
 def _verdict(ok: bool, cells: Sequence[Cell], evidence: str) -> Verdict:

@@ -59,7 +59,8 @@ def condition_of(run: dict[str, Any]) -> Condition:
     kwargs = config.get("env_kwargs") or {}
     human = (config.get("fixed") or {}).get("human_0", DEFAULT_CONDITION[2])
     start, encoding = (
-        str(kwargs.get(name, default)) for name, default in zip(("start", "inventory_encoding"), DEFAULT_CONDITION)
+        str(kwargs.get(name, default))
+        for name, default in zip(("start", "inventory_encoding"), DEFAULT_CONDITION[:2], strict=True)
     )
     return start, encoding, str(human)
 
@@ -153,7 +154,7 @@ def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[s
                         )
                     )
                 if per_run:
-                    table[beta] = FairSplit(*(float(np.mean(column)) for column in zip(*per_run)))
+                    table[beta] = FairSplit(*(float(np.mean(column)) for column in zip(*per_run, strict=True)))
             rows[condition][name] = table
     return rows
 

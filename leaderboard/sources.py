@@ -81,7 +81,7 @@ class ResultSet:
         """The directories each row's runs (``(variant, label)``) were read from, in the order given."""
         order = [directory.path for directory in self.directories]
         rows: dict[tuple[str, str], set[str]] = {}
-        for result, origin in zip(self.results, self.origins):
+        for result, origin in zip(self.results, self.origins, strict=True):
             rows.setdefault((table_env(result), result["method_label"]), set()).add(origin)
         return {row: tuple(sorted(found, key=order.index)) for row, found in rows.items()}
 
@@ -197,7 +197,7 @@ def load_results_dirs(
         shown = rename_dqn_rows([result for _, _, result in files], renamed)
         read = [
             (i, path, {**result, "method_label": label(i, result, named["method_label"])})
-            for (i, path, result), named in zip(read, shown)
+            for (i, path, result), named in zip(read, shown, strict=True)
         ]
     directories = tuple(
         ResultsDir(

@@ -303,7 +303,7 @@ def holm_survivors(cells: Sequence[Improvement], level: float = FAMILY_LEVEL) ->
     family = _family(cells)
     adjusted = holm_adjusted([cells[i].p_value for i in family])
     survives = [False] * len(cells)
-    for i, keep in zip(family, rejected(adjusted, level)):
+    for i, keep in zip(family, rejected(adjusted, level), strict=True):
         survives[i] = bool(keep) and cells[i].verdict in ("better", "worse")
     return survives
 
@@ -322,7 +322,7 @@ def multiplicity_note(
     marked = [i for i in family if cells[i].verdict in ("better", "worse")]
     holm = holm_survivors(cells, level)
     bh = rejected(benjamini_hochberg_adjusted([cells[i].p_value for i in family]), level)
-    by_bh = sum(1 for i, keep in zip(family, bh) if keep and i in marked)
+    by_bh = sum(1 for i, keep in zip(family, bh, strict=True) if keep and i in marked)
     percent = f"{100 * level:.0f} %"
     smallest = min((2.0 / math.comb(cells[i].n_seeds + cells[i].n_baseline_seeds, cells[i].n_seeds) for i in family), default=0.0)
     out_of_reach = (
@@ -349,7 +349,7 @@ def improvement_sections(
     (and DQN row compared with), a column per metric, each cell ``P [interval] · IQM value``; with
     ``against``, a column ``Against`` names the DQN row and its seeds. ``cells`` are the page's: a
     mark that survives Holm over them (:func:`holm_survivors`) is followed by :data:`HOLM_MARK`."""
-    holm = dict(zip(map(id, cells), holm_survivors(cells)))
+    holm = dict(zip(map(id, cells), holm_survivors(cells), strict=True))
     sections = []
     for phase in PHASES:
         mine = [c for c in cells if c.env == env and c.phase == phase]

@@ -102,9 +102,9 @@ def render_tradeoff_png(
     figure = Figure(figsize=(11.0, 4.6), layout="constrained")
     FigureCanvasAgg(figure)
     panels = figure.subplots(1, len(PHASES), squeeze=False)[0]
-    for axes, phase in zip(panels, PHASES):
+    for axes, phase in zip(panels, PHASES, strict=True):
         cells = [(_cell(scores, label, phase, spec.task), _cell(scores, label, phase, spec.effect)) for label in labels]
-        drawn = [(label, x, y) for label, (x, y) in zip(labels, cells) if x is not None and y is not None]
+        drawn = [(label, x, y) for label, (x, y) in zip(labels, cells, strict=True) if x is not None and y is not None]
         front = set(pareto_front([(x.mean, y.mean) for _, x, y in drawn], spec.effect_higher_is_better))
         for i, (label, x, y) in enumerate(drawn):
             colour = colours[labels.index(label)]
@@ -125,7 +125,7 @@ def render_tradeoff_png(
             )
         if len(front) > 1:
             ordered = sorted((drawn[i][1].mean, drawn[i][2].mean) for i in front)
-            axes.plot(*zip(*ordered), color="0.35", linestyle="--", linewidth=1.0, zorder=0)
+            axes.plot(*zip(*ordered, strict=True), color="0.35", linestyle="--", linewidth=1.0, zorder=0)
         axes.set_title(PHASE_TITLES.get(phase, phase))
         axes.set_xlabel(spec.task_label)
         axes.set_ylabel(spec.effect_label)

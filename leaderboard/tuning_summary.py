@@ -136,7 +136,7 @@ def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> 
     figure = Figure(figsize=(6.2 * len(variants), 0.9 + 0.38 * height), layout="constrained")
     FigureCanvasAgg(figure)
     axes_row = figure.subplots(1, len(variants), squeeze=False)[0]
-    for axes, variant in zip(axes_row, variants):
+    for axes, variant in zip(axes_row, variants, strict=True):
         labels = [s["plan"]["label"] for s in rows[variant]]
         for y, study in enumerate(rows[variant]):
             trials = [t for t in study["trials"] if name in t["params"] and t["state"] != "INTERRUPTED"]

@@ -41,7 +41,9 @@ def verdicts(page: str) -> dict[Cell, str]:
             if not header:
                 header = parts
             elif not set(parts[0]) <= set(":-"):
-                for metric, value in zip(header[2:], parts[2:]):
+                # (strict=False: the page is read as text, as written; a row with more or fewer cells than its
+                # header is read as far as both go, as before)
+                for metric, value in zip(header[2:], parts[2:], strict=False):
                     match = _MARK.match(value)
                     cells[(variant, phase, parts[0], metric)] = match.group(1) if match else ""
     return cells

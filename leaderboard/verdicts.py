@@ -26,6 +26,7 @@ The rules (:data:`RULES` is their text, printed in every REPRODUCTION.md before 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -123,7 +124,7 @@ def falls(cells: Sequence[Cell]) -> bool:
     below the first."""
     if len(cells) < 2:
         raise ValueError("a trend needs at least two cells")
-    no_rise = not any(below(previous, current) for previous, current in zip(cells, cells[1:]))
+    no_rise = not any(below(previous, current) for previous, current in itertools.pairwise(cells))
     return no_rise and below(cells[-1], cells[0])
 
 

@@ -57,7 +57,7 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str
             for phase in ("eval", "train_final10")
             if (key := (variant, label, phase, metric)) in verdicts
         ]
-    holm = {id(cell) for cell, keep in zip(shown, holm_survivors(shown)) if keep}
+    holm = {id(cell) for cell, keep in zip(shown, holm_survivors(shown), strict=True) if keep}
     lines: list[str] = []
     for variant, metrics in metrics_of.items():
         labels = [label for (env, label) in groups if env == variant]

@@ -83,7 +83,7 @@ def test_a_loaded_agent_acts_exactly_as_its_run(trained) -> None:
     learner, observations, paths, hashes = trained
     greedy = learner_greedy(learner, observations)
     singles = [learner_greedy(learner, o[None])[:, 0] for o in observations[:150]]  # (one observation at a time, as in training)
-    for run, (path, sha) in enumerate(zip(paths, hashes)):
+    for run, (path, sha) in enumerate(zip(paths, hashes, strict=True)):
         agent = load_agent(path, expected_sha256=sha)
         assert np.array_equal(agent.act_batch(observations), greedy[run])
         assert [agent.act(o) for o in observations[:150]] == [int(s[run]) for s in singles]
@@ -93,7 +93,7 @@ def test_a_loaded_agent_acts_exactly_as_its_run(trained) -> None:
 def test_a_loaded_agent_gives_the_learners_values_bit_for_bit(trained) -> None:
     learner, observations, paths, _ = trained
     own, acting = learner_values(learner, observations, "q"), learner_values(learner, observations, "emp")
-    for run, (path, beta) in enumerate(zip(paths, BETAS)):
+    for run, (path, beta) in enumerate(zip(paths, BETAS, strict=True)):
         values = load_agent(path).q_values(observations)
         assert set(values) == ({"q"} if beta == 1.0 else {"q", "q_emp"})
         assert values["q"].dtype == np.float32 and np.array_equal(values["q"], own[run])
@@ -108,7 +108,7 @@ def test_a_loaded_agent_gives_the_learners_values_bit_for_bit(trained) -> None:
 
 def test_describe_says_what_the_agent_is(trained) -> None:
     _, _, paths, hashes = trained
-    for run, (path, sha, beta) in enumerate(zip(paths, hashes, BETAS)):
+    for run, (path, sha, beta) in enumerate(zip(paths, hashes, BETAS, strict=True)):
         d = load_agent(path).describe()
         assert d["method"] == "empathic_dqn" and d["env"] == "coexistence_v0" and d["env_kwargs"] == {"max_cycles": 60}
         assert d["settings"]["selfishness"] == beta and d["seed"] == run and d["run_id"] == HEADER["run_id"]
@@ -125,7 +125,7 @@ def test_the_file_is_small_plain_data_and_written_atomically(trained) -> None:
     assert set(document) == {"format", "version", "header", "obs_size", "num_actions", "activation", "heads", "acting"}
     assert [tuple(t.shape) for t in document["heads"]["q_emp"]] == [(25, 128), (128,), (128, 128), (128,), (128, 5), (5,)]
     parameters = 4 * (25 * 128 + 128 + 128 * 128 + 128 + 128 * 5 + 5)  # float32 bytes of one head
-    for path, beta in zip(paths, BETAS):
+    for path, beta in zip(paths, BETAS, strict=True):
         heads = 1 if beta == 1.0 else 2
         assert heads * parameters < path.stat().st_size < heads * parameters + 12_000  # the networks, nothing more
     assert not [p for p in paths[0].parent.iterdir() if p.name.startswith(".")], "no temporary file is left"

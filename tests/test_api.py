@@ -47,7 +47,7 @@ def assert_same(a, b) -> None:
             assert_same(a[key], b[key])
     elif isinstance(a, (list, tuple)):
         assert type(a) is type(b) and len(a) == len(b)
-        for x, y in zip(a, b):
+        for x, y in zip(a, b, strict=True):
             assert_same(x, y)
     else:
         assert a == b and type(a) is type(b)

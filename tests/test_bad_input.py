@@ -400,7 +400,7 @@ def test_user_policy_gives_the_same_trajectories_on_both_faces():
     envs = [FixedAgents(coexistence_v0.parallel_env(), {CAT: spec}) for _ in seeds]
     vector = VectorEnv("coexistence_v0", len(seeds), fixed={CAT: spec})
     observations = vector.reset(seed=seeds)
-    for i, (env, seed) in enumerate(zip(envs, seeds)):
+    for i, (env, seed) in enumerate(zip(envs, seeds, strict=True)):
         np.testing.assert_array_equal(env.reset(seed=seed)[0][ROBOT], observations[i, 0])
     rng = np.random.default_rng(0)
     for _ in range(300):

@@ -304,7 +304,7 @@ def test_killed_run_resumes_from_its_checkpoint_and_matches_an_uninterrupted_run
     assert loaded == [checkpoint] and not checkpoint.exists()
     resumed, uninterrupted = run_files(out), run_files(reference)
     assert [p.name for p in resumed] == [p.name for p in uninterrupted]
-    for mine, theirs in zip(resumed, uninterrupted):
+    for mine, theirs in zip(resumed, uninterrupted, strict=True):
         a, b = json.loads(mine.read_text()), json.loads(theirs.read_text())
         assert a["train"] == b["train"] and a["eval"] == b["eval"]
 

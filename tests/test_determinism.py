@@ -58,7 +58,7 @@ def same(a: list, b: list) -> bool:
     flat_a, flat_b = flatten(a), flatten(b)
     if len(flat_a) != len(flat_b):
         return False
-    for x, y in zip(flat_a, flat_b):
+    for x, y in zip(flat_a, flat_b, strict=True):
         if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
             if not (isinstance(x, np.ndarray) and isinstance(y, np.ndarray) and x.dtype == y.dtype and np.array_equal(x, y)):
                 return False
@@ -129,7 +129,7 @@ def lockstep(module, fixed: dict | None, seeds: list[int], steps: int, action_se
 
     observations = vector.reset(seed=seeds)
     assert observations.shape == (n, len(learners), 25) and observations.dtype == np.float32
-    for i, (env, seed) in enumerate(zip(envs, seeds)):
+    for i, (env, seed) in enumerate(zip(envs, seeds, strict=True)):
         obs, _ = env.reset(seed=seed)
         for k, agent in enumerate(learners):
             np.testing.assert_array_equal(observations[i, k], obs[agent])

@@ -44,7 +44,9 @@ def test_targets_on_a_hand_made_batch() -> None:
     expected_y = [1.0 + 0.9 * 20.0, 0.0, 1.0 + 0.9 * 50.0, 2.0 + 0.9 * -3.0]
     expected_other = [0.9 * 4.0, 0.9 * 2.0, 0.9 * 8.0, 0.0]  # 0: the other has left
     assert y[0].tolist() == pytest.approx(expected_y)
-    assert y_emp[0].tolist() == pytest.approx([beta * a + (1 - beta) * b for a, b in zip(expected_y, expected_other)])
+    assert y_emp[0].tolist() == pytest.approx(
+        [beta * a + (1 - beta) * b for a, b in zip(expected_y, expected_other, strict=True)]
+    )
 
 
 def test_beta_one_target_ignores_the_other() -> None:
@@ -91,7 +93,7 @@ def test_beta_one_gives_the_same_updates_as_dqn_whatever_the_other_sees() -> Non
     plain = _train("dqn", _random_batches(200, 1, seed=0))
     empathic = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=1.0)
     assert plain.grad_steps > 100
-    for a, b in zip(plain.online, empathic.online):
+    for a, b in zip(plain.online, empathic.online, strict=True):
         assert torch.equal(a, b)
 
 
@@ -99,7 +101,7 @@ def test_beta_one_is_standard_dqn_with_one_network() -> None:
     selfish = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=1.0)
     caring = _train("empathic_dqn", _random_batches(200, 1, seed=0, swapped_noise=True), selfishness=0.25)
     assert not selfish.empathic_runs.any() and caring.empathic_runs.all()
-    for a, b in zip(selfish.online, caring.online):
+    for a, b in zip(selfish.online, caring.online, strict=True):
         assert a.shape[0] == 1 and b.shape[0] == 2  # Q only; Q and Q_emp
         assert torch.equal(a[0], b[0])  # Q is trained on y, which β does not touch
     obs = torch.rand(1, 7, 25)
@@ -126,7 +128,7 @@ def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
                 StepBatch(**{name: (None if value is None else value[run : run + 1]) for name, value in vars(batch).items()})
             )
         heads = [run] + ([len(betas) + [1, 3].index(run)] if beta < 1 else [])
-        for mine, alone in zip(mixed.online, solo.online):
+        for mine, alone in zip(mixed.online, solo.online, strict=True):
             assert torch.equal(mine[heads], alone)
         solo_values = solo.q_values(probe[run : run + 1])[0]
         assert torch.equal(acting[run], solo_values)
@@ -137,7 +139,7 @@ def test_mixed_ensemble_runs_equal_their_solo_runs() -> None:
 def test_ensemble_updates_equal_solo_updates() -> None:
     solo = _train("empathic_dqn", _random_batches(150, 1, seed=5), selfishness=0.5)
     ensemble = _train("empathic_dqn", _random_batches(150, 3, seed=5), selfishness=0.5)
-    for a, b in zip(solo.online, ensemble.online):
+    for a, b in zip(solo.online, ensemble.online, strict=True):
         assert torch.equal(a[0], b[0]) and torch.equal(a[1], b[3])  # Q of run 0 and Q_emp of run 0
         assert torch.equal(b[0], b[1])  # identical runs stay identical
 
@@ -148,7 +150,7 @@ def test_target_network_is_copied_on_schedule() -> None:
     assert not torch.equal(learner.target[0], learner.online[0][:1])
     learner.observe(_random_batches(1, 1, seed=9)[0])
     assert learner.grad_steps == 50
-    for target, online in zip(learner.target, learner.online):
+    for target, online in zip(learner.target, learner.online, strict=True):
         assert torch.equal(target, online[:1])
 
 

@@ -105,7 +105,7 @@ def test_training_gives_the_policy_the_same_contexts_as_fixed_agents(tmp_path, m
 
 
 def torus_distance(a, b, size: int) -> int:
-    return sum(min((x - y) % size, (y - x) % size) for x, y in zip(a, b))
+    return sum(min((x - y) % size, (y - x) % size) for x, y in zip(a, b, strict=True))
 
 
 def test_a_chaser_that_asks_for_positions_walks_to_a_robot_it_cannot_see():

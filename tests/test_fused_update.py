@@ -52,7 +52,9 @@ def _transitions(seed: int, others: int) -> list[tuple[np.ndarray, ...]]:
 
 def _close(a: list[torch.Tensor], b: list[torch.Tensor], rel: float) -> list[float]:
     """Largest difference of every tensor pair over the largest magnitude of the first; asserts ``≤ rel``."""
-    gaps = [float((x - y).abs().max() / x.abs().max()) for x, y in zip((t.detach() for t in a), (t.detach() for t in b))]
+    gaps = [
+        float((x - y).abs().max() / x.abs().max()) for x, y in zip((t.detach() for t in a), (t.detach() for t in b), strict=True)
+    ]
     assert max(gaps) <= rel, gaps
     return gaps
 
@@ -80,11 +82,11 @@ def test_one_step_on_a_tiny_network_matches_float64_autograd_and_adam(needs_numb
     ref_loss = ((h.gather(1, action[0][:, None])[:, 0] - y[0].double()) ** 2).mean()
     ref_loss.backward()
     assert loss == pytest.approx(float(ref_loss.detach()), rel=1e-6)
-    for grad, p in zip(fused._grads, ref):
+    for grad, p in zip(fused._grads, ref, strict=True):
         assert p.grad is not None
         np.testing.assert_allclose(grad, p.grad.numpy(), rtol=1e-5, atol=1e-7)
     lr, (b1, b2), eps = 0.01, (0.9, 0.999), 1e-8
-    for p, after, m, v in zip(ref, online, optimizer.exp_avg, optimizer.exp_avg_sq):
+    for p, after, m, v in zip(ref, online, optimizer.exp_avg, optimizer.exp_avg_sq, strict=True):
         g = p.grad.detach()
         m_ref, v_ref = (1 - b1) * g, (1 - b2) * g * g
         step = p.detach() - lr / (1 - b1) * m_ref / (v_ref.sqrt() / np.sqrt(1 - b2) + eps)
@@ -167,15 +169,17 @@ def test_a_run_is_the_same_alone_or_in_an_ensemble(needs_numba: None, others: in
     ensemble = _learner(betas, "numba", seeds, num_others=others, **settings)
     for _ in range(120):
         ensemble.update()
-    for run, (beta, seed) in enumerate(zip(betas, seeds)):
+    for run, (beta, seed) in enumerate(zip(betas, seeds, strict=True)):
         solo = _learner([beta], "numba", [seed], num_others=others, **settings)
         for _ in range(120):
             solo.update()
         heads = [run] + ([len(betas) + [1, 3].index(run)] if beta < 1 else [])
-        for mine, alone in zip(ensemble.online, solo.online):
+        for mine, alone in zip(ensemble.online, solo.online, strict=True):
             assert torch.equal(mine[heads], alone)
         for mine, alone in zip(
-            ensemble.optimizer.exp_avg + ensemble.optimizer.exp_avg_sq, solo.optimizer.exp_avg + solo.optimizer.exp_avg_sq
+            ensemble.optimizer.exp_avg + ensemble.optimizer.exp_avg_sq,
+            solo.optimizer.exp_avg + solo.optimizer.exp_avg_sq,
+            strict=True,
         ):
             assert torch.equal(mine[heads], alone)
 
@@ -184,7 +188,7 @@ def test_a_rerun_is_identical(needs_numba: None) -> None:
     first, second = _learner([0.5, 1.0], "numba"), _learner([0.5, 1.0], "numba")
     losses = [(first.update(), second.update()) for _ in range(80)]
     assert all(a == b for a, b in losses)
-    for a, b in zip(first.online + first.target, second.online + second.target):
+    for a, b in zip(first.online + first.target, second.online + second.target, strict=True):
         assert torch.equal(a, b)
 
 
@@ -199,10 +203,10 @@ def test_a_checkpoint_continues_identically(needs_numba: None) -> None:
     resumed.load_state_dict(state)
     for _ in range(60):
         assert uninterrupted.update() == resumed.update()
-    for a, b in zip(uninterrupted.state_dict()["online"], resumed.state_dict()["online"]):
+    for a, b in zip(uninterrupted.state_dict()["online"], resumed.state_dict()["online"], strict=True):
         assert torch.equal(a, b)
     for name in ("exp_avg", "exp_avg_sq"):
-        for a, b in zip(uninterrupted.optimizer.state_dict()[name], resumed.optimizer.state_dict()[name]):
+        for a, b in zip(uninterrupted.optimizer.state_dict()[name], resumed.optimizer.state_dict()[name], strict=True):
             assert torch.equal(a, b)
     assert torch.equal(uninterrupted.optimizer._step_table, resumed.optimizer._step_table)
 
@@ -348,7 +352,9 @@ def test_the_one_call_update_is_the_step_with_torch_targets(needs_numba: None, c
     assert split._overridden("targets")
     for _ in range(150):
         assert whole.update() == split.update()
-    for a, b in zip(whole.online + whole.target + whole.optimizer.exp_avg, split.online + split.target + split.optimizer.exp_avg):
+    for a, b in zip(
+        whole.online + whole.target + whole.optimizer.exp_avg, split.online + split.target + split.optimizer.exp_avg, strict=True
+    ):
         assert torch.equal(a, b)
 
 
@@ -386,7 +392,7 @@ def test_overridden_indices_and_targets_are_used(needs_numba: None) -> None:
         assert [learner.update() for learner in learners] == [loss, loss]
     assert _CountedTargets.calls == 60
     for learner in learners:
-        for a, b in zip(reference.online, learner.online):
+        for a, b in zip(reference.online, learner.online, strict=True):
             assert torch.equal(a, b)
 
 
@@ -422,7 +428,7 @@ def test_without_numba_the_learner_says_so_and_trains_with_torch(monkeypatch: py
     reference = _learner([0.5], "torch")
     for _ in range(20):
         assert fallen.update() == reference.update()
-    for a, b in zip(fallen.online, reference.online):
+    for a, b in zip(fallen.online, reference.online, strict=True):
         assert torch.equal(a, b)
 
 

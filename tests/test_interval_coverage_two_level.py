@@ -52,7 +52,7 @@ def test_the_resampler_is_deterministic_for_a_seed() -> None:
     row = _row([[0.0, 1.0], [0.2, 0.2, 0.3], [1.0]])
     first = ic.two_level_coverage(row, 5, 300, np.random.default_rng(4))
     second = ic.two_level_coverage(row, 5, 300, np.random.default_rng(4))
-    assert all(np.array_equal(a, b) for a, b in zip(first, second))
+    assert all(np.array_equal(a, b) for a, b in zip(first, second, strict=True))
 
 
 def test_rows_read_the_episodes_the_leaderboard_scores() -> None:

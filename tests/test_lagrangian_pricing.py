@@ -140,7 +140,7 @@ def test_both_kernels_price_a_batch_alike() -> None:
         losses = {name: learner.update() for name, learner in learners.items()}
         assert losses["numba"] == losses["split"]
         assert losses["numba"] == pytest.approx(losses["torch"], rel=1e-4)
-    for a, b, c in zip(*([p.detach() for p in learners[name].online] for name in ("numba", "split", "torch"))):
+    for a, b, c in zip(*([p.detach() for p in learners[name].online] for name in ("numba", "split", "torch")), strict=True):
         assert torch.equal(a, b)
         assert float((a - c).abs().max() / c.abs().max()) <= 1e-5
 
@@ -155,7 +155,7 @@ def test_a_priced_learner_trains_as_one_whose_rewards_were_priced_at_that_multip
     _fill(plain, [data], rewards=[_priced(data["reward"], 4.0, data["cost"])], costs=False)
     for _ in range(60):
         assert priced.update() == plain.update()
-    for a, b in zip(priced.online + priced.target, plain.online + plain.target):
+    for a, b in zip(priced.online + priced.target, plain.online + plain.target, strict=True):
         assert torch.equal(a, b)
 
 
@@ -171,7 +171,7 @@ def test_a_run_that_prices_nothing_trains_as_it_did_beside_one_that_does(kernel:
     for _ in range(60):
         mixed.update()
         alone.update()
-    for mine, theirs in zip(mixed.online, alone.online):
+    for mine, theirs in zip(mixed.online, alone.online, strict=True):
         assert torch.equal(mine[1:], theirs)
     assert mixed.memory_bytes_of(1) == alone.memory_bytes_of(0)
     assert mixed.memory_bytes_of(0) == alone.memory_bytes_of(0) + 4 * SMALL["replay_capacity"]

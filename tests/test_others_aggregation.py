@@ -89,7 +89,7 @@ def test_min_over_identical_others_trains_exactly_as_the_closest_rule() -> None:
         closest.observe(batch)
         aggregated.observe(batch)
     assert closest.grad_steps > 50
-    for a, b in zip(closest.online, aggregated.online):
+    for a, b in zip(closest.online, aggregated.online, strict=True):
         assert torch.equal(a, b)
 
 

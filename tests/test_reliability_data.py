@@ -91,7 +91,7 @@ def planted_checkpoint(out, records, run_ids, with_ids):
     directory = out / CHECKPOINT_DIR
     checkpoint = directory / digest_name("coexistence_v0", run_ids)
     save_checkpoint(checkpoint, {"run_ids": list(run_ids)})
-    runs = [{"run_id": run_id, **record} if with_ids else record for run_id, record in zip(run_ids, records)]
+    runs = [{"run_id": run_id, **record} if with_ids else record for run_id, record in zip(run_ids, records, strict=True)]
     manifest = checkpoint.with_name(checkpoint.stem + ".runs.json")
     write_json_atomic(manifest, {"format": 2 if with_ids else 1, "runs": runs})
     return checkpoint, manifest

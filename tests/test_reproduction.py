@@ -132,7 +132,8 @@ def test_tie_break_bounds_with_one_action_per_state_are_that_policys_figures() -
         lowest_index = np.eye(5, dtype=bool)[greedy_actions(q_emp)]
         for metric in ("harms", "survival"):
             expected = sum(
-                w * getattr(coexistence_optimum(beta, e, ties="first", max_cycles=60), metric) for e, w in zip(epsilons, weights)
+                w * getattr(coexistence_optimum(beta, e, ties="first", max_cycles=60), metric)
+                for e, w in zip(epsilons, weights, strict=True)
             )
             for highest in (False, True):
                 assert _tie_bound(lowest_index, epsilons, weights, metric, highest, 60, 7) == pytest.approx(expected, abs=1e-9)
@@ -148,8 +149,8 @@ def test_tie_break_range_contains_both_tie_rules() -> None:
         assert spread.harms[0] < spread.harms[1] and spread.survival[0] < spread.survival[1]
         for ties in ("uniform", "first"):
             outcome = [coexistence_optimum(beta, e, ties=ties, max_cycles=80) for e in schedule]
-            harms = sum(o.harms * n for o, n in zip(outcome, schedule.values())) / 4
-            survival = sum(o.survival * n for o, n in zip(outcome, schedule.values())) / 4
+            harms = sum(o.harms * n for o, n in zip(outcome, schedule.values(), strict=True)) / 4
+            survival = sum(o.survival * n for o, n in zip(outcome, schedule.values(), strict=True)) / 4
             assert spread.harms[0] - 1e-9 <= harms <= spread.harms[1] + 1e-9
             assert spread.survival[0] - 1e-9 <= survival <= spread.survival[1] + 1e-9
     with pytest.raises(ValueError, match="at least one ε"):

@@ -68,7 +68,7 @@ def test_runner_trains_it_and_the_suite_scores_it(tmp_path, method, settings, en
     if env == "coexistence_v0":  # +1 per operative step: the suite's survival is the unshaped return
         assert train["return"] == [float(s) for s in train["survival"]]
     else:
-        assert all(b + o <= 9 for b, o in zip(train["batteries"], train["other_batteries"]))
+        assert all(b + o <= 9 for b, o in zip(train["batteries"], train["other_batteries"], strict=True))
     assert sb3["memory_bytes"]["learner_per_run"] > 0
 
 

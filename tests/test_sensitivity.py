@@ -70,7 +70,7 @@ def _split_run(beta: float, seed: int, takes: list[int]) -> dict:
     run = synthetic_result("sharing_v0", "empathic_dqn", beta, seed)
     robot = [float(t) for t in takes]
     human = [9.0 - t for t in robot]
-    fair = [float(equality(value(int(r)), value(int(h)))) for r, h in zip(robot, human)]
+    fair = [float(equality(value(int(r)), value(int(h)))) for r, h in zip(robot, human, strict=True)]
     run["train"].update(batteries=robot, other_batteries=human, equality=fair)
     run["eval"][-1].update(batteries=robot[:4], other_batteries=human[:4], equality=fair[:4])
     return run

@@ -555,7 +555,7 @@ def test_vector_swaps_equal_the_parallel_envs(module, kwargs, in_view_only):
     envs = [FixedAgents(module.parallel_env(**kwargs), fixed) for _ in seeds]
     vector = VectorEnv(name, len(seeds), fixed=fixed, in_view_only=in_view_only, **kwargs)
     vector.reset(seed=seeds)
-    for env, seed in zip(envs, seeds):
+    for env, seed in zip(envs, seeds, strict=True):
         env.reset(seed=seed)
     others = vector.others[0]
     rng = np.random.default_rng(3)

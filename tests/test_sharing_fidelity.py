@@ -159,7 +159,7 @@ def test_vector_env_equals_parallel_envs_with_the_options_on():
     envs = [FixedAgents(sharing_v0.parallel_env(**OPTIONS), fixed) for _ in seeds]
     vector = VectorEnv("sharing_v0", len(seeds), fixed=fixed, **OPTIONS)
     observations = vector.reset(seed=seeds)
-    for i, (env, seed) in enumerate(zip(envs, seeds)):
+    for i, (env, seed) in enumerate(zip(envs, seeds, strict=True)):
         np.testing.assert_array_equal(observations[i, 0], env.reset(seed=seed)[0][ROBOT])
     rng = np.random.default_rng(9)
     finished = 0
@@ -217,7 +217,7 @@ def _equal(a, b) -> bool:
     if isinstance(a, dict):
         return isinstance(b, dict) and list(a) == list(b) and all(_equal(a[k], b[k]) for k in a)
     if isinstance(a, (list, tuple)):
-        return isinstance(b, (list, tuple)) and len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b))
+        return isinstance(b, (list, tuple)) and len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, np.ndarray):
         return isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
     return type(a) is type(b) and a == b

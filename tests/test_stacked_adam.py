@@ -26,7 +26,7 @@ def _stacked_run(fused: bool) -> tuple[list[torch.Tensor], StackedAdam]:
     elif not optimizer.fused:
         pytest.skip("this torch build has no fused Adam kernel")
     for step in range(STEPS):
-        for p, g in zip(params, _grads(step)):
+        for p, g in zip(params, _grads(step), strict=True):
             p.grad = g.clone()
         optimizer.step()
     return params, optimizer
@@ -37,7 +37,7 @@ def _reference_run(run: int, **adam_options) -> list[torch.Tensor]:
     params = [torch.randn(shape, generator=generator)[run].clone().requires_grad_() for shape in SHAPES]
     optimizer = torch.optim.Adam(params, lr=LR, **adam_options)
     for step in range(STEPS):
-        for p, g in zip(params, _grads(step)):
+        for p, g in zip(params, _grads(step), strict=True):
             p.grad = g[run].clone()
         optimizer.step()
     return params
@@ -56,10 +56,10 @@ def test_each_run_matches_torch_adam(fused: bool) -> None:
     exact = {"fused": True} if fused else {"foreach": True}
     for run in range(RUNS):
         reference = _reference_run(run, **exact)
-        for mine, theirs in zip(params, reference):
+        for mine, theirs in zip(params, reference, strict=True):
             torch.testing.assert_close(mine[run].detach(), theirs.detach(), rtol=0, atol=0)
         default = _reference_run(run)  # torch's default implementation on this device
-        for mine, theirs in zip(params, default):
+        for mine, theirs in zip(params, default, strict=True):
             torch.testing.assert_close(mine[run].detach(), theirs.detach(), rtol=1e-6, atol=1e-7)
 
 
@@ -73,8 +73,8 @@ def test_state_round_trip_continues_exactly(fused: bool) -> None:
     other.load_state_dict(state)
     assert other.step_count.tolist() == [float(STEPS)] * RUNS
     for opt, ps in ((optimizer, params), (other, copies)):
-        for p, g in zip(ps, _grads(STEPS)):
+        for p, g in zip(ps, _grads(STEPS), strict=True):
             p.grad = g.clone()
         opt.step()
-    for a, b in zip(params, copies):
+    for a, b in zip(params, copies, strict=True):
         assert torch.equal(a, b)

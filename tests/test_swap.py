@@ -200,7 +200,7 @@ def test_vector_swapped_agrees_with_the_parallel_primitive(module, in_view_only)
     envs = [FixedAgents(module.parallel_env(), fixed) for _ in seeds]
     vector = VectorEnv(name, len(seeds), fixed=fixed, in_view_only=in_view_only)
     vector.reset(seed=seeds)
-    for env, seed in zip(envs, seeds):
+    for env, seed in zip(envs, seeds, strict=True):
         env.reset(seed=seed)
     rng = np.random.default_rng(3)
     valid_seen, invalid_seen = 0, 0

@@ -109,7 +109,7 @@ def test_csv_files_hold_the_same_scalars_as_rows(arms) -> None:
         result = _result(logged, run_id)
         assert {name for _, name, _ in rows[1:]} == _expected(result)
         survival = [(int(step), float(value)) for step, name, value in rows[1:] if name == "charts/survival"]
-        assert survival == list(zip(result["train"]["episode_end_step"], map(float, result["train"]["survival"])))
+        assert survival == list(zip(result["train"]["episode_end_step"], map(float, result["train"]["survival"]), strict=True))
         steps = [int(step) for step, _, _ in rows[1:]]
         assert steps == sorted(steps) and steps[-1] == result["steps"]
 
@@ -143,15 +143,15 @@ def test_wandb_offline_run_holds_config_scalars_and_the_result_artifact(arms) ->
         [run_file] = log_dir(logged, "wandb", run_id).glob("wandb/offline-run-*/run-*.wandb")
         records = _wandb_records(run_file)
         kinds = [record.WhichOneof("record_type") for record in records]
-        [run] = [record.run for record, kind in zip(records, kinds) if kind == "run"]
+        [run] = [record.run for record, kind in zip(records, kinds, strict=True) if kind == "run"]
         result = _result(logged, run_id)
         assert run.display_name == run_id and run.run_group == run_id.rpartition("__s")[0]
         config = {item.key: json.loads(item.value_json) for item in run.config.update if item.key != "_wandb"}
         assert config["run_id"] == run_id and config["settings"] == result["config"]["settings"]
-        history = [item for record, kind in zip(records, kinds) if kind == "history" for item in record.history.item]
+        history = [item for record, kind in zip(records, kinds, strict=True) if kind == "history" for item in record.history.item]
         logged_names = {item.key or "/".join(item.nested_key) for item in history}  # (W&B splits a name at its "/")
         assert _expected(result) <= logged_names
-        [artifact] = [record.artifact for record, kind in zip(records, kinds) if kind == "artifact"]
+        [artifact] = [record.artifact for record, kind in zip(records, kinds, strict=True) if kind == "artifact"]
         assert artifact.type == "result" and [entry.path for entry in artifact.manifest.contents] == [f"{run_id}.json"]
 
 
@@ -305,7 +305,7 @@ def test_empathic_dqn_tracks_each_heads_figures_per_run_as_the_run_alone_and_cha
         mixed.observe(batch)
     before = [p.clone() for p in mixed.online] + [p.clone() for p in mixed.target]
     tracked = mixed.tracked_scalars()
-    assert all(torch.equal(a, b) for a, b in zip(before, [*mixed.online, *mixed.target]))
+    assert all(torch.equal(a, b) for a, b in zip(before, [*mixed.online, *mixed.target], strict=True))
     for run, beta in enumerate(betas):
         solo = method.learner([method.make_settings({**SETTINGS, "selfishness": beta})], [run], 25)
         for batch in batches:

@@ -35,7 +35,7 @@ def _scores(env: str, spec, values: dict[str, tuple[float, float]]) -> list[Scor
         Score(env, label, "m", phase, metric, mean, mean - 0.1, mean + 0.1, 3)
         for label, pair in values.items()
         for phase in PHASES
-        for metric, mean in zip((spec.task, spec.effect), pair)
+        for metric, mean in zip((spec.task, spec.effect), pair, strict=True)
     ]
 
 

@@ -15,7 +15,7 @@ from leaderboard.tuning_summary import find_studies, main, render_studies_png, s
 def _study(variant: str, label: str, rates: list[float], states: list[str], values: list[float | None]) -> dict[str, Any]:
     trials = [
         {"number": i, "state": s, "params": {"learning_rate": r}, "value": v, "wall_time_s": 30.0}
-        for i, (r, s, v) in enumerate(zip(rates, states, values))
+        for i, (r, s, v) in enumerate(zip(rates, states, values, strict=True))
     ]
     finished = [t for t in trials if t["state"] == "COMPLETE"]
     best = max(finished, key=lambda t: t["value"]) if finished else None

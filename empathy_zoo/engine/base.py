@@ -253,7 +253,7 @@ class GridEngine:
 
     def _reset(self, ids: np.ndarray, seeds: Sequence[int | None] | None, options: Mapping[str, Any] | None) -> None:
         if seeds is not None:
-            for i, s in zip(ids, seeds):
+            for i, s in zip(ids, seeds, strict=True):
                 if s is not None:
                     self.streams.seed(int(i), s)
         self.streams.ensure_seeded(ids)

@@ -221,7 +221,7 @@ class CoexistenceEngine(GridEngine):
                     sideways=self.options["sideways"],
                     same_cell=self.options["same_cell"],
                 ).astype(np.int8)
-                for r, c in zip(robot_action, cat_action)
+                for r, c in zip(robot_action, cat_action, strict=True)
             ],
             axis=1,
         ).ravel()

@@ -157,7 +157,7 @@ def parse_param(text: str, method: Method) -> ParamSpec:
     bounds = body.split(":")
     if len(bounds) != 2:
         raise ValueError(f"{where}: {kind} takes two bounds, {kind}:LOW:HIGH, got {body!r}")
-    low, high = (_number(b.strip(), integer, where, what) for what, b in zip(("LOW", "HIGH"), bounds))
+    low, high = (_number(b.strip(), integer, where, what) for what, b in zip(("LOW", "HIGH"), bounds, strict=True))
     if not low < high:
         raise ValueError(f"{where}: LOW must be below HIGH, got LOW={bounds[0]} and HIGH={bounds[1]}")
     if kind == "log" and low <= 0:

@@ -90,7 +90,8 @@ def _check_round_trip(text: str, spec: RunSpec, seeds: Sequence[int], label: str
     wanted = [replace(expected, seed=seed).config() for seed in seeds]
     got = [s.config() for s in read]
     if got != wanted:
-        first = next((i for i, (a, b) in enumerate(zip(got, wanted)) if a != b), min(len(got), len(wanted)))
+        # (unequal on purpose: where one list is a prefix of the other, the first difference is where it ends)
+        first = next((i for i, (a, b) in enumerate(zip(got, wanted, strict=False)) if a != b), min(len(got), len(wanted)))
         differs = (
             sorted(k for k in set(got[first]) | set(wanted[first]) if got[first].get(k) != wanted[first].get(k))
             if (first < min(len(got), len(wanted)))

@@ -205,7 +205,7 @@ def _runs_settings(path: Path, run_ids: list[str]) -> dict[str, Any] | None:
             )
             seeds.append(record["seed"])
         if len(records) != len(run_ids) or any(
-            record.get("run_id", run_id) != run_id for record, run_id in zip(records, run_ids)
+            record.get("run_id", run_id) != run_id for record, run_id in zip(records, run_ids, strict=True)
         ):
             return None
         first = shared[0]
@@ -365,7 +365,7 @@ def _check_networks(path: Path, state: Mapping[str, Any], runs: int) -> None:
             continue  # (the learner's own load says what it misses)
         if not isinstance(copies, list) or len(copies) != len(shapes) or not all(isinstance(c, torch.Tensor) for c in copies):
             raise corrupted(path, f"learner.{name} is no list of {len(shapes)} tensors (one per network parameter)")
-        for i, (copy, shape) in enumerate(zip(copies, shapes)):
+        for i, (copy, shape) in enumerate(zip(copies, shapes, strict=True)):
             if tuple(copy.shape) != shape:
                 raise corrupted(path, f"learner.{name}[{i}] has shape {tuple(copy.shape)}, not {shape} (its networks')")
     counts, updates = optimizer.get("steps"), state.get("grad_steps")

@@ -149,7 +149,7 @@ def _array(value: Any, field: str, shape: tuple[int, ...], like: np.ndarray | No
     """``value`` if it is an array of ``shape`` (``-1``: any size), of ``like``'s dtype (or of a dtype of ``kind``)."""
     if not isinstance(value, np.ndarray):
         raise ForgedState(f"{field} is no array")
-    if value.ndim != len(shape) or any(want not in (-1, got) for want, got in zip(shape, value.shape)):
+    if value.ndim != len(shape) or any(want not in (-1, got) for want, got in zip(shape, value.shape, strict=True)):
         raise ForgedState(f"{field} has shape {value.shape}, not {tuple('any' if n < 0 else n for n in shape)}")
     if (like is not None and value.dtype != like.dtype) or (kind and value.dtype.kind not in kind):
         raise ForgedState(f"{field} has dtype {value.dtype}, not {like.dtype if like is not None else kind}")

@@ -352,7 +352,7 @@ def _restore(
         raise CheckpointError(f"checkpoint {ckpt} cannot be resumed: {error}") from error
     except (KeyError, IndexError, TypeError, AttributeError, RuntimeError) as error:  # a state that is not the learner's
         raise corrupted(ckpt, error) from error
-    for log, columns in zip(logs, saved["logs"]):
+    for log, columns in zip(logs, saved["logs"], strict=True):
         log.columns = columns
     return observations, saved["evaluations"], int(saved["step"]), float(saved["elapsed"])
 

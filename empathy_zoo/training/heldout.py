@@ -179,7 +179,7 @@ def evaluate_run(
     entries = []
     scenarios: list[Scenario] = [own, *scenario_set.scenarios]
     variants = [scenario.for_run(home.kwargs) for scenario in scenarios]  # (every scenario checked before one is played)
-    for scenario, variant in zip(scenarios, variants):
+    for scenario, variant in zip(scenarios, variants, strict=True):
         columns = evaluate_greedy(
             learner,
             result["env"],

@@ -214,8 +214,8 @@ def _ensemble_of_records(checkpoint: Path, records: list[dict[str, Any]], asked:
             stored = _checkpoint_run_ids(checkpoint)
             if len(stored) != len(records):
                 raise CheckpointError(f"checkpoint {checkpoint} holds {len(stored)} runs, its list of runs {len(records)}")
-        ids = [str(run_id) if spec is None else spec.run_id for spec, run_id in zip(found, stored)]
-        foreign = [str(run_id) for spec, run_id in zip(found, stored) if spec is None]
+        ids = [str(run_id) if spec is None else spec.run_id for spec, run_id in zip(found, stored, strict=True)]
+        foreign = [str(run_id) for spec, run_id in zip(found, stored, strict=True) if spec is None]
         why = f"it also holds runs that cannot be rebuilt from the runs asked for here ({', '.join(foreign)})"
         return _Ensemble(ids, None, why)
     specs = [spec for spec in found if spec is not None]
