@@ -471,7 +471,7 @@ def run_targets_kernel(  # type: ignore[no-untyped-def]
                     count += 1 if counted else 0
                 elif counted and value < least:
                     least = value
-            if rule == MEAN:
+            if rule == MEAN:  # noqa: SIM108 - a numba kernel: the branches stay as numba types them today
                 term = total / np.float32(max(count, 1))
             else:
                 term = least if anyone_counted else zero

@@ -153,7 +153,7 @@ def committed_populations(root: Path = ROOT / "docs" / "results") -> list[np.nda
     populations = []
     for directory in sorted(p for p in root.iterdir() if (p / "runs").is_dir()):
         results = [read_json(path) for path in result_files(directory)]  # committed, checked by their tests
-        for (env, _), runs in group_runs(results).items():
+        for runs in group_runs(results).values():
             base = runs[0]["env"]
             scalars = [run_scalars(run) for run in runs]
             for phase in ("eval", "train_final10"):
@@ -373,7 +373,7 @@ def bca(data: np.ndarray, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         bounds = []
         for z in (-Z, Z):
             q = NORMAL.cdf(z0 + (z0 + z) / (1 - accel[i] * (z0 + z)))
-            bounds.append(sorted_means[i, min(b - 1, max(0, int(math.floor(q * b))))])
+            bounds.append(sorted_means[i, min(b - 1, max(0, math.floor(q * b)))])
         low[i], high[i] = bounds
     return low, high
 
@@ -382,7 +382,7 @@ def bootstrap_t(data: np.ndarray, counts: np.ndarray, m: np.ndarray) -> tuple[np
     """Studentized bootstrap from the resamples already drawn (``counts``, means ``m``): quantiles of
     (mean* − mean) / (s*/√n); a resample with s* = 0 counts as ±∞ (0 when it equals the mean), so
     with few seeds the interval is often unbounded."""
-    r, n = data.shape
+    _r, n = data.shape
     centred = data - data.mean(axis=1, keepdims=True)  # s* from the counts, centred for accuracy
     shift = m - data.mean(axis=1)[:, None]
     squares = np.einsum("rbn,rn->rb", counts, centred**2) - n * shift**2

@@ -141,8 +141,8 @@ def main() -> None:
     print("\n3. the update's largest matmuls alone (µs per call, GFLOP/s)")
     for name, (a, b) in shapes.items():
         flops = 2 * a.shape[0] * a.shape[1] * a.shape[2] * b.shape[2]
-        warm = cpu_ms(lambda: torch.bmm(a, b), 200) * 1e3
-        cold = (cpu_ms(lambda: (flush.add_(1.0), torch.bmm(a, b)), 50) - base) * 1e3
+        warm = cpu_ms(lambda a=a, b=b: torch.bmm(a, b), 200) * 1e3
+        cold = (cpu_ms(lambda a=a, b=b: (flush.add_(1.0), torch.bmm(a, b)), 50) - base) * 1e3
         print(
             f"   {name:38s} warm {warm:6.0f} ({flops / warm / 1e3:5.1f})   after 32 MB streamed {cold:6.0f} "
             f"({flops / cold / 1e3:5.1f})"

@@ -12,6 +12,7 @@ that form, whose writer is gone, never a file of the user's.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -76,10 +77,8 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
             os.fsync(handle.fileno())
         os.replace(tmp, check_replaceable(path))
     except BaseException:
-        try:
+        with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        except FileNotFoundError:
-            pass
         raise
     return path
 
@@ -140,10 +139,8 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
             _check_directory(directory, largest_file)
     except BaseException:
         for folder in reversed(created):  # (only what this call made, deepest first, and only while empty)
-            try:
+            with contextlib.suppress(OSError):
                 folder.rmdir()
-            except OSError:
-                pass
         raise
     return root
 

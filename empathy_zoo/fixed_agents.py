@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import copy
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -46,10 +47,8 @@ def undo_point(policy: Any) -> Callable[[], None]:
         except ValueError:  # (the per-environment copies refuse a state that is no plain data: copied below)
             pass
         else:
-            try:
+            with contextlib.suppress(Exception):  # a state that cannot be copied is given back as it was taken
                 saved = copy.deepcopy(saved)  # (a state may share its arrays with the policy)
-            except Exception:  # a state that cannot be copied is given back as it was taken
-                pass
             return lambda: policy.load_state(saved)
     try:
         attributes = copy.deepcopy(vars(policy))

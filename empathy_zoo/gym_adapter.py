@@ -63,7 +63,8 @@ __all__ = ["SingleAgentEnv", "make_single_agent_env", "GYM_IDS"]
 class SingleAgentEnv(gymnasium.Env, EzPickle):
     """One learner's view of an environment of the suite (see the module documentation)."""
 
-    metadata: dict[str, Any] = {"render_modes": ["ansi", "rgb_array"], "render_fps": 5}
+    # Gymnasium declares metadata an instance attribute, and __init__ replaces it per environment (never mutates it)
+    metadata: dict[str, Any] = {"render_modes": ["ansi", "rgb_array"], "render_fps": 5}  # noqa: RUF012
 
     def __init__(
         self,

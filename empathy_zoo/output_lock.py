@@ -18,7 +18,7 @@ import socket
 import sys
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 try:
@@ -108,10 +108,8 @@ def hold_output_dir(
         os.pwrite(fd, json.dumps(info).encode("utf-8"), 0)
         yield path
     finally:
-        try:
+        with suppress(OSError):
             path.unlink()  # (still holding the lock: a process that opened it meanwhile sees it replaced)
-        except OSError:
-            pass
         os.close(fd)
 
 

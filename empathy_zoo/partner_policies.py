@@ -184,7 +184,7 @@ class NearestBattery:
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         window = np.asarray(observation)
-        side = int(round(len(window) ** 0.5))
+        side = round(len(window) ** 0.5)
         if side * side != len(window):
             raise ValueError(f"nearest_battery reads a square window, got an observation of {len(window)} values")
         centre = side // 2

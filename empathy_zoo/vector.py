@@ -290,7 +290,7 @@ class VectorEnv:
             metrics = engine.episode_metrics(done_ids, self.learner_index[0])
             finished.update({name: metrics[name] for name in (*METRIC_NAMES, "length")})
             engine.reset(done_ids)
-            for index, policy in self.fixed.items():
+            for policy in self.fixed.values():
                 policy.reset(done_ids, [None] * done_ids.size)
             observations = final.copy()
             observations[done_ids] = self._observe_learners(done_ids)

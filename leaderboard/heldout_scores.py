@@ -258,7 +258,7 @@ def load_heldout(
     groups = []
     for (env, set_name), members in sorted(found.items()):
         first = members[0]
-        for run, evaluation, path in members[1:]:
+        for _run, evaluation, path in members[1:]:
             if evaluation["scenario_set"] != first[1]["scenario_set"]:
                 raise ValueError(
                     f"{path} and {first[2]} were made with different definitions of scenario set {set_name!r}: "

@@ -233,10 +233,7 @@ def improvement_interval(
     accepted = [d for d, tail in zip(support, tails, strict=True) if tail > alpha]
     rejected = [d for d, tail in zip(support, tails, strict=True) if tail <= alpha]
     scale = 2.0 * a.size * b.size  # D / scale is the distance of the probability from 0.5
-    if rejected:
-        half = 0.5 * (max(accepted, default=0) + min(rejected)) / scale
-    else:
-        half = 0.5
+    half = 0.5 * (max(accepted, default=0) + min(rejected)) / scale if rejected else 0.5
     return float(probability), max(0.0, probability - half), min(1.0, probability + half)
 
 

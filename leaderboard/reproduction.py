@@ -228,7 +228,7 @@ def _tie_bound(
     for togo in range(max_cycles):
         # einsum, not @: for arrays this small BLAS's threads cost more than they save
         following = np.einsum("ec,ck->ek", togo_value, stays).reshape(len(epsilons), cells, actions)
-        if metric == "harms":
+        if metric == "harms":  # noqa: SIM108 - two formulas, the second explained beside it
             per_action = cat_gone + following
         else:  # survival: 1 per step operative; with the cat gone, every step still to go as well
             per_action = (1.0 - robot_harmed) + cat_gone * togo + following

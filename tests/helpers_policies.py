@@ -65,10 +65,7 @@ class _Wandering:
         self.memory = []
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
-        if self.memory and self.rng.random() < self.repeat:
-            action = self.memory[-1]
-        else:
-            action = int(self.rng.integers(len(Action)))
+        action = self.memory[-1] if self.memory and self.rng.random() < self.repeat else int(self.rng.integers(len(Action)))
         self.memory.append(action)
         return action
 

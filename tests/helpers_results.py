@@ -52,7 +52,8 @@ def whole_episodes(mean: float, episodes: int, rng: np.random.Generator, metric:
     low, high = bounded(metric)
     mean = float(np.clip(mean, low, high))
     base = int(np.floor(mean))
-    more = min(int(round((mean - base) * episodes)), episodes) if high is None or base < high else 0
+    # (mean may be a NumPy scalar: int() keeps a Python int whatever round() gives back)
+    more = min(int(round((mean - base) * episodes)), episodes) if high is None or base < high else 0  # noqa: RUF046
     values = np.array([base + 1] * more + [base] * (episodes - more), dtype=float)
     return rng.permutation(values).tolist()
 

@@ -5,6 +5,7 @@ fixed policy."""
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 
 import numpy as np
@@ -213,7 +214,7 @@ def test_bad_agent_states_and_headers_are_refused(tmp_path) -> None:
         with pytest.raises(ValueError, match=message):
             write_agent_file(Plain(state), 0, tmp_path / f"{name}.agent.pt", head)
         assert not (tmp_path / f"{name}.agent.pt").exists()
-    with pytest.raises(ValueError, match="ends in .agent.pt"):
+    with pytest.raises(ValueError, match=re.escape("ends in .agent.pt")):
         write_agent_file(Plain(good), 0, tmp_path / "a.pt", full)
 
 
@@ -266,7 +267,7 @@ def test_a_loaded_agent_is_a_fixed_policy_driving_robot_0(trained) -> None:
     robot = []
     while env.agents:
         robot.append(agent.act(observations["robot_0"]))
-        observations, rewards, terminations, truncations, infos = env.step({"robot_0": robot[-1]})
+        observations, rewards, _terminations, _truncations, infos = env.step({"robot_0": robot[-1]})
     assert infos["robot_0"]["episode"]["survival"] == len(robot) or infos["robot_0"]["episode"]["harms"] >= 0
     # the same robot as a fixed agent inside FixedAgents, the cat stepped by hand: the same episode
     fixed = FixedAgents(coexistence_v0.parallel_env(max_cycles=80), {"robot_0": agent})

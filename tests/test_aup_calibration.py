@@ -337,7 +337,7 @@ def main() -> None:
     for seed in SEEDS:
         q_before, q_after = exact_q_values(former_reward_map(seed)), exact_q_values(auxiliary_reward_map(seed, 25, 30))
         shown = {
-            name: "%.3f harms, %.1f steps" % shaped_optimum(penalty)
+            name: "{:.3f} harms, {:.1f} steps".format(*shaped_optimum(penalty))
             for name, penalty in (
                 ("no penalty", 0.0 * penalties_after(q_after)),
                 ("before", penalties_before(q_before)),

@@ -340,7 +340,7 @@ def test_the_number_of_environments_is_a_positive_int(num_envs):
 
 
 def test_fixed_agents_with_an_unknown_or_every_agent_raises():
-    with pytest.raises(ValueError, match="unknown agent.*dog_0"):
+    with pytest.raises(ValueError, match=r"unknown agent.*dog_0"):
         FixedAgents(coexistence_v0.parallel_env(), {"dog_0": "random_walk"})
     with pytest.raises(ValueError, match="every agent is fixed"):
         FixedAgents(coexistence_v0.parallel_env(), {ROBOT: "stay", CAT: "stay"})

@@ -157,7 +157,7 @@ def test_a_new_leaderboard_is_what_it_always_was(tmp_path):
     write_leaderboard(results, tmp_path / "two")
     assert tree(tmp_path / "one").keys() == tree(tmp_path / "two").keys()
     assert all(path.is_file() and path.is_relative_to(tmp_path / "one") for path in paths.values())
-    assert not [p for p in (tmp_path / "one").rglob(".*")]  # no staging left behind
+    assert not list((tmp_path / "one").rglob(".*"))  # no staging left behind
 
 
 @pytest.mark.parametrize(

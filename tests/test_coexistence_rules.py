@@ -52,7 +52,7 @@ def expected_observation(viewer: tuple[int, int], other: tuple[int, int] | None)
 
 
 def assert_robot_harms_cat(env, out) -> None:
-    obs, rew, term, trunc, info = out
+    _obs, rew, term, trunc, info = out
     assert info[CAT]["harmed_by"] == ROBOT and info[CAT]["harmed"] == []
     assert info[ROBOT]["harmed_by"] is None and info[ROBOT]["harmed"] == [CAT]
     assert term == {ROBOT: False, CAT: True}
@@ -62,7 +62,7 @@ def assert_robot_harms_cat(env, out) -> None:
 
 
 def assert_cat_harms_robot(env, out) -> None:
-    obs, rew, term, trunc, info = out
+    _obs, rew, term, trunc, info = out
     assert info[ROBOT]["harmed_by"] == CAT and info[ROBOT]["harmed"] == []
     assert info[CAT]["harmed_by"] is None and info[CAT]["harmed"] == [ROBOT]
     assert term == {ROBOT: True, CAT: False}
@@ -72,7 +72,7 @@ def assert_cat_harms_robot(env, out) -> None:
 
 
 def assert_no_contact(env, out) -> None:
-    obs, rew, term, trunc, info = out
+    _obs, rew, term, trunc, info = out
     assert rew == {ROBOT: 1.0, CAT: 1.0}
     assert not any(term.values()) and not any(trunc.values())
     assert all(i["harmed_by"] is None and i["harmed"] == [] for i in info.values())

@@ -11,7 +11,7 @@ from leaderboard.compare_runs import compare_runs
 
 def test_runs_are_matched_by_experiment_and_seed_and_compared_column_by_column() -> None:
     old = [synthetic_result("coexistence_v0", "dqn", 1.0, seed, harms=0.5) for seed in range(3)]
-    new = copy.deepcopy(old[:2]) + [synthetic_result("coexistence_v0", "dqn", 1.0, 7, harms=0.5)]
+    new = [*copy.deepcopy(old[:2]), synthetic_result("coexistence_v0", "dqn", 1.0, 7, harms=0.5)]
     new[1]["train"]["harms"][0] += 1.0  # one value of one column changed
     result = compare_runs(old, new)
     assert len(result["same"]) == 1 and len(result["different"]) == 1

@@ -123,9 +123,11 @@ def test_the_bonus_is_discount_times_caring_times_the_sum_or_the_min_of_the_othe
 def test_the_bonus_is_paid_at_the_time_limit_only_and_only_after_the_warm_up() -> None:
     state = SMALL.initial_state(4, 1, seeds=[0, 1, 2, 3])
     obs = np.stack([one_hot(i) for i in range(4)])
-    ended: dict[str, Any] = dict(
-        terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True]
-    )
+    ended: dict[str, Any] = {
+        "terminated": [True, False, True, False],
+        "truncated": [False, True, False, False],
+        "present": [True, True, False, True],
+    }
     shaped, state = SMALL(step(obs, **ended), state)
     assert shaped[:, 0].tolist() == [1.0] * 4  # before bonus_starts: the environment's reward
     state["seen"][...] = SMALL.bonus_starts
@@ -141,9 +143,11 @@ def test_with_bonus_on_termination_the_learners_own_harm_is_paid_as_the_time_lim
     anywhere = replace(SMALL, bonus_on_termination=True)
     state = anywhere.initial_state(4, 1, seeds=[0, 1, 2, 3])
     obs = np.stack([one_hot(i) for i in range(4)])
-    ended: dict[str, Any] = dict(
-        terminated=[True, False, True, False], truncated=[False, True, False, False], present=[True, True, False, True]
-    )
+    ended: dict[str, Any] = {
+        "terminated": [True, False, True, False],
+        "truncated": [False, True, False, False],
+        "present": [True, True, False, True],
+    }
     state["seen"][...] = 0
     _, state = anywhere(step(obs, **ended), state)
     state["seen"][...] = anywhere.bonus_starts
@@ -276,7 +280,7 @@ def test_several_other_agents_are_refused_naming_the_problem() -> None:
     state = SMALL.initial_state(1, 1, seeds=[0])
     batch = step(one_hot(0)[None])
     batch.others_swapped = np.zeros((1, 1, 2, V), dtype=np.float32)
-    with pytest.raises(ValueError, match="this environment has 2 other agents.*num_cats = 1"):
+    with pytest.raises(ValueError, match=r"this environment has 2 other agents.*num_cats = 1"):
         SMALL(batch, state)
 
 

@@ -210,15 +210,15 @@ def test_reward_transforms_shape_only_the_rows_of_their_runs() -> None:
 
 
 def _spec(**kw) -> RunSpec:
-    base = dict(
-        env="coexistence_v0",
-        method="empathic_dqn",
-        settings={**TINY, "selfishness": 0.5},
-        seed=0,
-        steps=600,
-        eval_interval=300,
-        eval_episodes=2,
-    )
+    base = {
+        "env": "coexistence_v0",
+        "method": "empathic_dqn",
+        "settings": {**TINY, "selfishness": 0.5},
+        "seed": 0,
+        "steps": 600,
+        "eval_interval": 300,
+        "eval_episodes": 2,
+    }
     return RunSpec.of(**{**base, **kw})
 
 

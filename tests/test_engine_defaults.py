@@ -4,6 +4,8 @@ whose default grid is not 7×7 is built alike on every face."""
 
 from __future__ import annotations
 
+from typing import Any, ClassVar
+
 from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.environments import ENVIRONMENT_TABLE, Environment
 from empathy_zoo.gym_adapter import SingleAgentEnv
@@ -20,7 +22,7 @@ class SmallCoexistence(CoexistenceEngine):
 
 class SmallFace(GridParallelEnv):
     engine_class = SmallCoexistence
-    metadata = {"name": "small_coexistence_v0", "render_modes": ["ansi"], "is_parallel": True}
+    metadata: ClassVar[dict[str, Any]] = {"name": "small_coexistence_v0", "render_modes": ["ansi"], "is_parallel": True}
 
 
 def test_the_vector_env_and_the_parallel_face_take_the_engines_defaults():

@@ -66,9 +66,13 @@ def named_environments(source: str) -> Iterator[tuple[int, str]]:
     tree = ast.parse(source)
     documentation = _docstrings(tree)
     for node in ast.walk(tree):
-        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in documentation:
-            if NAMES.search(node.value):
-                yield node.lineno, node.value
+        if (
+            isinstance(node, ast.Constant)
+            and isinstance(node.value, str)
+            and id(node) not in documentation
+            and NAMES.search(node.value)
+        ):
+            yield node.lineno, node.value
 
 
 def metric_tables(source: str) -> Iterator[tuple[int, list[str]]]:

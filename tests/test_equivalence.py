@@ -79,7 +79,7 @@ def test_verdict_flips_are_listed_with_their_p_values() -> None:
     flips = verdict_flips(old, new)
     harms = [flip for flip in flips if flip[0][3] == "harms"]
     assert {flip[0][2] for flip in harms} == {"eval", "train_final10"}
-    for key, before, after, p_before, p_after in harms:
+    for _key, before, after, p_before, p_after in harms:
         assert (before, after) == ("no clear difference", "better")
         assert p_after < 0.05 <= p_before
     assert verdict_flips(old, old) == []

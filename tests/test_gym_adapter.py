@@ -107,7 +107,7 @@ def test_trajectory_equals_fixed_agents_parallel_env_and_vector_env(name, seed):
 
 def run_to_end(env, moves):
     for action in moves:
-        obs, reward, terminated, truncated, info = env.step(action)
+        _obs, _reward, terminated, truncated, info = env.step(action)
         if terminated or truncated:
             return terminated, truncated, info
     pytest.fail("the episode did not end")

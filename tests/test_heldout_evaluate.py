@@ -165,7 +165,7 @@ def test_runs_that_kept_no_agent_cannot_be_evaluated(trained, tmp_path) -> None:
         result[RESULT_FIELD] = None
         (tmp_path / "runs").mkdir(exist_ok=True)
         (tmp_path / "runs" / path.name).write_text(json.dumps(result))
-    with pytest.raises(ValueError, match="no run in .* kept a trained agent"):
+    with pytest.raises(ValueError, match=r"no run in .* kept a trained agent"):
         evaluate_results(tmp_path, progress=False)
 
 
@@ -204,7 +204,7 @@ def test_the_leaderboard_section_renders_from_real_files(trained, evaluated, tmp
     results, _ = trained
     shutil.copytree(results / "runs", tmp_path / "runs")
     shutil.copytree(evaluated / "evaluations", tmp_path / "evaluations")
-    markdown, html, figures = add_heldout_section(
+    markdown, _html, figures = add_heldout_section(
         tmp_path, load_results(tmp_path), tmp_path, "# b\n\n## Metric definitions\n", "<h2>Metric definitions</h2>"
     )
     assert "## Held-out partners" in markdown and "### coexistence_v0: scenario set coexistence_v0" in markdown

@@ -9,6 +9,7 @@ temporary files it made, and asks for room for its largest file before training.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
 import math
@@ -110,10 +111,8 @@ def test_a_fifo_is_refused_at_once_naming_it(tmp_path, kind):
     try:
         error = call_within(10, lambda: READERS[kind](fifo))
     finally:
-        try:  # (unblock a reader that waits on the FIFO)
+        with contextlib.suppress(OSError):  # (unblock a reader that waits on the FIFO)
             os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
-        except OSError:
-            pass
     assert isinstance(error, ValueError), error
     assert str(fifo) in str(error) and "FIFO" in str(error) and "\n" not in str(error)
 
@@ -121,7 +120,7 @@ def test_a_fifo_is_refused_at_once_naming_it(tmp_path, kind):
 @pytest.mark.parametrize("kind", list(READERS))
 def test_a_device_or_a_directory_is_refused_naming_it(tmp_path, kind):
     for path in (Path("/dev/zero"), tmp_path):
-        error = call_within(10, lambda: READERS[kind](path))
+        error = call_within(10, lambda path=path: READERS[kind](path))
         assert isinstance(error, ValueError), error
         assert str(path) in str(error) and "not a regular file" in str(error)
 
@@ -432,7 +431,7 @@ def test_training_asks_for_room_for_its_largest_checkpoint_before_it_starts(tmp_
     assert needed > 2 * 20_000_000  # (two runs' default replay of 500,000 steps)
     usage = shutil.disk_usage(tmp_path)
     monkeypatch.setattr(atomic.shutil, "disk_usage", lambda path: usage._replace(free=needed // 2))
-    with pytest.raises(ValueError, match="less than the .* of the largest file"):
+    with pytest.raises(ValueError, match=r"less than the .* of the largest file"):
         train_runs(specs, tmp_path / "out", options)
     assert not list((tmp_path / "out").rglob("*.json"))
     train_runs(specs, tmp_path / "without", RunnerOptions(progress=False, checkpoint_interval=0))  # (no checkpoint: no such room)

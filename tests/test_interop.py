@@ -50,7 +50,7 @@ def test_supersuit_vector_envs_step_and_reset_themselves(supersuit, name: str) -
     rng = np.random.default_rng(0)
     ends = 0
     for _ in range(STEPS):
-        obs, rewards, terminated, truncated, infos = envs.step(rng.integers(0, 5, envs.num_envs))
+        obs, rewards, terminated, truncated, _infos = envs.step(rng.integers(0, 5, envs.num_envs))
         assert obs.shape == (2 * agents, 25) and rewards.shape == (2 * agents,)
         ends += int(np.sum(terminated | truncated))
     assert ends >= 1, "episodes ended and the vector env reset them"

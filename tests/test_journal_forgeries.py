@@ -48,10 +48,8 @@ PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4
 
 
 def _tune(sweep: Path, out: Path, trials: int, params: list[str] = PARAMS) -> int:
-    return main(
-        ["tune", str(sweep), "--method", "dqn_harm_penalty", *params, "--trials", str(trials), "--tuning-seeds", "1"]
-        + ["--startup-trials", "2", "--no-progress", "--out", str(out)]
-    )
+    tuning = ["--trials", str(trials), "--tuning-seeds", "1", "--startup-trials", "2", "--no-progress", "--out", str(out)]
+    return main(["tune", str(sweep), "--method", "dqn_harm_penalty", *params, *tuning])
 
 
 @pytest.fixture(scope="module")

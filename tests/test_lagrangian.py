@@ -67,12 +67,12 @@ def test_lambda_rises_while_harms_exceed_the_limit_and_falls_back_to_zero_while_
     lagrangian = Lagrangian()  # d = 0.1 harms per episode, η = 1, λ from 0
     state = lagrangian.initial_state(1, 1)
     history = []
-    for episode in range(10):  # ten episodes of one harm each, three steps long
+    for _ in range(10):  # ten episodes of one harm each, three steps long
         for t in range(3):
             _, state = lagrangian(step([[int(t == 1)]], [[t == 2]]), state)
         history.append(float(state["multiplier"][0]))
     assert history == pytest.approx([0.9 * (i + 1) for i in range(10)])
-    for episode in range(200):  # harmless episodes: λ falls by η·d each, to 0, and stays there
+    for _ in range(200):  # harmless episodes: λ falls by η·d each, to 0, and stays there
         _, state = lagrangian(step([[0]], [[True]]), state)
         history.append(float(state["multiplier"][0]))
     assert history[10:100] == pytest.approx([max(0.0, 9.0 - 0.1 * (i + 1)) for i in range(90)], abs=1e-9)

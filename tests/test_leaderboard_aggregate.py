@@ -174,7 +174,7 @@ def test_t_interval_of_one_two_three_by_hand() -> None:
 
 def test_mean_ci_is_the_t_interval_at_half_the_miss_rate() -> None:
     assert t_level(0.95) == 0.975 and t_level(0.9) == pytest.approx(0.95)
-    mean, low, high = mean_ci([1.0, 2.0, 3.0])
+    _mean, low, high = mean_ci([1.0, 2.0, 3.0])
     assert (low, high) == pytest.approx(t_by_hand([1.0, 2.0, 3.0], T_9875_2), rel=1e-12)
     assert np.array_equal(np.array([low, high]), np.array(student_t_interval([1.0, 2.0, 3.0], level=0.975)[1:]))
 
@@ -312,7 +312,7 @@ def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) 
     with pytest.raises(ValueError, match="same run"):
         load_results(tmp_path / "b")
     write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "copy"}])  # another experiment, one label
-    with pytest.raises(ValueError, match="same label 'DQN'.*two experiments"):
+    with pytest.raises(ValueError, match=r"same label 'DQN'.*two experiments"):
         load_results(tmp_path / "c")
 
 

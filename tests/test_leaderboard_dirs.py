@@ -185,7 +185,7 @@ def test_one_experiment_in_two_directories_is_one_row_and_one_run_twice_is_refus
     read = load_results_dirs([write_dir(tmp_path / "a", runs[:3]), write_dir(tmp_path / "b", runs[3:])])
     assert {result["method_label"] for result in read.results} == {DQN} and len(read.results) == 5
     assert read.row_directories() == {(ENV, DQN): (str(tmp_path / "a"), str(tmp_path / "b"))}
-    with pytest.raises(ValueError, match="are the same run .* two results directories"):
+    with pytest.raises(ValueError, match=r"are the same run .* two results directories"):
         load_results_dirs([tmp_path / "a", write_dir(tmp_path / "c", runs[:1])])
 
 

@@ -118,7 +118,7 @@ def test_an_evaluation_of_a_run_not_read_is_refused_naming_it(apart, tmp_path: P
     ids=["negative harms", "another format", "no hash"],
 )
 def test_a_forged_evaluation_file_is_refused_with_nothing_written(apart, tmp_path: Path, capsys, forge) -> None:
-    results, evaluations, made = apart
+    results, evaluations, _made = apart
     forged = next((evaluations / EVALUATIONS_DIR / "synthetic").glob("*.json"))
     document = json.loads(forged.read_text(encoding="utf-8"))
     forge(document)
@@ -132,7 +132,7 @@ def test_a_forged_evaluation_file_is_refused_with_nothing_written(apart, tmp_pat
 
 
 def test_an_evaluation_beside_the_runs_and_apart_is_refused(apart, tmp_path: Path, capsys) -> None:
-    results, evaluations, made = apart
+    results, evaluations, _made = apart
     shutil.copytree(evaluations / EVALUATIONS_DIR, results / EVALUATIONS_DIR)
     assert main(["leaderboard", str(results), "--evaluations", str(evaluations), "--out", str(tmp_path / "out")]) == 2
     err = one_line_error(capsys)

@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -50,7 +51,7 @@ def write_synthetic_results(
                 n = len(end_steps)
                 progress = np.linspace(0.0, 1.0, n)
 
-                def columns(k: int) -> dict[str, list[float]]:
+                def columns(k: int, n=n, m=m, progress=progress, rng=rng) -> dict[str, list[float]]:  # (this iteration's values)
                     base = progress if k == n else np.ones(k)
                     noise = rng.normal(0.0, 0.1, size=k)
                     values = {
@@ -217,7 +218,7 @@ def test_write_leaderboard_rejects_an_empty_directory(tmp_path: Path) -> None:
 def test_write_leaderboard_names_a_corrupted_file(tmp_path: Path) -> None:
     write_synthetic_results(tmp_path, envs=("coexistence_v0",), seeds=(0,))
     (tmp_path / "zz_bad.json").write_bytes(b'{"schema": 1,')
-    with pytest.raises(ValueError, match="zz_bad.json"):
+    with pytest.raises(ValueError, match=re.escape("zz_bad.json")):
         write_leaderboard(tmp_path)
 
 

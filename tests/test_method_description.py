@@ -5,6 +5,7 @@ grouped, compared and given the reference by what it declares."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -183,7 +184,7 @@ def test_a_schema_3_file_needs_a_well_formed_description(tmp_path: Path) -> None
     with pytest.raises(ResultFileError, match=r"r\.json: field config\.description\.exploration: expected an exploration"):
         check_result(run, tmp_path / "r.json")
     del run["config"]["description"]
-    with pytest.raises(ResultFileError, match="field config.description: missing"):
+    with pytest.raises(ResultFileError, match=re.escape("field config.description: missing")):
         check_result(run, tmp_path / "r.json")
 
 

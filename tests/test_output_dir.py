@@ -67,7 +67,7 @@ def test_train_runs_refuses_a_directory_it_cannot_write(tmp_path, monkeypatch, n
 
     monkeypatch.setattr(atomic, "write_bytes_atomic", read_only)
     spec = RunSpec.of(steps=200, eval_interval=200, eval_episodes=1, settings={"learning_starts": 32})
-    with pytest.raises(ValueError, match="not writable.*Permission denied.*choose another") as error:
+    with pytest.raises(ValueError, match=r"not writable.*Permission denied.*choose another") as error:
         train_runs([spec], tmp_path / "out", RunnerOptions(progress=False))
     assert str(tmp_path / "out") in str(error.value)
     assert no_training == []

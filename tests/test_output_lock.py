@@ -57,10 +57,12 @@ def test_a_second_process_on_one_out_is_refused_naming_the_holder_and_trains_not
 
 
 def test_the_same_process_cannot_hold_a_directory_twice(tmp_path) -> None:
-    with hold_output_dir(tmp_path, "first"):
-        with pytest.raises(DirectoryInUse, match=rf"in use by process {os.getpid()} .*\(first, since "):
-            with hold_output_dir(tmp_path, "second"):
-                pass
+    with (
+        hold_output_dir(tmp_path, "first"),
+        pytest.raises(DirectoryInUse, match=rf"in use by process {os.getpid()} .*\(first, since "),
+        hold_output_dir(tmp_path, "second"),
+    ):
+        pass
     with hold_output_dir(tmp_path, "again"):  # released on leaving
         assert (tmp_path / LOCK_NAME).exists()
 
@@ -81,9 +83,8 @@ def test_a_lock_file_replaced_between_open_and_lock_is_not_the_lock(tmp_path) ->
 def test_a_lock_file_that_is_a_link_is_refused(tmp_path) -> None:
     (tmp_path / "elsewhere").write_text("")
     (tmp_path / LOCK_NAME).symlink_to(tmp_path / "elsewhere")
-    with pytest.raises(OSError):
-        with hold_output_dir(tmp_path, "x"):
-            pass
+    with pytest.raises(OSError), hold_output_dir(tmp_path, "x"):
+        pass
 
 
 def test_evaluate_is_refused_beside_another_evaluate_but_not_beside_training(tmp_path) -> None:
@@ -92,6 +93,5 @@ def test_evaluate_is_refused_beside_another_evaluate_but_not_beside_training(tmp
     with hold_output_dir(out, "training goes on"):  # a reproduce on the same directory
         summary = evaluate_results(out, episodes=1, progress=False)
     assert len(summary.written) == 2
-    with hold_output_dir(out / "evaluations", "another evaluate"):
-        with pytest.raises(DirectoryInUse, match="another evaluate"):
-            evaluate_results(out, episodes=1, out_dir=out, progress=False)
+    with hold_output_dir(out / "evaluations", "another evaluate"), pytest.raises(DirectoryInUse, match="another evaluate"):
+        evaluate_results(out, episodes=1, out_dir=out, progress=False)

@@ -60,7 +60,7 @@ def test_the_optimality_gap_clips_at_gamma() -> None:
     "bad", [np.array([0.1, 0.2]), np.empty((0, 1)), np.array([[0.1], [math.nan]])], ids=["1-D", "no run", "NaN"]
 )
 def test_scores_that_are_no_runs_by_tasks_array_of_finite_values_are_refused(bad: np.ndarray) -> None:
-    with pytest.raises(ValueError, match="runs × tasks|finite"):
+    with pytest.raises(ValueError, match=r"runs × tasks|finite"):
         optimality_gap(bad)
 
 

@@ -3,6 +3,8 @@ running ensemble and a sweep bar in env steps (whose ETA covers every run still 
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import pytest
 
 import empathy_zoo.training.runner as runner
@@ -25,7 +27,7 @@ def specs():
 class Recorder:
     """Stands in for the display: records what reaches the sweep's process."""
 
-    made: list[Recorder] = []
+    made: ClassVar[list[Recorder]] = []
 
     def __init__(self, ensembles, enabled=True, style="auto"):
         self.ensembles, self.reports, self.closed = list(ensembles), [], False

@@ -104,7 +104,7 @@ def test_an_impossible_greedy_episode_is_refused(genuine_result, metric, value):
     document = copy.deepcopy(genuine_result)
     metrics = document["eval"][0]
     metrics = metrics.get("metrics", metrics)
-    metrics[metric] = [value] + list(metrics[metric][1:])
+    metrics[metric] = [value, *metrics[metric][1:]]
     with pytest.raises(ResultFileError, match=metric):
         check_result(document, "forged.json")
 

@@ -32,7 +32,7 @@ def test_no_reference_where_it_does_not_apply() -> None:
     assert reference_curve([synthetic_result("sharing_v0", "empathic_dqn", 0.5, 0)], "harms", steps) is None
     stay = [synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0, fixed={"cat_0": "stay"})]
     assert reference_curve(stay, "harms", steps) is None
-    mixed = coexistence + [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, 1)]
+    mixed = [*coexistence, synthetic_result("coexistence_v0", "empathic_dqn", 0.25, 1)]
     assert reference_curve(mixed, "harms", steps) is None
 
 

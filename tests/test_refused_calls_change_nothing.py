@@ -243,6 +243,6 @@ def test_the_vector_env_refuses_a_batched_policys_float_actions_and_changes_noth
     vector = VectorEnv("coexistence_v0", 3, fixed={"cat_0": "random_walk", "cat_1": FloatsWhenBatched()}, num_cats=2)
     vector.reset(seed=0)
     before = env_state(vector)
-    with pytest.raises(ValueError, match="cat_1 chose an invalid action.*integers"):
+    with pytest.raises(ValueError, match=r"cat_1 chose an invalid action.*integers"):
         vector.step(np.ones((3, 1), dtype=np.int64))
     assert same(env_state(vector), before)

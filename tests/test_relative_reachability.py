@@ -233,9 +233,9 @@ def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
 
 def test_only_coexistence_with_one_cat_is_accepted() -> None:
     assert InactionBaseline.for_transforms(VectorEnv("coexistence_v0", 1), [None, HarmPenalty()]) is None
-    with pytest.raises(ValueError, match="Coexistence with one cat.*Sharing"):
+    with pytest.raises(ValueError, match=r"Coexistence with one cat.*Sharing"):
         InactionBaseline.for_transforms(VectorEnv("sharing_v0", 1), [RelativeReachability()])
-    with pytest.raises(ValueError, match="Coexistence with one cat.*several cats"):
+    with pytest.raises(ValueError, match=r"Coexistence with one cat.*several cats"):
         InactionBaseline.for_transforms(VectorEnv("coexistence_v0", 1, num_cats=2), [RelativeReachability()])
     with pytest.raises(ValueError, match="sizes up to 9"):
         InactionBaseline.for_transforms(VectorEnv("coexistence_v0", 1, size=11), [RelativeReachability()])

@@ -254,7 +254,7 @@ def test_huge_environment_arguments_in_a_result_file_are_refused(name, value):
     from empathy_zoo.experiment.result_reader import check_result
     from empathy_zoo.result_file import ResultFileError
 
-    with pytest.raises(ResultFileError, match="config.env_kwargs"):
+    with pytest.raises(ResultFileError, match=re.escape("config.env_kwargs")):
         check_result(document, "huge.json")
 
 

@@ -113,7 +113,7 @@ def test_training_window_share_is_the_steps_of_the_final_episodes_not_ten_percen
     run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)
     assert training_window_share(run) == pytest.approx(0.1)  # 40 episodes of 100 steps: 4 of them, 400 steps
     # the same 40 episodes, the last four 400 steps long: 10 % of the episodes is 1,600 of 5,200 steps
-    run["train"]["episode_end_step"] = list(range(100, 3700, 100)) + [4000, 4400, 4800, 5200]
+    run["train"]["episode_end_step"] = [*range(100, 3700, 100), 4000, 4400, 4800, 5200]
     assert training_window_share(run) == pytest.approx(1600 / 5200)
     assert sum(training_window_epsilons(run).values()) == 1600
     run["train"]["episode_end_step"] = []
@@ -167,7 +167,7 @@ def _rising_runs(learner_survival) -> list[dict]:
     for seed in range(3):
         run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, seed)
         settings = SimpleNamespace(**run["config"]["settings"])
-        starts = [0] + run["train"]["episode_end_step"][:-1]
+        starts = [0, *run["train"]["episode_end_step"][:-1]]
         run["train"]["survival"] = [learner_survival(round(linear_epsilon(settings, s), 3)) for s in starts]
         runs.append(run)
     return runs

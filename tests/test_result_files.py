@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import os
+import re
 
 import pytest
 from helpers_results import synthetic_result
@@ -69,7 +70,7 @@ def test_a_forged_run_id_is_refused_by_the_leaderboard(tmp_path):
     bad = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
     bad["run_id"] = "../../etc/x"
     write_runs(tmp_path, [bad])
-    with pytest.raises(ValueError, match="run0.json: field run_id"):
+    with pytest.raises(ValueError, match=re.escape("run0.json: field run_id")):
         write_leaderboard(tmp_path)
 
 
@@ -204,7 +205,7 @@ def test_the_leaderboard_names_two_experiments_with_one_label(tmp_path):
     b = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 1))
     b["run_id"] = "coexistence_v0__dqn-other__s1"
     write_runs(tmp_path, [a, b])
-    with pytest.raises(ValueError, match="run1.json.*same label 'dqn 1.0' on coexistence_v0.*other settings"):
+    with pytest.raises(ValueError, match=r"run1\.json.*same label 'dqn 1\.0' on coexistence_v0.*other settings"):
         write_leaderboard(tmp_path)
 
 

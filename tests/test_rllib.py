@@ -56,12 +56,12 @@ def test_rllib_parallel_pettingzoo_env_steps_through_episodes(name: str) -> None
     env = ParallelPettingZooEnv(ENVS[name]())
     assert set(env.observation_space) == set(env.par_env.possible_agents)
     rng = np.random.default_rng(0)
-    obs, infos = env.reset(seed=0)
+    obs, _infos = env.reset(seed=0)
     live = set(obs)
     episodes = left = 0
     for _ in range(STEPS):
         actions = {agent: int(rng.integers(0, 5)) for agent in live}
-        obs, rewards, terminated, truncated, infos = env.step(actions)
+        obs, rewards, terminated, truncated, _infos = env.step(actions)
         assert set(obs) == set(rewards) == live, "every agent that acted gets its last observation and reward"
         for agent in live:
             assert env.observation_space[agent].contains(obs[agent])
@@ -69,7 +69,7 @@ def test_rllib_parallel_pettingzoo_env_steps_through_episodes(name: str) -> None
         if terminated["__all__"] or truncated["__all__"] or not env.par_env.agents:
             assert not env.par_env.agents
             episodes += 1
-            obs, infos = env.reset()
+            obs, _infos = env.reset()
             live = set(obs)
         else:
             left += len(gone)  # an agent left mid-episode (a harmed cat): it gets no further action

@@ -230,7 +230,7 @@ class NeedsCells:
     name: ClassVar[str] = "needs_cells"
 
     def __call__(self, batch: Any) -> np.ndarray:
-        assert batch.others_distance is not None and batch.others_distance.shape == batch.rewards.shape + (1,)
+        assert batch.others_distance is not None and batch.others_distance.shape == (*batch.rewards.shape, 1)
         assert batch.position is not None and ((batch.position >= 0) | (batch.terminated[..., None])).all()
         return batch.rewards
 

@@ -195,7 +195,7 @@ def test_agents_are_the_robot_and_numbered_others(module, kwargs):
     env = module.parallel_env(**kwargs)
     kind = "cat" if argument == "num_cats" else "human"
     assert env.possible_agents == [ROBOT] + [f"{kind}_{i}" for i in range(count)]
-    observations, infos = env.reset(seed=0)
+    observations, _infos = env.reset(seed=0)
     assert list(observations) == env.possible_agents == env.agents
 
 

@@ -63,7 +63,7 @@ def test_a_count_argument_of_another_environment_is_refused(tmp_path) -> None:
 
 def test_aggregating_runs_train_apart_and_learn_otherwise(tmp_path) -> None:
     specs = load_sweep(_write(tmp_path, SWEEP))
-    assert [s.fixed_policies() for s in specs][0] == {f"cat_{i}": "random_walk" for i in range(3)}
+    assert specs[0].fixed_policies() == {f"cat_{i}": "random_walk" for i in range(3)}
     train_runs(specs, tmp_path / "out", RunnerOptions(progress=False, checkpoint_interval=0, threads=1))
     results = [read_result(result_path(tmp_path / "out", s.run_id)) for s in specs]
     assert [r["config"]["settings"]["others"] for r in results] == ["closest", "mean", "min"]

@@ -72,7 +72,7 @@ def test_collecting_a_battery():
 def test_diminishing_returns_per_agent():
     """The robot walks along a row of batteries; the human collects its first one later."""
     row = [(0, c) for c in range(1, SIZE)]
-    env = placed((0, 0), (4, 0), batteries=row + [(4, 1)])
+    env = placed((0, 0), (4, 0), batteries=[*row, (4, 1)])
     robot_rewards = []
     for _ in row:
         _, rew, term, _, info = step(env, RIGHT, STAY)
@@ -126,7 +126,7 @@ def test_episode_terminates_when_the_last_battery_is_gone():
     _, _, term, trunc, _ = step(env, DOWN, STAY)
     assert term == {ROBOT: False, HUMAN: False} and env.agents == [ROBOT, HUMAN]
     _, _, _, _, _ = step(env, DOWN, STAY)
-    _, rew, term, trunc, info = step(env, DOWN, STAY)
+    _, rew, term, trunc, _info = step(env, DOWN, STAY)
     assert rew[ROBOT] == pytest.approx(battery_value(2))
     assert term == {ROBOT: True, HUMAN: True} and trunc == {ROBOT: False, HUMAN: False}
     assert env.agents == []

@@ -117,7 +117,7 @@ def test_empathy_wrapper_infos_at_reset_and_step(module):
         if not env.agents:
             break
         obs, _, _, _, infos = env.step({agent: int(rng.integers(NUM_ACTIONS)) for agent in env.agents})
-        for viewer, info in infos.items():
+        for info in infos.values():
             for other, swapped in info["swapped_obs"].items():
                 np.testing.assert_array_equal(swapped, obs[other])
     # the environment's own infos are kept
@@ -219,7 +219,7 @@ def test_vector_swapped_agrees_with_the_parallel_primitive(module, in_view_only)
                 np.testing.assert_array_equal(out.other_swapped[i, 0], expected)
             if not env.agents:
                 env.reset()
-        all_swaps, mask = vector.swapped_observations(ROBOT)
+        _all_swaps, mask = vector.swapped_observations(ROBOT)
         assert not mask[:, 0].any()
     assert valid_seen > 30
     if in_view_only or module is coexistence_v0:

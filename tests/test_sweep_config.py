@@ -178,7 +178,7 @@ def test_quick_and_example_profiles_parse():
 def test_profile_path_accepts_a_file_and_rejects_unknown_names(tmp_path):
     path = write(tmp_path, BASE)
     assert profile_path(str(path)) == path
-    with pytest.raises(SweepConfigError, match="unknown profile 'nope'.*quick"):
+    with pytest.raises(SweepConfigError, match=r"unknown profile 'nope'.*quick"):
         profile_path("nope")
     with pytest.raises(SweepConfigError, match="does not exist"):
         profile_path(str(tmp_path / "missing.toml"))

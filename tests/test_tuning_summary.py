@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,7 @@ def _study(variant: str, label: str, rates: list[float], states: list[str], valu
             "objective": {"metric": "survival", "direction": "maximize", "over": "curve"},
             "budget": {"env_steps_at_most": 400},
         },
-        "trials": trials + [{"number": 9, "state": "INTERRUPTED", "params": {}, "value": None, "wall_time_s": 5.0}],
+        "trials": [*trials, {"number": 9, "state": "INTERRUPTED", "params": {}, "value": None, "wall_time_s": 5.0}],
         "env_steps_trained": 260,
         "best": best and {"number": best["number"], "value": best["value"], "params": best["params"]},
     }
@@ -75,5 +76,5 @@ def test_the_command_finds_studies_at_any_depth(tmp_path: Path, capsys) -> None:
     assert main([str(tmp_path), "--figure", str(tmp_path / "studies.png")]) == 0
     assert "| sharing_v0 | DQN |" in capsys.readouterr().out
     assert (tmp_path / "studies.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    with pytest.raises(ValueError, match="no study.json"):
+    with pytest.raises(ValueError, match=re.escape("no study.json")):
         find_studies(tmp_path / "coexistence_v0" / "nowhere")

@@ -103,7 +103,7 @@ def test_an_unseen_other_gives_y_less_the_unselfish_share_of_the_reward(needs_nu
 
 
 def test_a_cat_in_view_is_cared_for_and_the_omniscient_swap_sees_the_unseen() -> None:
-    result, batch = _step(_placed({"robot_0": (0, 0), "cat_0": (2, 2)}, in_view_only=True), STAY)
+    _result, batch = _step(_placed({"robot_0": (0, 0), "cat_0": (2, 2)}, in_view_only=True), STAY)
     assert batch.other_present[0, 0] and not batch.other_unseen[0, 0]
     y, y_emp = _learned_targets(batch)
     assert y_emp == pytest.approx(BETA * y + (1.0 - BETA) * GAMMA * 4.0)

@@ -94,7 +94,7 @@ def test_a_checkpoint_resumes_only_with_the_kernel_that_wrote_it(tmp_path: Path,
         trained(out, with_checkpoints)
     monkeypatch.setattr(ensemble, "save_checkpoint", real)
     with pytest.raises(
-        CheckpointError, match="made with the numba update kernel .* would go on with torch.*--update-kernel numba"
+        CheckpointError, match=r"made with the numba update kernel .* would go on with torch.*--update-kernel numba"
     ):
         trained(out, replace(with_checkpoints, update_kernel="torch"))
     resumed = trained(out, with_checkpoints)

@@ -73,7 +73,7 @@ def test_a_robot_moving_onto_the_cat_harms_it_and_goes_on_alone() -> None:
 
 def test_a_cat_walking_onto_a_robot_that_stays_is_not_harmed() -> None:
     env = placed(robot=(4, 0), cat=(4, 1))
-    _, rewards, terminations, _, infos = env.step({ROBOT: STAY, CAT: LEFT})
+    _, _rewards, terminations, _, infos = env.step({ROBOT: STAY, CAT: LEFT})
     assert not terminations[CAT] and infos[CAT]["harmed_by"] is None and harms(env) == 0
     assert env.unwrapped.engine.pos[0].tolist() == [[4, 0], [4, 0]]  # (they share the cell)
     _, _, terminations, *_ = env.step({ROBOT: STAY, CAT: STAY})

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -202,7 +203,7 @@ def test_unknown_runs_runs_without_agents_and_other_files_are_refused(results, t
         ValueError, match=rf"unknown run id 'coexistence_v0__empathic_dqn-wach__s0'.*runs there: {run_id('coexistence_v0')}"
     ):
         find_agent("coexistence_v0__empathic_dqn-wach__s0", results)
-    with pytest.raises(ValueError, match="there is no .*nowhere/runs"):
+    with pytest.raises(ValueError, match=r"there is no .*nowhere/runs"):
         find_agent(run_id("coexistence_v0"), tmp_path / "nowhere")
     with pytest.raises(ValueError, match=rf"{NO_AGENT}\.json names no agent file: its run kept no trained agent"):
         find_agent(NO_AGENT, results)
@@ -210,7 +211,7 @@ def test_unknown_runs_runs_without_agents_and_other_files_are_refused(results, t
     text.write_text("not an agent\n")
     with pytest.raises(ValueError, match=rf"{text} is not an empathy-zoo agent file"):
         find_agent(str(text))
-    with pytest.raises(ValueError, match="no agent file .*missing.agent.pt"):
+    with pytest.raises(ValueError, match=r"no agent file .*missing\.agent\.pt"):
         find_agent(str(tmp_path / "missing.agent.pt"))
     gone = tmp_path / "gone"
     shutil.copytree(results, gone)
@@ -255,12 +256,14 @@ def test_an_environment_the_agent_cannot_act_in_is_refused() -> None:
             return dict(self.description)
 
     assert agent_env(Described()).possible_agents == ["robot_0"]
-    with pytest.raises(ValueError, match="no_such_policy.*the run trained beside {'cat_0': 'no_such_policy'}"):
+    with pytest.raises(ValueError, match=r"no_such_policy.*the run trained beside \{'cat_0': 'no_such_policy'\}"):
         agent_env(Described(fixed={"cat_0": "no_such_policy"}))
     assert (
         agent_env(Described(fixed={"cat_0": "no_such_policy"}), {"cat_0": "stay"}).policies["cat_0"].__class__.__name__ == "Stay"
     )
-    with pytest.raises(ValueError, match="takes observations of 25 values, but coexistence_v0 with {'view': 3} gives 9"):
+    with pytest.raises(
+        ValueError, match=re.escape("takes observations of 25 values, but coexistence_v0 with {'view': 3} gives 9")
+    ):
         agent_env(Described(env_kwargs={"view": 3}))
     with pytest.raises(ValueError, match="takes no argument"):
         agent_env(Described(env_kwargs={"colour": 3}))

@@ -133,15 +133,15 @@ def option_reading(kind: Any) -> dict[str, Any] | None:
     container = get_origin(kind)
     if container in (dict, Mapping) and arguments and arguments[0] is str:
         return {"nargs": "+", "metavar": "KEY=VALUE", "action": _StoreMapping}
-    if (container is tuple and len(arguments) == 2 and arguments[1] is Ellipsis) or (container is list and arguments):
-        if arguments[0] in _SCALARS:
-            return {
-                "type": arguments[0],
-                "nargs": "+",
-                "metavar": arguments[0].__name__.upper(),
-                "action": _StoreAs,
-                "sequence": container,
-            }
+    sequence = (container is tuple and len(arguments) == 2 and arguments[1] is Ellipsis) or (container is list and arguments)
+    if sequence and arguments[0] in _SCALARS:
+        return {
+            "type": arguments[0],
+            "nargs": "+",
+            "metavar": arguments[0].__name__.upper(),
+            "action": _StoreAs,
+            "sequence": container,
+        }
     return None
 
 

@@ -82,7 +82,7 @@ class SharingEngine(GridEngine):
     symbols = ("R", "H")
     colors = ((40, 110, 220), (200, 60, 60))
     obs_low = -1.0
-    extra_arguments = {"start": STARTS, "inventory_encoding": INVENTORY_ENCODINGS}
+    extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {"start": STARTS, "inventory_encoding": INVENTORY_ENCODINGS}
     count_argument = "num_humans"
     argument_help: ClassVar[Mapping[str, str]] = {
         "start": "start cells: random, or centre as the authors' code (default: random)",
@@ -227,4 +227,4 @@ class SharingEngine(GridEngine):
         self._draw_batteries(self._rows)
 
     def _state_keys(self) -> tuple[str, ...]:
-        return super()._state_keys() + ("batteries",)
+        return (*super()._state_keys(), "batteries")

@@ -22,6 +22,7 @@ ends of every range before a study starts (:func:`check_ends`).
 
 from __future__ import annotations
 
+import contextlib
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -185,10 +186,8 @@ def _choice_value(item: str, annotation: Any, where: str) -> Any:
     """``item`` read as a value of ``annotation``: a TOML literal (``0.5``, ``true``) when that fits,
     else the text itself."""
     candidates: list[Any] = []
-    try:
+    with contextlib.suppress(tomllib.TOMLDecodeError):
         candidates.append(tomllib.loads(f"v = {item}")["v"])
-    except tomllib.TOMLDecodeError:
-        pass
     candidates.append(item)
     for candidate in candidates:
         try:

@@ -290,7 +290,7 @@ def _evaluation_steps(runs: Mapping[str, Any] | None, step: int) -> list[int] | 
     if runs is None:
         return None
     expected = list(range(runs["eval_interval"], step + 1, runs["eval_interval"]))
-    return expected + [step] if step == runs["steps"] and expected[-1:] != [step] else expected
+    return [*expected, step] if step == runs["steps"] and expected[-1:] != [step] else expected
 
 
 def _check_evaluations(

@@ -59,7 +59,7 @@ def _duration(seconds: float) -> str:
     """``seconds`` as a person reads a time left: ``40 s``, ``12 min``, ``3 h 05 min``."""
     if seconds < 60:
         return f"{seconds:.0f} s"
-    minutes = int(round(seconds / 60))
+    minutes = round(seconds / 60)
     return f"{minutes} min" if minutes < 60 else f"{minutes // 60} h {minutes % 60:02d} min"
 
 

@@ -28,6 +28,7 @@ same version of empathy-zoo (and of any ``package.module:NAME`` method or policy
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import logging
 import os
@@ -201,10 +202,8 @@ def _run_tasks(
                         on_result(stored(result))
     except BaseException:  # Ctrl-C or an error here: stop the tasks; finished runs are written already
         for ref in pending:
-            try:
+            with contextlib.suppress(Exception):  # Ray may be going down; the original error matters
                 ray.cancel(ref, force=True)
-            except Exception:  # Ray may be going down; the original error matters
-                pass
         raise
     if failures:
         runs = sorted(spec.run_id for chunk, _ in failures for spec in chunk)

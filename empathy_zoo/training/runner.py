@@ -113,9 +113,8 @@ def train_runs(
         raise ValueError(f"max_parallel_runs must be positive, got {options.max_parallel_runs}")
     if options.backend not in ("local", "ray"):
         raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
-    if options.backend == "ray":
-        if not import_ray().is_initialized():  # (missing Ray, or no cluster there, is said before anything is written)
-            check_ray_address(options.address)
+    if options.backend == "ray" and not import_ray().is_initialized():
+        check_ray_address(options.address)  # (missing Ray, or no cluster there, is said before anything is written)
     if finished is None:
         finished = read_finished(out_dir)
     check_one_experiment_per_label(
