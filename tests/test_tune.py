@@ -14,13 +14,13 @@ import pytest
 
 pytest.importorskip("optuna")
 
-from baselines.registry import get_method  # noqa: E402
-from empathy_zoo.cli import main  # noqa: E402
-from empathy_zoo.experiment import load_sweep  # noqa: E402
-from empathy_zoo.experiment.search_space import ParamSpec, parse_param, parse_params, point_runs  # noqa: E402
-from empathy_zoo.training import study_plan, tuning  # noqa: E402
-from empathy_zoo.training.study_plan import select_experiment, tuning_seeds  # noqa: E402
-from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE  # noqa: E402
+from baselines.registry import get_method
+from empathy_zoo.cli import main
+from empathy_zoo.experiment import load_sweep
+from empathy_zoo.experiment.search_space import ParamSpec, parse_param, parse_params, point_runs
+from empathy_zoo.training import study_plan, tuning
+from empathy_zoo.training.study_plan import select_experiment, tuning_seeds
+from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE
 
 SWEEP = """
 [sweep]
@@ -171,7 +171,7 @@ def test_tuning_seeds_are_kept_apart_from_reporting_seeds(tmp_path: Path, capsys
 
 def test_the_experiment_is_chosen_or_the_choices_named() -> None:
     specs = load_sweep("empathy_zoo/profiles/methods.toml")
-    with pytest.raises(ValueError, match="runs on 2 variants .*choose one with --env"):
+    with pytest.raises(ValueError, match=r"runs on 2 variants .*choose one with --env"):
         select_experiment(specs, "dqn_social_value")
     with pytest.raises(ValueError, match=r"has 3 experiments there .*choose one with --label"):
         select_experiment(specs, "empathic_dqn", "coexistence_3cats")
@@ -211,7 +211,9 @@ def test_a_study_is_the_same_twice_and_its_sweep_file_reproduces_its_best_trial(
     from empathy_zoo.training import RunnerOptions, train_runs
     from empathy_zoo.training.study_plan import trial_value
 
-    again = [s.__class__(s.variant, s.entry, s.budget, seed) for s, seed in zip(specs, study["plan"]["tuning_seeds"])]
+    again = [
+        s.__class__(s.variant, s.entry, s.budget, seed) for s, seed in zip(specs, study["plan"]["tuning_seeds"], strict=True)
+    ]
     results = [json.loads(p.read_text()) for p in train_runs(again, tmp_path / "again", RunnerOptions(progress=False))]
     assert trial_value([r["eval"][-1] for r in results], "survival")[0] == best["value"]
 
@@ -273,7 +275,7 @@ def test_the_pruner_hook_changes_nothing_a_run_computes(sweep: Path, tmp_path: P
 
     tuned = [stored(document) for document in tuning.train_trial(specs, tmp_path / "trials", options, report)]
     assert reported == [100, 200, 300]
-    for a, b in zip(normal, tuned):
+    for a, b in zip(normal, tuned, strict=True):
         for document in (a, b):
             del document["created"], document["wall_time_s"]
         assert a == b
@@ -308,7 +310,7 @@ def test_a_value_over_the_curve_is_the_mean_of_its_evaluations_and_over_last_the
 
 def test_ties_at_the_best_value_are_named_and_a_single_best_is_alone() -> None:
     def study(values: list[float | None], states: list[str]) -> dict[str, Any]:
-        trials = [{"number": i, "state": s, "value": v} for i, (v, s) in enumerate(zip(values, states))]
+        trials = [{"number": i, "state": s, "value": v} for i, (v, s) in enumerate(zip(values, states, strict=True))]
         finished = [t for t in trials if t["state"] == "COMPLETE"]
         best = max(finished, key=lambda t: t["value"]) if finished else None
         return {"trials": trials, "best": best and {"number": best["number"], "value": best["value"]}}

@@ -1,13 +1,15 @@
 """``tune``: one experiment of a sweep file tuned with Optuna, on seeds its results are not reported on.
 
     empathy-zoo tune SWEEP_FILE --method NAME --param NAME=KIND:... [--param ...] [--env VARIANT]
-                     [--trials N] [--budget STEPS] [--tuning-seeds N] [--objective METRIC]
-                     [--objective-over last|curve] [--out DIR]
+                     [--trials N] [--batch B] [--jobs N] [--budget STEPS] [--tuning-seeds N]
+                     [--objective METRIC] [--objective-over last|curve] [--log BACKENDS] [--out DIR]
 
 The study (:mod:`empathy_zoo.training.tuning`) writes ``study.json``, ``tuned.toml`` (a sweep file
 of the best settings on the sweep's reporting seeds: ``empathy-zoo reproduce --profile
-DIR/tuned.toml``) and ``trials.png`` (:mod:`leaderboard.trials_figure`) into ``--out``, after every
-trial; the same command resumes a stopped study. The objective is, unless ``--objective`` says
+DIR/tuned.toml``), ``trials.png`` and ``importance.png`` (:mod:`empathy_zoo.training.trials_figure`)
+into ``--out``, after every trial; the same command resumes a stopped study. ``--batch`` is part
+of the plan (trials proposed at once); ``--jobs`` is not (processes that train a batch), so any
+``--jobs`` gives the same study. The objective is, unless ``--objective`` says
 otherwise, the environment's task metric (its entry's
 :attr:`~empathy_zoo.environments.Environment.task`: Coexistence's survival, Sharing's batteries),
 maximised or minimised as :data:`empathy_zoo.metrics.HIGHER_IS_BETTER` says. Optuna is the
@@ -19,9 +21,12 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from empathy_zoo.cli.common import PROG, add_progress_style, check_device, help_text, path_text, positive
+
+if TYPE_CHECKING:
+    from empathy_zoo.experiment.search_space import ParamSpec
 
 __all__ = ["DEFAULT_TRIALS", "DEFAULT_TUNING_SEEDS", "add_tune", "cmd_tune", "default_objective"]
 
@@ -47,17 +52,20 @@ def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
 def cmd_tune(args: argparse.Namespace, command: str) -> int:
     """Run (or resume) the study; print what it wrote and its best trial. Every argument is
     checked, each size within its bound, before anything is written."""
+    from empathy_zoo.experiment.log_backends import parse_log
     from empathy_zoo.experiment.model import Budget
     from empathy_zoo.experiment.search_space import parse_params
     from empathy_zoo.experiment.sweep_file import load_sweep, profile_path, profiles
-    from empathy_zoo.limits import MAX_STEPS, check_at_most
+    from empathy_zoo.limits import MAX_STEPS, check_at_most, cpu_count
     from empathy_zoo.names import check_label
     from empathy_zoo.training.options import RunnerOptions
     from empathy_zoo.training.study_plan import OVER_WORDS, StudyPlan, select_experiment, ties_at_best, tuning_seeds
+    from empathy_zoo.training.trials_figure import IMPORTANCE_FIGURE, TRIALS_FIGURE
     from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE, import_optuna, run_study
-    from leaderboard.trials_figure import TRIALS_FIGURE
 
     import_optuna()  # (said first: nothing else is worth checking without it)
+    jobs = check_at_most("--jobs", positive("--jobs", args.jobs), cpu_count(), "the CPUs of this machine, os.cpu_count()")
+    log = parse_log(args.log, "--log")
     if args.label is not None:
         check_label(args.label, "--label")
     path = profile_path(args.sweep)
@@ -88,6 +96,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         startup_trials=positive("--startup-trials", args.startup_trials),
         over=args.objective_over,
         prune_from=args.prune_from,
+        batch=positive("--batch", args.batch),
     )
     options = RunnerOptions(
         device=check_device(args.device),
@@ -95,27 +104,38 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         progress=False,
         progress_style=args.progress_style,
         update_kernel=args.update_kernel,
+        workers=jobs,
+        log=log,
     )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
+    side_by_side = min(jobs, plan.batch)
+    batches = f" in batches of {plan.batch} ({side_by_side} trained at a time)" if plan.batch > 1 else ""
+    if jobs > plan.batch:
+        print(
+            f"{PROG}: note: --jobs {jobs} trains at most the {plan.batch} trial(s) of a batch side by side: "
+            f"{side_by_side} process(es) will; --batch B proposes B trials at once"
+        )
     print(
-        f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({plan.source}): {plan.trials} trials × "
+        f"{PROG}: tuning {base.display_label()} on {base.variant.label} ({plan.source}): {plan.trials} trials{batches} × "
         f"{len(plan.seeds)} tuning seeds ({plan.seeds[0]}..{plan.seeds[-1]}) × {steps:,} steps; objective {metric} "
         f"({direction}) {OVER_WORDS[plan.over]}; reporting seeds {reporting} kept apart; results in {out}",
         flush=True,
     )
-    figure = out / TRIALS_FIGURE
     document = run_study(
         plan,
         out,
         options,
         command=command,
         progress=not args.no_progress,
-        on_trial=lambda study: _draw(study, figure),
-        also_writes=(TRIALS_FIGURE,),
+        on_trial=lambda study: _draw(study, plan.params, out),
+        also_writes=(TRIALS_FIGURE, IMPORTANCE_FIGURE),
     )
-    _draw(document, figure)
+    skipped = _draw(document, plan.params, out)
     for name in (STUDY_FILE, TRIALS_FIGURE):
         print(f"{PROG}: wrote {out / name}")
+    print(f"{PROG}: {skipped}" if skipped else f"{PROG}: wrote {out / IMPORTANCE_FIGURE}")
+    if log:
+        print(f"{PROG}: the trials' runs logged under {out / 'logs'} ({', '.join(log)})")
     best = document["best"]
     if best is None:
         print(f"{PROG}: no trial finished (all pruned or refused): no {TUNED_FILE}; widen the ranges or raise --trials")
@@ -141,11 +161,18 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     return 0
 
 
-def _draw(study: dict[str, Any], path: Path) -> None:
-    """Draw ``trials.png`` of the study document ``study`` (after every trial)."""
-    from leaderboard.trials_figure import write_trials_figure
+def _draw(study: dict[str, Any], params: tuple[ParamSpec, ...], out: Path) -> str | None:
+    """Draw ``trials.png`` and ``importance.png`` of the study document ``study`` (whose search
+    space is ``params``) into ``out`` (after every trial); returns why there is no importance
+    figure (one line; an earlier one is removed then), or ``None``."""
+    from empathy_zoo.training.trials_figure import IMPORTANCE_FIGURE, TRIALS_FIGURE, write_importance_figure, write_trials_figure
+    from empathy_zoo.training.tuning_journal import param_distribution
 
-    write_trials_figure(study, path)
+    write_trials_figure(study, out / TRIALS_FIGURE)
+    skipped = write_importance_figure(study, {spec.name: param_distribution(spec) for spec in params}, out / IMPORTANCE_FIGURE)
+    if skipped is not None:
+        (out / IMPORTANCE_FIGURE).unlink(missing_ok=True)  # (a figure of earlier trials would disagree with the study)
+    return skipped
 
 
 def add_tune(sub: Any) -> None:
@@ -187,6 +214,21 @@ def add_tune(sub: Any) -> None:
         default=DEFAULT_TRIALS,
         metavar="N",
         help=f"trials (finished, pruned or refused); give every method of a comparison the same (default: {DEFAULT_TRIALS})",
+    )
+    tune.add_argument(
+        "--batch",
+        type=int,
+        default=1,
+        metavar="B",
+        help="trials the sampler proposes at once, from the trials finished before them, trained side by side "
+        "(--jobs) and told back in trial order; part of the study's plan (default: 1, one trial at a time)",
+    )
+    tune.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="N",
+        help="processes that train a batch's trials side by side, at most the CPUs; the study is the same for any (default: 1)",
     )
     tune.add_argument(
         "--budget", type=int, metavar="STEPS", help="env steps per run of a trial (default: the sweep file's steps)"
@@ -248,6 +290,13 @@ def add_tune(sub: Any) -> None:
         default=RunnerOptions.update_kernel,
         help="how Empathic DQN and the methods built on it take a gradient step (numba: compiled, faster; the "
         f"runs differ in their last bits; a study resumes only with its own) (default: {RunnerOptions.update_kernel})",
+    )
+    tune.add_argument(
+        "--log",
+        metavar="BACKENDS",
+        help="log every trial's runs' scalars live to tensorboard, csv and/or wandb, comma-separated, under "
+        'OUT/logs/<backend>/<run id>/ (tensorboard, wandb: pip install -e ".[tensorboard]" / ".[wandb]"; '
+        "none: no logging) (default: none)",
     )
     tune.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_progress_style(tune)

@@ -91,6 +91,11 @@ class StudyPlan:
     over: str = "last"
     """Which greedy evaluations a trial's value summarises (:data:`OBJECTIVE_OVER`): ``"last"``,
     the leaderboard's greedy figure; ``"curve"``, their mean, for a metric that saturates."""
+    batch: int = 1
+    """Trials the sampler proposes at once, each from the trials finished before the batch; they
+    may train side by side and are told back in trial order before the next batch is proposed.
+    The study depends on it, never on how many processes train a batch. 1 (one trial at a time)
+    is recorded as nothing, so a plan of 1 is the plan of a study made before batches existed."""
 
     def __post_init__(self) -> None:
         if self.metric not in METRIC_NAMES:
@@ -108,7 +113,7 @@ class StudyPlan:
             )
         if self.over not in OBJECTIVE_OVER:
             raise ValueError(f"the objective is over one of {', '.join(OBJECTIVE_OVER)}, got {self.over!r}")
-        for name in ("trials", "startup_trials"):
+        for name in ("trials", "startup_trials", "batch"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive int, got {value!r}")
@@ -153,7 +158,12 @@ class StudyPlan:
                 "eval_interval": self.reporting_budget.eval_interval,
                 "eval_episodes": self.reporting_budget.eval_episodes,
             },
-            "sampler": {"name": "TPESampler", "seed": self.sampler_seed, "n_startup_trials": self.startup_trials},
+            "sampler": {
+                "name": "TPESampler",
+                "seed": self.sampler_seed,
+                "n_startup_trials": self.startup_trials,
+                **({"batch": self.batch} if self.batch != 1 else {}),
+            },
             "pruner": (
                 {"name": "MedianPruner", "n_startup_trials": PRUNE_STARTUP_TRIALS, "n_warmup_steps": self.prune_from}
                 if self.prune

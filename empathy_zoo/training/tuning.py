@@ -32,20 +32,35 @@ Each is rewritten (atomically) after every trial. Decisions, and why (the plan's
   sweep reports on; seeds that a sweep file reports on are refused (:func:`tuning_seeds`), so a
   setting is never chosen on the runs that then score it. Every trial trains the same tuning
   seeds (common random numbers: trials differ by their parameters only), in one lockstep ensemble.
-* **Sampler**: Optuna's TPE, seeded; before each trial a new sampler is seeded from the study's
-  seed and the number of trials finished, and it sees only finished trials, so the same command
-  gives the same study, and a stopped study resumed gives the study an unstopped one gives.
-  Its first :attr:`StudyPlan.startup_trials` trials (:data:`STARTUP_TRIALS` unless said)
-  sample at random.
+* **Sampler**: Optuna's TPE, seeded; before each batch of trials (:attr:`StudyPlan.batch`, one
+  unless said) a new sampler is seeded from the study's seed and the number of trials finished
+  before the batch, and it sees only the trials finished before the batch (it proposes the
+  batch's points one after another in a study of its own, so a point never depends on when a
+  batch-mate finished). The same command gives the same study, and a stopped study resumed gives
+  the study an unstopped one gives: a batch stopped mid-way keeps its trials told back, and its
+  others are proposed again, the same points, and trained again. Its first
+  :attr:`StudyPlan.startup_trials` trials (:data:`STARTUP_TRIALS` unless said) sample at random.
+* **Batches and processes**: the trials of a batch train side by side in up to
+  ``options.workers`` processes (``tune --jobs``; one trains them one after another here), and
+  each is told back to the study, in trial order, as soon as it and every trial before it in the
+  batch finished. Two trials of a batch at the same point train once. The pruner judges every
+  trial of a batch against the trials finished before the batch, so a batch's outcome does not
+  depend on the number of processes or on which trial finished first; the journal gets the same
+  lines in the same order (but for time stamps and worker ids). A batch of one is the study of
+  one trial at a time, as before batches existed.
+* **Logging**: with ``options.log`` (``tune --log``), every trial's runs log their scalars
+  under ``<out>/logs/<backend>/<run id>/`` (:mod:`empathy_zoo.training.tracking`); two trials
+  at the same point are the same runs and log to the same place.
 * **Pruner**: Optuna's median pruner on the learning curve: at each greedy evaluation before the
   last, the trial reports its objective and is stopped when it is worse than the median of the
-  finished trials at that step (after :data:`PRUNE_STARTUP_TRIALS` finished trials, and from
-  the env step :attr:`StudyPlan.prune_from` on). The report
+  trials finished before its batch at that step (after :data:`PRUNE_STARTUP_TRIALS` finished
+  trials, and from the env step :attr:`StudyPlan.prune_from` on). The report
   rides on the trainer's ``on_evaluation`` hook (:func:`~empathy_zoo.training.ensemble.train_ensemble`),
   which only reads the evaluations: a run trains the same numbers with it as without it.
 * **Equal budgets**: a study runs exactly ``trials`` trials (finished, pruned or refused), each of
   ``len(seeds)`` runs of ``budget.steps`` env steps at most; a trial stopped by an interruption
-  does not count and is run again when the study resumes (its runs keep no checkpoint).
+  does not count and is run again when the study resumes (its runs keep no checkpoint), and so
+  is a finished trial that waited on an unfinished one before it in its batch.
 * **Refused points**: a point whose settings the method refuses (a warm-up longer than the
   budget, say) is a trial in state ``FAIL`` with the reason in ``study.json``; the ends of every
   range are checked before the study starts, so this is rare.
@@ -58,10 +73,13 @@ from __future__ import annotations
 
 import importlib
 import json
+import multiprocessing
+import os
 import sys
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -79,7 +97,9 @@ from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training
+from empathy_zoo.training.runner import _exit_with_parent, _stop_workers
 from empathy_zoo.training.study_plan import OVER_WORDS, PRUNE_STARTUP_TRIALS, StudyPlan, curve_value, trial_value
+from empathy_zoo.training.tracking import log_subdirs
 from empathy_zoo.training.tuning_journal import check_study_lines, stored_plan
 
 __all__ = [
@@ -87,7 +107,6 @@ __all__ = [
     "OUTPUT_FILES",
     "STUDY_FILE",
     "STUDY_SCHEMA",
-    "TRIALS_DIR",
     "TUNED_FILE",
     "TuningNotInstalledError",
     "check_journal",
@@ -102,8 +121,6 @@ TUNED_FILE = "tuned.toml"
 JOURNAL_FILE = "study.journal"
 OUTPUT_FILES = (STUDY_FILE, TUNED_FILE, JOURNAL_FILE)
 """The files a study writes (or appends to) in its output directory."""
-TRIALS_DIR = "trials"
-"""Where a trial's ensemble would keep a checkpoint (it keeps none: an interrupted trial is rerun)."""
 STUDY_SCHEMA = 1
 """Version of ``study.json``'s layout."""
 _REFUSED = "refused"
@@ -123,8 +140,33 @@ def import_optuna() -> Any:
         raise TuningNotInstalledError(f"tuning needs Optuna, which is not installed: {install_command('tune')}") from None
 
 
-class _Refused(Exception):
-    """A trial's point the method refuses (its reason is the trial's ``refused`` attribute)."""
+@dataclass(frozen=True)
+class _Outcome:
+    """What training a trial's point gave."""
+
+    curve: list[dict[str, Any]]
+    """The objective at each greedy evaluation: ``{step, value, per_seed}``, in step order."""
+    wall_time_s: float
+    """Seconds it trained."""
+    pruned: bool
+    """Whether the pruner stopped it before its last evaluation."""
+
+
+@dataclass(frozen=True)
+class _Point:
+    """A trial's point to train, with all it needs in a process of its own."""
+
+    plan: StudyPlan
+    out: Path
+    options: RunnerOptions
+    values: dict[str, Any]
+    """The point: a value for each of the plan's parameters, by name."""
+    earlier: list[Any]
+    """The trials finished before the point's batch (Optuna ``FrozenTrial``): whom the pruner judges it against."""
+
+
+class _Pruned(Exception):
+    """The pruner stopped a trial (its curve so far is its outcome)."""
 
 
 def train_trial(
@@ -136,7 +178,7 @@ def train_trial(
     """Train a trial's runs ``specs`` (one ensemble) and return their result documents, without
     writing them; ``on_evaluation`` is told each greedy evaluation (and may stop the trial by
     raising). Trained as :func:`~empathy_zoo.training.runner.train_runs` trains them, but for
-    checkpoints: a trial keeps none."""
+    checkpoints: a trial keeps none. With ``options.log``, the runs log under ``out_dir/logs``."""
     return train_ensemble(specs, out_dir, replace(options, checkpoint_interval=0), False, on_evaluation=on_evaluation)
 
 
@@ -145,19 +187,137 @@ def _counted(trial: Any, states: Any) -> bool:
     return trial.state in (states.COMPLETE, states.PRUNED) or (trial.state == states.FAIL and _REFUSED in trial.user_attrs)
 
 
+def _pruner(optuna: Any, plan: StudyPlan) -> Any:
+    """The plan's pruner: Optuna's median pruner, or none."""
+    if not plan.prune:
+        return optuna.pruners.NopPruner()
+    return optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
+
+
+def _train_point(point: _Point) -> _Outcome:
+    """Train ``point`` (here, or in a worker process): its runs on the plan's tuning seeds, the
+    objective taken at each greedy evaluation and shown to the plan's pruner, which judges it
+    against the trials finished before its batch (in a study in memory, as Optuna's
+    ``Trial.should_prune`` does in the study itself)."""
+    optuna = import_optuna()
+    plan = point.plan
+    judge = optuna.create_study(direction=plan.direction, pruner=_pruner(optuna, plan), sampler=optuna.samplers.RandomSampler(0))
+    judge.add_trials(point.earlier)
+    trial = judge.ask()
+    specs = point_runs(plan.base, plan.params, point.values, plan.seeds)
+    curve: list[dict[str, Any]] = []
+    started = time.perf_counter()
+
+    def report(step: int, per_run: list[dict[str, list]]) -> None:
+        value, per_seed = trial_value(per_run, plan.metric)
+        curve.append({"step": step, "value": value, "per_seed": per_seed})
+        trial.report(curve_value([p["value"] for p in curve], plan.over), step)
+        if step < plan.base.steps and trial.should_prune():
+            raise _Pruned
+
+    pruned = False
+    try:
+        train_trial(specs, point.out, point.options, report)
+    except _Pruned:
+        pruned = True
+    return _Outcome(curve, round(time.perf_counter() - started, 3), pruned)
+
+
+def _worker_started(parent: int) -> None:
+    """In a worker process: end with the study's process (killed, not interrupted); Optuna quiet."""
+    _exit_with_parent(parent)
+    optuna = import_optuna()
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+
+
+class _Workers:
+    """The processes that train a batch's points side by side: ``count`` at most (one trains them
+    here, one after another), started at the first batch with two points to train and kept for the
+    study's later batches."""
+
+    def __init__(self, count: int, batch: int) -> None:
+        self.count = min(count, batch)
+        self.pool: ProcessPoolExecutor | None = None
+
+    def train(self, points: list[tuple[list[int], _Point]]) -> Iterator[tuple[list[int], _Outcome]]:
+        """Each ``(slots, point)`` of ``points`` trained: ``(slots, its outcome)`` as each finishes
+        (in the order given, here). An interruption stops the workers; another error lets the
+        running points finish."""
+        if self.count == 1 or len(points) == 1:
+            for slots, point in points:
+                yield slots, _train_point(point)
+            return
+        if self.pool is None:
+            context = multiprocessing.get_context("spawn")
+            self.pool = ProcessPoolExecutor(self.count, mp_context=context, initializer=_worker_started, initargs=(os.getpid(),))
+        futures: dict[Future[_Outcome], list[int]] = {}
+        for slots, point in points:
+            options = replace(point.options, workers=1, progress=False, threads=point.options.threads or 1)
+            futures[self.pool.submit(_train_point, replace(point, options=options))] = slots
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException as error:
+            for future in futures:
+                future.cancel()
+            if isinstance(error, KeyboardInterrupt):
+                _stop_workers(self.pool)
+                self.pool = None
+            raise
+
+    def close(self) -> None:
+        """Let the workers end (once what they train finished)."""
+        if self.pool is not None:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+            self.pool = None
+
+
+def _given_sampler(optuna: Any, values: dict[str, Any]) -> Any:
+    """An Optuna sampler that draws ``values`` (a point proposed already), by parameter name."""
+
+    class Given(optuna.samplers.BaseSampler):
+        def infer_relative_search_space(self, study: Any, trial: Any) -> dict[str, Any]:
+            return {}
+
+        def sample_relative(self, study: Any, trial: Any, search_space: Any) -> dict[str, Any]:
+            return {}
+
+        def sample_independent(self, study: Any, trial: Any, param_name: str, param_distribution: Any) -> Any:
+            return values[param_name]
+
+    return Given()
+
+
+def _propose(optuna: Any, plan: StudyPlan, earlier: list[Any], count: int) -> list[dict[str, Any]]:
+    """The first ``count`` points of the batch that starts after the finished trials ``earlier``:
+    TPE seeded from the plan's seed and ``len(earlier)``, seeing ``earlier`` only (in a study in
+    memory), each point drawn after the one before it."""
+    seed = int(np.random.SeedSequence([plan.sampler_seed, len(earlier)]).generate_state(1)[0])
+    sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=plan.startup_trials, constant_liar=False)
+    proposer = optuna.create_study(direction=plan.direction, sampler=sampler)
+    proposer.add_trials(earlier)
+    points = []
+    for _ in range(count):
+        trial = proposer.ask()
+        points.append({spec.name: spec.suggest(trial) for spec in plan.params})
+    return points
+
+
 def run_study(
     plan: StudyPlan,
     out_dir: str | Path,
     options: RunnerOptions = RunnerOptions(progress=False),
     command: str = "",
     progress: bool = True,
-    on_trial: Callable[[dict[str, Any]], None] | None = None,
+    on_trial: Callable[[dict[str, Any]], object] | None = None,
     on_note: Callable[[str], None] | None = None,
     also_writes: Sequence[str] = (),
 ) -> dict[str, Any]:
     """Run (or resume) the study ``plan`` in ``out_dir`` and return its ``study.json`` document
     (see the module documentation); ``on_trial`` gets that document after every trial (the
-    command line draws its figure), ``on_note`` what is said on the way (default: stderr).
+    command line draws its figures), ``on_note`` what is said on the way (default: stderr).
+    ``options.workers`` processes train a batch's trials side by side (the study is the same for
+    any number); with ``options.log`` the trials' runs log under ``out_dir/logs``.
     ``also_writes`` names the files the caller writes into ``out_dir`` too (``trials.png``): each
     is checked with the study's own files (:data:`OUTPUT_FILES`) before anything is trained or
     written: only nothing or a regular file is ever replaced or appended to, never a link (named
@@ -172,7 +332,7 @@ def run_study(
         note(warning)
     for name in (*OUTPUT_FILES, *also_writes):
         check_replaceable(check_no_links(out, out / name))
-    check_output_dir(out, (TRIALS_DIR,))
+    check_output_dir(out, log_subdirs(options.log))
     verbosity = optuna.logging.get_verbosity()
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     try:
@@ -232,12 +392,9 @@ def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, has
     from optuna.storages.journal import JournalFileBackend
 
     storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
-    pruner = (
-        optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
-        if plan.prune
-        else optuna.pruners.NopPruner()
+    study = optuna.create_study(
+        storage=storage, study_name="tune", direction=plan.direction, pruner=_pruner(optuna, plan), load_if_exists=True
     )
-    study = optuna.create_study(storage=storage, study_name="tune", direction=plan.direction, pruner=pruner, load_if_exists=True)
     if not has_plan:
         study.set_user_attr("plan", stored_plan(plan, update_kernel))
     return study
@@ -250,7 +407,7 @@ def _study(
     options: RunnerOptions,
     command: str,
     progress: bool,
-    on_trial: Callable[[dict[str, Any]], None] | None,
+    on_trial: Callable[[dict[str, Any]], object] | None,
     note: Callable[[str], None],
     has_plan: bool,
 ) -> dict[str, Any]:
@@ -258,67 +415,124 @@ def _study(
 
     study = _open_study(optuna, plan, out, options.update_kernel, has_plan)
     states = optuna.trial.TrialState
-    done = sum(_counted(t, states) for t in study.trials)
+    counted = [t for t in study.trials if _counted(t, states)]
     interrupted = [t.number for t in study.trials if not _counted(t, states)]
-    if done or interrupted:
+    if counted or interrupted:
         note(
-            f"resuming the study in {out}: {done} of {plan.trials} trial(s) done"
+            f"resuming the study in {out}: {len(counted)} of {plan.trials} trial(s) done"
             + (f"; trial(s) {interrupted} were interrupted and do not count" if interrupted else "")
         )
     bar = progress_bar(
         options.progress_style,
         total=plan.trials,
-        initial=min(done, plan.trials),
+        initial=min(len(counted), plan.trials),
         desc=f"tune {plan.base.method}",
         unit="trial",
         disable=not progress,
     )
+
+    def told() -> None:
+        document = _write_outputs(study, plan, out, command, optuna, options)
+        if on_trial is not None:
+            on_trial(document)
+        best = document["best"]
+        bar.set_postfix_str(f"best {plan.metric} {best['value']:.4g} (trial {best['number']})" if best else "no trial finished")
+        bar.update(1)
+
+    workers = _Workers(options.workers, plan.batch)
     try:
-        while done < plan.trials:
-            seed = int(np.random.SeedSequence([plan.sampler_seed, done]).generate_state(1)[0])
-            study.sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=plan.startup_trials, constant_liar=False)
-            study.optimize(_objective(optuna, plan, out, options), n_trials=1, catch=(_Refused,))
-            done = sum(_counted(t, states) for t in study.trials)
-            document = _write_outputs(study, plan, out, command, optuna, options)
-            if on_trial is not None:
-                on_trial(document)
-            best = document["best"]
-            bar.set_postfix_str(
-                f"best {plan.metric} {best['value']:.4g} (trial {best['number']})" if best else "no trial finished"
-            )
-            bar.update(1)
+        while len(counted) < plan.trials:
+            start = len(counted) - len(counted) % plan.batch
+            earlier = counted[:start]
+            points = _propose(optuna, plan, earlier, min(plan.batch, plan.trials - start))
+            for trial, values in zip(counted[start:], points, strict=False):  # (the batch's trials told so far)
+                if dict(trial.params) != values:
+                    raise ValueError(
+                        f"{out / JOURNAL_FILE}: trial {trial.number} is not the point its batch proposes ({values}): "
+                        "the journal is damaged or not this study's; move it away to start the study again"
+                    )
+            _run_batch(optuna, study, plan, out, options, points[len(counted) - start :], earlier, workers, told)
+            counted = [t for t in study.trials if _counted(t, states)]
     finally:
+        workers.close()
         bar.close()
     return _write_outputs(study, plan, out, command, optuna, options)
 
 
-def _objective(optuna: Any, plan: StudyPlan, out: Path, options: RunnerOptions) -> Callable[[Any], float]:
-    def objective(trial: Any) -> float:
-        values = {spec.name: spec.suggest(trial) for spec in plan.params}
+def _run_batch(
+    optuna: Any,
+    study: Any,
+    plan: StudyPlan,
+    out: Path,
+    options: RunnerOptions,
+    points: list[dict[str, Any]],
+    earlier: list[Any],
+    workers: _Workers,
+    told: Callable[[], None],
+) -> None:
+    """Ask ``study`` for a trial at each of ``points`` (the batch's points not told yet), train
+    them with ``workers``, and tell each back in trial order as soon as it and those before it are
+    done (then ``told()``); a trial not told when training stops (an interruption, an error) is
+    told failed, as Optuna's ``optimize`` tells it."""
+    states = optuna.trial.TrialState
+    trials = []
+    for values in points:
+        study.sampler = _given_sampler(optuna, values)
+        trial = study.ask()
+        for spec in plan.params:
+            spec.suggest(trial)
+        trials.append(trial)
+    done: dict[int, _Outcome | str] = {}
+    to_train: dict[tuple[str, ...], list[int]] = {}
+    for slot, values in enumerate(points):
         try:
             specs = point_runs(plan.base, plan.params, values, plan.seeds)
             check_before_training(specs, options)
         except ValueError as error:
-            trial.set_user_attr(_REFUSED, str(error))
-            raise _Refused(str(error)) from None
-        curve: list[dict[str, Any]] = []
-        started = time.perf_counter()
+            done[slot] = str(error)
+            continue
+        to_train.setdefault(tuple(spec.run_id for spec in specs), []).append(slot)  # (one point, trained once)
+    next_slot = 0
 
-        def report(step: int, per_run: list[dict[str, list]]) -> None:
-            value, per_seed = trial_value(per_run, plan.metric)
-            curve.append({"step": step, "value": value, "per_seed": per_seed})
-            trial.set_user_attr(_CURVE, curve)
-            value = curve_value([point["value"] for point in curve], plan.over)
-            trial.report(value, step)
-            if step < plan.base.steps and trial.should_prune():
-                trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
-                raise optuna.TrialPruned(f"pruned at step {step}: {plan.metric} {value:.4g}")
+    def tell_ready() -> None:
+        nonlocal next_slot
+        while next_slot < len(trials) and next_slot in done:
+            _tell(optuna, study, plan, trials[next_slot], done[next_slot])
+            next_slot += 1
+            told()
 
-        train_trial(specs, out / TRIALS_DIR, options, report)
-        trial.set_user_attr(_WALL, round(time.perf_counter() - started, 3))
-        return curve_value([point["value"] for point in curve], plan.over)
+    try:
+        tell_ready()
+        jobs = [(slots, _Point(plan, out, options, points[slots[0]], earlier)) for slots in to_train.values()]
+        for slots, outcome in workers.train(jobs):
+            for slot in slots:
+                done[slot] = outcome
+            tell_ready()
+    except BaseException:
+        for trial in trials[next_slot:]:
+            study.tell(trial, state=states.FAIL)
+        raise
 
-    return objective
+
+def _tell(optuna: Any, study: Any, plan: StudyPlan, trial: Any, outcome: _Outcome | str) -> None:
+    """Tell ``study`` the ``outcome`` of ``trial``: the method's reason for refusing its point (a
+    string), or what training gave, written as a trial that trains in the study writes it (each
+    evaluation on its curve, then its value so far, then its wall time)."""
+    states = optuna.trial.TrialState
+    if isinstance(outcome, str):
+        trial.set_user_attr(_REFUSED, outcome)
+        study.tell(trial, state=states.FAIL)
+        return
+    curve: list[dict[str, Any]] = []
+    for point in outcome.curve:
+        curve.append(point)
+        trial.set_user_attr(_CURVE, list(curve))
+        trial.report(curve_value([p["value"] for p in curve], plan.over), point["step"])
+    trial.set_user_attr(_WALL, outcome.wall_time_s)
+    if outcome.pruned:
+        study.tell(trial, state=states.PRUNED)
+    else:
+        study.tell(trial, curve_value([p["value"] for p in curve], plan.over))
 
 
 def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, update_kernel: str) -> dict[str, Any]:

@@ -9,9 +9,10 @@ trial at a time), with exactly that operation's fields, each of its type and wit
   direction;
 * 2 (the plan, once, before any trial): equal to the plan of the command that resumes it, or the
   study is refused as one of another plan;
-* 4 (a trial created): only once the trial before it has ended or its run was stopped; trial ids
-  are the trials' numbers, ``0, 1, …``, in the order they were created, and every later line of a
-  trial names the trial created last;
+* 4 (a trial created): only while fewer trials than the plan's batch
+  (:attr:`~empathy_zoo.training.study_plan.StudyPlan.batch`; one for a batch of 1) run, those of
+  an earlier run stopped counting; trial ids are the trials' numbers, ``0, 1, …``, in the order
+  they were created, and every later line of a trial names one that runs;
 * 5 (a parameter drawn): the plan's parameters, each once, in the plan's order, before anything
   else of the trial; its distribution the one the plan's search space gives it, its value inside
   it (a finite number between its bounds, a whole one for an int field, an index of a choice);
@@ -47,7 +48,7 @@ from empathy_zoo.limits import MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_RANGES
 from empathy_zoo.training.study_plan import StudyPlan, curve_value
 
-__all__ = ["check_study_lines", "stored_plan"]
+__all__ = ["check_study_lines", "param_distribution", "stored_plan"]
 
 STUDY_NAME = "tune"
 """The name of the one study a journal holds."""
@@ -99,7 +100,6 @@ class _Trial:
     intermediate: list[float] = field(default_factory=list)
     wall: bool = False
     refused: bool = False
-    ended: bool = False
 
 
 class _Refusal(ValueError):
@@ -134,18 +134,22 @@ def _datetime(value: Any, what: str) -> None:
         raise _Refusal(f"{what} is {shown(value)}, expected an ISO 8601 time stamp") from None
 
 
-def _distribution_json(spec: ParamSpec) -> Any:
-    """The distribution Optuna stores for ``spec`` (as :meth:`ParamSpec.suggest` draws it), parsed."""
-    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution, distribution_to_json
+def param_distribution(spec: ParamSpec) -> Any:
+    """The Optuna distribution ``spec``'s parameter is drawn from (as :meth:`ParamSpec.suggest` draws it)."""
+    from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
 
-    distribution: Any
     if spec.kind == "choice":
-        distribution = CategoricalDistribution(list(spec.choices))
-    elif spec.integer:
-        distribution = IntDistribution(int(spec.low), int(spec.high), log=spec.kind == "log")
-    else:
-        distribution = FloatDistribution(spec.low, spec.high, log=spec.kind == "log")
-    return json.loads(distribution_to_json(distribution))
+        return CategoricalDistribution(list(spec.choices))
+    if spec.integer:
+        return IntDistribution(int(spec.low), int(spec.high), log=spec.kind == "log")
+    return FloatDistribution(spec.low, spec.high, log=spec.kind == "log")
+
+
+def _distribution_json(spec: ParamSpec) -> Any:
+    """The distribution Optuna stores for ``spec``, parsed."""
+    from optuna.distributions import distribution_to_json
+
+    return json.loads(distribution_to_json(param_distribution(spec)))
 
 
 class _StudyLines:
@@ -165,7 +169,8 @@ class _StudyLines:
         self.opened = False
         self.has_plan = False
         self.trials: list[_Trial] = []
-        self.open: _Trial | None = None
+        self.running: dict[int, _Trial] = {}
+        """The trials created since the study was last opened and not ended, by number."""
 
     def line(self, entry: dict[str, Any]) -> None:
         """Check one line (a JSON object), given every line before it was checked."""
@@ -203,7 +208,7 @@ class _StudyLines:
             f"[{direction}] (the plan's objective: {self.plan.direction})",
         )
         self.opened = True
-        self.open = None  # (a run of tune opens the study: a trial its last run left unended stays so)
+        self.running = {}  # (a run of tune opens the study: a trial its last run left unended stays so)
 
     def _op_2(self, entry: dict[str, Any]) -> None:
         attr = entry["user_attr"]
@@ -225,24 +230,23 @@ class _StudyLines:
         _datetime(entry["datetime_start"], "datetime_start")
         if not self.has_plan:
             raise _Refusal("a trial is created before the plan is stored")
-        if self.open is not None and not self.open.ended:
-            raise _Refusal(f"a trial is created while trial {self.open.number} runs (a study runs one trial at a time)")
-        self.open = _Trial(len(self.trials))
-        self.trials.append(self.open)
+        batch = self.plan.batch
+        if len(self.running) >= batch:
+            numbers = sorted(self.running)
+            raise _Refusal(
+                f"a trial is created while trial(s) {numbers} run (a study of batch {batch} runs at most {batch} at a time)"
+            )
+        trial = _Trial(len(self.trials))
+        self.trials.append(trial)
+        self.running[trial.number] = trial
 
     def _trial(self, entry: dict[str, Any]) -> _Trial:
-        """The trial a line names: the one created last, still running."""
+        """The trial a line names: one created since the study was opened, still running."""
         trial_id = entry["trial_id"]
-        running = self.open is not None and not self.open.ended
-        expected = f"{self.open.number} (the trial created last, still running)" if running and self.open else "no trial"
-        _expect(
-            _is_int(trial_id) and running and self.open is not None and trial_id == self.open.number,
-            "trial_id",
-            trial_id,
-            expected,
-        )
-        assert self.open is not None
-        return self.open
+        numbers = sorted(self.running)
+        expected = f"one of {numbers} (the trials still running)" if numbers else "no trial (none runs)"
+        _expect(_is_int(trial_id) and trial_id in self.running, "trial_id", trial_id, expected)
+        return self.running[trial_id]
 
     def _op_5(self, entry: dict[str, Any]) -> None:
         trial = self._trial(entry)
@@ -387,7 +391,7 @@ class _StudyLines:
                     raise _Refusal(
                         f"the finished trial's point is one method {self.plan.base.method!r} refuses ({error})"
                     ) from None
-        trial.ended = True
+        del self.running[trial.number]
 
 
 def _param_value(spec: ParamSpec, value: Any) -> Any:
