@@ -44,6 +44,7 @@ return (its entry's ``task``), each outcome also holds the robot's and the other
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from itertools import combinations
@@ -344,10 +345,9 @@ def separation_table(
         policies["dqn_lagrangian"] = greedy_policy(lagrangian_values(model, price, gamma, q))
         notes["dqn_lagrangian"] = lagrangian_note(multiplier, cost_limit)
         if considerate:
-            try:
+            # RuntimeError: no joint fixed point of the robot's optimum and the cat's value
+            with contextlib.suppress(RuntimeError):
                 policies["dqn_considerate"] = _considerate_policy(model, epsilon, gamma, paper)
-            except RuntimeError:  # no joint fixed point of the robot's optimum and the cat's value
-                pass
         for row in rows:
             if row.identical_to:
                 policies[row.name] = policies[row.identical_to]

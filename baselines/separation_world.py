@@ -25,6 +25,8 @@ engine does (:func:`empathy_zoo.exact_solver.optimal_values`), and every row act
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 from baselines.aup import NO_OP, AttainableUtility, auxiliary_reward_map
@@ -32,7 +34,7 @@ from baselines.reachability import RelativeReachability, truncated_deviation
 from baselines.reachability_table import UNREACHABLE, _shortest_steps
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import ENGINES
-from empathy_zoo.exact_solver import TabularModel
+from empathy_zoo.exact_solver import LayeredEngine, TabularModel
 
 __all__ = ["state_codes", "model_reachability", "relative_reachability_reward", "attainable_utility_reward", "AUP_SEED"]
 
@@ -92,7 +94,7 @@ def _observations(model: TabularModel) -> np.ndarray:
     engine.reset()
     engine.cells = np.stack([robot, other], axis=1).astype(engine.cells.dtype)
     engine.present[model.states :, 1] = False
-    getattr(engine, "set_tabular_layer")(layer)
+    cast(LayeredEngine, engine).set_tabular_layer(layer)
     seen = np.asarray(engine.observe(0), dtype=np.float64)
     return np.concatenate([seen, np.zeros((1, seen.shape[1]))])
 

@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, cast
 
 import numpy as np
 
@@ -148,6 +148,17 @@ class TabularModel:
         return np.arange(self.states) // (self.cells * self.cells)
 
 
+class LayeredEngine(Protocol):
+    """What the exact model asks of an engine beyond the robot's and the other agent's cells: the
+    start distribution over joint states and, for a world with more than one layer, the layer."""
+
+    def start_distribution(self) -> np.ndarray: ...
+
+    def set_tabular_layer(self, layer: np.ndarray) -> None: ...
+
+    def tabular_layer(self) -> np.ndarray: ...
+
+
 def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularModel:
     """The :class:`TabularModel` of ``env`` built with ``env_kwargs`` (its engine stepped once from
     every joint state with every joint action). ``ValueError`` for an environment whose engine
@@ -171,15 +182,15 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     layer, pair = np.divmod(state, cells * cells)
     engine.cells = np.stack(np.divmod(pair, cells), axis=1).astype(engine.cells.dtype)
     if layers > 1:
-        getattr(engine, "set_tabular_layer")(layer)
+        cast(LayeredEngine, engine).set_tabular_layer(layer)
     events = engine.step(np.stack([robot_action, other_action], axis=1))
     shape = (states, NUM_ACTIONS, NUM_ACTIONS)
     after = engine.cells[:, ROBOT] * cells + engine.cells[:, OTHER]
     if layers > 1:
-        after = after + getattr(engine, "tabular_layer")() * cells * cells
+        after = after + cast(LayeredEngine, engine).tabular_layer() * cells * cells
     after = after.reshape(shape)
     alone_reward, alone_after = alone_steps(engine_class, cells, layers, env_kwargs)
-    start = np.asarray(getattr(probe, "start_distribution")()).ravel()  # (checked on the class above)
+    start = np.asarray(cast(LayeredEngine, probe).start_distribution()).ravel()  # (checked on the class above)
     swap_layer = getattr(engine_class, "swapped_tabular_layer", None)
     layer_swap = None if swap_layer is None else tuple(int(x) for x in swap_layer(np.arange(layers)))
     return TabularModel(

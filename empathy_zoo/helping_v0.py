@@ -165,7 +165,7 @@ from empathy_zoo.parallel import GridParallelEnv, env_constructors, grid_metadat
 __all__ = ["raw_env", "parallel_env", "env"]
 
 
-class raw_env(GridParallelEnv):  # noqa: N801 - PettingZoo naming
+class raw_env(GridParallelEnv):
     """The helping task as a ``ParallelEnv`` (see the module documentation)."""
 
     engine_class = HelpingEngine

@@ -6,6 +6,7 @@ the committed rows are the solvers' own, and the exact model's swap exchanges wh
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -47,12 +48,12 @@ def committed():
 
 @pytest.mark.parametrize("epsilon", EPSILONS)
 def test_dqn_the_silver_rule_and_the_golden_rule_pairwise_differ(committed, epsilon) -> None:
-    for golden, silver in zip(GOLDEN, SILVER):
+    for golden, silver in zip(GOLDEN, SILVER, strict=True):
         for first, second in (("dqn", golden), ("dqn", silver), (golden, silver)):
             pair = committed.pair(first, second, epsilon)
             assert pair is not None and pair.differ and pair.differing_states > 50, (first, second, epsilon)
     for rows in (GOLDEN, SILVER):  # and every β of either rule has an optimum of its own
-        for first, second in zip(rows, rows[1:]):
+        for first, second in itertools.pairwise(rows):
             assert committed.differ(first, second, epsilon), (first, second, epsilon)
 
 
@@ -74,7 +75,7 @@ def test_beta_trades_the_robots_task_against_the_humans_welfare(committed) -> No
     assert human == sorted(human) and len(set(human)) == len(human)
     silver_task = [committed.outcome(row, 0.0).robot_return for row in SILVER]
     assert max(silver_task[:3]) - min(silver_task[:3]) < 2.0  # the silver rule barely moves until β = 0
-    for golden, silver in zip(GOLDEN, SILVER):
+    for golden, silver in zip(GOLDEN, SILVER, strict=True):
         assert committed.outcome(golden, 0.0).other_return > committed.outcome(silver, 0.0).other_return
 
 
