@@ -82,7 +82,7 @@ def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
             raise ValueError(f"{path}: not a separation table (no rows and pairs)")
         tables[path.stem] = table
     if not tables:
-        raise ValueError(f"{directory}: no separation table (*.json); make one with python -m baselines.separation_render")
+        raise ValueError(f"{directory}: no separation table (*.json); make one with empathy-zoo analyse separation")
     return tables
 
 
@@ -185,7 +185,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
     args = parser.parse_args(argv)
     out = args.out or args.directory / "DISCRIMINATION.md"
-    command = "python -m baselines.discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
+    command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
     if args.epsilon != 0.01:
         command += f" --epsilon {args.epsilon:g}"
     try:

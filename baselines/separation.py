@@ -9,7 +9,7 @@ of methods whether their optimal policies differ. Built on
 |---|---|
 | Import | `from baselines.separation import separation_table` |
 | Call | `separation_table(model, selfishness=(0.75, 0.5, 0.25, 0.0), epsilons=(0.0, 0.01, 0.05)) -> SeparationTable` |
-| Command | `python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]` |
+| Command | `empathy-zoo analyse separation [ENV] [ARG=VALUE ...] [--out DIR]` |
 | Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`baselines.separation_render`) |
 
 ## Rows and the values each acts on (at their fixed point, γ = 0.99)

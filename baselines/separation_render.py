@@ -90,7 +90,7 @@ def _figures(o: RowOutcome, returns: bool) -> list[str]:
 def to_markdown(table: SeparationTable) -> str:
     """The table for the docs: rows, outcomes, the groups of rows with one optimum, and the pairs of groups."""
     arguments = " ".join(f"{key}={value}" for key, value in table.arguments)
-    command = f"python -m baselines.separation_render {table.env} {arguments}".rstrip()
+    command = f"empathy-zoo analyse separation {table.env} {arguments}".rstrip()
     lines = [
         f"# Separation table: {table.env}" + (f" ({arguments})" if arguments else ""),
         "",

@@ -125,7 +125,7 @@ The exact optima are in docs/results/separation/charger_v0.md (full observabilit
 
 Regenerate the table (about two minutes on one core):
 
-    python -m baselines.separation_render charger_v0
+    empathy-zoo analyse separation charger_v0
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §3c.

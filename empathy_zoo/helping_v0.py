@@ -151,7 +151,7 @@ The exact optima are in docs/results/separation/helping_v0.md (full observabilit
 
 Regenerate the table (about two minutes on one core):
 
-    python -m baselines.separation_render helping_v0
+    empathy-zoo analyse separation helping_v0
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §3e.

@@ -125,7 +125,7 @@ per episode:
 
 Regenerate the table (about half a minute on one core):
 
-    python -m baselines.separation_render vase_v0
+    empathy-zoo analyse separation vase_v0
 
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §3d.

@@ -91,5 +91,5 @@ def test_the_shipped_page_is_what_the_command_makes(tmp_path):
     shipped = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
     out = tmp_path / "page.md"
     assert main([str(shipped), "--out", str(out)]) == 0
-    made = out.read_text().replace(f"`python -m baselines.discrimination {shipped}`", "`python -m baselines.discrimination`")
+    made = out.read_text().replace(f"`empathy-zoo analyse discrimination {shipped}`", "`empathy-zoo analyse discrimination`")
     assert made == (shipped / "DISCRIMINATION.md").read_text()
