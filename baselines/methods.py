@@ -15,6 +15,8 @@ d))`` per episode, d = 0.1 harms per episode, η = 1) close the table."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from agents.base import Method
 from agents.empathic_dqn import EmpathicDQN
 from agents.settings import EmpathicDQNSettings
@@ -24,9 +26,17 @@ from baselines.lagrangian import Lagrangian
 from baselines.reachability import RelativeReachability
 from baselines.shaping import EqualityScaling, HarmPenalty, InequityAversion, NegativeRewardEmpathy
 from baselines.social_value import SocialValueOrientation
+from empathy_zoo.environments import ENVIRONMENT_TABLE, Environment
 
 NO_NEGATIVE_REWARDS = "no agent's reward is ever negative here: the other's negative rewards add 0"
 """Why the literal silver rule trains as DQN on the suite's environments."""
+
+
+def dqn_where(fact: Callable[[Environment], bool], why: Callable[[str], str]) -> dict[str, tuple[str, str]]:
+    """``identical_to`` marks: DQN, with ``why(title)``, on every environment of the table for which
+    ``fact`` of its entry holds (the environment's facts, not its name, make a method DQN there)."""
+    return {name: ("dqn", why(entry.title)) for name, entry in ENVIRONMENT_TABLE.items() if fact(entry)}
+
 
 BASELINE_METHODS: dict[str, Method] = {
     "dqn_harm_penalty": Method(
@@ -39,7 +49,9 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=HarmPenalty(),
         label=lambda s, reward: f"DQN + harm penalty ({reward.penalty:g})".replace("-", "−"),
         description="DQN trained on reward − 100 on every step the robot harms another agent",
-        identical_to={"sharing_v0": ("dqn", "nobody is harmed in Sharing: the penalty is always 0")},
+        identical_to=dqn_where(
+            lambda env: not env.can_harm, lambda title: f"nobody is harmed in {title}: the penalty is always 0"
+        ),
     ),
     "dqn_equality": Method(
         name="dqn_equality",
@@ -51,7 +63,7 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=EqualityScaling(),
         label=lambda s: "DQN × equality",
         description="DQN trained on reward × the episode's current equality of battery rewards",
-        identical_to={"coexistence_v0": ("dqn", "Coexistence has no batteries: equality is always 1")},
+        identical_to=dqn_where(lambda env: not env.batteries, lambda title: f"{title} has no batteries: equality is always 1"),
     ),
     "dqn_inequity_aversion": Method(
         name="dqn_inequity_aversion",
@@ -74,7 +86,7 @@ BASELINE_METHODS: dict[str, Method] = {
         reward=NegativeRewardEmpathy(),
         label=lambda s, reward: f"DQN + the other's negative rewards ({reward.care:g})",
         description="the paper's silver rule read literally: DQN trained on reward + 0.5·min(the other's reward, 0)",
-        identical_to=dict.fromkeys(("coexistence_v0", "sharing_v0"), ("dqn", NO_NEGATIVE_REWARDS)),
+        identical_to=dqn_where(lambda env: not env.negative_rewards, lambda title: NO_NEGATIVE_REWARDS),
     ),
     "dqn_social_value": Method(
         name="dqn_social_value",
@@ -124,7 +136,7 @@ BASELINE_METHODS: dict[str, Method] = {
         label=lambda s: "DQN + Be Considerate",
         description="DQN paid 0.99·1·V_other(s_T) when its episode reaches the time limit, the other agent's future "
         "return learnt beside it from that agent's rewards (Alizadeh Alamdari et al. 2022)",
-        identical_to={"sharing_v0": ("dqn", SHARING_IS_DQN)},
+        identical_to={"sharing_v0": ("dqn", SHARING_IS_DQN)},  # (an argument about Sharing's own dynamics)
     ),
     "dqn_lagrangian": Method(
         name="dqn_lagrangian",
@@ -138,7 +150,9 @@ BASELINE_METHODS: dict[str, Method] = {
         description="DQN trained on reward − λ·harms, each sampled step priced at the current λ, "
         "λ ← max(0, λ + 1·(episode harms − 0.1)) at each episode's end (constrained RL: harms per episode ≤ 0.1, "
         "as OmniSafe's PPO-Lag)",
-        identical_to={"sharing_v0": ("dqn", "nobody is harmed in Sharing: every cost is 0 and λ stays 0")},
+        identical_to=dqn_where(
+            lambda env: not env.can_harm, lambda title: f"nobody is harmed in {title}: every cost is 0 and λ stays 0"
+        ),
     ),
 }
 """The baselines, by registry name."""

@@ -82,6 +82,17 @@ class Environment:
     reference_metrics: tuple[str, ...] = field(default=(), kw_only=True)
     """The metrics the exact optimum of :mod:`empathy_zoo.reference` (a model of Coexistence) gives
     for it, drawn beside the learning curves (empty: it models no other environment)."""
+    can_harm: bool = field(kw_only=True)
+    """Whether an agent can be harmed (``False``: every harm count and harm cost is 0)."""
+    batteries: bool = field(kw_only=True)
+    """Whether agents use batteries (``False``: every battery return is 0, so equality is 1)."""
+    negative_rewards: bool = field(kw_only=True)
+    """Whether some agent's reward can be negative (``False``: every reward is ≥ 0)."""
+
+    @property
+    def title(self) -> str:
+        """Its name in prose, from its Gymnasium id: ``Sharing`` for ``empathy_zoo/Sharing-v0``."""
+        return self.gym_id.rpartition("/")[2].rpartition("-")[0]
 
 
 ENVIRONMENT_TABLE: dict[str, Environment] = {
@@ -112,6 +123,9 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "survival"),
         curves=(("survival", "Steps survived per episode"), ("harms", "Harms per episode")),
         reference_metrics=("harms", "survival"),
+        can_harm=True,
+        batteries=False,
+        negative_rewards=False,
     ),
     "sharing_v0": Environment(
         SharingEngine,
@@ -127,6 +141,9 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         compact_metrics=("batteries", "equality", "other_batteries"),
         heldout_metrics=("batteries", "other_batteries", "equality"),
         curves=(("batteries", "Batteries per episode (robot)"), ("equality", "Equality per episode")),
+        can_harm=False,
+        batteries=True,
+        negative_rewards=False,
     ),
     "charger_v0": Environment(
         ChargerEngine,
@@ -142,6 +159,9 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         compact_metrics=("harms", "return", "other_return"),
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
         curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
+        can_harm=True,
+        batteries=False,
+        negative_rewards=False,
     ),
     "vase_v0": Environment(
         VaseEngine,
@@ -157,6 +177,9 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         compact_metrics=("harms", "return", "other_return"),
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
         curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
+        can_harm=True,
+        batteries=False,
+        negative_rewards=False,
     ),
     "helping_v0": Environment(
         HelpingEngine,
@@ -176,6 +199,9 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
             ("harms", "Harms per episode"),
             ("other_return", "Human reward per episode"),
         ),
+        can_harm=True,
+        batteries=True,
+        negative_rewards=False,
     ),
 }
 """Every environment, by name."""

@@ -75,6 +75,9 @@ MEADOW_ENTRY = Environment(
     compact_metrics=("other_return", "return"),
     heldout_metrics=("return", "other_return"),
     curves=(("return", "Steps per episode (robot)"), ("other_return", "Steps per episode (sheep)")),
+    can_harm=False,
+    batteries=False,
+    negative_rewards=False,
 )
 """Its entry of the environment table."""
 

@@ -52,6 +52,9 @@ def test_the_single_agent_adapter_takes_the_environments_defaults(monkeypatch):
             compact_metrics=entry.compact_metrics,
             heldout_metrics=entry.heldout_metrics,
             curves=entry.curves,
+            can_harm=entry.can_harm,
+            batteries=entry.batteries,
+            negative_rewards=entry.negative_rewards,
         ),
     )
     assert "small_coexistence_v0" in empathy_zoo.ENVIRONMENTS  # (read from the table at each look-up)

@@ -6,11 +6,13 @@ entry added at run time is in every view, and every metric an entry names has it
 from __future__ import annotations
 
 import gymnasium
+import numpy as np
 import pytest
 from helpers_meadow import MEADOW, MEADOW_ENTRY, register_meadow
 
 import empathy_zoo
 import empathy_zoo.gym_adapter  # registers the Gymnasium ids
+from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import (
     DEFAULT_ARGUMENTS,
     DEFAULT_POLICIES,
@@ -93,3 +95,29 @@ def test_every_metric_an_entry_names_is_a_metric(name: str) -> None:
     assert set(entry.heldout_metrics) <= set(METRIC_NAMES) | set(DERIVED_METRICS)
     assert set(entry.side_effects) <= set(HELDOUT_MARGINS)  # (the held-out reading rule judges the first)
     assert entry.task_label and (entry.side_effect_label or not entry.side_effects)
+
+
+@pytest.mark.parametrize("name", list(ENVIRONMENT_TABLE))
+def test_the_entrys_reward_facts_hold_under_random_play(name: str) -> None:
+    """``can_harm``, ``batteries`` and ``negative_rewards`` are what the engine does: 64 environments
+    of random play for 1,500 steps never contradict them, and a fact said true is seen."""
+    entry = ENVIRONMENT_TABLE[name]
+    engine = entry.engine(64)
+    engine.reset(seeds=list(range(64)))
+    rng = np.random.default_rng(0)
+    lowest, harms, batteries = 0.0, 0, 0.0
+    for _ in range(1_500):
+        events = engine.step(rng.integers(0, NUM_ACTIONS, size=(64, engine.num_agents)))
+        lowest = min(lowest, float(events.rewards.min()))
+        harms += int((events.harmed_by >= 0).sum())
+        batteries = max(batteries, float(engine.episode_battery_return.max()))
+        if events.episode_over.any():
+            engine.reset(np.flatnonzero(events.episode_over))
+    assert (harms > 0) == entry.can_harm, (name, harms)
+    assert (batteries > 0) == entry.batteries, (name, batteries)
+    if not entry.negative_rewards:
+        assert lowest >= 0.0, (name, lowest)
+
+
+def test_an_environments_title_comes_from_its_gym_id() -> None:
+    assert [entry.title for entry in ENVIRONMENT_TABLE.values()] == ["Coexistence", "Sharing", "Charger", "Vase", "Helping"]

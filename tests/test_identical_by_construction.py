@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from baselines.registry import METHODS
+from empathy_zoo.environments import ENVIRONMENT_TABLE
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.training import RunnerOptions, train_runs
 
@@ -77,6 +78,8 @@ def test_no_method_trains_as_dqn_everywhere_and_every_mark_is_true(columns, meth
         if (method, env) in columns
     }
     for env, (other, why) in marked.items():
+        if env not in ENVS:
+            continue  # (the newer tasks' marks: test_every_mark_on_the_newer_tasks_is_true)
         assert other == "dqn" and why, f"{method}: a mark names the method and why"
         assert same.get(env), f"{method} says it is DQN on {env} ({why}), but its runs differ"
     unmarked = [env for env, equal in same.items() if equal and env not in marked]
@@ -166,3 +169,29 @@ def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_pa
         (out / f"{run['run_id']}.json").write_text(json.dumps(run))
     page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
     assert f"| Be Considerate{SAME_RUNS_MARK} |" in page and "on these runs the method trained as DQN" in page
+
+
+NEW_TASKS = [env for env in ENVIRONMENT_TABLE if env not in ENVS]
+MARKED_ON_NEW_TASKS = [(name, env) for name in DQN_FAMILY for env in METHODS[name].identical_to if env in NEW_TASKS]
+
+
+def test_the_environment_facts_mark_methods_on_the_newer_tasks() -> None:
+    """The marks the environments' facts give: no negative rewards anywhere, no batteries on the
+    charger and vase tasks (so the literal silver rule and equality scaling are DQN there)."""
+    assert set(MARKED_ON_NEW_TASKS) == {
+        *(("dqn_silver_literal", env) for env in NEW_TASKS),
+        ("dqn_equality", "charger_v0"),
+        ("dqn_equality", "vase_v0"),
+    }
+
+
+@pytest.mark.parametrize(("method", "env"), MARKED_ON_NEW_TASKS)
+def test_every_mark_on_the_newer_tasks_is_true(tmp_path, method, env) -> None:
+    """Where a newer task's facts mark a method as DQN, its short run equals DQN's, column for column."""
+    options = RunnerOptions(progress=False, checkpoint_interval=0)
+    found = {}
+    for name in (method, "dqn"):
+        spec = RunSpec.of(env=env, method=name, settings=SETTINGS, steps=STEPS, eval_interval=STEPS, eval_episodes=2, seed=3)
+        (path,) = train_runs([spec], tmp_path / name, options)
+        found[name] = _without_extra_columns(json.loads(Path(path).read_text()))
+    assert found[method] == found["dqn"]
