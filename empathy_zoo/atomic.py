@@ -36,6 +36,7 @@ __all__ = [
     "check_output_dir",
     "remove_stale_temp_files",
     "process_alive",
+    "MAX_PID",
 ]
 
 TEMP_SUFFIX = ".tmp"
@@ -50,9 +51,15 @@ PROBE_BYTES = 256 * 1024
 agent file take (≈ 200 KB at the paper's settings), so a full disk is found before training, not
 after it. A caller that writes larger files (checkpoints) gives their size: that much free space
 is then asked for too."""
+MAX_PID = 2**31 - 1
+"""The largest process id there can be (``pid_t`` is a signed 32-bit number on every system the
+suite runs on): a name that carries a larger one, or one written otherwise than ``str(os.getpid())``
+writes it (a leading zero), is no name the suite made."""
+_PID = r"[1-9][0-9]{0,9}"
+"""A process id as the suite writes it into a name (at most ten digits, no leading zero)."""
 _OURS = re.compile(
-    rf"\.(?:.+\.{TEMP_MARKER}-(?P<pid>\d+)-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}"
-    rf"|{re.escape(PROBE_PREFIX[1:])}(?P<prober>\d+)-[0-9a-f]{{8}})"
+    rf"\.(?:.+\.{TEMP_MARKER}-(?P<pid>{_PID})-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}"
+    rf"|{re.escape(PROBE_PREFIX[1:])}(?P<prober>{_PID})-[0-9a-f]{{8}})"
 )
 """The whole name of a temporary file this module writes, with the writer's process id."""
 
@@ -175,15 +182,17 @@ def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:
     """Remove the temporary files that the suite's writes killed mid-way left in ``directory``;
     returns what was removed. The suite deletes only names it made: a file whose whole name is of
     the form it gives its temporary files and probes (``.<name>.ezoo-<pid>-<8 hex>.tmp``,
-    ``.ezoo-write-probe-<pid>-<8 hex>``), of a writer that is no live process on this machine (a
-    live one may still be writing). Any other name (``.notes.tmp``, a name of another program or of
-    an earlier version) is left alone."""
+    ``.ezoo-write-probe-<pid>-<8 hex>``, the pid at most :data:`MAX_PID`), of a writer that is no
+    live process on this machine (a live one may still be writing). Any other name (``.notes.tmp``,
+    a name of another program or of an earlier version, one with a pid no process can have) is left
+    alone."""
     removed = []
     for path in Path(directory).glob(".*"):
         match = _OURS.fullmatch(path.name)
         if match is None or not path.is_file() or path.is_symlink():
             continue
-        if process_alive(int(match["pid"] or match["prober"])):
+        pid = int(match["pid"] or match["prober"])
+        if pid > MAX_PID or process_alive(pid):  # (a larger pid: no writer of the suite's)
             continue
         path.unlink(missing_ok=True)
         removed.append(path)
@@ -192,8 +201,9 @@ def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:
 
 def process_alive(pid: int) -> bool:
     """Whether process ``pid`` may still be running on this machine (this process counts; a process
-    of another user, or one this system cannot tell of, counts as running)."""
-    if pid == os.getpid():
+    of another user, or one this system cannot tell of, counts as running, and so does a number that
+    is no process id, 0 or below or above :data:`MAX_PID`, which is never given to ``os.kill``)."""
+    if pid == os.getpid() or not 0 < pid <= MAX_PID:
         return True
     try:
         os.kill(pid, 0)

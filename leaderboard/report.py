@@ -67,7 +67,7 @@ STAGE_PREFIX = ".leaderboard."
 (``.leaderboard.ezoo-<pid>-<random>.tmp``) before its files are moved into place."""
 PAGES = ("csv", "markdown", "html")
 """The pages, in the order they are put in place (after every figure)."""
-_STAGE = re.compile(rf"{re.escape(STAGE_PREFIX)}{TEMP_MARKER}-(?P<pid>\d+)-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}")
+_STAGE = re.compile(rf"{re.escape(STAGE_PREFIX)}{TEMP_MARKER}-(?P<pid>[1-9][0-9]{{0,9}})-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}")
 _ATOMIC_TEMP = re.compile(rf"\.{TEMP_MARKER}-\d+-[0-9a-f]{{8}}{re.escape(TEMP_SUFFIX)}$")
 
 
@@ -150,7 +150,7 @@ def write_leaderboard(
     call = repr(str(dirs[0])) if not several else repr([str(directory) for directory in dirs])
     call += f", {str(out_dir)!r}" if several and out_dir is not None else ""
     command = command if command is not None else f"leaderboard.write_leaderboard({call})"
-    created = [directory for directory in (out, *out.parents) if not directory.exists()]
+    created = [directory for directory in (out / FIGURES_DIR, out, *out.parents) if not directory.exists()]
     try:
         with _staging(out) as stage:
             staged = _render(

@@ -38,6 +38,7 @@ leaderboard.reproduction DIR`` prints that list without writing anything):
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -48,7 +49,8 @@ import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
-from leaderboard.aggregate import final_episode_count, load_results, longest_episode, run_scalars
+from empathy_zoo.result_file import result_checker
+from leaderboard.aggregate import final_episode_count, load_result_files, longest_episode, run_scalars
 from leaderboard.claim_rules import less_than, reference_reading
 from leaderboard.run_facts import description_of, empathic_selfishness, env_argument, exploration_of, in_paper_setting
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
@@ -70,6 +72,8 @@ __all__ = [
     "write_reproduction",
     "training_window_epsilons",
     "training_window_share",
+    "check_run_steps",
+    "load_checked_results",
     "TieRange",
     "tie_break_range",
     "SurvivalRise",
@@ -169,21 +173,99 @@ def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
     return [f"{env} {key}" for env, keys in needed.items() for key in keys if key not in runs[env]]
 
 
+def check_run_steps(run: Mapping[str, Any], where: str | os.PathLike[str] | None = None) -> None:
+    """Refuse a run whose steps the report cannot read as its environment makes them: a ``ValueError``
+    naming ``where`` (its file; by default the run's id) and the field when a training episode is
+    longer than its environment's ``max_cycles`` (``train.episode_end_step``: no episode of the
+    suite's lasts longer), or when the ε schedule its description records (if any) has a start or
+    an end outside 0–1 or a warm-up or decay that is no finite number."""
+    check = result_checker(Path(where if where is not None else f"run {run.get('run_id') or '?'}"))
+    cycles = int(env_argument(run, "max_cycles"))
+    ends = np.asarray(run["train"]["episode_end_step"], dtype=np.int64)
+    lengths = np.diff(ends, prepend=0)
+    longest = int(lengths.argmax()) if lengths.size else 0
+    if lengths.size and lengths[longest] > cycles:
+        before = int(ends[longest - 1]) if longest else 0
+        raise check.fail(
+            f"train.episode_end_step[{longest}]",
+            f"the end of an episode of at most the environment's max_cycles ({cycles:,}) steps after step {before:,}",
+            int(ends[longest]),
+        )
+    schedule = ((run.get("config") or {}).get("description") or {}).get("exploration")
+    if schedule is None:
+        return
+    for name in ("start", "end", "warmup", "decay_steps"):
+        value = schedule.get(name) if isinstance(schedule, Mapping) else None
+        probability = name in ("start", "end")
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            finite = not isinstance(value, float) or math.isfinite(value)  # (an int of any size is compared as an int)
+            if finite and (not probability or 0 <= value <= 1):
+                continue
+        expected = "an ε between 0 and 1" if probability else "a finite number"
+        raise check.fail(f"config.description.exploration.{name}", expected, value)
+
+
+def load_checked_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """:func:`leaderboard.aggregate.load_results`, every run also checked by :func:`check_run_steps`
+    (a ``ValueError`` naming the first file refused): what the report reads, checked before
+    anything is judged or written."""
+    read = load_result_files(results_dir)
+    for path, run in read:
+        check_run_steps(run, path)
+    return [run for _, run in read]
+
+
 def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float, int]:
     """The ε schedule over the env steps of a run's final 10 % of training episodes, as
-    ``{ε rounded to digits: steps}`` (the schedule its description records, read before each step)."""
+    ``{ε rounded to digits: steps}`` (the schedule its description records, read before each step).
+
+    Counted in closed form, not step by step: the schedule is constant during its warm-up and
+    monotone after it, so each rounded ε holds over one run of steps on either side, whose end is
+    found by bisection; the work grows with the number of distinct values (at most about
+    ``10 ** digits``), not with the steps (up to :data:`~empathy_zoo.limits.MAX_STEPS`). The
+    counts are exactly those of reading the schedule at every step. A run refused by
+    :func:`check_run_steps` is a ``ValueError`` naming it."""
 
     ends = run["train"]["episode_end_step"]
     if not ends:
         return {}
+    check_run_steps(run)
     first = len(ends) - final_episode_count(len(ends))
     start = int(ends[first - 1]) if first > 0 else 0
-    epsilon_at = exploration_of(run)
+    epsilon_at = exploration_of(run)  # (a ValueError naming the run where it records no schedule)
+    schedule = description_of(run)["exploration"]
+    if schedule["kind"] != "linear":  # pragma: no cover - the only kind there is (schedules.SCHEDULE_KINDS)
+        raise ValueError(f"no closed form of the ε schedule of kind {schedule['kind']!r}")
+
+    def rounded(step: int) -> float:
+        return round(epsilon_at(step), digits)
+
     counts: dict[float, int] = {}
-    for step in range(start, int(ends[-1])):
-        epsilon = round(epsilon_at(step), digits)
-        counts[epsilon] = counts.get(epsilon, 0) + 1
+    warm_end = min(max(start, math.ceil(schedule["warmup"])), int(ends[-1]))  # (steps before it: s < warmup)
+    for low, high in ((start, warm_end), (warm_end, int(ends[-1]))):
+        for epsilon, steps in _runs_of_monotone(rounded, low, high):
+            counts[epsilon] = counts.get(epsilon, 0) + steps
     return counts
+
+
+def _runs_of_monotone(value: Callable[[int], float], low: int, high: int) -> list[tuple[float, int]]:
+    """``[(v, steps)]``: the runs of equal values of ``value`` over the steps ``low`` … ``high - 1``,
+    in order, for a ``value`` monotone there (each value then holds over one run of steps, whose
+    end is found by bisection)."""
+    runs: list[tuple[float, int]] = []
+    step = low
+    while step < high:
+        current = value(step)
+        after, beyond = step + 1, high  # (the run's end lies in [after, beyond])
+        while after < beyond:
+            middle = (after + beyond) // 2
+            if value(middle) == current:
+                after = middle + 1
+            else:
+                beyond = middle
+        runs.append((current, after - step))
+        step = after
+    return runs
 
 
 def training_window_share(run: dict[str, Any]) -> float:
@@ -629,8 +711,9 @@ def write_reproduction(
     tie_range: TieRangeOf | None = None,
 ) -> Path:
     """Judge the claims on ``results_dir`` and write the report (``<results_dir>/REPRODUCTION.md``);
-    raises :class:`NotThePaperSweep` (writing nothing) when the paper's experiments are not there."""
-    claims = assess_claims(load_results(results_dir), reference, tie_range)
+    raises :class:`NotThePaperSweep` (writing nothing) when the paper's experiments are not there,
+    and a ``ValueError`` naming the file (writing nothing) for a run :func:`check_run_steps` refuses."""
+    claims = assess_claims(load_checked_results(results_dir), reference, tie_range)
     path = Path(out_path) if out_path else Path(results_dir) / "REPRODUCTION.md"
     write_text_atomic(path, reproduction_markdown(claims, command, str(results_dir), note, appendix))
     return path
@@ -642,6 +725,6 @@ if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit("usage: python -m leaderboard.reproduction RESULTS_DIR   (each claim's old and new verdict; writes nothing)")
     try:
-        print(claim_verdicts_markdown(assess_claims(load_results(sys.argv[1]))))
-    except NotThePaperSweep as error:
+        print(claim_verdicts_markdown(assess_claims(load_checked_results(sys.argv[1]))))
+    except ValueError as error:
         sys.exit(f"{sys.argv[1]}: {error}")

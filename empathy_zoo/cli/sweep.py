@@ -95,7 +95,7 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     """Write REPRODUCTION.md of existing results (with the sensitivity sweeps' tables if given)."""
     from leaderboard.aggregate import load_results
     from leaderboard.beyond_paper import beyond_the_paper
-    from leaderboard.reproduction import NotThePaperSweep, missing_paper_experiments, write_reproduction
+    from leaderboard.reproduction import NotThePaperSweep, load_checked_results, missing_paper_experiments, write_reproduction
     from leaderboard.sensitivity import sensitivity_markdown
 
     note = _read_note(args.note)
@@ -116,7 +116,7 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
         )
         appendix = "\n\n".join(part for part in (appendix, rules) if part)
     out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"
-    missing = missing_paper_experiments(load_results(args.results))
+    missing = missing_paper_experiments(load_checked_results(args.results))  # (a forged file: refused before any figure)
     if missing:  # (refused before any figure of the held-out section is drawn)
         raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
     beyond = beyond_the_paper(args.results, out)  # (the held-out evaluation, where the directory has one)

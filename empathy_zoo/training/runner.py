@@ -135,8 +135,8 @@ def train_runs(
     room = max(PROBE_BYTES, largest_checkpoint_bytes(todo, options)) if local_checkpoints and todo else PROBE_BYTES
     check_log_places(out_dir, options.log, [s.run_id for s in todo])  # (no link where a run logs)
     subdirs = (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ()), *log_subdirs(options.log))
-    check_output_dir(out_dir, subdirs, largest_file=room)
     with hold_output_dir(out_dir, command_line(), note):
+        check_output_dir(out_dir, subdirs, largest_file=room)  # (inside the lock: nothing made before it)
         for warning in warnings:  # (said once everything before training has passed)
             note(warning)
         stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
