@@ -11,10 +11,14 @@ Each is a :class:`empathy_zoo.policies.FixedPolicy` registered by name in
   ``positions``.
 * ``nearest_battery`` (:class:`NearestBattery`, Sharing): steps towards the nearest battery in its
   window, else patrols; reads its observation.
+* ``noisy`` (:class:`Noisy`): another registered partner that keeps nothing between steps
+  (``partner``, e.g. ``chase``), except that on a share ``noise`` of its steps it acts uniformly
+  at random; the noisy counterpart of a deterministic partner.
 
 :class:`Chase`, :class:`KeepAway` and :class:`NearestBattery` are deterministic and keep nothing
 between steps (``stateless = True``); :class:`SlowWalk` draws from a counter-based stream of its
-seed, as :class:`~empathy_zoo.builtin_policies.RandomWalk` does, and has a batched fast path.
+seed, as :class:`~empathy_zoo.builtin_policies.RandomWalk` does, and has a batched fast path;
+:class:`Noisy` draws from such a stream too, one draw per step.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from empathy_zoo.actions import Action
 from empathy_zoo.builtin_policies import CounterStream, CounterStreamBatch
 from empathy_zoo.randomness import counter_uniform
 
-__all__ = ["SlowWalk", "Chase", "KeepAway", "NearestBattery", "BATTERY_VALUE", "MOVES_BY_ACTION"]
+__all__ = ["SlowWalk", "Chase", "KeepAway", "NearestBattery", "Noisy", "BATTERY_VALUE", "MOVES_BY_ACTION"]
 
 BATTERY_VALUE = -1.0
 """How a battery looks in a Sharing observation (SPEC §3: floor 0, battery −1, an agent positive)."""
@@ -197,3 +201,38 @@ class NearestBattery:
         if down:
             return int(Action.DOWN if down > 0 else Action.UP)
         return int(Action.RIGHT if right > 0 else Action.LEFT)
+
+
+class Noisy(CounterStream):
+    """A deterministic partner with noise: on each step, with probability ``noise`` it takes one of
+    the five actions uniformly at random, else the action of ``partner``.
+
+    ``partner`` is the registered name of a policy that keeps nothing between steps (``chase``,
+    ``keep_away``, ``stay``, ``patrol``, ``nearest_battery``), built with its defaults. One draw
+    per step from the counter-based stream of its seed decides both: a draw ``u < noise`` gives
+    action ``⌊5u/noise⌋``. It reads what its partner reads."""
+
+    def __init__(self, partner: str = "chase", noise: float = 0.2) -> None:
+        from empathy_zoo.policies import POLICIES  # (the registry imports this module)
+
+        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not 0.0 < float(noise) <= 1.0:
+            raise ValueError(f"noise must be a number in (0, 1], got {noise!r}")
+        if not isinstance(partner, str) or partner not in POLICIES or partner == "noisy":
+            raise ValueError(f"partner must name a registered policy other than 'noisy', got {partner!r}")
+        base = POLICIES[partner]()
+        if getattr(base, "stateless", False) is not True:
+            raise ValueError(f"partner must keep nothing between steps (stateless = True); {partner!r} does not")
+        super().__init__()
+        self.partner, self.noise, self._base = partner, float(noise), base
+        self.needs_state = bool(getattr(base, "needs_state", False))
+
+    def reset(self, seed: int | None = None) -> None:
+        super().reset(seed)
+        self._base.reset(seed)
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        key, count = self._take()
+        draw = float(counter_uniform(key, count)[0])
+        if draw < self.noise:
+            return min(int(draw / self.noise * 5), 4)
+        return int(self._base.act(observation, info))

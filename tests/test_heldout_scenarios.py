@@ -7,10 +7,12 @@ from __future__ import annotations
 import pytest
 from helpers_results import synthetic_result
 
+from empathy_zoo.environments import ENVIRONMENT_TABLE
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.policies import entry_label
 from empathy_zoo.scenarios import (
     TRAINED_WITH,
+    default_set_name,
     load_scenario_set,
     parse_entry_label,
     parse_scenario_set,
@@ -38,8 +40,18 @@ SHARING_PARTNERS = {
 }
 
 
-def test_one_set_ships_per_environment() -> None:
-    assert shipped_sets() == ["charger_v0", "coexistence_v0", "helping_v0", "sharing_v0", "vase_v0"]
+def test_one_default_set_ships_per_environment_and_coexistence_has_its_noisy_set() -> None:
+    assert shipped_sets() == ["charger_v0", "coexistence_v0", "coexistence_v0_noisy", "helping_v0", "sharing_v0", "vase_v0"]
+    assert [default_set_name(env) for env in ENVIRONMENT_TABLE] == list(ENVIRONMENT_TABLE)
+
+
+def test_the_noisy_set_holds_the_noisy_chaser_and_fleer() -> None:
+    noisy = load_scenario_set("coexistence_v0_noisy")
+    assert noisy.env == "coexistence_v0" and noisy.name == "coexistence_v0_noisy"
+    assert {s.name: s.definition()["fixed"] for s in noisy.scenarios} == {
+        "cat_chases_noisily": {"cat_0": 'noisy(noise=0.2, partner="chase")'},
+        "cat_keeps_away_noisily": {"cat_0": 'noisy(noise=0.2, partner="keep_away")'},
+    }
 
 
 @pytest.mark.parametrize("name, partners", [("coexistence_v0", COEXISTENCE_PARTNERS), ("sharing_v0", SHARING_PARTNERS)])
@@ -114,7 +126,7 @@ def test_a_bad_set_header_is_refused(text, message, tmp_path) -> None:
 
 
 def test_an_unknown_set_name_lists_the_shipped_ones() -> None:
-    shipped = "charger_v0, coexistence_v0, helping_v0, sharing_v0, vase_v0"
+    shipped = "charger_v0, coexistence_v0, coexistence_v0_noisy, helping_v0, sharing_v0, vase_v0"
     with pytest.raises(SweepConfigError, match=f"unknown scenario set 'mine'; shipped: {shipped}"):
         load_scenario_set("mine")
 
