@@ -14,25 +14,38 @@ Each is a :class:`empathy_zoo.policies.FixedPolicy` registered by name in
 * ``noisy`` (:class:`Noisy`): another registered partner that keeps nothing between steps
   (``partner``, e.g. ``chase``), except that on a share ``noise`` of its steps it acts uniformly
   at random; the noisy counterpart of a deterministic partner.
+* ``population`` (:class:`Population`): one of several registered partners (``members``), drawn
+  afresh at each episode with probabilities ``weights``; a population of partners to train with
+  or to hold out.
 
 :class:`Chase`, :class:`KeepAway` and :class:`NearestBattery` are deterministic and keep nothing
 between steps (``stateless = True``); :class:`SlowWalk` draws from a counter-based stream of its
 seed, as :class:`~empathy_zoo.builtin_policies.RandomWalk` does, and has a batched fast path;
-:class:`Noisy` draws from such a stream too, one draw per step.
+:class:`Noisy` draws from such a stream too, one draw per step; :class:`Population` one per episode.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from empathy_zoo.actions import Action
 from empathy_zoo.builtin_policies import CounterStream, CounterStreamBatch
-from empathy_zoo.randomness import counter_uniform
+from empathy_zoo.randomness import STREAMS, counter_uniform, derive_key
 
-__all__ = ["SlowWalk", "Chase", "KeepAway", "NearestBattery", "Noisy", "BATTERY_VALUE", "MOVES_BY_ACTION"]
+__all__ = [
+    "SlowWalk",
+    "Chase",
+    "KeepAway",
+    "NearestBattery",
+    "Noisy",
+    "Population",
+    "MAX_MEMBERS",
+    "BATTERY_VALUE",
+    "MOVES_BY_ACTION",
+]
 
 BATTERY_VALUE = -1.0
 """How a battery looks in a Sharing observation (SPEC §3: floor 0, battery −1, an agent positive)."""
@@ -236,3 +249,72 @@ class Noisy(CounterStream):
         if draw < self.noise:
             return min(int(draw / self.noise * 5), 4)
         return int(self._base.act(observation, info))
+
+
+MAX_MEMBERS = 16
+"""The most partners a population holds."""
+
+
+class Population(CounterStream):
+    """A population of partners: at each episode's start one member plays the whole episode.
+
+    ``members`` are registered policy names (built with their defaults), each at most once;
+    ``weights`` (default: equal) are their probabilities, normalised. The member is drawn from the
+    population's own counter-based stream, keyed by the episode's seed on a seeded reset (stream
+    ``population_member`` of :data:`~empathy_zoo.randomness.STREAMS`) and continued otherwise; the
+    member is reset with the same seed. Its state is its stream's, the member's index and every
+    member's own state, so a checkpointed run resumes it exactly."""
+
+    def __init__(self, members: Sequence[str] = ("chase", "keep_away"), weights: Sequence[float] | None = None) -> None:
+        from empathy_zoo.policies import POLICIES  # (the registry imports this module)
+
+        if isinstance(members, str) or not isinstance(members, Sequence) or not 1 <= len(members) <= MAX_MEMBERS:
+            raise ValueError(f"members must be a list of 1 to {MAX_MEMBERS} registered policy names, got {members!r}")
+        for name in members:
+            if not isinstance(name, str) or name not in POLICIES or name == "population":
+                raise ValueError(f"members must name registered policies other than 'population', got {name!r}")
+        if len(set(members)) != len(members):
+            raise ValueError(f"members must differ (give a member more weight instead), got {list(members)!r}")
+        shares = [1.0] * len(members) if weights is None else weights
+        if isinstance(shares, str) or not isinstance(shares, Sequence) or len(shares) != len(members):
+            raise ValueError(f"weights must be a list of {len(members)} numbers (one per member), got {weights!r}")
+        if any(isinstance(w, bool) or not isinstance(w, (int, float)) or not 0.0 < float(w) < float("inf") for w in shares):
+            raise ValueError(f"weights must be positive finite numbers, got {list(shares)!r}")
+        super().__init__()
+        total = sum(float(w) for w in shares)
+        self.members, self.weights = list(members), [float(w) for w in shares]
+        self._cumulative = np.cumsum([float(w) / total for w in shares])
+        self._policies = [POLICIES[name]() for name in members]
+        self.needs_state = any(bool(getattr(p, "needs_state", False)) for p in self._policies)
+        self.needs_observation = any(bool(getattr(p, "needs_observation", True)) for p in self._policies)
+        self.member = 0
+        """The index of the member playing this episode."""
+
+    def reset(self, seed: int | None = None) -> None:
+        if seed is not None:
+            self._key, self._count = derive_key(seed, STREAMS["population_member"]), 0
+        else:
+            super().reset(None)
+        key, count = self._take()
+        draw = float(counter_uniform(key, count)[0])
+        self.member = min(int(np.searchsorted(self._cumulative, draw, side="right")), len(self.members) - 1)
+        self._policies[self.member].reset(seed)
+
+    def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
+        return int(self._policies[self.member].act(observation, info))
+
+    def state(self) -> dict[str, Any]:
+        states = [p.state() if hasattr(p, "state") else {} for p in self._policies]
+        return {**super().state(), "member": self.member, "members": states}
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        member, states = state["member"], state["members"]
+        if isinstance(member, bool) or not isinstance(member, int) or not 0 <= member < len(self.members):
+            raise ValueError(f"population state 'member' must be an index below {len(self.members)}, got {member!r}")
+        if not isinstance(states, list) or len(states) != len(self.members):
+            raise ValueError(f"population state 'members' must hold {len(self.members)} states, got {states!r}")
+        super().load_state(state)
+        self.member = member
+        for policy, own in zip(self._policies, states, strict=True):
+            if hasattr(policy, "load_state"):
+                policy.load_state(own)

@@ -31,7 +31,7 @@ import numpy as np
 from empathy_zoo.actions import NUM_ACTIONS, Action, check_action
 from empathy_zoo.builtin_policies import Patrol, RandomWalk, Stay
 from empathy_zoo.import_names import resolve_name
-from empathy_zoo.partner_policies import Chase, KeepAway, NearestBattery, Noisy, SlowWalk
+from empathy_zoo.partner_policies import Chase, KeepAway, NearestBattery, Noisy, Population, SlowWalk
 
 if TYPE_CHECKING:
     from empathy_zoo.engine.base import GridEngine
@@ -186,6 +186,7 @@ POLICIES: dict[str, type] = {
     "keep_away": KeepAway,
     "nearest_battery": NearestBattery,
     "noisy": Noisy,
+    "population": Population,
 }
 """Fixed policies by name."""
 

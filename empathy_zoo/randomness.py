@@ -40,6 +40,7 @@ STREAMS: dict[str, int] = {
     "heldout_eval": 31,  # a trained agent's held-out evaluation start states, every scenario alike (+ the episode)
     "attainable_utility": 40,  # AUP's auxiliary rewards, networks and replay batches (+ which of them)
     "considerate_value": 41,  # Be Considerate's value network of the other agent and its replay batches (+ which)
+    "population_member": 50,  # a population partner's choice of member at each episode (from the episode's seed)
 }
 """Every random stream derived from a run's seed, by name: ``derive_key(seed, STREAMS[name], ...)``.
 One id per stream, so no two streams of a run ever coincide; a new stream takes a new id here."""
