@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -33,12 +32,12 @@ FILE_KINDS = ("result file", "evaluation file", "agent file", "checkpoint", "lis
 CAPS: dict[str, int] = {kind: BOUNDS[kind] for kind in FILE_KINDS}
 """The largest file of each kind read, by what a refusal calls it."""
 
-_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')
-"""A JSON string (its brackets are no nesting)."""
-_NOT_BRACKET = bytes(code for code in range(256) if code not in b"[]{}")
-"""Every byte but the four brackets of JSON."""
-_CHUNK = 1 << 24
-"""Brackets counted at once (a hostile file of only brackets is counted in bounded memory)."""
+_QUOTE, _BACKSLASH = ord('"'), ord("\\")
+"""The bytes that open or close a JSON string (a quote) and escape the next one (a backslash)."""
+_STEPS = np.array([1 if code in b"[{" else -1 if code in b"]}" else 0 for code in range(256)], np.int8)
+"""What each byte adds to the depth outside strings: 1 for ``[`` and ``{``, -1 for ``]`` and ``}``."""
+_CHUNK = 1 << 22
+"""Bytes scanned at once (any file is scanned in bounded memory)."""
 
 
 def read_data(path: str | os.PathLike[str], kind: str) -> bytes:
@@ -71,13 +70,31 @@ def open_data(path: str | os.PathLike[str], kind: str) -> BinaryIO:
 
 def json_depth(data: bytes, limit: int = MAX_JSON_DEPTH) -> int:
     """How deep arrays and objects nest in the JSON text ``data`` (brackets in strings do not
-    count), counted no further than past ``limit``."""
-    brackets = _STRING.sub(b"", data).translate(None, _NOT_BRACKET)
+    count), counted no further than past ``limit``. One pass over the text, a chunk at a time
+    (time linear in its length, whatever it holds: ``"\\"\\"\\"…`` too): a quote after an even
+    number of backslashes opens or closes a string, one after an odd number is in it."""
     deepest, depth = 0, 0
-    for start in range(0, len(brackets), _CHUNK):
-        codes = np.frombuffer(brackets, np.uint8, count=min(_CHUNK, len(brackets) - start), offset=start)
-        steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1).astype(np.int64)
-        levels = depth + np.cumsum(steps)
+    in_string, backslashes = 0, 0  # (carried from chunk to chunk: inside a string; the backslashes ending the last chunk)
+    for start in range(0, len(data), _CHUNK):
+        codes = np.frombuffer(data, np.uint8, count=min(_CHUNK, len(data) - start), offset=start)
+        quotes = codes == _QUOTE
+        slashes = codes == _BACKSLASH
+        if backslashes or slashes.any():
+            index = np.arange(codes.size, dtype=np.int64)
+            last_other = np.maximum.accumulate(np.where(slashes, -1 - backslashes, index))  # (the last byte no backslash)
+            run = index - 1 - np.concatenate(([-1 - backslashes], last_other[:-1]))  # (the backslashes before each byte)
+            quotes &= run % 2 == 0
+            backslashes = int(codes.size - 1 - last_other[-1])
+        else:
+            backslashes = 0
+        if not quotes.any() and in_string:
+            continue
+        steps = _STEPS[codes]
+        if quotes.any():
+            inside = np.bitwise_xor.accumulate(quotes.view(np.uint8)) ^ in_string
+            in_string = int(inside[-1])
+            steps[inside.view(bool)] = 0
+        levels = depth + np.cumsum(steps, dtype=np.int64)
         deepest, depth = max(deepest, int(levels.max())), int(levels[-1])
         if deepest > limit:
             break

@@ -81,7 +81,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -385,13 +385,29 @@ def check_journal(
     return any(entry.get("op_code") == 2 for _, entry in entries)
 
 
+class _HeldWithDirectory:
+    """The lock on the journal Optuna takes to append to it, held already: the one process that
+    writes the journal (trials train in worker processes, which never write it) holds the output
+    directory (:func:`~empathy_zoo.output_lock.hold_output_dir`) the while. Optuna's own lock
+    file, ``study.journal.lock``, is never made: a file of that name (the user's) is left alone,
+    where Optuna's lock waits 30 seconds on it and deletes it. (Optuna only calls these two
+    methods of it; its base class is private to Optuna.)"""
+
+    def acquire(self) -> bool:
+        """Taken (the directory is held)."""
+        return True
+
+    def release(self) -> None:
+        """Nothing to give back (the directory is released by its holder)."""
+
+
 def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, has_plan: bool) -> Any:
     """The study stored in ``out`` (created when there is none), whose journal :func:`check_journal`
     checked against ``plan`` (``has_plan``: it holds the plan already; else the plan is stored)."""
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
 
-    storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE)))
+    storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE), lock_obj=cast(Any, _HeldWithDirectory())))
     study = optuna.create_study(
         storage=storage, study_name="tune", direction=plan.direction, pruner=_pruner(optuna, plan), load_if_exists=True
     )

@@ -35,7 +35,7 @@ import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from datetime import datetime
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +62,9 @@ MAX_WORKER_ID = 200
 """Longest worker id read (Optuna writes a UUID and a thread id: under 60 characters)."""
 MAX_DATETIME = 64
 """Longest time stamp read (Optuna writes ISO 8601 with microseconds and a zone: 32 characters)."""
+EARLIEST, LATEST = datetime(1971, 1, 1, tzinfo=UTC), datetime(9999, 1, 1, tzinfo=UTC)
+"""The range of a time stamp read (UTC): any zone's local time of one inside it is a ``datetime``
+(Optuna writes the time a trial started and ended)."""
 MAX_REASON = 100_000
 """Longest reason for a refused point read (the method's one-line message)."""
 MAX_DISTRIBUTION = 1 << 20
@@ -127,11 +130,17 @@ def _number(value: Any, what: str) -> float:
 
 
 def _datetime(value: Any, what: str) -> None:
-    _expect(isinstance(value, str) and 0 < len(value) <= MAX_DATETIME, what, value, "an ISO 8601 time stamp")
+    """Refuse ``value`` unless it is an ISO 8601 time stamp between :data:`EARLIEST` and
+    :data:`LATEST` (one without a zone taken as UTC): Optuna turns it into local time, which
+    overflows a stamp near the ends of ``datetime``'s range (year 1 or 9999)."""
+    expected = f"an ISO 8601 time stamp from {EARLIEST.year} to {LATEST.year - 1}"
+    _expect(isinstance(value, str) and 0 < len(value) <= MAX_DATETIME, what, value, expected)
     try:
-        datetime.fromisoformat(value)
-    except ValueError:
-        raise _Refusal(f"{what} is {shown(value)}, expected an ISO 8601 time stamp") from None
+        stamp = datetime.fromisoformat(value)
+        utc = stamp.astimezone(UTC) if stamp.tzinfo is not None else stamp.replace(tzinfo=UTC)
+    except (ValueError, OverflowError):
+        utc = None
+    _expect(utc is not None and EARLIEST <= utc < LATEST, what, value, expected)
 
 
 def param_distribution(spec: ParamSpec) -> Any:
