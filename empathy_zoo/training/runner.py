@@ -46,6 +46,8 @@ __all__ = [
     "CHECKPOINT_DIR",
     "SUPERSEDED_SUFFIX",
     "STOP_SIGNALS",
+    "exit_with_parent",
+    "stop_workers",
 ]
 
 SUPERSEDED_SUFFIX = ".superseded"
@@ -267,7 +269,7 @@ def read_finished(out_dir: str | Path) -> dict[Path, dict[str, Any]]:
     return {path: read_result(path) for path in paths if not path.name.startswith(".")}
 
 
-def _exit_with_parent(parent: int) -> None:
+def exit_with_parent(parent: int) -> None:
     """In a worker: end this process if the sweep's process goes away (killed, not interrupted),
     so no orphan keeps training and writing checkpoints beside a restarted sweep."""
 
@@ -307,7 +309,7 @@ def stopped_by_signals() -> Iterator[None]:
             signal.signal(number, handler)
 
 
-def _stop_workers(pool: ProcessPoolExecutor) -> None:
+def stop_workers(pool: ProcessPoolExecutor) -> None:
     """End the worker processes of ``pool`` now (the sweep stops): each is terminated, then killed
     after :data:`WORKER_STOP_S` seconds, and waited for. What they finished is written (each result
     file and checkpoint atomically), so the same command resumes from there."""
@@ -333,14 +335,14 @@ def _train_in_processes(
     """Spread ensembles over ``options.workers`` processes (one torch thread each by default);
     their progress comes back through a queue and is drawn here. When an ensemble fails, those not
     started are cancelled and the running ones finish; when this process is interrupted (Ctrl-C,
-    SIGINT or SIGTERM: :class:`Stopped`), the workers are stopped too (:func:`_stop_workers`)."""
+    SIGINT or SIGTERM: :class:`Stopped`), the workers are stopped too (:func:`stop_workers`)."""
     context = multiprocessing.get_context("spawn")
     workers = min(options.workers, len(chunks))
     manager = context.Manager() if options.progress else None
     drain = QueueDrain(manager.Queue(), progress) if manager is not None else None
     reporter = QueueReporter(drain.source) if drain is not None else None
     try:
-        with ProcessPoolExecutor(workers, mp_context=context, initializer=_exit_with_parent, initargs=(os.getpid(),)) as pool:
+        with ProcessPoolExecutor(workers, mp_context=context, initializer=exit_with_parent, initargs=(os.getpid(),)) as pool:
             futures = [
                 pool.submit(
                     train_ensemble, chunk, out_dir, replace(options, workers=1, threads=options.threads or 1), True, reporter, i
@@ -356,7 +358,7 @@ def _train_in_processes(
                 for future in futures:
                     future.cancel()
                 if isinstance(error, KeyboardInterrupt):  # (another error lets the running ensembles finish)
-                    _stop_workers(pool)
+                    stop_workers(pool)
                 raise
     finally:
         if drain is not None:

@@ -97,7 +97,7 @@ from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training
-from empathy_zoo.training.runner import _exit_with_parent, _stop_workers
+from empathy_zoo.training.runner import exit_with_parent, stop_workers
 from empathy_zoo.training.study_plan import OVER_WORDS, PRUNE_STARTUP_TRIALS, StudyPlan, curve_value, trial_value
 from empathy_zoo.training.tracking import log_subdirs
 from empathy_zoo.training.tuning_journal import check_study_lines, stored_plan
@@ -225,7 +225,7 @@ def _train_point(point: _Point) -> _Outcome:
 
 def _worker_started(parent: int) -> None:
     """In a worker process: end with the study's process (killed, not interrupted); Optuna quiet."""
-    _exit_with_parent(parent)
+    exit_with_parent(parent)
     optuna = import_optuna()
     optuna.logging.set_verbosity(optuna.logging.ERROR)
 
@@ -261,7 +261,7 @@ class _Workers:
             for future in futures:
                 future.cancel()
             if isinstance(error, KeyboardInterrupt):
-                _stop_workers(self.pool)
+                stop_workers(self.pool)
                 self.pool = None
             raise
 
@@ -332,11 +332,11 @@ def run_study(
         note(warning)
     for name in (*OUTPUT_FILES, *also_writes):
         check_replaceable(check_no_links(out, out / name))
-    check_output_dir(out, log_subdirs(options.log))
     verbosity = optuna.logging.get_verbosity()
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     try:
         with hold_output_dir(out, command or "run_study", note):
+            check_output_dir(out, log_subdirs(options.log))
             has_plan = check_journal(out / JOURNAL_FILE, note, plan, options.update_kernel)
             for stale in remove_stale_temp_files(out):
                 note(f"removed {stale}, a write killed mid-way")
