@@ -202,7 +202,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("results_dir")
     parser.add_argument("--out", help="write the page here (default: print it)")
     args = parser.parse_args(argv)
-    command = f"python -m leaderboard.coexistence_sensitivity {args.results_dir}" + (f" --out {args.out}" if args.out else "")
+    command = f"empathy-zoo analyse coexistence-sensitivity {args.results_dir}" + (f" --out {args.out}" if args.out else "")
     try:
         if args.out:
             write_coexistence_sensitivity(args.results_dir, args.out, command)
