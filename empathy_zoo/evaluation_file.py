@@ -32,6 +32,7 @@ from typing import Any
 from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker, shown
+from empathy_zoo.engine.arguments import argument_defaults
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
@@ -49,6 +50,8 @@ __all__ = [
     "evaluations_root",
     "evaluation_files",
     "check_evaluation",
+    "check_scenario_set",
+    "check_scenario_definition",
     "evaluation_mismatch",
     "read_evaluation",
 ]
@@ -63,6 +66,8 @@ SCHEMA = 1
 """The schema of the evaluation files this suite writes (and the newest it reads)."""
 EVALUATIONS_DIR = "evaluations"
 """The folder, beside a results directory's ``runs/``, that holds ``<scenario set>/<run id>.json``."""
+OPTIONAL_FIELDS = ("variant", "version")
+"""Top-level fields an evaluation file may have besides :data:`REQUIRED_FIELDS`."""
 REQUIRED_FIELDS = (
     "format",
     "schema",
@@ -79,7 +84,11 @@ REQUIRED_FIELDS = (
 )
 """Top-level fields every evaluation file has (``variant`` and ``version`` are written too)."""
 SCENARIO_FIELDS = ("name", "reason", "held_out", "env_kwargs", "fixed", "metrics")
-"""Fields of every entry of ``scenarios``."""
+"""Fields of every entry of ``scenarios`` (and no others)."""
+DEFINITION_FIELDS = ("name", "reason", "env_kwargs", "fixed")
+"""Fields of every scenario definition of ``scenario_set.scenarios`` (and no others)."""
+SET_FIELDS = ("name", "env", "description", "scenarios")
+"""Fields ``scenario_set`` may have (``description`` may be left out; no others)."""
 STREAM = STREAMS["heldout_eval"]
 """The random stream of every evaluation's start seeds (``stream``): ``empathy-zoo evaluate`` plays
 every scenario from ``derive_key(seed, STREAM, episode)`` and refuses a file made with another."""
@@ -130,6 +139,7 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     check = _checker(Path(path))
     evaluation = check.table(document, "(the whole file)")
     check.has(evaluation, REQUIRED_FIELDS, "")
+    _only(check, evaluation, (*REQUIRED_FIELDS, *OPTIONAL_FIELDS), "")
     if evaluation["format"] != FORMAT:
         raise check.fail("format", repr(FORMAT), evaluation["format"])
     if evaluation["schema"] != SCHEMA or isinstance(evaluation["schema"], bool):
@@ -154,17 +164,9 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     check.text(agent["file"], "agent.file")
     if not isinstance(agent["sha256"], str) or not _SHA256.fullmatch(agent["sha256"]):
         raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", agent["sha256"])
-    scenario_set = check.table(evaluation["scenario_set"], "scenario_set")
-    check.has(scenario_set, ("name", "env", "scenarios"), "scenario_set.")
-    check.name(scenario_set["name"], "scenario_set.name")
-    if scenario_set.get("description", "") != "":  # (a set may have none: "")
-        check.text(scenario_set["description"], "scenario_set.description")
+    scenario_set = check_scenario_set(check, evaluation["scenario_set"], "scenario_set")
     if scenario_set["env"] != evaluation["env"]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])
-    if not isinstance(scenario_set["scenarios"], list) or len(scenario_set["scenarios"]) > MAX_SCENARIOS:
-        raise check.fail(
-            "scenario_set.scenarios", f"an array of at most {MAX_SCENARIOS:,} scenario definitions", scenario_set["scenarios"]
-        )
     episodes = check.integer(evaluation["episodes"], "episodes", 1, MAX_EVAL_EPISODES)
     if check.integer(evaluation["stream"], "stream", 0) != STREAM:
         raise check.fail("stream", f"{STREAM}, the stream empathy-zoo evaluate plays every evaluation from", evaluation["stream"])
@@ -176,6 +178,7 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         where = f"scenarios[{i}]"
         entry = check.table(entry, where)
         check.has(entry, SCENARIO_FIELDS, f"{where}.")
+        _only(check, entry, SCENARIO_FIELDS, f"{where}.")
         names.append(_check_scenario(check, evaluation["env"], entry, where, played=True))
         if not isinstance(entry["held_out"], bool):
             raise check.fail(f"{where}.held_out", "true or false", entry["held_out"])
@@ -191,12 +194,61 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
         _check_scenario(check, evaluation["env"], definition, f"scenario_set.scenarios[{i}]", played=False)
     if names[0] != TRAINED_WITH or scenarios[0]["held_out"]:
         raise check.fail("scenarios[0]", f"the run's own partners ({TRAINED_WITH!r}, held_out false) first", names[0])
+    own = _world(evaluation["env"], scenarios[0])
+    for i, entry in enumerate(scenarios[1:], start=1):  # (one marked held out in the run's own world: evaluation_mismatch)
+        if not entry["held_out"] and _world(evaluation["env"], entry) != own:
+            raise check.fail(
+                f"scenarios[{i}].held_out",
+                f"true: a scenario of a held-out set is held out unless it is the run's own world ({TRAINED_WITH!r}: "
+                "the same arguments and partners), and this one is not",
+                entry["held_out"],
+            )
     if len(set(names)) != len(names):
         raise check.fail("scenarios", "distinct scenario names", names)
     declared = [definition.get("name") if isinstance(definition, dict) else None for definition in scenario_set["scenarios"]]
     if declared != names[1:]:
         raise check.fail("scenarios", f"the set's scenarios {declared} after {TRAINED_WITH!r}", names)
     return evaluation
+
+
+def _only(check: DocumentChecker, table: Mapping[str, Any], fields: tuple[str, ...], prefix: str) -> None:
+    """No field of ``table`` (at ``prefix``) but ``fields``: the first other one is named."""
+    for name in table:
+        if name not in fields:
+            raise check.fail(f"{prefix}{name}", f"no such field (one of {', '.join(fields)})", name)
+
+
+def _world(env: str, entry: Mapping[str, Any]) -> tuple[dict[str, Any], Any]:
+    """The world of a played scenario (checked): its arguments over ``env``'s defaults, and its fixed
+    agents' policy labels, as ``empathy-zoo evaluate`` compares them (``same_world``) to mark it
+    ``held_out``."""
+    return {**argument_defaults(ENGINES[env]), **entry["env_kwargs"]}, entry["fixed"]
+
+
+def check_scenario_set(check: DocumentChecker, value: Any, where: str) -> dict[str, Any]:
+    """A scenario set's definition (:meth:`empathy_zoo.scenarios.ScenarioSet.definition`) at ``where``:
+    the fields of :data:`SET_FIELDS` only; its ``name`` a file name, its ``description`` (which may be
+    ``""`` or left out) one line of printable text, and at most :data:`MAX_SCENARIOS` scenario
+    definitions. Its scenarios are checked by the caller, against the environment. The loader of
+    scenario files (:func:`empathy_zoo.scenarios.parse_scenario_set`) checks a set it reads with
+    this too, so a set it accepts is one an evaluation file of it may hold."""
+    scenario_set = check.table(value, where)
+    check.has(scenario_set, ("name", "env", "scenarios"), f"{where}.")
+    _only(check, scenario_set, SET_FIELDS, f"{where}.")
+    check.name(scenario_set["name"], f"{where}.name")
+    if scenario_set.get("description", "") != "":  # (a set may have none: "")
+        check.text(scenario_set["description"], f"{where}.description")
+    if not isinstance(scenario_set["scenarios"], list) or len(scenario_set["scenarios"]) > MAX_SCENARIOS:
+        raise check.fail(
+            f"{where}.scenarios", f"an array of at most {MAX_SCENARIOS:,} scenario definitions", scenario_set["scenarios"]
+        )
+    return scenario_set
+
+
+def check_scenario_definition(check: DocumentChecker, env: str, definition: Any, where: str) -> str:
+    """A scenario definition of a set of ``env`` at ``where``, as an evaluation file's
+    ``scenario_set.scenarios`` holds it (:data:`DEFINITION_FIELDS`); returns its name."""
+    return _check_scenario(check, env, definition, where, played=False)
 
 
 def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: str, played: bool) -> str:
@@ -206,7 +258,9 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
     its own arguments, laid over the run's when played, so only those played are checked together
     against the grid) and ``fixed`` (agent names and policy labels); returns its name."""
     entry = check.table(definition, where)
-    check.has(entry, ("name", "reason", "env_kwargs", "fixed"), f"{where}.")
+    check.has(entry, DEFINITION_FIELDS, f"{where}.")
+    if not played:
+        _only(check, entry, DEFINITION_FIELDS, f"{where}.")
     name = check.name(entry["name"], f"{where}.name")
     check.text(entry["reason"], f"{where}.reason")
     check_env_kwargs(check, env, entry["env_kwargs"], f"{where}.env_kwargs", grid=played)
@@ -220,8 +274,9 @@ def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -
     """What of ``evaluation`` (checked by :func:`check_evaluation`) is not of ``run`` (a result as
     :func:`~empathy_zoo.experiment.result_reader.read_result` gives it), as ``"<what>: <found>, its run has
     <value>"``, or ``None`` when it is that run's: its run id, environment, variant, method, seed,
-    the agent file's SHA-256 its result file records, and its :data:`TRAINED_WITH` scenario the run's
-    own world and partners (what ``empathy-zoo evaluate`` writes of the run)."""
+    the agent file's SHA-256 its result file records, its :data:`TRAINED_WITH` scenario the run's
+    own world and partners, and every other scenario ``held_out`` exactly when it is another world
+    than that (what ``empathy-zoo evaluate`` writes of the run)."""
     agent = run.get("agent")
     recorded = run.get("config")
     config: Mapping[str, Any] = recorded if isinstance(recorded, Mapping) else {}
@@ -236,6 +291,11 @@ def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -
         (f"scenarios[0].env_kwargs ({TRAINED_WITH})", own["env_kwargs"], config.get("env_kwargs")),
         (f"scenarios[0].fixed ({TRAINED_WITH})", own["fixed"], config.get("fixed")),
     ]
+    own_world = _world(evaluation["env"], own)
+    for i, entry in enumerate(evaluation["scenarios"][1:], start=1):
+        held_out = _world(evaluation["env"], entry) != own_world
+        where = "another world than" if held_out else "the same world as"
+        expected.append((f"scenarios[{i}].held_out ({entry['name']}: {where} its run's own)", entry["held_out"], held_out))
     for what, found, value in expected:
         if what == "variant" and found is None:
             continue  # (a file may leave it out: the run's environment)

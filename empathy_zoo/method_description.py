@@ -33,7 +33,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from empathy_zoo.schedules import check_schedule
+from empathy_zoo.schedules import ScheduleError, check_schedule
 
 __all__ = ["DESCRIPTION_FIELDS", "DescriptionError", "default_description", "check_description"]
 
@@ -78,8 +78,10 @@ def _is_number(value: Any, low: float, high: float) -> bool:
 
 
 def check_description(description: Any) -> dict[str, Any]:
-    """``description`` if it has exactly the fields of :data:`DESCRIPTION_FIELDS`, each of its kind;
-    else :class:`DescriptionError` naming the first field that is not."""
+    """``description`` if it has exactly the fields of :data:`DESCRIPTION_FIELDS`, each of its kind
+    (the exploration schedule's fields within their ranges: :func:`~empathy_zoo.schedules.check_schedule`),
+    and ``dqn_reference`` only on the environment's reward at β = 1 (or none); else
+    :class:`DescriptionError` naming the first field that is not."""
     if not isinstance(description, Mapping):
         raise DescriptionError("(the whole description)", "an object", description)
     for field in description:
@@ -100,10 +102,20 @@ def check_description(description: Any) -> dict[str, Any]:
         elif field == "exploration":
             try:
                 ok = value is None or bool(check_schedule(value))
-            except ValueError:
+            except ScheduleError as error:
+                if error.field:  # (a field of the schedule: named)
+                    raise DescriptionError(f"exploration.{error.field}", error.expected, error.value) from None
                 ok = False
         else:  # reward
             ok = value is None or (isinstance(value, Mapping) and isinstance(value.get("name"), str) and bool(value["name"]))
         if not ok:
             raise DescriptionError(field, expected, value)
+    if description["dqn_reference"] and (description["reward"] is not None or description["selfishness"] not in (None, 1.0)):
+        raise DescriptionError(
+            "dqn_reference",
+            "false for a run that is no plain DQN: the reference trains on the environment's reward (reward null) "
+            f"at β = 1 (selfishness 1 or null; this run's: reward {description['reward']!r}, selfishness "
+            f"{description['selfishness']!r})",
+            True,
+        )
     return dict(description)

@@ -15,6 +15,7 @@ __all__ = [
     "METRIC_RANGES",
     "HIGHER_IS_BETTER",
     "INTEGER_METRICS",
+    "COUNT_PER_STEP",
     "WHOLE_NUMBER_METRICS",
     "HARMS_PER_100_STEPS",
     "DERIVED_METRICS",
@@ -75,6 +76,18 @@ HIGHER_IS_BETTER: dict[str, bool] = {
 INTEGER_METRICS: frozenset[str] = frozenset({"survival", "harms", "batteries", "other_batteries"})
 """The metrics that count things (whole numbers): a training episode records them as integers,
 the others as floats rounded to 6 decimals."""
+
+COUNT_PER_STEP: dict[str, tuple[int, int]] = {
+    "survival": (1, 0),
+    "harms": (1, 1),
+    "batteries": (1, 0),
+    "other_batteries": (0, 1),
+}
+"""The most each count of :data:`INTEGER_METRICS` grows by in one step, ``(own, per other agent)``:
+a step survives once; harms at most each other agent once and one thing besides (a vase); the
+robot collects at most one battery and each other agent at most one. An episode of ``max_cycles``
+steps beside ``k`` other agents holds at most ``max_cycles × (own + k × per other agent)`` of it:
+the bound a result or evaluation file's count is read within (keeping the leaderboard's sums finite)."""
 
 WHOLE_NUMBER_METRICS: frozenset[str] = frozenset({"survival", "return", "other_return"})
 """The metrics the compact tables against DQN print without decimals (hundreds of steps or rewards)."""

@@ -21,14 +21,13 @@ that knows the methods built in at schema 2 (:data:`SCHEMA_2_METHODS`).
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from empathy_zoo.document_checks import DocumentChecker, shown
+from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import (
@@ -42,7 +41,7 @@ from empathy_zoo.limits import (
     MAX_WALL_TIME_S,
 )
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.metrics import COUNT_PER_STEP, METRIC_NAMES
 from empathy_zoo.names import check_path_name
 
 __all__ = [
@@ -108,6 +107,7 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
     if result["schema"] == 1 and not isinstance(result["schema"], bool):
         result = upgrade_schema_1(result, path)
     if result["schema"] == 2 and not isinstance(result["schema"], bool):
+        check_schema_2_settings(check, result)
         result = upgrade_schema_2(result)
     if result["schema"] != SCHEMA or isinstance(result["schema"], bool):
         raise ResultFileError(
@@ -115,13 +115,15 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
             f"got {shown(result['schema'])}; move the file away"
         )
     check.name(result["run_id"], "run_id")
+    seed = check.integer(result["seed"], "seed", 0, MAX_SEED)
+    if not result["run_id"].endswith(f"__s{seed}"):
+        raise check.fail("run_id", f"the run id of seed {seed} (a run id ends with __s<seed>: __s{seed})", result["run_id"])
     if check.name(result["env"], "env") not in ENGINES:
         raise check.fail("env", f"a registered environment ({', '.join(ENGINES)})", result["env"])
     if result.get("variant") is not None:
         check.name(result["variant"], "variant")
     check.text(result["method"], "method")
     check.label(result["method_label"], "method_label")
-    check.integer(result["seed"], "seed", 0, MAX_SEED)
     steps = check.integer(result["steps"], "steps", 1, MAX_STEPS)
     _check_config(check, result)
     if "steps" in result["config"] and result["config"]["steps"] != steps:
@@ -246,8 +248,10 @@ def upgrade_schema_1(result: dict[str, Any], path: str | Path) -> dict[str, Any]
     settings = dict(config["settings"])
     shaping = {name: settings.pop(name, default) for name, default in LEGACY_SHAPING.items()}
     penalty, scaled = shaping["harm_penalty"], shaping["equality_shaping"]
-    if isinstance(penalty, bool) or not isinstance(penalty, (int, float)) or not math.isfinite(penalty):
-        raise ResultFileError(f"{path}: field config.settings.harm_penalty: a finite number, got {penalty!r}; move the file away")
+    if finite_float(penalty) is None:  # (math.isfinite raises on an int past a float's range: finite_float does not)
+        raise ResultFileError(
+            f"{path}: field config.settings.harm_penalty: a finite number, got {shown(penalty)}; move the file away"
+        )
     if not isinstance(scaled, bool):
         raise ResultFileError(
             f"{path}: field config.settings.equality_shaping: true or false, got {scaled!r}; move the file away"
@@ -337,6 +341,40 @@ def schema_2_description(method: str, config: Mapping[str, Any]) -> dict[str, An
     }
 
 
+SCHEMA_2_RANGES: dict[str, tuple[bool, int | float, int | float]] = {
+    "selfishness": (False, 0.0, 1.0),
+    "gamma": (False, 0.0, 1.0),
+    "epsilon_start": (False, 0.0, 1.0),
+    "epsilon_end": (False, 0.0, 1.0),
+    "learning_starts": (True, 0, MAX_STEPS),
+    "epsilon_decay_steps": (True, 1, MAX_STEPS),
+}
+"""What each setting of :data:`SCHEMA_2_SETTINGS` may be, ``(whole (an int), low, high)``: the
+description :func:`schema_2_description` builds of it is checked by the same ranges
+(:func:`empathy_zoo.method_description.check_description`)."""
+
+
+def check_schema_2_settings(check: DocumentChecker, result: Mapping[str, Any]) -> None:
+    """The settings of a schema-2 (or upgraded schema-1) ``result`` that its description is built from
+    (:data:`SCHEMA_2_SETTINGS`, for a method of :data:`SCHEMA_2_METHODS` that reads them), each within
+    :data:`SCHEMA_2_RANGES`, so that a bad one is named as the setting the file holds, never as a
+    description field it does not; anything else is left to the checks that follow."""
+    config = result.get("config")
+    method = result.get("method")
+    if not isinstance(config, dict) or not isinstance(config.get("settings"), dict) or method not in SCHEMA_2_METHODS:
+        return
+    if SCHEMA_2_METHODS[method][0] == "sb3":
+        return
+    for name, (whole, low, high) in SCHEMA_2_RANGES.items():
+        if name not in config["settings"]:
+            continue
+        value = config["settings"][name]
+        if whole:
+            check.integer(value, f"config.settings.{name}", int(low), int(high))
+        elif finite_float(value) is None or not low <= value <= high:
+            raise check.fail(f"config.settings.{name}", f"a number in [{low:g}, {high:g}]", value)
+
+
 def upgrade_schema_2(result: dict[str, Any]) -> dict[str, Any]:
     """A schema-2 result as schema 3: ``config.description`` (:func:`schema_2_description`) added.
     The run id stays as written (the description is no part of a run's identity)."""
@@ -399,15 +437,18 @@ leaderboard's sums (docs/limits.md)."""
 def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float | None]:
     """The most each metric of :data:`~empathy_zoo.metrics.METRIC_NAMES` can be in one episode of
     ``env`` built with ``env_kwargs`` (checked by :func:`check_env_kwargs`; the others at their
-    defaults): ``survival`` at most ``max_cycles`` steps; ``return`` at most ``max_cycles`` times
-    :data:`STEP_REWARD_BOUND`, ``other_return`` that for each other agent (it is their sum);
-    ``None`` (no bound beyond the metric's range) for the others."""
+    defaults): a count (``survival``, ``harms``, ``batteries``, ``other_batteries``) at most
+    ``max_cycles`` times what one step adds to it (:data:`~empathy_zoo.metrics.COUNT_PER_STEP`);
+    ``return`` at most ``max_cycles`` times :data:`STEP_REWARD_BOUND`, ``other_return`` that for each
+    other agent (it is their sum); ``None`` (no bound beyond the metric's range) for the others.
+    Every count is bounded, so no forged count overflows the leaderboard's sums."""
     engine = ENGINES[env]
     arguments = {**argument_defaults(engine), **env_kwargs}
     cycles = int(arguments["max_cycles"])
     others = int(arguments[engine.count_argument]) if engine.count_argument else 1
     bounds: dict[str, float | None] = dict.fromkeys(METRIC_NAMES)
-    bounds["survival"] = cycles
+    for name, (own, per_other) in COUNT_PER_STEP.items():
+        bounds[name] = cycles * (own + per_other * others)
     bounds["return"] = cycles * STEP_REWARD_BOUND
     bounds["other_return"] = others * cycles * STEP_REWARD_BOUND
     return bounds
@@ -424,6 +465,7 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     for agent, policy in check.table(config["fixed"], "config.fixed").items():
         check.name(agent, f"config.fixed (the agent {agent!r})")
         check.policy_label(policy, f"config.fixed.{agent}")
+    check.plain(settings, "config.settings")  # (a plug-in's settings are checked for their shape only)
     if "hidden_size" in settings:
         check.integer(settings["hidden_size"], "config.settings.hidden_size", 1, MAX_HIDDEN_SIZE)
     _check_optional(

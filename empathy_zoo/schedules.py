@@ -5,14 +5,19 @@ with at any step (:func:`epsilon_function`) without importing any learner or set
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from typing import Any, Protocol
 
+from empathy_zoo.limits import MAX_STEPS
+
 __all__ = [
     "EpsilonSchedule",
+    "ScheduleError",
     "SCHEDULE_KINDS",
     "linear_epsilon",
     "linear_schedule",
+    "SCHEDULE_FIELDS",
     "check_schedule",
     "epsilon_function",
     "epsilon_at",
@@ -61,20 +66,55 @@ def linear_schedule(settings: EpsilonSchedule) -> dict[str, Any]:
     }
 
 
+SCHEDULE_FIELDS: dict[str, tuple[str, bool, int | float, int | float]] = {
+    "start": ("ε at the end of warm-up", False, 0.0, 1.0),
+    "end": ("ε after the decay", False, 0.0, 1.0),
+    "warmup": ("env steps at ε = 1", True, 0, MAX_STEPS),
+    "decay_steps": ("env steps of the decay", True, 1, MAX_STEPS),
+}
+"""Every numeric field a schedule may hold: ``(what it is, whole (an int), low, high)``. ε is a
+probability; the steps are whole env steps, at most :data:`~empathy_zoo.limits.MAX_STEPS` (the
+longest run)."""
+
+
+class ScheduleError(ValueError):
+    """A schedule that is not what :data:`SCHEDULE_KINDS` says: ``field`` (``""`` for the whole
+    schedule), what it should be, and the value found."""
+
+    def __init__(self, message: str, field: str = "", expected: str = "", value: Any = None) -> None:
+        super().__init__(message)
+        self.field, self.expected, self.value = field, expected, value
+
+
+def _is_within(value: Any, whole: bool, low: float, high: float) -> bool:
+    """``value`` is an int (or, unless ``whole``, a float) in ``[low, high]``, never a boolean, NaN or
+    an infinity; an int of any size is compared as an int, never made a float."""
+    if isinstance(value, bool) or not isinstance(value, int if whole else (int, float)):
+        return False
+    if isinstance(value, float) and not math.isfinite(value):
+        return False
+    return low <= value <= high
+
+
 def check_schedule(schedule: Any) -> Mapping[str, Any]:
-    """``schedule`` if it is a schedule of :data:`SCHEDULE_KINDS` with numeric fields (``decay_steps``
-    at least 1), else ``ValueError`` saying what is wrong."""
+    """``schedule`` if it is a schedule of :data:`SCHEDULE_KINDS` whose fields are within
+    :data:`SCHEDULE_FIELDS` (ε in ``[0, 1]``; ``warmup`` and ``decay_steps`` whole steps, ``decay_steps``
+    at least 1), else :class:`ScheduleError` saying what is wrong and naming the field."""
     if not isinstance(schedule, Mapping) or not isinstance(schedule.get("kind"), str) or schedule["kind"] not in SCHEDULE_KINDS:
-        raise ValueError(f"an exploration schedule is a table with kind one of {sorted(SCHEDULE_KINDS)}, got {schedule!r}")
+        raise ScheduleError(f"an exploration schedule is a table with kind one of {sorted(SCHEDULE_KINDS)}, got {schedule!r}")
     fields = SCHEDULE_KINDS[schedule["kind"]]
     if set(schedule) != {"kind", *fields}:
-        raise ValueError(f"a {schedule['kind']} schedule has the fields kind, {', '.join(fields)}; got {sorted(schedule)}")
+        raise ScheduleError(f"a {schedule['kind']} schedule has the fields kind, {', '.join(fields)}; got {sorted(schedule)}")
     for name in fields:
         value = schedule[name]
+        what, whole, low, high = SCHEDULE_FIELDS[name]
+        expected = f"{'an int' if whole else 'a number'} in [{low:,}, {high:,}] ({what})"
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"the schedule's {name} must be a number, got {value!r}")
-    if schedule["decay_steps"] < 1:
-        raise ValueError(f"the schedule's decay_steps must be at least 1, got {schedule['decay_steps']!r}")
+            raise ScheduleError(f"the schedule's {name} must be a number, got {value!r}", name, expected, value)
+        if name == "decay_steps" and not _is_within(value, False, low, math.inf):
+            raise ScheduleError(f"the schedule's decay_steps must be at least 1, got {value!r}", name, expected, value)
+        if not _is_within(value, whole, low, high):
+            raise ScheduleError(f"the schedule's {name} must be {expected}, got {value!r}", name, expected, value)
     return schedule
 
 

@@ -3,41 +3,195 @@
 
 :func:`empathy_zoo.result_file.check_result_fields` checks the schema, field by field; this
 module adds what needs the method registry (:mod:`baselines.registry`): a registered method's
-settings, given to its settings class. A ``package.module:NAME`` method is never imported here,
-so its settings are checked for their shape only.
+settings, each of the type its settings class declares and within :data:`MAX_SETTING`, then given
+to the class (its own range checks), its reward transform (the method's own, by name), and the
+description the method gives a run of those settings (:meth:`agents.base.Method.describe`), which the file's must be: a
+description that contradicts its settings (a β, a DQN reference) is refused. A
+``package.module:NAME`` method is never imported here, so its settings are checked for their shape
+only. :func:`read_result` also refuses a file not named ``<run id>.json`` (a copy under another name
+would count its run twice).
 """
 
 from __future__ import annotations
 
+import json
+import types
+import unicodedata
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, Union, get_args, get_origin
 
 from empathy_zoo.atomic import read_json
-from empathy_zoo.document_checks import one_line
-from empathy_zoo.result_file import check_result_fields, result_checker
+from empathy_zoo.document_checks import DocumentChecker, finite_float, one_line
+from empathy_zoo.experiment.values import field_types
+from empathy_zoo.limits import MAX_STEPS
+from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
+from empathy_zoo.result_file import ResultFileError, check_result_fields, result_checker
 
-__all__ = ["check_result", "read_result"]
+__all__ = ["MAX_SETTING", "check_result", "read_result"]
+
+MAX_SETTING = MAX_STEPS
+"""The largest magnitude of a number in a registered method's settings (as a result file records
+them): every count a setting gives (steps, transitions, widths) is at most the steps of the
+longest run, and no rate or weight is larger."""
 
 
 def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     """``document`` (a parsed result file) if it follows the schema and a registered method's
-    settings are ones its settings class accepts, else :class:`~empathy_zoo.result_file.ResultFileError`
-    naming ``path`` and the field."""
+    settings, reward transform and description are ones it gives a run, else
+    :class:`~empathy_zoo.result_file.ResultFileError` naming ``path`` and the field."""
     from baselines.registry import METHODS  # (lazily: the registry imports the learners, and torch)
 
     result = check_result_fields(document, path)
     method = METHODS.get(result["method"])
     if method is not None:
-        settings = result["config"]["settings"]
-        try:
-            method.settings(**settings)
-        except (TypeError, ValueError, OverflowError) as error:
-            raise result_checker(Path(path)).fail(
-                "config.settings", f"settings of {result['method']} ({one_line(str(error), 200)})", settings
-            ) from None
+        check = result_checker(Path(path))
+        settings = _settings(check, method, result)
+        reward = _reward(check, method, result)
+        _check_described(check, method, settings, reward, result)
     return result
 
 
 def read_result(path: Path) -> dict[str, Any]:
-    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field)."""
-    return check_result(read_json(path), path)
+    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field),
+    as does one not named ``<run id>.json`` of the run it holds (where a sweep writes it: a file
+    renamed or copied under another name would count its run twice)."""
+    result = check_result(read_json(path), path)
+    name = Path(path).name
+    if name != f"{result['run_id']}.json":
+        raise ResultFileError(
+            f"{path}: field run_id: the file is named {name}, but it holds run {result['run_id']} "
+            f"({result['run_id']}.json): renamed or copied; move it away (a run is counted once, from its own file)"
+        )
+    return result
+
+
+def _settings(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:
+    """The settings object of ``result``'s ``config.settings``: each field one of ``method``'s
+    settings class, of the type it declares (:func:`_setting_problem`), then accepted by the class
+    itself (its ranges). A refusal names ``config.settings`` and,
+    in it, the setting: ``expected settings of dqn (selfishness: a finite number ...)``."""
+    settings = result["config"]["settings"]
+    kinds = field_types(method.settings)
+
+    def refuse(why: str, value: Any) -> ValueError:
+        return check.fail("config.settings", f"settings of {result['method']} ({one_line(why, 300)})", value)
+
+    for name, value in settings.items():
+        if name not in kinds:
+            raise refuse(f"{name}: no such setting; its settings: {', '.join(kinds)}", name)
+        problem = _setting_problem(value, kinds[name], name)
+        if problem is not None:
+            raise refuse(f"{problem[0]}: {problem[1]}", problem[2])
+    try:
+        return method.settings(**settings)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise refuse(str(error), settings) from None
+
+
+Problem = tuple[str, str, Any]
+"""Where in a setting a value is wrong, what it should be, and the value."""
+
+
+def _setting_problem(value: Any, kind: Any, where: str) -> Problem | None:
+    """What is wrong with ``value`` for the type ``kind`` declares, or ``None``: an ``int`` an int (not
+    a boolean) in ``[0, MAX_SETTING]``; a ``float`` a finite number of magnitude at most
+    :data:`MAX_SETTING`; a ``bool`` true or false; a ``str`` one line of printable text; ``X | None``
+    null or an ``X``; a tuple or list an array of its items; anything else plain data
+    (:func:`_plain_problem`)."""
+    origin, arguments = get_origin(kind), get_args(kind)
+    if origin in (Union, types.UnionType) and type(None) in arguments:
+        if value is None:
+            return None
+        rest = [argument for argument in arguments if argument is not type(None)]
+        kind, origin, arguments = (rest[0], get_origin(rest[0]), get_args(rest[0])) if len(rest) == 1 else (Any, None, ())
+    if kind is bool:
+        return None if isinstance(value, bool) else (where, "true or false", value)
+    if kind is int:
+        whole = not isinstance(value, bool) and isinstance(value, int) and 0 <= value <= MAX_SETTING
+        return None if whole else (where, f"an int in [0, {MAX_SETTING:,}]", value)
+    if kind is float:
+        number = finite_float(value) is not None and abs(value) <= MAX_SETTING
+        return None if number else (where, f"a finite number in [-{MAX_SETTING:,}, {MAX_SETTING:,}]", value)
+    if kind is str:
+        text = isinstance(value, str) and bool(value) and _unprintable(value) is None
+        return None if text else (where, "a non-empty line of printable text", value)
+    if origin in (tuple, list):
+        if not isinstance(value, list):
+            return where, "an array", value
+        item_kind = arguments[0] if arguments and (len(arguments) == 1 or arguments[1] is Ellipsis) else Any
+        return next(
+            (problem for i, item in enumerate(value) if (problem := _setting_problem(item, item_kind, f"{where}[{i}]"))), None
+        )
+    return _plain_problem(value, where)
+
+
+def _plain_problem(value: Any, where: str) -> Problem | None:
+    """What is not plain data in ``value`` (as :meth:`DocumentChecker.plain` reads it: objects with
+    string keys, arrays, ``null``, booleans, finite numbers, printable text), or ``None``."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                return where, "an object (string keys)", key
+            if (problem := _plain_problem(item, f"{where}.{key}")) is not None:
+                return problem
+    elif isinstance(value, list):
+        return next((problem for i, item in enumerate(value) if (problem := _plain_problem(item, f"{where}[{i}]"))), None)
+    elif isinstance(value, str):
+        if _unprintable(value) is not None:
+            return where, "one line of printable text", value
+    elif value is not None and not isinstance(value, bool) and finite_float(value) is None:
+        return where, "plain data (an object, array, string, boolean, null or finite number)", value
+    return None
+
+
+def _unprintable(text: str) -> str | None:
+    """The first character of ``text`` one line of text may not hold (a control or format character,
+    a line break: :data:`~empathy_zoo.names.LABEL_REFUSED_CATEGORIES`), or ``None``."""
+    return next((c for c in text if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES), None)
+
+
+def _reward(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:
+    """The reward transform ``config.reward`` records, which must be ``method``'s: ``null`` for a
+    method without one, else a record of the same name (its fields are the file's: a transform may
+    have gained a field since the run was made); ``None`` or the method's own transform."""
+    recorded = result["config"].get("reward")
+    own = method.reward
+    matches = own is None if recorded is None else own is not None and recorded.get("name") == own.name
+    if matches:
+        return own
+    expected = "null (it trains on the environment's reward)" if own is None else f"a reward named {own.name!r}"
+    raise check.fail("config.reward", f"{expected}, as {result['method']} trains", recorded)
+
+
+def _check_described(check: DocumentChecker, method: Any, settings: Any, reward: Any, result: Mapping[str, Any]) -> None:
+    """``config.description`` is what ``method`` describes a run of ``settings`` as
+    (:meth:`agents.base.Method.describe`): its family, target, swap, β, γ and exploration schedule;
+    ``dqn_reference`` only for a reference method's run on the environment's reward at β = 1; the
+    reward it records ``config.reward``. The first field that differs (a β or a DQN reference its
+    settings contradict) is named."""
+    config = result["config"]
+    try:
+        expected = _as_json(method.describe(settings, reward))
+    except (TypeError, ValueError, OverflowError) as error:
+        why = one_line(str(error), 200)
+        raise check.fail("config.settings", f"settings {result['method']} describes ({why})", config["settings"]) from None
+    expected["reward"] = config.get("reward")
+    expected["dqn_reference"] = bool(
+        method.dqn_reference and config.get("reward") is None and expected["selfishness"] in (None, 1.0)
+    )
+    described = config["description"]
+    first = ("selfishness", "gamma", "exploration")  # (what the settings give, before what follows from it)
+    for field in sorted(expected, key=lambda name: name not in first):
+        value = expected[field]
+        if described.get(field) != value:
+            raise check.fail(
+                f"config.description.{field}",
+                f"{value!r}, what {result['method']} describes a run of these settings as (it contradicts them)",
+                described.get(field),
+            )
+
+
+def _as_json(value: Any) -> Any:
+    """``value`` as a JSON file holds it (tuples as lists)."""
+    return json.loads(json.dumps(value))

@@ -14,7 +14,8 @@ Schema (docs/heldout.md)::
     [scenario_set]
     env = "coexistence_v0"           # the environment of every scenario (required)
     name = "my_partners"             # default: the file's stem; names evaluations/<name>/
-    description = "..."              # optional, one line
+    description = "..."              # optional, one line of printable text
+    held_out = true                  # optional; only true (every scenario set is held out)
 
     [scenarios.cat_stays]            # one table per scenario; its key names it
     reason = "A cat that never moves: ..."        # required, one line
@@ -42,9 +43,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from empathy_zoo.document_checks import DocumentChecker
 from empathy_zoo.engine.arguments import argument_types
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
-from empathy_zoo.evaluation_file import TRAINED_WITH
+from empathy_zoo.evaluation_file import TRAINED_WITH, check_scenario_definition, check_scenario_set
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.sweep_file import variant_of_table
 from empathy_zoo.experiment.values import PolicyTable, SweepConfigError, check_keys, check_value, read_toml, type_name
@@ -81,8 +83,11 @@ OBSERVATION_ARGUMENTS: dict[str, str] = {
     "inventory_encoding": "it changes what the values of the observation mean to a trained network",
 }
 """Environment arguments a scenario may not set, and why (the run's own are kept)."""
-SET_KEYS: dict[str, Any] = {"env": str, "name": str, "description": str}
-"""Keys of the ``[scenario_set]`` table and their types."""
+SET_KEYS: dict[str, Any] = {"env": str, "name": str, "description": str, "held_out": bool}
+"""Keys of the ``[scenario_set]`` table and their types. ``held_out`` may only be ``true`` (or be
+left out): every scenario set is a held-out set, played beside partners a run never trained with
+(an evaluation marks a scenario that is the run's own world as not held out by itself), so a set
+saying ``held_out = false`` asks for something the suite does not do and is refused."""
 TOP_TABLES = ("scenario_set", "scenarios")
 
 
@@ -208,9 +213,18 @@ def parse_scenario_set(data: Mapping[str, Any], source: str = "<scenarios>", def
         check_path_name(name, "scenario set name")
     except ValueError as error:
         raise SweepConfigError(f"{where} name: {error}") from None
+    if values.get("held_out", True) is not True:
+        raise SweepConfigError(
+            f"{where} held_out: a scenario set is always held out (its scenarios are played beside partners "
+            "the run never trained with; one that is the run's own world is marked not held out by itself): "
+            "write held_out = true or leave the key out, got false"
+        )
     description = values.get("description", "")
-    if "\n" in description:
-        raise SweepConfigError(f"{where} description: expected one line, got {description!r}")
+    if _unprintable(description) is not None:
+        raise SweepConfigError(
+            f"{where} description: expected one line of printable text, got {description[:80]!r} "
+            f"(it holds {_unprintable(description)})"
+        )
     tables = data.get("scenarios")
     if not isinstance(tables, dict) or not tables:
         raise SweepConfigError(f"{source}: declare at least one [scenarios.<name>] table (reason = ..., fixed = ...)")
@@ -220,7 +234,28 @@ def parse_scenario_set(data: Mapping[str, Any], source: str = "<scenarios>", def
             "(each is played for every run evaluated; docs/limits.md)"
         )
     scenarios = tuple(_scenario(key, table, env, source) for key, table in tables.items())
-    return ScenarioSet(name, env, scenarios, description, source)
+    scenario_set = ScenarioSet(name, env, scenarios, description, source)
+    _check_as_recorded(scenario_set)
+    return scenario_set
+
+
+def _check_as_recorded(scenario_set: ScenarioSet) -> None:
+    """The set as an evaluation file records it (:meth:`ScenarioSet.definition`) passes the checks the
+    suite reads that file with (:func:`~empathy_zoo.evaluation_file.check_scenario_set`,
+    :func:`~empathy_zoo.evaluation_file.check_scenario_definition`): every text field one line of
+    printable text, every policy label one the reader parses. A set is refused when it is loaded,
+    never after its agents are played, in a file nothing reads back."""
+    check = DocumentChecker(
+        Path(scenario_set.source),
+        SweepConfigError,
+        "a scenario file",
+        "a scenario set an evaluation file can record",
+        "fix the field in the scenario file",
+    )
+    definition = scenario_set.definition()
+    check_scenario_set(check, definition, "[scenario_set]")
+    for scenario in definition["scenarios"]:
+        check_scenario_definition(check, scenario_set.env, scenario, f"[scenarios.{scenario['name']}]")
 
 
 def _scenario(key: str, table: Any, env: str, source: str) -> Scenario:
