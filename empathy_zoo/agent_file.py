@@ -23,6 +23,15 @@ that keeps its agent in a library's own format (Stable-Baselines3) offers ``save
 instead; its file is ``runs/<run id>.agent.zip``, the library's zip with one more member,
 ``empathy_zoo_agent.json`` (the same keys but ``heads`` as names, plus ``library``, ``algorithm`` and
 ``policy``), and is read back with the library's own ``load`` (:class:`~empathy_zoo.trained_agent.SB3Agent`).
+
+Before anything of a file is decompressed or loaded, its zip directory is read
+(:func:`~empathy_zoo.safe_data.zip_members`): an agent file is a zip of at most
+:data:`MAX_MEMBERS` members of the records ``torch.save`` writes, stored as they are
+(:func:`~empathy_zoo.safe_data.torch_zip_problem`), or a library's zip of its members
+(:data:`LIBRARY_MEMBERS`, stored or deflated, together at most the agent file's size cap once
+expanded; each ``.pth`` of them a zip of ``torch.save`` in turn). A key an agent file does not have
+(:data:`DOCUMENT_KEYS`, :data:`LIBRARY_MEMBER_KEYS`, and SB3's ``data``: :mod:`empathy_zoo.sb3_agent_data`)
+is refused, naming the file and the key.
 """
 
 from __future__ import annotations
@@ -42,13 +51,15 @@ import numpy as np
 import torch
 
 from empathy_zoo.atomic import read_json, write_bytes_atomic
-from empathy_zoo.bounded_read import check_json_depth, read_data
+from empathy_zoo.bounded_read import CAPS, check_json_depth, read_data
 from empathy_zoo.document_checks import DocumentChecker, one_line, shown
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.extras import install_command
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED, MAX_SIZE, MAX_STEPS
 from empathy_zoo.policies import plain_data_problem
 from empathy_zoo.result_file import AGENT_SUFFIXES, check_env_kwargs
+from empathy_zoo.safe_data import torch_zip_problem, zip_members
+from empathy_zoo.sb3_agent_data import ACTING_ONLY, check_sb3_data
 from empathy_zoo.trained_agent import SB3Agent, TrainedAgent
 
 __all__ = [
@@ -58,6 +69,10 @@ __all__ = [
     "AGENT_SUFFIX",
     "LIBRARY_AGENT_SUFFIX",
     "LIBRARY_MEMBER",
+    "LIBRARY_MEMBERS",
+    "LIBRARY_MEMBER_KEYS",
+    "DOCUMENT_KEYS",
+    "MAX_MEMBERS",
     "HEADER_KEYS",
     "agent_path",
     "agent_document",
@@ -85,6 +100,36 @@ RESULT_FIELD = "agent"
 HEADER_KEYS = ("method", "settings", "env", "env_kwargs")
 """Keys every header must have (it may hold more: ``run_id``, ``seed``, ``steps``, ``fixed``, ...)."""
 
+DOCUMENT_KEYS = ("format", "version", "header", "obs_size", "num_actions", "activation", "heads", "acting")
+"""The keys of an agent file's dict (no other is read)."""
+LIBRARY_MEMBER_KEYS = (
+    "format",
+    "version",
+    "header",
+    "library",
+    "algorithm",
+    "policy",
+    "obs_size",
+    "num_actions",
+    "heads",
+    "acting",
+)
+"""The keys of :data:`LIBRARY_MEMBER`."""
+LIBRARY_MEMBERS = (
+    LIBRARY_MEMBER,
+    "data",
+    "policy.pth",
+    "policy.optimizer.pth",
+    "pytorch_variables.pth",
+    "_stable_baselines3_version",
+    "system_info.txt",
+)
+"""The members of a Stable-Baselines3 agent file: what SB3's ``save`` writes of a DQN or a PPO, and
+:data:`LIBRARY_MEMBER`; each ``.pth`` is a ``torch.save`` zip (``pytorch_variables.pth`` of ``{}``:
+DQN and PPO keep no variables besides their networks)."""
+MAX_MEMBERS = 4096
+"""Most members of an agent file's zip (and of each ``.pth`` zip in a library's): a ``torch.save``
+archive holds a few records and one per tensor, two per layer of each head."""
 MEMBER_BYTES = 64 << 20
 """Largest JSON member of a library's zip read (64 MiB; the suite's are a few KB)."""
 MAX_OBSERVATION = (MAX_SIZE - 1) ** 2
@@ -312,9 +357,13 @@ def load_agent(
             "it was changed or replaced after the run wrote it; refusing to load it"
         )
     source = {"file": str(path), "sha256": sha256}
-    member = _library_member(path, data)
+    members = _zip_members(path, data)
+    member = _library_member(path, data, members)
     if member is not None:
         return _load_library_agent(path, data, member, source)
+    problem = torch_zip_problem(members, len(data))
+    if problem:
+        raise AgentFileError(f"{path} is not an empathy-zoo agent file ({problem})")
     try:
         document = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception as error:  # (torch raises several kinds for a file that is no torch.save)
@@ -322,6 +371,7 @@ def load_agent(
             f"{path} is not an empathy-zoo agent file (torch.load with weights_only=True fails: {_why(error)})"
         ) from None
     _check_format(path, document)
+    _check_keys(path, document, DOCUMENT_KEYS, "agent file")
     try:
         heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"), budget=len(data))
         for name, layers in heads.items():
@@ -371,6 +421,78 @@ def _check_format(path: Path, document: Any) -> None:
         raise AgentFileError(
             f"agent file {path} has format version {shown(version)}; this empathy-zoo reads versions 1 to {VERSION}"
         )
+
+
+def _check_keys(path: Path, document: Mapping[Any, Any], keys: tuple[str, ...], what: str) -> None:
+    """Refuse (:class:`AgentFileError` naming ``path`` and the key) a key of ``document`` not in ``keys``."""
+    unknown = sorted(shown(key) for key in document if key not in keys)
+    if unknown:
+        raise AgentFileError(
+            f"agent file {path}: its {what} holds a key {unknown[0]}, which no agent file has (its keys are {', '.join(keys)})"
+        )
+
+
+def _zip_members(path: Path, data: bytes, most: int = MAX_MEMBERS, where: str = "") -> list[zipfile.ZipInfo]:
+    """The members of the zip ``data`` (the agent file ``path``, or its member ``where``), read from
+    its directory (:func:`~empathy_zoo.safe_data.zip_members`), else :class:`AgentFileError`."""
+    try:
+        return zip_members(io.BytesIO(data), len(data), most)
+    except ValueError as error:
+        why = one_line(str(error), MESSAGE_CHARS)
+        if where:
+            raise AgentFileError(f"agent file {path}: its member {where} is no archive of torch.save ({why})") from None
+        raise AgentFileError(f"{path} is not an empathy-zoo agent file ({why})") from None
+
+
+def _check_library_zip(path: Path, members: list[zipfile.ZipInfo]) -> None:
+    """A library's zip of its members (:data:`LIBRARY_MEMBERS`) only, each stored or deflated and
+    not encrypted, together no larger once expanded than the agent file's size cap; else
+    :class:`AgentFileError` naming the file and the member."""
+    budget = CAPS["agent file"]
+    for info in members:
+        if info.filename not in LIBRARY_MEMBERS:
+            raise AgentFileError(
+                f"agent file {path} holds a member {info.filename[:100]!r}, which no agent file of "
+                f"{', '.join(_LIBRARIES)} has (its members are {', '.join(LIBRARY_MEMBERS)})"
+            )
+        stored = info.compress_type == zipfile.ZIP_STORED and info.file_size == info.compress_size
+        if not (stored or info.compress_type == zipfile.ZIP_DEFLATED) or info.flag_bits & 0x1:
+            raise AgentFileError(
+                f"agent file {path}: its member {info.filename} is compressed with method {info.compress_type} "
+                f"({info.compress_size:,} bytes in the file for {info.file_size:,} once read) or encrypted; "
+                "a member of an agent file is stored or deflated"
+            )
+    total = sum(info.file_size for info in members)
+    if total > budget:
+        raise AgentFileError(
+            f"agent file {path}: its members expand to {total:,} bytes, more than the {budget:,} bytes an agent "
+            "file may hold (docs/limits.md); refusing to decompress them"
+        )
+
+
+def _check_library_tensors(path: Path, archive: zipfile.ZipFile) -> None:
+    """Each ``.pth`` member of a library's ``archive`` a ``torch.save`` zip (stored records only,
+    :func:`~empathy_zoo.safe_data.torch_zip_problem`), and ``pytorch_variables.pth`` one of ``{}``;
+    else :class:`AgentFileError` naming the file and the member. (Read one at a time: the library
+    reads each again.)"""
+    for name in archive.namelist():
+        if not name.endswith(".pth"):
+            continue
+        data = archive.read(name)
+        problem = torch_zip_problem(_zip_members(path, data, where=name), len(data))
+        if problem:
+            raise AgentFileError(f"agent file {path}: its member {name} is no archive of torch.save ({problem})")
+        if name == "pytorch_variables.pth":
+            try:
+                variables = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+            except Exception as error:  # (torch raises several kinds for a damaged file)
+                raise AgentFileError(f"agent file {path}: its member {name} cannot be read ({_why(error)})") from None
+            if not isinstance(variables, dict) or variables:
+                found = ", ".join(sorted(map(shown, variables))) if isinstance(variables, dict) else type(variables).__name__
+                raise AgentFileError(
+                    f"agent file {path}: its member {name} holds {found[:MESSAGE_CHARS]}; DQN and PPO keep no variables "
+                    "there (it holds {})"
+                )
 
 
 def _checker(path: Path) -> DocumentChecker:
@@ -431,16 +553,16 @@ def _description(
     return {**header, "obs_size": obs_size, "num_actions": num_actions, "heads": heads, "acting": acting, **source}
 
 
-def _library_member(path: Path, data: bytes) -> dict[str, Any] | None:
+def _library_member(path: Path, data: bytes, members: list[zipfile.ZipInfo]) -> dict[str, Any] | None:
     """The :data:`LIBRARY_MEMBER` of an agent file kept in a library's zip (checked by
-    :func:`_read_member`), or ``None`` when ``data`` is no such zip (a ``torch.save`` file is a zip
-    too, without that member). A damaged zip raises :class:`AgentFileError` naming the file."""
-    if not zipfile.is_zipfile(io.BytesIO(data)):
+    :func:`_read_member`, once its members are, by :func:`_check_library_zip`), or ``None`` when
+    ``data`` (of ``members``) has no such member (a ``torch.save`` file is a zip too, without it).
+    A damaged zip raises :class:`AgentFileError` naming the file."""
+    if LIBRARY_MEMBER not in (info.filename for info in members):
         return None
+    _check_library_zip(path, members)
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            if LIBRARY_MEMBER not in archive.namelist():
-                return None
             return _read_member(path, archive)
     except _ZIP_ERRORS as error:
         raise AgentFileError(f"agent file {path} is a damaged zip ({_why(error)})") from None
@@ -465,6 +587,7 @@ def _json_member(path: Path, archive: zipfile.ZipFile, name: str) -> Any:
 def _read_member(path: Path, archive: zipfile.ZipFile) -> dict[str, Any]:
     member = _json_member(path, archive, LIBRARY_MEMBER)
     _check_format(path, member)
+    _check_keys(path, member, LIBRARY_MEMBER_KEYS, LIBRARY_MEMBER)
     if member.get("library") not in _LIBRARIES or member.get("algorithm") not in _LIBRARIES.get(member.get("library"), ()):
         raise AgentFileError(
             f"agent file {path} holds a {shown(member.get('library'))} {shown(member.get('algorithm'))} model, "
@@ -504,17 +627,21 @@ def _load_library_agent(path: Path, data: bytes, member: Mapping[str, Any], sour
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             saved = _json_member(path, archive, "data")
+            if not isinstance(saved, dict):
+                raise AgentFileError(f"agent file {path}: its member 'data' is a {type(saved).__name__}, not an object")
+            custom = _sb3_custom_objects(cls, member, saved)
+            pickled = sorted(key for key, value in saved.items() if isinstance(value, dict) and ":serialized:" in value)
+            unknown = [key for key in pickled if key not in custom]
+            if unknown:
+                raise AgentFileError(
+                    f"agent file {path} holds pickled objects {shown(unknown)} this loader does not rebuild; "
+                    "refusing to unpickle them"
+                )
+            sizes = (int(member["obs_size"]), int(member["num_actions"]))
+            check_sb3_data(_checker(path), member["algorithm"], saved, *sizes, len(data))
+            _check_library_tensors(path, archive)
     except _ZIP_ERRORS as error:
         raise AgentFileError(f"agent file {path} is a damaged zip ({_why(error)})") from None
-    if not isinstance(saved, dict):
-        raise AgentFileError(f"agent file {path}: its member 'data' is a {type(saved).__name__}, not an object")
-    custom = _sb3_custom_objects(cls, member, saved)
-    pickled = sorted(key for key, value in saved.items() if isinstance(value, dict) and ":serialized:" in value)
-    unknown = [key for key in pickled if key not in custom]
-    if unknown:
-        raise AgentFileError(
-            f"agent file {path} holds pickled objects {shown(unknown)} this loader does not rebuild; refusing to unpickle them"
-        )
     try:
         model = cls.load(io.BytesIO(data), device="cpu", custom_objects=custom)
     except Exception as error:  # (SB3 and torch raise many kinds for a damaged zip)
@@ -531,7 +658,8 @@ def _sb3_custom_objects(cls: Any, member: Mapping[str, Any], saved: Mapping[str,
     """What replaces the pickled entries of an SB3 ``data`` file: the spaces the suite's SB3 learner
     builds (``Box(-inf, inf, (V,), float32)``, ``Discrete(A)``), the policy class by its alias, SB3's
     buffer classes, constant schedules and no last observations or episode buffers (they serve only
-    training); DQN's replay memory is made one transition long (a loaded agent only acts)."""
+    training); the replay or rollout buffer is made one step long, of one environment
+    (:data:`~empathy_zoo.sb3_agent_data.ACTING_ONLY`: a loaded agent only acts)."""
     import gymnasium
     from stable_baselines3.common.buffers import ReplayBuffer, RolloutBuffer
     from stable_baselines3.common.type_aliases import TrainFreq, TrainFrequencyUnit
@@ -551,7 +679,6 @@ def _sb3_custom_objects(cls: Any, member: Mapping[str, Any], saved: Mapping[str,
         "clip_range": constant(0.2),
         "clip_range_vf": None,
         **dict.fromkeys(("_last_obs", "_last_original_obs", "_last_episode_starts", "ep_info_buffer", "ep_success_buffer")),
+        **ACTING_ONLY,
     }
-    if "buffer_size" in saved:
-        custom["buffer_size"] = 1
     return {key: value for key, value in custom.items() if key in saved}

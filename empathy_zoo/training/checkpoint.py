@@ -12,11 +12,15 @@ type and within what one episode of its runs can hold (the result reader's bound
 state one numpy makes, the learner's counters and copies of its networks consistent with its
 networks and its updates, and the environments' state what its runs would hold
 (:mod:`empathy_zoo.training.checkpoint_state`). Numbers are compared exactly: an ``int`` of any size
-is never made a float. Anything else is refused as corrupted, naming the file and the field
-(:func:`corrupted`)."""
+is never made a float. Before ``torch.load`` reads it, its zip directory is read: at most
+:data:`MAX_MEMBERS` records of ``torch.save``, stored as they are, declaring no more bytes than
+the file holds (:func:`~empathy_zoo.safe_data.torch_zip_problem`: nothing is decompressed); an
+ensemble's holds no other key than :data:`KEYS`. Anything else is refused as corrupted, naming the
+file and the field (:func:`corrupted`)."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -29,7 +33,7 @@ from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_STEPS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import PRICE_COLUMN, episode_bounds
-from empathy_zoo.safe_data import from_safe, to_safe
+from empathy_zoo.safe_data import from_safe, to_safe, torch_zip_problem, zip_members
 from empathy_zoo.training.checkpoint_state import ForgedState, bit_generator_problem, check_vector, number, rng_states, shown
 
 __all__ = [
@@ -41,10 +45,17 @@ __all__ = [
     "from_safe",
     "CheckpointError",
     "RUNS_LIST_SUFFIX",
+    "KEYS",
+    "MAX_MEMBERS",
     "runs_list_path",
 ]
 
 FORMAT = 1
+KEYS = ("format", "run_ids", "step", "elapsed", "learner", "vector", "obs", "logs", "evaluations", "rewards")
+"""The keys an ensemble's checkpoint holds (:func:`check_checkpoint_keys` refuses any other)."""
+MAX_MEMBERS = 1 << 18
+"""Most members of a checkpoint's zip: ``torch.save`` writes a few records and one per tensor (an
+ensemble's checkpoint holds a few dozen per learner, or per run of SB3's)."""
 RUNS_LIST_SUFFIX = ".runs.json"
 """Suffix of the file beside a checkpoint that lists its runs' specs (:mod:`empathy_zoo.training.resume`)."""
 TENSOR_DTYPES = frozenset(
@@ -113,11 +124,18 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
         handle = open_data(path, "checkpoint")
     except ValueError as error:
         raise corrupted(path, str(error)) from None
-    try:
-        with handle:
+    with handle:
+        try:
+            size = os.fstat(handle.fileno()).st_size
+            problem = torch_zip_problem(zip_members(handle, size, MAX_MEMBERS), size)
+        except (ValueError, OSError) as error:
+            problem = str(error)
+        if problem:
+            raise corrupted(path, problem)
+        try:
             payload = torch.load(handle, map_location="cpu", weights_only=True)
-    except Exception as error:  # torch raises many kinds for a damaged file
-        raise corrupted(path, error) from error
+        except Exception as error:  # torch raises many kinds for a damaged file
+            raise corrupted(path, error) from error
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"checkpoint {path} has an unknown format; delete or move it to restart")
     for where, tensor in _tensors(payload, "the checkpoint"):
@@ -166,8 +184,9 @@ def corrupted(path: Path, error: BaseException | str) -> CheckpointError:
 
 def check_checkpoint_keys(path: Path, payload: dict[str, Any], keys: dict[str, type | tuple[type, ...]]) -> dict[str, Any]:
     """``payload`` (checkpoint ``path`` as loaded) if it holds every key of ``keys`` with a value of
-    its type and, for an ensemble's checkpoint (``run_ids``, ``step``, ``elapsed``, ``learner``,
-    ``vector``, ``logs``, ``evaluations``), every value within its range and consistent with the
+    its type and no other key (but ``format``; an ensemble's, those of :data:`KEYS`), and, for an
+    ensemble's checkpoint (``run_ids``, ``step``, ``elapsed``, ``learner``, ``vector``, ``logs``,
+    ``evaluations``), every value within its range and consistent with the
     settings of its runs (see the module page); else the :func:`corrupted` error naming what is
     missing or wrong."""
     missing = [key for key in keys if key not in payload]
@@ -176,7 +195,14 @@ def check_checkpoint_keys(path: Path, payload: dict[str, Any], keys: dict[str, t
     wrong = [key for key, kind in keys.items() if isinstance(payload[key], bool) or not isinstance(payload[key], kind)]
     if wrong:
         raise corrupted(path, ", ".join(f"{shown(key)} is a {type(payload[key]).__name__}" for key in wrong))
-    if {"run_ids", "step", "elapsed", "learner", "vector", "logs", "evaluations"} <= set(keys):  # (an ensemble's)
+    ensemble = {"run_ids", "step", "elapsed", "learner", "vector", "logs", "evaluations"} <= set(keys)
+    known = {"format", *keys, *(KEYS if ensemble else ())}
+    unknown = sorted(shown(key) for key in payload if key not in known)
+    if unknown:
+        raise corrupted(
+            path, f"it holds a key {unknown[0]}, which no such checkpoint has (its keys are {', '.join(sorted(known))})"
+        )
+    if ensemble:
         _check_ensemble(path, payload)
     return payload
 
