@@ -174,6 +174,8 @@ def write_leaderboard(
             return _publish(staged, stage, out)
     except BaseException:
         for directory in created:  # (only the directories this call made, and only while empty)
+            if not directory.is_dir() or directory.is_symlink():
+                continue  # (not made before the refusal)
             try:
                 directory.rmdir()
             except OSError:

@@ -308,10 +308,11 @@ def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) 
     with pytest.raises(ValueError, match="different lengths"):
         load_results(tmp_path / "a")
     duplicate = make_run("coexistence_v0", "DQN", 0, [1.0])
-    write_runs(tmp_path / "b", [duplicate, {**duplicate, "run_id": "coexistence_v0__DQN__s0-copy"}])
-    with pytest.raises(ValueError, match="same run"):
+    write_runs(tmp_path / "b", [duplicate])
+    (tmp_path / "b" / "copy.json").write_text(json.dumps(duplicate))  # one run, two files
+    with pytest.raises(ValueError, match=r"copy\.json: field run_id: the file is named copy\.json.*renamed or copied"):
         load_results(tmp_path / "b")
-    write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "copy"}])  # another experiment, one label
+    write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "coexistence_v0__copy__s0"}])  # another experiment, one label
     with pytest.raises(ValueError, match=r"same label 'DQN'.*two experiments"):
         load_results(tmp_path / "c")
 

@@ -255,8 +255,9 @@ def test_a_failing_write_leaves_the_old_files_intact(tmp_path: Path, monkeypatch
 def test_each_environment_s_tables_show_its_own_metrics_a_variant_its_environment_s(tmp_path: Path) -> None:
     paths = write_synthetic_results(tmp_path / "sweep" / "runs")
     variant = json.loads(paths[-1].read_text(encoding="utf-8"))  # a sharing_v0 run, as a variant
-    variant.update(variant="sharing_centre", run_id="sharing_centre__x__s0", method_label="Centre")
-    (tmp_path / "sweep" / "runs" / "sharing_centre__x__s0.json").write_text(json.dumps(variant), encoding="utf-8")
+    run_id = f"sharing_centre__x__s{variant['seed']}"
+    variant.update(variant="sharing_centre", run_id=run_id, method_label="Centre")
+    (tmp_path / "sweep" / "runs" / f"{run_id}.json").write_text(json.dumps(variant), encoding="utf-8")
     markdown = write_leaderboard(tmp_path / "sweep", command="c")["markdown"].read_text(encoding="utf-8")
     headers = {}
     for section in markdown.split("\n## ")[1:]:

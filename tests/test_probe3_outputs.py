@@ -164,7 +164,8 @@ def test_a_pid_out_of_range_is_never_given_to_kill(monkeypatch) -> None:
 
 def test_the_leaderboard_keeps_names_with_impossible_pids_and_writes(tmp_path) -> None:
     results = tmp_path / "results"
-    write_json_atomic(results / RUNS_DIR / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    write_json_atomic(results / RUNS_DIR / f"{run['run_id']}.json", run)
     strange = [results / f".x.ezoo-{HUGE_PID}-abcdef12.tmp", results / f".leaderboard.ezoo-{HUGE_PID}-abcdef12.tmp"]
     strange[0].write_text("a user's")
     strange[1].mkdir()
@@ -175,7 +176,8 @@ def test_the_leaderboard_keeps_names_with_impossible_pids_and_writes(tmp_path) -
 
 def test_a_refused_leaderboard_leaves_no_figures_directory(tmp_path, monkeypatch) -> None:
     results = tmp_path / "results"
-    write_json_atomic(results / RUNS_DIR / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    write_json_atomic(results / RUNS_DIR / f"{run['run_id']}.json", run)
 
     def refuse(directory):
         raise ValueError(f"{directory}: refused")
