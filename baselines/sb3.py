@@ -400,6 +400,19 @@ def _update_progress(model: Any, schedule_steps: int) -> None:
 _COUNTERS = ("num_timesteps", "_n_updates", "_n_calls", "exploration_rate", "_current_progress_remaining", "_episode_num")
 
 
+def _check_saved(owner: Any, name: str, value: Any, allowed: tuple[str, ...], what: str) -> None:
+    """Refuse a checkpoint's ``value`` for ``owner.name`` unless ``name`` is one the checkpoint
+    writes (``allowed``) and ``value`` has the current value's type (an array: shape and dtype)."""
+    if name not in allowed or not hasattr(owner, name):
+        raise ValueError(f"checkpoint holds an unknown SB3 {what} {name!r} (known: {', '.join(allowed)})")
+    current = getattr(owner, name)
+    if isinstance(current, np.ndarray):
+        if not isinstance(value, np.ndarray) or value.shape != current.shape or value.dtype != current.dtype:
+            raise ValueError(f"checkpoint's SB3 {what} {name!r} is not a {current.dtype} array of shape {current.shape}")
+    elif type(value) is not type(current) and not (isinstance(current, float) and type(value) is int):
+        raise ValueError(f"checkpoint's SB3 {what} {name!r} is a {type(value).__name__}, not a {type(current).__name__}")
+
+
 class SB3Learner:
     """``K`` runs, one SB3 model each, driven by the runner (see the module documentation)."""
 
@@ -544,9 +557,12 @@ class SB3Learner:
             model.policy.load_state_dict(saved["policy"])
             model.policy.optimizer.load_state_dict(saved["optimizer"])
             for name, value in saved["counters"].items():
+                _check_saved(model, name, value, _COUNTERS, "counter")
                 setattr(model, name, value)
             buffer = getattr(model, "replay_buffer", None) or model.rollout_buffer
+            own = tuple(k for k, v in vars(buffer).items() if isinstance(v, (np.ndarray, bool, int, float)))
             for name, value in from_safe(saved["buffer"]).items():
+                _check_saved(buffer, name, value, own, "buffer field")
                 setattr(buffer, name, value.copy() if isinstance(value, np.ndarray) else value)
             run.load(from_safe(saved["driver"]))
             randomness = from_safe(saved["random"])

@@ -171,3 +171,28 @@ def test_missing_sb3_says_how_to_install(monkeypatch):
     with pytest.raises(ImportError) as error:
         SB3Learner([SB3Settings()], [0], 25, 5)
     assert str(error.value) == INSTALL_HINT and 'pip install -e ".[sb3]"' in INSTALL_HINT
+
+
+@needs_sb3
+@pytest.mark.parametrize(
+    "part, name, value, says",
+    [
+        ("counters", "policy", 0, "unknown SB3 counter 'policy'"),
+        ("counters", "num_timesteps", "many", "counter 'num_timesteps' is a str"),
+        ("buffer", "observations", np.zeros(3, np.float32), "buffer field 'observations' is not a float32 array of shape"),
+        ("buffer", "device", 1, "unknown SB3 buffer field 'device'"),
+    ],
+)
+def test_a_checkpoint_sets_only_the_counters_and_buffer_fields_it_writes(part, name, value, says):
+    from empathy_zoo.safe_data import from_safe, to_safe
+
+    settings = SB3Settings(algorithm="dqn", algorithm_kwargs=DQN_SMALL["algorithm_kwargs"], batch_size=32)
+    learner = SB3Learner([settings], [3], 25, 5)
+    state = learner.state_dict()
+    saved = state["runs"][0]
+    if part == "counters":
+        saved["counters"][name] = value
+    else:
+        saved["buffer"] = to_safe({**from_safe(saved["buffer"]), name: value})
+    with pytest.raises(ValueError, match=says):
+        SB3Learner([settings], [3], 25, 5).load_state_dict(state)
