@@ -3,9 +3,9 @@
 A *scenario* is an environment variant a trained robot can still act in: other fixed agents (their
 policies, with arguments, and their number) and other world arguments (the grid's ``size``,
 ``max_cycles``, Sharing's ``start``), with a one-line ``reason`` saying what it tests. A *scenario
-set* is a TOML file of scenarios for one environment; one per environment ships here
+set* is a TOML file of scenarios for one environment; one per environment ships here, its default
 (:func:`shipped_sets`: ``coexistence_v0``, ``sharing_v0``, ``charger_v0``, ``vase_v0``,
-``helping_v0``), written before any result was seen.
+``helping_v0``), and the opt-in ``coexistence_v0_noisy``, each written before any result was seen.
 ``empathy-zoo evaluate`` (:mod:`empathy_zoo.training.heldout`) plays every kept agent in every
 scenario of its environment, and in :func:`trained_with`, the run's own partners and world.
 
