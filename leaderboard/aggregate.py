@@ -31,8 +31,9 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
+from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
-from empathy_zoo.experiment.result_reader import read_result
+from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
@@ -182,7 +183,7 @@ def load_result_files(results_dir: str | os.PathLike[str]) -> list[tuple[Path, d
     paths = result_files(results_dir)
     if not paths:
         raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
-    read = [(path, read_result(path)) for path in paths]
+    read = [(path, check_result(read_json(path), path)) for path in paths]
     check_runs(read)
     return read
 

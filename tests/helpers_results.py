@@ -7,6 +7,7 @@ from dataclasses import asdict
 import numpy as np
 
 from agents.settings import EmpathicDQNSettings
+from baselines.registry import METHODS
 from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
@@ -28,8 +29,23 @@ def described(run: dict) -> dict:
 
 
 def synthetic_result(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
-    """A schema-3 result (a schema-1 document, read as the suite reads it) with ``means`` per metric."""
-    return check_result(synthetic_schema_1(env, method, beta, seed, fixed, **means), "synthetic.json")
+    """A schema-3 result (a schema-1 document, read as the suite reads it) with ``means`` per metric.
+    A method whose reward transform no schema-1 file held (the Lagrangian, Be Considerate, ...)
+    gets DQN's document with its own method, reward record and description, as it records them."""
+    own = METHODS[method].reward if method in METHODS else None
+    if own is None or method in SCHEMA_1_SHAPING:
+        return check_result(synthetic_schema_1(env, method, beta, seed, fixed, **means), "synthetic.json")
+    document = check_result(synthetic_schema_1(env, "dqn", beta, seed, fixed, **means), "synthetic.json")
+    registered = METHODS[method]
+    reward = registered.make_reward({})
+    settings = registered.make_settings(dict(document["config"]["settings"]))
+    document.update(method=method, method_label=f"{method} {beta}", run_id=f"{env}__{method}-{beta}__s{seed}")
+    document["config"] = {
+        **document["config"],
+        "reward": {"name": reward.name, **asdict(reward)},
+        "description": registered.describe(settings, reward),
+    }
+    return check_result(document, "synthetic.json")
 
 
 MAX_CYCLES = 500

@@ -310,7 +310,7 @@ def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) 
     duplicate = make_run("coexistence_v0", "DQN", 0, [1.0])
     write_runs(tmp_path / "b", [duplicate])
     (tmp_path / "b" / "copy.json").write_text(json.dumps(duplicate))  # one run, two files
-    with pytest.raises(ValueError, match=r"copy\.json: field run_id: the file is named copy\.json.*renamed or copied"):
+    with pytest.raises(ValueError, match="same run"):
         load_results(tmp_path / "b")
     write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "coexistence_v0__copy__s0"}])  # another experiment, one label
     with pytest.raises(ValueError, match=r"same label 'DQN'.*two experiments"):
