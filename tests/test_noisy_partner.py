@@ -1,20 +1,18 @@
 """The ``noisy`` partner (empathy_zoo.partner_policies.Noisy): a deterministic partner that acts at
 random on a share of its steps, one counter-based draw per step; its rate, its partner's moves on
-the other steps, its state, its refusals, and both env paths alike."""
+the other steps, its state, and its refusals (both env paths alike: tests/test_partner_policies.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from empathy_zoo import ENVIRONMENTS, FixedAgents
 from empathy_zoo.actions import Action
 from empathy_zoo.builtin_policies import CounterStream
 from empathy_zoo.partner_policies import Chase, Noisy
 from empathy_zoo.policies import POLICIES, make_policy
 from empathy_zoo.randomness import counter_uniform
 from empathy_zoo.scenarios import parse_scenario_set
-from empathy_zoo.vector import VectorEnv
 
 SIZE = 7
 CONTEXT = {"step": 0, "agent": "cat_0", "size": SIZE, "positions": {"cat_0": (0, 0), "robot_0": (2, 0)}}
@@ -85,18 +83,3 @@ def test_a_scenario_file_names_it_and_never_code() -> None:
     bad = {**good, "scenarios": {"x": {"reason": "r", "fixed": {"cat_0": {"policy": "noisy", "partner": "os:system"}}}}}
     with pytest.raises(ValueError, match="partner"):
         parse_scenario_set(bad, source="test", default_name="noisy")
-
-
-@pytest.mark.parametrize("seed", [0, 7])
-def test_it_drives_the_pettingzoo_env_and_the_vector_env_alike(seed) -> None:
-    fixed = {"cat_0": {"policy": "noisy", "partner": "chase", "noise": 0.3}}
-    parallel = FixedAgents(ENVIRONMENTS["coexistence_v0"].parallel_env(max_cycles=80), fixed)
-    vector = VectorEnv("coexistence_v0", 1, fixed=fixed, max_cycles=80)
-    observations, _ = parallel.reset(seed=seed)
-    vector_obs = vector.reset(seed=[seed])
-    for action in np.random.default_rng(seed).integers(0, 5, size=80):
-        assert np.array_equal(observations["robot_0"], vector_obs[0, 0])
-        observations, _, _, _, _ = parallel.step({"robot_0": int(action)})
-        vector_obs = vector.step(np.array([[action]])).final_observations
-        if not parallel.agents:
-            return

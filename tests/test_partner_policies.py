@@ -143,6 +143,8 @@ def test_chase_refuses_bad_arguments(bad) -> None:
         ("coexistence_v0", "cat_0", "chase"),
         ("coexistence_v0", "cat_0", "keep_away"),
         ("sharing_v0", "human_0", "nearest_battery"),
+        ("coexistence_v0", "cat_0", {"policy": "noisy", "partner": "chase", "noise": 0.3}),
+        ("coexistence_v0", "cat_0", {"policy": "population", "members": ["chase", "random_walk"]}),
     ],
 )
 @pytest.mark.parametrize("seed", [0, 7])

@@ -1,17 +1,15 @@
 """The ``population`` partner (empathy_zoo.partner_policies.Population): one registered member per
 episode, drawn with the given weights from a stream keyed by the episode's seed; its shares, its
-members' moves, its state, its refusals, a scenario file naming it, and both env paths alike."""
+members' moves, its state, its refusals, and a scenario file naming it (both env paths alike: tests/test_partner_policies.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from empathy_zoo import ENVIRONMENTS, FixedAgents
 from empathy_zoo.partner_policies import MAX_MEMBERS, Chase, KeepAway, Population
 from empathy_zoo.policies import POLICIES, make_policy
 from empathy_zoo.scenarios import parse_scenario_set
-from empathy_zoo.vector import VectorEnv
 
 CONTEXT = {"step": 0, "agent": "cat_0", "size": 7, "positions": {"cat_0": (3, 3), "robot_0": (2, 3)}}
 """The robot one row above the cat: chase steps up, keep-away down."""
@@ -97,21 +95,6 @@ def test_a_scenario_file_names_a_population_and_never_code() -> None:
     data["scenarios"]["mixed"]["fixed"]["cat_0"] = {"policy": "population", "members": ["chase", "os:system"]}
     with pytest.raises(ValueError, match="members"):
         parse_scenario_set(data, source="test", default_name="p")
-
-
-@pytest.mark.parametrize("seed", [0, 7])
-def test_it_drives_the_pettingzoo_env_and_the_vector_env_alike(seed) -> None:
-    fixed = {"cat_0": {"policy": "population", "members": ["chase", "random_walk"]}}
-    parallel = FixedAgents(ENVIRONMENTS["coexistence_v0"].parallel_env(max_cycles=60), fixed)
-    vector = VectorEnv("coexistence_v0", 1, fixed=fixed, max_cycles=60)
-    observations, _ = parallel.reset(seed=seed)
-    vector_obs = vector.reset(seed=[seed])
-    for action in np.random.default_rng(seed).integers(0, 5, size=60):
-        assert np.array_equal(observations["robot_0"], vector_obs[0, 0])
-        observations, _, _, _, _ = parallel.step({"robot_0": int(action)})
-        vector_obs = vector.step(np.array([[action]])).final_observations
-        if not parallel.agents:
-            return
 
 
 def test_a_checkpoint_of_the_batched_path_resumes_every_environments_member() -> None:
