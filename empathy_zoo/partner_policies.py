@@ -58,6 +58,9 @@ MOVES_BY_ACTION: tuple[tuple[Action, int, int], ...] = (
 )
 """Every action and its ``(row, col)`` displacement (SPEC §1), in action order."""
 _DIRECTIONS = (Action.UP, Action.DOWN, Action.LEFT, Action.RIGHT)
+REGISTRY: dict[str, type] = {}
+"""The registered policies :class:`Noisy` and :class:`Population` build their members from, by
+name: :data:`empathy_zoo.policies.POLICIES`, which that module puts here (it imports this one)."""
 
 
 def _slow_walk_action(draw: float, move_probability: float) -> int:
@@ -226,13 +229,11 @@ class Noisy(CounterStream):
     action ``⌊5u/noise⌋``. It reads what its partner reads."""
 
     def __init__(self, partner: str = "chase", noise: float = 0.2) -> None:
-        from empathy_zoo.policies import POLICIES  # (the registry imports this module)
-
         if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not 0.0 < float(noise) <= 1.0:
             raise ValueError(f"noise must be a number in (0, 1], got {noise!r}")
-        if not isinstance(partner, str) or partner not in POLICIES or partner == "noisy":
+        if not isinstance(partner, str) or partner not in REGISTRY or partner == "noisy":
             raise ValueError(f"partner must name a registered policy other than 'noisy', got {partner!r}")
-        base = POLICIES[partner]()
+        base = REGISTRY[partner]()
         if getattr(base, "stateless", False) is not True:
             raise ValueError(f"partner must keep nothing between steps (stateless = True); {partner!r} does not")
         super().__init__()
@@ -266,12 +267,10 @@ class Population(CounterStream):
     member's own state, so a checkpointed run resumes it exactly."""
 
     def __init__(self, members: Sequence[str] = ("chase", "keep_away"), weights: Sequence[float] | None = None) -> None:
-        from empathy_zoo.policies import POLICIES  # (the registry imports this module)
-
         if isinstance(members, str) or not isinstance(members, Sequence) or not 1 <= len(members) <= MAX_MEMBERS:
             raise ValueError(f"members must be a list of 1 to {MAX_MEMBERS} registered policy names, got {members!r}")
         for name in members:
-            if not isinstance(name, str) or name not in POLICIES or name == "population":
+            if not isinstance(name, str) or name not in REGISTRY or name == "population":
                 raise ValueError(f"members must name registered policies other than 'population', got {name!r}")
         if len(set(members)) != len(members):
             raise ValueError(f"members must differ (give a member more weight instead), got {list(members)!r}")
@@ -284,7 +283,7 @@ class Population(CounterStream):
         total = sum(float(w) for w in shares)
         self.members, self.weights = list(members), [float(w) for w in shares]
         self._cumulative = np.cumsum([float(w) / total for w in shares])
-        self._policies = [POLICIES[name]() for name in members]
+        self._policies = [REGISTRY[name]() for name in members]
         self.needs_state = any(bool(getattr(p, "needs_state", False)) for p in self._policies)
         self.needs_observation = any(bool(getattr(p, "needs_observation", True)) for p in self._policies)
         self.member = 0

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from empathy_zoo import partner_policies
 from empathy_zoo.actions import NUM_ACTIONS, Action, check_action
 from empathy_zoo.builtin_policies import Patrol, RandomWalk, Stay
 from empathy_zoo.import_names import resolve_name
@@ -189,6 +190,7 @@ POLICIES: dict[str, type] = {
     "population": Population,
 }
 """Fixed policies by name."""
+partner_policies.REGISTRY = POLICIES  # (what the noisy and population partners build members from)
 
 
 # ---------------------------------------------------------------------------- naming and building
