@@ -229,7 +229,7 @@ class Noisy(CounterStream):
     action ``⌊5u/noise⌋``. It reads what its partner reads."""
 
     def __init__(self, partner: str = "chase", noise: float = 0.2) -> None:
-        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not 0.0 < float(noise) <= 1.0:
+        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not 0 < noise <= 1:
             raise ValueError(f"noise must be a number in (0, 1], got {noise!r}")
         if not isinstance(partner, str) or partner not in REGISTRY or partner == "noisy":
             raise ValueError(f"partner must name a registered policy other than 'noisy', got {partner!r}")
@@ -254,6 +254,8 @@ class Noisy(CounterStream):
 
 MAX_MEMBERS = 16
 """The most partners a population holds."""
+MAX_WEIGHT = 1e9
+"""The largest weight of a population's member (their sum stays finite and exact enough)."""
 
 
 class Population(CounterStream):
@@ -277,8 +279,8 @@ class Population(CounterStream):
         shares = [1.0] * len(members) if weights is None else weights
         if isinstance(shares, str) or not isinstance(shares, Sequence) or len(shares) != len(members):
             raise ValueError(f"weights must be a list of {len(members)} numbers (one per member), got {weights!r}")
-        if any(isinstance(w, bool) or not isinstance(w, (int, float)) or not 0.0 < float(w) < float("inf") for w in shares):
-            raise ValueError(f"weights must be positive finite numbers, got {list(shares)!r}")
+        if any(isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w <= MAX_WEIGHT for w in shares):
+            raise ValueError(f"weights must be positive finite numbers of at most {MAX_WEIGHT:g}, got {list(shares)!r:.200}")
         super().__init__()
         total = sum(float(w) for w in shares)
         self.members, self.weights = list(members), [float(w) for w in shares]

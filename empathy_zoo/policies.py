@@ -408,35 +408,46 @@ def recorded_entry(label: Any, where: str, allowed_imports: Collection[str] = ()
     return entry
 
 
+MAX_LABEL_CHARS = 4_096
+"""The longest fixed policy's label read back (a population of 16 members takes a few hundred)."""
+
+
 def parse_entry_label(label: str) -> PolicyEntry:
     """The policy entry whose :func:`~empathy_zoo.policies.entry_label` is ``label`` (what a result
     file's ``config.fixed`` records): ``"patrol"`` → ``"patrol"``, ``"patrol(period=3)"`` →
-    ``{"policy": "patrol", "period": 3}``; ``ValueError`` for a label no entry gives."""
+    ``{"policy": "patrol", "period": 3}``; ``ValueError`` for a label no entry gives, or one longer
+    than :data:`MAX_LABEL_CHARS` (its message shows the label's start only)."""
     if not isinstance(label, str) or not label:
-        raise ValueError(f"a fixed policy's label is a non-empty string, got {label!r}")
+        raise ValueError(f"a fixed policy's label is a non-empty string, got {label!r:.80}")
+    if len(label) > MAX_LABEL_CHARS:
+        raise ValueError(
+            f"a fixed policy's label is at most {MAX_LABEL_CHARS:,} characters, got {len(label):,} ({label[:40]!r}...)"
+        )
     if not label.endswith(")"):
         if "(" in label or ")" in label:
-            raise ValueError(f"{label!r} is not a fixed policy's label (name or name(argument=value, ...))")
+            raise ValueError(f"{label!r:.80} is not a fixed policy's label (name or name(argument=value, ...))")
         return policy_entry(label)
     name, bracket, body = label[:-1].partition("(")
     if not bracket or not name:
-        raise ValueError(f"{label!r} is not a fixed policy's label (name or name(argument=value, ...))")
+        raise ValueError(f"{label!r:.80} is not a fixed policy's label (name or name(argument=value, ...))")
     decoder = json.JSONDecoder()
     entry: dict[str, Any] = {"policy": name}
     position = 0
     while position < len(body):
-        key, equals, _ = body[position:].partition("=")
-        if not equals or not key.isidentifier():
-            raise ValueError(f"{label!r} is not a fixed policy's label: expected argument=value at {body[position:]!r}")
+        equals = body.find("=", position)
+        key = body[position:] if equals < 0 else body[position:equals]
+        if equals < 0 or not key.isidentifier():
+            raise ValueError(f"{label!r:.80} is not a fixed policy's label: expected argument=value at {body[position:]!r:.40}")
         try:
-            value, end = decoder.raw_decode(body, position + len(key) + 1)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{label!r} is not a fixed policy's label: the value of {key!r} is not JSON ({error})") from None
+            value, end = decoder.raw_decode(body, equals + 1)
+        except (json.JSONDecodeError, RecursionError) as error:
+            why = "nested too deep" if isinstance(error, RecursionError) else str(error)
+            raise ValueError(f"{label!r:.80} is not a fixed policy's label: the value of {key!r} is not JSON ({why})") from None
         entry[key] = value
         if end < len(body) and not body.startswith(", ", end):
-            raise ValueError(f"{label!r} is not a fixed policy's label: expected ', ' after the value of {key!r}")
+            raise ValueError(f"{label!r:.80} is not a fixed policy's label: expected ', ' after the value of {key!r}")
         position = end + 2 if end < len(body) else end
     parsed = policy_entry(entry)
     if entry_label(parsed) != label:
-        raise ValueError(f"{label!r} is not a fixed policy's label (it reads back as {entry_label(parsed)!r})")
+        raise ValueError(f"{label!r:.80} is not a fixed policy's label (it reads back as {entry_label(parsed)!r:.80})")
     return parsed

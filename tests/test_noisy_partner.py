@@ -63,6 +63,7 @@ def test_a_seed_repeats_the_episode_and_the_state_resumes_it() -> None:
         ({"noise": 0.0}, "noise must be a number in"),
         ({"noise": 1.5}, "noise must be a number in"),
         ({"noise": True}, "noise must be a number in"),
+        ({"noise": 10**400}, "noise must be a number in"),
         ({"partner": "random_walk"}, "must keep nothing between steps"),
         ({"partner": "noisy"}, "other than 'noisy'"),
         ({"partner": "os:system"}, "registered policy"),

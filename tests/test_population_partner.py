@@ -69,6 +69,8 @@ def test_an_unseeded_reset_continues_the_stream_and_the_state_resumes_it() -> No
         ({"members": ["chase", "stay"], "weights": [1, 0]}, "positive finite"),
         ({"members": ["chase", "stay"], "weights": [1, float("inf")]}, "positive finite"),
         ({"members": ["chase", "stay"], "weights": [1, True]}, "positive finite"),
+        ({"members": ["chase", "stay"], "weights": [1, 10**400]}, "positive finite"),
+        ({"members": ["chase", "stay"], "weights": [1e308, 1e308]}, "at most 1e\\+09"),
     ],
 )
 def test_bad_arguments_are_refused(arguments, says) -> None:

@@ -1,0 +1,35 @@
+"""Fixed-policy labels read back from files (empathy_zoo.policies.parse_entry_label): a label
+nested past the parser's recursion, a label of megabytes, and arguments no partner takes are each
+one ``ValueError`` with a short message, never a traceback of another kind."""
+
+from __future__ import annotations
+
+import pytest
+
+from empathy_zoo.policies import MAX_LABEL_CHARS, make_policy, parse_entry_label
+
+
+def test_a_label_nested_past_the_recursion_limit_is_a_value_error() -> None:
+    label = "random_walk(a=" + "[" * 1_500 + "]" * 1_500 + ")"
+    assert len(label) <= MAX_LABEL_CHARS
+    with pytest.raises(ValueError, match="nested too deep"):
+        parse_entry_label(label)
+
+
+def test_a_label_of_megabytes_is_refused_by_its_length_with_a_short_message() -> None:
+    label = "random_walk(" + "a=1, " * 400_000 + "a=1)"
+    with pytest.raises(ValueError, match=f"at most {MAX_LABEL_CHARS:,} characters") as refused:
+        parse_entry_label(label)
+    assert len(str(refused.value)) < 200
+
+
+@pytest.mark.parametrize(
+    "label",
+    [
+        "noisy(noise=1" + "0" * 400 + ', partner="chase")',
+        'population(members=["chase", "stay"], weights=[1, 1' + "0" * 400 + "])",
+    ],
+)
+def test_a_huge_number_in_a_partners_label_is_a_value_error(label: str) -> None:
+    with pytest.raises(ValueError):
+        make_policy(parse_entry_label(label))
