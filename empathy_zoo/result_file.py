@@ -180,6 +180,8 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
                 )
         for name in METRIC_NAMES:
             values = check.metric(entry[name], f"eval[{i}].{name}", name, bounds[name], length=episodes)
+            if episodes is None and not values:
+                raise check.fail(f"eval[{i}].{name}", "at least one greedy episode (an evaluation plays 1 or more)", values)
             episodes = len(values) if episodes is None else episodes
     made = [entry["step"] for entry in result["eval"]]
     if schedule is not None and made != schedule:

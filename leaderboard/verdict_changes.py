@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from pathlib import Path
 
 __all__ = ["Cell", "verdicts", "changes", "changes_markdown", "main"]
@@ -81,8 +82,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("old", type=Path, help="the older LEADERBOARD.md")
     parser.add_argument("new", type=Path, help="the newer LEADERBOARD.md")
     args = parser.parse_args(argv)
-    print(changes_markdown(args.old.read_text(encoding="utf-8"), args.new.read_text(encoding="utf-8")), end="")
+    try:
+        old, new = (_read_page(path) for path in (args.old, args.new))
+    except ValueError as error:
+        print(f"verdict_changes: error: {error}", file=sys.stderr)
+        return 2
+    print(changes_markdown(old, new), end="")
     return 0
+
+
+MAX_PAGE_BYTES = 64 * 2**20
+"""The largest leaderboard page read (the shipped ones are under 1 MB)."""
+
+
+def _read_page(path: Path) -> str:
+    """A leaderboard page's text: a regular UTF-8 file of at most :data:`MAX_PAGE_BYTES`, else a
+    ``ValueError`` naming it (a FIFO, a device or a directory is refused, never read)."""
+    from empathy_zoo.limits import read_bounded
+
+    try:
+        return read_bounded(path, MAX_PAGE_BYTES, "leaderboard page").decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path} is not UTF-8 text ({error})") from None
+    except OSError as error:
+        raise ValueError(f"{path}: {error.strerror or error}") from None
 
 
 if __name__ == "__main__":

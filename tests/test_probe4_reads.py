@@ -1,0 +1,43 @@
+"""A fourth probe's findings on reads: a leaderboard page handed to ``analyse verdict-changes`` is
+read bounded (a device, a FIFO, a directory or a missing file is one line, status 2), and a result
+file's evaluations hold at least one greedy episode."""
+
+from __future__ import annotations
+
+import copy
+import os
+from pathlib import Path
+
+import pytest
+from helpers_results import synthetic_result
+
+from empathy_zoo.cli import main
+from empathy_zoo.experiment.result_reader import check_result
+
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / "LEADERBOARD.md"
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "directory", "missing"])
+def test_verdict_changes_reads_pages_bounded(tmp_path: Path, capsys, kind: str) -> None:
+    path = {"device": Path("/dev/zero"), "directory": tmp_path, "missing": tmp_path / "none.md"}.get(kind, tmp_path / "fifo")
+    if kind == "fifo":
+        os.mkfifo(path)
+    assert main(["analyse", "verdict-changes", str(path), str(PAGE)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(path) in err
+
+
+def test_verdict_changes_of_a_page_with_itself_lists_no_change(capsys) -> None:
+    assert main(["analyse", "verdict-changes", str(PAGE), str(PAGE)]) == 0
+    assert "|" in capsys.readouterr().out
+
+
+def test_an_evaluation_of_no_episode_is_refused() -> None:
+    run = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    run["config"].pop("eval_episodes", None)
+    for evaluation in run["eval"]:
+        for name in evaluation:
+            if name != "step":
+                evaluation[name] = []
+    with pytest.raises(ValueError, match=r"at least one greedy episode"):
+        check_result(run, "x.json")
