@@ -41,3 +41,25 @@ def test_an_evaluation_of_no_episode_is_refused() -> None:
                 evaluation[name] = []
     with pytest.raises(ValueError, match=r"at least one greedy episode"):
         check_result(run, "x.json")
+
+
+@pytest.mark.parametrize("there", ["directory", "link"])
+def test_an_unreadable_list_of_runs_is_not_set_aside_over_a_directory_or_link(tmp_path: Path, there: str) -> None:
+    from empathy_zoo.experiment.model import RunSpec
+    from empathy_zoo.training.checkpoint import save_checkpoint
+    from empathy_zoo.training.resume import checkpoint_path, plan_ensembles
+
+    todo = [RunSpec.of(steps=100, eval_interval=100, eval_episodes=1, seed=0)]
+    out = tmp_path / "out"
+    checkpoint = checkpoint_path(out, todo)
+    save_checkpoint(checkpoint, {"run_ids": [s.run_id for s in todo]})
+    manifest = checkpoint.with_name(checkpoint.stem + ".runs.json")
+    manifest.write_text("{")
+    aside = manifest.with_name(manifest.name + ".unreadable")
+    target = tmp_path / "user.txt"
+    target.write_text("mine")
+    aside.mkdir() if there == "directory" else aside.symlink_to(target)
+    with pytest.raises(ValueError, match=r"\.runs\.json\.unreadable"):
+        plan_ensembles(todo, out, 1, lambda _: None)
+    assert manifest.read_text() == "{" and target.read_text() == "mine"
+    assert aside.is_dir() if there == "directory" else aside.is_symlink()

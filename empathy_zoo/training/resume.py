@@ -44,7 +44,7 @@ from typing import Any
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.data_files import data_files
 from empathy_zoo.experiment.model import RunSpec, group_specs
-from empathy_zoo.names import check_path_name
+from empathy_zoo.names import check_path_name, check_replaceable
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.checkpoint import RUNS_LIST_SUFFIX, CheckpointError, load_checkpoint, runs_list_path
 
@@ -191,7 +191,9 @@ def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], N
         try:
             records = read_manifest(manifest, checkpoint)
         except ValueError as error:
-            aside = manifest.replace(manifest.with_name(manifest.name + UNREADABLE_SUFFIX))
+            aside = manifest.with_name(manifest.name + UNREADABLE_SUFFIX)
+            check_replaceable(aside)  # (a link, a directory or a FIFO there is refused, never replaced)
+            aside = manifest.replace(aside)
             on_note(
                 f"set aside {manifest} as {aside.name}: it cannot be read as the list of runs of checkpoint "
                 f"{checkpoint.name} ({error}); that checkpoint's own run ids are read instead"
