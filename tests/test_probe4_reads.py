@@ -63,3 +63,9 @@ def test_an_unreadable_list_of_runs_is_not_set_aside_over_a_directory_or_link(tm
         plan_ensembles(todo, out, 1, lambda _: None)
     assert manifest.read_text() == "{" and target.read_text() == "mine"
     assert aside.is_dir() if there == "directory" else aside.is_symlink()
+
+
+@pytest.mark.parametrize("command", ["a\nb", "x\x1b[31m", "", "y" * 2_001])
+def test_produced_by_is_one_line_of_printable_text(tmp_path: Path, capsys, command: str) -> None:
+    assert main(["reproduction", str(PAGE.parent), "--out", str(tmp_path / "r.md"), "--produced-by", command]) == 2
+    assert "--produced-by" in capsys.readouterr().err and not (tmp_path / "r.md").exists()

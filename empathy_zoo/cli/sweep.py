@@ -146,6 +146,26 @@ def _report_out(args: argparse.Namespace) -> Path | None:
     return out / args.report_name if out.is_dir() else out
 
 
+MAX_COMMAND_CHARS = 2_000
+"""The longest ``--produced-by`` command a report shows."""
+
+
+def _command_text(text: str) -> str:
+    """``--produced-by``: one line of printable text of at most :data:`MAX_COMMAND_CHARS`
+    characters (it is shown in the report's code block), else a usage error."""
+    import argparse
+    import unicodedata
+
+    from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
+
+    if not text.strip() or len(text) > MAX_COMMAND_CHARS:
+        raise argparse.ArgumentTypeError(f"a command of 1 to {MAX_COMMAND_CHARS:,} characters, got {len(text):,}")
+    refused = next((c for c in text if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES), None)
+    if refused is not None:
+        raise argparse.ArgumentTypeError(f"one line of printable text, got the character {refused!r}")
+    return text
+
+
 def _read_note(path: str | None) -> str:
     """The ``--note`` file's text (``""`` without one); one larger than
     :data:`~empathy_zoo.limits.MAX_NOTE_BYTES` is refused (``ValueError``), never read to its end."""
@@ -306,5 +326,7 @@ def _add_report_options(parser: argparse.ArgumentParser, sweep: str, report: str
         help=f"the file to write, or a directory to write {report} into (default: DIR/{report})",
     )
     parser.set_defaults(report_name=report)
-    parser.add_argument("--produced-by", metavar="COMMAND", help="the command that produced the results, for the report")
+    parser.add_argument(
+        "--produced-by", metavar="COMMAND", type=_command_text, help="the command that produced the results, for the report"
+    )
     parser.add_argument("--note", metavar="FILE.md", help="prose placed before the rules (how the run was made, what it shows)")
