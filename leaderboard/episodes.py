@@ -37,10 +37,11 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.agent_file import RESULT_FIELD, load_agent
+from empathy_zoo.environments import default_policies
 from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name, confined
-from empathy_zoo.policies import PolicyEntry, recorded_entry
+from empathy_zoo.policies import PolicyEntry, make_policy, recorded_entry
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs, table_env
 from leaderboard.tables import env_metrics, markdown_table, place_before_definitions
@@ -199,11 +200,21 @@ def trained_world(
     ``allowed_imports`` (:func:`empathy_zoo.policies.recorded_entry`: a result file never makes
     the leaderboard import code), else ``ValueError`` naming the field; nothing is imported."""
     config = run["config"]
+    where = f"run {run.get('run_id')}: config.fixed"
     fixed = {
-        agent: recorded_entry(entry, f"run {run.get('run_id')}: config.fixed.{agent}", allowed_imports)
+        agent: recorded_entry(entry, f"{where}.{agent}", allowed_imports)
         for agent, entry in dict(config.get("fixed") or {}).items()
     }
-    return str(config["env"]), dict(config.get("env_kwargs") or {}), fixed
+    env, env_kwargs = str(config["env"]), dict(config.get("env_kwargs") or {})
+    unknown = sorted(set(fixed) - set(default_policies(env, env_kwargs)))
+    if unknown:
+        raise ValueError(f"{where}: {env} as the run built it has no agent {', '.join(unknown)}")
+    for agent, entry in fixed.items():
+        try:
+            make_policy(entry)  # (its arguments checked: a registered policy, or one of allowed_imports)
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"{where}.{agent}: {error}") from None
+    return env, env_kwargs, fixed
 
 
 # ---------------------------------------------------------------------------- playing

@@ -33,3 +33,24 @@ def test_a_label_of_megabytes_is_refused_by_its_length_with_a_short_message() ->
 def test_a_huge_number_in_a_partners_label_is_a_value_error(label: str) -> None:
     with pytest.raises(ValueError):
         make_policy(parse_entry_label(label))
+
+
+@pytest.mark.parametrize(
+    "fixed, says",
+    [
+        ({"cat_0": 'noisy(noise=0.2, partner="os:system")'}, "config.fixed.cat_0: partner must name a registered policy"),
+        ({"cat_0": 'population(members=["os:system"])'}, "config.fixed.cat_0: members must name registered policies"),
+        ({"cat_7": "random_walk"}, "config.fixed: coexistence_v0 as the run built it has no agent cat_7"),
+    ],
+)
+def test_the_trained_world_names_the_run_and_field_of_bad_partner_arguments(fixed: dict, says: str) -> None:
+    import json
+    from pathlib import Path
+
+    from leaderboard.episodes import trained_world
+
+    quick = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / "runs"
+    run = json.loads(next(quick.glob("coexistence_v0__*__s0.json")).read_text())
+    run["config"]["fixed"] = fixed
+    with pytest.raises(ValueError, match=f"run {run['run_id']}: {says}"):
+        trained_world(run)
