@@ -368,11 +368,29 @@ def _publish(staged: dict[str, Path], stage: Path, out: Path) -> dict[str, Path]
 
 
 def _remove_stale_stages(out: Path) -> None:
-    """Remove the staging directories that processes which died rendering left in ``out``."""
+    """Remove the staging directories that processes which died rendering left in ``out``; one
+    holding anything a render does not write (a page, ``figures/`` of PNG and GIF files) is left."""
     for path in out.glob(f"{STAGE_PREFIX}*{TEMP_SUFFIX}"):
         match = _STAGE.fullmatch(path.name)
-        if match and path.is_dir() and not path.is_symlink() and not process_alive(int(match["pid"])):
+        if match and path.is_dir() and not path.is_symlink() and not process_alive(int(match["pid"])) and _rendered_only(path):
             shutil.rmtree(path, ignore_errors=True)
+
+
+def _rendered_only(stage: Path) -> bool:
+    """Whether ``stage`` holds only what a render writes: its pages and ``figures/`` of images."""
+    pages = {MARKDOWN_NAME, CSV_NAME, HTML_NAME}
+    for entry in stage.iterdir():
+        if entry.is_symlink() or (entry.name not in pages and entry.name != FIGURES_DIR and not _ATOMIC_TEMP.search(entry.name)):
+            return False
+        if entry.name == FIGURES_DIR and (
+            not entry.is_dir()
+            or any(
+                f.is_symlink() or not f.is_file() or (f.suffix not in (".png", ".gif") and not _ATOMIC_TEMP.search(f.name))
+                for f in entry.iterdir()
+            )
+        ):
+            return False
+    return True
 
 
 def _print_note(text: str) -> None:

@@ -69,3 +69,25 @@ def test_an_unreadable_list_of_runs_is_not_set_aside_over_a_directory_or_link(tm
 def test_produced_by_is_one_line_of_printable_text(tmp_path: Path, capsys, command: str) -> None:
     assert main(["reproduction", str(PAGE.parent), "--out", str(tmp_path / "r.md"), "--produced-by", command]) == 2
     assert "--produced-by" in capsys.readouterr().err and not (tmp_path / "r.md").exists()
+
+
+def test_a_stale_leaderboard_stage_holding_a_users_file_is_left(tmp_path: Path) -> None:
+    from helpers_results import synthetic_result
+
+    from empathy_zoo.atomic import write_json_atomic
+    from leaderboard import report
+
+    results = tmp_path / "results"
+    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    write_json_atomic(results / "runs" / f"{run['run_id']}.json", run)
+    users, rendered = (
+        results / ".leaderboard.ezoo-2000000001-deadbeef.tmp",
+        results / ".leaderboard.ezoo-2000000002-deadbeef.tmp",
+    )  # (no such pid)
+    users.mkdir()
+    (users / "own").write_text("mine")
+    (rendered / "figures").mkdir(parents=True)
+    (rendered / "LEADERBOARD.md").write_text("half")
+    (rendered / "figures" / "a.png").write_bytes(b"png")
+    report.write_leaderboard(results, n_resamples=50, on_note=lambda _: None)
+    assert (users / "own").read_text() == "mine" and not rendered.exists()
