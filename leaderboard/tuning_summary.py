@@ -18,6 +18,7 @@ import argparse
 import io
 import json
 import os
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -180,12 +181,45 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("root", metavar="DIR", help="a directory holding study.json files, at any depth")
     parser.add_argument("--figure", metavar="PATH", help="draw the trials of every study into this PNG")
     args = parser.parse_args(argv)
-    studies = [json.loads(path.read_text(encoding="utf-8")) for path in find_studies(args.root)]
-    print(summary_table([summarise(study) for study in studies]))
-    if args.figure:
-        write_bytes_atomic(args.figure, render_studies_png(studies))
+    try:
+        read = [(path, read_study(path)) for path in find_studies(args.root)]
+        studies = [study for _, study in read]
+        table = summary_table([_checked(path, summarise, study) for path, study in read])
+        figure = _checked(Path(args.root), render_studies_png, studies) if args.figure else None
+    except ValueError as error:
+        print(f"tuning_summary: error: {error}", file=sys.stderr)
+        return 2
+    print(table)
+    if figure is not None:
+        write_bytes_atomic(args.figure, figure)
         print(f"\nwrote {args.figure}")
     return 0
+
+
+MAX_STUDY_BYTES = 64 * 2**20
+"""The largest ``study.json`` read (``tune`` writes a few KB per trial)."""
+
+
+def read_study(path: Path) -> Any:
+    """A ``study.json``: a regular file of at most :data:`MAX_STUDY_BYTES`, JSON nested within the
+    suite's bound, else a ``ValueError`` naming it."""
+    from empathy_zoo.bounded_read import check_json_depth
+    from empathy_zoo.limits import read_bounded
+
+    data = read_bounded(path, MAX_STUDY_BYTES, "study file")
+    check_json_depth(data, str(path))
+    try:
+        return json.loads(data)
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path} is not JSON ({error})") from None
+
+
+def _checked(where: Path, make: Any, study: Any) -> Any:
+    """``make(study)``, a missing or mistyped field of the study a ``ValueError`` naming ``where``."""
+    try:
+        return make(study)
+    except (KeyError, TypeError, AttributeError, IndexError, OverflowError) as error:
+        raise ValueError(f"{where}: not a study that tune wrote ({type(error).__name__}: {error!s:.200})") from None
 
 
 if __name__ == "__main__":

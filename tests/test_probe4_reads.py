@@ -91,3 +91,13 @@ def test_a_stale_leaderboard_stage_holding_a_users_file_is_left(tmp_path: Path) 
     (rendered / "figures" / "a.png").write_bytes(b"png")
     report.write_leaderboard(results, n_resamples=50, on_note=lambda _: None)
     assert (users / "own").read_text() == "mine" and not rendered.exists()
+
+
+@pytest.mark.parametrize("text", ["{}", "[" * 100_000 + "]" * 100_000, "{not json", '{"plan": 3, "trials": []}'])
+def test_tuning_summary_refuses_a_forged_study_in_one_line(tmp_path: Path, capsys, text: str) -> None:
+    study = tmp_path / "a" / "study.json"
+    study.parent.mkdir()
+    study.write_text(text)
+    assert main(["analyse", "tuning-summary", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(study) in err
