@@ -54,6 +54,9 @@ def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.compare_runs OLD_DIR NEW_DIR``: one line per matched pair, then the counts."""
     args = list(sys.argv[1:] if argv is None else argv)
+    if args in (["-h"], ["--help"]):
+        print(main.__doc__)
+        return 0
     if len(args) != 2:
         sys.exit("usage: python -m leaderboard.compare_runs OLD_DIR NEW_DIR")
     result = compare_runs(load_results(args[0]), load_results(args[1]))

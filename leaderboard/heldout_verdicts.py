@@ -53,6 +53,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     import sys
 
     args = list(sys.argv[1:] if argv is None else argv)
+    if args in (["-h"], ["--help"]):
+        print(main.__doc__)
+        return 0
     if len(args) != 1:
         sys.exit("usage: python -m leaderboard.heldout_verdicts RESULTS_DIR")
     print(verdicts_markdown(heldout_verdicts(args[0])))

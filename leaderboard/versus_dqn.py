@@ -106,6 +106,9 @@ def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.versus_dqn RESULTS_DIR``: the tables against DQN, printed."""
     args = list(sys.argv[1:] if argv is None else argv)
+    if args in (["-h"], ["--help"]):
+        print(main.__doc__)
+        return 0
     if len(args) != 1:
         sys.exit("usage: python -m leaderboard.versus_dqn RESULTS_DIR")
     print(versus_dqn_tables(load_results(args[0])))

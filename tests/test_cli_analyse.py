@@ -45,3 +45,9 @@ def test_an_unknown_tool_is_a_usage_error(capsys: pytest.CaptureFixture[str]) ->
     assert main(["analyse", "no-such-tool"]) == 2
     err = capsys.readouterr().err
     assert "invalid choice: 'no-such-tool'" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("tool", list(TOOLS))
+def test_every_tool_answers_help_with_status_zero(capsys: pytest.CaptureFixture[str], tool: str) -> None:
+    assert main(["analyse", tool, "--help"]) == 0
+    assert capsys.readouterr().out.strip()
