@@ -426,6 +426,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     import sys
 
     given = list(sys.argv[1:] if argv is None else argv)
+    if given in (["-h"], ["--help"]):
+        print(main.__doc__, "--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS.")
+        return 0
     options = {"--all", "--tost"}
     args = [a for a in given if a not in options]
     if len(args) != 2:
