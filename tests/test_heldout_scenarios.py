@@ -199,3 +199,8 @@ def test_the_docs_example_set_parses(tmp_path) -> None:
         "sleepy_cat": {"cat_0": "slow_walk(move_probability=0.02)"},
         "cat_and_chaser": {"cat_0": "random_walk", "cat_1": "chase(every=2)"},
     }
+
+
+def test_an_empty_set_name_is_refused() -> None:
+    with pytest.raises(SweepConfigError, match="got an empty name"):
+        load_scenario_set("")

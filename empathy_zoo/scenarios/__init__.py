@@ -170,6 +170,8 @@ def scenario_set_path(name_or_path: str | Path) -> Path:
     """The file of a shipped set's name, or ``name_or_path`` itself when it is a ``.toml`` file;
     anything else raises :class:`SweepConfigError` listing the shipped names."""
     text = str(name_or_path)
+    if not text.strip():
+        raise SweepConfigError(f"a scenario set is a shipped name ({', '.join(shipped_sets())}) or a .toml file, got an empty name")
     if text in shipped_sets():
         return SCENARIO_DIR / f"{text}.toml"
     path = Path(text)
