@@ -171,7 +171,8 @@ def scenario_set_path(name_or_path: str | Path) -> Path:
     anything else raises :class:`SweepConfigError` listing the shipped names."""
     text = str(name_or_path)
     if not text.strip():
-        raise SweepConfigError(f"a scenario set is a shipped name ({', '.join(shipped_sets())}) or a .toml file, got an empty name")
+        shipped = ", ".join(shipped_sets())
+        raise SweepConfigError(f"a scenario set is a shipped name ({shipped}) or a .toml file, got an empty name")
     if text in shipped_sets():
         return SCENARIO_DIR / f"{text}.toml"
     path = Path(text)
