@@ -18,6 +18,11 @@ from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 __all__ = ["CounterStream", "CounterStreamBatch", "RandomWalk", "Patrol", "Stay"]
 
 
+def _fields(state: Any) -> str:
+    """What a policy's saved ``state`` holds, for a refusal: its fields, or its start."""
+    return str(sorted(map(str, state))) if isinstance(state, Mapping) else f"{state!r:.80}"
+
+
 class CounterStream:
     """A policy's own counter-based random stream (:func:`~empathy_zoo.randomness.counter_uniform`):
     ``reset(seed)`` keys it from the episode's seed (a fresh random key without one), and each
@@ -46,8 +51,15 @@ class CounterStream:
         return {"key": self._key, "count": self._count}
 
     def load_state(self, state: Mapping[str, Any]) -> None:
-        self._key = None if state["key"] is None else int(state["key"])
-        self._count = int(state["count"])
+        if not isinstance(state, Mapping) or set(state) != {"key", "count"}:
+            raise ValueError(f"a counter stream's state holds key and count, got {_fields(state)}")
+        key, count = state["key"], state["count"]
+        if key is not None and (isinstance(key, bool) or not isinstance(key, (int, np.integer)) or not 0 <= key < 2**64):
+            raise ValueError(f"a counter stream's key is a 64-bit unsigned int or null, got {key!r:.80}")
+        if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 0 <= count < 2**63:
+            raise ValueError(f"a counter stream's count is an int in [0, 2**63), got {count!r:.80}")
+        self._key = None if key is None else int(key)
+        self._count = int(count)
 
 
 class CounterStreamBatch:
@@ -76,12 +88,16 @@ class CounterStreamBatch:
         return {"keys": self.keys.copy(), "counts": self.counts.copy()}
 
     def load_state(self, state: Mapping[str, Any]) -> None:
+        if not isinstance(state, Mapping) or set(state) != {"keys", "counts"}:
+            raise ValueError(f"{self.state_name} state holds keys and counts, got {_fields(state)}")
         for name in ("keys", "counts"):
             value = np.asarray(state[name])
             current = getattr(self, name)
             if value.shape != current.shape:
                 raise ValueError(f"{self.state_name} state {name!r} has shape {value.shape}, expected {current.shape}")
-            current[...] = value.astype(np.uint64)
+            if value.dtype != np.uint64:
+                raise ValueError(f"{self.state_name} state {name!r} is {value.dtype}, expected uint64")
+            current[...] = value
 
 
 class RandomWalk(CounterStream):

@@ -309,12 +309,14 @@ class Population(CounterStream):
         return {**super().state(), "member": self.member, "members": states}
 
     def load_state(self, state: Mapping[str, Any]) -> None:
+        if set(state) != {"key", "count", "member", "members"}:
+            raise ValueError(f"population state holds key, count, member and members, got {sorted(state)!r:.120}")
         member, states = state["member"], state["members"]
         if isinstance(member, bool) or not isinstance(member, int) or not 0 <= member < len(self.members):
             raise ValueError(f"population state 'member' must be an index below {len(self.members)}, got {member!r}")
         if not isinstance(states, list) or len(states) != len(self.members):
             raise ValueError(f"population state 'members' must hold {len(self.members)} states, got {states!r}")
-        super().load_state(state)
+        super().load_state({"key": state["key"], "count": state["count"]})
         self.member = member
         for policy, own in zip(self._policies, states, strict=True):
             if hasattr(policy, "load_state"):
