@@ -170,7 +170,9 @@ def load_results_dirs(
     def label(i: int, result: dict[str, Any], core: str) -> str:
         """``core`` (a run's label, or its shown name) with the directory's prefix and the run's budget."""
         prefixed = core if prefixes[i] is None else f"{prefixes[i]} {core}"
-        return prefixed + (BUDGET_SEPARATOR + budget_of(result).text(with_evaluation) if len(budgets) > 1 else "")
+        shown = prefixed + (BUDGET_SEPARATOR + budget_of(result).text(with_evaluation) if len(budgets) > 1 else "")
+        # (a prefix and a label of at most 200 characters each can make one longer than a label may be)
+        return check_label(shown, f"--label {given[i]}: the label of run {result['run_id']} with its prefix")
 
     read = [(i, path, {**result, "method_label": label(i, result, result["method_label"])}) for i, path, result in files]
     try:  # (on the labels of the result files: a clash names what a user finds in them)

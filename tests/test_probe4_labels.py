@@ -54,3 +54,16 @@ def test_the_trained_world_names_the_run_and_field_of_bad_partner_arguments(fixe
     run["config"]["fixed"] = fixed
     with pytest.raises(ValueError, match=f"run {run['run_id']}: {says}"):
         trained_world(run)
+
+
+def test_a_prefix_that_makes_a_label_too_long_is_refused(tmp_path) -> None:
+    import shutil
+    from pathlib import Path
+
+    from leaderboard.sources import load_results_dirs
+
+    quick = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"
+    other = tmp_path / "other"
+    shutil.copytree(quick / "runs", other / "runs")
+    with pytest.raises(ValueError, match="with its prefix"):
+        load_results_dirs([quick, other], labels={str(other): "p" * 195})
