@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_journal_forgeries import PARAMS, SWEEP
 
 from empathy_zoo.bounded_read import check_json_depth, json_depth, read_json_data
 from empathy_zoo.limits import MAX_JSON_DEPTH
@@ -109,27 +110,6 @@ def test_a_journal_line_of_escaped_quotes_is_refused_naming_file_and_line(tmp_pa
 
 # --- a study's journal and directory (a study of one 300-step trial, as in test_journal_forgeries.py)
 
-SWEEP = """
-[sweep]
-seeds = [0, 1]
-steps = 300
-eval_interval = 100
-eval_episodes = 1
-
-[settings]
-learning_starts = 32
-replay_capacity = 300
-hidden_size = 8
-target_update_interval = 50
-epsilon_decay_steps = 200
-
-[envs.coexistence_v0]
-max_cycles = 40
-
-[[methods]]
-method = "dqn_harm_penalty"
-"""
-PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4:1e-2"]
 LOCK = "study.journal.lock"
 """The name Optuna gives the lock file of a journal ``study.journal``."""
 
