@@ -59,6 +59,7 @@ __all__ = [
     "episode_file_name",
     "chosen_runs",
     "trained_world",
+    "ForgedWorld",
     "play_row_episodes",
     "episodes_section",
     "add_episodes_section",
@@ -192,6 +193,12 @@ def _runs_root(directory: str) -> Path:
     return root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
 
 
+class ForgedWorld(ValueError):
+    """A result file's world no run of the suite trained in: a partner for an agent the world lacks,
+    or arguments its policy does not take. The leaderboard refuses the file (a plug-in partner not
+    allowed is a note instead: the user may allow it)."""
+
+
 def trained_world(
     run: Mapping[str, Any], allowed_imports: Collection[str] = ()
 ) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
@@ -208,12 +215,12 @@ def trained_world(
     env, env_kwargs = str(config["env"]), dict(config.get("env_kwargs") or {})
     unknown = sorted(set(fixed) - set(default_policies(env, env_kwargs)))
     if unknown:
-        raise ValueError(f"{where}: {env} as the run built it has no agent {', '.join(unknown)}")
+        raise ForgedWorld(f"{where}: {env} as the run built it has no agent {', '.join(unknown)}")
     for agent, entry in fixed.items():
         try:
             make_policy(entry)  # (its arguments checked: a registered policy, or one of allowed_imports)
         except (ValueError, TypeError) as error:
-            raise ValueError(f"{where}.{agent}: {error}") from None
+            raise ForgedWorld(f"{where}.{agent}: {error}") from None
     return env, env_kwargs, fixed
 
 
@@ -249,6 +256,8 @@ def play_row_episodes(
             continue
         try:
             world = trained_world(run, allowed_imports)
+        except ForgedWorld as error:
+            raise ValueError(f"{result_file}: {error}") from None
         except ValueError as error:
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue
