@@ -102,10 +102,15 @@ def _huge_record(data: bytes) -> bytes:
     return declared(data, name, 3 << 30, compressed=True)
 
 
-TORCH_FORGERIES: dict[str, tuple[Callable[[bytes], bytes], str]] = {
+ZIP_FORGERIES: dict[str, tuple[Callable[[bytes], bytes], str]] = {
     "every record deflated": (lambda data: zip_of(members_of(data), lambda name: True), "is not stored as it is"),
     "8 MiB of zeros deflated": (_bomb, r"data/99' is not stored as it is"),
     "a record declaring 3 GiB": (_huge_record, "more than the .* bytes of the file"),
+}
+"""The forgeries of a ``torch.save`` zip that an agent file and a checkpoint both refuse."""
+
+TORCH_FORGERIES: dict[str, tuple[Callable[[bytes], bytes], str]] = {
+    **ZIP_FORGERIES,
     "a record no torch.save writes": (
         lambda data: zip_of({**members_of(data), "archive/notes.txt": b"hello"}),
         "'archive/notes.txt', which is no record torch.save writes",
@@ -315,9 +320,7 @@ def saved(tmp_path: Path) -> bytes:
 
 
 CHECKPOINT_FORGERIES: dict[str, tuple[Callable[[bytes], bytes], str]] = {
-    "every record deflated": (lambda data: zip_of(members_of(data), lambda name: True), "is not stored as it is"),
-    "8 MiB of zeros deflated": (_bomb, r"data/99' is not stored as it is"),
-    "a record declaring 3 GiB": (_huge_record, "more than the .* bytes of the file"),
+    **ZIP_FORGERIES,
     "a record no torch.save writes": (
         lambda data: zip_of({**members_of(data), "archive/run.sh": b"echo"}),
         "'archive/run.sh', which is no record torch.save writes",
