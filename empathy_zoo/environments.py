@@ -13,6 +13,7 @@ way it is better, its range) are in :mod:`empathy_zoo.metrics`.
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -38,6 +39,7 @@ __all__ = [
     "entry_of",
     "face_module",
     "default_policies",
+    "is_fixed_agent",
 ]
 
 V = TypeVar("V")
@@ -252,6 +254,24 @@ def default_policies(env: str, env_kwargs: Mapping[str, Any] | None = None) -> d
         if index == "0":
             fixed |= {f"{kind}_{i}": policy for i in range(1, number)}
     return fixed
+
+
+_INDEX = re.compile(r"[1-9][0-9]{0,29}")
+"""An agent's index after ``<kind>_`` beyond 0: ASCII digits, no leading zero, short enough to read as an int at once."""
+
+
+def is_fixed_agent(env: str, env_kwargs: Mapping[str, Any] | None, agent: str) -> bool:
+    """Whether ``agent`` is a fixed agent of ``env`` built with ``env_kwargs``: a key of
+    :func:`default_policies`, decided without listing them (a count read from a file may be up to
+    10⁹): one of the table's, or ``<kind>_<i>`` for a table's ``<kind>_0`` and ``0 < i <`` the count."""
+    table = DEFAULT_POLICIES.get(env, {})
+    if agent in table:
+        return True
+    kind, _, index = agent.rpartition("_")
+    count = ENGINES[env].count_argument if env in ENGINES else None
+    if not count or f"{kind}_0" not in table or not _INDEX.fullmatch(index):
+        return False
+    return int(index) < int((env_kwargs or {}).get(count, 1))
 
 
 class _GymIds(Mapping[str, str]):

@@ -33,7 +33,7 @@ from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import argument_defaults
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import ENGINES, default_policies, is_fixed_agent
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
@@ -256,18 +256,38 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
     its ``name``, ``reason`` (one line of printable text), ``env_kwargs`` (as a result file's
     ``config.env_kwargs``: :func:`~empathy_zoo.result_file.check_env_kwargs`; a definition's are
     its own arguments, laid over the run's when played, so only those played are checked together
-    against the grid) and ``fixed`` (agent names and policy labels); returns its name."""
+    against the grid) and ``fixed`` (policy labels of agents its world holds beside the learner:
+    :func:`~empathy_zoo.environments.is_fixed_agent` with its own count, else one, as
+    :meth:`empathy_zoo.scenarios.Scenario.for_run` plays it); returns its name."""
     entry = check.table(definition, where)
     check.has(entry, DEFINITION_FIELDS, f"{where}.")
     if not played:
         _only(check, entry, DEFINITION_FIELDS, f"{where}.")
     name = check.name(entry["name"], f"{where}.name")
     check.text(entry["reason"], f"{where}.reason")
-    check_env_kwargs(check, env, entry["env_kwargs"], f"{where}.env_kwargs", grid=played)
+    env_kwargs = check_env_kwargs(check, env, entry["env_kwargs"], f"{where}.env_kwargs", grid=played)
     for agent_name, label in check.table(entry["fixed"], f"{where}.fixed").items():
         check.name(agent_name, f"{where}.fixed (the agent {agent_name!r})")
+        if not is_fixed_agent(env, env_kwargs, agent_name):
+            raise check.fail(
+                f"{where}.fixed (the agent {agent_name!r})",
+                f"an agent {env} holds beside its learner in this scenario's world ({_others(env, env_kwargs)})",
+                agent_name,
+            )
         check.policy_label(label, f"{where}.fixed.{agent_name}")
     return name
+
+
+def _others(env: str, env_kwargs: Mapping[str, Any]) -> str:
+    """The fixed agents of ``env`` built with ``env_kwargs`` (checked), as a message names them:
+    ``cat_0 … cat_2`` for three (a count may be up to 10⁹, so they are never listed one by one)."""
+    count = ENGINES[env].count_argument
+    number = int(env_kwargs.get(count, 1)) if count else 1
+    names = []
+    for agent in default_policies(env):
+        kind, _, index = agent.rpartition("_")
+        names.append(f"{agent} … {kind}_{number - 1}" if count and index == "0" and number > 1 else agent)
+    return ", ".join(names)
 
 
 def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -> str | None:
