@@ -147,6 +147,10 @@ FORGERIES: dict[str, tuple[Callable[[list[Entry]], int], Callable[[Entry], None]
     "curve per_seed NaN": (_nth(ATTR, 0, "curve"), _curve(_point("per_seed", [float("nan")]))),
     "curve value -1": (_nth(ATTR, 0, "curve"), _curve(_point("value", -1.0))),
     "curve step past the budget": (_nth(ATTR, 0, "curve"), _curve(_point("step", 301))),
+    # probe 5 (#14): a step off the schedule (every 100 steps, and the last: 300) is its own line's fault
+    "curve step off the schedule": (_nth(ATTR, 0, "curve"), _curve(_point("step", 150))),
+    "curve step skipping an evaluation": (_nth(ATTR, 0, "curve"), _curve(_point("step", 200))),
+    "curve step off the schedule later": (_nth(ATTR, 1, "curve"), _curve(_point("step", 250))),
     "trial_id -5": (_nth(PARAM), _set("trial_id", -5)),
     "trial_id 1e9": (_nth(ATTR), _set("trial_id", 1e9)),
     "trial_id of an ended trial": (_nth(PARAM, 2), _set("trial_id", 0)),
@@ -250,3 +254,28 @@ def test_a_study_of_another_plan_is_refused_before_the_journal_gains_a_line(
     other = ["--param", "penalty=float:-100:-1", "--param", "learning_rate=log:1e-4:1e-2"]
     assert _tune(sweep, out, 3, other) == 2
     _refused(out, f"{out} holds a study of another plan (params differ)", capsys, before)
+
+
+def test_a_curve_the_next_line_disagrees_with_is_named_by_its_line(
+    genuine: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A curve point forged to agree with itself (its value the mean of its per_seed) is caught by
+    the intermediate value after it: that line is refused, naming the curve's line too (either may
+    be the forged one)."""
+    sweep, study = genuine
+    out = tmp_path / "study"
+    shutil.copytree(study, out)
+    journal = out / JOURNAL_FILE
+
+    def consistent(point: dict[str, Any]) -> None:
+        point["per_seed"] = [point["per_seed"][0] / 2 + 0.25]  # (within survival's range, never its own value)
+        point["value"] = point["per_seed"][0]
+
+    number = _forge(journal, _nth(ATTR, 0, "curve"), _curve(consistent))
+    before = _snapshot(out)
+    capsys.readouterr()
+    assert _tune(sweep, out, 3) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"empathy-zoo: error: tuning journal {journal}, line {number + 1}: intermediate_value is "), err
+    assert f"over the curve line {number} set" in err and err.count("\n") == 1
+    assert _snapshot(out) == before

@@ -16,8 +16,9 @@ trial at a time), with exactly that operation's fields, each of its type and wit
 * 5 (a parameter drawn): the plan's parameters, each once, in the plan's order, before anything
   else of the trial; its distribution the one the plan's search space gives it, its value inside
   it (a finite number between its bounds, a whole one for an int field, an index of a choice);
-* 8 (a trial's attribute): its learning curve (each greedy evaluation's step, increasing, at most
-  the budget's steps; each tuning seed's value of the objective metric, finite and within the
+* 8 (a trial's attribute): its learning curve (each greedy evaluation's step the next of the
+  plan's schedule, as the runner evaluates: every ``eval_interval`` steps and at the budget's last
+  step; each tuning seed's value of the objective metric, finite and within the
   metric's range; the value their mean), growing by one evaluation at a time; its wall time; the
   reason the method refused its point;
 * 7 (an intermediate value): the step of the curve's last evaluation and the trial's value so
@@ -100,6 +101,8 @@ class _Trial:
     number: int
     params: dict[str, Any] = field(default_factory=dict)
     curve: list[Any] = field(default_factory=list)
+    curve_line: int = 0
+    """The journal's line that set :attr:`curve` (a later line that disagrees with it names it)."""
     intermediate: list[float] = field(default_factory=list)
     wall: bool = False
     refused: bool = False
@@ -180,6 +183,8 @@ class _StudyLines:
         self.trials: list[_Trial] = []
         self.running: dict[int, _Trial] = {}
         """The trials created since the study was last opened and not ended, by number."""
+        self.number = 0
+        """The number of the line being checked (in the journal)."""
 
     def line(self, entry: dict[str, Any]) -> None:
         """Check one line (a JSON object), given every line before it was checked."""
@@ -317,11 +322,15 @@ class _StudyLines:
             isinstance(point, dict) and sorted(point) == ["per_seed", "step", "value"], where, point, "{step, value, per_seed}"
         )
         step, after = point["step"], trial.curve[-1]["step"] if trial.curve else 0
+        interval, budget = self.plan.base.eval_interval, self.plan.base.steps
+        if after >= budget:
+            raise _Refusal(f"{what} grows past its evaluation at the budget's last step ({budget:,})")
+        due = min((after // interval + 1) * interval, budget)
         _expect(
-            _is_int(step) and after < step <= self.plan.base.steps,
+            _is_int(step) and step == due,
             f"{where}.step",
             step,
-            f"an env step in ({after:,}, {self.plan.base.steps:,}]",
+            f"{due:,}, the next greedy evaluation of the plan's schedule (every {interval:,} steps, and the last: {budget:,})",
         )
         per_seed = point["per_seed"]
         seeds = len(self.plan.seeds)
@@ -334,7 +343,7 @@ class _StudyLines:
             point["value"],
             "the mean of per_seed",
         )
-        trial.curve = curve
+        trial.curve, trial.curve_line = curve, self.number
 
     def _metric(self, value: Any, what: str) -> float:
         """``value``, a value of the objective metric, within its range."""
@@ -361,7 +370,10 @@ class _StudyLines:
             raise _Refusal("an intermediate value without a new evaluation on the trial's curve")
         step = entry["step"]
         _expect(
-            _is_int(step) and step == trial.curve[-1]["step"], "step", step, f"{trial.curve[-1]['step']} (the curve's last step)"
+            _is_int(step) and step == trial.curve[-1]["step"],
+            "step",
+            step,
+            f"{trial.curve[-1]['step']} (the last step of the curve line {trial.curve_line} set)",
         )
         value = self._metric(entry["intermediate_value"], "intermediate_value")
         expected = curve_value([point["value"] for point in trial.curve], self.plan.over)
@@ -369,7 +381,7 @@ class _StudyLines:
             math.isclose(value, expected, rel_tol=1e-9, abs_tol=1e-12),
             "intermediate_value",
             entry["intermediate_value"],
-            f"{expected!r} (the trial's value over its curve)",
+            f"{expected!r} (the trial's value over the curve line {trial.curve_line} set)",
         )
         trial.intermediate.append(value)
 
@@ -442,6 +454,7 @@ def check_study_lines(lines: Sequence[tuple[int, dict[str, Any]]], path: Path, p
     refused with a one-line ``ValueError`` naming the file (and the line)."""
     check = _StudyLines(plan, update_kernel, path.parent)
     for number, entry in lines:
+        check.number = number
         try:
             check.line(entry)
         except _Refusal as error:
