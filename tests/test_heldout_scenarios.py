@@ -40,8 +40,13 @@ SHARING_PARTNERS = {
 }
 
 
+SPLITS = tuple(f"{env}_{split}" for env in sorted(ENVIRONMENT_TABLE) for split in ("test", "validation"))
+SHIPPED = sorted(["charger_v0", "coexistence_v0", "coexistence_v0_noisy", "helping_v0", "sharing_v0", "vase_v0", *SPLITS])
+"""Every shipped set: the defaults, the noisy set and each environment's validation and test splits."""
+
+
 def test_one_default_set_ships_per_environment_and_coexistence_has_its_noisy_set() -> None:
-    assert shipped_sets() == ["charger_v0", "coexistence_v0", "coexistence_v0_noisy", "helping_v0", "sharing_v0", "vase_v0"]
+    assert shipped_sets() == SHIPPED
     assert [default_set_name(env) for env in ENVIRONMENT_TABLE] == list(ENVIRONMENT_TABLE)
 
 
@@ -126,7 +131,7 @@ def test_a_bad_set_header_is_refused(text, message, tmp_path) -> None:
 
 
 def test_an_unknown_set_name_lists_the_shipped_ones() -> None:
-    shipped = "charger_v0, coexistence_v0, coexistence_v0_noisy, helping_v0, sharing_v0, vase_v0"
+    shipped = ", ".join(SHIPPED)
     with pytest.raises(SweepConfigError, match=f"unknown scenario set 'mine'; shipped: {shipped}"):
         load_scenario_set("mine")
 
