@@ -23,6 +23,13 @@ def _fields(state: Any) -> str:
     return str(sorted(map(str, state))) if isinstance(state, Mapping) else f"{state!r:.80}"
 
 
+def _key_problem(field: str, key: Any, expected: int) -> str | None:
+    """``None`` when ``key`` (a saved stream's ``field``) is ``expected``, the key its seed gives."""
+    if isinstance(key, (int, np.integer)) and not isinstance(key, bool) and int(key) == expected:
+        return None
+    return f"{field} is {key!r:.40}, not {expected}, the key its seed gives"
+
+
 class CounterStream:
     """A policy's own counter-based random stream (:func:`~empathy_zoo.randomness.counter_uniform`):
     ``reset(seed)`` keys it from the episode's seed (a fresh random key without one), and each
@@ -32,9 +39,14 @@ class CounterStream:
         self._key: int | None = None
         self._count = 0
 
+    def key_of(self, seed: int) -> int:
+        """The key a reset with ``seed`` gives the stream (:func:`~empathy_zoo.randomness.derive_key`
+        of it), which it keeps until its next seeded reset."""
+        return derive_key(seed)
+
     def reset(self, seed: int | None = None) -> None:
         if seed is not None:
-            self._key, self._count = derive_key(seed), 0
+            self._key, self._count = self.key_of(seed), 0
         elif self._key is None:
             self._key = secrets.randbits(64)
 
@@ -49,6 +61,12 @@ class CounterStream:
 
     def state(self) -> dict[str, Any]:
         return {"key": self._key, "count": self._count}
+
+    def saved_key_problem(self, state: Any, seed: int) -> str | None:
+        """What is wrong with the key of ``state`` (what :meth:`state` saved) of a stream whose last
+        seeded reset was with ``seed``: ``None`` when it is the key that seed gives (:meth:`key_of`,
+        rederived: no step changes it), else one line naming the field."""
+        return _key_problem("key", state.get("key") if isinstance(state, Mapping) else None, self.key_of(seed))
 
     def load_state(self, state: Mapping[str, Any]) -> None:
         if not isinstance(state, Mapping) or set(state) != {"key", "count"}:
@@ -73,10 +91,28 @@ class CounterStreamBatch:
         self.keys = np.array([secrets.randbits(64) for _ in range(num_envs)], dtype=np.uint64)
         self.counts = np.zeros(num_envs, dtype=np.uint64)
 
+    def key_of(self, seed: int) -> int:
+        """The key a reset with ``seed`` gives an environment's stream (as :meth:`CounterStream.key_of`)."""
+        return derive_key(seed)
+
     def reset(self, env_ids: np.ndarray, seeds: Sequence[int | None]) -> None:
         for i, seed in zip(env_ids, seeds, strict=True):
             if seed is not None:
-                self.keys[i], self.counts[i] = derive_key(seed), 0
+                self.keys[i], self.counts[i] = self.key_of(seed), 0
+
+    def saved_key_problem(self, state: Any, seeds: Sequence[int | None]) -> str | None:
+        """What is wrong with the keys of ``state`` (what :meth:`state` saved) of streams whose last
+        seeded resets were with ``seeds`` (one per environment; ``None``: never seeded, not judged):
+        ``None`` when each is the key its seed gives (:meth:`key_of`, rederived), else one line
+        naming the field."""
+        keys = state.get("keys") if isinstance(state, Mapping) else None
+        if not isinstance(keys, np.ndarray) or keys.dtype != np.uint64 or keys.shape != self.keys.shape:
+            return f"keys is no uint64 array of shape {self.keys.shape}"
+        for i, seed in enumerate(seeds):
+            problem = None if seed is None else _key_problem(f"keys[{i}]", int(keys[i]), self.key_of(seed))
+            if problem is not None:
+                return problem
+        return None
 
     def _take(self, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The keys and the numbers of this step's draws (the counts of the active ones advance)."""

@@ -291,15 +291,33 @@ class Population(CounterStream):
         self.member = 0
         """The index of the member playing this episode."""
 
+    def key_of(self, seed: int) -> int:
+        """The key of the draws of members a reset with ``seed`` gives (stream ``population_member``)."""
+        return derive_key(seed, STREAMS["population_member"])
+
     def reset(self, seed: int | None = None) -> None:
-        if seed is not None:
-            self._key, self._count = derive_key(seed, STREAMS["population_member"]), 0
-        else:
-            super().reset(None)
-        key, count = self._take()
-        draw = float(counter_uniform(key, count)[0])
-        self.member = min(int(np.searchsorted(self._cumulative, draw, side="right")), len(self.members) - 1)
+        super().reset(seed)
+        self.member = self._member_of(*self._take())
         self._policies[self.member].reset(seed)
+
+    def _member_of(self, key: int, count: int) -> int:
+        """The member the draw ``count`` of the stream ``key`` picks."""
+        draw = float(counter_uniform(key, count)[0])
+        return min(int(np.searchsorted(self._cumulative, draw, side="right")), len(self.members) - 1)
+
+    def saved_key_problem(self, state: Any, seed: int) -> str | None:
+        """As :meth:`CounterStream.saved_key_problem`, for its own key and that of the member its seeded
+        reset picked (reset with the same seed). A member first picked after it, at a reset without a
+        seed, keys its stream from fresh entropy (:meth:`CounterStream.reset`): no seed gives that
+        key, so it is not judged."""
+        problem = super().saved_key_problem(state, seed)
+        members = state.get("members") if isinstance(state, Mapping) else None
+        if problem is not None or not isinstance(members, list) or len(members) != len(self.members):
+            return problem  # (a list of another length: load_state refuses it)
+        first = self._member_of(self.key_of(seed), 0)
+        judge = getattr(self._policies[first], "saved_key_problem", None)
+        inner = judge(members[first], seed) if callable(judge) else None
+        return None if inner is None else f"members[{first}].{inner}"
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         return int(self._policies[self.member].act(observation, info))

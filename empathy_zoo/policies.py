@@ -104,6 +104,10 @@ class FixedPolicy(Protocol):
     (train it with ``--checkpoint-interval 0``), since a resumed run would silently act otherwise
     than an uninterrupted one. The per-environment copies of the generic batched path save and
     load each copy's state; a policy's own ``batched()`` object follows the same protocol.
+    A policy whose saved state holds a key derived from its seed may define
+    ``saved_key_problem(state, seed) -> str | None`` (a batched one: ``(state, seeds)``), as
+    :class:`~empathy_zoo.builtin_policies.CounterStream` does: a resumed run refuses a checkpoint
+    whose key is not the one its environment's seed gives.
     """
 
     def reset(self, seed: int | None = None) -> None:
@@ -167,6 +171,22 @@ class _PolicyCopies:
 
     def state(self) -> dict[str, Any]:
         return {"copies": [policy_state(policy) for policy in self.copies]}
+
+    def saved_key_problem(self, state: Any, seeds: Sequence[int | None]) -> str | None:
+        """What is wrong with the keys of the random streams ``state`` saves, each copy's as its
+        policy judges it (its ``saved_key_problem``, given the seed of its environment's last seeded
+        reset; a policy without one, or an environment never seeded, is not judged), else ``None``."""
+        judge = getattr(self.copies[0], "saved_key_problem", None) if self.copies else None
+        if not callable(judge):
+            return None
+        states = state.get("copies") if isinstance(state, Mapping) else None
+        if not isinstance(states, list) or len(states) != len(self.copies):
+            return f"copies is no list of {len(self.copies)} states (one per environment)"
+        for i, (policy, saved, seed) in enumerate(zip(self.copies, states, seeds, strict=True)):
+            problem = None if seed is None else policy.saved_key_problem(saved, seed)  # type: ignore[attr-defined]
+            if problem is not None:
+                return f"copies[{i}].{problem}"
+        return None
 
     def load_state(self, state: Mapping[str, Any]) -> None:
         states = state["copies"]

@@ -223,6 +223,9 @@ class VectorEnv:
         """(N,) bool: the environment was reset after :attr:`_events` (its context is the reset's)."""
         self._watchers: list[EngineWatcher] = []
         """What :meth:`watch_engine` was given, in order."""
+        self._seeds: list[int | None] = [None] * self.num_envs
+        """The seed each environment was last reset with by :meth:`reset` (``None``: without one):
+        its fixed policies' keys derive from it (:meth:`saved_key_problem`)."""
 
     # ------------------------------------------------------------------ episode
     def reset(self, seed: int | Sequence[int] | None = None) -> np.ndarray:
@@ -242,6 +245,7 @@ class VectorEnv:
         self.engine.reset(ids, seeds)
         for index, policy in self.fixed.items():
             policy.reset(ids, [None if s is None else policy_seed(s, index) for s in seeds])
+        self._seeds = seeds
         self._events, self._fresh[:] = None, True
         self._observations = self._observe_learners()
         return self._observations
@@ -476,6 +480,24 @@ class VectorEnv:
             "fresh": self._fresh.copy(),
             "observations": observations,
         }
+
+    def saved_key_problem(self, state: Mapping[str, Any]) -> str | None:
+        """What is wrong with the keys of the fixed policies' random streams in ``state`` (what
+        :meth:`state` saved), given this env was reset with the seeds the saved one was (a resumed
+        run's, freshly reset): each key rederived from its environment's seed and its agent
+        (:func:`~empathy_zoo.fixed_agents.policy_seed`, then the policy's ``saved_key_problem``). One
+        line naming the field (``policies.cat_0.keys[1] is …``), or ``None``; a policy without
+        ``saved_key_problem`` and an environment reset without a seed are not judged."""
+        policies = state.get("policies")
+        if not isinstance(policies, Mapping):
+            return "policies is no table of the fixed agents' states"
+        for index, policy in self.fixed.items():
+            judge, name = getattr(policy, "saved_key_problem", None), self.agents[index]
+            if callable(judge) and name in policies:  # (one missing: load_state refuses it)
+                problem = judge(policies[name], [None if s is None else policy_seed(s, index) for s in self._seeds])
+                if problem is not None:
+                    return f"policies.{name}.{problem}"
+        return None
 
     def load_state(self, state: Mapping[str, Any]) -> None:
         """Continue from :meth:`state`; a state of another layout (an earlier version's

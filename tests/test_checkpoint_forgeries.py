@@ -162,6 +162,11 @@ FORGERIES: dict[str, tuple[Callable[[dict[str, Any]], None], str]] = {
         _set("vector.events.rewards.__ndarray__", lambda t: t[:, :1].clone()),
         "events.rewards",
     ),
+    # 5 (probe 5, #6): a fixed policy's stream key changed within its range (rederived from the run's seed)
+    "a cat's stream key of another seed": (
+        _set("vector.policies.cat_0.keys.__ndarray__", _first(12345)),
+        "vector.policies.cat_0.keys[0] is 12345",
+    ),
     "fresh of 3 environments": (
         _set("vector.fresh", lambda _: {"__ndarray__": torch.ones(3, dtype=torch.bool), "dtype": "bool"}),
         "vector.fresh",
@@ -209,6 +214,7 @@ WITHOUT_RUNS_LIST = [
     "seed of another run",
     "stream position past its block",
     "harmed by agent 99",
+    "a cat's stream key of another seed",
 ]
 """Forgeries refused from the checkpoint alone: by the bounds every run has and by its other fields."""
 

@@ -342,9 +342,13 @@ def _restore(
                 "(update_kernel in RunnerOptions), or move the checkpoint away to restart"
             )
     try:
+        vector = from_safe(saved["vector"])
+        forged_key = venv.saved_key_problem(vector)  # (venv is reset with the runs' seeds: each key rederived)
+        if forged_key is not None:
+            raise corrupted(ckpt, f"vector.{forged_key}")
         learner.load_state_dict(learner_state)
         train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
-        venv.load_state(from_safe(saved["vector"]))
+        venv.load_state(vector)
         observations = from_safe(saved["obs"])
     except CheckpointError:
         raise
