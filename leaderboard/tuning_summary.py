@@ -9,7 +9,8 @@ study: its trials finished / pruned / refused, the env steps it spent against it
 value and the settings chosen) and, with ``--figure``, draws the trials of studies that tune one
 numeric parameter: one panel per variant, one line per study, each trial a dot at its value of
 the parameter (finished filled, pruned hollow), the chosen one a star, the range's ends dotted. Read from the study files
-alone; nothing is trained or tested.
+alone; nothing is trained or tested. A study file may come from anyone: each is read bounded and
+checked field by field (:func:`check_study`) before anything is printed or drawn.
 """
 
 from __future__ import annotations
@@ -28,8 +29,21 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.document_checks import DocumentChecker, finite_float
+from empathy_zoo.limits import MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
+from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
+from leaderboard.tables import markdown_text
 
-__all__ = ["StudySummary", "find_studies", "summarise", "summary_table", "render_studies_png", "main"]
+__all__ = [
+    "StudySummary",
+    "StudyFileError",
+    "check_study",
+    "find_studies",
+    "summarise",
+    "summary_table",
+    "render_studies_png",
+    "main",
+]
 
 STUDY_FILE = "study.json"
 """A study's file (:data:`empathy_zoo.training.tuning.STUDY_FILE`)."""
@@ -94,7 +108,8 @@ def _value(value: Any) -> str:
 
 
 def summary_table(summaries: Sequence[StudySummary]) -> str:
-    """Markdown: one line per study, in the order given."""
+    """Markdown: one line per study, in the order given; its text (a label, a parameter's name or
+    chosen value: data) escaped (:func:`~leaderboard.tables.markdown_text`), so a ``|`` is no cell."""
     lines = [
         "| variant | method | trials: finished / pruned / refused | env steps (of at most) | trials' wall time | "
         "best value | chosen |",
@@ -104,8 +119,9 @@ def summary_table(summaries: Sequence[StudySummary]) -> str:
         best = "none finished" if s.best_value is None else f"{s.metric} {s.best_value:.4g} ({s.over})"
         chosen = ", ".join(f"{name} = {_value(value)}" for name, value in s.best_params.items()) or "—"
         lines.append(
-            f"| {s.variant} | {s.label} | {s.trials}: {s.finished} / {s.pruned} / {s.refused} | "
-            f"{s.env_steps_trained:,} ({s.env_steps_at_most:,}) | {s.wall_time_s / 60:.1f} min | {best} | {chosen} |"
+            f"| {markdown_text(s.variant)} | {markdown_text(s.label)} | {s.trials}: {s.finished} / {s.pruned} / {s.refused} | "
+            f"{s.env_steps_trained:,} ({s.env_steps_at_most:,}) | {s.wall_time_s / 60:.1f} min | {best} | "
+            f"{markdown_text(chosen)} |"
         )
     return "\n".join(lines)
 
@@ -182,7 +198,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--figure", metavar="PATH", help="draw the trials of every study into this PNG")
     args = parser.parse_args(argv)
     try:
-        read = [(path, read_study(path)) for path in find_studies(args.root)]
+        read = [(path, check_study(read_study(path), path)) for path in find_studies(args.root)]
         studies = [study for _, study in read]
         table = summary_table([_checked(path, summarise, study) for path, study in read])
         figure = _checked(Path(args.root), render_studies_png, studies) if args.figure else None
@@ -212,6 +228,117 @@ def read_study(path: Path) -> Any:
         return json.loads(data)
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise ValueError(f"{path} is not JSON ({error})") from None
+
+
+class StudyFileError(ValueError):
+    """A ``study.json`` is not what ``tune`` writes; the message names the file and the field."""
+
+
+TRIAL_STATES = ("COMPLETE", "PRUNED", "REFUSED", "INTERRUPTED")
+"""The states a ``study.json`` records of a trial (:func:`empathy_zoo.training.tuning.study_document`)."""
+MAX_ENV_STEPS = MAX_TRIALS * MAX_SEEDS * MAX_STEPS
+"""The most env steps a study may spend: its trials, each on its tuning seeds, each of its steps."""
+RANGE_KINDS = ("log", "float", "int")
+"""The kinds of a parameter spec that give a range (``choice`` lists its values)."""
+
+
+def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
+    """``document`` (a parsed ``study.json``) if every field this tool reads is what ``tune`` writes,
+    else :class:`StudyFileError` naming ``path`` and the field. Every string anywhere one line of
+    printable text, every number finite; what a table or figure shows (``plan.variant`` a name,
+    ``plan.label``, each parameter's name and spec, each chosen text value) a label
+    (:func:`empathy_zoo.names.check_label`); the objective's metric and its reduction the suite's;
+    each env step count a whole number within ``trials × tuning seeds × steps`` at their bounds;
+    each trial's state one ``tune`` writes, its wall time within ten years; every parameter value
+    one of the plan's parameters, within its range; the best value finite, within its metric's range."""
+    check = DocumentChecker(
+        Path(path), StudyFileError, "a study file", "a study that empathy-zoo tune wrote", "move it away (tune writes it again)"
+    )
+    study = check.table(document, "(the whole file)")
+    for key, item in study.items():
+        check.plain(item, key)  # (every string one line of printable text, every number finite)
+    check.has(study, ("plan", "env_steps_trained", "best", "trials"), "")
+    plan = check.table(study["plan"], "plan")
+    check.has(plan, ("variant", "label", "params", "objective", "budget"), "plan.")
+    check.name(plan["variant"], "plan.variant")
+    check.label(plan["label"], "plan.label")
+    objective = check.table(plan["objective"], "plan.objective")
+    check.has(objective, ("metric",), "plan.objective.")
+    metric = objective["metric"]
+    if metric not in METRIC_NAMES:
+        raise check.fail("plan.objective.metric", f"one of the suite's metrics ({', '.join(METRIC_NAMES)})", metric)
+    if objective.get("over", "last") not in ("last", "curve"):
+        raise check.fail("plan.objective.over", "last or curve", objective["over"])
+    budget = check.table(plan["budget"], "plan.budget")
+    check.has(budget, ("env_steps_at_most",), "plan.budget.")
+    check.integer(budget["env_steps_at_most"], "plan.budget.env_steps_at_most", 1, MAX_ENV_STEPS)
+    check.integer(study["env_steps_trained"], "env_steps_trained", 0, MAX_ENV_STEPS)
+    specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
+    trials = study["trials"]
+    if not isinstance(trials, list):
+        raise check.fail("trials", "an array of trials", trials)
+    for i, trial in enumerate(trials):
+        where = f"trials[{i}]"
+        trial = check.table(trial, where)
+        check.has(trial, ("state", "params"), f"{where}.")
+        if trial["state"] not in TRIAL_STATES:
+            raise check.fail(f"{where}.state", f"one of {', '.join(TRIAL_STATES)}", trial["state"])
+        wall = trial.get("wall_time_s")
+        if wall is not None and not 0 <= check.finite(wall, f"{where}.wall_time_s") <= MAX_WALL_TIME_S:
+            raise check.fail(f"{where}.wall_time_s", f"seconds in [0, {MAX_WALL_TIME_S:,}] (ten years)", wall)
+        _params(check, trial["params"], specs, f"{where}.params")
+    best = study["best"]
+    if best is not None:
+        best = check.table(best, "best")
+        check.has(best, ("value", "params"), "best.")
+        low, high = METRIC_RANGES[metric]
+        value = check.finite(best["value"], "best.value", low)
+        if high is not None and value > high:
+            raise check.fail("best.value", f"{metric}, a number in [{low:g}, {high:g}]", value)
+        _params(check, best["params"], specs, "best.params")
+    return study
+
+
+def _spec(check: DocumentChecker, name: str, spec: Any) -> tuple[str, float, float]:
+    """A parameter's name and spec (``log:1e-4:1e-2``, ``choice:a,b``) as labels; a range's ends
+    finite, in order: ``(kind, low, high)`` (a choice's ends are not used)."""
+    check.label(name, f"plan.params (the parameter {name[:60]!r})")
+    where = f"plan.params.{name}"
+    check.label(spec, where)
+    kind, _, rest = spec.partition(":")
+    if kind == "choice" and rest:
+        return kind, 0.0, 0.0
+    ends = [_finite(end) for end in rest.split(":")] if kind in RANGE_KINDS else []
+    if len(ends) != 2 or ends[0] is None or ends[1] is None or ends[0] > ends[1]:
+        raise check.fail(where, "a parameter's spec (log:LOW:HIGH, float:LOW:HIGH, int:LOW:HIGH or choice:A,B,...)", spec)
+    return kind, ends[0], ends[1]
+
+
+def _finite(text: str) -> float | None:
+    """``text`` as a finite float, or ``None``."""
+    try:
+        return finite_float(float(text))
+    except ValueError:
+        return None
+
+
+def _params(check: DocumentChecker, value: Any, specs: Mapping[str, tuple[str, float, float]], where: str) -> None:
+    """A trial's parameter values: each of a parameter of the plan; a range's a number within it
+    (a whole one for an ``int``), a choice's a boolean, a finite number or a label."""
+    for name, item in check.table(value, where).items():
+        field = f"{where}.{name}" if name in specs else f"{where} (the parameter {name[:60]!r})"
+        if name not in specs:
+            raise check.fail(field, f"one of the plan's parameters ({', '.join(specs)})", name)
+        kind, low, high = specs[name]
+        if kind == "choice":
+            if isinstance(item, str):
+                check.label(item, field)
+            elif not isinstance(item, bool):
+                check.finite(item, field)
+            continue
+        number = finite_float(item)
+        if number is None or isinstance(item, bool) or not low <= number <= high or (kind == "int" and number != int(number)):
+            raise check.fail(field, f"{'a whole number' if kind == 'int' else 'a number'} in [{low:g}, {high:g}]", item)
 
 
 def _checked(where: Path, make: Any, study: Any) -> Any:

@@ -1,6 +1,7 @@
 """A fifth probe's leftovers (issue 33, "files from elsewhere are inert"): an evaluation file's
 partners only for agents its scenario's world holds; a checkpoint's saved stream keys rederived
-from the seeds of the runs it resumes."""
+from the seeds of the runs it resumes; a study file's text and numbers checked field by field
+before ``analyse tuning-summary`` puts them in a table."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from empathy_zoo.cli import main
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.partner_policies import Population
@@ -139,3 +141,73 @@ def test_a_vector_envs_saved_key_is_judged_against_the_seeds_it_was_reset_with()
     unseeded = VectorEnv("coexistence_v0", 2, fixed={"cat_0": "random_walk"})
     unseeded.reset()
     assert unseeded.saved_key_problem(state) is None  # (reset without seeds: no key to rederive)
+
+
+# ---------------------------------------------------------------------------- study files (#10)
+STUDY = DOCS / "methods" / "tuning" / "coexistence_v0" / "dqn" / "study.json"
+"""A shipped study: DQN's learning_rate on log:0.0001:0.003, survival over the curve."""
+
+
+def _study_at(tmp_path: Path, forge: Any) -> Path:
+    """A copy of :data:`STUDY` under ``tmp_path/study/``, edited by ``forge(document)``; its path."""
+    document = json.loads(STUDY.read_text())
+    forge(document)
+    path = tmp_path / "study" / "study.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(document))
+    return path
+
+
+def _setter(*where: Any, value: Any) -> Any:
+    def forge(document: dict[str, Any]) -> None:
+        table = document
+        for key in where[:-1]:
+            table = table[key]
+        table[where[-1]] = value
+
+    return forge
+
+
+STUDY_FORGERIES = {
+    "label with a line break": (_setter("plan", "label", value="DQN\n| x | y |"), "plan.label"),
+    "label with a control character": (_setter("plan", "label", value="DQN\x1b[31m"), "plan.label"),
+    "label of megabytes": (_setter("plan", "label", value="D" * 1_000_000), "plan.label"),
+    "variant with a |": (_setter("plan", "variant", value="a|b"), "plan.variant"),
+    "metric unknown": (_setter("plan", "objective", "metric", value="bogus"), "plan.objective.metric"),
+    "over unknown": (_setter("plan", "objective", "over", value="all"), "plan.objective.over"),
+    "parameter name with a line break": (
+        _setter("plan", "params", value={"learning\nrate": "log:0.0001:0.003"}),
+        "plan.params (the parameter",
+    ),
+    "parameter spec not a range": (_setter("plan", "params", "learning_rate", value="log:x:1e999"), "plan.params.learning_rate"),
+    "env steps negative": (_setter("env_steps_trained", value=-5), "env_steps_trained"),
+    "env steps past every bound": (_setter("env_steps_trained", value=10**30), "env_steps_trained"),
+    "budget a float": (_setter("plan", "budget", "env_steps_at_most", value=1.5), "plan.budget.env_steps_at_most"),
+    "trial state unknown": (_setter("trials", 0, "state", value="HACKED"), "trials[0].state"),
+    "wall time past ten years": (_setter("trials", 0, "wall_time_s", value=1e12), "trials[0].wall_time_s"),
+    "parameter value outside its range": (_setter("trials", 0, "params", "learning_rate", value=0.5), "trials[0].params"),
+    "parameter of another plan": (_setter("trials", 1, "params", value={"evil\u202e": 1}), "trials[1].params"),
+    "best value outside survival's range": (_setter("best", "value", value=-1.0), "best.value"),
+    "best value past a float": (_setter("best", "value", value=10**400), "best.value"),
+    "best chosen value a string": (_setter("best", "params", "learning_rate", value="1 | 2"), "best.params.learning_rate"),
+    "command with a line break": (_setter("command", value="tune\nrm -rf"), "field command"),
+}
+"""Each forgery of a study file: ``(how, the field its refusal names)``."""
+
+
+@pytest.mark.parametrize("name", list(STUDY_FORGERIES))
+def test_tuning_summary_refuses_a_forged_study_naming_file_and_field(tmp_path: Path, capsys, name: str) -> None:
+    forge, field = STUDY_FORGERIES[name]
+    path = _study_at(tmp_path, forge)
+    capsys.readouterr()
+    assert main(["analyse", "tuning-summary", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert not captured.out and captured.err.count("\n") == 1 and str(path) in captured.err and field in captured.err
+
+
+def test_a_label_holding_a_bar_stays_in_its_cell(tmp_path: Path, capsys) -> None:
+    _study_at(tmp_path, _setter("plan", "label", value="DQN | lr"))
+    assert main(["analyse", "tuning-summary", str(tmp_path)]) == 0
+    header, rule, row = capsys.readouterr().out.strip().splitlines()
+    bars = row.replace("\\|", "").count("|")
+    assert bars == header.count("|") == rule.count("|") and "DQN \\| lr" in row
