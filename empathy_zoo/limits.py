@@ -48,6 +48,7 @@ __all__ = [
     "MAX_TRIALS",
     "MAX_VECTOR_ENVS",
     "MAX_WALL_TIME_S",
+    "MAX_WATCH_STEPS",
     "available_memory",
     "check_at_most",
     "check_memory",
@@ -123,6 +124,10 @@ MAX_REFERENCE_SIZE = 21
 MAX_REFERENCE_CYCLES = 10_000
 """Longest ``max_cycles`` of a run whose leaderboard curves get the exact reference: it takes one
 product with the step matrix per step of an episode, at every point of the curve."""
+MAX_WATCH_STEPS = MAX_REFERENCE_CYCLES
+"""Most steps ``watch`` plays of one episode: an agent file's ``max_cycles`` may be up to
+:data:`MAX_CYCLES`, and a longer episode is cut short there, said before it plays, as the
+leaderboard's greedy episodes are (it plays no episode step by step past :data:`MAX_REFERENCE_CYCLES`)."""
 MAX_WALL_TIME_S = 10 * 365 * 24 * 3600
 """Longest training time a result file records (``wall_time_s``), in seconds: ten years."""
 MAX_LEARNER_BYTES = 1 << 40
@@ -160,6 +165,7 @@ BOUNDS: Mapping[str, int] = {
     "trials": MAX_TRIALS,
     "reference curve size": MAX_REFERENCE_SIZE,
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
+    "watch episode steps": MAX_WATCH_STEPS,
     "wall_time_s": MAX_WALL_TIME_S,
     "memory_bytes": MAX_LEARNER_BYTES,
     "hidden_size recorded": MAX_HIDDEN_SIZE,

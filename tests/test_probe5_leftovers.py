@@ -211,3 +211,42 @@ def test_a_label_holding_a_bar_stays_in_its_cell(tmp_path: Path, capsys) -> None
     header, rule, row = capsys.readouterr().out.strip().splitlines()
     bars = row.replace("\\|", "").count("|")
     assert bars == header.count("|") == rule.count("|") and "DQN \\| lr" in row
+
+
+# ---------------------------------------------------------------------------- watch's episode cap (#16)
+def test_watch_cuts_an_agent_files_long_episode_at_its_cap_and_says_so(tmp_path: Path, capsys, monkeypatch) -> None:
+    import argparse
+
+    from agents.empathic_dqn import EmpathicDQN
+    from agents.settings import EmpathicDQNSettings
+    from empathy_zoo import greedy_episode
+    from empathy_zoo.agent_file import write_agent_file
+    from empathy_zoo.cli.watch import add_watch
+    from empathy_zoo.limits import MAX_CYCLES, MAX_WATCH_STEPS
+
+    venv = VectorEnv("coexistence_v0", 1, fixed={"cat_0": "random_walk"})
+    learner = EmpathicDQN([EmpathicDQNSettings(hidden_size=8)], [0], venv.obs_size, venv.num_actions)
+    header: dict[str, Any] = {"run_id": "coexistence_v0__dqn-long__s0", "method": "empathic_dqn", "seed": 0}
+    header |= {"settings": {"hidden_size": 8}, "env": "coexistence_v0", "fixed": {"cat_0": "stay"}}
+    header |= {"env_kwargs": {"max_cycles": MAX_CYCLES}}  # (the most a header may say: 10⁹)
+    written = write_agent_file(learner, 0, tmp_path / "long.agent.pt", header)
+    assert written is not None
+    name = written[0]
+    played: list[int | None] = []
+    real: Any = greedy_episode.play_greedy
+
+    def counted(*args: Any, max_steps: int | None = None, **kwargs: Any) -> Any:
+        played.append(max_steps)
+        assert max_steps is not None and max_steps <= MAX_WATCH_STEPS  # (uncapped: a billion steps, never ending)
+        return real(*args, max_steps=max_steps, **kwargs)
+
+    monkeypatch.setattr(greedy_episode, "play_greedy", counted)
+    parser = argparse.ArgumentParser(prog="empathy-zoo")
+    add_watch(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(["watch", str(tmp_path / name), "--seed", "3"])
+    assert args.handler(args, "empathy-zoo watch") == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert played == [MAX_WATCH_STEPS]
+    note = f"max_cycles {MAX_CYCLES:,} is more than watch plays of an episode ({MAX_WATCH_STEPS:,}"
+    assert note in lines[1] and name in lines[1]  # (before the episode's line)
+    assert lines[2].startswith(f"episode 0 (seed 3) (its first {MAX_WATCH_STEPS:,} steps): survival {MAX_WATCH_STEPS}")

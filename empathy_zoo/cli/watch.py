@@ -7,7 +7,10 @@ optionally the grid every step (``--render ansi``) and a GIF of the first episod
 A run id is looked up as ``<dir>/runs/<run id>.json`` (``--dir``: what ``train --out`` or a sweep
 wrote to, default ``runs``), whose ``agent`` entry names the agent file beside it and its
 SHA-256 (:func:`~empathy_zoo.agent_file.load_run_agent`); a path is read as an agent file (checked
-against the result file beside it when that one names it) or as a result file.
+against the result file beside it when that one names it) or as a result file. An episode is
+played for at most :data:`~empathy_zoo.limits.MAX_WATCH_STEPS` steps (an agent file may record a
+``max_cycles`` of up to 10⁹): a longer one is cut short there, said before anything plays, and its
+line says which steps its metrics are of.
 """
 
 from __future__ import annotations
@@ -170,7 +173,7 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     """Greedy episodes of a trained agent, each one's metrics printed; a GIF of the first."""
     from empathy_zoo.episode_gif import EpisodeRecorder
     from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
-    from empathy_zoo.limits import MAX_CYCLES, check_at_most
+    from empathy_zoo.limits import MAX_CYCLES, MAX_WATCH_STEPS, check_at_most
     from empathy_zoo.policies import entry_label
     from empathy_zoo.render import render_text
 
@@ -188,6 +191,12 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     run = f" of run {d['run_id']}" if d.get("run_id") else ""
     print(f"{d.get('method')} agent{run} ({d['file']}) on {d['env']} {d['env_kwargs']}, beside {beside}")
     engine = env.unwrapped.engine
+    if engine.max_cycles > MAX_WATCH_STEPS:  # (an agent file's header may say up to 10⁹: said before anything plays)
+        print(
+            f"{PROG}: {d['file']}: max_cycles {engine.max_cycles:,} is more than watch plays of an episode "
+            f"({MAX_WATCH_STEPS:,}, docs/limits.md): each episode is cut short there, as the leaderboard's greedy "
+            "episodes are, and its metrics are those of the steps played"
+        )
     recorder = None
     if args.gif:
         title = str(d.get("label") or d.get("method"))  # (a run's label names its settings: β, the penalty)
@@ -201,8 +210,9 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
             if recorder is not None and first:
                 recorder(step)
 
-        outcome = play_greedy(agent, env, seed, on_step=on_step)
-        print(f"episode {episode} (seed {seed}): {format_metrics(outcome.metrics)}", flush=True)
+        outcome = play_greedy(agent, env, seed, max_steps=MAX_WATCH_STEPS, on_step=on_step)
+        cut = "" if outcome.ended else f" (its first {outcome.steps:,} steps)"
+        print(f"episode {episode} (seed {seed}){cut}: {format_metrics(outcome.metrics)}", flush=True)
     if recorder is not None:
         data = recorder.gif()
         path = write_gif(args.gif, data)
