@@ -264,8 +264,9 @@ class Population(CounterStream):
     ``members`` are registered policy names (built with their defaults), each at most once;
     ``weights`` (default: equal) are their probabilities, normalised. The member is drawn from the
     population's own counter-based stream, keyed by the episode's seed on a seeded reset (stream
-    ``population_member`` of :data:`~empathy_zoo.randomness.STREAMS`) and continued otherwise; the
-    member is reset with the same seed. Its state is its stream's, the member's index and every
+    ``population_member`` of :data:`~empathy_zoo.randomness.STREAMS`) and continued otherwise. A
+    seeded reset resets every member with its seed, so a member first picked at a later, unseeded
+    reset continues a stream of that seed: a run repeats exactly. Its state is its stream's, the member's index and every
     member's own state, so a checkpointed run resumes it exactly."""
 
     def __init__(self, members: Sequence[str] = ("chase", "keep_away"), weights: Sequence[float] | None = None) -> None:
@@ -298,7 +299,11 @@ class Population(CounterStream):
     def reset(self, seed: int | None = None) -> None:
         super().reset(seed)
         self.member = self._member_of(*self._take())
-        self._policies[self.member].reset(seed)
+        if seed is None:
+            self._policies[self.member].reset(None)  # (continues its own stream, keyed at the last seeded reset)
+        else:
+            for policy in self._policies:  # every member keyed by the seed: one first picked later is too
+                policy.reset(seed)
 
     def _member_of(self, key: int, count: int) -> int:
         """The member the draw ``count`` of the stream ``key`` picks."""
@@ -306,18 +311,18 @@ class Population(CounterStream):
         return min(int(np.searchsorted(self._cumulative, draw, side="right")), len(self.members) - 1)
 
     def saved_key_problem(self, state: Any, seed: int) -> str | None:
-        """As :meth:`CounterStream.saved_key_problem`, for its own key and that of the member its seeded
-        reset picked (reset with the same seed). A member first picked after it, at a reset without a
-        seed, keys its stream from fresh entropy (:meth:`CounterStream.reset`): no seed gives that
-        key, so it is not judged."""
+        """As :meth:`CounterStream.saved_key_problem`, for its own key and every member's: a seeded
+        reset keys every member with its seed (:meth:`reset`), and an unseeded one continues them."""
         problem = super().saved_key_problem(state, seed)
         members = state.get("members") if isinstance(state, Mapping) else None
         if problem is not None or not isinstance(members, list) or len(members) != len(self.members):
             return problem  # (a list of another length: load_state refuses it)
-        first = self._member_of(self.key_of(seed), 0)
-        judge = getattr(self._policies[first], "saved_key_problem", None)
-        inner = judge(members[first], seed) if callable(judge) else None
-        return None if inner is None else f"members[{first}].{inner}"
+        for index, (policy, own) in enumerate(zip(self._policies, members, strict=True)):
+            judge = getattr(policy, "saved_key_problem", None)
+            inner = judge(own, seed) if callable(judge) else None
+            if inner is not None:
+                return f"members[{index}].{inner}"
+        return None
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         return int(self._policies[self.member].act(observation, info))

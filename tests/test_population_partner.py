@@ -120,3 +120,31 @@ def test_a_checkpoint_of_the_batched_path_resumes_every_environments_member() ->
     [act(first) for _ in range(5)]
     load_policy_state(second, policy_state(first))
     assert [act(first) for _ in range(10)] == [act(second) for _ in range(10)]
+
+
+def _episodes(population: Population, seed: int, episodes: int = 30, steps: int = 12) -> list[list[int]]:
+    """The moves of ``episodes`` episodes, seeded once at the first, as training resets them."""
+    moves = []
+    for episode in range(episodes):
+        population.reset(seed if episode == 0 else None)
+        moves.append([population.act(np.zeros(25), {**CONTEXT, "step": step}) for step in range(steps)])
+    return moves
+
+
+def test_episodes_after_the_seeded_one_repeat_whichever_member_plays_first_later() -> None:
+    members = ["stay", "random_walk", "slow_walk"]  # the first seeded episode's member is stay (seed 3)
+    first, second = Population(members), Population(members)
+    moves = _episodes(first, 3)
+    assert _episodes(second, 3) == moves
+    assert len({tuple(m) for m in moves}) > 2  # random members moved: not a trivially equal sequence
+
+
+def test_every_members_saved_key_is_rederived_from_the_seed() -> None:
+    population = Population(["stay", "random_walk", "slow_walk"])
+    _episodes(population, 3, episodes=5)
+    state = population.state()
+    assert population.saved_key_problem(state, 3) is None
+    for index in (1, 2):
+        members = [dict(m) for m in state["members"]]
+        members[index]["key"] = (members[index]["key"] + 1) % 2**64
+        assert str(population.saved_key_problem({**state, "members": members}, 3)).startswith(f"members[{index}].key is ")
