@@ -56,6 +56,7 @@ __all__ = [
     "format_bytes",
     "not_a_regular_file",
     "open_regular",
+    "read_at_most",
     "read_bounded",
 ]
 
@@ -328,9 +329,34 @@ def read_bounded(path: str | os.PathLike[str], bound: int, what: str) -> bytes:
             ) from None
         raise
     with handle:
-        if os.fstat(handle.fileno()).st_size > bound:
+        size = os.fstat(handle.fileno()).st_size
+        if size > bound:
             raise ValueError(too_large)
-        data = handle.read(bound + 1)
+        data = read_at_most(handle, bound + 1, size + 1)
     if len(data) > bound:
         raise ValueError(too_large)
     return data
+
+
+READ_CHUNK = 1 << 20
+"""Bytes :func:`read_at_most` asks for at once past a file's stated size (1 MiB)."""
+
+
+def read_at_most(handle: BinaryIO, most: int, expected: int = 0) -> bytes:
+    """At most ``most`` bytes of ``handle``, read until its end, with memory that tracks the bytes
+    actually read: ``min(expected, most)`` bytes first (a regular file's size and one more, so its
+    end is seen in one read), then :data:`READ_CHUNK` at a time (a file that grows meanwhile, one
+    whose size says nothing, as ``/proc``'s). Never one read of ``most`` bytes: ``read(n)``
+    reserves ``n`` bytes before it reads one, so a small file read under a cap of 4 GB would take
+    4 GB of memory."""
+    chunks: list[bytes] = []
+    total = 0
+    want = min(max(expected, 1), most)
+    while total < most:
+        chunk = handle.read(want)
+        chunks.append(chunk)
+        total += len(chunk)
+        if len(chunk) < want:  # (a buffered read returns less only at the file's end)
+            break
+        want = min(READ_CHUNK, most - total)
+    return chunks[0] if len(chunks) == 1 else b"".join(chunks)

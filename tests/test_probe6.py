@@ -1,0 +1,97 @@
+"""A sixth probe's findings (issue 33, "files from elsewhere are inert"): a bounded read reserves
+memory for the bytes it reads, not for its cap; a list of runs set aside twice never replaces the
+first; checked files whose fields contradict each other are refused naming file and field; a
+refused command leaves a lock file it did not create as it was."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from empathy_zoo import limits
+from empathy_zoo.bounded_read import read_data
+from empathy_zoo.limits import read_bounded
+
+
+# ---------------------------------------------------------------------------- bounded reads (#1)
+class _Recording:
+    """A file object that records every size asked of ``read`` (and refuses a large one)."""
+
+    def __init__(self, handle: Any, asked: list[int], most: int) -> None:
+        self.handle, self.asked, self.most = handle, asked, most
+
+    def read(self, size: int = -1) -> bytes:
+        self.asked.append(size)
+        if size < 0 or size > self.most:
+            raise AssertionError(f"read({size}) reserves more than the {self.most} bytes the file can hold")
+        return self.handle.read(size)
+
+    def fileno(self) -> int:
+        return self.handle.fileno()
+
+    def __enter__(self) -> _Recording:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.handle.close()
+
+
+def test_a_small_file_read_under_a_huge_cap_asks_for_its_size(tmp_path: Path, monkeypatch) -> None:
+    path = tmp_path / "small.json"
+    path.write_bytes(b"x" * 6000)
+    asked: list[int] = []
+    real = limits.open_regular
+    monkeypatch.setattr(limits, "open_regular", lambda p, what: _Recording(real(p, what), asked, 6001))
+    assert read_bounded(path, 10**12, "agent file") == b"x" * 6000
+    assert asked and max(asked) <= 6001, asked
+
+
+def test_a_file_whose_size_says_nothing_is_read_in_chunks_to_its_cap() -> None:
+    status = Path("/proc/self/status")
+    if not status.is_file() or status.stat().st_size:
+        pytest.skip("needs a /proc file whose stated size is 0")
+    assert b"VmSize" in read_bounded(status, 10**12, "note")
+    with pytest.raises(ValueError, match=r"note /proc/self/status is larger than 100 bytes"):
+        read_bounded(status, 100, "note")
+
+
+def test_a_bounded_read_fits_in_little_memory(tmp_path: Path) -> None:
+    """``read(n)`` reserves ``n`` bytes first: under an address-space limit of 1 GiB more than the
+    interpreter holds, a 6 KB agent file is read under its 4 GB cap, and a file under 1 TB's."""
+    if sys.platform != "linux":
+        pytest.skip("RLIMIT_AS and /proc/self/status are Linux's")
+    path = tmp_path / "x.agent.pt"
+    path.write_bytes(b"a" * 6000)
+    script = textwrap.dedent(
+        f"""
+        import resource
+        from empathy_zoo.bounded_read import read_data
+        from empathy_zoo.limits import read_bounded
+        size = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmSize:")) * 1024
+        resource.setrlimit(resource.RLIMIT_AS, (size + (1 << 30), resource.getrlimit(resource.RLIMIT_AS)[1]))
+        assert len(read_data({str(path)!r}, "agent file")) == 6000
+        assert len(read_bounded({str(path)!r}, 1 << 40, "checkpoint")) == 6000
+        print("read")
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "read", done.stderr[-2000:]
+
+
+def test_a_file_past_its_cap_and_a_device_are_still_refused(tmp_path: Path) -> None:
+    path = tmp_path / "big.json"
+    path.write_bytes(b"y" * 101)
+    with pytest.raises(ValueError, match=rf"result file {path} is larger than 100 bytes"):
+        read_bounded(path, 100, "result file")
+    assert read_bounded(path, 101, "result file") == b"y" * 101
+    if os.path.exists("/dev/zero"):
+        with pytest.raises(ValueError, match="/dev/zero is a character device, not a regular file"):
+            read_data("/dev/zero", "agent file")
+        with pytest.raises(ValueError, match="/dev/zero is a character device"):
+            read_bounded("/dev/zero", 10**12, "note")
