@@ -59,9 +59,8 @@ def test_an_unreadable_list_of_runs_is_not_set_aside_over_a_directory_or_link(tm
     target = tmp_path / "user.txt"
     target.write_text("mine")
     aside.mkdir() if there == "directory" else aside.symlink_to(target)
-    with pytest.raises(ValueError, match=r"\.runs\.json\.unreadable"):
-        plan_ensembles(todo, out, 1, lambda _: None)
-    assert manifest.read_text() == "{" and target.read_text() == "mine"
+    plan_ensembles(todo, out, 1, lambda _: None)  # (set aside under the next free name: tests/test_probe6.py)
+    assert manifest.with_name(manifest.name + ".unreadable.2").read_text() == "{" and target.read_text() == "mine"
     assert aside.is_dir() if there == "directory" else aside.is_symlink()
 
 

@@ -95,3 +95,66 @@ def test_a_file_past_its_cap_and_a_device_are_still_refused(tmp_path: Path) -> N
             read_data("/dev/zero", "agent file")
         with pytest.raises(ValueError, match="/dev/zero is a character device"):
             read_bounded("/dev/zero", 10**12, "note")
+
+
+# ---------------------------------------------------------------------------- lists of runs set aside (#2)
+def _planted(out: Path, run_ids: list[str] | None = None) -> tuple[list[Any], Path]:
+    """A run to do and its checkpoint in ``out`` (holding ``run_ids``, else the run's own); the checkpoint."""
+    from empathy_zoo.experiment.model import RunSpec
+    from empathy_zoo.training.checkpoint import save_checkpoint
+    from empathy_zoo.training.resume import checkpoint_path
+
+    todo = [RunSpec.of(steps=100, eval_interval=100, eval_episodes=1, seed=0)]
+    checkpoint = checkpoint_path(out, todo)
+    save_checkpoint(checkpoint, {"run_ids": run_ids or [spec.run_id for spec in todo]})
+    return todo, checkpoint
+
+
+def test_a_second_unreadable_list_of_runs_never_replaces_the_first(tmp_path: Path) -> None:
+    from empathy_zoo.training.resume import plan_ensembles
+
+    out = tmp_path / "out"
+    todo, checkpoint = _planted(out)
+    manifest = checkpoint.with_name(checkpoint.stem + ".runs.json")
+    first = manifest.with_name(manifest.name + ".unreadable")
+    first.write_text("PRECIOUS: a user's file\n")
+    for number, text in enumerate(["{", "[]", '{"format": 9}'], start=2):
+        manifest.write_text(text)
+        notes: list[str] = []
+        plan_ensembles(todo, out, 1, notes.append)
+        aside = manifest.with_name(f"{manifest.name}.unreadable.{number}")
+        assert aside.read_text() == text and not manifest.exists()
+        assert any(note.startswith(f"set aside {manifest} as {aside.name}:") for note in notes), notes
+    assert first.read_text() == "PRECIOUS: a user's file\n"
+
+
+def test_a_set_aside_skips_a_dangling_link_a_folder_and_a_file(tmp_path: Path) -> None:
+    from empathy_zoo.training.resume import plan_ensembles
+
+    out = tmp_path / "out"
+    todo, checkpoint = _planted(out)
+    manifest = checkpoint.with_name(checkpoint.stem + ".runs.json")
+    manifest.write_text("{")
+    taken = [manifest.with_name(manifest.name + tail) for tail in (".unreadable", ".unreadable.2", ".unreadable.3")]
+    taken[0].symlink_to(tmp_path / "nowhere")
+    taken[1].mkdir()
+    taken[2].write_text("mine")
+    notes: list[str] = []
+    plan_ensembles(todo, out, 1, notes.append)
+    assert manifest.with_name(manifest.name + ".unreadable.4").read_text() == "{"
+    assert taken[0].is_symlink() and taken[1].is_dir() and taken[2].read_text() == "mine"
+    assert any(f"as {manifest.name}.unreadable.4:" in note for note in notes), notes
+
+
+def test_a_misnamed_checkpoint_is_never_set_aside_over_a_dangling_link(tmp_path: Path) -> None:
+    from empathy_zoo.training.resume import plan_ensembles
+
+    out = tmp_path / "out"
+    todo, checkpoint = _planted(out, ["coexistence_v0__other-12345678__s0"])
+    link = checkpoint.with_name(checkpoint.name + ".misnamed")
+    link.symlink_to(tmp_path / "nowhere")
+    notes: list[str] = []
+    plan_ensembles(todo, out, 1, notes.append)
+    assert link.is_symlink() and os.readlink(link) == str(tmp_path / "nowhere")
+    assert checkpoint.with_name(checkpoint.name + ".misnamed.2").is_file() and not checkpoint.exists()
+    assert any(f"as {checkpoint.name}.misnamed.2:" in note for note in notes), notes

@@ -20,12 +20,16 @@ checkpoint of the output directory:
   ``<name>.misnamed`` (said, with the name that would resume it): under its name it would be
   taken for the checkpoint of other runs.
 
+A file set aside takes the first of ``.misnamed`` (``.unreadable``), ``.misnamed.2``, … that names
+nothing yet: nothing is ever renamed over a file, a link or a folder, a user's or one set aside
+before.
+
 The list of runs beside a checkpoint is data, never code: it is read as JSON and each record is
 compared with the :meth:`~empathy_zoo.experiment.model.RunSpec.request` of the runs asked for
 here (and its run id with theirs); a record is never resolved, so it can name no method or
 policy to import. A record that equals a run asked for but for its seed is that run with the
 record's seed (another ``--seeds``); any other record cannot be rebuilt here. A list that cannot
-be read is set aside (``<name>.runs.json.unreadable``, said), and the checkpoint's own run ids
+be read is set aside (``<name>.runs.json.unreadable``, or ``.unreadable.2``, …, said), and the checkpoint's own run ids
 are used instead.
 
 Every decision but a plain resume is reported through ``on_note``, one line each.
@@ -36,6 +40,7 @@ from __future__ import annotations
 import hashlib
 import inspect
 import json
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -44,7 +49,7 @@ from typing import Any
 from empathy_zoo.atomic import read_json, write_json_atomic
 from empathy_zoo.data_files import data_files
 from empathy_zoo.experiment.model import RunSpec, group_specs
-from empathy_zoo.names import check_path_name, check_replaceable
+from empathy_zoo.names import check_path_name
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.checkpoint import RUNS_LIST_SUFFIX, CheckpointError, load_checkpoint, runs_list_path
 
@@ -90,18 +95,34 @@ def remove_checkpoint(checkpoint: Path) -> None:
     manifest_path(checkpoint).unlink(missing_ok=True)
 
 
-def _set_aside_misnamed(checkpoint: Path) -> Path:
-    """Rename ``checkpoint`` (and its list of runs) to ``<name>.misnamed`` (never over a file)."""
-    aside = checkpoint.with_name(checkpoint.name + MISNAMED_SUFFIX)
+def _free_suffix(suffix: str, *paths: Path) -> str:
+    """The first of ``suffix``, ``suffix.2``, ``suffix.3``, … that, after the name of each of
+    ``paths``, names nothing yet (no file, directory or link, not even a dangling one): a file set
+    aside under it replaces nothing, a user's or one set aside before."""
     number = 1
-    while aside.exists():
+    while True:
+        tail = suffix if number == 1 else f"{suffix}.{number}"
+        if not any(os.path.lexists(path.with_name(path.name + tail)) for path in paths):
+            return tail
         number += 1
-        aside = checkpoint.with_name(f"{checkpoint.name}{MISNAMED_SUFFIX}.{number}")
-    checkpoint.replace(aside)
+
+
+def _set_aside_misnamed(checkpoint: Path) -> Path:
+    """Rename ``checkpoint`` (and its list of runs) to ``<name>.misnamed`` (``.misnamed.2``, … where
+    that name is taken: never over anything)."""
     manifest = manifest_path(checkpoint)
+    tail = _free_suffix(MISNAMED_SUFFIX, checkpoint, manifest)
+    aside = checkpoint.with_name(checkpoint.name + tail)
+    checkpoint.replace(aside)
     if manifest.exists():
-        manifest.replace(aside.with_name(manifest.name + aside.name.removeprefix(checkpoint.name)))
+        manifest.replace(manifest.with_name(manifest.name + tail))
     return aside
+
+
+def _set_aside_unreadable(manifest: Path) -> Path:
+    """Rename the list of runs ``manifest`` to ``<name>.unreadable`` (``.unreadable.2``, … where that
+    name is taken: never over a user's file or one set aside before)."""
+    return manifest.replace(manifest.with_name(manifest.name + _free_suffix(UNREADABLE_SUFFIX, manifest)))
 
 
 def read_manifest(manifest: Path, checkpoint: Path) -> list[dict[str, Any]]:
@@ -191,9 +212,7 @@ def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], N
         try:
             records = read_manifest(manifest, checkpoint)
         except ValueError as error:
-            aside = manifest.with_name(manifest.name + UNREADABLE_SUFFIX)
-            check_replaceable(aside)  # (a link, a directory or a FIFO there is refused, never replaced)
-            aside = manifest.replace(aside)
+            aside = _set_aside_unreadable(manifest)  # (under a name nothing holds yet: nothing is replaced)
             on_note(
                 f"set aside {manifest} as {aside.name}: it cannot be read as the list of runs of checkpoint "
                 f"{checkpoint.name} ({error}); that checkpoint's own run ids are read instead"
