@@ -6,17 +6,20 @@ directory: a second process asked to write there meanwhile is refused at once, w
 the first (their files would be identical, the work doubled). The lock is an advisory ``flock`` on
 ``<dir>/.empathy-zoo.lock``: the operating system releases it when its process ends, however it
 ends (a ``kill -9`` included), so a crash never leaves a directory locked; the file is removed on
-a clean exit. On a system without ``fcntl`` (Windows) the directory is not locked, and the call
-says so once through its ``on_note``.
+a clean exit (one taken over and then refused is put back as it was). On a system without
+``fcntl`` (Windows) the directory is not locked, and the call says so once through its ``on_note``.
 
 The lock file's place may hold anything a user (or a hostile results directory) put there. The
 suite creates the file itself (``O_EXCL``), or takes over one it left before (a regular file with
 one link, empty or holding a holder's record); anything else there (a symbolic link, a hard link
 to another file, a directory, a FIFO, a device, a file of other content) is refused in one line
-naming it, without being opened for writing, changed or removed. Only the file this call holds is
-removed on leaving, and only while it is still the one in that place. The directory itself is
-created when missing (and removed again on leaving while it is empty), so a caller takes the
-lock before it creates anything inside the directory.
+naming it, without being opened for writing, changed or removed. A file taken over holds this
+call's record while it holds the lock; a block that raises (a refused command, one that failed
+or was stopped) puts it back byte for byte, with its times, so a refusal changes nothing; one
+that finishes removes it, as a file this call created is removed on leaving, and only while it is
+still the one in that place. The directory itself is created when missing (and removed again on
+leaving while it is empty), so a caller takes the lock before it creates anything inside the
+directory.
 """
 
 from __future__ import annotations
@@ -90,15 +93,15 @@ def _check_place(path: Path, status: os.stat_result) -> None:
         raise _refuse(path, f"a file with {status.st_nlink} hard links (another name of a file kept elsewhere)")
 
 
-def _open_lock(path: Path) -> int:
-    """The lock file ``path`` open for reading and writing: created new (``O_EXCL``), else the
-    regular, singly linked file there, opened without following a link or waiting on a FIFO and
-    seen to be the file that was checked; anything else in its place is refused
-    (:class:`UnsafeLockFile`) untouched. An ``OSError`` of ``ENOENT`` asks the caller to try again
-    (the file went away meanwhile)."""
+def _open_lock(path: Path) -> tuple[int, bool]:
+    """The lock file ``path`` open for reading and writing, and whether this call created it: created
+    new (``O_EXCL``), else the regular, singly linked file there, opened without following a link or
+    waiting on a FIFO and seen to be the file that was checked; anything else in its place is
+    refused (:class:`UnsafeLockFile`) untouched. An ``OSError`` of ``ENOENT`` asks the caller to try
+    again (the file went away meanwhile)."""
     flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
-        return os.open(path, flags, 0o644)
+        return os.open(path, flags, 0o644), True
     except FileExistsError:
         pass
     status = os.lstat(path)  # (FileNotFoundError: gone meanwhile; the caller tries again)
@@ -118,7 +121,7 @@ def _open_lock(path: Path) -> int:
     except BaseException:
         os.close(fd)
         raise
-    return fd
+    return fd, False
 
 
 def _check_contents(path: Path, fd: int) -> None:
@@ -215,7 +218,8 @@ def _locked(root: Path, path: Path, command: str) -> Iterator[None]:
     assert fcntl is not None
     for _attempt in range(100):
         try:
-            fd = _open_lock(path)
+            fd, created = _open_lock(path)
+            found = os.fstat(fd)  # (its times before a byte of it is read)
         except UnsafeLockFile:
             raise
         except OSError as error:
@@ -245,14 +249,40 @@ def _locked(root: Path, path: Path, command: str) -> Iterator[None]:
         break
     else:  # pragma: no cover - a hundred replaced files in a row
         raise DirectoryInUse(f"{root}: its lock file {path} keeps being replaced; is another process looping on it?")
+    before = None if created else _contents(fd, found)  # (a file taken over: put back as it was if the block fails)
     try:
         info = {"pid": os.getpid(), "host": socket.gethostname(), "command": command[:200], "since": time.time()}
         os.ftruncate(fd, 0)
         os.pwrite(fd, json.dumps(info).encode("utf-8"), 0)
         yield
-    finally:
+    except BaseException:
+        if before is None:
+            _remove_own(path, fd)
+        else:
+            _put_back(fd, before)  # (a refused or failed command leaves the file it found as it was)
+        raise
+    else:
         _remove_own(path, fd)  # (still holding the lock: a process that opened it meanwhile sees it replaced)
+    finally:
         os.close(fd)
+
+
+def _contents(fd: int, found: os.stat_result) -> tuple[bytes, int, int]:
+    """What the lock file open as ``fd`` holds (at most :data:`_HOLDER_BYTES`, as
+    :func:`_check_contents` saw) and its access and modification times as ``found`` (its ``fstat``
+    before it was read) has them, in nanoseconds."""
+    return os.pread(fd, _HOLDER_BYTES, 0), found.st_atime_ns, found.st_mtime_ns
+
+
+def _put_back(fd: int, before: tuple[bytes, int, int]) -> None:
+    """Give the lock file open as ``fd`` back the bytes and times it had (:func:`_contents`) before
+    this call took it over: a file the suite did not create is left as it was."""
+    data, accessed, modified = before
+    with suppress(OSError):
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, data, 0)
+        if os.utime in os.supports_fd:
+            os.utime(fd, ns=(accessed, modified))
 
 
 def _remove_own(path: Path, fd: int) -> None:

@@ -158,3 +158,56 @@ def test_a_misnamed_checkpoint_is_never_set_aside_over_a_dangling_link(tmp_path:
     assert link.is_symlink() and os.readlink(link) == str(tmp_path / "nowhere")
     assert checkpoint.with_name(checkpoint.name + ".misnamed.2").is_file() and not checkpoint.exists()
     assert any(f"as {checkpoint.name}.misnamed.2:" in note for note in notes), notes
+
+
+# ---------------------------------------------------------------------------- lock files (#4)
+STALE = b'{"pid": 12345, "host": "elsewhere", "command": "empathy-zoo train --out out", "since": 0}'
+"""A lock file a killed holder left: the suite's own, taken over by the next command."""
+
+
+def _stale_lock(out: Path, data: bytes) -> tuple[Path, os.stat_result]:
+    from empathy_zoo.output_lock import LOCK_NAME
+
+    out.mkdir(parents=True, exist_ok=True)
+    lock = out / LOCK_NAME
+    lock.write_bytes(data)
+    os.utime(lock, ns=(1_000_000_000, 2_000_000_000))
+    return lock, lock.stat()
+
+
+@pytest.mark.parametrize("data", [STALE, b""], ids=["a-holder's-record", "empty"])
+def test_a_block_refused_under_a_lock_it_took_over_leaves_the_file_as_it_was(tmp_path: Path, data: bytes) -> None:
+    from empathy_zoo.output_lock import hold_output_dir
+
+    lock, before = _stale_lock(tmp_path / "out", data)
+    with pytest.raises(ValueError, match="refused"), hold_output_dir(lock.parent, "empathy-zoo train"):
+        assert b"empathy-zoo train" in lock.read_bytes()  # (held: a second process is told who holds it)
+        raise ValueError("refused")
+    after = lock.stat()
+    assert lock.read_bytes() == data
+    assert (after.st_ino, after.st_mtime_ns, after.st_atime_ns) == (before.st_ino, before.st_mtime_ns, before.st_atime_ns)
+
+
+def test_a_refused_train_leaves_a_lock_file_it_did_not_create_byte_for_byte(tmp_path: Path, capsys) -> None:
+    from empathy_zoo.cli import main
+
+    out = tmp_path / "out"
+    lock, before = _stale_lock(out, STALE)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (out / "runs").symlink_to(elsewhere)  # (refused once the lock is held: a link where runs are written)
+    train = ["train", "--steps", "200", "--eval-interval", "100", "--learning-starts", "50", "--hidden-size", "16"]
+    assert main([*train, "--max-cycles", "50", "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{out / 'runs'}" in err and "link" in err, err
+    assert lock.read_bytes() == STALE and lock.stat().st_mtime_ns == before.st_mtime_ns
+    assert sorted(path.name for path in out.iterdir()) == [lock.name, "runs"] and not list(elsewhere.iterdir())
+
+
+def test_a_command_that_finishes_still_removes_the_lock_file_it_took_over(tmp_path: Path) -> None:
+    from empathy_zoo.output_lock import hold_output_dir
+
+    lock, _ = _stale_lock(tmp_path / "out", STALE)
+    with hold_output_dir(lock.parent, "empathy-zoo train"):
+        pass
+    assert not lock.exists()
