@@ -12,6 +12,7 @@ import math
 import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,11 @@ SHOWN = 60
 """Characters of a bad value quoted in a message."""
 HUGE_DIGITS = 30
 """An integer of more digits than this is shown by its number of digits, not its digits."""
+EARLIEST, LATEST = datetime(1971, 1, 1, tzinfo=UTC), datetime(9999, 1, 1, tzinfo=UTC)
+"""The range of a time stamp read (UTC), as a tuning journal's
+(:data:`empathy_zoo.training.tuning_journal.EARLIEST`): any zone's local time of one inside it is a ``datetime``."""
+MAX_DATETIME = 64
+"""Longest time stamp read (the suite writes ISO 8601 with a zone: 25 to 32 characters)."""
 
 
 def shown(value: Any) -> str:
@@ -155,6 +161,22 @@ class DocumentChecker:
                 name = unicodedata.name(character, f"U+{ord(character):04X}")
                 raise self.fail(field, f"one line of printable text (it holds {name}, {category}, at position {position})", value)
         return value
+
+    def date_time(self, value: Any, field: str) -> datetime:
+        """An ISO 8601 date and time with its offset from UTC (``2026-11-29T22:32:30+00:00``, as the
+        suite writes ``created``), from :data:`EARLIEST` to :data:`LATEST` (years 1971 to 9998, UTC:
+        the tuning journal's rule)."""
+        expected = f"an ISO 8601 date and time with its offset from UTC, from {EARLIEST.year} to {LATEST.year - 1}"
+        if not isinstance(value, str) or not 0 < len(value) <= MAX_DATETIME:
+            raise self.fail(field, expected, value)
+        try:
+            stamp = datetime.fromisoformat(value)
+            utc = stamp.astimezone(UTC) if stamp.tzinfo is not None else None
+        except (ValueError, OverflowError):
+            utc = None
+        if utc is None or not EARLIEST <= utc < LATEST:
+            raise self.fail(field, expected, value)
+        return stamp
 
     def plain(self, value: Any, field: str) -> Any:
         """Plain data a method records (a reward transform's fields, a description): objects, arrays,

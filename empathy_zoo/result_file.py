@@ -76,6 +76,8 @@ unit of cost after each training episode, a finite number >= 0 per episode. File
 (every other method's, and those made before it was recorded) are read as they are."""
 UPDATE_KERNELS_RECORDED = ("numba", "torch")
 """The update kernels a result file may name (``update_kernel``; ``null``: the learner has no choice)."""
+MEMORY_FIGURES = ("replay_per_run", "learner_per_run")
+"""The figures of ``memory_bytes`` (bytes of a run's replay memory and of its whole learner): no others."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
 """Tables of ``config`` every result file has."""
 _SHA256 = re.compile(r"[0-9a-f]{64}")
@@ -129,7 +131,7 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
     if "steps" in result["config"] and result["config"]["steps"] != steps:
         raise check.fail("steps", f"the run's config.steps ({result['config']['steps']:,})", steps)
     schedule = evaluation_steps(steps, result["config"].get("eval_interval"))
-    _check_optional(check, result, "", {"version": check.text, "created": check.text, "wall_time_s": _wall_time(check)})
+    _check_optional(check, result, "", {"version": check.text, "created": check.date_time, "wall_time_s": _wall_time(check)})
     if result.get("commit") is not None:
         check.text(result["commit"], "commit")
     if result.get("update_kernel") is not None and result["update_kernel"] not in UPDATE_KERNELS_RECORDED:
@@ -139,7 +141,8 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
         if digest is not None and not (isinstance(digest, str) and _SHA256.fullmatch(digest)):
             raise check.fail(f"plugin_sha256.{module}", "a SHA-256 (64 lowercase hex digits) or null", digest)
     for name, count in check.table(result.get("memory_bytes", {}), "memory_bytes").items():
-        check.name(name, f"memory_bytes (the name {name!r})")
+        if name not in MEMORY_FIGURES:
+            raise check.fail(f"memory_bytes (the name {name[:60]!r})", f"one of {', '.join(MEMORY_FIGURES)}", name)
         check.integer(count, f"memory_bytes.{name}", 0, MAX_LEARNER_BYTES)
     _check_agent(check, result)
     bounds = episode_bounds(result["env"], result["config"]["env_kwargs"])

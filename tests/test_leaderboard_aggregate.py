@@ -64,7 +64,7 @@ def make_run(
         "wall_time_s": 0.0,
         "version": "0.1.0",
         "commit": None,
-        "created": "now",
+        "created": "2026-01-01T00:00:00+00:00",
     }
 
 

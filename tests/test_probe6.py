@@ -5,7 +5,9 @@ refused command leaves a lock file it did not create as it was."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -211,3 +213,55 @@ def test_a_command_that_finishes_still_removes_the_lock_file_it_took_over(tmp_pa
     with hold_output_dir(lock.parent, "empathy-zoo train"):
         pass
     assert not lock.exists()
+
+
+# ---------------------------------------------------------------------------- result files (#3)
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"
+RUN = RESULTS / "runs" / "coexistence_v0__dqn_harm_penalty-684a7c7f__s0.json"
+"""A shipped result file (and, beside it in ``evaluations/``, its evaluation; its agent file)."""
+
+
+def _result() -> dict[str, Any]:
+    return json.loads(RUN.read_text())
+
+
+def test_the_shipped_result_passes() -> None:
+    from empathy_zoo.experiment.result_reader import check_result
+
+    check_result(_result(), RUN)
+
+
+@pytest.mark.parametrize(
+    "field, value, named",
+    [
+        ("memory_bytes", {"replay_per_run": 1, "learner_per_run": 2, "zzz": 5}, "memory_bytes (the name 'zzz')"),
+        ("memory_bytes", {"replay": 1}, "memory_bytes (the name 'replay')"),
+        ("created", "not a date", "created"),
+        ("created", "99999-01-01T00:00:00+00:00", "created"),
+        ("created", "9999-12-31T23:00:00+00:00", "created"),
+        ("created", "1970-12-31T23:59:59+00:00", "created"),
+        ("created", "2026-11-29T22:32:30", "created"),  # (no offset from UTC)
+        ("created", "2026-11-29", "created"),
+        ("created", 20261129, "created"),
+        ("created", "2026-11-29T22:32:30+00:00" + " " * 60, "created"),
+    ],
+)
+def test_a_result_files_memory_figures_and_date_are_the_writers(field: str, value: Any, named: str) -> None:
+    from empathy_zoo.experiment.result_reader import check_result
+
+    document = _result()
+    document[field] = value
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(RUN))}: field {re.escape(named)}: expected") as refused:
+        check_result(document, RUN)
+    assert "\n" not in str(refused.value)
+
+
+@pytest.mark.parametrize("created", ["2026-11-29T22:32:30+00:00", "1971-01-01T05:00:00+05:00", "9998-12-31T22:59:59-01:00"])
+def test_a_result_files_date_within_its_range_is_read(created: str) -> None:
+    from empathy_zoo.experiment.result_reader import check_result
+
+    document = _result()
+    document["created"] = created
+    check_result(document, RUN)
+    del document["created"]
+    check_result(document, RUN)  # (a field the schema does not require)
