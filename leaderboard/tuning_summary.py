@@ -29,8 +29,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
-from empathy_zoo.document_checks import DocumentChecker, finite_float
-from empathy_zoo.limits import MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
+from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
+from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from leaderboard.tables import markdown_text
 
@@ -250,7 +250,13 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     (:func:`empathy_zoo.names.check_label`); the objective's metric and its reduction the suite's;
     each env step count a whole number within ``trials × tuning seeds × steps`` at their bounds;
     each trial's state one ``tune`` writes, its wall time within ten years; every parameter value
-    one of the plan's parameters, within its range; the best value finite, within its metric's range."""
+    one of the plan's parameters, within its range; the best value finite, within its metric's range.
+    The fields agree with each other: ``trials`` not empty, each trial's number its own; every value
+    of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
+    within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
+    tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
+    and the budget's last); ``best`` the finished trial its ``number`` names, with its value and
+    parameters."""
     check = DocumentChecker(
         Path(path), StudyFileError, "a study file", "a study that empathy-zoo tune wrote", "move it away (tune writes it again)"
     )
@@ -259,7 +265,7 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         check.plain(item, key)  # (every string one line of printable text, every number finite)
     check.has(study, ("plan", "env_steps_trained", "best", "trials"), "")
     plan = check.table(study["plan"], "plan")
-    check.has(plan, ("variant", "label", "params", "objective", "budget"), "plan.")
+    check.has(plan, ("variant", "label", "params", "objective", "budget", "tuning_seeds"), "plan.")
     check.name(plan["variant"], "plan.variant")
     check.label(plan["label"], "plan.label")
     objective = check.table(plan["objective"], "plan.objective")
@@ -270,13 +276,18 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     if objective.get("over", "last") not in ("last", "curve"):
         raise check.fail("plan.objective.over", "last or curve", objective["over"])
     budget = check.table(plan["budget"], "plan.budget")
-    check.has(budget, ("env_steps_at_most",), "plan.budget.")
+    check.has(budget, ("env_steps_at_most", "steps", "eval_interval"), "plan.budget.")
     check.integer(budget["env_steps_at_most"], "plan.budget.env_steps_at_most", 1, MAX_ENV_STEPS)
+    steps = check.integer(budget["steps"], "plan.budget.steps", 1, MAX_STEPS)
+    interval = check.integer(budget["eval_interval"], "plan.budget.eval_interval", 1, MAX_STEPS)
+    seeds = _tuning_seeds(check, plan["tuning_seeds"])
+    bounds = metric_bounds(metric)
     check.integer(study["env_steps_trained"], "env_steps_trained", 0, MAX_ENV_STEPS)
     specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
     trials = study["trials"]
-    if not isinstance(trials, list):
-        raise check.fail("trials", "an array of trials", trials)
+    if not isinstance(trials, list) or not trials:
+        raise check.fail("trials", "a non-empty array of trials (tune writes one once a trial has run)", trials)
+    numbers: dict[int, dict[str, Any]] = {}
     for i, trial in enumerate(trials):
         where = f"trials[{i}]"
         trial = check.table(trial, where)
@@ -287,16 +298,89 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         if wall is not None and not 0 <= check.finite(wall, f"{where}.wall_time_s") <= MAX_WALL_TIME_S:
             raise check.fail(f"{where}.wall_time_s", f"seconds in [0, {MAX_WALL_TIME_S:,}] (ten years)", wall)
         _params(check, trial["params"], specs, f"{where}.params")
+        number = check.integer(trial.get("number"), f"{where}.number", 0)
+        if number in numbers:
+            raise check.fail(f"{where}.number", "a trial number of its own (each trial is numbered once)", number)
+        numbers[number] = trial
+        for name in ("value", "last_value"):
+            if trial.get(name) is not None:
+                _in_range(check, trial[name], f"{where}.{name}", metric, bounds)
+        _curve(check, trial.get("curve", []), f"{where}.curve", metric, bounds, len(seeds), (steps, interval))
     best = study["best"]
     if best is not None:
         best = check.table(best, "best")
         check.has(best, ("value", "params"), "best.")
-        low, high = METRIC_RANGES[metric]
-        value = check.finite(best["value"], "best.value", low)
-        if high is not None and value > high:
-            raise check.fail("best.value", f"{metric}, a number in [{low:g}, {high:g}]", value)
+        _in_range(check, best["value"], "best.value", metric, bounds)
         _params(check, best["params"], specs, "best.params")
+        chosen = numbers.get(check.integer(best.get("number"), "best.number", 0))
+        if chosen is None or chosen["state"] != "COMPLETE":
+            raise check.fail("best.number", f"the number of a finished trial of its {len(numbers):,} trials", best["number"])
+        for name in ("value", "params"):
+            if best[name] != chosen.get(name):
+                raise check.fail(f"best.{name}", f"its trial {best['number']}'s {name}, {shown(chosen.get(name))}", best[name])
     return study
+
+
+def metric_bounds(metric: str) -> tuple[float, float | None]:
+    """The range of a value of ``metric`` a study records (a mean over episodes and seeds):
+    :data:`~empathy_zoo.metrics.METRIC_RANGES`, survival at most :data:`~empathy_zoo.limits.MAX_CYCLES`
+    (a study records no ``max_cycles``; no run's is longer)."""
+    low, high = METRIC_RANGES[metric]
+    return (low, MAX_CYCLES) if metric == "survival" and high is None else (low, high)
+
+
+def _in_range(check: DocumentChecker, value: Any, field: str, metric: str, bounds: tuple[float, float | None]) -> float:
+    """A finite value of ``metric`` within ``bounds``."""
+    low, high = bounds
+    number = check.finite(value, field)
+    if number < low or (high is not None and number > high):
+        span = f"a number >= {low:g}" if high is None else f"a number in [{low:g}, {high:g}]"
+        raise check.fail(field, f"{metric}, {span}", value)
+    return number
+
+
+def _tuning_seeds(check: DocumentChecker, value: Any) -> list[int]:
+    """``plan.tuning_seeds``: 1 … :data:`~empathy_zoo.limits.MAX_SEEDS` distinct seeds."""
+    if not isinstance(value, list) or not 1 <= len(value) <= MAX_SEEDS:
+        raise check.fail("plan.tuning_seeds", f"an array of 1 to {MAX_SEEDS:,} seeds", value)
+    seeds = [check.integer(seed, f"plan.tuning_seeds[{i}]", 0, MAX_SEED) for i, seed in enumerate(value)]
+    if len(set(seeds)) != len(seeds):
+        raise check.fail("plan.tuning_seeds", "distinct seeds", value)
+    return seeds
+
+
+def _curve(
+    check: DocumentChecker,
+    value: Any,
+    where: str,
+    metric: str,
+    bounds: tuple[float, float | None],
+    seeds: int,
+    schedule: tuple[int, int],
+) -> None:
+    """A trial's learning curve: one point per greedy evaluation, in order, at the steps of the plan's
+    schedule (``schedule``: its steps and evaluation interval; point ``i`` at ``min((i + 1) · interval,
+    steps)``, none past the last), each ``value`` and each of its ``seeds`` parts within ``bounds``."""
+    steps, interval = schedule
+    if not isinstance(value, list) or len(value) > -(-steps // interval):
+        raise check.fail(where, f"an array of at most {-(-steps // interval):,} points (one per greedy evaluation)", value)
+    for i, point in enumerate(value):
+        at = f"{where}[{i}]"
+        point = check.table(point, at)
+        check.has(point, ("step", "value", "per_seed"), f"{at}.")
+        due = min((i + 1) * interval, steps)
+        if check.integer(point["step"], f"{at}.step", 1, MAX_STEPS) != due:
+            raise check.fail(
+                f"{at}.step",
+                f"{due:,}, the next greedy evaluation of the plan's schedule (every {interval:,} steps, and the last: {steps:,})",
+                point["step"],
+            )
+        _in_range(check, point["value"], f"{at}.value", metric, bounds)
+        parts = point["per_seed"]
+        if not isinstance(parts, list) or len(parts) != seeds:
+            raise check.fail(f"{at}.per_seed", f"one value per tuning seed ({seeds:,})", parts)
+        for j, part in enumerate(parts):
+            _in_range(check, part, f"{at}.per_seed[{j}]", metric, bounds)
 
 
 def _spec(check: DocumentChecker, name: str, spec: Any) -> tuple[str, float, float]:

@@ -265,3 +265,73 @@ def test_a_result_files_date_within_its_range_is_read(created: str) -> None:
     check_result(document, RUN)
     del document["created"]
     check_result(document, RUN)  # (a field the schema does not require)
+
+
+# ---------------------------------------------------------------------------- study files (#3)
+STUDY = RESULTS.parent / "methods" / "tuning" / "coexistence_v0" / "dqn" / "study.json"
+"""A shipped study: survival over the curve, tuning seeds 10000 and 10001, 50,000 steps evaluated
+every 10,000; trial 1 (finished) the best, trial 3 pruned."""
+
+
+def _forged_study(change: Any) -> dict[str, Any]:
+    document = json.loads(STUDY.read_text())
+    change(document)
+    return document
+
+
+def _trial(number: int, change: Any) -> Any:
+    return lambda document: change(document["trials"][number])
+
+
+STUDY_CONTRADICTIONS = {
+    "trial value past a float's range of survival": (_trial(0, lambda t: t.__setitem__("value", 1e308)), "trials[0].value"),
+    "trial value below survival's": (_trial(0, lambda t: t.__setitem__("value", -3.0)), "trials[0].value"),
+    "last value past max_cycles": (_trial(3, lambda t: t.__setitem__("last_value", 2e9)), "trials[3].last_value"),
+    "curve value negative": (_trial(0, lambda t: t["curve"][1].__setitem__("value", -1.0)), "trials[0].curve[1].value"),
+    "per_seed of three seeds": (
+        _trial(0, lambda t: t["curve"][0].__setitem__("per_seed", [1, 2, 3])),
+        "trials[0].curve[0].per_seed",
+    ),
+    "per_seed value negative": (_trial(0, lambda t: t["curve"][0].__setitem__("per_seed", [1.0, -5.0])), "per_seed[1]"),
+    "curve step negative": (_trial(0, lambda t: t["curve"][0].__setitem__("step", -5)), "trials[0].curve[0].step"),
+    "curve step off the schedule": (_trial(0, lambda t: t["curve"][1].__setitem__("step", 25_000)), "trials[0].curve[1].step"),
+    "curve step skipped": (_trial(0, lambda t: t["curve"].pop(0)), "trials[0].curve[0].step"),
+    "curve past the budget": (
+        _trial(0, lambda t: t["curve"].append({"step": 60_000, "value": 1.0, "per_seed": [1.0, 1.0]})),
+        "trials[0].curve",
+    ),
+    "no trials": (lambda d: d.__setitem__("trials", []), "field trials"),
+    "trial numbered twice": (_trial(2, lambda t: t.__setitem__("number", 1)), "trials[2].number"),
+    "best of a trial not there": (lambda d: d["best"].__setitem__("number", 99), "best.number"),
+    "best of a pruned trial": (lambda d: d["best"].__setitem__("number", 3), "best.number"),
+    "best without its number": (lambda d: d["best"].pop("number"), "best.number"),
+    "best value not its trial's": (lambda d: d["best"].__setitem__("value", 499.0), "best.value"),
+    "best parameters not its trial's": (lambda d: d["best"]["params"].__setitem__("learning_rate", 0.002), "best.params"),
+    "best value past max_cycles": (lambda d: d["best"].__setitem__("value", 1e10), "best.value"),
+    "no tuning seeds": (lambda d: d["plan"].pop("tuning_seeds"), "plan.tuning_seeds"),
+    "tuning seeds twice": (lambda d: d["plan"].__setitem__("tuning_seeds", [10000, 10000]), "plan.tuning_seeds"),
+    "no evaluation interval": (lambda d: d["plan"]["budget"].pop("eval_interval"), "plan.budget.eval_interval"),
+}
+
+
+def test_every_shipped_study_passes() -> None:
+    from leaderboard.tuning_summary import check_study
+
+    shipped = sorted((RESULTS.parent).rglob("study.json"))
+    assert STUDY in shipped
+    for path in shipped:
+        check_study(json.loads(path.read_text()), path)
+
+
+@pytest.mark.parametrize("name", list(STUDY_CONTRADICTIONS))
+def test_a_study_whose_fields_contradict_each_other_is_refused(tmp_path: Path, capsys, name: str) -> None:
+    from empathy_zoo.cli import main
+
+    change, field = STUDY_CONTRADICTIONS[name]
+    path = tmp_path / "study" / "study.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(_forged_study(change)))
+    assert main(["analyse", "tuning-summary", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert not captured.out and captured.err.count("\n") == 1, captured.err
+    assert f"{path}: field {field}" in captured.err or (field in captured.err and str(path) in captured.err), captured.err
