@@ -33,7 +33,7 @@ from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import argument_defaults
-from empathy_zoo.environments import ENGINES, default_policies, is_fixed_agent
+from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES, default_policies, is_fixed_agent
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
@@ -208,7 +208,39 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     declared = [definition.get("name") if isinstance(definition, dict) else None for definition in scenario_set["scenarios"]]
     if declared != names[1:]:
         raise check.fail("scenarios", f"the set's scenarios {declared} after {TRAINED_WITH!r}", names)
+    for i, (entry, definition) in enumerate(zip(scenarios[1:], scenario_set["scenarios"], strict=True), start=1):
+        _check_played_as_defined(check, evaluation["env"], scenarios[0], entry, definition, i)
     return evaluation
+
+
+def _check_played_as_defined(
+    check: DocumentChecker, env: str, own: Mapping[str, Any], entry: Mapping[str, Any], definition: Mapping[str, Any], i: int
+) -> None:
+    """The played scenario ``entry`` (``scenarios[i]``, checked) is its ``definition`` (the set's
+    scenario of the same name) in the run's world (``own``, :data:`TRAINED_WITH`), as
+    :meth:`empathy_zoo.scenarios.Scenario.for_run` plays it: its reason the definition's, its
+    arguments the run's but for the count of other agents, updated with the definition's own, and
+    its partners the definition's; else :class:`EvaluationFileError` naming the field."""
+    where, defined = f"scenarios[{i}]", f"scenario_set.scenarios[{i - 1}]"
+    if entry["reason"] != definition["reason"]:
+        raise check.fail(
+            f"{where}.reason", f"the reason of {defined} ({entry['name']}), {shown(definition['reason'])}", entry["reason"]
+        )
+    count = ENGINES[env].count_argument
+    expected = {key: value for key, value in own["env_kwargs"].items() if key != count} | dict(definition["env_kwargs"])
+    played = entry["env_kwargs"]
+    for key in sorted({*expected, *played}):
+        if key not in played or key not in expected or played[key] != expected[key]:
+            raise check.fail(
+                f"{where}.env_kwargs.{key}",
+                f"{shown(expected.get(key, '(left out)'))}: the run's own arguments ({TRAINED_WITH}) but the count of "
+                f"other agents, updated with {defined}'s, as evaluate plays {entry['name']}",
+                played.get(key, "(left out)"),
+            )
+    if entry["fixed"] != definition["fixed"]:
+        raise check.fail(
+            f"{where}.fixed", f"the partners of {defined} ({entry['name']}), {shown(definition['fixed'])}", entry["fixed"]
+        )
 
 
 def _only(check: DocumentChecker, table: Mapping[str, Any], fields: tuple[str, ...], prefix: str) -> None:
@@ -258,7 +290,9 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
     its own arguments, laid over the run's when played, so only those played are checked together
     against the grid) and ``fixed`` (policy labels of agents its world holds beside the learner:
     :func:`~empathy_zoo.environments.is_fixed_agent` with its own count, else one, as
-    :meth:`empathy_zoo.scenarios.Scenario.for_run` plays it); returns its name."""
+    :meth:`empathy_zoo.scenarios.Scenario.for_run` plays it), one for each of them, as
+    :meth:`~empathy_zoo.scenarios.Scenario.definition` and ``evaluate`` record every partner
+    (:func:`_fixed_count`); returns its name."""
     entry = check.table(definition, where)
     check.has(entry, DEFINITION_FIELDS, f"{where}.")
     if not played:
@@ -275,7 +309,34 @@ def _check_scenario(check: DocumentChecker, env: str, definition: Any, where: st
                 agent_name,
             )
         check.policy_label(label, f"{where}.fixed.{agent_name}")
+    expected = _fixed_count(env, env_kwargs)
+    if len(entry["fixed"]) != expected:
+        raise check.fail(
+            f"{where}.fixed",
+            f"a policy for each of the {expected:,} fixed agents its world holds ({_others(env, env_kwargs)}), "
+            "as evaluate records every partner",
+            entry["fixed"],
+        )
     return name
+
+
+def _fixed_count(env: str, env_kwargs: Mapping[str, Any]) -> int:
+    """How many fixed agents ``env`` built with ``env_kwargs`` (checked) holds: the keys of
+    :func:`~empathy_zoo.environments.default_policies` (the table's agents and, for each ``<kind>_0``
+    of them, ``<kind>_1 … <kind>_<count − 1>``), counted without listing them (a count read from a
+    file may be up to 10⁹)."""
+    table = DEFAULT_POLICIES.get(env, {})
+    count = ENGINES[env].count_argument
+    number = int(env_kwargs.get(count, 1)) if count else 1
+    kinds = {agent.rpartition("_")[0] for agent in table if agent.rpartition("_")[2] == "0"}
+    also_listed = sum(  # (an agent of the table that is one of those added too)
+        1
+        for agent in table
+        if agent.rpartition("_")[0] in kinds
+        and re.fullmatch(r"[1-9][0-9]*", index := agent.rpartition("_")[2])
+        and int(index) < number
+    )
+    return len(table) + len(kinds) * max(number - 1, 0) - also_listed
 
 
 def _others(env: str, env_kwargs: Mapping[str, Any]) -> str:

@@ -297,6 +297,7 @@ def test_an_evaluation_s_scenario_is_held_out_unless_it_is_the_run_s_own_world(t
         check_evaluation(forged, EVALUATION)
     own = copy.deepcopy(evaluation)
     own["scenarios"][1] |= {"env_kwargs": dict(own["scenarios"][0]["env_kwargs"]), "fixed": dict(own["scenarios"][0]["fixed"])}
+    own["scenario_set"]["scenarios"][0]["fixed"] = dict(own["scenarios"][0]["fixed"])  # (played as its set defines it)
     mismatch = evaluation_mismatch(check_evaluation(own, EVALUATION), run)  # (held out in the run's own world)
     assert mismatch == "scenarios[1].held_out (cat_stays: the same world as its run's own): True, its run has False"
     own["scenarios"][1]["held_out"] = False

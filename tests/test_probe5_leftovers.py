@@ -64,7 +64,8 @@ def test_an_evaluation_partner_numbered_within_a_huge_count_is_checked_without_l
     definition = document["scenario_set"]["scenarios"][0]  # (a definition's grid is checked when played)
     definition["env_kwargs"]["num_cats"] = 10**9
     definition["fixed"]["cat_999999999"] = "stay"
-    check_evaluation(copy.deepcopy(document), "forged.json")
+    with pytest.raises(EvaluationFileError, match=r"scenarios\[0\]\.fixed: expected a policy for each of the 1,000,000,000"):
+        check_evaluation(copy.deepcopy(document), "forged.json")  # (a name within the count, the partners counted)
     definition["fixed"]["cat_1000000000"] = "stay"
     with pytest.raises(EvaluationFileError, match=r"'cat_1000000000'"):
         check_evaluation(document, "forged.json")

@@ -335,3 +335,66 @@ def test_a_study_whose_fields_contradict_each_other_is_refused(tmp_path: Path, c
     captured = capsys.readouterr()
     assert not captured.out and captured.err.count("\n") == 1, captured.err
     assert f"{path}: field {field}" in captured.err or (field in captured.err and str(path) in captured.err), captured.err
+
+
+# ---------------------------------------------------------------------------- evaluation files (#3)
+EVALUATION = RESULTS / "evaluations" / "coexistence_v0" / RUN.name
+"""The shipped evaluation of :data:`RUN` (one cat, 7×7): ``scenarios[1]`` cat_stays, ``[5]``
+two_random_cats (``num_cats = 2``), ``[6]`` three_random_cats, ``[7]`` larger_grid (``size = 11``)."""
+
+
+def _played(i: int, key: str, value: Any) -> Any:
+    return lambda document: document["scenarios"][i].__setitem__(key, value)
+
+
+def _both(i: int, key: str, value: Any) -> Any:
+    """The played scenario ``i`` and its definition in the set changed alike."""
+
+    def change(document: dict[str, Any]) -> None:
+        document["scenarios"][i][key] = value
+        document["scenario_set"]["scenarios"][i - 1][key] = value
+
+    return change
+
+
+EVALUATION_CONTRADICTIONS = {
+    "partner not the definition's": (_played(1, "fixed", {"cat_0": "chase"}), "scenarios[1].fixed"),
+    "44 cats, one partner": (_played(1, "env_kwargs", {"num_cats": 44}), "scenarios[1].fixed"),
+    "44 cats, one partner, defined so": (_both(1, "env_kwargs", {"num_cats": 44}), "scenarios[1].fixed"),
+    "3 cats, 2 partners": (_played(5, "env_kwargs", {"num_cats": 3}), "scenarios[5].fixed"),
+    "3 cats and partners where the definition has 2": (
+        lambda d: (_played(5, "env_kwargs", {"num_cats": 3})(d), _played(5, "fixed", d["scenarios"][6]["fixed"])(d)),
+        "scenarios[5].env_kwargs.num_cats",
+    ),
+    "2 cats, one defined": (
+        lambda d: d["scenario_set"]["scenarios"][4].__setitem__("fixed", {"cat_0": "random_walk"}),
+        "scenario_set.scenarios[4].fixed",
+    ),
+    "grid not the definition's": (_played(7, "env_kwargs", {"size": 9}), "scenarios[7].env_kwargs.size"),
+    "an argument the run did not have": (_played(1, "env_kwargs", {"max_cycles": 1000}), "scenarios[1].env_kwargs.max_cycles"),
+    "the run's argument left out": (
+        lambda d: d["scenarios"][0].__setitem__("env_kwargs", {"max_cycles": 500}),
+        "scenarios[1].env_kwargs.max_cycles",
+    ),
+    "reason not the definition's": (_played(1, "reason", "Something else."), "scenarios[1].reason"),
+}
+
+
+def test_the_shipped_evaluation_passes() -> None:
+    from empathy_zoo.evaluation_file import read_evaluation
+
+    read_evaluation(EVALUATION)
+
+
+@pytest.mark.parametrize("name", list(EVALUATION_CONTRADICTIONS))
+def test_an_evaluation_whose_scenarios_contradict_its_set_is_refused(name: str) -> None:
+    from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation
+
+    change, field = EVALUATION_CONTRADICTIONS[name]
+    document = json.loads(EVALUATION.read_text())
+    change(document)
+    with pytest.raises(
+        EvaluationFileError, match=rf"^{re.escape(str(EVALUATION))}: field {re.escape(field)}: expected"
+    ) as refused:
+        check_evaluation(document, EVALUATION)
+    assert "\n" not in str(refused.value)

@@ -210,7 +210,7 @@ def test_an_evaluation_file_named_for_another_run_is_refused(evaluated, tmp_path
         (("method",), "dqn", "method"),
         (("variant",), "elsewhere", "variant"),
         (("scenarios", 0, "fixed", "cat_0"), "stay", r"scenarios\[0\]\.fixed"),
-        (("scenarios", 0, "env_kwargs", "max_cycles"), 41, r"scenarios\[0\]\.env_kwargs"),
+        (("scenarios", "*", "env_kwargs", "max_cycles"), 41, r"scenarios\[0\]\.env_kwargs"),
     ],
 )
 def test_the_leaderboard_refuses_an_evaluation_that_is_not_its_runs(
@@ -220,7 +220,13 @@ def test_the_leaderboard_refuses_an_evaluation_that_is_not_its_runs(
     apart = tmp_path / "apart"
     shutil.copytree(evaluated, apart)
     (path,) = [p for p in evaluation_files(apart) if "empathic_dqn" in p.name]
-    path.write_text(json.dumps(forged(genuine_evaluation, *where, value=value)))
+    if where[1:2] == ("*",):  # (the run's argument in every scenario played: each plays the run's world but its own)
+        document = copy.deepcopy(genuine_evaluation)
+        for scenario in document["scenarios"]:
+            scenario[where[2]][where[3]] = value
+    else:
+        document = forged(genuine_evaluation, *where, value=value)
+    path.write_text(json.dumps(document))
     out = tmp_path / "page"
     assert main(["leaderboard", str(trained), "--out", str(out), "--evaluations", str(apart)]) == 2
     refusal = one_line_refusal(capsys)
