@@ -55,7 +55,8 @@ from empathy_zoo.bounded_read import CAPS, check_json_depth, read_data
 from empathy_zoo.document_checks import DocumentChecker, one_line, shown
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.extras import install_command
-from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SEED, MAX_SIZE, MAX_STEPS
+from empathy_zoo.import_names import MAX_PLUGIN_NAME, PLUGIN_NAME
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_HIDDEN_SIZE, MAX_SEED, MAX_SIZE, MAX_STEPS
 from empathy_zoo.policies import plain_data_problem
 from empathy_zoo.result_file import AGENT_SUFFIXES, check_env_kwargs
 from empathy_zoo.safe_data import torch_zip_problem, zip_members
@@ -81,6 +82,7 @@ __all__ = [
     "write_agent_file",
     "load_agent",
     "load_run_agent",
+    "check_against_result",
     "result_entry",
     "RESULT_FIELD",
     "file_sha256",
@@ -99,6 +101,24 @@ RESULT_FIELD = "agent"
 """The result file's field naming its agent file: ``{"file": name, "sha256": hex}``, or ``null``."""
 HEADER_KEYS = ("method", "settings", "env", "env_kwargs")
 """Keys every header must have (it may hold more: ``run_id``, ``seed``, ``steps``, ``fixed``, ...)."""
+HEADER_OPTIONAL = (
+    "run_id",
+    "variant",
+    "fixed",
+    "reward",
+    "description",
+    "seed",
+    "steps",
+    "eval_interval",
+    "eval_episodes",
+    "label",
+)
+"""The other keys a header read back may have: the trainer writes the run's id and configuration
+(``{"run_id": ..., **RunSpec.config()}``), as its result file records them; no others."""
+METHOD_NAME = re.compile(r"[a-z][a-z0-9_]*")
+"""What the name of a registered method looks like (``empathic_dqn``); any other ``method`` of a
+header is a ``package.module:NAME`` plug-in (:data:`~empathy_zoo.import_names.PLUGIN_NAME`), kept as
+text and never imported."""
 
 DOCUMENT_KEYS = ("format", "version", "header", "obs_size", "num_actions", "activation", "heads", "acting")
 """The keys of an agent file's dict (no other is read)."""
@@ -339,27 +359,35 @@ def _library_file(learner: Any, run: int, header: Mapping[str, Any]) -> bytes:
 
 # ---------------------------------------------------------------------------- reading
 def load_agent(
-    path: str | Path, expected_sha256: str | None = None, *, result_file: str | Path | None = None
+    path: str | Path,
+    expected_sha256: str | None = None,
+    *,
+    result_file: str | Path | None = None,
+    recorded: Mapping[str, Any] | None = None,
 ) -> TrainedAgent | SB3Agent:
     """The trained agent of the agent file at ``path`` (a ``TrainedAgent``; an ``SB3Agent`` for a
     Stable-Baselines3 ``.agent.zip``), read with ``torch.load(..., weights_only=True)``.
 
     With ``expected_sha256`` (what the result file records) a file whose SHA-256 differs raises
     ``ValueError`` naming the agent file and, when given, ``result_file``; so does a file that is not
-    an agent file, or one of a newer format version."""
+    an agent file, or one of a newer format version. With ``result_file`` (whose document is
+    ``recorded``, else read here), the header must be the run that file records
+    (:func:`check_against_result`)."""
     path = Path(path)
     data = read_data(path, "agent file")
     sha256 = hashlib.sha256(data).hexdigest()
     if expected_sha256 is not None and sha256 != str(expected_sha256).lower():
-        recorded = f"its result file {result_file} records" if result_file is not None else "expected"
+        records = f"its result file {result_file} records" if result_file is not None else "expected"
         raise ValueError(
-            f"agent file {path} has SHA-256 {sha256}, but {recorded} {expected_sha256}: "
+            f"agent file {path} has SHA-256 {sha256}, but {records} {expected_sha256}: "
             "it was changed or replaced after the run wrote it; refusing to load it"
         )
     source = {"file": str(path), "sha256": sha256}
     members = _zip_members(path, data)
     member = _library_member(path, data, members)
     if member is not None:
+        if result_file is not None:
+            check_against_result(path, member["header"], result_file, recorded)
         return _load_library_agent(path, data, member, source)
     problem = torch_zip_problem(members, len(data))
     if problem:
@@ -390,6 +418,9 @@ def load_agent(
     except ValueError as error:
         raise AgentFileError(f"agent file {path} is malformed: {one_line(str(error), MESSAGE_CHARS)}") from None
     header = _check_header_fields(path, header)
+    _check_hidden_size(path, header, heads)
+    if result_file is not None:
+        check_against_result(path, header, result_file, recorded)
     description = _description(header, obs_size, num_actions, list(heads), document["acting"], source)
     description["layers"] = [obs_size] + [int(t.shape[0]) for t in heads[document["acting"]][1::2]]
     return TrainedAgent(heads, document["acting"], description)
@@ -409,7 +440,51 @@ def load_run_agent(result_file: str | Path) -> TrainedAgent | SB3Agent:
     name = Path(entry["file"])
     if name.name != entry["file"]:
         raise ValueError(f"result file {result_file}: its agent file {entry['file']!r} must be a file name beside it")
-    return load_agent(result_file.parent / name, entry["sha256"], result_file=result_file)
+    return load_agent(result_file.parent / name, entry["sha256"], result_file=result_file, recorded=document)
+
+
+def check_against_result(
+    path: str | Path, header: Mapping[str, Any], result_file: str | Path, recorded: Mapping[str, Any] | None = None
+) -> None:
+    """Refuse (:class:`AgentFileError` naming the agent file ``path``, the field and ``result_file``)
+    a header (checked) that is not the run its result file records: the trainer writes both from one
+    run (``{"run_id": ..., **config}``), so every field of the header the result file's ``config``
+    holds too (the environment and its arguments, partners, method, settings, reward, seed, budget,
+    label) is equal to it, and ``run_id`` to its ``run_id`` (a field either leaves out is not
+    compared: the result file's own reader requires its fields). ``recorded``: the result file's
+    document, else it is read (bounded)."""
+    document = read_json(result_file, "result file") if recorded is None else recorded
+    if not isinstance(document, Mapping):
+        raise AgentFileError(f"agent file {path}: its result file {result_file} is no JSON object to check it against")
+    config = document.get("config")
+    config = config if isinstance(config, Mapping) else {}  # (what a result file holds is checked by its reader)
+    pairs = [("run_id", "run_id", document["run_id"])] if "run_id" in document else []
+    pairs += [(key, f"config.{key}", config[key]) for key in header if key != "run_id" and key in config]
+    for key, where, value in pairs:
+        if key in header and header[key] != value:
+            raise AgentFileError(
+                f"agent file {path}: field header.{key}: {shown(header[key])}, but its result file {result_file} records "
+                f"{where} {shown(value)}: the agent file is not that run's; move it away (train the run again to make it anew)"
+            )
+
+
+def _check_hidden_size(path: Path, header: Mapping[str, Any], heads: Mapping[str, list[torch.Tensor]]) -> None:
+    """Refuse (:class:`AgentFileError` naming the file and the field) a header whose
+    ``settings.hidden_size`` is not the width of every hidden layer of every head (a registered
+    method's networks are ``obs → hidden → hidden → actions``). A plug-in's settings are its own:
+    only their shape is checked, as a result file's."""
+    settings = header["settings"]
+    if "hidden_size" not in settings or PLUGIN_NAME.fullmatch(header["method"]):
+        return
+    check = _checker(path)
+    hidden = check.integer(settings["hidden_size"], "header.settings.hidden_size", 1, MAX_HIDDEN_SIZE)
+    widths = sorted({int(layer.shape[0]) for layers in heads.values() for layer in layers[1:-1:2]})
+    if widths != [hidden]:
+        raise check.fail(
+            "header.settings.hidden_size",
+            f"the width of every hidden layer of its networks ({', '.join(map(str, widths)) or 'none'})",
+            settings["hidden_size"],
+        )
 
 
 def _check_format(path: Path, document: Any) -> None:
@@ -509,7 +584,10 @@ def _checker(path: Path) -> DocumentChecker:
 def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
     """``header`` (plain data with :data:`HEADER_KEYS`, read from the agent file at ``path``) if each
     field a reader uses is what the trainer writes (the run's configuration, as its result file's
-    ``config``): ``method`` one line of printable text; ``settings`` an object; ``env`` a registered
+    ``config``): no key but :data:`HEADER_KEYS` and :data:`HEADER_OPTIONAL`; ``method`` a registered
+    method's name by its shape (:data:`METHOD_NAME`; the registry sits above this module:
+    :func:`empathy_zoo.experiment.agent_method.check_agent_method`) or a ``package.module:NAME``
+    plug-in, kept as text and never imported; ``settings`` an object; ``env`` a registered
     environment and ``env_kwargs`` its arguments, within what it builds (as a result file's,
     :func:`~empathy_zoo.result_file.check_env_kwargs`); where present, ``run_id`` and ``variant``
     file-name-safe names, ``label`` a label, ``fixed`` agent names and policy labels (parsed as
@@ -518,7 +596,20 @@ def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
     Anything else raises :class:`AgentFileError` naming the file and the field; nothing read from
     it is printed or built before."""
     check = _checker(path)
-    check.text(header["method"], "header.method")
+    for key in header:
+        if key not in HEADER_KEYS and key not in HEADER_OPTIONAL:
+            raise check.fail(
+                f"header (the key {str(key)[:60]!r})",
+                f"no such key (an agent file's header holds {', '.join((*HEADER_KEYS, *HEADER_OPTIONAL))})",
+                key,
+            )
+    method = check.text(header["method"], "header.method")
+    if len(method) > MAX_PLUGIN_NAME or not (METHOD_NAME.fullmatch(method) or PLUGIN_NAME.fullmatch(method)):
+        raise check.fail(
+            "header.method",
+            "a registered method's name or a package.module:NAME plug-in (kept as text, never imported)",
+            method,
+        )
     check.table(header["settings"], "header.settings")
     env = check.name(header["env"], "header.env")
     if env not in ENGINES:

@@ -11,6 +11,7 @@ is refused; ``watch --gif`` replaces only a regular file and checks its director
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -54,16 +55,24 @@ def exit_code(argv: list[str]) -> int:
 
 
 def forged_copy(trained: Path, target: Path, label: str = FORGED) -> Path:
-    """A copy of ``trained`` whose result file records ``label`` as the cat's policy."""
+    """A copy of ``trained`` whose runs trained beside ``label`` as the cat's policy: each result
+    file records it, and so does its agent file's header (one run's: the reader compares them),
+    the result file recording that agent file's SHA-256."""
     runs = target / "runs"
     runs.mkdir(parents=True)
     for path in (trained / "runs").iterdir():
-        if path.name.endswith(".json"):
-            result = json.loads(path.read_text())
-            result["config"]["fixed"] = {"cat_0": label}
-            (runs / path.name).write_text(json.dumps(result))
-        elif path.is_file():
+        if path.name.endswith(".agent.pt"):
+            document = torch.load(path, weights_only=True)
+            document["header"]["fixed"] = {"cat_0": label}
+            torch.save(document, runs / path.name)
+        elif path.is_file() and not path.name.endswith(".json"):
             (runs / path.name).write_bytes(path.read_bytes())
+    for path in (trained / "runs").glob("*.json"):
+        result = json.loads(path.read_text())
+        result["config"]["fixed"] = {"cat_0": label}
+        if result.get("agent"):
+            result["agent"]["sha256"] = hashlib.sha256((runs / result["agent"]["file"]).read_bytes()).hexdigest()
+        (runs / path.name).write_text(json.dumps(result))
     return target
 
 

@@ -398,3 +398,105 @@ def test_an_evaluation_whose_scenarios_contradict_its_set_is_refused(name: str) 
     ) as refused:
         check_evaluation(document, EVALUATION)
     assert "\n" not in str(refused.value)
+
+
+# ---------------------------------------------------------------------------- agent files (#3)
+AGENT = RUN.with_name(RUN.stem + ".agent.pt")
+"""The agent file of :data:`RUN`: DQN with a harm penalty, ``hidden_size = 128``, on a 7×7 grid."""
+
+
+def _forged_agent(tmp_path: Path, change: Any, beside: bool = False) -> Path:
+    """A copy of :data:`AGENT` whose header ``change(header)`` edited; with ``beside``, in
+    ``tmp_path/runs`` beside a copy of :data:`RUN` that records its SHA-256 (its run's own file)."""
+    import hashlib
+
+    import torch
+
+    folder = tmp_path / "runs"
+    folder.mkdir(exist_ok=True)
+    document = torch.load(AGENT, weights_only=True)
+    change(document["header"])
+    path = folder / AGENT.name
+    torch.save(document, path)
+    if beside:
+        result = _result()
+        result["agent"]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+        (folder / RUN.name).write_text(json.dumps(result))
+    return path
+
+
+AGENT_FORGERIES = {
+    "unknown header key": (lambda h: h.__setitem__("zzz", 1), "header (the key 'zzz')"),
+    "hidden_size not its networks'": (lambda h: h["settings"].__setitem__("hidden_size", 64), "header.settings.hidden_size"),
+    "hidden_size past its bound": (lambda h: h["settings"].__setitem__("hidden_size", 10**6), "header.settings.hidden_size"),
+    "hidden_size not a number": (lambda h: h["settings"].__setitem__("hidden_size", "128"), "header.settings.hidden_size"),
+    "method no name": (lambda h: h.__setitem__("method", "dqn; rm -rf"), "header.method"),
+    "method a path": (lambda h: h.__setitem__("method", "../x:Y"), "header.method"),
+}
+
+
+def test_the_shipped_agent_passes_alone_and_beside_its_result() -> None:
+    from empathy_zoo.agent_file import load_agent, load_run_agent
+
+    assert load_agent(AGENT).describe()["method"] == "dqn_harm_penalty"
+    load_run_agent(RUN)
+
+
+@pytest.mark.parametrize("name", list(AGENT_FORGERIES))
+def test_an_agent_header_that_contradicts_itself_or_its_weights_is_refused(tmp_path: Path, capsys, name: str) -> None:
+    from empathy_zoo.agent_file import AgentFileError, load_agent
+    from empathy_zoo.cli import main
+
+    change, field = AGENT_FORGERIES[name]
+    path = _forged_agent(tmp_path, change)
+    with pytest.raises(AgentFileError, match=rf"^{re.escape(str(path))}: field {re.escape(field)}: expected") as refused:
+        load_agent(path)
+    assert "\n" not in str(refused.value)
+    assert main(["watch", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert not captured.out and captured.err.count("\n") == 1 and field in captured.err
+
+
+def test_a_plug_in_method_is_kept_as_text_and_an_unregistered_name_is_refused(tmp_path: Path, capsys) -> None:
+    from empathy_zoo.agent_file import load_agent
+    from empathy_zoo.cli import main
+    from empathy_zoo.experiment.agent_method import check_agent_method
+
+    plug_in = _forged_agent(tmp_path, lambda h: h.__setitem__("method", "probe6_never_imported.module:Method"))
+    agent = load_agent(plug_in)
+    assert check_agent_method(agent) is agent and "probe6_never_imported" not in sys.modules
+    unregistered = _forged_agent(tmp_path, lambda h: h.__setitem__("method", "no_such_method"))
+    load_agent(unregistered)  # (the reader below the registry checks the name's shape only)
+    assert main(["watch", str(unregistered)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"agent file {unregistered}: field header.method" in err and "'no_such_method'" in err
+
+
+@pytest.mark.parametrize(
+    "key, value",
+    [
+        ("env_kwargs", {"size": 255}),
+        ("env_kwargs", {"max_cycles": 7}),
+        ("fixed", {"cat_0": "stay"}),
+        ("method", "dqn"),
+        ("seed", 3),
+        ("steps", 40_000),
+        ("run_id", "coexistence_v0__dqn_harm_penalty-684a7c7f__s1"),
+        ("label", "another label"),
+    ],
+)
+def test_an_agent_header_that_is_not_its_result_files_run_is_refused(tmp_path: Path, capsys, key: str, value: Any) -> None:
+    from empathy_zoo.agent_file import AgentFileError, load_agent, load_run_agent
+    from empathy_zoo.cli import main
+
+    path = _forged_agent(tmp_path, lambda h: h.__setitem__(key, value), beside=True)
+    result = path.with_name(RUN.name)
+    field = f"agent file {path}: field header.{key}:"
+    with pytest.raises(AgentFileError, match=re.escape(field)) as refused:
+        load_run_agent(result)
+    assert str(result) in str(refused.value) and "\n" not in str(refused.value)
+    with pytest.raises(AgentFileError, match=re.escape(field)):  # (as the leaderboard loads it)
+        load_agent(path, json.loads(result.read_text())["agent"]["sha256"], result_file=result)
+    assert main(["watch", str(result)]) == 2
+    assert field in capsys.readouterr().err
+    load_agent(path)  # (alone, the header is a run's as it says)

@@ -87,19 +87,21 @@ def _unknown_run(run_id: str, results_dir: Path) -> ValueError:
 def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> Any:
     """The trained agent ``target`` names: a run id (its result file in ``results_dir/runs``, the
     agent file checked against the SHA-256 that records), or the path of an agent file or a
-    result file. Anything not found, not an agent file, changed since its run wrote it, or a run
-    that kept no agent, raises ``ValueError`` saying which."""
+    result file. Anything not found, not an agent file, changed since its run wrote it, of a method
+    neither registered here nor a ``package.module:NAME`` plug-in (never imported), or a run that
+    kept no agent, raises ``ValueError`` saying which."""
     from empathy_zoo.agent_file import AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX
+    from empathy_zoo.experiment.agent_method import check_agent_method
     from empathy_zoo.result_file import result_path
 
     path = Path(target)
     try:
         if path.is_file() or target.endswith((AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, ".json")) or "/" in target:
-            return _agent_file(path)
+            return check_agent_method(_agent_file(path))
         result = result_path(Path(results_dir), target)
         if not result.is_file():
             raise _unknown_run(target, Path(results_dir))
-        return _run_agent(result)
+        return check_agent_method(_run_agent(result))
     except ImportError as error:  # (a Stable-Baselines3 agent without SB3 installed)
         raise ValueError(str(error)) from None
 
