@@ -2,7 +2,8 @@
 :class:`empathy_zoo.exact_solver.TabularModel` (:mod:`baselines.separation` holds the table).
 
 * :func:`silver_values`: the silver rule as implemented (:mod:`baselines.silver_rule`),
-  ``Q* − (1 − β)·E[max(c − o, 0)]``, ``c = γ·(1 − done)·V*(s')`` and ``o = γ·present'·V*(swap(s'))``.
+  ``Q* − (1 − β)·E[max(c − o, 0)]``, ``c = γ·(1 − done)·V*(s')`` and ``o = γ·present'·V*(swap(s'))``
+  (``present'`` 0 where the other is harmed, or where the episode ends for both: it is terminal).
 * :func:`in_view_values`: in-view Empathic DQN, the golden rule with the robot's own continuation as
   the other-term wherever the other is present but outside the engine's window at t+1 (SPEC §4).
 
@@ -21,15 +22,17 @@ __all__ = ["silver_values", "in_view_values"]
 
 
 def _continuation(model: TabularModel, v: np.ndarray, gamma: float) -> np.ndarray:
-    """``c = γ·(1 − done)·V*(s')`` of every step, ``(states, 5, 5)``, the robot alone once the other leaves."""
-    return np.select([model.robot_harmed, model.other_harmed], [0.0, gone_continuation(model, gamma)], gamma * v[model.after])
+    """``c = γ·(1 − done)·V*(s')`` of every step (the model's shape), the robot alone once the other
+    leaves; ``done`` where the robot is harmed or the episode ends for both."""
+    ends = model.robot_harmed | model.ended
+    return np.select([ends, model.other_harmed], [0.0, gone_continuation(model, gamma)], gamma * v[model.after])
 
 
 def silver_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma: float = 0.99) -> np.ndarray:
     """The silver rule's ``Q_silver = Q* − (1 − β)·E[max(c − o, 0)]`` at ``Q*`` (the module page)."""
     v = q.max(axis=1)
     continuation = _continuation(model, v, gamma)
-    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
+    other = gamma * np.where(model.other_harmed | model.ended, 0.0, v[model.swapped][model.after])
     return q - (1.0 - selfishness) * np.maximum(continuation - other, 0.0).mean(axis=2)
 
 
@@ -44,6 +47,7 @@ def in_view_values(model: TabularModel, selfishness: float, q: np.ndarray, gamma
     seen = np.asarray(engine.in_view(0, 1), dtype=bool)
     v = q.max(axis=1)
     continuation = _continuation(model, v, gamma)
-    other = gamma * np.where(model.other_harmed, 0.0, v[model.swapped][model.after])
-    other = np.where(~model.other_harmed & ~seen[model.after], continuation, other)
+    terminal = model.other_harmed | model.ended
+    other = gamma * np.where(terminal, 0.0, v[model.swapped][model.after])
+    other = np.where(~terminal & ~seen[model.after], continuation, other)
     return q + (1.0 - selfishness) * (other - model.reward - continuation).mean(axis=2)

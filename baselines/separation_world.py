@@ -40,45 +40,60 @@ __all__ = ["state_codes", "model_reachability", "relative_reachability_reward", 
 
 AUP_SEED = 0
 """The run seed whose auxiliary rewards the exact AUP row uses."""
-CHUNK = 256
-"""States whose deviations are computed at once."""
+PAIR_CHUNK = 1024
+"""Pairs of a state reached and its baseline whose deviations are computed at once."""
 
 
 def state_codes(model: TabularModel) -> np.ndarray:
-    """``(states, 5, 5)``: the code of the state each step ends in: a joint state's own index, the
+    """The model's shape: the code of the state each step ends in: a joint state's own index, the
     robot alone ``states + layer · cells + cell``, the end ``states + alone_states``."""
     end = model.states + model.alone_states
-    return np.select([model.robot_harmed, model.other_harmed], [end, model.states + model.after // model.cells], model.after)
+    ends = model.robot_harmed | model.ended
+    return np.select([ends, model.other_harmed], [end, model.states + model.after // model.cells], model.after)
 
 
 def _successors(model: TabularModel) -> np.ndarray:
     """``(states + alone_states + 1, 25)``: the code every joint action leads to from every state."""
     end = model.states + model.alone_states
-    joint = state_codes(model).reshape(model.states, NUM_ACTIONS * NUM_ACTIONS)
-    alone = np.repeat(model.states + model.alone_after, NUM_ACTIONS, axis=1)
-    return np.concatenate([joint, alone, np.full((1, NUM_ACTIONS * NUM_ACTIONS), end)])
+    width = NUM_ACTIONS * model.other_moves
+    joint = state_codes(model).reshape(model.states, width)
+    alone = np.repeat(model.states + model.alone_after, model.other_moves, axis=1)
+    return np.concatenate([joint, alone, np.full((1, width), end)])
 
 
 def model_reachability(model: TabularModel, discount: float) -> np.ndarray:
     """``(S, S)``: ``discount ** (fewest steps from x to y)``, 0 where none reach it, over every
     state of the model (see the module page)."""
-    distances = _shortest_steps(_successors(model))
+    return _powers(discount)[_shortest_steps(_successors(model))]
+
+
+def _powers(discount: float) -> np.ndarray:
+    """``discount ** k`` for every distance ``k``, 0 for :data:`UNREACHABLE`."""
     powers = discount ** np.arange(UNREACHABLE + 1, dtype=np.float64)
     powers[UNREACHABLE] = 0.0
-    return powers[distances]
+    return powers
 
 
 def relative_reachability_reward(model: TabularModel, transform: RelativeReachability | None = None) -> np.ndarray:
-    """``(states, 5, 5)``: the model's reward less ``λ·d(s'; b')`` (see the module page)."""
+    """The model's shape: its reward less ``λ·d(s'; b')`` (see the module page). The deviation is
+    computed once for each pair of a state reached and its baseline that differ (0 where they are
+    one state), from the fewest steps between states, :data:`PAIR_CHUNK` rows of reachability at a
+    time (Sharing's 31,201 states would take 7.8 GB as one matrix of reachability)."""
     transform = RelativeReachability() if transform is None else transform
-    reach = model_reachability(model, transform.discount)
+    distances = _shortest_steps(_successors(model))
+    powers = _powers(transform.discount)
     codes = state_codes(model)
     baseline = np.broadcast_to(codes[:, NO_OP : NO_OP + 1, :], codes.shape)
+    moved = codes != baseline
+    keys, inverse = np.unique(codes[moved] * len(distances) + baseline[moved], return_inverse=True)
+    after, before = np.divmod(keys, len(distances))
+    found = np.zeros(len(keys))
+    for start in range(0, len(keys), PAIR_CHUNK):
+        part = slice(start, start + PAIR_CHUNK)
+        found[part] = truncated_deviation(powers[distances[after[part]]], powers[distances[before[part]]])
     deviation = np.zeros(codes.shape)
-    for start in range(0, model.states, CHUNK):
-        part = slice(start, start + CHUNK)
-        deviation[part] = truncated_deviation(reach[codes[part]], reach[baseline[part]])
-    return model.reward - transform.weight * np.where(model.robot_harmed, 0.0, deviation)
+    deviation[moved] = found[inverse]
+    return model.reward - transform.weight * np.where(model.robot_harmed | model.ended, 0.0, deviation)
 
 
 def _observations(model: TabularModel) -> np.ndarray:
@@ -107,7 +122,7 @@ def auxiliary_values(model: TabularModel, gamma: float, seed: int = AUP_SEED, to
     rewards = observations @ auxiliary_reward_map(seed, observations.shape[1], aup.num_rewards).astype(np.float64)
     rewards /= observations.shape[1]
     rewards[-1] = 0.0  # (the end pays nothing and leads nowhere)
-    successors = _successors(model).reshape(-1, NUM_ACTIONS, NUM_ACTIONS)
+    successors = _successors(model).reshape(-1, NUM_ACTIONS, model.other_moves)
     live = np.ones(len(successors), dtype=bool)
     live[-1] = False
     v = np.zeros(rewards.shape)
@@ -122,7 +137,7 @@ def auxiliary_values(model: TabularModel, gamma: float, seed: int = AUP_SEED, to
 
 
 def attainable_utility_reward(model: TabularModel, gamma: float = 0.99) -> np.ndarray:
-    """``(states, 5, 5)``: the model's reward less AUP's penalty of the robot's action (see the module page)."""
+    """The model's shape: its reward less AUP's penalty of the robot's action (see the module page)."""
     q = auxiliary_values(model, gamma)
     shift = np.abs(q - q[:, NO_OP : NO_OP + 1, :]).sum(axis=2)
     scale = np.abs(q[:, NO_OP, :]).sum(axis=1, keepdims=True)

@@ -13,6 +13,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
+from empathy_zoo.exact_chance import FixedDraws
 from empathy_zoo.reference import greedy_policy
 
 
@@ -46,16 +47,22 @@ ROBOT, OTHER = 0, 1
 
 def alone_steps(engine_class: Any, cells: int, layers: int, env_kwargs: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """``(reward, after)``, each ``(layers · cells, 5)``: one step of the robot alone from every
-    cell and layer with every action (the other absent), read off the engine."""
+    cell and layer with every action (the other absent), read off the engine, which may draw no
+    random number there (:class:`~empathy_zoo.exact_chance.FixedDraws` counts them)."""
     alone, action = (x.ravel() for x in np.indices((layers * cells, NUM_ACTIONS)))
     layer, cell = np.divmod(alone, cells)
     engine = engine_class(len(cell), **env_kwargs)
+    stand_in = FixedDraws(len(cell))
+    engine.streams = stand_in
     engine.reset()
+    stand_in.forget()
     engine.cells = np.stack([cell, np.zeros_like(cell)], axis=1).astype(engine.cells.dtype)
     engine.present[:, OTHER] = False
     if layers > 1:
         engine.set_tabular_layer(layer)
     events = engine.step(np.stack([action, np.full_like(action, NUM_ACTIONS - 1)], axis=1))
+    if stand_in.drawn.any():
+        raise ValueError(f"{engine.name}'s engine drew a random number in a step of the robot alone: the model has no draw there")
     shape = (layers * cells, NUM_ACTIONS)
     after = engine.cells[:, ROBOT] + (engine.tabular_layer() * cells if layers > 1 else 0)
     return events.rewards[:, ROBOT].astype(np.float64).reshape(shape), after.reshape(shape).astype(np.int64)
@@ -89,7 +96,7 @@ def alone_policy(model: TabularModel, epsilon: float, gamma: float = 0.99, toler
 
 def gone_continuation(model: TabularModel, gamma: float = 0.99, tolerance: float = 1e-10) -> float | np.ndarray:
     """``γ·V*`` after a step in which the other leaves: ``γ·pay/(1 − γ)`` where every step alone pays
-    the same, else ``(states, 5, 5)``: ``γ·V*_alone`` of the robot's cell after the step."""
+    the same, else the model's shape: ``γ·V*_alone`` of the robot's cell after the step."""
     pay = model.alone_pay
     if pay is not None:
         return gamma * pay / (1.0 - gamma)
