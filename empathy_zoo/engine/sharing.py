@@ -13,10 +13,17 @@ Two fidelity options (SPEC §3, constructor keywords; the defaults are the suite
   tie-breaks than with ``"random"``.
 * ``inventory_encoding``: an agent holding ``n`` batteries is drawn as ``1 + n``
   (``"count_plus_one"``) or as ``5·(n+1)/100`` (``"authors"``, :func:`authors_agent_value`).
+
+The exact model (:mod:`empathy_zoo.exact_solver`) reads the state beyond the two cells as a
+*layer*: the batteries left and the batteries the robot holds (the human holds the rest of those
+taken), every layer one the rules can reach (:func:`tabular_layer_table`). A battery both agents
+reach in one step is the step's chance: ``tabular_draws = 2`` equally likely draws, one per winner.
+The hooks model one human and the default inventory encoding, and refuse others.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -25,6 +32,7 @@ import numpy as np
 from empathy_zoo.engine.base import GridEngine, StepEvents, check_choice
 from empathy_zoo.engine.placement import check_cell, distinct_picks
 from empathy_zoo.grid import cells_by_distance
+from empathy_zoo.metrics import equality
 from empathy_zoo.observation_codes import step_value
 
 __all__ = [
@@ -33,6 +41,8 @@ __all__ = [
     "agent_value",
     "authors_agent_value",
     "battery_cells",
+    "battery_return",
+    "tabular_layer_table",
     "FLOOR",
     "BATTERY",
     "STARTS",
@@ -45,6 +55,7 @@ STARTS = ("random", "centre")
 """Values of the ``start`` argument (the first is the default)."""
 INVENTORY_ENCODINGS = ("count_plus_one", "authors")
 """Values of the ``inventory_encoding`` argument (the first is the default)."""
+ROBOT, HUMAN = 0, 1
 
 
 def battery_cells(size: int) -> np.ndarray:
@@ -56,6 +67,48 @@ def battery_cells(size: int) -> np.ndarray:
 def battery_value(n: np.ndarray | int) -> np.ndarray:
     """Worth of an agent's ``n``-th battery (n = 1, 2, …): ``1.1 − 0.1·n``."""
     return 1.1 - 0.1 * np.asarray(n, dtype=np.float64)
+
+
+def battery_return(n: np.ndarray | int) -> np.ndarray:
+    """An agent's battery reward for its first ``n`` batteries: ``1.0 + 0.9 + … + (1.1 − 0.1·n)``
+    (float64, summed in the engine's order)."""
+    n = np.asarray(n, dtype=np.int64)
+    top = int(n.max(initial=0))
+    sums = np.concatenate([[0.0], np.cumsum(battery_value(np.arange(1, top + 1)))])
+    return sums[n]
+
+
+@functools.lru_cache(maxsize=4)
+def tabular_layer_table(batteries: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(bitmap, robot)``, one entry per layer of the exact model: which batteries are left
+    (bit ``i``: the ``i``-th battery cell in row-major order) and how many the robot holds, every
+    pair the rules reach (the robot holds at most the batteries taken; the human the rest of
+    them). Ordered by batteries taken, then bitmap from the highest, then the robot's count: layer
+    0 is the start, every battery left and none held."""
+    bitmap = np.repeat(np.arange(2**batteries, dtype=np.int64), batteries + 1)
+    robot = np.tile(np.arange(batteries + 1, dtype=np.int64), 2**batteries)
+    taken = batteries - _popcount(bitmap, batteries)
+    keep = robot <= taken
+    bitmap, robot, taken = bitmap[keep], robot[keep], taken[keep]
+    order = np.lexsort((robot, -bitmap, taken))
+    bitmap, robot = bitmap[order], robot[order]
+    bitmap.flags.writeable = robot.flags.writeable = False
+    return bitmap, robot
+
+
+def _popcount(bitmap: np.ndarray, bits: int) -> np.ndarray:
+    """Set bits of each entry of ``bitmap`` (below ``2**bits``)."""
+    return ((bitmap[..., None] >> np.arange(bits)) & 1).sum(axis=-1)
+
+
+@functools.lru_cache(maxsize=4)
+def _layer_index(batteries: int) -> np.ndarray:
+    """``(2**batteries, batteries + 1)``: the layer of each (bitmap, robot's count), ``-1`` for no layer."""
+    bitmap, robot = tabular_layer_table(batteries)
+    index = np.full((2**batteries, batteries + 1), -1, dtype=np.int64)
+    index[bitmap, robot] = np.arange(len(bitmap))
+    index.flags.writeable = False
+    return index
 
 
 _ONE = np.array(1)
@@ -89,6 +142,9 @@ class SharingEngine(GridEngine):
         "inventory_encoding": "how an agent is drawn: count_plus_one, or authors (default: count_plus_one)",
         "num_humans": "humans (default: 1)",
     }
+    tabular_draws: ClassVar[int] = 2
+    """Equally likely outcomes of a step's chance (:mod:`empathy_zoo.exact_solver`): a battery the
+    robot and the human reach in one step goes to either, with probability ½ each."""
 
     def __init__(
         self,
@@ -167,6 +223,86 @@ class SharingEngine(GridEngine):
     def _random_start(self, env_ids: np.ndarray) -> None:
         picks = distinct_picks(self.streams, env_ids, len(self._free_cells), self.num_agents)
         self.cells[env_ids] = self._free_cells[picks]
+
+    # ------------------------------------------------------------------ the exact model's hooks
+    @property
+    def tabular_layers(self) -> int:
+        """Layers of the exact model (:func:`tabular_layer_table`): ``2^(B−1)·(B + 2)`` for ``B``
+        batteries, 48 on the 5×5 torus and 2,816 on the 7×7 one."""
+        self._check_tabular()
+        return 2 ** (self.num_batteries - 1) * (self.num_batteries + 2)
+
+    def _check_tabular(self) -> None:
+        """``ValueError`` unless the exact model's hooks model this engine: one human, the default encoding."""
+        if self.num_others != 1 or self.inventory_encoding != INVENTORY_ENCODINGS[0]:
+            raise ValueError(
+                f"the exact model of {self.name} is for one human and inventory_encoding={INVENTORY_ENCODINGS[0]!r}, "
+                f"got num_humans={self.num_others} and inventory_encoding={self.inventory_encoding!r}"
+            )
+
+    def start_distribution(self) -> np.ndarray:
+        """``(cells, cells)``: the probability that an episode starts with the robot on flat cell
+        ``i`` and the human on flat cell ``j``, in layer 0 (every battery left, none held): two
+        distinct battery-free cells, uniformly, or the fixed cells of ``start="centre"``."""
+        self._check_tabular()
+        p = np.zeros((self.num_cells, self.num_cells))
+        if self.start_order is not None:
+            placed = type(self)(1, self.size, self.view, self.max_cycles, start=self.start)
+            placed.reset()  # (draws nothing)
+            p[placed.cells[0, ROBOT], placed.cells[0, HUMAN]] = 1.0
+            return p
+        free = self._free_cells
+        p[np.ix_(free, free)] = 1.0 / (len(free) * (len(free) - 1))
+        p[free, free] = 0.0
+        return p
+
+    def tabular_layer(self) -> np.ndarray:
+        """``(N,)`` the layer of every environment (:func:`tabular_layer_table`); ``ValueError``
+        where its batteries and inventories are no layer (a battery off the odd cells, or counts
+        that do not add up to the batteries taken)."""
+        self._check_tabular()
+        cells = np.flatnonzero(self.initial_batteries)
+        left = self.batteries[:, cells]
+        robot, human = self.inventory[:, ROBOT], self.inventory[:, HUMAN]
+        known = (robot + human + left.sum(axis=1) == len(cells)) & ~self.batteries[:, ~self.initial_batteries].any(axis=1)
+        if not known.all():
+            raise ValueError(f"environment {int(np.flatnonzero(~known)[0])} is in no layer of the exact model")
+        bitmap = left.astype(np.int64) @ (1 << np.arange(len(cells), dtype=np.int64))
+        return _layer_index(len(cells))[bitmap, robot]
+
+    def set_tabular_layer(self, layer: np.ndarray) -> None:
+        """Set the batteries left and what each agent holds in every environment from ``layer``."""
+        self._check_tabular()
+        bitmap, robot = tabular_layer_table(self.num_batteries)
+        layer = np.asarray(layer)
+        bits = (bitmap[layer][:, None] >> np.arange(self.num_batteries)) & 1
+        self.batteries[:] = False
+        self.batteries[:, np.flatnonzero(self.initial_batteries)] = bits.astype(bool)
+        self.inventory[:, ROBOT] = robot[layer]
+        self.inventory[:, HUMAN] = self.num_batteries - bits.sum(axis=1) - robot[layer]
+        self._draw_batteries(self._rows)
+
+    def swapped_tabular_layer(self, layer: np.ndarray) -> np.ndarray:
+        """The layer with the two agents' situations exchanged: the same batteries left, what each
+        holds swapped (the swap of SPEC §4 exchanges inventories)."""
+        self._check_tabular()
+        bitmap, robot = tabular_layer_table(self.num_batteries)
+        layer = np.asarray(layer)
+        human = self.num_batteries - _popcount(bitmap[layer], self.num_batteries) - robot[layer]
+        return _layer_index(self.num_batteries)[bitmap[layer], human]
+
+    def tabular_figures(self, layer: np.ndarray) -> dict[str, np.ndarray]:
+        """SPEC §5's battery metrics of an episode that ends in ``layer``: ``batteries``,
+        ``other_batteries`` and ``equality`` (of the two battery rewards)."""
+        self._check_tabular()
+        bitmap, robot = tabular_layer_table(self.num_batteries)
+        layer = np.asarray(layer)
+        human = self.num_batteries - _popcount(bitmap[layer], self.num_batteries) - robot[layer]
+        return {
+            "batteries": robot[layer],
+            "other_batteries": human,
+            "equality": equality(battery_return(robot[layer]), battery_return(human)),
+        }
 
     def _resolve(self, previous: np.ndarray, moves: np.ndarray, events: StepEvents) -> None:
         flat = self.cells + self._cell_base if self.num_envs > 1 else self.cells  # into batteries.ravel()
