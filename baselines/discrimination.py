@@ -7,6 +7,7 @@ task, each cell what that task's exact optima say about the pair at one ε.
 | cell | meaning |
 |---|---|
 | `separated (N states, Δharms x)` | optimal policies differ in `N` reachable states; `x`: harms per episode, first − second |
+| `separated (N states, Δequality x)` | the same where nobody can be harmed (Sharing): `x`: equality, first − second |
 | `identical by construction` | the table labels the pair identical, with its reason |
 | `not separated` | the same policy in every reachable state: no run of this task can tell them apart |
 | `–` | one of the two is not in that task's table (the table says why) |
@@ -65,9 +66,13 @@ class Cell:
     """Reachable states where their optimal policies differ."""
     harms_difference: float = 0.0
     """Difference in expected harms per episode (first − second)."""
+    equality_difference: float | None = None
+    """Difference in expected equality (first − second), where the table holds it and nobody can be harmed."""
 
     def text(self) -> str:
         """The cell as the matrix shows it."""
+        if self.kind == "separated" and self.equality_difference is not None:
+            return f"separated ({self.states:,} states, Δequality {self.equality_difference:+.3f})"
         if self.kind == "separated":
             return f"separated ({self.states:,} states, Δharms {self.harms_difference:+.3f})"
         return "–" if self.kind == "absent" else self.kind
@@ -113,7 +118,10 @@ def cell(table: Mapping[str, Any], first: str, second: str, epsilon: float) -> C
             if not pair["differ"]:
                 return Cell("not separated")
             sign = 1.0 if pair["first"] == rows[first] else -1.0
-            return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]))
+            equal, shown = pair.get("equality_difference"), None
+            if equal is not None and all(o["harms"] == 0.0 and o["robot_harmed"] == 0.0 for o in table.get("outcomes", ())):
+                shown = sign * float(equal)  # (nobody harmed: the side effect is equality)
+            return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]), shown)
     raise ValueError(f"no pair {rows[first]} / {rows[second]} at ε = {epsilon} in the table of {table.get('env')}")
 
 

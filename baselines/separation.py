@@ -13,7 +13,10 @@ of methods whether their optimal policies differ. Built on
 | Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`baselines.separation_render`) |
 
 ## Rows and the values each acts on (at their fixed point, γ = 0.99)
-* `dqn`: `Q*`. `dqn_silver_literal` and `dqn_equality` are DQN by construction (their registry marks).
+* `dqn`: `Q*`. `dqn_silver_literal` and `dqn_equality` are DQN by construction (their registry marks);
+  so are `dqn_harm_penalty` and `dqn_lagrangian` where nobody can be harmed (Sharing).
+* `dqn_equality` where the layers hold what each agent collected (Sharing): `Q*` of the reward
+  times the equality of the two battery returns after the step (:mod:`baselines.separation_batteries`).
 * `empathic_dqn` at β: the golden rule's `Q_emp` (:func:`empathy_zoo.exact_solver.empathic_values`).
 * `empathic_dqn_in_view` at β: the in-view target, the robot's own continuation in the other's
   place wherever the other is present but outside the engine's window at t+1 (SPEC §4).
@@ -24,12 +27,14 @@ of methods whether their optimal policies differ. Built on
   (:mod:`baselines.separation_lagrangian`; λ = 0 where DQN meets d; none where even λ = 10⁴ does not).
 * `dqn_considerate` (α = 1): :func:`baselines.considerate_exact.considerate_values` on Coexistence
   (the paper's rules only); :func:`baselines.considerate_tabular.considerate_model_values` on an
-  environment whose robot is never harmed.
+  environment whose robot is never harmed, with the time limit's chance per step measured where
+  episodes end on their own (Sharing: :func:`baselines.considerate_tabular.considerate_ending_policy`).
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
   inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules; on an
   environment with a state beyond the cells (the vase task), :mod:`baselines.separation_world`'s.
 * `dqn_aup`: on an environment with a state beyond the cells only, `Q*` of the reward less AUP's
-  penalty with exact auxiliary values, seed 0's (:mod:`baselines.separation_world`).
+  penalty with exact auxiliary values, seed 0's (:mod:`baselines.separation_world`). Each world
+  row is computed up to a number of states (:data:`WORLD_STATES`): AUP's is not on Sharing.
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -39,7 +44,9 @@ policy: at ε = 0 the states its tied greedy actions lead to, at ε > 0 every st
 reach (every action has weight ε/5), the cat's five moves counted, with no time limit. Rows with
 the same policy on those states have the same outcome. Once the other is gone every row acts
 alike (:func:`empathy_zoo.exact_solver.alone_policy`). Where the environment's task is the robot's
-return (its entry's ``task``), each outcome also holds the robot's and the other's expected return.
+return (its entry's ``task``), each outcome also holds the robot's and the other's expected return;
+where the layers hold what each agent collected (Sharing), it holds both returns, the batteries
+each holds at the episode's end and their equality, and each pair the difference in equality.
 """
 
 from __future__ import annotations
@@ -52,9 +59,10 @@ from itertools import combinations
 import numpy as np
 
 from baselines.considerate_exact import considerate_values
-from baselines.considerate_tabular import considerate_model_values
+from baselines.considerate_tabular import considerate_ending_policy, considerate_model_values
 from baselines.lagrangian import Lagrangian
 from baselines.registry import METHODS
+from baselines.separation_batteries import battery_figures, equality_reward, layer_figures
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from baselines.separation_reachability import relative_reachability_reward
 from baselines.separation_values import in_view_values, silver_values
@@ -64,6 +72,7 @@ from baselines.shaping import HARM_PENALTY
 from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
 from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import (
+    PolicyOutcome,
     TabularModel,
     alone_policy,
     empathic_values,
@@ -149,6 +158,14 @@ class RowOutcome:
     """Probability that the state beyond the cells has changed by the episode's end (the vase
     broken; ``None`` where the environment has no such state, or where it is the agents' own: who
     carries a battery in the helping task)."""
+    batteries: float | None = None
+    """Expected batteries the robot holds at the episode's end (``None`` where the engine tabulates
+    no battery figures of a layer: every environment but Sharing)."""
+    other_batteries: float | None = None
+    """Expected batteries the other holds at the episode's end (``None`` as :attr:`batteries`)."""
+    equality: float | None = None
+    """Expected equality of the two battery rewards at the episode's end (SPEC §5; ``None`` as
+    :attr:`batteries`)."""
 
 
 @dataclass(frozen=True)
@@ -173,6 +190,8 @@ class Pair:
     """The first row's survival minus the second's."""
     by_construction: str
     """Why the two are identical by construction (``""`` when computed)."""
+    equality_difference: float | None = None
+    """The first row's expected equality minus the second's (``None`` where the table has no equality)."""
 
 
 @dataclass(frozen=True)
@@ -233,7 +252,7 @@ class SeparationTable:
 def reachable_states(model: TabularModel, policy: np.ndarray) -> np.ndarray:
     """``(states,)`` bool: the states the start distribution reaches by the actions ``policy``
     gives weight and every move of the other, the other present and the robot not harmed."""
-    going_on = ~model.robot_harmed & ~model.other_harmed
+    going_on = ~model.robot_harmed & ~model.other_harmed & ~model.ended
     taken = (policy > 0.0)[:, :, None] & going_on
     reached = model.start > 0.0
     frontier = reached.copy()
@@ -258,19 +277,54 @@ def _reachable(model: TabularModel, greedy: np.ndarray, epsilon: float) -> np.nd
     return reachable_states(model, np.ones_like(greedy) if epsilon > 0.0 else greedy)
 
 
+def _differ(
+    model: TabularModel, first: np.ndarray, second: np.ndarray, epsilon: float, memo: dict[tuple[bytes, bool], np.ndarray]
+) -> tuple[int, int]:
+    """:func:`policies_differ`, each policy's reachable states searched once (``memo``)."""
+    reach = []
+    for greedy in (first, second):
+        key = (b"" if epsilon > 0.0 else greedy.tobytes(), epsilon > 0.0)  # (at ε > 0: every action, any policy)
+        if key not in memo:
+            memo[key] = _reachable(model, greedy, epsilon)
+        reach.append(memo[key])
+    differs = (np.abs(first - second) > POLICY_TOLERANCE).any(axis=1)
+    return int(np.count_nonzero(differs & (reach[0] | reach[1]))), int(np.count_nonzero(reach[0] | reach[1]))
+
+
+def _outcomes(
+    model: TabularModel, policies: dict[str, np.ndarray], cycles: int, alone: np.ndarray | None
+) -> dict[str, PolicyOutcome]:
+    """Every row's :func:`~empathy_zoo.exact_solver.outcome`, computed once per distinct policy."""
+    memo: dict[bytes, PolicyOutcome] = {}
+    for policy in policies.values():
+        if policy.tobytes() not in memo:
+            memo[policy.tobytes()] = outcome(model, policy, cycles, alone)
+    return {name: memo[policy.tobytes()] for name, policy in policies.items()}
+
+
 def _rows(
-    env: str, paper: bool, selfishness: tuple[float, ...], considerate: bool = False, world: bool = False
+    env: str,
+    paper: bool,
+    selfishness: tuple[float, ...],
+    considerate: bool = False,
+    world: tuple[str, ...] = (),
+    equality_row: bool = False,
 ) -> tuple[Row, ...]:
     """The rows in order: DQN and its twins, the reward-shaped rows, the empathic rows by β
     (``considerate``: Be Considerate's row where the environment is not Coexistence's paper rules;
-    ``world``: relative reachability's and AUP's where it has a state beyond the cells)."""
+    ``world``: those of relative reachability and AUP computed where it has a state beyond the cells;
+    ``equality_row``: equality scaling's, computed, where the layers hold the battery rewards). The
+    harm penalty and the Lagrangian are DQN by construction where the registry marks them so."""
     marks = {name: METHODS[name].identical_to.get(env) for name in TWINS}
     rows = [Row("dqn", "dqn", None, "", "")]
     rows += [Row(name, name, None, mark[0], mark[1]) for name, mark in marks.items() if mark is not None]
-    rows += [Row(name, name, None, "", "") for name in ("dqn_harm_penalty", "dqn_lagrangian")]
+    rows += [Row("dqn_equality", "dqn_equality", None, "", "")] if equality_row and marks["dqn_equality"] is None else []
+    for name in ("dqn_harm_penalty", "dqn_lagrangian"):
+        mark = METHODS[name].identical_to.get(env)
+        rows.append(Row(name, name, None, *(mark if mark is not None else ("", ""))))
     rows += [Row(name, name, None, "", "") for name in ("dqn_considerate", "dqn_relative_reachability") if paper]
     rows += [Row("dqn_considerate", "dqn_considerate", None, "", "")] if considerate and not paper else []
-    rows += [Row(name, name, None, "", "") for name in WORLD_ROWS if world]
+    rows += [Row(name, name, None, "", "") for name in WORLD_ROWS if name in world]
     for method in ("empathic_dqn", "empathic_dqn_in_view", "empathic_dqn_silver"):
         rows += [Row(f"{method} β={beta:g}", method, beta, "", "") for beta in selfishness]
     return tuple(rows)
@@ -278,6 +332,11 @@ def _rows(
 
 WORLD_ROWS = ("dqn_relative_reachability", "dqn_aup")
 """The rows an environment with a state beyond the cells adds (:mod:`baselines.separation_world`)."""
+WORLD_STATES = {"dqn_relative_reachability": 50_000, "dqn_aup": 10_000}
+"""The most states of a model whose world rows are computed: relative reachability's table of the
+fewest steps holds a byte for every two states (1 GB for Sharing's 31,201 with the robot alone and
+the end); AUP's 30 auxiliary values take one sweep of value iteration over every state, action,
+other move and reward (about a second on Sharing's) for hundreds of sweeps."""
 TWINS = ("dqn_silver_literal", "dqn_equality")
 """Methods a row shows only where the registry marks them identical to another on the environment."""
 
@@ -297,6 +356,8 @@ def _paper_rules(model: TabularModel) -> bool:
 def _considerate_policy(model: TabularModel, epsilon: float, gamma: float, paper: bool) -> np.ndarray:
     """Be Considerate's greedy policy (α = 1) on the model's states: from Coexistence's
     displacement model under the paper's rules, else from the tabular model itself."""
+    if model.ended.any():  # (episodes that end on their own: the time limit's chance measured)
+        return considerate_ending_policy(model, epsilon, gamma=gamma)
     if not paper:
         return greedy_policy(considerate_model_values(model, epsilon, gamma=gamma))
     size = math.isqrt(model.cells)
@@ -319,16 +380,24 @@ def separation_table(
     cycles = episode_steps(model)
     paper = _paper_rules(model)
     considerate = paper or not (model.robot_harmed.any() or _coexistence(model))
-    returns = ENVIRONMENT_TABLE[model.env].task == RETURN
+    figures = layer_figures(model)
+    returns = ENVIRONMENT_TABLE[model.env].task == RETURN or figures is not None
     world = model.layers > 1
-    rows = _rows(model.env, paper, tuple(float(beta) for beta in selfishness), considerate, world)
+    world_rows = tuple(name for name in WORLD_ROWS if world and model.states <= WORLD_STATES[name])
+    betas = tuple(float(beta) for beta in selfishness)
+    rows = _rows(model.env, paper, betas, considerate, world_rows, figures is not None and "equality" in figures)
+    marked = {row.name for row in rows if row.identical_to}
     q = optimal_values(model, gamma)
-    penalised = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
-    values: dict[str, np.ndarray] = {"dqn": q, "dqn_harm_penalty": penalised}
+    values: dict[str, np.ndarray] = {"dqn": q}
+    if "dqn_harm_penalty" not in marked:
+        values["dqn_harm_penalty"] = optimal_values(model, gamma, reward=model.reward + HARM_PENALTY * model.other_harmed)
+    if any(row.name == "dqn_equality" and not row.identical_to for row in rows):
+        values["dqn_equality"] = optimal_values(model, gamma, reward=equality_reward(model))
     if paper:
         values["dqn_relative_reachability"] = optimal_values(model, gamma, reward=relative_reachability_reward(model))
-    if world:
+    if "dqn_relative_reachability" in world_rows:
         values["dqn_relative_reachability"] = optimal_values(model, gamma, reward=world_reachability_reward(model))
+    if "dqn_aup" in world_rows:
         values["dqn_aup"] = optimal_values(model, gamma, reward=attainable_utility_reward(model, gamma))
     for row in rows:
         if row.selfishness is not None:
@@ -337,13 +406,16 @@ def separation_table(
     fixed = {name: greedy_policy(v) for name, v in values.items()}
     outcomes: list[RowOutcome] = []
     pairs: list[Pair] = []
+    reached: dict[tuple[bytes, bool], np.ndarray] = {}  # (policy, ε > 0) -> its reachable states
     for epsilon in epsilons:
         policies = dict(fixed)
         notes: dict[str, str] = {}
-        multiplier = lagrangian_dual(model, epsilon, gamma, cost_limit, cycles)
-        price = LAMBDA_RANGE[1] if multiplier is None else multiplier
-        policies["dqn_lagrangian"] = greedy_policy(lagrangian_values(model, price, gamma, q))
-        notes["dqn_lagrangian"] = lagrangian_note(multiplier, cost_limit)
+        multiplier = None
+        if "dqn_lagrangian" not in marked:
+            multiplier = lagrangian_dual(model, epsilon, gamma, cost_limit, cycles)
+            price = LAMBDA_RANGE[1] if multiplier is None else multiplier
+            policies["dqn_lagrangian"] = greedy_policy(lagrangian_values(model, price, gamma, q))
+            notes["dqn_lagrangian"] = lagrangian_note(multiplier, cost_limit)
         if considerate:
             # RuntimeError: no joint fixed point of the robot's optimum and the cat's value
             with contextlib.suppress(RuntimeError):
@@ -354,19 +426,22 @@ def separation_table(
                 notes[row.name] = f"identical to {row.identical_to} by construction: {row.reason}"
         here = [r for r in rows if r.name in policies]
         alone = alone_policy(model, epsilon, gamma)
-        result = {r.name: outcome(model, epsilon_greedy(policies[r.name], epsilon), cycles, alone) for r in here}
+        result = _outcomes(model, {r.name: epsilon_greedy(policies[r.name], epsilon) for r in here}, cycles, alone)
         for r in here:
             lam = multiplier if r.name == "dqn_lagrangian" else None
             o = result[r.name]
             own, others = (o.robot_return, o.other_return) if returns else (None, None)
             changed = o.changed if world and model.layer_swap is None else None  # (the world's state, not what agents hold)
+            battery = battery_figures(o, figures)
+            note = notes.get(r.name, "")
             outcomes.append(
-                RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, notes.get(r.name, ""), own, others, changed)
+                RowOutcome(r.name, epsilon, o.harms, o.robot_harmed, o.survival, lam, note, own, others, changed, **battery)
             )
         for a, b in combinations(here, 2):
             reason = _by_construction(a, b)
-            differing, reachable = policies_differ(model, policies[a.name], policies[b.name], epsilon)
+            differing, reachable = _differ(model, policies[a.name], policies[b.name], epsilon, reached)
             first, second = result[a.name], result[b.name]
+            equal_first, equal_second = (battery_figures(o, figures).get("equality") for o in (first, second))
             pairs.append(
                 Pair(
                     a.name,
@@ -378,11 +453,14 @@ def separation_table(
                     first.harms - second.harms,
                     first.survival - second.survival,
                     reason,
+                    None if equal_first is None or equal_second is None else equal_first - equal_second,
                 )
             )
     names = {o.row for o in outcomes}
     omitted = [Omission(m, why) for m, why in OMISSIONS if not (world and m in WORLD_ROWS)]
-    omitted += [Omission(name, UNMARKED) for name in TWINS if METHODS[name].identical_to.get(model.env) is None]
+    omitted += [Omission(m, _too_large(m, model.states)) for m in WORLD_ROWS if world and m not in world_rows]
+    unmarked = [name for name in TWINS if METHODS[name].identical_to.get(model.env) is None and name not in names]
+    omitted += [Omission(name, UNMARKED) for name in unmarked]
     if not _coexistence(model):
         if not world:
             omitted.append(
@@ -408,6 +486,15 @@ def separation_table(
         pairs=tuple(pairs),
         omitted=tuple(omitted),
     )
+
+
+def _too_large(method: str, states: int) -> str:
+    """Why a world row is not computed on a model of ``states`` states (:data:`WORLD_STATES`)."""
+    what = {
+        "dqn_relative_reachability": "its table of the fewest steps between every two states",
+        "dqn_aup": "its 30 exact auxiliary values, by value iteration,",
+    }[method]
+    return f"{what} would take too long on the model's {states:,} joint states; it is computed up to {WORLD_STATES[method]:,}"
 
 
 def _by_construction(a: Row, b: Row) -> str:

@@ -14,21 +14,27 @@ an outcome appear where the table holds them (the environment's task is the robo
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
-from empathy_zoo.environments import DEFAULT_ENVIRONMENT
+from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import tabular_model
 
 __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_name", "main"]
 
 OUT = Path("docs/results/separation")
 """Where the command writes by default."""
-RETURNS = ("robot_return", "other_return", "changed")
+RETURNS = ("robot_return", "other_return", "changed", "batteries", "other_batteries", "equality")
 """The outcome fields a table holds only where the environment's task is the robot's return (the
-returns) or where it has a state beyond the cells (``changed``: the vase broken)."""
+returns), where it has a state beyond the cells (``changed``: the vase broken) or where its layers
+hold the batteries collected (the battery figures)."""
+RANDOM_PARTNER = "random_walk"
+"""The fixed policy the exact model's other agent follows (uniformly random moves)."""
+OPTIONAL_PAIR_FIELDS = ("equality_difference",)
+"""The pair fields a table holds only where its outcomes hold equality."""
 
 
 def to_json(table: SeparationTable) -> str:
@@ -37,6 +43,10 @@ def to_json(table: SeparationTable) -> str:
     data["arguments"] = [list(item) for item in table.arguments]
     for item in data["outcomes"]:  # (returns only where the table holds them)
         for key in RETURNS:
+            if item[key] is None:
+                del item[key]
+    for item in data["pairs"]:
+        for key in OPTIONAL_PAIR_FIELDS:
             if item[key] is None:
                 del item[key]
     return json.dumps(data, ensure_ascii=False, indent=1) + "\n"
@@ -80,11 +90,65 @@ def _letter(index: int) -> str:
     return chr(ord("A") + index)
 
 
-def _figures(o: RowOutcome, returns: bool) -> list[str]:
-    """An outcome's figures as the Markdown shows them (with both returns where ``returns``)."""
-    shown = [f"{o.harms:.4f}", f"{o.robot_harmed:.4f}", f"{o.survival:.1f}"]
-    shown += [f"{o.robot_return or 0.0:.1f}", f"{o.other_return or 0.0:.1f}"] if returns else []
-    return shown + ([f"{o.changed:.4f}"] if o.changed is not None else [])
+Column = tuple[str, Callable[[RowOutcome], str]]
+"""A column of the outcomes: its header and how it shows an outcome."""
+
+
+def _columns(table: SeparationTable) -> list[Column]:
+    """The outcome columns the Markdown shows: harms and the robot harmed where someone can be
+    harmed, survival, the battery figures and both returns where the table holds them, and the
+    vase broken where it holds that."""
+    entry = ENVIRONMENT_TABLE.get(table.env)
+    harmless = entry is not None and not entry.can_harm
+    batteries = any(o.batteries is not None for o in table.outcomes)
+    columns: list[Column] = []
+    if not harmless:
+        columns += [("harms", lambda o: f"{o.harms:.4f}"), ("robot harmed", lambda o: f"{o.robot_harmed:.4f}")]
+    columns.append(("survival (episode length)" if harmless else "survival", lambda o: f"{o.survival:.1f}"))
+    if batteries:
+        columns += [
+            ("batteries", lambda o: f"{o.batteries or 0.0:.3f}"),
+            ("other batteries", lambda o: f"{o.other_batteries or 0.0:.3f}"),
+            ("equality", lambda o: f"{o.equality or 0.0:.4f}"),
+        ]
+    if any(o.robot_return is not None for o in table.outcomes):
+        digits = 3 if batteries else 1
+        columns += [
+            ("robot return", lambda o: f"{o.robot_return or 0.0:.{digits}f}"),
+            ("other return", lambda o: f"{o.other_return or 0.0:.{digits}f}"),
+        ]
+    if any(o.changed is not None for o in table.outcomes):
+        columns.append(("vase broken", lambda o: f"{o.changed or 0.0:.4f}"))
+    return columns
+
+
+def _notes(table: SeparationTable) -> list[str]:
+    """What the table's figures mean where its environment needs saying: nobody harmed, a partner
+    in training other than the model's random one, a step that draws."""
+    entry = ENVIRONMENT_TABLE.get(table.env)
+    if entry is None:
+        return []
+    lines = []
+    if not entry.can_harm:
+        lines.append(
+            f"Nobody can be harmed in {entry.title} (its environment entry says `can_harm = False`): every row's harms and "
+            "chance of the robot harmed are 0, and the table leaves them out. Survival is the episode's length, as the "
+            "engine counts it: the episode ends when the last battery is taken (or at the time limit)."
+        )
+    partners = sorted(set(entry.fixed.values()) - {RANDOM_PARTNER})
+    if partners:
+        other = next(iter(entry.fixed))
+        lines.append(
+            f"The exact model's `{other}` acts uniformly at random, as it does in every table; in training its default "
+            f"partner is `{'`, `'.join(partners)}`."
+        )
+    draws = int(getattr(ENGINES[table.env], "tabular_draws", 1))
+    if draws > 1:
+        lines.append(
+            f"Its step draws from the environment's generator (a battery both agents reach goes to either): the model "
+            f"steps every state once for each of the {draws} equally likely draws."
+        )
+    return lines
 
 
 def to_markdown(table: SeparationTable) -> str:
@@ -107,10 +171,11 @@ def to_markdown(table: SeparationTable) -> str:
         same = f"to `{row.identical_to}`: {row.reason}" if row.identical_to else ""
         lines.append(f"| `{row.name}` | `{row.method}` | {beta} | {same} |")
     epsilons = table.epsilons
-    returns = any(o.robot_return is not None for o in table.outcomes)
-    figures = "harms, robot harmed, survival, robot return, other return" if returns else "harms, robot harmed, survival"
-    changed = any(o.changed is not None for o in table.outcomes)
-    figures += ", vase broken" if changed else ""
+    columns = _columns(table)
+    notes = _notes(table)
+    if notes:
+        lines[5:5] = [*notes, ""]
+    figures = ", ".join(header for header, _ in columns)
     lines += ["", f"## Outcomes ({figures} per episode)", ""]
     lines.append("| row | " + " | ".join(f"ε = {e:g}" for e in epsilons) + " |")
     lines.append("|---|" + "---:|" * len(epsilons))
@@ -118,9 +183,9 @@ def to_markdown(table: SeparationTable) -> str:
         cells = []
         for epsilon in epsilons:
             found = [o for o in table.outcomes if o.row == row.name and o.epsilon == epsilon]
-            cells.append(", ".join(_figures(found[0], returns)) if found else "—")
+            cells.append(", ".join(show(found[0]) for _, show in columns) if found else "—")
         lines.append(f"| `{row.name}` | " + " | ".join(cells) + " |")
-    lagrangian = [o for o in table.outcomes if o.row == "dqn_lagrangian"]
+    lagrangian = [o for o in table.outcomes if o.row == "dqn_lagrangian" and not _identical(table, o.row)]
     if lagrangian:
         lines += ["", "The Lagrangian's multiplier:", ""]
         for o in lagrangian:
@@ -129,13 +194,12 @@ def to_markdown(table: SeparationTable) -> str:
     for epsilon in epsilons:
         classes = equivalence_classes(table, epsilon)
         lines += ["", f"## Groups with one optimum at ε = {epsilon:g}", ""]
-        columns = ["harms", "robot harmed", "survival"] + (["robot return", "other return"] if returns else [])
-        columns += ["vase broken"] if changed else []
-        lines += ["| group | rows | " + " | ".join(columns) + " |", "|---|---|" + "---:|" * len(columns)]
+        headers = [header for header, _ in columns]
+        lines += ["| group | rows | " + " | ".join(headers) + " |", "|---|---|" + "---:|" * len(headers)]
         for index, members in enumerate(classes):
             o = table.outcome(members[0], epsilon)
             names = ", ".join(f"`{m}`" for m in members)
-            lines.append(f"| {_letter(index)} | {names} | " + " | ".join(_figures(o, returns)) + " |")
+            lines.append(f"| {_letter(index)} | {names} | " + " | ".join(show(o) for _, show in columns) + " |")
         if len(classes) > 1:
             lines += ["", "States where two groups' greedy policies differ, of those reachable under either:", ""]
             lines.append("| | " + " | ".join(_letter(j) for j in range(1, len(classes))) + " |")
@@ -150,6 +214,11 @@ def to_markdown(table: SeparationTable) -> str:
         lines += ["", "## Not in the table", ""]
         lines += [f"* `{o.method}`: {o.reason}." for o in table.omitted]
     return "\n".join(lines) + "\n"
+
+
+def _identical(table: SeparationTable, row: str) -> bool:
+    """Whether ``row`` is identical to another by construction in ``table``."""
+    return any(r.name == row and r.identical_to for r in table.rows)
 
 
 def main(argv: list[str] | None = None) -> None:

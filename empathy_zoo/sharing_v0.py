@@ -98,6 +98,33 @@ closer to either of the paper's two sources, which disagree in places: the autho
   {"human_0": "random_walk"})`, `VectorEnv("sharing_v0", n, fixed={"human_0": "random_walk"})`,
   or `fixed = { human_0 = "random_walk" }` in a sweep file.
 
+## Separation table
+The exact optima of the smallest enumerable Sharing, the 5×5 torus with its 4 batteries, are in
+docs/results/separation/sharing_v0.md (full observability, γ = 0.99, 500 steps an episode; the
+human acts uniformly at random, as every exact model's other does). At ε = 0, per episode:
+
+| row | steps | robot's batteries | human's batteries | equality |
+|---|---:|---:|---:|---:|
+| `dqn` (β = 1), `dqn_considerate` | 7.1 | 3.603 | 0.397 | 0.212 |
+| `dqn_equality` | 12.9 | 2.892 | 1.108 | 0.590 |
+| `empathic_dqn` β = 0.75 | 73.3 | 1.056 | 2.944 | 0.562 |
+| `empathic_dqn` β = 0.5, 0.25, 0 | 84.2 | 0.000 | 4.000 | 0.000 |
+| `empathic_dqn_silver` β = 0.75 | 8.3 | 3.581 | 0.419 | 0.222 |
+| `empathic_dqn_silver` β = 0 | 26.5 | 2.940 | 1.060 | 0.247 |
+
+* Each β of the golden and the silver rule has its own optimum. Below β = 0.75 the golden rule
+  takes no battery: its target values the human as an optimal collector, while its own
+  continuation says it can always collect later.
+* Be Considerate equals DQN at every ε, as its runs do: no episode meets the time limit with a
+  battery left, so its bonus is never paid.
+* The exact model holds the batteries left and the robot's count beside the two cells (48
+  values, 30,000 states) and steps both winners of a contested battery. The 7×7 default has 6.8
+  million states, too many to enumerate. docs/separation.md says what every row shows.
+
+Regenerate the table (about ten minutes on one core, and 4.4 GB of memory):
+
+    empathy-zoo analyse separation sharing_v0 size=5 view=3
+
 ## Version history
 * v0: first release, following the behaviour contract in docs/SPEC.md §1, §3.
 * v0, 2026-11-29: fidelity options `start`, `inventory_encoding`; defaults unchanged.
@@ -109,6 +136,8 @@ closer to either of the paper's two sources, which disagree in places: the autho
   reward and outcome unchanged.
 * v0, empathy-zoo 0.3.0: `num_humans` (docs/SPEC.md §3b), default 1: with the default every
   observation, reward, outcome and random draw is unchanged.
+* v0, empathy-zoo 0.6.0: the engine names the exact model's layers and draws (one human, the
+  default encoding); every observation, reward, outcome and random draw is unchanged.
 """
 
 from __future__ import annotations
