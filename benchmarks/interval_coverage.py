@@ -66,7 +66,7 @@ sys.path.insert(0, str(ROOT))
 
 from machine import describe_machine  # noqa: E402  (benchmarks/machine.py, this directory is on sys.path)
 
-from empathy_zoo.atomic import read_json  # noqa: E402
+from empathy_zoo.experiment.records import RunResult  # noqa: E402
 from leaderboard.aggregate import (  # noqa: E402
     PHASES,
     final_episode_count,
@@ -74,7 +74,6 @@ from leaderboard.aggregate import (  # noqa: E402
     load_results,
     longest_episode,
     mean_ci,
-    result_files,
     run_scalars,
     student_t_interval,
     t_level,
@@ -152,9 +151,8 @@ def committed_populations(root: Path = ROOT / "docs" / "results") -> list[np.nda
     at least two distinct values)."""
     populations = []
     for directory in sorted(p for p in root.iterdir() if (p / "runs").is_dir()):
-        results = [read_json(path) for path in result_files(directory)]  # committed, checked by their tests
-        for runs in group_runs(results).values():
-            base = runs[0]["env"]
+        for runs in group_runs(load_results(directory)).values():
+            base = runs[0].env
             scalars = [run_scalars(run) for run in runs]
             for phase in ("eval", "train_final10"):
                 for metric in table_metrics(base):
@@ -204,23 +202,21 @@ class RowEpisodes:
         return float(np.mean([values.mean() for values in self.runs]))
 
 
-def row_episodes(
-    results: Sequence[dict[str, Any]], directory: str, metrics: Sequence[str] = TWO_LEVEL_METRICS
-) -> list[RowEpisodes]:
+def row_episodes(results: Sequence[RunResult], directory: str, metrics: Sequence[str] = TWO_LEVEL_METRICS) -> list[RowEpisodes]:
     """Every row of ``results`` with two or more runs, per scored phase and each of ``metrics`` its
     environment's tables show, as :class:`RowEpisodes` (the episodes the leaderboard averages)."""
     rows = []
     for (env, label), runs in group_runs(results).items():
-        shown = table_metrics(runs[0]["env"])
+        shown = table_metrics(runs[0].env)
         for phase in PHASES:
             for metric in (m for m in metrics if m in shown):
                 per_run = []
                 for run in runs:
                     if phase == "eval":
-                        last = max(run["eval"], key=lambda evaluation: evaluation["step"]) if run["eval"] else {}
-                        values = np.asarray(last.get(metric, []), dtype=np.float64)
+                        last = run.last_eval
+                        values = np.asarray(() if last is None else last.metrics[metric], dtype=np.float64)
                     else:
-                        column = np.asarray(run["train"].get(metric, []), dtype=np.float64)
+                        column = np.asarray(run.train.metrics[metric], dtype=np.float64)
                         values = column[column.size - final_episode_count(column.size) :]
                     values = values[np.isfinite(values)]
                     if values.size:

@@ -30,6 +30,7 @@ under ``nice``: it takes about half an hour on two busy cores.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -73,15 +74,17 @@ def shipped_header(page: Path) -> tuple[str, str]:
     raise SystemExit(f"{page}: no 'Produced by ... commit ...' header line")
 
 
-def run(argv: list[str], log: Path, stdout: Path | None = None) -> None:
-    """Run ``argv`` in the repository root; its output goes to ``stdout`` (else the log)."""
+def run(argv: list[str], log: Path, stdout: Path | None = None, cwd: Path = ROOT) -> None:
+    """Run ``argv`` in ``cwd`` (this tree's code imported wherever it runs); its output goes to
+    ``stdout`` (else the log)."""
     started = time.monotonic()
     with log.open("a", encoding="utf-8") as sink:
         sink.write(f"$ {' '.join(argv)}\n")
         sink.flush()
         out = stdout.open("w", encoding="utf-8") if stdout is not None else sink
         try:
-            status = subprocess.run(argv, cwd=ROOT, stdout=out, stderr=sink, check=False).returncode
+            environment = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
+            status = subprocess.run(argv, cwd=cwd, env=environment, stdout=out, stderr=sink, check=False).returncode
         finally:
             if stdout is not None:
                 out.close()
@@ -132,7 +135,7 @@ def main() -> None:
     if chosen("separation"):
         for arguments in SEPARATION:
             run([*cli, "analyse", "separation", *arguments, "--out", str(out / "separation")], log)
-        run([*cli, "analyse", "discrimination", str(out / "separation")], log)
+        run([*cli, "analyse", "discrimination", "separation"], log, cwd=out)  # (its page names the folder as given)
     if chosen("stdout"):
         printed = out / "stdout"
         for name in ("paper", "methods"):

@@ -24,16 +24,16 @@ import functools
 import math
 import os
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeAlias
 
 import numpy as np
 
-from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
-from empathy_zoo.experiment.result_reader import check_result
+from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
@@ -159,17 +159,18 @@ def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     return data_files(root, "*.json", "result file")
 
 
-def table_env(result: dict[str, Any]) -> str:
+def table_env(result: RunResult) -> str:
     """The env name a run is tabled under: its variant (a sweep's env key) if any, else its env."""
-    return str(result.get("variant") or result["env"])
+    return result.table_env
 
 
-def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
+def load_results(results_dir: str | os.PathLike[str]) -> list[RunResult]:
     """Every result file of ``results_dir`` (see :func:`result_files`), in file-name order.
 
     A directory without result files raises ``ValueError``; a corrupted or malformed file raises
     ``ValueError`` naming it and the field
-    (:func:`empathy_zoo.experiment.result_reader.check_result`); so do two runs with the same
+    (:func:`empathy_zoo.experiment.result_reader.check_result`); each run is read once, into a
+    :class:`~empathy_zoo.experiment.records.RunResult`; so do two runs with the same
     ``(env, method_label, seed)``, which would otherwise be counted twice, and two experiments
     with one ``(env, method_label)``, which would be mixed in one row. Several directories are
     read into one leaderboard by :func:`leaderboard.sources.load_results_dirs`.
@@ -177,47 +178,45 @@ def load_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
     return [result for _, result in load_result_files(results_dir)]
 
 
-def load_result_files(results_dir: str | os.PathLike[str]) -> list[tuple[Path, dict[str, Any]]]:
+def load_result_files(results_dir: str | os.PathLike[str]) -> list[tuple[Path, RunResult]]:
     """``(path, result)`` of every result file of ``results_dir``, read and checked as
     :func:`load_results` reads them."""
     paths = result_files(results_dir)
     if not paths:
         raise ValueError(f"no result files (*.json) in {results_dir}: run a sweep first")
-    read = [(path, check_result(read_json(path), path)) for path in paths]
+    read = [(path, read_result(path, named=False)) for path in paths]
     check_runs(read)
     return read
 
 
-def check_runs(runs: Sequence[tuple[str | os.PathLike[str], dict[str, Any]]]) -> None:
+def check_runs(runs: Sequence[tuple[str | os.PathLike[str], RunResult]]) -> None:
     """``ValueError`` when two of ``runs`` (``(where it is, result)``) are one row's runs from two
     experiments (:func:`empathy_zoo.result_file.check_one_experiment_per_label`) or are the same
     run, ``(env, method_label, seed)``, which would be counted twice."""
-    check_one_experiment_per_label(
-        (table_env(result), result["method_label"], result["run_id"], str(where)) for where, result in runs
-    )
-    seen: dict[tuple[str, str, Any], str] = {}
+    check_one_experiment_per_label((result.table_env, result.method_label, result.run_id, str(where)) for where, result in runs)
+    seen: dict[tuple[str, str, int], str] = {}
     for where, result in runs:
-        key = (table_env(result), result["method_label"], result["seed"])
+        key = (result.table_env, result.method_label, result.seed)
         if key in seen:
             raise ValueError(f"{seen[key]} and {where} are the same run {key}; move one away")
         seen[key] = str(where)
 
 
-def group_runs(results: Iterable[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, Any]]]:
+def group_runs(results: Iterable[RunResult]) -> dict[tuple[str, str], list[RunResult]]:
     """Runs grouped by ``(env, method_label)``; groups sorted by env, method, label (its numbers by
     value: :func:`leaderboard.ordering.label_order`, so α = 0.3 comes before α = 1); runs by seed."""
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    groups: dict[tuple[str, str], list[RunResult]] = {}
     for result in results:
-        groups.setdefault((table_env(result), result["method_label"]), []).append(result)
+        groups.setdefault((result.table_env, result.method_label), []).append(result)
 
     def order(key: tuple[str, str]) -> tuple[str, str, Any]:
-        return key[0], min(str(run["method"]) for run in groups[key]), label_order(key[1])
+        return key[0], min(run.method for run in groups[key]), label_order(key[1])
 
-    return {key: sorted(groups[key], key=lambda run: run["seed"]) for key in sorted(groups, key=order)}
+    return {key: sorted(groups[key], key=lambda run: run.seed) for key in sorted(groups, key=order)}
 
 
-def _method_name(runs: Sequence[dict[str, Any]]) -> str:
-    return ",".join(sorted({str(run["method"]) for run in runs}))
+def _method_name(runs: Sequence[RunResult]) -> str:
+    return ",".join(sorted({run.method for run in runs}))
 
 
 def _nanmean(values: np.ndarray, axis: int) -> np.ndarray:
@@ -228,8 +227,9 @@ def _nanmean(values: np.ndarray, axis: int) -> np.ndarray:
     return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
-def _column(episodes: dict[str, Any], metric: str) -> np.ndarray:
-    return np.asarray(episodes.get(metric, []), dtype=np.float64)
+def _series(columns: Mapping[str, np.ndarray], metric: str) -> np.ndarray:
+    """The column ``metric`` as float64 (empty where there is none)."""
+    return np.asarray(columns.get(metric, ()), dtype=np.float64)
 
 
 def final_episode_count(n_episodes: int, fraction: float = FINAL_FRACTION) -> int:
@@ -240,18 +240,17 @@ def final_episode_count(n_episodes: int, fraction: float = FINAL_FRACTION) -> in
 
 
 def run_scalars(
-    result: dict[str, Any], metrics: Sequence[str] = METRIC_NAMES, final_fraction: float = FINAL_FRACTION
+    result: RunResult, metrics: Sequence[str] = METRIC_NAMES, final_fraction: float = FINAL_FRACTION
 ) -> dict[str, dict[str, float]]:
     """``{phase: {metric: value}}`` for one run; NaN where the run has no such episodes."""
-    train = result["train"]
-    evaluations = result["eval"]
-    last_eval = max(evaluations, key=lambda evaluation: evaluation["step"]) if evaluations else {}
+    last_eval = result.last_eval
     scalars: dict[str, dict[str, float]] = {"eval": {}, "train_final10": {}}
     for metric in metrics:
-        column = _column(train, metric)
+        column = _series(result.train.metrics, metric)
         final = column[len(column) - final_episode_count(len(column), final_fraction) :]
         scalars["train_final10"][metric] = float(_nanmean(final, axis=0))
-        scalars["eval"][metric] = float(_nanmean(_column(last_eval, metric), axis=0))
+        evaluated = _series({} if last_eval is None else last_eval.metrics, metric)
+        scalars["eval"][metric] = float(_nanmean(evaluated, axis=0))
     return scalars
 
 
@@ -359,7 +358,7 @@ def t_level(confidence: float = CONFIDENCE) -> float:
     return 1.0 - (1.0 - confidence) / 2.0
 
 
-def longest_episode(runs: Iterable[dict[str, Any]]) -> int:
+def longest_episode(runs: Iterable[RunResult]) -> int:
     """The most steps an episode of ``runs`` can last (their ``max_cycles``; the environment's default
     where a run's config does not set it): the bound of ``survival``."""
     return max(int(env_argument(run, "max_cycles")) for run in runs)
@@ -424,18 +423,15 @@ def student_t_interval(
 
 
 def score_runs(
-    results: Iterable[dict[str, Any]],
+    results: Iterable[RunResult],
     *,
     metrics: Sequence[str] = METRIC_NAMES,
     final_fraction: float = FINAL_FRACTION,
-    random_state: int = DEFAULT_SEED,
-    n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> list[Score]:
     """Every leaderboard cell, ordered by env, method (see :func:`group_runs`), phase, metric.
 
-    Each cell's interval is the Student-t interval of :func:`mean_ci`; it draws nothing, so
-    ``random_state`` and ``n_resamples`` are accepted for older callers and unused.
+    Each cell's interval is the Student-t interval of :func:`mean_ci` (it draws nothing).
     """
     scores: list[Score] = []
     for (env, label), runs in group_runs(results).items():
@@ -482,14 +478,12 @@ def rolling_curve(
 
 
 def learning_curves(
-    results: Iterable[dict[str, Any]],
+    results: Iterable[RunResult],
     metric: str,
     *,
     env: str | None = None,
     n_points: int = N_POINTS,
     window: int | None = None,
-    random_state: int = DEFAULT_SEED,
-    n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> list[Curve]:
     """Training curves of ``metric`` per ``(env, method_label)`` group (only ``env`` if given).
@@ -498,19 +492,18 @@ def learning_curves(
     steps up to the group's largest ``steps`` (so seeds share points), over the last ``window``
     training episodes; ``None`` = a tenth of the run's episodes (:func:`final_episode_count`), so a
     curve's last point is the run's final-10 % score whatever the budget. The runs' curves are
-    averaged with a per-point Student-t interval (see :func:`mean_ci`; ``random_state`` and
-    ``n_resamples`` are accepted for older callers and unused).
+    averaged with a per-point Student-t interval (see :func:`mean_ci`; it draws nothing).
     """
     curves: list[Curve] = []
     for (group_env, label), runs in group_runs(results).items():
         if env is not None and group_env != env:
             continue
-        points = np.linspace(0.0, float(max(run["steps"] for run in runs)), n_points + 1)[1:]
+        points = np.linspace(0.0, float(max(run.steps for run in runs)), n_points + 1)[1:]
         per_run = []
         for run in runs:
-            ends = run["train"].get("episode_end_step", [])
+            ends = run.train.episode_end_step
             size = window if window is not None else max(1, final_episode_count(len(ends)))
-            per_run.append(rolling_curve(ends, _column(run["train"], metric), points, size))
+            per_run.append(rolling_curve(ends, _series(run.train.metrics, metric), points, size))
         mean, low, high = mean_ci(np.array(per_run), confidence=confidence, metrics=metric, max_cycles=longest_episode(runs))
         curves.append(Curve(group_env, label, metric, points, mean, low, high, len(runs)))
     return curves

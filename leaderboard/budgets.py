@@ -7,9 +7,10 @@ budget only (:func:`leaderboard.improvement.improvements_over_dqn`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+
+from empathy_zoo.experiment.records import RunResult
 
 __all__ = ["RunBudget", "budget_of", "budgets_of", "shows_evaluation"]
 
@@ -40,17 +41,12 @@ class RunBudget:
         return self.steps, self.eval_interval or 0, self.eval_episodes or 0
 
 
-def _optional_int(value: Any) -> int | None:
-    return None if value is None else int(value)
+def budget_of(run: RunResult) -> RunBudget:
+    """The budget of ``run``."""
+    return RunBudget(run.steps, run.config.eval_interval, run.config.eval_episodes)
 
 
-def budget_of(run: Mapping[str, Any]) -> RunBudget:
-    """The budget of ``run`` (a result as :func:`empathy_zoo.experiment.result_reader.read_result` gives it)."""
-    config = run.get("config") or {}
-    return RunBudget(int(run["steps"]), _optional_int(config.get("eval_interval")), _optional_int(config.get("eval_episodes")))
-
-
-def budgets_of(runs: Iterable[Mapping[str, Any]]) -> tuple[RunBudget, ...]:
+def budgets_of(runs: Iterable[RunResult]) -> tuple[RunBudget, ...]:
     """The distinct budgets of ``runs``, ascending."""
     return tuple(sorted({budget_of(run) for run in runs}, key=RunBudget.order))
 

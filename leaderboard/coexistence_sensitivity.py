@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import load_results
 from leaderboard.reproduction import (
     BETAS,
@@ -69,13 +70,13 @@ def exact_reference(env_kwargs: Mapping[str, Any]) -> Reference:
     return reference
 
 
-def condition_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+def condition_runs(results: Sequence[RunResult]) -> dict[str, dict[str, list[RunResult]]]:
     """``{variant: {experiment: runs}}`` of the Coexistence runs in ``results``, by variant in the
     order first met; raises ``ValueError`` naming what a condition lacks, or that none is there."""
-    out: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    out: dict[str, dict[str, list[RunResult]]] = {}
     for run in results:
-        if run["env"] == COEXISTENCE:
-            out.setdefault(str(run["config"]["variant"]), {}).setdefault(method_key(run), []).append(run)
+        if run.env == COEXISTENCE:
+            out.setdefault(str(run.config.variant), {}).setdefault(method_key(run), []).append(run)
     if not out:
         raise ValueError(f"no {COEXISTENCE} runs in these results")
     for variant, runs in out.items():
@@ -85,13 +86,13 @@ def condition_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, lis
     return out
 
 
-def _arguments(runs: Mapping[str, list[dict[str, Any]]]) -> dict[str, Any]:
+def _arguments(runs: Mapping[str, list[RunResult]]) -> dict[str, Any]:
     """The environment arguments of a condition's runs (one set: a condition is one variant)."""
-    return dict(next(iter(runs.values()))[0]["config"]["env_kwargs"])
+    return dict(next(iter(runs.values()))[0].config.env_kwargs)
 
 
 def judge_conditions(
-    results: Sequence[dict[str, Any]], reference_of: ReferenceOf = exact_reference
+    results: Sequence[RunResult], reference_of: ReferenceOf = exact_reference
 ) -> dict[str, dict[str, dict[str, Verdict]]]:
     """``{variant: {claim: {phase: verdict}}}``: C1–C4 in each condition, C3 against
     ``reference_of(its environment arguments)``."""
@@ -110,15 +111,15 @@ def hinge(verdicts: Sequence[Verdict]) -> str:
     return HOLDS if len({verdict.ok for verdict in verdicts}) == 1 else HINGES
 
 
-def _condition_text(runs: Mapping[str, list[dict[str, Any]]]) -> str:
+def _condition_text(runs: Mapping[str, list[RunResult]]) -> str:
     arguments = ", ".join(f"`{name}={value}`" for name, value in sorted(_arguments(runs).items())) or "the defaults"
-    settings = next(iter(runs.values()))[0]["config"]["settings"]
+    settings = next(iter(runs.values()))[0].config.settings
     time_limit = settings.get("time_limit", "bootstrap")
     return f"{arguments}; a time-limit end {'bootstraps' if time_limit == 'bootstrap' else 'is terminal'}"
 
 
 def _conditions_and_answers(
-    conditions: Mapping[str, Mapping[str, list[dict[str, Any]]]], judged: Mapping[str, Mapping[str, Mapping[str, Verdict]]]
+    conditions: Mapping[str, Mapping[str, list[RunResult]]], judged: Mapping[str, Mapping[str, Mapping[str, Verdict]]]
 ) -> list[str]:
     """The conditions, then one table of every claim's verdict per condition and phase, and its answer."""
     variants = list(judged)
@@ -126,7 +127,7 @@ def _conditions_and_answers(
     for variant in variants:
         runs = conditions[variant]
         seeds = min(len(group) for group in runs.values())
-        steps = next(iter(runs.values()))[0]["steps"]
+        steps = next(iter(runs.values()))[0].steps
         lines.append(f"- `{variant}`: {_condition_text(runs)}; {seeds} seeds, {steps:,} steps per run.")
     header = " | ".join(f"`{variant}`" for variant in variants)
     lines += ["", f"| claim | phase | {header} | answer |", "|---|---|" + "---|" * len(variants) + "---|"]
@@ -139,7 +140,7 @@ def _conditions_and_answers(
     return lines
 
 
-def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str, reference_of: ReferenceOf = exact_reference) -> str:
+def sensitivity_markdown(results: Sequence[RunResult], command: str, reference_of: ReferenceOf = exact_reference) -> str:
     """The page: the conditions, one table of verdicts and answers, then each verdict's evidence."""
     conditions = condition_runs(results)
     judged = judge_conditions(results, reference_of)
@@ -165,7 +166,7 @@ def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str, refere
     return "\n".join(lines)
 
 
-def reproduction_section(results: Sequence[dict[str, Any]], command: str, reference_of: ReferenceOf = exact_reference) -> str:
+def reproduction_section(results: Sequence[RunResult], command: str, reference_of: ReferenceOf = exact_reference) -> str:
     """REPRODUCTION.md's section on the rules: the conditions and the table of verdicts and answers
     (the evidence is on the study's own page, ``SENSITIVITY.md``, beside its results)."""
     conditions = condition_runs(results)

@@ -12,30 +12,27 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import Any
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import load_results
 from leaderboard.run_facts import description_of
 
 __all__ = ["run_key", "compare_runs"]
 
 
-def run_key(run: dict[str, Any]) -> tuple:
+def run_key(run: RunResult) -> tuple:
     """What two versions' runs must share to be the same experiment."""
-    config = run.get("config") or {}
-    settings = config.get("settings") or {}
-    reward = (config.get("reward") or {}).get("name")
     return (
-        config.get("variant") or run["env"],
-        run["method"],
+        run.config.variant or run.env,
+        run.method,
         description_of(run)["selfishness"],
-        settings.get("others", "closest"),
-        reward,
-        run["seed"],
+        run.config.settings.get("others", "closest"),
+        run.config.reward_name,
+        run.seed,
     )
 
 
-def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> dict[str, list[tuple]]:
+def compare_runs(old: Sequence[RunResult], new: Sequence[RunResult]) -> dict[str, list[tuple]]:
     """``{"same": [...], "different": [...], "only_old": [...], "only_new": [...]}``: the keys
     (:func:`run_key`) of the matched pairs by outcome, and of the runs without a partner."""
     by_key_old = {run_key(run): run for run in old}
@@ -46,7 +43,7 @@ def compare_runs(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -
             outcome["only_new"].append(key)
             continue
         a, b = by_key_old[key], by_key_new[key]
-        outcome["same" if a["train"] == b["train"] and a["eval"] == b["eval"] else "different"].append(key)
+        outcome["same" if a.train == b.train and a.eval == b.eval else "different"].append(key)
     outcome["only_old"] = sorted((key for key in by_key_old if key not in by_key_new), key=repr)
     return outcome
 

@@ -11,12 +11,11 @@ episodes. A leaderboard without such rows has no such section.
 from __future__ import annotations
 
 import html
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
-from empathy_zoo.result_file import PRICE_COLUMN
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import final_episode_count, group_runs
 from leaderboard.constraint import ConstraintCheck, PhaseCost, constraint_satisfaction
 from leaderboard.tables import markdown_table, place_before_definitions
@@ -28,20 +27,31 @@ VERDICTS = {"above": "met", "inside": "undecided", "below": "violated"}
 """What the position of ``d`` against a phase's interval says of the constraint."""
 
 
-def constraint_rows(results: Sequence[Mapping[str, Any]]) -> list[tuple[str, str, float, ConstraintCheck, list[float]]]:
+def _prices(run: RunResult) -> np.ndarray:
+    """The run's price after each training episode (only for a run that records it)."""
+    assert run.train.price is not None
+    return run.train.price
+
+
+def _cost_limit(run: RunResult) -> float:
+    """The ``cost_limit`` of the run's reward transform (NaN where it has none)."""
+    return float((run.config.reward or {}).get("cost_limit", float("nan")))
+
+
+def constraint_rows(results: Sequence[RunResult]) -> list[tuple[str, str, float, ConstraintCheck, list[float]]]:
     """``(variant, label, d, check, λ at the end of each run)`` of every row whose runs record a price."""
     rows = []
-    for (env, label), runs in group_runs([dict(run) for run in results]).items():
-        if not all(PRICE_COLUMN in run["train"] for run in runs):
+    for (env, label), runs in group_runs(results).items():
+        if not all(run.train.price is not None for run in runs):
             continue
-        limits = {float((run["config"].get("reward") or {}).get("cost_limit", float("nan"))) for run in runs}
+        limits = {_cost_limit(run) for run in runs}
         if len(limits) != 1 or not all(np.isfinite(list(limits))):
             continue
         (limit,) = limits
         check = constraint_satisfaction(
-            [run["train"]["harms"] for run in runs], [run["eval"][-1]["harms"] for run in runs], limit
+            [run.train.metrics["harms"].tolist() for run in runs], [run.eval[-1].metrics["harms"].tolist() for run in runs], limit
         )
-        rows.append((env, label, limit, check, [float(run["train"][PRICE_COLUMN][-1]) for run in runs]))
+        rows.append((env, label, limit, check, [float(_prices(run)[-1]) for run in runs]))
     return rows
 
 
@@ -54,18 +64,14 @@ def _cell(phase: PhaseCost) -> str:
     return f"{phase.mean:.2f} [{phase.low:.2f}, {phase.high:.2f}]: {VERDICTS[phase.limit_lies]}"
 
 
-def add_constraint_section(results: Sequence[Mapping[str, Any]], markdown: str, html_page: str) -> tuple[str, str]:
+def add_constraint_section(results: Sequence[RunResult], markdown: str, html_page: str) -> tuple[str, str]:
     """``markdown`` and ``html_page`` with the section placed before their metric definitions;
     unchanged where no row records a price."""
     rows = constraint_rows(results)
     if not rows:
         return markdown, html_page
     priced = {(env, label) for env, label, *_ in rows}
-    lambdas = {
-        key: [list(run["train"][PRICE_COLUMN]) for run in runs]
-        for key, runs in group_runs([dict(run) for run in results]).items()
-        if key in priced
-    }
+    lambdas = {key: [_prices(run).tolist() for run in runs] for key, runs in group_runs(results).items() if key in priced}
     header = ["Variant", "Method", "d", "training, final 10 %", "final greedy evaluation", "λ at the end", "λ still rising"]
     table = [
         [

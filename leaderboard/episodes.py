@@ -31,19 +31,20 @@ from __future__ import annotations
 import hashlib
 import html
 import unicodedata
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.agent_file import RESULT_FIELD, load_agent
+from empathy_zoo.agent_file import load_agent
 from empathy_zoo.environments import default_policies
 from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name, confined
 from empathy_zoo.policies import PolicyEntry, make_policy, recorded_entry
 from empathy_zoo.result_file import RUNS_DIR
-from leaderboard.aggregate import group_runs, table_env
+from leaderboard.aggregate import group_runs
 from leaderboard.tables import env_metrics, markdown_table, place_before_definitions
 
 __all__ = [
@@ -165,12 +166,7 @@ def episode_file_name(env: str, slug: str) -> str:
 
 
 # ---------------------------------------------------------------------------- which run, which world
-def _kept_agent(run: Mapping[str, Any]) -> Mapping[str, Any] | None:
-    entry = run.get(RESULT_FIELD)
-    return entry if isinstance(entry, Mapping) else None
-
-
-def chosen_runs(results: Sequence[dict[str, Any]], origins: Sequence[str]) -> dict[tuple[str, str], tuple[dict[str, Any], str]]:
+def chosen_runs(results: Sequence[RunResult], origins: Sequence[str]) -> dict[tuple[str, str], tuple[RunResult, str]]:
     """``{(variant, label): (run, directory)}``: each row's run of the lowest seed that kept an agent,
     and the directory (as given) it was read from (``origins``, one per result:
     :attr:`leaderboard.sources.ResultSet.origins`); rows whose runs kept none are left out. Rows
@@ -180,9 +176,9 @@ def chosen_runs(results: Sequence[dict[str, Any]], origins: Sequence[str]) -> di
     origin_of = {id(run): origin for run, origin in zip(results, origins, strict=True)}
     chosen = {}
     for row, runs in group_runs(results).items():
-        kept = [run for run in runs if _kept_agent(run) is not None]
+        kept = [run for run in runs if run.agent is not None]
         if kept:
-            run = min(kept, key=lambda run: run["seed"])
+            run = min(kept, key=lambda run: run.seed)
             chosen[row] = (run, origin_of[id(run)])
     return chosen
 
@@ -199,20 +195,14 @@ class ForgedWorld(ValueError):
     allowed is a note instead: the user may allow it)."""
 
 
-def trained_world(
-    run: Mapping[str, Any], allowed_imports: Collection[str] = ()
-) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
+def trained_world(run: RunResult, allowed_imports: Collection[str] = ()) -> tuple[str, dict[str, Any], dict[str, PolicyEntry]]:
     """``(env, env_kwargs, fixed)`` the run trained in, from its result file's ``config``: the
     fixed partners' policy labels read back as policy entries, each a registered policy or one of
     ``allowed_imports`` (:func:`empathy_zoo.policies.recorded_entry`: a result file never makes
     the leaderboard import code), else ``ValueError`` naming the field; nothing is imported."""
-    config = run["config"]
-    where = f"run {run.get('run_id')}: config.fixed"
-    fixed = {
-        agent: recorded_entry(entry, f"{where}.{agent}", allowed_imports)
-        for agent, entry in dict(config.get("fixed") or {}).items()
-    }
-    env, env_kwargs = str(config["env"]), dict(config.get("env_kwargs") or {})
+    where = f"run {run.run_id}: config.fixed"
+    fixed = {agent: recorded_entry(entry, f"{where}.{agent}", allowed_imports) for agent, entry in run.config.fixed.items()}
+    env, env_kwargs = run.config.env or run.env, dict(run.config.env_kwargs)
     unknown = sorted(set(fixed) - set(default_policies(env, env_kwargs)))
     if unknown:
         raise ForgedWorld(f"{where}: {env} as the run built it has no agent {', '.join(unknown)}")
@@ -226,7 +216,7 @@ def trained_world(
 
 # ---------------------------------------------------------------------------- playing
 def play_row_episodes(
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | Path,
     origins: Sequence[str],
     figures_dir: str = "figures",
@@ -245,10 +235,10 @@ def play_row_episodes(
     ready = []
     for (env, label), (run, origin) in chosen.items():
         root = _runs_root(origin)
-        entry = _kept_agent(run)
+        entry = run.agent
         assert entry is not None
-        result_file = root / f"{check_path_name(run['run_id'], 'run id')}.json"
-        agent_file = confined(root, str(entry["file"]))
+        result_file = root / f"{check_path_name(run.run_id, 'run id')}.json"
+        agent_file = confined(root, entry.file)
         if not agent_file.is_file():
             notes.append(
                 f"{label} ({env}): agent file {agent_file}, named by result file {result_file}, is missing; no episode shown"
@@ -262,7 +252,7 @@ def play_row_episodes(
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue
         try:
-            agent = load_agent(agent_file, str(entry["sha256"]), result_file=result_file)
+            agent = load_agent(agent_file, entry.sha256, result_file=result_file)
         except ImportError as error:
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue
@@ -279,9 +269,7 @@ def play_row_episodes(
             max_steps=EPISODE_STEPS,
             title=label,
         )
-        episodes.append(
-            RowEpisode(env, label, slugs[env, label], str(run["run_id"]), int(run["seed"]), result_file, agent_file, gif)
-        )
+        episodes.append(RowEpisode(env, label, slugs[env, label], run.run_id, run.seed, result_file, agent_file, gif))
     return episodes, notes
 
 
@@ -335,7 +323,7 @@ def _md_alt(text: str) -> str:
 
 
 def episodes_section(
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | Path,
     origins: Sequence[str],
     figures_dir: str = "figures",
@@ -348,7 +336,7 @@ def episodes_section(
     if not episodes and not notes:
         return None
     out = Path(out_dir)
-    base_env = {table_env(run): str(run["env"]) for run in results}
+    base_env = {run.table_env: run.env for run in results}
     markdown = ["", f"## {SECTION_TITLE}", "", _intro()]
     page = [f"<h2>{SECTION_TITLE}</h2>", f'<p class="note">{_html_code(_intro())}</p>']
     figures: dict[str, Path] = {}
@@ -379,7 +367,7 @@ def _html_code(text: str) -> str:
 
 
 def add_episodes_section(
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | Path,
     markdown: str,
     html_page: str,

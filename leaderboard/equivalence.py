@@ -54,11 +54,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import run_key
@@ -238,26 +238,26 @@ def holm_rejections(p_values: Sequence[float], level: float = FAMILY_LEVEL) -> l
     return rejected
 
 
-def _experiment(run: dict[str, Any]) -> tuple:
+def _experiment(run: RunResult) -> tuple:
     """The run's experiment: :func:`leaderboard.compare_runs.run_key` without the seed, and its
     budget (runs of another length are another experiment)."""
-    return (*run_key(run)[:-1], int(run["steps"]))
+    return (*run_key(run)[:-1], run.steps)
 
 
-def _per_experiment(runs: Sequence[dict[str, Any]]) -> dict[tuple, list[dict[str, Any]]]:
-    groups: dict[tuple, list[dict[str, Any]]] = {}
+def _per_experiment(runs: Sequence[RunResult]) -> dict[tuple, list[RunResult]]:
+    groups: dict[tuple, list[RunResult]] = {}
     for run in runs:
         groups.setdefault(_experiment(run), []).append(run)
     return groups
 
 
-def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], level: float = FAMILY_LEVEL) -> Equivalence:
+def equivalence(old: Sequence[RunResult], new: Sequence[RunResult], level: float = FAMILY_LEVEL) -> Equivalence:
     """The verdict of the rule (module documentation) on two sets of result documents."""
     a, b = _per_experiment(old), _per_experiment(new)
     raw: list[Cell] = []
     for experiment in sorted(set(a) & set(b), key=repr):
         env = table_env(a[experiment][0])
-        metrics = table_metrics(env, a[experiment][0]["env"])
+        metrics = table_metrics(env, a[experiment][0].env)
         scalars_a = [run_scalars(run) for run in a[experiment]]
         scalars_b = [run_scalars(run) for run in b[experiment]]
         for phase in PHASES:
@@ -281,8 +281,8 @@ def equivalence(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], le
 
 
 def tost_cells(
-    old: Sequence[dict[str, Any]],
-    new: Sequence[dict[str, Any]],
+    old: Sequence[RunResult],
+    new: Sequence[RunResult],
     margins: dict[str, float] | None = None,
     level: float = TOST_LEVEL,
 ) -> TostSummary:
@@ -294,7 +294,7 @@ def tost_cells(
     cells = []
     for experiment in sorted(set(a) & set(b), key=repr):
         env = table_env(a[experiment][0])
-        metrics = table_metrics(env, a[experiment][0]["env"])
+        metrics = table_metrics(env, a[experiment][0].env)
         scalars_a = [run_scalars(run) for run in a[experiment]]
         scalars_b = [run_scalars(run) for run in b[experiment]]
         for phase in PHASES:
@@ -307,7 +307,7 @@ def tost_cells(
     return TostSummary(tuple(cells))
 
 
-def tost_report(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> str:
+def tost_report(old: Sequence[RunResult], new: Sequence[RunResult]) -> str:
     """Markdown: the TOST's verdict and every cell, with its difference, 90 % interval and p."""
     summary = tost_cells(old, new)
     counts = {v: sum(c.verdict == v for c in summary.cells) for v in (EQUIVALENT, NOT_SHOWN, TOO_FEW)}
@@ -331,10 +331,10 @@ def tost_report(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) ->
     return "\n".join(lines)
 
 
-def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) -> list[tuple[tuple, str, str, float, float]]:
+def verdict_flips(old: Sequence[RunResult], new: Sequence[RunResult]) -> list[tuple[tuple, str, str, float, float]]:
     """The leaderboard's verdicts against DQN that differ between the sets: ``(cell key, old
     verdict, new verdict, old p, new p)``, the key ``(variant, label, phase, metric, DQN row)``."""
-    metrics_of = {table_env(run): table_metrics(run["env"]) for run in [*old, *new]}
+    metrics_of = {run.table_env: table_metrics(run.env) for run in [*old, *new]}
     before = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(old, metrics_of)}
     after = {(c.env, c.method_label, c.phase, c.metric, c.baseline_label): c for c in improvements_over_dqn(new, metrics_of)}
     return [
@@ -344,23 +344,23 @@ def verdict_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]]) 
     ]
 
 
-def split_flips(old: Sequence[dict[str, Any]], new: Sequence[dict[str, Any]], trials: int = 40, seed: int = 0) -> list[int]:
+def split_flips(old: Sequence[RunResult], new: Sequence[RunResult], trials: int = 40, seed: int = 0) -> list[int]:
     """How many verdicts against DQN differ between two draws of the same process, for reading
     :func:`verdict_flips`: the runs of both sets pooled per row (variant and label), split at
     random into two halves of equal size (each row's seeds renumbered), and the halves' verdicts
     compared; one count per split (``trials`` splits, seeded). Where the two sets are draws of one
     process, this is what redrawing the seeds alone does."""
     rng = np.random.default_rng(seed)
-    pooled: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    pooled: dict[tuple[str, str], list[RunResult]] = {}
     for run in [*old, *new]:
-        pooled.setdefault((table_env(run), run["method_label"]), []).append(run)
+        pooled.setdefault((run.table_env, run.method_label), []).append(run)
     counts = []
     for _ in range(trials):
-        halves: tuple[list[dict[str, Any]], list[dict[str, Any]]] = ([], [])
+        halves: tuple[list[RunResult], list[RunResult]] = ([], [])
         for runs in pooled.values():
             half = len(runs) // 2
             for position, index in enumerate(rng.permutation(len(runs))[: 2 * half]):
-                halves[position // half].append({**runs[index], "seed": position % half})
+                halves[position // half].append(replace(runs[index], seed=position % half))
         counts.append(len(verdict_flips(*halves)))
     return counts
 

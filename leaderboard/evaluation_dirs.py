@@ -25,16 +25,17 @@ with a note.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.data_files import data_files
 from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evaluation_mismatch, read_evaluation
+from empathy_zoo.experiment.records import RunResult
 
 __all__ = ["MatchedEvaluation", "evaluation_dir_files", "match_evaluations"]
 
-MatchedEvaluation = tuple[dict[str, Any], dict[str, Any], Path]
+MatchedEvaluation = tuple[RunResult, dict[str, Any], Path]
 """``(run, evaluation, path)``: a run read for the leaderboard, its evaluation and the file it was read from."""
 
 
@@ -61,14 +62,12 @@ def evaluation_dir_files(directory: str | os.PathLike[str]) -> list[Path]:
     return found
 
 
-def _recorded_sha(run: Mapping[str, Any]) -> str | None:
-    agent = run.get("agent")
-    sha = agent.get("sha256") if isinstance(agent, Mapping) else None
-    return sha if isinstance(sha, str) else None
+def _recorded_sha(run: RunResult) -> str | None:
+    return None if run.agent is None else run.agent.sha256
 
 
 def _beside_runs(
-    results_dirs: Sequence[str | os.PathLike[str]], results: Sequence[dict[str, Any]], origins: Sequence[str] | None
+    results_dirs: Sequence[str | os.PathLike[str]], results: Sequence[RunResult], origins: Sequence[str] | None
 ) -> dict[tuple[str, str], Path]:
     """``{(run id, scenario set): path}`` of the evaluation files beside the runs that count
     (:func:`~leaderboard.heldout_scores.load_heldout`): those whose run was read from their
@@ -77,7 +76,7 @@ def _beside_runs(
     beside: dict[tuple[str, str], Path] = {}
     for directory in results_dirs:
         mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == os.fspath(directory)]
-        recorded = {(str(run["run_id"]), _recorded_sha(run)) for run in mine}
+        recorded = {(run.run_id, _recorded_sha(run)) for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             if (evaluation["run_id"], evaluation["agent"]["sha256"]) in recorded:
@@ -87,7 +86,7 @@ def _beside_runs(
 
 def match_evaluations(
     evaluation_dirs: Sequence[str | os.PathLike[str]],
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     results_dirs: Sequence[str | os.PathLike[str]] = (),
     origins: Sequence[str] | None = None,
 ) -> list[MatchedEvaluation]:
@@ -110,9 +109,9 @@ def match_evaluations(
         if where in seen_dirs:
             raise ValueError(f"--evaluations {directory} is given twice (as {seen_dirs[where]} too)")
         seen_dirs[where] = os.fspath(directory)
-    by_id: dict[str, list[dict[str, Any]]] = {}
+    by_id: dict[str, list[RunResult]] = {}
     for run in results:
-        by_id.setdefault(str(run["run_id"]), []).append(run)
+        by_id.setdefault(run.run_id, []).append(run)
     taken = _beside_runs(results_dirs, results, origins)
     read = ", ".join(os.fspath(d) for d in results_dirs) or "the results read"
     matched: list[MatchedEvaluation] = []
@@ -134,7 +133,7 @@ def match_evaluations(
                 )
             if len(same_agent) > 1:
                 raise ValueError(f"{path}: run {run_id} is read from {len(same_agent)} results directories; read it from one")
-            mismatch = evaluation_mismatch(evaluation, same_agent[0])
+            mismatch = evaluation_mismatch(evaluation, same_agent[0].to_document(series=False))
             if mismatch is not None:
                 raise ValueError(
                     f"{path}: not the evaluation of run {run_id} its result file records ({mismatch}); "

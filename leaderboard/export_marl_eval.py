@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_replaceable
 from empathy_zoo.result_file import RUNS_DIR
@@ -83,23 +84,24 @@ def step_key(index: int) -> str:
     return f"step_{index}"
 
 
-def _run_layout(run: Mapping[str, Any]) -> dict[str, Any]:
-    """One run as marl-eval's ``{step_<i>: {...}, ..., absolute_metrics: {...}}``."""
-    evaluations = sorted(run["eval"], key=lambda entry: entry["step"])
+def _run_layout(run: RunResult) -> dict[str, Any]:
+    """One run as marl-eval's ``{step_<i>: {...}, ..., absolute_metrics: {...}}`` (each value as
+    its result file records it)."""
+    evaluations = sorted(run.eval, key=lambda entry: entry.step)
     if not evaluations:
         raise ValueError(
-            f"run {run['run_id']} has no greedy evaluation (its eval is empty): marl-eval's steps and absolute "
+            f"run {run.run_id} has no greedy evaluation (its eval is empty): marl-eval's steps and absolute "
             "metrics are evaluations; train it with an evaluation interval within its budget, or move it away"
         )
     steps: dict[str, Any] = {
-        step_key(i): {STEP_COUNT: int(entry["step"]), **{metric: list(entry[metric]) for metric in METRIC_NAMES}}
+        step_key(i): {STEP_COUNT: entry.step, **{metric: entry.metrics[metric].tolist() for metric in METRIC_NAMES}}
         for i, entry in enumerate(evaluations)
     }
-    steps[ABSOLUTE_METRICS] = {metric: list(evaluations[-1][metric]) for metric in METRIC_NAMES}
+    steps[ABSOLUTE_METRICS] = {metric: evaluations[-1].metrics[metric].tolist() for metric in METRIC_NAMES}
     return steps
 
 
-def marl_eval_layout(results: Iterable[dict[str, Any]]) -> dict[str, dict[str, dict[str, dict[str, Any]]]]:
+def marl_eval_layout(results: Iterable[RunResult]) -> dict[str, dict[str, dict[str, dict[str, Any]]]]:
     """``results`` (runs as :func:`leaderboard.aggregate.load_results` or
     :func:`leaderboard.sources.load_results_dirs` read them) in marl-eval's layout,
     ``{environment: {task: {algorithm: {run: {step_<i>: ..., "absolute_metrics": ...}}}}}`` (the
@@ -114,7 +116,7 @@ def marl_eval_layout(results: Iterable[dict[str, Any]]) -> dict[str, dict[str, d
     layout: dict[str, dict[str, dict[str, dict[str, Any]]]] = {}
     labels: dict[tuple[str, str, str], str] = {}
     for (task, label), runs in group_runs(results).items():
-        environment = str(runs[0]["env"])
+        environment = runs[0].env
         algorithm = algorithm_name(label)
         first = labels.setdefault((environment, task, algorithm.lower()), label)
         if first != label:
@@ -124,7 +126,7 @@ def marl_eval_layout(results: Iterable[dict[str, Any]]) -> dict[str, dict[str, d
                 "its sweep entry, or --label DIR=PREFIX where they come from two results directories)"
             )
         algorithms = layout.setdefault(environment, {}).setdefault(task, {})
-        algorithms[algorithm] = {run_key(int(run["seed"])): _run_layout(run) for run in runs}
+        algorithms[algorithm] = {run_key(run.seed): _run_layout(run) for run in runs}
     return {environment: dict(sorted(layout[environment].items())) for environment in sorted(layout)}
 
 

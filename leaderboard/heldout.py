@@ -63,6 +63,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EFFECT_NAMES, HELDOUT_MARGINS, METRIC_RANGES, PER_OTHER_AGENT, RANGE_NOTES
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
 from leaderboard.heldout_scores import (
@@ -231,14 +232,14 @@ def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
 
 def heldout_section(
     results_dirs: ResultsDirs,
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | os.PathLike[str],
     origins: Sequence[str] | None = None,
     figures_dir: str = "figures",
     digits: int = 2,
     title: str = "Held-out partners",
     lead: str = "",
-    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
 ) -> HeldoutSection | None:
     """The "Held-out partners" section of the evaluation files of ``results_dirs`` and ``extra``
     (``None`` when there are none; ``origins`` and ``extra`` as :func:`load_heldout` takes them), its figures written into
@@ -292,12 +293,12 @@ def heldout_section(
 
 def add_heldout_section(
     results_dirs: ResultsDirs,
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | os.PathLike[str],
     markdown: str,
     html_page: str,
     origins: Sequence[str] | None = None,
-    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
 ) -> tuple[str, str, dict[str, Path]]:
     """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Held-out partners" section
     placed before their metric definitions, and the section's figures; the pages unchanged and no

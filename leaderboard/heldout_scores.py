@@ -24,6 +24,7 @@ import numpy as np
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
 from empathy_zoo.evaluation_file import TRAINED_WITH, evaluation_files, evaluation_mismatch, read_evaluation
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import (
     DERIVED_DEFINITIONS,
     DERIVED_METRICS,
@@ -33,7 +34,7 @@ from empathy_zoo.metrics import (
     METRIC_DEFINITIONS,
     PER_OTHER_AGENT,
 )
-from leaderboard.aggregate import group_runs, mean_ci, table_env
+from leaderboard.aggregate import group_runs, mean_ci
 from leaderboard.budgets import budgets_of
 from leaderboard.improvement import (
     TOO_FEW_SEEDS,
@@ -165,7 +166,7 @@ class HeldoutGroup:
     """The environment itself (``coexistence_v0``)."""
     scenario_set: Mapping[str, Any]
     """The set's definition (as the evaluation files record it)."""
-    runs: dict[str, list[tuple[dict[str, Any], dict[str, Any]]]]
+    runs: dict[str, list[tuple[RunResult, dict[str, Any]]]]
     """``{method label: [(result, evaluation)]}``, methods in the leaderboard's order, runs by seed."""
     dqn_of: dict[str, str | None]
     """``{method label: the DQN row it is compared with}``: the first DQN row of its variant and
@@ -207,9 +208,9 @@ def _dirs(results_dirs: ResultsDirs) -> list[str | os.PathLike[str]]:
 
 def load_heldout(
     results_dirs: ResultsDirs,
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     origins: Sequence[str] | None = None,
-    extra: Sequence[tuple[dict[str, Any], dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
 ) -> tuple[list[HeldoutGroup], list[str]]:
     """The evaluation files of ``results_dirs`` grouped by environment and scenario set, each matched
     with its run among ``results`` (as :func:`leaderboard.aggregate.load_results` gives them), and
@@ -227,33 +228,32 @@ def load_heldout(
     if origins is not None and len(origins) != len(results):
         raise ValueError(f"{len(origins)} origins for {len(results)} results")
     notes: list[str] = []
-    found: dict[tuple[str, str], list[tuple[dict[str, Any], dict[str, Any], Path]]] = {}
+    found: dict[tuple[str, str], list[tuple[RunResult, dict[str, Any], Path]]] = {}
     for directory in dirs:
         mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == str(directory)]
-        by_id = {run["run_id"]: run for run in mine}
+        by_id = {run.run_id: run for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             run = by_id.get(evaluation["run_id"])
             if run is None:
                 notes.append(f"{path}: its run {evaluation['run_id']} has no result file here; left out")
                 continue
-            agent = run.get("agent")
-            recorded = agent.get("sha256") if isinstance(agent, Mapping) else None
+            recorded = None if run.agent is None else run.agent.sha256
             if recorded != evaluation["agent"]["sha256"]:
                 notes.append(f"{path}: made of another agent than its result file records (trained again?); left out")
                 continue
-            mismatch = evaluation_mismatch(evaluation, run)
+            mismatch = evaluation_mismatch(evaluation, run.to_document(series=False))
             if mismatch is not None:  # (the agent is the run's, the rest is not: a forged or damaged file)
-                raise ValueError(f"{path}: not an evaluation of run {run['run_id']} ({mismatch})")
-            key = (table_env(run), evaluation["scenario_set"]["name"])
+                raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
+            key = (run.table_env, evaluation["scenario_set"]["name"])
             found.setdefault(key, []).append((run, evaluation, path))
     for run, evaluation, path in extra:
-        found.setdefault((table_env(run), evaluation["scenario_set"]["name"]), []).append((run, evaluation, path))
+        found.setdefault((run.table_env, evaluation["scenario_set"]["name"]), []).append((run, evaluation, path))
     for members in found.values():
         seen: dict[int, Path] = {}
         for run, _, path in members:
             if id(run) in seen:
-                raise ValueError(f"{path} and {seen[id(run)]} evaluate run {run['run_id']} in one scenario set; move one away")
+                raise ValueError(f"{path} and {seen[id(run)]} evaluate run {run.run_id} in one scenario set; move one away")
             seen[id(run)] = path
     groups = []
     for (env, set_name), members in sorted(found.items()):
@@ -369,7 +369,7 @@ def heldout_cells(group: HeldoutGroup) -> list[HeldoutCell]:
     return cells
 
 
-def _longest(pairs: Sequence[tuple[dict[str, Any], dict[str, Any]]]) -> int | None:
+def _longest(pairs: Sequence[tuple[RunResult, dict[str, Any]]]) -> int | None:
     """The most steps an episode of these evaluations could last (the bound of survival)."""
     cycles = [
         int(entry["env_kwargs"].get("max_cycles", DEFAULT_ARGUMENTS[evaluation["env"]]["max_cycles"]))

@@ -38,10 +38,10 @@ import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import HIGHER_IS_BETTER
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES, group_runs, run_scalars
 from leaderboard.budgets import RunBudget, budgets_of
@@ -295,12 +295,12 @@ def interquartile_mean(values: Sequence[float]) -> float:
     return float(data[cut : data.size - cut].mean())
 
 
-def is_dqn(run: Mapping[str, Any]) -> bool:
+def is_dqn(run: RunResult) -> bool:
     """Whether ``run`` is standard DQN, as its description says (:func:`leaderboard.run_facts.is_dqn_reference`)."""
     return is_dqn_reference(run)
 
 
-def dqn_rows(results: Sequence[dict[str, Any]]) -> dict[tuple[str, tuple[RunBudget, ...]], list[str]]:
+def dqn_rows(results: Sequence[RunResult]) -> dict[tuple[str, tuple[RunBudget, ...]], list[str]]:
     """The labels of the DQN rows (:func:`is_dqn`) per ``(variant, budgets of the row's runs)``, in
     row order (:func:`leaderboard.aggregate.group_runs`)."""
     rows: dict[tuple[str, tuple[RunBudget, ...]], list[str]] = {}
@@ -310,7 +310,7 @@ def dqn_rows(results: Sequence[dict[str, Any]]) -> dict[tuple[str, tuple[RunBudg
     return rows
 
 
-def uncompared_rows(results: Sequence[dict[str, Any]]) -> list[tuple[str, str]]:
+def uncompared_rows(results: Sequence[RunResult]) -> list[tuple[str, str]]:
     """The ``(variant, label)`` rows other than DQN's that no DQN row of their variant and budget
     is compared with (:func:`improvements_over_dqn` gives them no cell), in row order."""
     baselines = dqn_rows(results)
@@ -322,19 +322,16 @@ def uncompared_rows(results: Sequence[dict[str, Any]]) -> list[tuple[str, str]]:
 
 
 def improvements_over_dqn(
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     metrics_of: Mapping[str, Sequence[str]],
     *,
-    random_state: int = DEFAULT_SEED,
-    n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> list[Improvement]:
     """Every method's probability of improving on DQN in its environment, per phase and metric
     (``metrics_of[env]``: the metrics of that env's tables), with the interval that inverts the
     exact permutation test (:func:`improvement_interval`) and the test's p; a row is compared with
     every other DQN row of its variant and budget (:func:`dqn_rows`), one cell each, in row order.
-    A row without such a DQN row has none. The intervals draw nothing: ``random_state`` and
-    ``n_resamples`` are accepted for older callers and unused."""
+    A row without such a DQN row has none. The intervals draw nothing."""
     groups = group_runs(results)
     baselines = dqn_rows(results)
     scalars = {key: [run_scalars(run) for run in runs] for key, runs in groups.items()}

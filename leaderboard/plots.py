@@ -10,7 +10,6 @@ import io
 import os
 from collections.abc import Collection, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -18,17 +17,15 @@ from matplotlib.figure import Figure
 
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.environments import entry_of
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE,
-    DEFAULT_SEED,
     MIN_INTERVAL_SEEDS,
     N_POINTS,
-    N_RESAMPLES,
     Curve,
     group_runs,
     learning_curves,
-    table_env,
 )
 from leaderboard.colours import label_colours
 from leaderboard.reference_curves import reference_curve
@@ -132,7 +129,7 @@ def render_curves_png(
 
 
 def plot_metric(
-    results: Iterable[dict[str, Any]],
+    results: Iterable[RunResult],
     env: str,
     metric: str,
     path: str | os.PathLike[str],
@@ -140,8 +137,6 @@ def plot_metric(
     ylabel: str | None = None,
     title: str | None = None,
     n_points: int = N_POINTS,
-    random_state: int = DEFAULT_SEED,
-    n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> Path:
     """Draw the training curves of ``metric`` on ``env`` (every method, with the exact reference
@@ -152,8 +147,6 @@ def plot_metric(
         metric,
         env=env,
         n_points=n_points,
-        random_state=random_state,
-        n_resamples=n_resamples,
         confidence=confidence,
     )
     if not curves:
@@ -173,13 +166,11 @@ def plot_metric(
 
 
 def plot_learning_curves(
-    results: Iterable[dict[str, Any]],
+    results: Iterable[RunResult],
     figures_dir: str | os.PathLike[str],
     *,
     specs: Mapping[str, FigureSpec] | None = None,
     n_points: int = N_POINTS,
-    random_state: int = DEFAULT_SEED,
-    n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
 ) -> dict[tuple[str, str], Path]:
     """The figures of every env present in ``results``: ``specs``'s, by default the environment
@@ -189,7 +180,7 @@ def plot_learning_curves(
     """
     results = list(results)
     envs = sorted({env for env, _ in group_runs(results)})
-    base_env = {table_env(run): run["env"] for run in results}  # a variant is drawn like its env
+    base_env = {run.table_env: run.env for run in results}  # a variant is drawn like its env
     paths: dict[tuple[str, str], Path] = {}
     for env in envs:
         spec = figure_spec(env, base_env[env]) if specs is None else specs.get(env, specs.get(base_env[env], FALLBACK_SPEC))
@@ -201,8 +192,6 @@ def plot_learning_curves(
                 confined(figures_dir, figure_filename(env, metric)),
                 ylabel=ylabel,
                 n_points=n_points,
-                random_state=random_state,
-                n_resamples=n_resamples,
                 confidence=confidence,
             )
     return paths

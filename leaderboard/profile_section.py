@@ -25,15 +25,15 @@ from __future__ import annotations
 import html
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from empathy_zoo.environments import ENGINES
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_RANGES, PER_OTHER_AGENT
-from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, group_runs, run_scalars, table_env
+from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, group_runs, run_scalars
 from leaderboard.html_images import img_tag
 from leaderboard.profile_plot import plot_profiles
 from leaderboard.profiles import GAMMA, Profile, optimality_gaps, performance_profiles
@@ -71,7 +71,7 @@ def normalization(metric: str) -> str | None:
     return metric if HIGHER_IS_BETTER.get(metric, True) and (low, high) == (0.0, 1.0) else f"{metric}, scaled to [0, 1]"
 
 
-def normalized_score(run: Mapping[str, Any], metric: str, value: float) -> float:
+def normalized_score(run: RunResult, metric: str, value: float) -> float:
     """``value`` of ``metric`` in ``run`` normalized as :func:`normalization` says (by the run's own
     ``max_cycles`` and number of other agents); NaN for a metric without one."""
     if normalization(metric) is None or not math.isfinite(value):
@@ -79,7 +79,7 @@ def normalized_score(run: Mapping[str, Any], metric: str, value: float) -> float
     if metric == "survival":
         return value / float(env_argument(run, "max_cycles"))
     if metric in PER_OTHER_AGENT:
-        count = ENGINES[run["env"]].count_argument
+        count = ENGINES[run.env].count_argument
         others = int(env_argument(run, count)) if count else 1
         return 1.0 - value / max(1, others)
     low, high = METRIC_RANGES[metric]
@@ -92,7 +92,7 @@ def profile_metrics(env: str, base_env: str) -> tuple[str, ...]:
     return tuple(metric for metric in table_metrics(env, base_env) if normalization(metric) is not None)
 
 
-def normalized_scores(results: Sequence[dict[str, Any]], env: str, metric: str) -> dict[str, np.ndarray]:
+def normalized_scores(results: Sequence[RunResult], env: str, metric: str) -> dict[str, np.ndarray]:
     """``{row label: runs × 1 array}`` of ``env``'s rows' normalized ``metric`` in the last greedy
     evaluation, in the leaderboard's row order; runs without a finite score left out, rows without
     any too."""
@@ -129,7 +129,7 @@ def _intro(n_resamples: int, random_state: int, confidence: float) -> str:
 
 
 def _gap_table(
-    results: Sequence[dict[str, Any]], env: str, metrics: Sequence[str], n_resamples: int, random_state: int, confidence: float
+    results: Sequence[RunResult], env: str, metrics: Sequence[str], n_resamples: int, random_state: int, confidence: float
 ) -> tuple[list[str], list[list[str]], list[tuple[str, dict[str, Profile]]]]:
     """The optimality-gap table of ``env`` (header, rows) and its figure's panels."""
     gaps: dict[str, dict[str, tuple[float, float, float, int]]] = {}
@@ -154,7 +154,7 @@ def _gap_table(
 
 
 def add_profile_section(
-    results: Sequence[dict[str, Any]],
+    results: Sequence[RunResult],
     out_dir: str | os.PathLike[str],
     markdown: str,
     html_page: str,
@@ -167,7 +167,7 @@ def add_profile_section(
     """``markdown`` and ``html_page`` with the section placed before their metric definitions, and
     ``{"figure:<env>:profiles": path}`` of the figures written into ``out_dir / figures_dir``; the
     pages unchanged and no figures where no environment has a normalized metric."""
-    base_env = {table_env(run): run["env"] for run in results}
+    base_env = {run.table_env: run.env for run in results}
     envs = [(env, profile_metrics(env, base_env[env])) for env in sorted(base_env)]
     envs = [(env, metrics) for env, metrics in envs if metrics]
     if not envs:

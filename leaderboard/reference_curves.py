@@ -8,11 +8,11 @@ training. Which target, β, γ and ε schedule a run has, its result file's desc
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, format_bytes
 from leaderboard.run_facts import description_of, exploration_of, in_paper_setting
 
@@ -22,14 +22,14 @@ MODELLED_ARGUMENTS = ("size", "view", "max_cycles")
 """Environment arguments the reference takes; every other must be at its default."""
 
 
-def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarray) -> np.ndarray | None:
+def reference_curve(runs: Sequence[RunResult], metric: str, steps: np.ndarray) -> np.ndarray | None:
     """The reference's ``metric`` at each of ``steps`` for a group of runs, or ``None`` when the
     reference does not apply (another env, fixed agent or target, a reward transform, a
     description without β, γ or ε schedule; runs of different descriptions) or when their grid or
     episodes are beyond what it is computed for (:func:`reference_refusal`)."""
     from empathy_zoo.reference import coexistence_optimum
 
-    if not _applies(runs) or metric not in ENVIRONMENT_TABLE[runs[0]["env"]].reference_metrics or reference_refusal(runs):
+    if not _applies(runs) or metric not in ENVIRONMENT_TABLE[runs[0].env].reference_metrics or reference_refusal(runs):
         return None
     first = runs[0]
     described = description_of(first)
@@ -48,7 +48,7 @@ def reference_curve(runs: Sequence[dict[str, Any]], metric: str, steps: np.ndarr
     return np.asarray(values, dtype=np.float64)
 
 
-def reference_refusal(runs: Sequence[dict[str, Any]]) -> str | None:
+def reference_refusal(runs: Sequence[RunResult]) -> str | None:
     """Why a group of runs the reference applies to gets none, in one line: a ``size`` beyond
     :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` (its step matrix alone takes ``8·(size² + 2)²``
     bytes) or a ``max_cycles`` beyond :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES` (a matrix
@@ -56,7 +56,7 @@ def reference_refusal(runs: Sequence[dict[str, Any]]) -> str | None:
     runs the reference does not apply to."""
     if not _applies(runs):
         return None
-    modelled = {**DEFAULT_ARGUMENTS[runs[0]["env"]], **_modelled(runs[0])}
+    modelled = {**DEFAULT_ARGUMENTS[runs[0].env], **_modelled(runs[0])}
     size, cycles = int(modelled["size"]), int(modelled["max_cycles"])
     if size > MAX_REFERENCE_SIZE:
         return (
@@ -71,7 +71,7 @@ def reference_refusal(runs: Sequence[dict[str, Any]]) -> str | None:
     return None
 
 
-def _applies(runs: Sequence[dict[str, Any]]) -> bool:
+def _applies(runs: Sequence[RunResult]) -> bool:
     """Whether the reference models ``runs`` (see :func:`reference_curve`)."""
     from empathy_zoo.reference import RULES
 
@@ -80,8 +80,8 @@ def _applies(runs: Sequence[dict[str, Any]]) -> bool:
     first = runs[0]
     described = description_of(first)
     return not (
-        first["env"] not in ENVIRONMENT_TABLE
-        or not ENVIRONMENT_TABLE[first["env"]].reference_metrics
+        first.env not in ENVIRONMENT_TABLE
+        or not ENVIRONMENT_TABLE[first.env].reference_metrics
         or not in_paper_setting(first, varying=MODELLED_ARGUMENTS)
         or described["target"] not in RULES
         or described["reward"] is not None
@@ -90,6 +90,6 @@ def _applies(runs: Sequence[dict[str, Any]]) -> bool:
     )
 
 
-def _modelled(run: dict[str, Any]) -> dict[str, int]:
+def _modelled(run: RunResult) -> dict[str, int]:
     """The environment arguments of ``run`` the reference takes (:data:`MODELLED_ARGUMENTS`)."""
-    return {k: int(v) for k, v in (run.get("config", {}).get("env_kwargs") or {}).items() if k in MODELLED_ARGUMENTS}
+    return {k: int(v) for k, v in run.config.env_kwargs.items() if k in MODELLED_ARGUMENTS}

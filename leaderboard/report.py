@@ -31,7 +31,6 @@ from leaderboard.aggregate import (
     N_RESAMPLES,
     group_runs,
     score_runs,
-    table_env,
 )
 from leaderboard.budgets import budgets_of
 from leaderboard.constraint_section import add_constraint_section
@@ -213,19 +212,11 @@ def _render(
         directories=read.directories if comparison else (),
         budgets=read.budgets if comparison else (),
     )
-    scores = score_runs(
-        results, final_fraction=final_fraction, random_state=random_state, n_resamples=n_resamples, confidence=confidence
-    )
-    curves = plot_learning_curves(
-        results, out / FIGURES_DIR, n_points=n_points, random_state=random_state, n_resamples=n_resamples, confidence=confidence
-    )
-    base_env = {table_env(run): run["env"] for run in results}  # a variant is shown like its env
+    scores = score_runs(results, final_fraction=final_fraction, confidence=confidence)
+    curves = plot_learning_curves(results, out / FIGURES_DIR, n_points=n_points, confidence=confidence)
+    base_env = {run.table_env: run.env for run in results}  # a variant is shown like its env
     improvements = improvements_over_dqn(
-        results,
-        {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env},
-        random_state=random_state,
-        n_resamples=n_resamples,
-        confidence=confidence,
+        results, {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env}, confidence=confidence
     )
     uncompared = uncompared_rows(results) if comparison else []
     rows = None

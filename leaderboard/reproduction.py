@@ -49,6 +49,7 @@ import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.result_file import result_checker
 from leaderboard.aggregate import final_episode_count, load_result_files, longest_episode, run_scalars
 from leaderboard.claim_rules import less_than, reference_reading
@@ -147,24 +148,24 @@ class Claim:
     """``False`` for the suite's own questions (not claimed by the paper)."""
 
 
-def method_key(run: dict[str, Any]) -> str:
+def method_key(run: RunResult) -> str:
     """``β=…`` for a run of Empathic DQN's target (:func:`leaderboard.run_facts.empathic_selfishness`),
     else the method's name."""
     beta = empathic_selfishness(run)
-    return str(run["method"]) if beta is None else f"β={beta:g}"
+    return run.method if beta is None else f"β={beta:g}"
 
 
-def paper_runs(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+def paper_runs(results: Sequence[RunResult]) -> dict[str, dict[str, list[RunResult]]]:
     """``{env: {method key: runs}}`` of the runs made in the paper's setting
     (:func:`leaderboard.run_facts.in_paper_setting`)."""
-    out: dict[str, dict[str, list[dict[str, Any]]]] = {COEXISTENCE: {}, SHARING: {}}
+    out: dict[str, dict[str, list[RunResult]]] = {COEXISTENCE: {}, SHARING: {}}
     for run in results:
-        if run["env"] in out and in_paper_setting(run):
-            out[run["env"]].setdefault(method_key(run), []).append(run)
+        if run.env in out and in_paper_setting(run):
+            out[run.env].setdefault(method_key(run), []).append(run)
     return out
 
 
-def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
+def missing_paper_experiments(results: Sequence[RunResult]) -> list[str]:
     """The paper's experiments that ``results`` lack (empty: the paper's sweep is there)."""
     runs = paper_runs(results)
     needed = {
@@ -173,15 +174,15 @@ def missing_paper_experiments(results: Sequence[dict[str, Any]]) -> list[str]:
     return [f"{env} {key}" for env, keys in needed.items() for key in keys if key not in runs[env]]
 
 
-def check_run_steps(run: Mapping[str, Any], where: str | os.PathLike[str] | None = None) -> None:
+def check_run_steps(run: RunResult, where: str | os.PathLike[str] | None = None) -> None:
     """Refuse a run whose steps the report cannot read as its environment makes them: a ``ValueError``
     naming ``where`` (its file; by default the run's id) and the field when a training episode is
     longer than its environment's ``max_cycles`` (``train.episode_end_step``: no episode of the
     suite's lasts longer), or when the ε schedule its description records (if any) has a start or
     an end outside 0–1 or a warm-up or decay that is no finite number."""
-    check = result_checker(Path(where if where is not None else f"run {run.get('run_id') or '?'}"))
+    check = result_checker(Path(where if where is not None else f"run {run.run_id or '?'}"))
     cycles = int(env_argument(run, "max_cycles"))
-    ends = np.asarray(run["train"]["episode_end_step"], dtype=np.int64)
+    ends = np.asarray(run.train.episode_end_step, dtype=np.int64)
     lengths = np.diff(ends, prepend=0)
     longest = int(lengths.argmax()) if lengths.size else 0
     if lengths.size and lengths[longest] > cycles:
@@ -191,7 +192,7 @@ def check_run_steps(run: Mapping[str, Any], where: str | os.PathLike[str] | None
             f"the end of an episode of at most the environment's max_cycles ({cycles:,}) steps after step {before:,}",
             int(ends[longest]),
         )
-    schedule = ((run.get("config") or {}).get("description") or {}).get("exploration")
+    schedule = run.config.description.get("exploration")
     if schedule is None:
         return
     for name in ("start", "end", "warmup", "decay_steps"):
@@ -205,7 +206,7 @@ def check_run_steps(run: Mapping[str, Any], where: str | os.PathLike[str] | None
         raise check.fail(f"config.description.exploration.{name}", expected, value)
 
 
-def load_checked_results(results_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
+def load_checked_results(results_dir: str | os.PathLike[str]) -> list[RunResult]:
     """:func:`leaderboard.aggregate.load_results`, every run also checked by :func:`check_run_steps`
     (a ``ValueError`` naming the first file refused): what the report reads, checked before
     anything is judged or written."""
@@ -215,7 +216,7 @@ def load_checked_results(results_dir: str | os.PathLike[str]) -> list[dict[str, 
     return [run for _, run in read]
 
 
-def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float, int]:
+def training_window_epsilons(run: RunResult, digits: int = 3) -> dict[float, int]:
     """The ε schedule over the env steps of a run's final 10 % of training episodes, as
     ``{ε rounded to digits: steps}`` (the schedule its description records, read before each step).
 
@@ -226,8 +227,8 @@ def training_window_epsilons(run: dict[str, Any], digits: int = 3) -> dict[float
     counts are exactly those of reading the schedule at every step. A run refused by
     :func:`check_run_steps` is a ``ValueError`` naming it."""
 
-    ends = run["train"]["episode_end_step"]
-    if not ends:
+    ends = run.train.episode_end_step
+    if not ends.size:
         return {}
     check_run_steps(run)
     first = len(ends) - final_episode_count(len(ends))
@@ -268,11 +269,11 @@ def _runs_of_monotone(value: Callable[[int], float], low: int, high: int) -> lis
     return runs
 
 
-def training_window_share(run: dict[str, Any]) -> float:
+def training_window_share(run: RunResult) -> float:
     """The fraction of a run's env steps that its final 10 % of training episodes take up (not
     10 % in general: it depends on the lengths of the episodes); NaN for a run without episodes."""
-    ends = run["train"]["episode_end_step"]
-    if not ends or not ends[-1]:
+    ends = run.train.episode_end_step
+    if not ends.size or not ends[-1]:
         return float("nan")
     return sum(training_window_epsilons(run).values()) / float(ends[-1])
 
@@ -372,7 +373,7 @@ class SurvivalRise:
 
 
 def survival_rise(
-    runs: Sequence[dict[str, Any]], reference: Reference, *, gamma: float, max_cycles: int, digits: int = 3
+    runs: Sequence[RunResult], reference: Reference, *, gamma: float, max_cycles: int, digits: int = 3
 ) -> SurvivalRise:
     """Separate learning from the ε schedule over the training phase: each run's final 10 % of
     training episodes is split into halves (by episode), and the mean survival of each half is
@@ -390,8 +391,8 @@ def survival_rise(
     learner: list[np.ndarray] = []  # per run: mean survival of each half
     optimal: list[np.ndarray] = []  # per run: the reference's at the ε of the same episodes
     for run in runs:
-        ends = [int(e) for e in run["train"]["episode_end_step"]]
-        survival = np.asarray(run["train"]["survival"], dtype=np.float64)
+        ends = [int(e) for e in run.train.episode_end_step]
+        survival = np.asarray(run.train.metrics["survival"], dtype=np.float64)
         final = final_episode_count(len(ends))
         if final < 2:
             continue
@@ -427,19 +428,19 @@ def _reference_over(
     return harms, survival
 
 
-def _curve_mean(run: dict[str, Any], phase: str, metric: str) -> float:
+def _curve_mean(run: RunResult, phase: str, metric: str) -> float:
     """Mean over the whole learning curve: every training episode, or every greedy evaluation."""
     if phase == "eval":
-        values = [float(np.mean(e[metric])) for e in run["eval"] if len(e[metric])]
+        values = [float(np.mean(e.metrics[metric])) for e in run.eval if len(e.metrics[metric])]
     else:
-        values = [float(v) for v in run["train"][metric]]
+        values = [float(v) for v in run.train.metrics[metric]]
     return float(np.mean(values)) if values else float("nan")
 
 
 class _Table:
     """Cells of the paper's runs of one env, per phase, metric and method key."""
 
-    def __init__(self, runs: Mapping[str, list[dict[str, Any]]]) -> None:
+    def __init__(self, runs: Mapping[str, list[RunResult]]) -> None:
         self.runs = runs
 
     def cell(self, phase: str, metric: str, key: str) -> Cell:
@@ -481,7 +482,7 @@ def _less(a: Sequence[float], b: Sequence[float], names: Sequence[str]) -> tuple
 
 
 def coexistence_claims(
-    runs: Mapping[str, list[dict[str, Any]]], reference: Reference, tie_range: TieRangeOf | None = None
+    runs: Mapping[str, list[RunResult]], reference: Reference, tie_range: TieRangeOf | None = None
 ) -> dict[str, dict[str, Verdict]]:
     """The paper's Coexistence claims (C1–C4), ``{claim: {phase: verdict}}``, judged on ``runs``
     keyed as :func:`paper_runs` keys them (``β=1`` … ``β=0.25`` and :data:`PENALTY`), with
@@ -584,7 +585,7 @@ def coexistence_claims(
 
 
 def assess_claims(
-    results: Sequence[dict[str, Any]], reference: Reference | None = None, tie_range: TieRangeOf | None = None
+    results: Sequence[RunResult], reference: Reference | None = None, tie_range: TieRangeOf | None = None
 ) -> list[Claim]:
     """Judge every claim of SPEC §7 (and the suite's own questions) on the paper's runs in
     ``results``; raises :class:`NotThePaperSweep` when an experiment of the paper is missing.

@@ -17,9 +17,11 @@ is never given: where one would be, that variant's rows keep their labels.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any
+from dataclasses import replace
 
-from leaderboard.aggregate import table_env
+import numpy as np
+
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.run_facts import is_dqn_reference
 
 __all__ = [
@@ -42,12 +44,12 @@ def _qualified(label: str) -> str:
     return label if label == DQN_NAME else f"{DQN_NAME}, as {label}"
 
 
-def dqn_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+def dqn_row_names(results: Iterable[RunResult]) -> dict[tuple[str, str], str]:
     """``{(table env, label): shown name}`` of every DQN reference row of ``results`` (labels as
     their result files have them) whose shown name differs from its label (see the module page)."""
     rows: dict[tuple[str, str], bool] = {}
     for run in results:
-        key = (table_env(dict(run)), str(run["method_label"]))
+        key = (run.table_env, run.method_label)
         rows[key] = rows.get(key, True) and is_dqn_reference(run)
     names: dict[tuple[str, str], str] = {}
     for env in sorted({env for env, _ in rows}):
@@ -66,7 +68,7 @@ IDENTICAL_MARK = " ≡ DQN"
 """Appended to the name of a row whose method trains as DQN by construction on its environment."""
 
 
-def identical_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+def identical_row_names(results: Iterable[RunResult]) -> dict[tuple[str, str], str]:
     """``{(table env, label): label ≡ DQN}`` of every row of ``results`` whose method says it trains
     as DQN by construction on the run's environment (``Method.identical_to``: Be Considerate in
     Sharing, the harm penalty in Sharing, …); a method the registry does not hold is not marked."""
@@ -74,11 +76,11 @@ def identical_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str,
 
     names: dict[tuple[str, str], str] = {}
     for run in results:
-        method = METHODS.get(str(run.get("method")))
-        other = method.identical_to.get(str(run.get("env"))) if method is not None else None
-        label = str(run["method_label"])
+        method = METHODS.get(run.method)
+        other = method.identical_to.get(run.env) if method is not None else None
+        label = run.method_label
         if other is not None and other[0] == "dqn" and not label.endswith(IDENTICAL_MARK):
-            names[table_env(dict(run)), label] = label + IDENTICAL_MARK
+            names[run.table_env, label] = label + IDENTICAL_MARK
     return names
 
 
@@ -90,12 +92,14 @@ OWN_COLUMNS = frozenset({"lambda"})
 the comparison with DQN."""
 
 
-def _columns(run: Mapping[str, Any]) -> tuple[dict[str, Any], Any]:
-    """A run's training columns (but :data:`OWN_COLUMNS`) and its evaluations."""
-    return {key: value for key, value in run["train"].items() if key not in OWN_COLUMNS}, run["eval"]
+def _same_columns(run: RunResult, other: RunResult) -> bool:
+    """The two runs' training columns (but :data:`OWN_COLUMNS`) and evaluations are equal, value for value."""
+    mine = {key: value for key, value in run.train.columns().items() if key not in OWN_COLUMNS}
+    theirs = {key: value for key, value in other.train.columns().items() if key not in OWN_COLUMNS}
+    return mine.keys() == theirs.keys() and all(np.array_equal(mine[key], theirs[key]) for key in mine) and run.eval == other.eval
 
 
-def same_runs_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+def same_runs_row_names(results: Iterable[RunResult]) -> dict[tuple[str, str], str]:
     """``{(table env, label): label = DQN's runs}`` of every row of ``results`` that is no DQN
     reference and whose every run has the training and evaluation columns of the DQN reference run
     of its table, seed and budget, where such a run exists for each: a method that trained as DQN
@@ -103,35 +107,36 @@ def same_runs_row_names(results: Iterable[Mapping[str, Any]]) -> dict[tuple[str,
     (:func:`identical_row_names`) are left to that mark."""
     runs = list(results)
     by_construction = identical_row_names(runs)
-    dqn: dict[tuple[str, int, int], Mapping[str, Any]] = {}
+    dqn: dict[tuple[str, int, int], RunResult] = {}
     for run in runs:
         if is_dqn_reference(run):
-            dqn.setdefault((table_env(dict(run)), int(run["seed"]), int(run["steps"])), run)
+            dqn.setdefault((run.table_env, run.seed, run.steps), run)
     rows: dict[tuple[str, str], bool] = {}
     for run in runs:
-        key = (table_env(dict(run)), str(run["method_label"]))
+        key = (run.table_env, run.method_label)
         if is_dqn_reference(run) or key in by_construction:
             continue
-        reference = dqn.get((key[0], int(run["seed"]), int(run["steps"])))
-        rows[key] = rows.get(key, True) and reference is not None and _columns(run) == _columns(reference)
+        reference = dqn.get((key[0], run.seed, run.steps))
+        rows[key] = rows.get(key, True) and reference is not None and _same_columns(run, reference)
     return {key: key[1] + SAME_RUNS_MARK for key, same in rows.items() if same}
 
 
-def rename_dqn_rows(results: Sequence[dict[str, Any]], names: Mapping[tuple[str, str], str]) -> list[dict[str, Any]]:
+def rename_dqn_rows(results: Sequence[RunResult], names: Mapping[tuple[str, str], str]) -> list[RunResult]:
     """``results`` with the label of every run of a renamed row (``names``, from
-    :func:`dqn_row_names`) replaced by its shown name; the others as they are (nothing is written)."""
+    :func:`dqn_row_names`) replaced by its shown name (a new record: :func:`dataclasses.replace`);
+    the others as they are (nothing is written)."""
     renamed = []
     for run in results:
-        name = names.get((table_env(run), run["method_label"]))
-        renamed.append(run if name is None else {**run, "method_label": name})
+        name = names.get((run.table_env, run.method_label))
+        renamed.append(run if name is None else replace(run, method_label=name))
     return renamed
 
 
-def dqn_rows_of(results: Iterable[dict[str, Any]]) -> set[tuple[str, str]]:
+def dqn_rows_of(results: Iterable[RunResult]) -> set[tuple[str, str]]:
     """``{(table env, label)}`` of the rows of ``results`` whose every run is a DQN reference."""
     rows: dict[tuple[str, str], bool] = {}
     for run in results:
-        key = (table_env(run), run["method_label"])
+        key = (run.table_env, run.method_label)
         rows[key] = rows.get(key, True) and is_dqn_reference(run)
     return {key for key, reference in rows.items() if reference}
 

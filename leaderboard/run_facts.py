@@ -3,16 +3,18 @@ method's own description (``config.description``, :mod:`empathy_zoo.method_descr
 environment's arguments, and whether it ran in the paper's setting.
 
 Nothing here knows a method: a plug-in method is grouped, compared and given a reference by what
-its description declares. Every reader takes runs as :func:`empathy_zoo.experiment.result_reader.read_result`
-gives them (files of every schema get a description there).
+its description declares. Every reader takes runs as records
+(:class:`~empathy_zoo.experiment.records.RunResult`, as :func:`empathy_zoo.experiment.result_reader.read_result`
+gives them: files of every schema get a description there).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
+from empathy_zoo.experiment.records import PlainTable, RunResult
 from empathy_zoo.schedules import epsilon_function
 
 __all__ = [
@@ -25,29 +27,19 @@ __all__ = [
 ]
 
 
-def _name(run: Mapping[str, Any]) -> str:
-    return str(run.get("run_id") or "a run")
+def description_of(run: RunResult) -> PlainTable:
+    """The run's ``config.description`` (files of schemas 1 and 2 get theirs when read:
+    :func:`empathy_zoo.result_file.upgrade_schema_2`)."""
+    return run.config.description
 
 
-def description_of(run: Mapping[str, Any]) -> Mapping[str, Any]:
-    """The run's ``config.description``; ``ValueError`` for a run that has none (one not read
-    through :func:`empathy_zoo.experiment.result_reader.read_result`)."""
-    description = (run.get("config") or {}).get("description")
-    if not isinstance(description, Mapping):
-        raise ValueError(
-            f"{_name(run)} has no config.description: read result files with empathy_zoo.experiment.result_reader.read_result "
-            "(or leaderboard.aggregate.load_results), which gives files of every schema one"
-        )
-    return description
-
-
-def is_dqn_reference(run: Mapping[str, Any]) -> bool:
+def is_dqn_reference(run: RunResult) -> bool:
     """The run is plain DQN on the environment's reward, as its description says: the reference
     every other method is compared with."""
     return bool(description_of(run)["dqn_reference"])
 
 
-def empathic_selfishness(run: Mapping[str, Any]) -> float | None:
+def empathic_selfishness(run: RunResult) -> float | None:
     """β of a run that learns Empathic DQN's target (``target`` ``"golden"``: DQN at β = 1) with the
     paper's omniscient swap, on the environment's reward, and declares its γ and ε schedule: the
     runs the paper's claims are about, keyed by β. ``None`` for any other run."""
@@ -64,36 +56,34 @@ def empathic_selfishness(run: Mapping[str, Any]) -> float | None:
     return float(described["selfishness"])
 
 
-def exploration_of(run: Mapping[str, Any]) -> Callable[[int], float]:
+def exploration_of(run: RunResult) -> Callable[[int], float]:
     """ε as a function of the env step, by the schedule the run's description records;
     ``ValueError`` where it records none."""
     schedule = description_of(run)["exploration"]
     if schedule is None:
-        raise ValueError(f"{_name(run)}: its method's description records no exploration schedule")
+        raise ValueError(f"{run.run_id}: its method's description records no exploration schedule")
     return epsilon_function(schedule)
 
 
-def env_argument(run: Mapping[str, Any], name: str) -> Any:
+def env_argument(run: RunResult, name: str) -> Any:
     """The run's environment argument ``name``: as its config sets it, else its environment's
     default (:data:`empathy_zoo.environments.DEFAULT_ARGUMENTS`); ``ValueError`` for an environment
     or an argument the suite does not have."""
-    defaults = DEFAULT_ARGUMENTS.get(run["env"])
+    defaults = DEFAULT_ARGUMENTS.get(run.env)
     if defaults is None or name not in defaults:
         known = ", ".join(sorted(DEFAULT_ARGUMENTS)) if defaults is None else ", ".join(defaults)
-        raise ValueError(f"{_name(run)}: environment {run['env']!r} has no argument {name!r} (known: {known})")
-    return ((run.get("config") or {}).get("env_kwargs") or {}).get(name, defaults[name])
+        raise ValueError(f"{run.run_id}: environment {run.env!r} has no argument {name!r} (known: {known})")
+    return run.config.env_kwargs.get(name, defaults[name])
 
 
-def in_paper_setting(run: Mapping[str, Any], varying: Sequence[str] = ()) -> bool:
+def in_paper_setting(run: RunResult, varying: Sequence[str] = ()) -> bool:
     """The run's environment is one of the suite's with every argument at its default (but those
     named in ``varying``, which may take any value) and its default fixed agents: the paper's
     setting, as the result file records it."""
-    defaults = DEFAULT_ARGUMENTS.get(run["env"])
+    defaults = DEFAULT_ARGUMENTS.get(run.env)
     if defaults is None:
         return False
-    config = run.get("config") or {}
-    arguments = dict(config.get("env_kwargs") or {})
     return (
-        all(name in defaults and (name in varying or defaults[name] == value) for name, value in arguments.items())
-        and dict(config.get("fixed") or {}) == DEFAULT_POLICIES[run["env"]]
+        all(name in defaults and (name in varying or defaults[name] == value) for name, value in run.config.env_kwargs.items())
+        and dict(run.config.fixed) == DEFAULT_POLICIES[run.env]
     )

@@ -19,12 +19,12 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
 from leaderboard.run_facts import empathic_selfishness
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
@@ -53,11 +53,10 @@ DEFAULT_CONDITION: Condition = (
 """Sharing's defaults (the paper's setting)."""
 
 
-def condition_of(run: dict[str, Any]) -> Condition:
+def condition_of(run: RunResult) -> Condition:
     """The fidelity condition a Sharing run was trained under (its env's default where it sets none)."""
-    config = run.get("config", {})
-    kwargs = config.get("env_kwargs") or {}
-    human = (config.get("fixed") or {}).get("human_0", DEFAULT_CONDITION[2])
+    kwargs = run.config.env_kwargs
+    human = run.config.fixed.get("human_0", DEFAULT_CONDITION[2])
     start, encoding = (
         str(kwargs.get(name, default))
         for name, default in zip(("start", "inventory_encoding"), DEFAULT_CONDITION[:2], strict=True)
@@ -65,12 +64,12 @@ def condition_of(run: dict[str, Any]) -> Condition:
     return start, encoding, str(human)
 
 
-def _empathic_sharing_runs(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[float, list[dict[str, Any]]]]:
+def _empathic_sharing_runs(results: Sequence[RunResult]) -> dict[Condition, dict[float, list[RunResult]]]:
     """``{condition: {β: runs}}`` of the Sharing runs that learn Empathic DQN's target
     (:func:`leaderboard.run_facts.empathic_selfishness`)."""
-    groups: dict[Condition, dict[float, list[dict[str, Any]]]] = {}
+    groups: dict[Condition, dict[float, list[RunResult]]] = {}
     for run in results:
-        beta = empathic_selfishness(run) if run["env"] == SHARING else None
+        beta = empathic_selfishness(run) if run.env == SHARING else None
         if beta is not None:
             groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
     return groups
@@ -82,7 +81,7 @@ def _condition_text(condition: Condition) -> str:
     return ", ".join(marks) + (" (the defaults)" if condition == DEFAULT_CONDITION else "")
 
 
-def sensitivity_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[str, dict[float, Cell]]]]:
+def sensitivity_rows(results: Sequence[RunResult]) -> dict[Condition, dict[str, dict[str, dict[float, Cell]]]]:
     """``{condition: {phase: {metric: {β: cell}}}}`` over the Empathic DQN runs of Sharing."""
     groups = _empathic_sharing_runs(results)
     rows: dict[Condition, dict[str, dict[str, dict[float, Cell]]]] = {}
@@ -118,18 +117,18 @@ class FairSplit:
     """Fraction of the episodes in which robot + human collected all 9 batteries."""
 
 
-def _episodes(run: dict[str, Any], phase: str) -> dict[str, np.ndarray]:
+def _episodes(run: RunResult, phase: str) -> dict[str, np.ndarray]:
     """The episodes a phase scores (:func:`leaderboard.aggregate.run_scalars`'s): the final 10 %
     of training episodes, or the last greedy evaluation."""
     metrics = ("batteries", "other_batteries", "equality")
     if phase == "eval":
-        source = max(run["eval"], key=lambda e: e["step"]) if run["eval"] else {}
-        return {m: np.asarray(source.get(m, []), dtype=np.float64) for m in metrics}
-    columns = {m: np.asarray(run["train"].get(m, []), dtype=np.float64) for m in metrics}
+        source = run.last_eval
+        return {m: np.asarray(() if source is None else source.metrics[m], dtype=np.float64) for m in metrics}
+    columns = {m: np.asarray(run.train.metrics[m], dtype=np.float64) for m in metrics}
     return {m: c[len(c) - final_episode_count(len(c)) :] for m, c in columns.items()}
 
 
-def fair_split_rows(results: Sequence[dict[str, Any]]) -> dict[Condition, dict[str, dict[float, FairSplit]]]:
+def fair_split_rows(results: Sequence[RunResult]) -> dict[Condition, dict[str, dict[float, FairSplit]]]:
     """``{condition: {phase: {β: FairSplit}}}`` over the Empathic DQN runs of Sharing."""
     groups = _empathic_sharing_runs(results)
     rows: dict[Condition, dict[str, dict[float, FairSplit]]] = {}
@@ -168,7 +167,7 @@ def fair_split_summary(table: dict[float, FairSplit]) -> tuple[float, float, flo
     return closest_mean, closest_episodes, most_equal
 
 
-def _fair_split_markdown(results: Sequence[dict[str, Any]]) -> list[str]:
+def _fair_split_markdown(results: Sequence[RunResult]) -> list[str]:
     rows = fair_split_rows(results)
     lines = [
         "### Is equality set by the robot's mean take?",
@@ -214,7 +213,7 @@ def _word(ok: bool | None) -> str:
     return "—" if ok is None else ("reproduced" if ok else "not reproduced")
 
 
-def sensitivity_markdown(results: Sequence[dict[str, Any]], command: str) -> str:
+def sensitivity_markdown(results: Sequence[RunResult], command: str) -> str:
     """The sensitivity section: one table per phase, a row per condition and β."""
     rows = sensitivity_rows(results)
     if not rows:

@@ -3,7 +3,8 @@
 :func:`load_results_dirs` reads every result file of each directory, each directory checked as
 :func:`leaderboard.aggregate.load_results` checks one, into one list: a researcher's runs tabled
 beside the suite's (``docs/results/paper``) without retraining either. Nothing is written to a
-result file; what keeps experiments apart is done on the runs read:
+result file; what keeps experiments apart is done on the runs read (each relabelled run a new record,
+:func:`dataclasses.replace`):
 
 * **Label prefixes.** ``labels={DIR: PREFIX}`` (``--label DIR=PREFIX``) puts ``PREFIX`` and a
   space before the label of every run read from ``DIR``; a prefix is a label by the reader's rule
@@ -27,13 +28,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
 
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import check_label
-from empathy_zoo.result_file import experiment_of
-from leaderboard.aggregate import check_runs, load_result_files, table_env
+from leaderboard.aggregate import check_runs, load_result_files
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
 from leaderboard.row_names import dqn_row_names, identical_row_names, rename_dqn_rows, same_runs_row_names
 
@@ -65,7 +65,7 @@ class ResultsDir:
 class ResultSet:
     """The runs of one leaderboard, with where they were read from."""
 
-    results: list[dict[str, Any]]
+    results: list[RunResult]
     """Every run, its label prefixed and (with several budgets) ending with its budget."""
     directories: tuple[ResultsDir, ...]
     """The directories read, in the order given."""
@@ -82,7 +82,7 @@ class ResultSet:
         order = [directory.path for directory in self.directories]
         rows: dict[tuple[str, str], set[str]] = {}
         for result, origin in zip(self.results, self.origins, strict=True):
-            rows.setdefault((table_env(result), result["method_label"]), set()).add(origin)
+            rows.setdefault((result.table_env, result.method_label), set()).add(origin)
         return {row: tuple(sorted(found, key=order.index)) for row, found in rows.items()}
 
     @property
@@ -133,8 +133,12 @@ def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[st
     return prefixes
 
 
-def _recorded(runs: Sequence[dict[str, Any]], field: str) -> tuple[str, ...]:
-    return tuple(sorted({str(run[field]) for run in runs if run.get(field)}))
+def _versions(runs: Sequence[RunResult]) -> tuple[str, ...]:
+    return tuple(sorted({run.version for run in runs if run.version}))
+
+
+def _commits(runs: Sequence[RunResult]) -> tuple[str, ...]:
+    return tuple(sorted({run.commit for run in runs if run.commit}))
 
 
 def load_results_dirs(
@@ -167,14 +171,14 @@ def load_results_dirs(
     budgets = budgets_of(result for _, _, result in files)
     with_evaluation = shows_evaluation(budgets)
 
-    def label(i: int, result: dict[str, Any], core: str) -> str:
+    def label(i: int, result: RunResult, core: str) -> str:
         """``core`` (a run's label, or its shown name) with the directory's prefix and the run's budget."""
         prefixed = core if prefixes[i] is None else f"{prefixes[i]} {core}"
         shown = prefixed + (BUDGET_SEPARATOR + budget_of(result).text(with_evaluation) if len(budgets) > 1 else "")
         # (a prefix and a label of at most 200 characters each can make one longer than a label may be)
-        return check_label(shown, f"--label {given[i]}: the label of run {result['run_id']} with its prefix")
+        return check_label(shown, f"--label {given[i]}: the label of run {result.run_id} with its prefix")
 
-    read = [(i, path, {**result, "method_label": label(i, result, result["method_label"])}) for i, path, result in files]
+    read = [(i, path, replace(result, method_label=label(i, result, result.method_label))) for i, path, result in files]
     try:  # (on the labels of the result files: a clash names what a user finds in them)
         check_runs([(path, result) for _, path, result in read])
     except ValueError as error:
@@ -198,7 +202,7 @@ def load_results_dirs(
     if renamed:
         shown = rename_dqn_rows([result for _, _, result in files], renamed)
         read = [
-            (i, path, {**result, "method_label": label(i, result, named["method_label"])})
+            (i, path, replace(result, method_label=label(i, result, named.method_label)))
             for (i, path, result), named in zip(read, shown, strict=True)
         ]
     directories = tuple(
@@ -206,8 +210,8 @@ def load_results_dirs(
             path=directory,
             prefix=prefixes[i],
             runs=len(mine),
-            versions=_recorded(mine, "version"),
-            commits=_recorded(mine, "commit"),
+            versions=_versions(mine),
+            commits=_commits(mine),
             budgets=budgets_of(mine),
         )
         for i, directory in enumerate(given)
@@ -216,18 +220,18 @@ def load_results_dirs(
     return ResultSet([result for _, _, result in read], directories, budgets, tuple(given[i] for i, _, _ in read), renamed)
 
 
-def _clashing_dirs(read: Sequence[tuple[int, Path, dict[str, Any]]]) -> tuple[int, int]:
+def _clashing_dirs(read: Sequence[tuple[int, Path, RunResult]]) -> tuple[int, int]:
     """The directories of the first two runs that share a row but not an experiment, or are
     the same run (each directory passed these checks on its own)."""
     rows: dict[tuple[str, str], tuple[str, int]] = {}
-    runs: dict[tuple[str, str, Any], int] = {}
+    runs: dict[tuple[str, str, int], int] = {}
     for i, _, result in read:
-        row = (table_env(result), result["method_label"])
-        experiment, first = rows.setdefault(row, (experiment_of(result["run_id"]), i))
-        if experiment != experiment_of(result["run_id"]):
+        row = (result.table_env, result.method_label)
+        experiment, first = rows.setdefault(row, (result.experiment, i))
+        if experiment != result.experiment:
             return first, i
     for i, _, result in read:
-        first = runs.setdefault((table_env(result), result["method_label"], result["seed"]), i)
+        first = runs.setdefault((result.table_env, result.method_label, result.seed), i)
         if first != i:
             return first, i
     return 0, 0

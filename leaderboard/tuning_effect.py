@@ -20,8 +20,8 @@ from __future__ import annotations
 import argparse
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
 from leaderboard.versus_dqn import compact_metrics
@@ -64,7 +64,7 @@ class TuningEffect:
     """``(variant, label)`` of each tuned row of ``TUNED_DIR`` with no untuned row."""
 
 
-def _cells(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]]) -> tuple[dict, dict, set]:
+def _cells(results: Sequence[RunResult], metrics_of: Mapping[str, Sequence[str]]) -> tuple[dict, dict, set]:
     means = {(s.env, s.method_label, s.phase, s.metric): s.mean for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c.verdict for c in improvements_over_dqn(results, metrics_of)}
     references = {key for key, runs in group_runs(results).items() if all(is_dqn(run) for run in runs)}
@@ -79,12 +79,12 @@ def _cells(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[
 
 
 def tuning_effect(
-    untuned: Sequence[dict[str, Any]], tuned: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]] | None = None
+    untuned: Sequence[RunResult], tuned: Sequence[RunResult], metrics_of: Mapping[str, Sequence[str]] | None = None
 ) -> TuningEffect:
     """The pairs of :class:`VerdictPair` of every tuned row of ``tuned`` with its row in ``untuned``
-    (result documents, as :func:`leaderboard.aggregate.load_results` reads them)."""
+    (runs, as :func:`leaderboard.aggregate.load_results` reads them)."""
     groups = group_runs(tuned)
-    variants = {env: runs[0]["env"] for (env, _), runs in groups.items()}
+    variants = {env: runs[0].env for (env, _), runs in groups.items()}
     metrics = {v: compact_metrics(v, env, metrics_of) for v, env in variants.items()}
     old_means, old_verdicts, old_references = _cells(untuned, metrics)
     new_means, new_verdicts, new_references = _cells(tuned, metrics)

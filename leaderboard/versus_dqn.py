@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 from empathy_zoo.environments import ENVIRONMENT_TABLE, entry_of
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
@@ -40,10 +40,10 @@ def _format(value: float, metric: str) -> str:
     return f"{value:.0f}" if metric in WHOLE_NUMBER_METRICS else f"{value:.2f}"
 
 
-def versus_dqn_tables(results: Sequence[dict[str, Any]], metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
+def versus_dqn_tables(results: Sequence[RunResult], metrics_of: Mapping[str, Sequence[str]] | None = None) -> str:
     """Markdown: per variant, one row per method, a cell per metric ``▲ greedy / ▼ training``."""
     groups = group_runs(results)
-    envs = {env: runs[0]["env"] for (env, _), runs in groups.items()}
+    envs = {env: runs[0].env for (env, _), runs in groups.items()}
     metrics_of = {variant: compact_metrics(variant, env, metrics_of) for variant, env in envs.items()}
     scores = {(s.env, s.method_label, s.phase, s.metric): s for s in score_runs(results)}
     verdicts = {(c.env, c.method_label, c.phase, c.metric): c for c in improvements_over_dqn(results, metrics_of)}

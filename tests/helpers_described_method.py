@@ -10,6 +10,7 @@ from typing import Any
 from helpers_results import SETTINGS, synthetic_schema_1
 
 from agents.base import Method
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import check_result
 
 NAME = "helpers_described_method:KIND_DQN"
@@ -52,7 +53,12 @@ KIND_DQN = Method(
 """The plug-in: DQN at care 0 (β = 1), Empathic DQN's target otherwise."""
 
 
-def kind_result(env: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
+def kind_result(env: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> RunResult:
+    """The record of :func:`kind_document`."""
+    return RunResult.from_checked(kind_document(env, beta, seed, fixed, **means))
+
+
+def kind_document(env: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
     """A schema-3 result of :data:`KIND_DQN` at β (care = 1 − β) with the numbers
     ``helpers_results.synthetic_result`` gives Empathic DQN at that β."""
     run = synthetic_schema_1(env, "empathic_dqn", beta, seed, fixed, **means)

@@ -9,10 +9,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from helpers_results import synthetic_result, whole_episodes
+from helpers_results import record, synthetic_document, whole_episodes
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, TRAINED_WITH, check_evaluation, evaluation_path
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.randomness import STREAMS
 
@@ -44,15 +45,16 @@ def sha_of(run_id: str) -> str:
     return hashlib.sha256(run_id.encode()).hexdigest()
 
 
-def synthetic_run(env: str, method: str, beta: float, seed: int) -> dict[str, Any]:
-    """A result (as :func:`leaderboard.aggregate.load_results` gives it) that kept an agent."""
-    run = synthetic_result(env, method, beta, seed)
+def synthetic_run(env: str, method: str, beta: float, seed: int) -> RunResult:
+    """A result (as :func:`leaderboard.aggregate.load_results` gives it) that kept an agent (its
+    document, to write to a file: ``run.to_document()``)."""
+    run = synthetic_document(env, method, beta, seed)
     run["agent"] = {"file": f"{run['run_id']}.agent.pt", "sha256": sha_of(run["run_id"])}
-    return run
+    return record(run)
 
 
 def synthetic_evaluation(
-    run: Mapping[str, Any],
+    run: RunResult,
     definition: Mapping[str, Any],
     values: Mapping[str, Mapping[str, float | Sequence[float]]],
     own_fixed: Mapping[str, str],
@@ -90,13 +92,13 @@ def synthetic_evaluation(
         "format": FORMAT,
         "schema": SCHEMA,
         "version": "0.4.0",
-        "run_id": run["run_id"],
-        "env": run["env"],
-        "variant": run["env"],
-        "method": run["method"],
-        "method_label": run["method_label"],
-        "seed": run["seed"],
-        "agent": dict(run["agent"]),
+        "run_id": run.run_id,
+        "env": run.env,
+        "variant": run.env,
+        "method": run.method,
+        "method_label": run.method_label,
+        "seed": run.seed,
+        "agent": None if run.agent is None else run.agent.to_document(),
         "scenario_set": dict(definition),
         "episodes": EPISODES,
         "stream": STREAMS["heldout_eval"],
@@ -107,14 +109,14 @@ def synthetic_evaluation(
 
 def write_synthetic(
     out: Path,
-    runs_and_values: Sequence[tuple[dict[str, Any], Mapping[str, Any]]],
+    runs_and_values: Sequence[tuple[RunResult, Mapping[str, Any]]],
     definition: Mapping[str, Any],
     own_fixed: Mapping[str, str],
 ) -> list[Path]:
     """Write the evaluation files of ``(run, values)`` pairs under ``out/evaluations/<set>/``."""
     paths = []
     for run, values in runs_and_values:
-        path = evaluation_path(out, definition["name"], run["run_id"])
+        path = evaluation_path(out, definition["name"], run.run_id)
         paths.append(write_json_atomic(path, synthetic_evaluation(run, definition, values, own_fixed)))
     return paths
 

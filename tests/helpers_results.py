@@ -1,17 +1,22 @@
-"""Synthetic result files for the leaderboard's and the verdicts' tests."""
+"""Synthetic result files for the leaderboard's and the verdicts' tests: documents as a file holds
+them (:func:`synthetic_document`), and runs as the suite reads them (:func:`synthetic_result`,
+:func:`record`: through the result-file checker, into a :class:`~empathy_zoo.experiment.records.RunResult`)."""
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
+from types import MappingProxyType
 
 import numpy as np
 
 from agents.settings import EmpathicDQNSettings
 from baselines.registry import METHODS
 from empathy_zoo.environments import DEFAULT_POLICIES
+from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.result_file import schema_2_description
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 """Schedule of the synthetic runs: 4,000 steps, ε at its floor on the last one."""
@@ -21,14 +26,82 @@ SCHEMA_1_SHAPING = {"dqn_harm_penalty": {"harm_penalty": -100.0}, "dqn_equality"
 """How the schema-1 files of the shaped baselines hold their shaping (as settings)."""
 
 
-def described(run: dict) -> dict:
-    """A hand-made run dict with the ``config.description`` its method name has at schema 2 (as
-    reading an older file gives it): for runs handed to the leaderboard without a file."""
-    run["config"] = {**run.get("config", {}), "description": schema_2_description(run["method"], run.get("config", {}))}
-    return run
+def hand_made_result(
+    env: str,
+    method: str,
+    seed: int,
+    train: dict[str, list],
+    evaluations: list[dict],
+    *,
+    label: str | None = None,
+    steps: int | None = None,
+    settings: dict | None = None,
+    env_kwargs: dict | None = None,
+) -> RunResult:
+    """A run of the given training columns (``episode_end_step`` and some metrics) and evaluations
+    (``step`` and some metrics), the metrics they leave out 0 per episode (equality 1), in the
+    world of ``env_kwargs``, as a schema-1 file of ``method`` with ``settings`` (a shaped
+    baseline's shaping added: :data:`SCHEMA_1_SHAPING`) holds them, read through the checker: for
+    tests of the statistics on runs of chosen values."""
+    label = label if label is not None else f"{method} {(settings or {}).get('selfishness', 1.0)}"
+    episodes = len(train["episode_end_step"])
+
+    def filled(columns: dict, count: int) -> dict:
+        return {name: columns.get(name, [1.0 if name == "equality" else 0] * count) for name in METRIC_NAMES}
+
+    last = evaluations[-1] if evaluations else {}
+    count = len(next((v for k, v in last.items() if k != "step"), []))
+    document = {
+        "schema": 1,
+        "run_id": f"{env}__{method}-{''.join(c if c.isascii() and c.isalnum() else '_' for c in label)}__s{seed}",
+        "env": env,
+        "method": method,
+        "method_label": label,
+        "seed": seed,
+        "steps": steps if steps is not None else max([*train["episode_end_step"], *(e["step"] for e in evaluations), 1]),
+        "config": {
+            "settings": {**(settings or {}), **SCHEMA_1_SHAPING.get(method, {})},
+            "env_kwargs": dict(env_kwargs or {}),
+            "fixed": dict(DEFAULT_POLICIES[env]),
+        },
+        "train": {"episode_end_step": list(train["episode_end_step"]), **filled(train, episodes)},
+        "eval": [{"step": e["step"], **filled(e, count)} for e in evaluations],
+    }
+    return record(document)
 
 
-def synthetic_result(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
+def edited(run: RunResult, change: Callable[[dict], object]) -> RunResult:
+    """``run`` with ``change`` made to its document (in place), read again through the checker."""
+    document = run.to_document()
+    change(document)
+    return record(document)
+
+
+def with_training(run: RunResult, **columns: Sequence[float]) -> RunResult:
+    """``run`` with the training columns ``columns`` (``episode_end_step`` or metrics) in place of
+    its own: a record made in code, not read (a file may not hold it: episodes past the run's
+    steps, a fractional count, columns of different lengths), for tests of a reader's own checks."""
+    ends = columns.pop("episode_end_step", None)
+    train = dataclasses.replace(
+        run.train,
+        episode_end_step=run.train.episode_end_step if ends is None else read_only_series(ends),
+        metrics=MappingProxyType({**run.train.metrics, **{k: read_only_series(v) for k, v in columns.items()}}),
+    )
+    return dataclasses.replace(run, train=train)
+
+
+def record(document: dict, path: str = "synthetic.json") -> RunResult:
+    """``document`` (a result document) read as the suite reads a file: checked
+    (:func:`~empathy_zoo.experiment.result_reader.check_result`), then a record."""
+    return RunResult.from_checked(check_result(document, path))
+
+
+def synthetic_result(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> RunResult:
+    """The record of :func:`synthetic_document`: a run as the leaderboard reads it."""
+    return RunResult.from_checked(synthetic_document(env, method, beta, seed, fixed, **means))
+
+
+def synthetic_document(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
     """A schema-3 result (a schema-1 document, read as the suite reads it) with ``means`` per metric.
     A method whose reward transform no schema-1 file held (the Lagrangian, Be Considerate, ...)
     gets DQN's document with its own method, reward record and description, as it records them."""
@@ -82,7 +155,7 @@ def greedy_episodes(mean: float, rng: np.random.Generator, metric: str) -> list[
 
 
 def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
-    """The result of :func:`synthetic_result` as a schema-1 file holds it."""
+    """The result of :func:`synthetic_document` as a schema-1 file holds it."""
     rng = np.random.default_rng(seed)
     episodes = 40
     train = {"episode_end_step": list(range(100, 100 * (episodes + 1), 100))}

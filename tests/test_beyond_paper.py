@@ -9,6 +9,7 @@ from pathlib import Path
 from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 
 from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.beyond_paper import BEYOND_TITLE, beyond_the_paper
 from leaderboard.reproduction import write_reproduction
 
@@ -16,18 +17,18 @@ OWN = {"cat_0": "random_walk"}
 SET = scenario_set("coexistence_v0", {"cat_stays": {"cat_0": "stay"}, "cat_chases": {"cat_0": "chase"}})
 
 
-def _results(out: Path) -> list[dict]:
+def _results(out: Path) -> list[RunResult]:
     runs = [synthetic_run("coexistence_v0", "empathic_dqn", beta, seed) for beta in (1.0, 0.5) for seed in range(5)]
     for run in runs:
-        write_json_atomic(out / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(out / "runs" / f"{run.run_id}.json", run.to_document())
     harms = {1.0: 0.8, 0.5: 0.1}
     values = [
         (
             run,
             {
-                "trained with": {"harms": harms[run["config"]["settings"]["selfishness"]] + 0.01 * run["seed"]},
+                "trained with": {"harms": harms[run.config.settings["selfishness"]] + 0.01 * run.seed},
                 "cat_stays": {"harms": 0.0},
-                "cat_chases": {"harms": 2 * harms[run["config"]["settings"]["selfishness"]] + 0.01 * run["seed"]},
+                "cat_chases": {"harms": 2 * harms[run.config.settings["selfishness"]] + 0.01 * run.seed},
             },
         )
         for run in runs
@@ -51,7 +52,7 @@ def test_the_section_holds_the_heldout_tables_and_links_its_figures_from_the_rep
 
 def test_without_evaluations_there_is_no_section(tmp_path: Path) -> None:
     run = synthetic_run("coexistence_v0", "empathic_dqn", 0.5, 0)
-    write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+    write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", run.to_document())
     assert beyond_the_paper(tmp_path, tmp_path / "REPRODUCTION.md") == ""
 
 
@@ -59,8 +60,7 @@ def test_the_report_places_it_after_the_claims(tmp_path: Path) -> None:
     from test_reproduction import _paper_like, fake_reference
 
     for run in _paper_like():
-        run["agent"] = None
-        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", {**run.to_document(), "agent": None})
     extra = tmp_path / "extra"
     _results(extra)
     section = beyond_the_paper(extra, tmp_path / "REPRODUCTION.md")

@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_schema_1
+from helpers_results import record, synthetic_schema_1
 
 import leaderboard.report as report
 from empathy_zoo.agent_file import RESULT_FIELD
 from empathy_zoo.cli import main
-from empathy_zoo.experiment.result_reader import check_result
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, MAX_SEEDS, MAX_VECTOR_ENVS
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.vector import VectorEnv
@@ -228,12 +228,12 @@ def test_training_refuses_an_evaluation_of_too_many_environments_before_it_start
     assert not (tmp_path / "out").exists()
 
 
-def reference_runs(**env_kwargs: int) -> list[dict]:
+def reference_runs(**env_kwargs: int) -> list[RunResult]:
     runs = []
     for seed in range(2):
         document = synthetic_schema_1("coexistence_v0", "empathic_dqn", 0.5, seed, harms=0.1, survival=400)
         document["config"]["env_kwargs"] = env_kwargs
-        runs.append(check_result(document, "synthetic.json"))
+        runs.append(record(document))
     return runs
 
 
@@ -260,16 +260,16 @@ def test_no_reference_curve_beyond_its_bounds(monkeypatch, env_kwargs, named):
 def test_the_leaderboard_says_why_a_run_has_no_reference_curve(tmp_path, capsys):
     (tmp_path / "runs").mkdir()
     for run in reference_runs(size=MAX_REFERENCE_SIZE + 2):
-        (tmp_path / "runs" / f"{run['run_id']}.json").write_text(json.dumps(synthetic_schema_1_of(run)))
+        (tmp_path / "runs" / f"{run.run_id}.json").write_text(json.dumps(synthetic_schema_1_of(run)))
     notes: list[str] = []
     write_leaderboard(tmp_path, tmp_path / "out", on_note=notes.append)
     assert len(notes) == 1 and f"beyond {MAX_REFERENCE_SIZE}" in notes[0] and "reference" in notes[0]
     assert reference_refusal(reference_runs()) is None
 
 
-def synthetic_schema_1_of(run: dict) -> dict:
-    document = synthetic_schema_1("coexistence_v0", "empathic_dqn", 0.5, run["seed"], harms=0.1, survival=400)
-    document["config"]["env_kwargs"] = dict(run["config"]["env_kwargs"])
+def synthetic_schema_1_of(run: RunResult) -> dict:
+    document = synthetic_schema_1("coexistence_v0", "empathic_dqn", 0.5, run.seed, harms=0.1, survival=400)
+    document["config"]["env_kwargs"] = dict(run.config.env_kwargs)
     return document
 
 

@@ -9,9 +9,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import record, synthetic_document, synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.coexistence_sensitivity import (
     ALONE,
     HINGES,
@@ -43,16 +44,16 @@ def lenient(env_kwargs: dict[str, Any]):
     return lambda selfishness, epsilon, *, gamma, max_cycles: Outcome(0.01, 450.0)
 
 
-def condition(variant: str, env_kwargs: dict[str, Any], low_beta_harms: float) -> list[dict]:
+def condition(variant: str, env_kwargs: dict[str, Any], low_beta_harms: float) -> list[RunResult]:
     runs = []
     for seed in range(5):
         rows = ((1.0, 0.9, 490.0), (0.75, 0.5, 480.0), (0.5, low_beta_harms, 475.0), (0.25, low_beta_harms, 470.0))
-        made = [synthetic_result("coexistence_v0", "empathic_dqn", b, seed, harms=h, survival=s) for b, h, s in rows]
-        made.append(synthetic_result("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470.0))
+        made = [synthetic_document("coexistence_v0", "empathic_dqn", b, seed, harms=h, survival=s) for b, h, s in rows]
+        made.append(synthetic_document("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470.0))
         for run in made:
             run["config"] = {**run["config"], "variant": variant, "env_kwargs": dict(env_kwargs)}
             run["run_id"] = f"{variant}__{run['run_id']}"
-        runs += made
+        runs += [record(run) for run in made]
     return runs
 
 
@@ -86,7 +87,7 @@ def test_an_undecided_or_untestable_verdict_makes_the_answer_undecided():
 
 
 def test_a_condition_without_the_papers_experiments_is_refused_naming_it():
-    results = [run for run in condition("coexistence_authors", AUTHORS, 0.0) if run["method"] != "dqn_harm_penalty"]
+    results = [run for run in condition("coexistence_authors", AUTHORS, 0.0) if run.method != "dqn_harm_penalty"]
     with pytest.raises(ValueError, match="condition 'coexistence_authors' lacks the paper's experiments dqn_harm_penalty"):
         condition_runs(results)
     with pytest.raises(ValueError, match="no coexistence_v0 runs"):
@@ -104,7 +105,7 @@ def test_the_page_names_each_condition_and_answers_each_claim(tmp_path, capsys):
     assert "- `coexistence_authors`: `max_cycles=501`, `rules=authors`; a time-limit end bootstraps; 5 seeds" in page
     assert f"| {C3} | greedy | reproduced | not reproduced | **{HINGES}** |" in page
     for run in results:
-        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", run.to_document())
     with pytest.raises(SystemExit) as refused:
         main([str(tmp_path / "nothing")])
     assert refused.value.code == 2 and "error:" in capsys.readouterr().err

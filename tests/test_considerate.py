@@ -340,8 +340,9 @@ def test_the_method_trains_through_the_command_line(tmp_path, env) -> None:
     )
     [path] = (out / "runs").glob("*.json")
     result = read_result(path)
-    assert result["config"]["reward"]["caring"] == 0.5 and result["config"]["reward"]["learning_starts"] == 50
-    assert result["method_label"] == (
+    assert result.config.reward is not None
+    assert result.config.reward["caring"] == 0.5 and result.config.reward["learning_starts"] == 50
+    assert result.method_label == (
         "DQN + Be Considerate (caring=0.5, reward.replay_capacity=200, reward.learning_starts=50, bonus_starts=100)"
     )  # in the fields' order
-    assert result["train"]["survival"] and result["eval"]
+    assert result.train.episodes and result.eval

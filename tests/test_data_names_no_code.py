@@ -20,10 +20,12 @@ import numpy as np
 import pytest
 import torch
 from helpers_heldout import dqn_and_empathic_runs
+from helpers_results import record
 
 from empathy_zoo import coexistence_v0
 from empathy_zoo.cli import main
 from empathy_zoo.cli.watch import check_gif_path
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.greedy_episode import agent_policies
 from empathy_zoo.policies import POLICIES, make_policy, recorded_entry
@@ -129,7 +131,7 @@ def test_evaluate_refuses_a_forged_result_file_before_writing_and_runs_nothing(t
 def test_the_leaderboard_does_not_replay_a_forged_partner_and_runs_nothing(trained, tmp_path, monkeypatch) -> None:
     forged = forged_copy(trained, tmp_path / "forged")
     monkeypatch.chdir(tmp_path)
-    result = json.loads(next((forged / "runs").glob("*.json")).read_text())
+    result = read_result(next((forged / "runs").glob("*.json")))  # (a result file names code as data: it is read)
     with pytest.raises(ValueError, match="not registered"):
         trained_world(result)
     episodes, notes = play_row_episodes([result], tmp_path / "board", [str(forged)])
@@ -140,11 +142,12 @@ def test_the_leaderboard_does_not_replay_a_forged_partner_and_runs_nothing(train
 
 def test_the_trained_with_scenario_resolves_only_registered_partners(trained, tmp_path) -> None:
     forged = forged_copy(trained, tmp_path / "forged")
-    result = json.loads(next((forged / "runs").glob("*.json")).read_text())
+    path = next((forged / "runs").glob("*.json"))
     with pytest.raises(ValueError, match=r"its own partners do not make a scenario.*not registered"):
-        trained_with_scenario(result)
-    result["config"]["fixed"] = {"cat_0": "helpers_policies:AlwaysLeft"}
-    scenario = trained_with_scenario(result, {"helpers_policies:AlwaysLeft"})
+        trained_with_scenario(read_result(path))
+    document = json.loads(path.read_text())
+    document["config"]["fixed"] = {"cat_0": "helpers_policies:AlwaysLeft"}
+    scenario = trained_with_scenario(record(document, str(path)), {"helpers_policies:AlwaysLeft"})
     assert scenario.variant.fixed_policies()["cat_0"] == "helpers_policies:AlwaysLeft"
 
 

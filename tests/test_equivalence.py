@@ -8,13 +8,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.equivalence import FAMILY_LEVEL, equivalence, holm_rejections, simulated_power, split_flips, verdict_flips
-from tests.helpers_results import synthetic_result
+from tests.helpers_results import edited, synthetic_result
 
 SEEDS = range(10)
 
 
-def runs(draw_seed: int, harm_shift: float = 0.0, beta: float = 0.5, method: str = "empathic_dqn") -> list[dict]:
+def runs(draw_seed: int, harm_shift: float = 0.0, beta: float = 0.5, method: str = "empathic_dqn") -> list[RunResult]:
     """Ten seeds of one Coexistence experiment, each run's metric means drawn from ``draw_seed``'s
     generator (harms ~ N(1 + shift·0.3, 0.3), survival ~ N(400, 30), the cat's return ~ N(450, 20))."""
     rng = np.random.default_rng(draw_seed)
@@ -63,8 +64,11 @@ def test_constant_cells_are_not_tested_and_unmatched_experiments_are_listed() ->
     old = [synthetic_result("coexistence_v0", "empathic_dqn", 0.5, s, harms=0.0, survival=500.0) for s in SEEDS]
     new = [synthetic_result("coexistence_v0", "empathic_dqn", 0.5, s, harms=0.0, survival=500.0) for s in SEEDS]
     only_new = [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, s, harms=1.0) for s in SEEDS]
-    for run in old + new:  # every greedy episode harm-free
-        run["eval"][0]["harms"] = [0.0] * len(run["eval"][0]["harms"])
+
+    def harm_free(document: dict) -> None:  # every greedy episode
+        document["eval"][0]["harms"] = [0.0] * len(document["eval"][0]["harms"])
+
+    old, new = [edited(run, harm_free) for run in old], [edited(run, harm_free) for run in new]
     result = equivalence(old, new + only_new)
     eval_harms = next(c for c in result.cells if (c.phase, c.metric) == ("eval", "harms"))
     assert eval_harms.constant and not eval_harms.differs
@@ -118,8 +122,6 @@ def test_split_flips_counts_flips_between_halves_of_the_pooled_runs() -> None:
 
 
 def test_runs_of_another_budget_are_another_experiment() -> None:
-    longer = runs(2)
-    for run in longer:
-        run["steps"] = 8000
+    longer = [edited(run, lambda document: document.update(steps=8000)) for run in runs(2)]
     result = equivalence(runs(1), longer)
     assert result.verdict == "nothing compared" and len(result.only_old) == len(result.only_new) == 1

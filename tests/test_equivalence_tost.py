@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.equivalence import (
     NO_DIFFERENCE,
     TOST_MARGINS,
@@ -78,7 +79,7 @@ def test_tost_level_under_the_boundary_is_at_most_five_percent() -> None:
     assert hits / 400 <= 0.07
 
 
-def _runs(draw_seed: int, harm_sd: float, seeds: int = 10) -> list[dict]:
+def _runs(draw_seed: int, harm_sd: float, seeds: int = 10) -> list[RunResult]:
     rng = np.random.default_rng(draw_seed)
     return [
         synthetic_result(
@@ -120,7 +121,7 @@ def test_the_report_prints_the_power_and_the_tost(tmp_path) -> None:
 
     for name, draw in (("a", 1), ("b", 2)):
         for run in _runs(draw, 0.01, seeds=5):
-            write_json_atomic(tmp_path / name / "runs" / f"{run['run_id']}.json", run)
+            write_json_atomic(tmp_path / name / "runs" / f"{run.run_id}.json", run.to_document())
     text = report(str(tmp_path / "a"), str(tmp_path / "b"), with_tost=True)
     assert "**no difference detected**" in text
     assert "smallest p the exact test can reach is 0.0079" in text

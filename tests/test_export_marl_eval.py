@@ -12,10 +12,11 @@ import re
 from pathlib import Path
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import record, synthetic_document
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_NAMES
 from leaderboard.aggregate import load_results, table_env
 from leaderboard.export_marl_eval import (
@@ -34,10 +35,19 @@ EVAL_STEPS = (2000, 4000)
 """The training steps of every synthetic run's greedy evaluations."""
 
 
-def run(method: str, beta: float, seed: int, variant: str | None = None, label: str | None = None, steps: int = 4000) -> dict:
+def run(
+    method: str, beta: float, seed: int, variant: str | None = None, label: str | None = None, steps: int = 4000
+) -> RunResult:
     """A synthetic run with a greedy evaluation at each of :data:`EVAL_STEPS` before ``steps`` and at ``steps``,
     each metric's episodes distinct per run, evaluation, metric and episode."""
-    result = synthetic_result(ENV, method, beta, seed)
+    return record(run_document(method, beta, seed, variant, label, steps))
+
+
+def run_document(
+    method: str, beta: float, seed: int, variant: str | None = None, label: str | None = None, steps: int = 4000
+) -> dict:
+    """The result document of :func:`run`."""
+    result = synthetic_document(ENV, method, beta, seed)
     result["steps"] = steps
     result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": 3}
     kept = [i for i, end in enumerate(result["train"]["episode_end_step"]) if end <= steps]  # (episodes within the budget)
@@ -67,7 +77,7 @@ def write_dir(directory: Path, runs: list[dict]) -> Path:
     return directory
 
 
-def synthetic_runs() -> list[dict]:
+def synthetic_runs() -> list[RunResult]:
     """Two tasks of one environment (the env itself and a variant), two algorithms, three seeds."""
     return [
         run(method, beta, seed, variant)
@@ -77,13 +87,13 @@ def synthetic_runs() -> list[dict]:
     ]
 
 
-def assert_layout_holds(layout: dict, results: list[dict]) -> None:
+def assert_layout_holds(layout: dict, results: list[RunResult]) -> None:
     """Every run of ``results`` is in ``layout`` where the mapping puts it, with every evaluation
     (in step order, its metrics' lists as the result file holds them) and the last as its absolute
     metrics; nothing else is in ``layout``."""
     for result in results:
-        steps = layout[result["env"]][table_env(result)][algorithm_name(result["method_label"])][run_key(result["seed"])]
-        evaluations = sorted(result["eval"], key=lambda entry: entry["step"])
+        steps = layout[result.env][table_env(result)][algorithm_name(result.method_label)][run_key(result.seed)]
+        evaluations = result.to_document()["eval"]  # (as the file holds them: by step)
         assert list(steps) == [*(step_key(i) for i in range(len(evaluations))), ABSOLUTE_METRICS]
         for i, entry in enumerate(evaluations):
             assert steps[step_key(i)] == {STEP_COUNT: entry["step"], **{m: entry[m] for m in METRIC_NAMES}}
@@ -95,7 +105,7 @@ def assert_layout_holds(layout: dict, results: list[dict]) -> None:
         for algorithm, runs in algorithms.items()
         for seed in runs
     }
-    expected = {(r["env"], table_env(r), algorithm_name(r["method_label"]), run_key(r["seed"])) for r in results}
+    expected = {(r.env, table_env(r), algorithm_name(r.method_label), run_key(r.seed)) for r in results}
     assert written == expected
 
 
@@ -116,11 +126,11 @@ def test_the_layout_of_synthetic_runs_nests_environment_task_algorithm_run_step(
 
 
 def test_evaluations_are_written_in_step_order() -> None:
-    shuffled = run("empathic_dqn", 0.5, 0)
-    shuffled["eval"] = shuffled["eval"][::-1]
-    steps = marl_eval_layout([shuffled])[ENV][ENV]["empathic_dqn 0.5"]["seed_0"]
+    result = run("empathic_dqn", 0.5, 0)  # (a file's evaluations are by step: the checker refuses others)
+    steps = marl_eval_layout([result])[ENV][ENV]["empathic_dqn 0.5"]["seed_0"]
     assert [steps[key][STEP_COUNT] for key in ("step_0", "step_1")] == list(EVAL_STEPS)
-    assert steps[ABSOLUTE_METRICS]["survival"] == shuffled["eval"][0]["survival"]  # the one at step 4000
+    assert steps[ABSOLUTE_METRICS]["survival"] == result.eval[-1].metrics["survival"].tolist()  # the one at step 4000
+    assert all(type(value) is float for value in steps[ABSOLUTE_METRICS]["survival"])  # (written as the file holds them)
 
 
 def test_the_shipped_quick_results_are_all_exported_with_their_values() -> None:
@@ -147,9 +157,10 @@ def test_commas_are_dropped_from_algorithm_names_and_names_one_to_marl_eval_are_
 
 
 def test_a_run_without_greedy_evaluation_is_refused_naming_it() -> None:
-    empty = run("empathic_dqn", 0.5, 0)
-    empty["eval"] = []
-    with pytest.raises(ValueError, match=re.escape(f"run {empty['run_id']} has no greedy evaluation")):
+    document = run_document("empathic_dqn", 0.5, 0)
+    del document["config"]["eval_interval"]  # (a file made before it was recorded: any evaluations, or none)
+    empty = record({**document, "eval": []})
+    with pytest.raises(ValueError, match=re.escape(f"run {empty.run_id} has no greedy evaluation")):
         marl_eval_layout([empty])
 
 
@@ -163,13 +174,13 @@ def test_export_writes_json_that_reads_back_as_the_layout(tmp_path: Path, capsys
 def test_several_directories_keep_their_rows_apart_as_the_leaderboard_does(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    mine = write_dir(tmp_path / "mine", [run("empathic_dqn", 0.5, seed) for seed in range(2)])
-    theirs = write_dir(tmp_path / "theirs", [run("empathic_dqn", 0.5, seed, steps=3000) for seed in range(2)])
+    mine = write_dir(tmp_path / "mine", [run_document("empathic_dqn", 0.5, seed) for seed in range(2)])
+    theirs = write_dir(tmp_path / "theirs", [run_document("empathic_dqn", 0.5, seed, steps=3000) for seed in range(2)])
     out = tmp_path / "both.json"
     argv = ["export", str(mine), str(theirs), "--format", "marl-eval", "--out", str(out)]
     assert main(argv) == 0  # two budgets: every label ends with its budget (commas dropped)
     assert list(json.loads(out.read_text())[ENV][ENV]) == ["empathic_dqn 0.5 · 3000 steps", "empathic_dqn 0.5 · 4000 steps"]
-    other_experiment = {**run("empathic_dqn", 0.5, 0), "run_id": f"{ENV}__empathic_dqn-0.5-other__s0"}
+    other_experiment = {**run_document("empathic_dqn", 0.5, 0), "run_id": f"{ENV}__empathic_dqn-0.5-other__s0"}
     same_budget = write_dir(tmp_path / "same", [other_experiment])
     out.unlink()
     assert main(["export", str(mine), str(same_budget), "--format", "marl-eval", "--out", str(out)]) == 2
@@ -212,7 +223,7 @@ def test_the_write_is_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ca
 def test_bad_input_is_refused_with_one_line_and_writes_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], expected: str
 ) -> None:
-    results = write_dir(tmp_path / "results", [run("empathic_dqn", 0.5, 0)])
+    results = write_dir(tmp_path / "results", [run_document("empathic_dqn", 0.5, 0)])
     (tmp_path / "a_file").write_text("")
     before = sorted(tmp_path.rglob("*"))
     filled = [arg.replace("{tmp}", str(tmp_path)).replace("{results}", str(results)) for arg in argv]
@@ -253,10 +264,10 @@ def test_marl_evals_own_processing_reads_the_export() -> None:
     assert "extra" in processed  # (on a layout it cannot read, it prints why and returns the data as given)
     assert processed["extra"]["number_of_runs"] == 3 and processed["extra"]["number_of_steps"] == 3
     absolute, over_steps = processing.create_matrices_for_rliable(processed, ENV, ["return"])
-    for result in (r for r in results if r["env"] == ENV):
-        algorithm = algorithm_name(result["method_label"]).lower()
-        row = sorted(r["seed"] for r in results if r["method_label"] == result["method_label"] and r["env"] == ENV)
-        last = max(result["eval"], key=lambda entry: entry["step"])
-        seed_row = row.index(result["seed"])
-        assert absolute["mean_harms"][algorithm][seed_row, 0] == pytest.approx(sum(last["harms"]) / len(last["harms"]))
+    for result in (r for r in results if r.env == ENV):
+        algorithm = algorithm_name(result.method_label).lower()
+        row = sorted(r.seed for r in results if r.method_label == result.method_label and r.env == ENV)
+        last = result.eval[-1].metrics["harms"]
+        seed_row = row.index(result.seed)
+        assert absolute["mean_harms"][algorithm][seed_row, 0] == pytest.approx(sum(last) / len(last))
         assert over_steps["mean_survival"][algorithm].shape == (3, 1, 3)

@@ -261,7 +261,7 @@ def test_a_plugin_without_a_file_cannot_be_told_and_the_commit_never_counts():
 
 def test_the_result_file_checks_plugin_hashes_when_present(finished_dqn):
     [path] = (finished_dqn / "runs").glob("*.json")
-    result = read_result(path)
+    result = read_result(path).to_document()
     check_result({**result, "plugin_sha256": {MODULE: None, "other": sha256("x")}}, path)
     check_result({key: value for key, value in result.items() if key != "plugin_sha256"}, path)
     with pytest.raises(ResultFileError, match=f"field plugin_sha256.{MODULE}: expected a SHA-256"):

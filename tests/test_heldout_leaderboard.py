@@ -4,12 +4,14 @@ section and its figure rendered from them."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 
+from empathy_zoo.experiment.records import AgentRef
 from empathy_zoo.metrics import HELDOUT_MARGINS
 from leaderboard.heldout import add_heldout_section
 from leaderboard.heldout_scores import (
@@ -100,7 +102,7 @@ def test_why_each_verdict_was_given(synthetic) -> None:
 
 def test_fewer_seeds_than_the_test_needs_leave_every_reading_undecided(synthetic) -> None:
     out, results = synthetic
-    few = [run for run in results if run["seed"] < 3]  # 3 against 3: the exact test cannot reach 5 %
+    few = [run for run in results if run.seed < 3]  # 3 against 3: the exact test cannot reach 5 %
     (group,), notes = load_heldout(out, few)
     assert all(r.verdict == UNDECIDED and r.versus_dqn == TOO_FEW_SEEDS for r in readings(group))
     assert len(notes) == 4  # the evaluations of the seeds left out have no result file here
@@ -108,7 +110,7 @@ def test_fewer_seeds_than_the_test_needs_leave_every_reading_undecided(synthetic
 
 def test_without_dqn_nothing_is_judged(synthetic) -> None:
     out, results = synthetic
-    (group,), _ = load_heldout(out, [run for run in results if run["method"] != "dqn"])
+    (group,), _ = load_heldout(out, [run for run in results if run.method != "dqn"])
     assert {r.verdict for r in readings(group)} == {UNDECIDED}
     assert all("no DQN" in r.why for r in readings(group))
 
@@ -184,7 +186,8 @@ def test_without_evaluation_files_the_pages_are_unchanged(tmp_path) -> None:
 
 def test_an_evaluation_of_another_agent_is_left_out_with_a_note(synthetic) -> None:
     out, results = synthetic
-    changed = [dict(run, agent={**run["agent"], "sha256": "0" * 64}) if run["seed"] == 0 else run for run in results]
+    retrained = AgentRef(f"{results[0].run_id}.agent.pt", "0" * 64)
+    changed = [dataclasses.replace(run, agent=retrained) if run.seed == 0 else run for run in results]
     (group,), notes = load_heldout(out, changed)
     assert len(notes) == 2 and all("another agent" in note for note in notes)
     assert all(len(pairs) == 4 for pairs in group.runs.values())
@@ -196,7 +199,7 @@ def test_several_results_directories_match_each_evaluation_in_its_own(synthetic,
     out, results = synthetic
     other = tmp_path / "other"
     shutil.copytree(out / "evaluations", other / "evaluations")
-    prefixed = [{**run, "method_label": f"B {run['method_label']}"} for run in results]
+    prefixed = [dataclasses.replace(run, method_label=f"B {run.method_label}") for run in results]
     (group,), notes = load_heldout([out, other], results + prefixed, [str(out)] * len(results) + [str(other)] * len(results))
     assert notes == [] and set(group.runs) == {"dqn 1.0", "empathic_dqn 0.5", "B dqn 1.0", "B empathic_dqn 0.5"}
     with pytest.raises(ValueError, match="need each result's origin"):

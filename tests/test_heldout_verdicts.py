@@ -188,7 +188,7 @@ def test_the_command_lists_old_and_new_verdicts(synthetic) -> None:
 
     out, results = synthetic
     for run in results:
-        write_json_atomic(out / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(out / "runs" / f"{run.run_id}.json", run.to_document())
     rows = heldout_verdicts(out)
     assert len(rows) == 6  # two methods × three held-out scenarios
     assert {(r.method_label, r.scenario, r.old_verdict, r.verdict) for r in rows} >= {

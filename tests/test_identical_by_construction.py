@@ -98,19 +98,20 @@ def test_the_methods_and_envs_commands_say_it(capsys) -> None:
 
 
 def test_the_leaderboard_marks_a_row_identical_by_construction(tmp_path) -> None:
+    from dataclasses import replace
+
     from helpers_results import synthetic_result
 
     from leaderboard.report import write_leaderboard
     from leaderboard.row_names import IDENTICAL_MARK, identical_row_names
 
     runs = [synthetic_result("sharing_v0", method, 1.0, seed) for method in ("dqn", "dqn_considerate") for seed in (0, 1)]
-    for run in runs:
-        run["method_label"] = {"dqn": "DQN", "dqn_considerate": "Be Considerate"}[run["method"]]
+    runs = [replace(run, method_label={"dqn": "DQN", "dqn_considerate": "Be Considerate"}[run.method]) for run in runs]
     assert identical_row_names(runs) == {("sharing_v0", "Be Considerate"): "Be Considerate" + IDENTICAL_MARK}
     out = tmp_path / "runs"
     out.mkdir()
     for run in runs:
-        (out / f"{run['run_id']}.json").write_text(json.dumps(run))
+        (out / f"{run.run_id}.json").write_text(json.dumps(run.to_document()))
     page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
     assert "| Be Considerate ≡ DQN |" in page and "train as DQN by construction" in page
 
@@ -137,28 +138,31 @@ def test_reproduce_dry_run_plans_and_writes_nothing(tmp_path, capsys) -> None:
 
 
 def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_path) -> None:
-    from helpers_results import synthetic_result
+    from helpers_results import edited, record, synthetic_document, synthetic_result
 
+    from empathy_zoo.experiment.records import RunResult
     from leaderboard.report import write_leaderboard
     from leaderboard.row_names import SAME_RUNS_MARK, same_runs_row_names
 
-    def row(method: str, label: str, survival: float = 400.0, seeds: tuple[int, ...] = (0, 1, 2, 3)) -> list[dict]:
-        made = [synthetic_result("coexistence_v0", method, 1.0, seed, survival=survival) for seed in seeds]
+    def row(method: str, label: str, survival: float = 400.0, seeds: tuple[int, ...] = (0, 1, 2, 3)) -> list[RunResult]:
+        made = [synthetic_document("coexistence_v0", method, 1.0, seed, survival=survival) for seed in seeds]
         for run in made:
             run["method_label"] = label
             run["run_id"] = f"coexistence_v0__{label.replace(' ', '_')}__s{run['seed']}"
-        return made
+        return [record(run) for run in made]
 
     dqn, considerate = row("dqn", "DQN"), row("dqn_considerate", "Be Considerate")
     assert same_runs_row_names(dqn + considerate) == {("coexistence_v0", "Be Considerate"): "Be Considerate" + SAME_RUNS_MARK}
     # one differing value, a seed DQN lacks, or another budget: not the same runs
     differs = row("dqn_considerate", "Be Considerate")
-    differs[2]["eval"][0]["survival"][0] -= 1.0
+
+    def one_less(document: dict) -> None:
+        document["eval"][0]["survival"][0] -= 1.0
+
+    differs[2] = edited(differs[2], one_less)
     assert same_runs_row_names(dqn + differs) == {}
     assert same_runs_row_names(dqn + row("dqn_considerate", "Be Considerate", seeds=(0, 1, 2, 7))) == {}
-    longer = row("dqn_considerate", "Be Considerate")
-    for run in longer:
-        run["steps"] = 8000
+    longer = [edited(run, lambda document: document.update(steps=8000)) for run in row("dqn_considerate", "Be Considerate")]
     assert same_runs_row_names(dqn + longer) == {}
     # a row marked by construction keeps that mark (Be Considerate in Sharing)
     sharing = [synthetic_result("sharing_v0", m, 1.0, s) for m in ("dqn", "dqn_considerate") for s in (0, 1)]
@@ -166,7 +170,7 @@ def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_pa
     out = tmp_path / "runs"
     out.mkdir()
     for run in dqn + considerate:
-        (out / f"{run['run_id']}.json").write_text(json.dumps(run))
+        (out / f"{run.run_id}.json").write_text(json.dumps(run.to_document()))
     page = write_leaderboard(tmp_path, tmp_path / "board")["markdown"].read_text(encoding="utf-8")
     assert f"| Be Considerate{SAME_RUNS_MARK} |" in page and "on these runs the method trained as DQN" in page
 

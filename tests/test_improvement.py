@@ -7,8 +7,9 @@ import json
 import math
 
 import pytest
-from helpers_results import described
+from helpers_results import hand_made_result
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import (
     bootstrap_improvement,
     improvement_verdict,
@@ -51,27 +52,22 @@ def test_interquartile_mean(values, expected) -> None:
     assert interquartile_mean(values) == expected
 
 
-def _run(method: str, seed: int, value: float, selfishness: float = 1.0, reward=None, env="coexistence_v0") -> dict:
-    return described(
-        {
-            "method": method,
-            "method_label": f"{method} {selfishness}",
-            "env": env,
-            "seed": seed,
-            "steps": 10,
-            "config": {"settings": {"selfishness": selfishness}, "reward": reward},
-            "train": {"episode_end_step": [10], "survival": [value], "harms": [1.0 - value / 10]},
-            "eval": [{"step": 10, "survival": [value], "harms": [1.0 - value / 10]}],
-        }
+def _run(method: str, seed: int, value: float, selfishness: float = 1.0, env: str = "coexistence_v0") -> RunResult:
+    """A run whose one training episode and greedy episode survived ``value`` steps and harmed a
+    cat in a run of short survival (below 5 steps)."""
+    harms = [int(value < 5)]
+    train = {"episode_end_step": [10], "survival": [value], "harms": harms}
+    return hand_made_result(
+        env, method, seed, train, [{"step": 10, "survival": [value], "harms": harms}], settings={"selfishness": selfishness}
     )
 
 
 def test_dqn_is_the_baseline_and_every_other_method_is_compared_with_it() -> None:
     assert is_dqn(_run("dqn", 0, 1)) and is_dqn(_run("empathic_dqn", 0, 1))
     assert not is_dqn(_run("empathic_dqn", 0, 1, selfishness=0.5))
-    assert not is_dqn(_run("dqn_harm_penalty", 0, 1, reward={"name": "harm_penalty", "penalty": -100.0}))
+    assert not is_dqn(_run("dqn_harm_penalty", 0, 1))
     runs = [_run("empathic_dqn", s, 5.0 + s) for s in range(3)] + [_run("empathic_dqn", s, 6.0 + s, 0.5) for s in range(3)]
-    cells = improvements_over_dqn(runs, {"coexistence_v0": ["survival", "harms"]}, n_resamples=50)
+    cells = improvements_over_dqn(runs, {"coexistence_v0": ["survival", "harms"]})
     assert {(c.method_label, c.metric) for c in cells} == {("empathic_dqn 0.5", "survival"), ("empathic_dqn 0.5", "harms")}
     survival = next(c for c in cells if c.metric == "survival" and c.phase == "eval")
     assert survival.probability == pytest.approx(7 / 9) and survival.iqm == 7.0 and survival.n_baseline_seeds == 3
@@ -118,7 +114,7 @@ def test_verdicts_on_synthetic_runs_separate_a_clear_gain_from_noise() -> None:
     dqn = [_run("dqn", s, 100.0 + s) for s in range(5)]
     better = [_run("empathic_dqn", s, 300.0 + s, 0.5) for s in range(5)]  # every run beats every DQN run
     mixed = [_run("empathic_dqn", s, 98.0 + 2 * s, 0.25) for s in range(5)]  # interleaved with DQN's
-    cells = improvements_over_dqn(dqn + better + mixed, {"coexistence_v0": ["survival", "harms"]}, n_resamples=500)
+    cells = improvements_over_dqn(dqn + better + mixed, {"coexistence_v0": ["survival", "harms"]})
     verdict = {(c.method_label, c.metric, c.phase): c.verdict for c in cells}
     assert verdict[("empathic_dqn 0.5", "survival", "eval")] == "better"
     assert verdict[("empathic_dqn 0.25", "survival", "eval")] == "no clear difference"

@@ -367,7 +367,7 @@ def test_the_checkpoint_the_suite_wrote_resumes(tmp_path, checkpointed):
     shutil.copytree(checkpointed, out)
     assert not list((out / CHECKPOINT_DIR).glob("*.pt.*"))
     [path] = train_runs([run_spec()], out, OPTIONS)
-    assert read_result(path)["steps"] == 300
+    assert read_result(path).steps == 300
 
 
 # ---------------------------------------------------------------------------- the tuning journal

@@ -9,8 +9,9 @@ import math
 
 import numpy as np
 import pytest
-from helpers_results import described
+from helpers_results import hand_made_result, record, synthetic_document, synthetic_result
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import bootstrap_mean_ci, mean_ci, student_t_interval
 from leaderboard.improvement import (
     TOO_FEW_SEEDS,
@@ -108,19 +109,12 @@ def test_three_seeds_against_three_can_never_give_a_verdict() -> None:
     assert improvement_verdict(low, high) == "no clear difference"  # the interval alone says the same
 
 
-def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> dict:
-    return described(
-        {
-            "method": method,
-            "method_label": f"{method} {selfishness}",
-            "env": "coexistence_v0",
-            "seed": seed,
-            "steps": 10,
-            "config": {"settings": {"selfishness": selfishness}, "reward": None},
-            "train": {"episode_end_step": [10], "survival": [value], "harms": [value / 1000]},
-            "eval": [{"step": 10, "survival": [value], "harms": [value / 1000]}],
-        }
-    )
+def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> RunResult:
+    """A run whose one training episode and greedy episode survived ``value`` steps and harmed
+    ``value // 100`` cats (more with longer survival)."""
+    train = {"episode_end_step": [10], "survival": [value], "harms": [value // 100]}
+    evaluations = [{"step": 10, "survival": [value], "harms": [value // 100]}]
+    return hand_made_result("coexistence_v0", method, seed, train, evaluations, settings={"selfishness": selfishness})
 
 
 def _verdicts(method_values: list[float], dqn_values: list[float]) -> dict[str, Improvement]:
@@ -189,8 +183,7 @@ def test_survival_stays_below_the_longest_episode() -> None:
 
     _, low, high = mean_ci(np.array([500.0, 480.0, 200.0]), metrics="survival", max_cycles=500)
     assert high == 500.0 and 0.0 <= low < 200.0
-    runs = [
-        {"env": "coexistence_v0", "config": {"env_kwargs": {}}},
-        {"env": "sharing_v0", "config": {"env_kwargs": {"max_cycles": 40}}},
-    ]
+    shorter = synthetic_document("sharing_v0", "dqn", 1.0, 0)
+    shorter["config"]["env_kwargs"] = {"max_cycles": 40}
+    runs = [synthetic_result("coexistence_v0", "dqn", 1.0, 0), record(shorter)]
     assert longest_episode(runs) == 500 and longest_episode(runs[1:]) == 40  # the environment's default where unset

@@ -119,8 +119,8 @@ def test_the_method_trains_through_the_command_line_and_is_dqn_in_sharing(tmp_pa
     )
     [path] = (out / "runs").glob("*.json")
     result = read_result(path)
-    assert result["config"]["reward"] == {"name": "lagrangian", "cost_limit": 0.05, "lambda_lr": 2.0, "lambda_init": 0.0}
-    assert result["method_label"] == "DQN-Lagrangian (cost_limit=0.05, lambda_lr=2)"
+    assert result.config.reward == {"name": "lagrangian", "cost_limit": 0.05, "lambda_lr": 2.0, "lambda_init": 0.0}
+    assert result.method_label == "DQN-Lagrangian (cost_limit=0.05, lambda_lr=2)"
     columns = {}
     for method in ("dqn_lagrangian", "dqn"):
         target = tmp_path / method

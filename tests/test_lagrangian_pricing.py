@@ -280,14 +280,14 @@ def test_a_lagrangian_run_records_lambda_after_every_training_episode(tmp_path) 
 
     spec = small_run("dqn_lagrangian", reward={"cost_limit": 0.5, "lambda_lr": 2.0, "lambda_init": 0.25})
     [path] = train_runs([spec], tmp_path / "lag", RunnerOptions(progress=False, checkpoint_interval=0))
-    train = read_result(path)["train"]
-    harms, recorded = train["harms"], train[PRICE_COLUMN]
-    assert len(recorded) == len(harms) == len(train["episode_end_step"]) > 5
+    train = read_result(path).train
+    harms, recorded = train.metrics["harms"], train.column(PRICE_COLUMN)
+    assert len(recorded) == len(harms) == len(train.episode_end_step) > 5
     multiplier, expected = np.array([0.25]), []
     for harm in harms:
         multiplier = dual_ascent(multiplier, np.array([float(harm)]), 0.5, 2.0)
         expected.append(float(multiplier[0]))
-    assert recorded == pytest.approx(expected, abs=1e-6)
+    assert recorded.tolist() == pytest.approx(expected, abs=1e-6)
     assert 0 in recorded[1:] or min(recorded) < max(recorded)  # (λ moved)
     assert sum(harms) > 0
     [plain] = train_runs([small_run("dqn")], tmp_path / "dqn", RunnerOptions(progress=False, checkpoint_interval=0))

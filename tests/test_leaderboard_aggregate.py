@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 import pytest
+from helpers_results import record
 
+from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.metrics import METRIC_NAMES
 from leaderboard.aggregate import (
     bootstrap_mean_ci,
@@ -31,7 +35,7 @@ T_9875_2 = 6.205346816570706
 """t(0.9875, 2 degrees of freedom), from mpmath: the quantile of the leaderboard's 3-seed interval."""
 
 
-def make_run(
+def make_document(
     env: str,
     label: str,
     seed: int,
@@ -42,17 +46,22 @@ def make_run(
     steps: int = 100,
     method: str = "dqn",
 ) -> dict[str, Any]:
-    """A result dict whose every metric column equals ``survival`` (train) / ``eval_survival``."""
+    """A schema-1 result document whose every metric column equals ``survival`` (train) /
+    ``eval_survival`` (equality within its range: at most 1)."""
     n = len(survival)
     end_steps = end_steps if end_steps is not None else [int((i + 1) * steps / n) for i in range(n)]
+
+    def column(values: list[float], metric: str) -> list[float]:
+        return [min(value, 1.0) for value in values] if metric == "equality" else list(values)
+
     train: dict[str, Any] = {"episode_end_step": end_steps}
-    train.update({metric: list(survival) for metric in METRIC_NAMES})
+    train.update({metric: column(survival, metric) for metric in METRIC_NAMES})
     evaluations = []
     if eval_survival is not None:
-        evaluations.append({"step": steps, **{metric: list(eval_survival) for metric in METRIC_NAMES}})
+        evaluations.append({"step": steps, **{metric: column(eval_survival, metric) for metric in METRIC_NAMES}})
     return {
         "schema": 1,
-        "run_id": f"{env}__{label}__s{seed}",
+        "run_id": f"{env}__{''.join(c if c.isascii() and c.isalnum() else '_' for c in label)}__s{seed}",
         "env": env,
         "method": method,
         "method_label": label,
@@ -66,6 +75,11 @@ def make_run(
         "commit": None,
         "created": "2026-01-01T00:00:00+00:00",
     }
+
+
+def make_run(env: str, label: str, seed: int, survival: list[float], **options: Any) -> RunResult:
+    """The run of :func:`make_document`, read as the leaderboard reads a file."""
+    return record(make_document(env, label, seed, survival, **options))
 
 
 def t_by_hand(values: list[float], quantile: float) -> tuple[float, float]:
@@ -91,10 +105,10 @@ def test_final_episode_count_is_ceil_of_ten_percent_at_least_one(n: int, expecte
 
 
 def test_run_scalars_select_final_ten_percent_and_last_evaluation() -> None:
-    run = make_run("coexistence_v0", "DQN", 0, [float(i) for i in range(1, 21)], eval_survival=[1.0, 3.0])
-    run["eval"].insert(0, {"step": 50, **{metric: [100.0] for metric in METRIC_NAMES}})  # earlier one
-    run["eval"].reverse()  # the last evaluation is found by its step, not its position
-    scalars = run_scalars(run)
+    document = make_document("coexistence_v0", "DQN", 0, [float(i) for i in range(1, 21)], eval_survival=[1.0, 3.0])
+    earlier = {metric: [1.0 if metric == "equality" else 100.0] * 2 for metric in METRIC_NAMES}
+    document["eval"].insert(0, {"step": 50, **earlier})
+    scalars = run_scalars(record(document))  # (the last evaluation: that of the latest step)
     assert scalars["train_final10"]["survival"] == 19.5  # episodes 19 and 20 of 20
     assert scalars["eval"]["harms"] == 2.0
 
@@ -106,8 +120,11 @@ def test_run_scalars_are_nan_without_episodes_or_evaluation() -> None:
 
 
 def test_run_scalars_ignore_nan_episodes() -> None:
-    run = make_run("coexistence_v0", "DQN", 0, [5.0] * 18 + [float("nan"), 7.0])
-    assert run_scalars(run)["train_final10"]["survival"] == 7.0
+    """No result file holds a NaN (the checker refuses one), but a record made in code may."""
+    run = make_run("coexistence_v0", "DQN", 0, [5.0] * 20)
+    survival = read_only_series([5.0] * 18 + [float("nan"), 7.0])
+    train = dataclasses.replace(run.train, metrics=MappingProxyType({**run.train.metrics, "survival": survival}))
+    assert run_scalars(dataclasses.replace(run, train=train))["train_final10"]["survival"] == 7.0
 
 
 def test_bootstrap_identical_seeds_give_a_zero_width_interval() -> None:
@@ -202,7 +219,7 @@ def test_score_runs_groups_by_env_and_label_with_seed_means_and_intervals() -> N
         make_run("sharing_v0", "Empathic DQN (β=0.5)", 2, [0.0] * 9 + [1.0], eval_survival=[0.0], method="empathic_dqn"),
         make_run("coexistence_v0", "DQN", 0, [5.0, 9.0], eval_survival=[1.0, 2.0]),
     ]
-    scores = score_runs(runs, random_state=0, n_resamples=400)
+    scores = score_runs(runs)
     assert [(s.env, s.phase, s.metric) for s in scores[:2]] == [
         ("coexistence_v0", "eval", "survival"),
         ("coexistence_v0", "eval", "harms"),
@@ -241,9 +258,8 @@ def test_rolling_curve_means_the_last_window_episodes_at_each_point() -> None:
 
 def test_learning_curves_have_no_gaps_at_a_small_budget() -> None:
     """A run with fewer episodes than points: every point after the first episode has a value."""
-    run = make_run("coexistence_v0", "DQN", 0, [3.0, 5.0, 9.0], end_steps=[400, 2_000, 2_100])
-    run["steps"] = 3_000
-    (curve,) = learning_curves([run], "survival", n_points=30, n_resamples=50)
+    run = make_run("coexistence_v0", "DQN", 0, [3.0, 5.0, 9.0], end_steps=[400, 2_000, 2_100], steps=3_000)
+    (curve,) = learning_curves([run], "survival", n_points=30)
     assert np.isnan(curve.mean[curve.steps < 400]).all() and np.isfinite(curve.mean[curve.steps >= 400]).all()
     assert curve.mean[-1] == 9.0  # the last tenth of three episodes: the last one
 
@@ -254,7 +270,7 @@ def test_learning_curves_average_seeds_per_point_with_t_intervals() -> None:
         for seed, values in enumerate([[1.0, 2.0, 3.0, 4.0], [3.0, 4.0, 5.0, 6.0], [5.0, 0.0, 7.0, 8.0]])
     ]
     runs.append(make_run("sharing_v0", "DQN", 0, [1.0]))
-    (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4, random_state=5, n_resamples=200)
+    (curve,) = learning_curves(runs, "survival", env="coexistence_v0", n_points=4)
     assert curve.steps.tolist() == [25.0, 50.0, 75.0, 100.0]
     assert curve.mean.tolist() == [3.0, 2.0, 5.0, 6.0] and curve.n_seeds == 3
     low, high = t_by_hand([2.0, 4.0, 0.0], T_9875_2)
@@ -269,15 +285,15 @@ def write_runs(directory: Path, runs: list[dict[str, Any]]) -> None:
 
 
 def test_load_results_reads_runs_subdirectory_and_ignores_temp_files(tmp_path: Path) -> None:
-    write_runs(tmp_path / "runs", [make_run("coexistence_v0", "DQN", s, [1.0]) for s in (1, 0)])
+    write_runs(tmp_path / "runs", [make_document("coexistence_v0", "DQN", s, [1.0]) for s in (1, 0)])
     (tmp_path / "runs" / ".coexistence_v0__DQN__s2.json.abc.tmp").write_text("{half", encoding="utf-8")
     (tmp_path / "runs" / ".hidden.json").write_text("{half", encoding="utf-8")
     assert [p.name for p in result_files(tmp_path)] == ["coexistence_v0__DQN__s0.json", "coexistence_v0__DQN__s1.json"]
-    assert [r["seed"] for r in load_results(tmp_path)] == [0, 1]
+    assert [r.seed for r in load_results(tmp_path)] == [0, 1]
 
 
 def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
-    write_runs(tmp_path, [make_run("coexistence_v0", "DQN", 0, [1.0])])
+    write_runs(tmp_path, [make_document("coexistence_v0", "DQN", 0, [1.0])])
     (tmp_path / "broken.json").write_text('{"schema": 1, "run', encoding="utf-8")
     with pytest.raises(ValueError, match=r"broken\.json is corrupted"):
         load_results(tmp_path)
@@ -292,7 +308,7 @@ def test_load_results_names_a_corrupted_file(tmp_path: Path) -> None:
     ],
 )
 def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, Any], message: str | None) -> None:
-    run = make_run("coexistence_v0", "DQN", 0, [1.0])
+    run = make_document("coexistence_v0", "DQN", 0, [1.0])
     run.update(change)
     for key in [key for key, value in change.items() if value is None]:
         del run[key]
@@ -302,12 +318,12 @@ def test_load_results_rejects_malformed_files(tmp_path: Path, change: dict[str, 
 
 
 def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) -> None:
-    run = make_run("coexistence_v0", "DQN", 0, [1.0, 0.0])
+    run = make_document("coexistence_v0", "DQN", 0, [1.0, 0.0])
     run["train"]["harms"] = [0.0]
     write_runs(tmp_path / "a", [run])
     with pytest.raises(ValueError, match="different lengths"):
         load_results(tmp_path / "a")
-    duplicate = make_run("coexistence_v0", "DQN", 0, [1.0])
+    duplicate = make_document("coexistence_v0", "DQN", 0, [1.0])
     write_runs(tmp_path / "b", [duplicate])
     (tmp_path / "b" / "copy.json").write_text(json.dumps(duplicate))  # one run, two files
     with pytest.raises(ValueError, match="same run"):

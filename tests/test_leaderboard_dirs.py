@@ -9,7 +9,7 @@ import io
 from pathlib import Path
 
 import pytest
-from helpers_results import EVAL_EPISODES, synthetic_result
+from helpers_results import EVAL_EPISODES, record, synthetic_document
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -34,7 +34,7 @@ PENALTY = "dqn_harm_penalty 1.0"
 def run(method: str, beta: float, seed: int, steps: int = 4000, experiment: str = "", **means: float) -> dict:
     """A synthetic result of ``steps`` training steps; ``experiment`` tells two experiments of one
     label apart (their run ids differ by more than the seed)."""
-    result = synthetic_result(ENV, method, beta, seed, **means)
+    result = synthetic_document(ENV, method, beta, seed, **means)
     result["steps"] = steps
     result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": EVAL_EPISODES}
     result["eval"] = [{**result["eval"][-1], "step": step} for step in range(2000, steps + 1, 2000)]  # (as trained: every 2,000)
@@ -133,11 +133,11 @@ def test_evaluation_settings_join_the_budget_where_they_differ(tmp_path: Path) -
         assert all(len(entry["survival"]) == 10 for entry in result["eval"])  # (ten episodes evaluated)
         result["run_id"] = result["run_id"].replace("4000", "4000-ten")
     read = load_results_dirs([write_dir(tmp_path / "a", dqn()), write_dir(tmp_path / "b", other)])
-    assert sorted({result["method_label"] for result in read.results}) == [
+    assert sorted({result.method_label for result in read.results}) == [
         f"{DQN} · 4,000 steps, eval 2,000 × 10",
         f"{DQN} · 4,000 steps, eval 2,000 × {EVAL_EPISODES}",
     ]
-    assert budget_of(other[0]).text() == "4,000 steps, eval 2,000 × 10"
+    assert budget_of(record(other[0])).text() == "4,000 steps, eval 2,000 × 10"
 
 
 def test_a_row_without_dqn_of_its_budget_is_named_not_compared(tmp_path: Path) -> None:
@@ -183,7 +183,7 @@ def test_a_label_prefix_resolves_the_clash_and_each_row_is_compared_with_both_dq
 def test_one_experiment_in_two_directories_is_one_row_and_one_run_twice_is_refused(tmp_path: Path) -> None:
     runs = dqn()
     read = load_results_dirs([write_dir(tmp_path / "a", runs[:3]), write_dir(tmp_path / "b", runs[3:])])
-    assert {result["method_label"] for result in read.results} == {DQN} and len(read.results) == 5
+    assert {result.method_label for result in read.results} == {DQN} and len(read.results) == 5
     assert read.row_directories() == {(ENV, DQN): (str(tmp_path / "a"), str(tmp_path / "b"))}
     with pytest.raises(ValueError, match=r"are the same run .* two results directories"):
         load_results_dirs([tmp_path / "a", write_dir(tmp_path / "c", runs[:1])])

@@ -18,6 +18,7 @@ from helpers_heldout import dqn_and_empathic_runs
 from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
 from empathy_zoo.episode_gif import HOLD_MS
 from empathy_zoo.experiment import RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.greedy_episode import play_greedy, watch_env
 from empathy_zoo.names import PATH_NAME
 from empathy_zoo.training import RunnerOptions, train_runs
@@ -118,7 +119,7 @@ def test_a_gif_is_the_lowest_seeds_episode_in_its_own_world(trained, board, meth
     out, _ = board
     durations = gif_frames(out / "figures" / GIFS[ROWS[method]])
     run_file = result_file(trained, method, min(SEEDS))
-    env, env_kwargs, fixed = trained_world(json.loads(run_file.read_text()))
+    env, env_kwargs, fixed = trained_world(read_result(run_file))
     assert (env, env_kwargs, fixed) == ("coexistence_v0", {"max_cycles": MAX_CYCLES}, {"cat_0": "random_walk"})
     outcome = play_greedy(load_run_agent(run_file), watch_env(env, env_kwargs, fixed), EPISODE_SEED, max_steps=EPISODE_STEPS)
     assert len(durations) == outcome.steps + 1

@@ -17,6 +17,7 @@ from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
 from empathy_zoo.evaluation_file import EVALUATIONS_DIR
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.evaluation_dirs import match_evaluations
 from leaderboard.tables import CSV_COLUMNS
 
@@ -26,24 +27,24 @@ SEEDS = range(5)
 SET = scenario_set(ENV, {"still": {"cat_0": "stay"}, "chaser": {"cat_0": "chase"}})
 
 
-def runs() -> list[dict]:
+def runs() -> list[RunResult]:
     """DQN and Empathic DQN (β = 0.5), five seeds each, every run with a kept agent."""
     return [synthetic_run(ENV, method, beta, seed) for method, beta in (("dqn", 1.0), ("empathic_dqn", 0.5)) for seed in SEEDS]
 
 
-def values(run: dict) -> dict[str, dict[str, float]]:
+def values(run: RunResult) -> dict[str, dict[str, float]]:
     """Harms and survival per scenario: DQN harms, the empathic runs harm little."""
-    harms = 0.8 if run["method"] == "dqn" else 0.1
-    return {s: {"harms": harms + 0.01 * run["seed"], "survival": 400.0} for s in ("trained_with", "still", "chaser")}
+    harms = 0.8 if run.method == "dqn" else 0.1
+    return {s: {"harms": harms + 0.01 * run.seed, "survival": 400.0} for s in ("trained_with", "still", "chaser")}
 
 
 @pytest.fixture
-def apart(tmp_path: Path) -> tuple[Path, Path, list[dict]]:
+def apart(tmp_path: Path) -> tuple[Path, Path, list[RunResult]]:
     """``(results dir, evaluations dir, runs)``: result files in one, their evaluation files in the other."""
     results, evaluations = tmp_path / "results", tmp_path / "evaluated"
     made = runs()
     for run in made:
-        write_json_atomic(results / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(results / "runs" / f"{run.run_id}.json", run.to_document())
     write_synthetic(evaluations, [(run, values(run)) for run in made], SET, OWN)
     return results, evaluations, made
 
@@ -83,13 +84,14 @@ def test_evaluations_apart_make_the_pages_they_make_beside_the_runs(apart, tmp_p
 def test_the_evaluations_folder_itself_may_be_given(apart, tmp_path: Path) -> None:
     results, evaluations, made = apart
     matched = match_evaluations([evaluations / EVALUATIONS_DIR], made, [results])
-    assert sorted(evaluation["run_id"] for _, evaluation, _ in matched) == sorted(run["run_id"] for run in made)
-    assert all(run["run_id"] == evaluation["run_id"] for run, evaluation, _ in matched)
+    assert sorted(evaluation["run_id"] for _, evaluation, _ in matched) == sorted(run.run_id for run in made)
+    assert all(run.run_id == evaluation["run_id"] for run, evaluation, _ in matched)
 
 
 def test_an_evaluation_of_another_agent_is_refused_naming_it(apart, tmp_path: Path, capsys) -> None:
     results, evaluations, made = apart
-    retrained = {**made[3], "agent": {**made[3]["agent"], "sha256": "0" * 64}}
+    retrained = made[3].to_document()
+    retrained["agent"]["sha256"] = "0" * 64
     write_json_atomic(results / "runs" / f"{retrained['run_id']}.json", retrained)
     out = tmp_path / "out"
     assert main(["leaderboard", str(results), "--evaluations", str(evaluations), "--out", str(out)]) == 2
@@ -100,11 +102,11 @@ def test_an_evaluation_of_another_agent_is_refused_naming_it(apart, tmp_path: Pa
 
 def test_an_evaluation_of_a_run_not_read_is_refused_naming_it(apart, tmp_path: Path, capsys) -> None:
     results, evaluations, made = apart
-    (results / "runs" / f"{made[0]['run_id']}.json").unlink()
+    (results / "runs" / f"{made[0].run_id}.json").unlink()
     out = tmp_path / "out"
     assert main(["leaderboard", str(results), "--evaluations", str(evaluations), "--out", str(out)]) == 2
     err = one_line_error(capsys)
-    assert f"{made[0]['run_id']}.json: its run {made[0]['run_id']} is in none of the results directories read" in err
+    assert f"{made[0].run_id}.json: its run {made[0].run_id} is in none of the results directories read" in err
     assert not out.exists()
 
 

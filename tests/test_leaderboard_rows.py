@@ -4,13 +4,14 @@ mean over fewer than 3 seeds is printed without an interval, saying so."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import synthetic_document, synthetic_result
 from PIL import Image
 
 from empathy_zoo.atomic import write_json_atomic
@@ -28,7 +29,7 @@ def write_runs(directory: Path, runs: list[tuple[str, float, str | None]], seeds
     """Result files of ``(method, β, label)`` rows (label ``None``: the synthetic ``"<method> <β>"``)."""
     for method, beta, label in runs:
         for seed in seeds:
-            result = synthetic_result(ENV, method, beta, seed, harms=0.5 if beta < 1 else 1.0, survival=400.0)
+            result = synthetic_document(ENV, method, beta, seed, harms=0.5 if beta < 1 else 1.0, survival=400.0)
             if label is not None:
                 result["method_label"] = label
             write_json_atomic(directory / "runs" / f"{result['run_id']}.json", result)
@@ -75,9 +76,9 @@ def test_a_dqn_run_and_an_empathic_dqn_beta_1_run_are_both_dqn_and_kept_apart(tm
 
 def test_a_name_another_row_has_is_never_given() -> None:
     runs = [synthetic_result(ENV, "empathic_dqn", 1.0, 0), synthetic_result(ENV, "dqn_harm_penalty", 1.0, 0)]
-    runs[1]["method_label"] = "DQN"  # a user's label on a row that is no reference
+    runs[1] = dataclasses.replace(runs[1], method_label="DQN")  # a user's label on a row that is no reference
     assert dqn_row_names(runs) == {}
-    runs[1]["method_label"] = "penalty"
+    runs[1] = dataclasses.replace(runs[1], method_label="penalty")
     assert dqn_row_names(runs) == {(ENV, "empathic_dqn 1.0"): "DQN"}
 
 

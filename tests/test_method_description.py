@@ -11,14 +11,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_described_method import KIND_DQN, NAME, KindSettings, kind_result
-from helpers_results import synthetic_result
+from helpers_described_method import KIND_DQN, NAME, KindSettings, kind_document, kind_result
+from helpers_results import synthetic_document, synthetic_result
 
 from agents.base import Method
 from agents.rewards import transform_config
 from agents.settings import EmpathicDQNSettings
 from baselines.registry import METHODS, get_method
 from empathy_zoo.atomic import read_json, write_json_atomic
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.method_description import DESCRIPTION_FIELDS, check_description
 from empathy_zoo.result_file import SCHEMA_2_METHODS, ResultFileError, schema_2_description
@@ -142,12 +143,14 @@ def test_a_file_reads_with_the_description_a_fresh_run_of_its_config_gets(direct
         raw = read_json(path)
         assert raw["schema"] == schema and ("description" in raw["config"]) == (schema == 3)
         result = read_result(path)
-        assert result["schema"] == 3 and result["run_id"] == raw["run_id"]
+        assert result.schema == 3 and result.run_id == raw["run_id"]
         config = raw["config"]
         method = get_method(config["method"])
         settings = method.make_settings(config["settings"])
         reward = method.make_reward({k: v for k, v in (config["reward"] or {}).items() if k != "name"})
-        assert result["config"]["description"] == json.loads(json.dumps(method.describe(settings, reward))), path.name
+        assert result.to_document()["config"]["description"] == json.loads(json.dumps(method.describe(settings, reward))), (
+            path.name
+        )
 
 
 def test_the_description_is_no_part_of_a_run_s_id() -> None:
@@ -169,7 +172,7 @@ def test_the_description_is_no_part_of_a_run_s_id() -> None:
             env_kwargs=c["env_kwargs"],
         )
         assert spec.run_id == raw["run_id"]
-        assert spec.config()["description"] == read_result(path)["config"]["description"]
+        assert spec.config()["description"] == read_result(path).config.description
 
 
 def test_an_unknown_method_of_an_older_file_is_described_as_declaring_nothing() -> None:
@@ -179,7 +182,7 @@ def test_an_unknown_method_of_an_older_file_is_described_as_declaring_nothing() 
 
 
 def test_a_schema_3_file_needs_a_well_formed_description(tmp_path: Path) -> None:
-    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    run = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     run["config"]["description"]["exploration"] = {"kind": "cosine"}
     with pytest.raises(ResultFileError, match=r"r\.json: field config\.description\.exploration: expected an exploration"):
         check_result(run, tmp_path / "r.json")
@@ -189,7 +192,7 @@ def test_a_schema_3_file_needs_a_well_formed_description(tmp_path: Path) -> None
 
 
 # ------------------------------------------------------------------------------ the leaderboard
-def _kind_paper_sweep() -> list[dict]:
+def _kind_paper_sweep() -> list[RunResult]:
     """The paper's sweep with the plug-in in Empathic DQN's place (the same numbers)."""
     runs = []
     for seed in range(5):
@@ -208,7 +211,7 @@ def test_the_plug_in_is_judged_as_empathic_dqn_by_what_it_declares() -> None:
     runs = _kind_paper_sweep()
     groups = paper_runs(runs)
     assert sorted(groups["coexistence_v0"]) == ["dqn_harm_penalty", "β=0.25", "β=0.5", "β=0.75", "β=1"]
-    assert {run["method"] for run in groups["sharing_v0"]["β=0.5"]} == {NAME}
+    assert {run.method for run in groups["sharing_v0"]["β=0.5"]} == {NAME}
     claims = assess_claims(runs, reference=fake_reference)
     assert claims == assess_claims(_paper_like(), reference=fake_reference)  # as Empathic DQN with the same numbers
     rows = sensitivity_rows(runs)
@@ -244,11 +247,11 @@ def test_the_leaderboard_shows_the_plug_in_s_rows(tmp_path: Path) -> None:
     from leaderboard.report import write_leaderboard
 
     runs = [
-        kind_result("coexistence_v0", beta, seed, survival=400.0 if beta == 1.0 else 410.0)
+        kind_document("coexistence_v0", beta, seed, survival=400.0 if beta == 1.0 else 410.0)
         for beta in (1.0, 0.5)
         for seed in range(4)
     ]
-    runs += [synthetic_result("coexistence_v0", "empathic_dqn", 0.25, seed, survival=450.0) for seed in range(4)]
+    runs += [synthetic_document("coexistence_v0", "empathic_dqn", 0.25, seed, survival=450.0) for seed in range(4)]
     for run in runs:
         write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
     markdown = write_leaderboard(tmp_path)["markdown"].read_text(encoding="utf-8")

@@ -88,12 +88,12 @@ def test_a_read_only_directory_is_refused(tmp_path, no_training):
 
 
 def test_the_leaderboard_refuses_an_unusable_out(tmp_path, capsys):
-    from helpers_results import synthetic_result
+    from helpers_results import synthetic_document
 
     from empathy_zoo.atomic import write_json_atomic
 
     results = tmp_path / "results"
-    write_json_atomic(results / "runs" / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    write_json_atomic(results / "runs" / "a.json", synthetic_document("coexistence_v0", "dqn", 1.0, 0))
     out = unusable_outputs(tmp_path)["file"]
     assert main(["leaderboard", str(results), "--out", str(out)]) == 2
     err = capsys.readouterr().err

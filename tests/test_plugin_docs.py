@@ -56,7 +56,7 @@ def test_the_plugin_page_runs_and_its_runs_are_scored(in_tmp: Path) -> None:
     assert [name for name, _ in page if name] == ["my_plugins.py"] * 3 + ["my_sweep.toml"]
     run_page("plugins.md", in_tmp)
     results = [read_result(path) for path in sorted((in_tmp / "my_results" / RUNS_DIR).glob("*.json"))]
-    rows = {(r["variant"], r["method_label"]) for r in results}
+    rows = {(r.variant, r.method_label) for r in results}
     assert rows == {
         ("coexistence_chased", "Tabular Q (ε=0.1)"),
         ("coexistence_chased", "Tabular Q (ε=0.3)"),
@@ -65,13 +65,13 @@ def test_the_plugin_page_runs_and_its_runs_are_scored(in_tmp: Path) -> None:
         ("sharing_v0", "DQN − envy (weight=0.5)"),
         ("sharing_v0", "DQN − envy (weight=1)"),  # a reward transform's field swept like a setting
     }
-    chased = [r for r in results if r["variant"] == "coexistence_chased"]
-    assert {r["config"]["fixed"]["cat_0"] for r in chased} == {"my_plugins:Chaser(eagerness=0.5)"}
-    envious = next(r for r in results if r["method_label"] == "DQN − envy (weight=0.5)")
-    assert envious["config"]["reward"] == {"name": "envy", "weight": 0.5}
-    heavier = next(r for r in results if r["method_label"] == "DQN − envy (weight=1)")
-    assert heavier["config"]["reward"] == {"name": "envy", "weight": 1.0} and heavier["run_id"] != envious["run_id"]
-    assert set(envious["plugin_sha256"]) == {"my_plugins"}
+    chased = [r for r in results if r.variant == "coexistence_chased"]
+    assert {r.config.fixed["cat_0"] for r in chased} == {"my_plugins:Chaser(eagerness=0.5)"}
+    envious = next(r for r in results if r.method_label == "DQN − envy (weight=0.5)")
+    assert envious.config.reward == {"name": "envy", "weight": 0.5}
+    heavier = next(r for r in results if r.method_label == "DQN − envy (weight=1)")
+    assert heavier.config.reward == {"name": "envy", "weight": 1.0} and heavier.run_id != envious.run_id
+    assert set(envious.plugin_sha256 or {}) == {"my_plugins"}
     assert (in_tmp / "my_results" / "LEADERBOARD.md").read_text(encoding="utf-8").count("Tabular Q") >= 2
 
 

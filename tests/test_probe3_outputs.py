@@ -7,14 +7,14 @@ line and left as it was, and nothing is created in an output directory before it
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 import os
 import stat
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import synthetic_document, synthetic_result
 from helpers_sweeps import TINY_TRAIN
 
 import empathy_zoo.schedules as schedules
@@ -22,6 +22,7 @@ import empathy_zoo.training.runner as runner
 import leaderboard.report as report
 from empathy_zoo.atomic import process_alive, remove_stale_temp_files, write_json_atomic
 from empathy_zoo.cli import main
+from empathy_zoo.experiment.records import RunResult, frozen_plain, read_only_series
 from empathy_zoo.output_lock import LOCK_NAME, hold_output_dir
 from empathy_zoo.result_file import RUNS_DIR
 from empathy_zoo.schedules import epsilon_function
@@ -51,17 +52,19 @@ def counted_schedule(monkeypatch):
     return calls
 
 
-def _window_run(low: int, high: int, schedule: dict | None = None) -> dict:
+def _window_run(low: int, high: int, schedule: dict | None = None) -> RunResult:
     """A run of 40 training episodes whose final 10 % (the last 4) span steps ``low`` … ``high - 1``,
-    in an environment whose episodes may be that long."""
-    run = copy.deepcopy(synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0))
+    in an environment whose episodes may be that long (a record made in code: no file holds one)."""
+    run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)
     head = [round(low * (i + 1) / 36) for i in range(36)]
     tail = [low + round((high - low) * (i + 1) / 4) for i in range(4)]
-    run["train"]["episode_end_step"] = head + tail
-    run["config"]["env_kwargs"] = {"max_cycles": 10**9}
+    described = run.config.description
     if schedule is not None:
-        run["config"]["description"]["exploration"] = {"kind": "linear", **schedule}
-    return run
+        described = frozen_plain({**described, "exploration": {"kind": "linear", **schedule}})
+    config = dataclasses.replace(run.config, env_kwargs=frozen_plain({"max_cycles": 10**9}), description=described)
+    return dataclasses.replace(
+        run, config=config, train=dataclasses.replace(run.train, episode_end_step=read_only_series(head + tail))
+    )
 
 
 def _counted_by_hand(schedule: dict, low: int, high: int, digits: int) -> dict[float, int]:
@@ -119,10 +122,10 @@ def _paper_runs(forged: int) -> list[dict]:
     runs = []
     for seed in range(2):
         for beta in (1.0, 0.75, 0.5, 0.25):
-            runs.append(synthetic_result("coexistence_v0", "empathic_dqn", beta, seed, survival=400))
-            runs.append(synthetic_result("sharing_v0", "empathic_dqn", beta, seed))
-        runs.append(synthetic_result("coexistence_v0", "dqn_harm_penalty", 1.0, seed))
-        runs.append(synthetic_result("sharing_v0", "dqn_equality", 1.0, seed))
+            runs.append(synthetic_document("coexistence_v0", "empathic_dqn", beta, seed, survival=400))
+            runs.append(synthetic_document("sharing_v0", "empathic_dqn", beta, seed))
+        runs.append(synthetic_document("coexistence_v0", "dqn_harm_penalty", 1.0, seed))
+        runs.append(synthetic_document("sharing_v0", "dqn_equality", 1.0, seed))
     runs[forged]["train"]["episode_end_step"] = [*range(10, 400, 10), 4000]
     return runs
 
@@ -164,7 +167,7 @@ def test_a_pid_out_of_range_is_never_given_to_kill(monkeypatch) -> None:
 
 def test_the_leaderboard_keeps_names_with_impossible_pids_and_writes(tmp_path) -> None:
     results = tmp_path / "results"
-    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    run = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     write_json_atomic(results / RUNS_DIR / f"{run['run_id']}.json", run)
     strange = [results / f".x.ezoo-{HUGE_PID}-abcdef12.tmp", results / f".leaderboard.ezoo-{HUGE_PID}-abcdef12.tmp"]
     strange[0].write_text("a user's")
@@ -176,7 +179,7 @@ def test_the_leaderboard_keeps_names_with_impossible_pids_and_writes(tmp_path) -
 
 def test_a_refused_leaderboard_leaves_no_figures_directory(tmp_path, monkeypatch) -> None:
     results = tmp_path / "results"
-    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    run = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     write_json_atomic(results / RUNS_DIR / f"{run['run_id']}.json", run)
 
     def refuse(directory):

@@ -84,7 +84,7 @@ def test_every_count_has_a_bound_of_one_episode() -> None:
 def test_a_count_at_its_bound_is_read_and_one_more_is_refused(tmp_path: Path) -> None:
     document = genuine(REFERENCE_RUN)
     document["eval"][0]["harms"][0] = 1000  # (500 steps: the cat and one thing besides, each step)
-    assert read_result(written(document, tmp_path))["eval"][0]["harms"][0] == 1000
+    assert read_result(written(document, tmp_path)).eval[0].metrics["harms"][0] == 1000
     document["eval"][0]["harms"][0] = 1001
     refused(written(document, tmp_path), "eval[0].harms[0]")
 
@@ -224,7 +224,7 @@ def test_a_plug_in_s_settings_are_plain_data(tmp_path: Path) -> None:
     document = genuine(REFERENCE_RUN)
     document["method"] = document["config"]["method"] = "my_plugins.methods:MINE"
     document["config"]["description"]["family"] = "my_plugins.methods:MINE"
-    assert read_result(written(document, tmp_path))["method"] == "my_plugins.methods:MINE"  # (never imported)
+    assert read_result(written(document, tmp_path)).method == "my_plugins.methods:MINE"  # (never imported)
     document["config"]["settings"]["width"] = float("inf")
     refused(written(document, tmp_path), "config.settings.width")
 
@@ -242,7 +242,7 @@ def test_a_result_file_under_another_name_is_refused(tmp_path: Path) -> None:
     runs = tmp_path / "runs"
     runs.mkdir()
     shutil.copy(REFERENCE_RUN, runs / REFERENCE_RUN.name)
-    assert read_result(runs / REFERENCE_RUN.name)["run_id"] == REFERENCE_RUN.stem
+    assert read_result(runs / REFERENCE_RUN.name).run_id == REFERENCE_RUN.stem
     copied = runs / "coexistence_v0__empathic_dqn-b52b0d46__s9.json"
     shutil.copy(REFERENCE_RUN, copied)
     message = refused(copied, "run_id")
@@ -250,7 +250,7 @@ def test_a_result_file_under_another_name_is_refused(tmp_path: Path) -> None:
     paths = sorted((RESULTS / "runs").glob("*.json"))
     assert len(paths) == 30
     for path in paths:  # (every genuine one still reads)
-        assert read_result(path)["run_id"] == path.stem
+        assert read_result(path).run_id == path.stem
 
 
 # ------------------------------------------------------------------------------ 4. scenario files
@@ -289,7 +289,7 @@ def test_a_scenario_set_saying_it_is_not_held_out_is_refused(tmp_path: Path) -> 
 
 
 def test_an_evaluation_s_scenario_is_held_out_unless_it_is_the_run_s_own_world(tmp_path: Path) -> None:
-    evaluation, run = genuine(EVALUATION), read_result(REFERENCE_RUN)
+    evaluation, run = genuine(EVALUATION), read_result(REFERENCE_RUN).to_document(series=False)
     assert evaluation_mismatch(check_evaluation(evaluation, EVALUATION), run) is None
     forged = copy.deepcopy(evaluation)
     forged["scenarios"][1]["held_out"] = False  # (the cat stays: another partner than the run's)

@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import synthetic_document
 
 from empathy_zoo.cli import main
 from empathy_zoo.experiment.result_reader import check_result
@@ -33,7 +33,7 @@ def test_verdict_changes_of_a_page_with_itself_lists_no_change(capsys) -> None:
 
 
 def test_an_evaluation_of_no_episode_is_refused() -> None:
-    run = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    run = copy.deepcopy(synthetic_document("coexistence_v0", "dqn", 1.0, 0))
     run["config"].pop("eval_episodes", None)
     for evaluation in run["eval"]:
         for name in evaluation:
@@ -71,13 +71,13 @@ def test_produced_by_is_one_line_of_printable_text(tmp_path: Path, capsys, comma
 
 
 def test_a_stale_leaderboard_stage_holding_a_users_file_is_left(tmp_path: Path) -> None:
-    from helpers_results import synthetic_result
+    from helpers_results import synthetic_document
 
     from empathy_zoo.atomic import write_json_atomic
     from leaderboard import report
 
     results = tmp_path / "results"
-    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    run = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     write_json_atomic(results / "runs" / f"{run['run_id']}.json", run)
     users, rendered = (
         results / ".leaderboard.ezoo-2000000001-deadbeef.tmp",

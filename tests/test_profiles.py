@@ -8,8 +8,9 @@ import math
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import hand_made_result, synthetic_result
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.profile_plot import render_profiles_png
 from leaderboard.profile_section import (
     SECTION_TITLE,
@@ -113,19 +114,13 @@ def test_profiles_and_gaps_per_method() -> None:
     assert alone["a"] == gaps["a"]  # (each method draws from its own generator: another method changes nothing)
 
 
-def hand_run(seed: int, survival: list[float], harms: list[float], label: str = "A") -> dict:
+def hand_run(seed: int, survival: list[float], harms: list[float], label: str = "A") -> RunResult:
     """A Coexistence run of two cats and 400-step episodes whose last greedy evaluation is given."""
-    columns = {"survival": survival, "harms": harms}
-    return {
-        "run_id": f"hand__s{seed}",
-        "env": "coexistence_v0",
-        "method": "dqn",
-        "method_label": label,
-        "seed": seed,
-        "config": {"env_kwargs": {"num_cats": 2, "max_cycles": 400}},
-        "train": {"survival": [1.0], "harms": [0.0]},
-        "eval": [{"step": 1, **columns}],
-    }
+    train = {"episode_end_step": [1], "survival": [1], "harms": [0]}
+    evaluations = [{"step": 1, "survival": survival, "harms": harms}]
+    return hand_made_result(
+        "coexistence_v0", "dqn", seed, train, evaluations, label=label, env_kwargs={"num_cats": 2, "max_cycles": 400}
+    )
 
 
 def test_scores_are_normalized_by_each_run_s_own_world() -> None:

@@ -16,7 +16,7 @@ def test_reference_follows_the_runs_epsilon_schedule() -> None:
     steps = np.array([50.0, 2000.0, 3990.0, 10_000.0])  # warm-up, decaying, near the end, after
     harms = reference_curve(runs, "harms", steps)
     assert harms is not None
-    settings = runs[0]["config"]["settings"]
+    settings = runs[0].config.settings
     assert harms[0] == coexistence_optimum(0.5, 1.0).harms  # ε = 1 in the warm-up
     assert harms[-1] == coexistence_optimum(0.5, 0.01).harms  # ε at its floor
     assert harms[0] > harms[1] > harms[2]  # less exploration, fewer harms for an empathic robot

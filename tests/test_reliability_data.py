@@ -21,7 +21,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from helpers_results import synthetic_result, synthetic_schema_1
+from helpers_results import synthetic_document, synthetic_schema_1
 from helpers_resume import TINY_SETTINGS
 
 from empathy_zoo import coexistence_v0, sharing_v0
@@ -293,7 +293,7 @@ SEEDS = range(3)
 def leaderboard_dir(directory: Path, label: str | None = None) -> Path:
     for method, beta in (("empathic_dqn", 1.0), ("empathic_dqn", 0.5)):
         for seed in SEEDS:
-            result = synthetic_result("coexistence_v0", method, beta, seed, harms=beta, survival=300.0 + 100 * beta)
+            result = synthetic_document("coexistence_v0", method, beta, seed, harms=beta, survival=300.0 + 100 * beta)
             if label is not None and beta == 0.5:
                 result["method_label"] = label
             write_json_atomic(directory / "runs" / f"{result['run_id']}.json", result)

@@ -192,7 +192,7 @@ def test_train_ensemble_takes_a_state_before_its_first_step(tmp_path, steps_take
 
 def test_without_checkpoints_such_a_policy_trains(tmp_path):
     (path,) = train_runs(unsaveable_sweep(), tmp_path, QUIET)
-    assert read_result(path)["steps"] == 300
+    assert read_result(path).steps == 300
 
 
 # ---------------------------------------------------------------------------- 3. SB3 keyword arguments

@@ -6,9 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import synthetic_result, with_training
 
 from empathy_zoo.atomic import write_json_atomic
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.reproduction import NotThePaperSweep, assess_claims, training_window_epsilons, write_reproduction
 
 
@@ -23,7 +24,7 @@ def fake_reference(selfishness: float, epsilon: float, *, gamma: float, max_cycl
     return FakeOutcome(harms=0.01 + epsilon, survival=480.0 - 1000 * epsilon)
 
 
-def _paper_like(harm_for_low_beta: float = 0.0, equality_at_half: float = 0.95) -> list[dict]:
+def _paper_like(harm_for_low_beta: float = 0.0, equality_at_half: float = 0.95) -> list[RunResult]:
     runs = []
     for seed in range(5):
         for beta, harms, survival in ((1.0, 0.9, 490), (0.75, 0.5, 480), (0.5, 0.0, 475), (0.25, harm_for_low_beta, 470)):
@@ -39,7 +40,7 @@ def _paper_like(harm_for_low_beta: float = 0.0, equality_at_half: float = 0.95) 
     return runs
 
 
-def _verdicts(runs: list[dict]) -> dict[str, tuple[str, str]]:
+def _verdicts(runs: list[RunResult]) -> dict[str, tuple[str, str]]:
     return {
         c.text: (c.verdicts["greedy"].word, c.verdicts["training"].word) for c in assess_claims(runs, reference=fake_reference)
     }
@@ -60,7 +61,7 @@ def test_a_claim_that_fails_is_reported_as_such(tmp_path) -> None:
     assert verdicts[survive] == ("not reproduced", "not reproduced")
     assert verdicts["Equality peaks at β = 0.5."] == ("reproduced", "reproduced")
     for run in runs:
-        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", run.to_document())
     text = write_reproduction(tmp_path, command="empathy-zoo reproduce --profile test", reference=fake_reference).read_text()
     assert "**not reproduced**" in text and "empathy-zoo reproduce --profile test" in text
     assert text.index("**The rules**") < text.index("| environment | claim | greedy | training |")
@@ -75,7 +76,7 @@ def test_a_peak_needs_separation_not_just_the_highest_mean() -> None:
 def test_survival_is_judged_against_the_reference_at_the_phase_epsilon() -> None:
     runs = _paper_like()
     # the final 10 % of training is steps 3600-4000, where ε falls from ≈ 0.112 to 0.01
-    schedule = training_window_epsilons(next(r for r in runs if r["env"] == "coexistence_v0"))
+    schedule = training_window_epsilons(next(r for r in runs if r.env == "coexistence_v0"))
     assert sum(schedule.values()) == 400 and min(schedule) == 0.01 and 0.11 < max(schedule) < 0.12
 
     # a reference that asks for more survival than the runs show fails the claim in training only
@@ -87,11 +88,11 @@ def test_survival_is_judged_against_the_reference_at_the_phase_epsilon() -> None
 
 
 def test_a_sweep_without_the_papers_experiments_gets_no_verdicts(tmp_path) -> None:
-    runs = [r for r in _paper_like() if r["method"] != "dqn_harm_penalty"]
+    runs = [r for r in _paper_like() if r.method != "dqn_harm_penalty"]
     with pytest.raises(NotThePaperSweep, match="coexistence_v0 dqn_harm_penalty"):
         assess_claims(runs, reference=fake_reference)
     for run in runs:
-        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", run.to_document())
     with pytest.raises(NotThePaperSweep):
         write_reproduction(tmp_path, reference=fake_reference)
     assert not (tmp_path / "REPRODUCTION.md").exists()
@@ -113,10 +114,10 @@ def test_training_window_share_is_the_steps_of_the_final_episodes_not_ten_percen
     run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)
     assert training_window_share(run) == pytest.approx(0.1)  # 40 episodes of 100 steps: 4 of them, 400 steps
     # the same 40 episodes, the last four 400 steps long: 10 % of the episodes is 1,600 of 5,200 steps
-    run["train"]["episode_end_step"] = [*range(100, 3700, 100), 4000, 4400, 4800, 5200]
+    run = with_training(run, episode_end_step=[*range(100, 3700, 100), 4000, 4400, 4800, 5200])
     assert training_window_share(run) == pytest.approx(1600 / 5200)
     assert sum(training_window_epsilons(run).values()) == 1600
-    run["train"]["episode_end_step"] = []
+    run = with_training(run, episode_end_step=[])
     assert training_window_share(run) != training_window_share(run)  # NaN without episodes
 
 
@@ -157,7 +158,7 @@ def test_tie_break_range_contains_both_tie_rules() -> None:
         tie_break_range(0.5, {})
 
 
-def _rising_runs(learner_survival) -> list[dict]:
+def _rising_runs(learner_survival) -> list[RunResult]:
     """Coexistence runs whose training survival per episode is ``learner_survival(ε at its first step)``."""
     from types import SimpleNamespace
 
@@ -166,10 +167,9 @@ def _rising_runs(learner_survival) -> list[dict]:
     runs = []
     for seed in range(3):
         run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, seed)
-        settings = SimpleNamespace(**run["config"]["settings"])
-        starts = [0, *run["train"]["episode_end_step"][:-1]]
-        run["train"]["survival"] = [learner_survival(round(linear_epsilon(settings, s), 3)) for s in starts]
-        runs.append(run)
+        settings = SimpleNamespace(**run.config.settings)
+        starts = [0, *run.train.episode_end_step.tolist()[:-1]]
+        runs.append(with_training(run, survival=[learner_survival(round(linear_epsilon(settings, s), 3)) for s in starts]))
     return runs
 
 

@@ -5,11 +5,12 @@ refused when it is read, in one line naming the file and the field, before anyth
 from __future__ import annotations
 
 import copy
+import dataclasses
 import os
 import re
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import synthetic_document, synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -36,9 +37,9 @@ ESCAPES = ["../../x", "../escaped", "/ABSOLUTE", "a/b", "..", ".hidden", ""]
 def test_a_result_file_cannot_make_the_leaderboard_write_outside(tmp_path, capsys, field, name):
     sandbox = tmp_path / "sandbox"
     results = sandbox / "results"
-    bad = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    bad = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     bad[field] = name.replace("ABSOLUTE", str(tmp_path / "absolute").lstrip("/"))
-    write_runs(results, [synthetic_result("coexistence_v0", "dqn", 1.0, 1), bad])
+    write_runs(results, [synthetic_document("coexistence_v0", "dqn", 1.0, 1), bad])
     before = everything_below(tmp_path)
     assert main(["leaderboard", str(results)]) == 2
     err = capsys.readouterr().err
@@ -47,8 +48,7 @@ def test_a_result_file_cannot_make_the_leaderboard_write_outside(tmp_path, capsy
 
 
 def test_plots_confine_figures_to_their_directory(tmp_path):
-    run = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
-    run["variant"] = "../outside"
+    run = dataclasses.replace(synthetic_result("coexistence_v0", "dqn", 1.0, 0), variant="../outside")  # (no file can)
     with pytest.raises(ValueError, match="outside"):
         plot_learning_curves([run], tmp_path / "out" / "figures")
     assert not (tmp_path / "out").exists() and not list(tmp_path.glob("*.png"))
@@ -67,7 +67,7 @@ def test_result_path_refuses_a_run_id_that_is_not_a_file_name(tmp_path, run_id):
 
 
 def test_a_forged_run_id_is_refused_by_the_leaderboard(tmp_path):
-    bad = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
+    bad = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     bad["run_id"] = "../../etc/x"
     write_runs(tmp_path, [bad])
     with pytest.raises(ValueError, match=re.escape("run0.json: field run_id")):
@@ -119,7 +119,7 @@ MALFORMED = {
 
 
 def malformed(case):
-    result = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 0))  # (it shares DEFAULT_POLICIES)
+    result = copy.deepcopy(synthetic_document("coexistence_v0", "dqn", 1.0, 0))  # (it shares DEFAULT_POLICIES)
     mutate, expected = MALFORMED[case]
     if expected is None:
         return [result], "(the whole file): expected an object"
@@ -130,7 +130,7 @@ def malformed(case):
 @pytest.mark.parametrize("case", sorted(MALFORMED))
 def test_a_malformed_result_file_is_one_line_naming_file_and_field(tmp_path, capsys, case):
     document, expected = malformed(case)
-    write_runs(tmp_path, [synthetic_result("coexistence_v0", "dqn", 1.0, 1), document])
+    write_runs(tmp_path, [synthetic_document("coexistence_v0", "dqn", 1.0, 1), document])
     before = everything_below(tmp_path)
     assert main(["leaderboard", str(tmp_path)]) == 2
     err = capsys.readouterr().err
@@ -201,8 +201,8 @@ def test_train_runs_refuses_two_experiments_with_one_label_in_one_call(tmp_path)
 
 
 def test_the_leaderboard_names_two_experiments_with_one_label(tmp_path):
-    a = synthetic_result("coexistence_v0", "dqn", 1.0, 0)
-    b = copy.deepcopy(synthetic_result("coexistence_v0", "dqn", 1.0, 1))
+    a = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
+    b = copy.deepcopy(synthetic_document("coexistence_v0", "dqn", 1.0, 1))
     b["run_id"] = "coexistence_v0__dqn-other__s1"
     write_runs(tmp_path, [a, b])
     with pytest.raises(ValueError, match=r"run1\.json.*same label 'dqn 1\.0' on coexistence_v0.*other settings"):
@@ -242,8 +242,8 @@ def test_schema_1_files_are_read_with_their_shaping_as_the_reward_transform() ->
         raw = read_json(path)
         assert raw["schema"] == 1 and "harm_penalty" in raw["config"]["settings"]
         result = read_result(path)
-        assert result["schema"] == SCHEMA == 3 and result["run_id"] == raw["run_id"]
-        assert "harm_penalty" not in result["config"]["settings"] and "equality_shaping" not in result["config"]["settings"]
-        assert result["config"]["reward"] == expected[result["method"]]
-        seen.add(result["method"])
+        assert result.schema == SCHEMA == 3 and result.run_id == raw["run_id"]
+        assert "harm_penalty" not in result.config.settings and "equality_shaping" not in result.config.settings
+        assert result.config.reward == expected[result.method]
+        seen.add(result.method)
     assert seen == set(expected)

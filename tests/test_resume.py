@@ -166,12 +166,12 @@ def test_temporary_files_of_killed_writes_are_removed_on_the_next_run(tmp_path):
 
 
 def test_temporary_files_beside_the_leaderboard_are_removed_when_it_is_written(tmp_path):
-    from helpers_results import synthetic_result
+    from helpers_results import synthetic_document
 
     from empathy_zoo.atomic import write_json_atomic
     from leaderboard.report import write_leaderboard
 
-    write_json_atomic(tmp_path / "runs" / "a.json", synthetic_result("coexistence_v0", "dqn", 1.0, 0))
+    write_json_atomic(tmp_path / "runs" / "a.json", synthetic_document("coexistence_v0", "dqn", 1.0, 0))
     stale = [
         tmp_path / ".LEADERBOARD.md.ezoo-4194305-0badc0de.tmp",
         tmp_path / "figures" / ".x.png.ezoo-4194305-0badc0de.tmp",

@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import pytest
-from helpers_results import synthetic_result
+from helpers_results import record, synthetic_document, synthetic_result
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.sensitivity import DEFAULT_CONDITION, condition_of, sensitivity_markdown, sensitivity_rows
 
 
-def _condition_runs(start: str, encoding: str, human: str, equality_at_half: float) -> list[dict]:
+def _condition_runs(start: str, encoding: str, human: str, equality_at_half: float) -> list[RunResult]:
     runs = []
     for seed in range(3):
         for beta, robot, eq in ((1.0, 6, 0.75), (0.75, 5, 0.9), (0.5, 4.5, equality_at_half), (0.25, 3, 0.75)):
-            run = synthetic_result(
+            run = synthetic_document(
                 "sharing_v0",
                 "empathic_dqn",
                 beta,
@@ -25,7 +26,7 @@ def _condition_runs(start: str, encoding: str, human: str, equality_at_half: flo
             run["config"]["env_kwargs"] = {"start": start, "inventory_encoding": encoding}
             if (start, encoding, human) == DEFAULT_CONDITION:
                 run["config"]["env_kwargs"] = {}
-            runs.append(run)
+            runs.append(record(run))
     return runs
 
 
@@ -54,26 +55,27 @@ def test_sensitivity_command_writes_the_file(tmp_path) -> None:
     from empathy_zoo.cli import main
 
     for run in _condition_runs("centre", "authors", "random_walk", equality_at_half=1.0):
-        write_json_atomic(tmp_path / "runs" / f"{run['run_id']}.json", run)
+        write_json_atomic(tmp_path / "runs" / f"{run.run_id}.json", run.to_document())
     assert main(["sensitivity", str(tmp_path), "--produced-by", "empathy-zoo reproduce --profile x"]) == 0
     text = (tmp_path / "SENSITIVITY.md").read_text()
     assert "**The rules**" in text and "empathy-zoo reproduce --profile x" in text and "human `random_walk`" in text
 
 
-def _split_run(beta: float, seed: int, takes: list[int]) -> dict:
+def _split_run(beta: float, seed: int, takes: list[int], human_takes: list[float] | None = None) -> RunResult:
     """A Sharing run whose every scored episode (training and greedy) has these robot takes of 9."""
     from empathy_zoo.metrics import equality
 
     def value(n: int) -> float:
         return sum(1.1 - 0.1 * k for k in range(1, n + 1))
 
-    run = synthetic_result("sharing_v0", "empathic_dqn", beta, seed)
+    run = synthetic_document("sharing_v0", "empathic_dqn", beta, seed)
     robot = [float(t) for t in takes]
-    human = [9.0 - t for t in robot]
+    human = [9.0 - t for t in robot] if human_takes is None else human_takes
     fair = [float(equality(value(int(r)), value(int(h)))) for r, h in zip(robot, human, strict=True)]
     run["train"].update(batteries=robot, other_batteries=human, equality=fair)
-    run["eval"][-1].update(batteries=robot[:4], other_batteries=human[:4], equality=fair[:4])
-    return run
+    greedy = {name: values[:4] for name, values in run["eval"][-1].items() if name != "step"}  # (four greedy episodes)
+    run["eval"][-1].update(greedy, batteries=robot[:4], other_batteries=human[:4], equality=fair[:4])
+    return record(run)
 
 
 def test_the_mean_take_closest_to_half_need_not_be_the_most_equal() -> None:
@@ -103,8 +105,7 @@ def test_the_mean_take_closest_to_half_need_not_be_the_most_equal() -> None:
 def test_the_fair_split_counts_episodes_where_not_all_batteries_were_collected() -> None:
     from leaderboard.sensitivity import fair_split_rows
 
-    run = _split_run(1.0, 0, [4] * 40)
-    run["train"]["other_batteries"] = [3.0] * 40  # 7 collected in every episode: the fair take is 3.5
+    run = _split_run(1.0, 0, [4] * 40, human_takes=[3.0] * 40)  # 7 collected in every episode: the fair take is 3.5
     table = fair_split_rows([run])[DEFAULT_CONDITION]["training"]
     assert table[1.0].fair == pytest.approx(3.5) and table[1.0].distance == pytest.approx(0.5)
     assert table[1.0].all_collected == 0.0

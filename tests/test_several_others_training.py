@@ -66,9 +66,9 @@ def test_aggregating_runs_train_apart_and_learn_otherwise(tmp_path) -> None:
     assert specs[0].fixed_policies() == {f"cat_{i}": "random_walk" for i in range(3)}
     train_runs(specs, tmp_path / "out", RunnerOptions(progress=False, checkpoint_interval=0, threads=1))
     results = [read_result(result_path(tmp_path / "out", s.run_id)) for s in specs]
-    assert [r["config"]["settings"]["others"] for r in results] == ["closest", "mean", "min"]
-    assert all(r["config"]["env_kwargs"]["num_cats"] == 3 for r in results)
-    trains = [json.dumps(r["train"]) for r in results]
+    assert [r.config.settings["others"] for r in results] == ["closest", "mean", "min"]
+    assert all(r.config.env_kwargs["num_cats"] == 3 for r in results)
+    trains = [json.dumps(r.to_document()["train"]) for r in results]
     assert len(set(trains)) == 3  # the same seed, three other-terms
 
 

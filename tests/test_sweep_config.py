@@ -318,12 +318,14 @@ def test_structure_errors(tmp_path):
 
 
 def test_variants_of_one_env_are_tabled_apart():
+    import dataclasses
+
+    from helpers_results import synthetic_result
+
     from leaderboard.aggregate import group_runs
 
-    runs = [
-        {"env": "coexistence_v0", "variant": variant, "method": "dqn", "method_label": "DQN", "seed": 0}
-        for variant in ("coexistence_v0", "coexistence_9x9")
-    ]
+    run = dataclasses.replace(synthetic_result("coexistence_v0", "dqn", 1.0, 0), method_label="DQN")
+    runs = [dataclasses.replace(run, variant=variant) for variant in ("coexistence_v0", "coexistence_9x9")]
     assert list(group_runs(runs)) == [("coexistence_9x9", "DQN"), ("coexistence_v0", "DQN")]
 
 

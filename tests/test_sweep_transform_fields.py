@@ -7,12 +7,14 @@ by their numbers' values."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import textwrap
 from pathlib import Path
 
 import pytest
 from helpers_cli_method import TINY
+from helpers_results import synthetic_result
 
 from agents.rewards import TrainRewards, same_transform
 from baselines.registry import get_method
@@ -20,6 +22,7 @@ from baselines.shaping import HarmPenalty, InequityAversion
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.cli.train import train_values
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.sweep_file import load_sweep
 from empathy_zoo.experiment.values import SweepConfigError
@@ -161,8 +164,8 @@ def test_the_harm_penalty_is_a_train_option(tmp_path):
     assert main(["train", "--method", "dqn_harm_penalty", "--penalty", "-10", "--out", str(out), *TINY]) == 0
     [path] = (out / "runs").glob("*.json")
     result = read_result(path)
-    assert result["config"]["reward"] == {"name": "harm_penalty", "penalty": -10.0}
-    assert result["method_label"] == "DQN + harm penalty (−10)"
+    assert result.config.reward == {"name": "harm_penalty", "penalty": -10.0}
+    assert result.method_label == "DQN + harm penalty (−10)"
 
 
 def test_a_field_named_like_a_setting_is_a_reward_option_and_a_config_table_sets_fields(tmp_path):
@@ -233,7 +236,7 @@ def test_shipped_result_files_still_load_and_record_the_defaults_a_run_records_n
     assert paths
     spec = RunSpec.of(method=method)
     for path in paths:
-        assert read_result(path)["config"]["reward"] == spec.config()["reward"]
+        assert read_result(path).config.reward == spec.config()["reward"]
 
 
 # ---------------------------------------------------------------------------- the leaderboard's order
@@ -267,8 +270,8 @@ def test_labels_sort_by_their_numbers_values():
 
 
 def test_the_leaderboard_puts_alpha_one_after_alpha_point_three():
-    def run(label: str, method: str = "dqn_inequity_aversion") -> dict:
-        return {"env": "sharing_v0", "method": method, "method_label": label, "seed": 0}
+    def run(label: str, method: str = "dqn_inequity_aversion") -> RunResult:
+        return dataclasses.replace(synthetic_result("sharing_v0", method, 1.0, 0), method_label=label)
 
     runs = [
         run("DQN + IA (disadvantageous=1)"),

@@ -3,14 +3,17 @@ the untuned DQN, and a verdict that differs is said (synthetic runs whose verdic
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 from helpers_results import synthetic_result
 
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.tuning_effect import tuning_effect, tuning_effect_table
 
 
-def _rows(method: str, beta: float, label: str, seeds: range = range(5), **means: float) -> list[dict]:
-    return [{**synthetic_result("coexistence_v0", method, beta, s, **means), "method_label": label} for s in seeds]
+def _rows(method: str, beta: float, label: str, seeds: range = range(5), **means: float) -> list[RunResult]:
+    return [dataclasses.replace(synthetic_result("coexistence_v0", method, beta, s, **means), method_label=label) for s in seeds]
 
 
 def test_a_tuned_row_is_compared_with_the_tuned_dqn_and_a_changed_verdict_is_said() -> None:

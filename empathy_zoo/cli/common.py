@@ -7,12 +7,15 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 # (the names only: agents.empathic_dqn imports torch, which the command line loads anyway)
 from agents.base import UPDATE_KERNELS
+
+if TYPE_CHECKING:
+    from empathy_zoo.experiment.records import RunResult
 
 __all__ = [
     "PROG",
@@ -132,7 +135,7 @@ def positive(name: str, value: int, allow_zero: bool = False) -> int:
     return value
 
 
-def read_results(specs: Sequence[Any], out: Path) -> tuple[dict[Path, dict[str, Any]], int]:
+def read_results(specs: Sequence[Any], out: Path) -> tuple[dict[Path, RunResult], int]:
     """Every result file in ``out/runs``, read once (a corrupted or malformed one raises,
     untouched), and how many of the runs ``specs`` have one."""
     from empathy_zoo.result_file import result_path
@@ -146,20 +149,18 @@ def _fmt(value: float) -> str:
     return "n/a" if not np.isfinite(value) else f"{value:.3g}" if abs(value) < 100 else f"{value:.0f}"
 
 
-def run_summary(result: dict[str, Any]) -> str:
+def run_summary(result: RunResult) -> str:
     """One line: the run's final-10 % training means and its last greedy evaluation, of the
     metrics that mean something in its environment (the leaderboard's table columns)."""
     from empathy_zoo.environments import ENVIRONMENT_TABLE
     from leaderboard.aggregate import run_scalars
 
-    metrics = ENVIRONMENT_TABLE[str(result["env"])].table_metrics
+    metrics = ENVIRONMENT_TABLE[result.env].table_metrics
     scalars = run_scalars(result, metrics)
     train = ", ".join(f"{m} {_fmt(scalars['train_final10'][m])}" for m in metrics)
     evaluation = ", ".join(f"{m} {_fmt(scalars['eval'][m])}" for m in metrics)
-    last = max((e["step"] for e in result["eval"]), default=None)
-    return (
-        f"{result['run_id']} [{result['method_label']}]: final 10% of training: {train} | last eval (step {last}): {evaluation}"
-    )
+    last = max(result.eval_steps(), default=None)
+    return f"{result.run_id} [{result.method_label}]: final 10% of training: {train} | last eval (step {last}): {evaluation}"
 
 
 def print_written(paths: dict[str, Path]) -> None:

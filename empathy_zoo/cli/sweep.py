@@ -8,7 +8,7 @@ import argparse
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import (
@@ -21,6 +21,9 @@ from empathy_zoo.cli.common import (
     read_results,
     runner_options,
 )
+
+if TYPE_CHECKING:
+    from empathy_zoo.experiment.records import RunResult
 
 __all__ = ["add_sweep_commands", "cmd_leaderboard", "cmd_reproduce", "cmd_reproduction", "cmd_sensitivity"]
 
@@ -183,7 +186,7 @@ def _read_note(path: str | None) -> str:
 
 
 def dry_run_plan(
-    specs: Sequence[Any], finished: Mapping[Path, Mapping[str, Any]], out: Path, ensembles: Sequence[Sequence[Any]], workers: int
+    specs: Sequence[Any], finished: Mapping[Path, RunResult], out: Path, ensembles: Sequence[Sequence[Any]], workers: int
 ) -> str:
     """What ``reproduce --dry-run`` prints: one line per experiment (its runs, steps, how many are
     finished), the env steps left, and an estimate of the wall time from the rate the finished
@@ -191,7 +194,7 @@ def dry_run_plan(
     Nothing is trained or written."""
     from empathy_zoo.result_file import result_path
 
-    done_ids = {str(result.get("run_id")) for result in finished.values()}
+    done_ids = {result.run_id for result in finished.values()}
     lines = [f"{PROG}: dry run: nothing is trained or written"]
     experiments: dict[str, list[Any]] = {}
     for spec in specs:
@@ -206,11 +209,7 @@ def dry_run_plan(
     left = [ensemble for ensemble in ensembles if any(spec.run_id not in done_ids for spec in ensemble)]
     steps_left = sum(spec.budget.steps for spec in specs if spec.run_id not in done_ids)
     lines.append(f"{PROG}: {steps_left:,} env steps left in {len(left)} ensemble(s) on {workers} worker process(es)")
-    rates = sorted(
-        float(result["wall_time_s"]) / int(result["steps"])
-        for result in finished.values()
-        if isinstance(result.get("wall_time_s"), (int, float)) and result.get("steps")
-    )
+    rates = sorted(float(result.wall_time_s) / result.steps for result in finished.values() if result.wall_time_s is not None)
     if not rates:
         lines.append(
             f"{PROG}: no estimate of the time: {out} holds no finished run to measure the rate by "

@@ -9,7 +9,8 @@ description the method gives a run of those settings (:meth:`agents.base.Method.
 description that contradicts its settings (a β, a DQN reference) is refused. A
 ``package.module:NAME`` method is never imported here, so its settings are checked for their shape
 only. :func:`read_result` also refuses a file not named ``<run id>.json`` (a copy under another name
-would count its run twice).
+would count its run twice), and gives the run as a typed, frozen record
+(:class:`~empathy_zoo.experiment.records.RunResult`), made only of a document :func:`check_result` accepted.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import Any, Union, get_args, get_origin
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.document_checks import DocumentChecker, finite_float, one_line
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.values import field_types
 from empathy_zoo.limits import MAX_STEPS
 from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
@@ -52,11 +54,18 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     return result
 
 
-def read_result(path: Path) -> dict[str, Any]:
-    """Read a result file; a corrupted or malformed one raises ``ValueError`` naming it (and the field),
-    as does one not named ``<run id>.json`` of the run it holds (where a sweep writes it: a file
-    renamed or copied under another name would count its run twice)."""
+def read_result(path: str | Path, *, named: bool = True) -> RunResult:
+    """Read a result file as a :class:`~empathy_zoo.experiment.records.RunResult`; a corrupted or
+    malformed one raises ``ValueError`` naming it (and the field), as does (where ``named``) one
+    not named ``<run id>.json`` of the run it holds (where a sweep writes it: a file renamed or
+    copied under another name would count its run twice; the leaderboard, which reads a whole
+    directory, refuses a run counted twice by its own check)."""
     result = check_result(read_json(path), path)
+    return RunResult.from_checked(_named(result, path) if named else result)
+
+
+def _named(result: dict[str, Any], path: str | Path) -> dict[str, Any]:
+    """``result`` (checked) if ``path`` is named ``<run id>.json`` of its run, else :class:`ResultFileError`."""
     name = Path(path).name
     if name != f"{result['run_id']}.json":
         raise ResultFileError(

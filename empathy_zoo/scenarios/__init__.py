@@ -48,6 +48,7 @@ from empathy_zoo.engine.arguments import argument_types
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.evaluation_file import TRAINED_WITH, check_scenario_definition, check_scenario_set
 from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.sweep_file import variant_of_table
 from empathy_zoo.experiment.values import PolicyTable, SweepConfigError, check_keys, check_value, read_toml, type_name
 from empathy_zoo.limits import MAX_SCENARIOS, not_a_regular_file
@@ -303,19 +304,17 @@ def _unprintable(text: str) -> str | None:
 
 
 # ---------------------------------------------------------------------------- a run's own partners
-def trained_with(result: Mapping[str, Any], allowed_imports: Collection[str] = ()) -> Scenario:
+def trained_with(result: RunResult, allowed_imports: Collection[str] = ()) -> Scenario:
     """The scenario of a run's own partners and world (:data:`TRAINED_WITH`): its environment, its
     ``config.env_kwargs`` and its fixed agents (``config.fixed``), from its result file as
     :func:`empathy_zoo.experiment.result_reader.read_result` gives it; ``ValueError`` naming the run when they
     do not make an environment variant. A recorded policy resolves only to a registered one or a
     name in ``allowed_imports`` (:func:`~empathy_zoo.policies.recorded_entry`): nothing a result
     file names is imported unless the user allowed it."""
-    config = result["config"]
+    config = result.config
     try:
-        fixed = {
-            agent: recorded_entry(label, f"config.fixed.{agent}", allowed_imports) for agent, label in config["fixed"].items()
-        }
-        variant = EnvVariant(result["env"], dict(config["env_kwargs"]), fixed, TRAINED_WITH)
+        fixed = {agent: recorded_entry(label, f"config.fixed.{agent}", allowed_imports) for agent, label in config.fixed.items()}
+        variant = EnvVariant(result.env, dict(config.env_kwargs), fixed, TRAINED_WITH)
     except ValueError as error:
-        raise ValueError(f"run {result['run_id']}: its own partners do not make a scenario: {error}") from None
+        raise ValueError(f"run {result.run_id}: its own partners do not make a scenario: {error}") from None
     return Scenario(TRAINED_WITH, TRAINED_WITH_REASON, variant)

@@ -52,6 +52,7 @@ from empathy_zoo.provenance import git_commit, package_version
 
 if TYPE_CHECKING:
     from empathy_zoo.experiment.model import RunSpec
+    from empathy_zoo.experiment.records import RunResult
 
 __all__ = [
     "CodeFingerprint",
@@ -174,10 +175,11 @@ def run_fingerprint(spec: RunSpec, update_kernel: str | None = None) -> CodeFing
     return CodeFingerprint(package_version(), git_commit(), plugins, update_kernel)
 
 
-def recorded_fingerprint(result: Mapping[str, Any]) -> CodeFingerprint:
+def recorded_fingerprint(result: RunResult) -> CodeFingerprint:
     """The fingerprint a result file records (``plugins`` is ``None`` in files older than it,
     ``update_kernel`` in files older than that field)."""
-    return CodeFingerprint(result.get("version"), result.get("commit"), result.get("plugin_sha256"), result.get("update_kernel"))
+    plugins = None if result.plugin_sha256 is None else dict(result.plugin_sha256)
+    return CodeFingerprint(result.version, result.commit, plugins, result.update_kernel)
 
 
 @cache
@@ -197,7 +199,7 @@ def module_sha256(module: ModuleType) -> str | None:
 
 def code_changes(
     specs: Iterable[RunSpec],
-    results: Mapping[str, Mapping[str, Any]],
+    results: Mapping[str, RunResult],
     update_kernel: str = "auto",
     device: str = "cpu",
 ) -> tuple[dict[str, list[str]], dict[str, list[str]]]:

@@ -28,12 +28,13 @@ from typing import Any
 import numpy as np
 import torch
 
-from empathy_zoo.agent_file import RESULT_FIELD, load_run_agent
+from empathy_zoo.agent_file import load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
 from empathy_zoo.data_files import data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
 from empathy_zoo.experiment.model import EnvVariant
+from empathy_zoo.experiment.records import AgentRef, RunResult
 from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.limits import MAX_EVAL_EPISODES, check_at_most, cpu_count
 from empathy_zoo.output_lock import command_line, hold_output_dir
@@ -98,7 +99,7 @@ class EvaluationSummary:
         return sorted(self.written + self.done)
 
 
-def results_of(results_dir: str | Path) -> list[tuple[Path, dict[str, Any]]]:
+def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
     """``(result file, result)`` of every result file of ``results_dir`` (its ``runs/``, or itself
     when it holds the files), read and checked (:func:`empathy_zoo.experiment.result_reader.read_result`), in
     file-name order; a directory without result files raises ``ValueError``, and so does a result or
@@ -127,18 +128,18 @@ def same_world(a: EnvVariant, b: EnvVariant) -> bool:
     return world(a) == world(b)
 
 
-def run_agent(result_file: Path, result: Mapping[str, Any], allowed_imports: Collection[str] = ()) -> Any:
+def run_agent(result_file: Path, result: RunResult, allowed_imports: Collection[str] = ()) -> Any:
     """The trained agent of the run whose result file (read as ``result``) is ``result_file``: loaded
     from the agent file it names and checked against the SHA-256 recorded there, of the run's
     environment and observation window; else a ``ValueError`` naming the file."""
     agent = load_run_agent(result_file)
     described = agent.describe().get("env")
-    if described is not None and described != result["env"]:
+    if described is not None and described != result.env:
         raise ValueError(
-            f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result['env']}"
+            f"agent file {agent.describe().get('file')} is of {described}, but its run {result_file} is of {result.env}"
         )
     home = trained_with(result, allowed_imports).variant
-    view = int({**DEFAULT_ARGUMENTS[result["env"]], **home.kwargs}["view"])
+    view = int({**DEFAULT_ARGUMENTS[result.env], **home.kwargs}["view"])
     if agent.obs_size != view * view:
         raise ValueError(
             f"agent file {agent.describe().get('file')} takes observations of {agent.obs_size} values, but its run "
@@ -149,7 +150,7 @@ def run_agent(result_file: Path, result: Mapping[str, Any], allowed_imports: Col
 
 def evaluate_run(
     result_file: Path,
-    result: Mapping[str, Any],
+    result: RunResult,
     scenario_set: ScenarioSet,
     episodes: int = DEFAULT_EPISODES,
     on_scenario: Callable[[str], None] | None = None,
@@ -167,10 +168,8 @@ def evaluate_run(
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a positive int, got {episodes!r}")
     check_at_most("episodes", episodes, MAX_EVAL_EPISODES, "greedy episodes per run and scenario, played at once")
-    if result["env"] != scenario_set.env:
-        raise ValueError(
-            f"scenario set {scenario_set.name!r} is for {scenario_set.env}; run {result['run_id']} is of {result['env']}"
-        )
+    if result.env != scenario_set.env:
+        raise ValueError(f"scenario set {scenario_set.name!r} is for {scenario_set.env}; run {result.run_id} is of {result.env}")
     if agent is None:
         agent = run_agent(result_file, result, allowed_imports)
     own = trained_with(result, allowed_imports)
@@ -182,8 +181,8 @@ def evaluate_run(
     for scenario, variant in zip(scenarios, variants, strict=True):
         columns = evaluate_greedy(
             learner,
-            result["env"],
-            [int(result["seed"])],
+            result.env,
+            [result.seed],
             episodes,
             variant.fixed_policies(),
             dict(variant.kwargs),
@@ -205,13 +204,13 @@ def evaluate_run(
         "format": FORMAT,
         "schema": SCHEMA,
         "version": package_version(),
-        "run_id": result["run_id"],
-        "env": result["env"],
-        "variant": result.get("variant") or result["env"],
-        "method": result["method"],
-        "method_label": result["method_label"],
-        "seed": result["seed"],
-        "agent": dict(result[RESULT_FIELD]),
+        "run_id": result.run_id,
+        "env": result.env,
+        "variant": result.table_env,
+        "method": result.method,
+        "method_label": result.method_label,
+        "seed": result.seed,
+        "agent": _agent_entry(result).to_document(),
         "scenario_set": scenario_set.definition(),
         "episodes": episodes,
         "stream": STREAM_HELDOUT,
@@ -230,13 +229,13 @@ def _identity(document: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
-def _check_done(path: Path, result_file: Path, result: Mapping[str, Any], scenario_set: ScenarioSet, episodes: int) -> None:
+def _check_done(path: Path, result_file: Path, result: RunResult, scenario_set: ScenarioSet, episodes: int) -> None:
     """Raise ``ValueError`` naming ``path`` when the evaluation file there was made of another agent,
     set or episode count than asked for now."""
     existing = read_evaluation(path)
     asked = {
-        "the run": result["run_id"],
-        "the agent file's SHA-256": result[RESULT_FIELD]["sha256"],
+        "the run": result.run_id,
+        "the agent file's SHA-256": _agent_entry(result).sha256,
         "the scenario set": scenario_set.definition(),
         "the episodes per scenario": episodes,
         "the start seeds' stream": STREAM_HELDOUT,
@@ -255,9 +254,11 @@ def _check_done(path: Path, result_file: Path, result: Mapping[str, Any], scenar
             )
 
 
-def _agent_entry(result: Mapping[str, Any]) -> Mapping[str, Any] | None:
-    entry = result.get(RESULT_FIELD)
-    return entry if isinstance(entry, Mapping) else None
+def _agent_entry(result: RunResult) -> AgentRef:
+    """The agent file the run kept (only for a run that kept one: a ``ValueError`` otherwise)."""
+    if result.agent is None:
+        raise ValueError(f"run {result.run_id} kept no trained agent: its result file names no agent file")
+    return result.agent
 
 
 def evaluate_results(
@@ -307,8 +308,8 @@ def evaluate_results(
     summary = EvaluationSummary()
     kept = []
     for path, result in runs:
-        if _agent_entry(result) is None:
-            summary.without_agent.append(result["run_id"])
+        if result.agent is None:
+            summary.without_agent.append(result.run_id)
         else:
             kept.append((path, result))
     if not kept:
@@ -317,7 +318,7 @@ def evaluate_results(
             "only runs trained by empathy-zoo 0.4 or later, with a method that keeps its agent, can be evaluated"
         )
     if scenario_sets is None:
-        names = sorted({name for _, result in kept if (name := default_set_name(result["env"])) is not None})
+        names = sorted({name for _, result in kept if (name := default_set_name(result.env)) is not None})
         sets = [load_scenario_set(name) for name in names]
     else:
         sets = [s if isinstance(s, ScenarioSet) else load_scenario_set(s) for s in scenario_sets]
@@ -329,12 +330,12 @@ def evaluate_results(
             )
         by_name[scenario_set.name] = scenario_set
     envs = {s.env for s in by_name.values()}
-    summary.without_set = [result["run_id"] for _, result in kept if result["env"] not in envs]
-    work = [(s, path, result) for s in by_name.values() for path, result in kept if result["env"] == s.env]
+    summary.without_set = [result.run_id for _, result in kept if result.env not in envs]
+    work = [(s, path, result) for s in by_name.values() for path, result in kept if result.env == s.env]
     if not work:
         raise ValueError(
             f"no scenario set is for the environments of the kept agents in {results_dir} "
-            f"({', '.join(sorted({result['env'] for _, result in kept}))}); sets given: "
+            f"({', '.join(sorted({result.env for _, result in kept}))}); sets given: "
             + ", ".join(f"{s.name} ({s.env})" for s in by_name.values())
         )
     for _, result in kept:
@@ -370,14 +371,14 @@ def evaluate_results(
 
 
 def _todo(
-    work: Sequence[tuple[ScenarioSet, Path, dict[str, Any]]], out: Path, episodes: int, summary: EvaluationSummary
-) -> list[tuple[ScenarioSet, Path, dict[str, Any], Path]]:
+    work: Sequence[tuple[ScenarioSet, Path, RunResult]], out: Path, episodes: int, summary: EvaluationSummary
+) -> list[tuple[ScenarioSet, Path, RunResult, Path]]:
     """``(set, result file, result, evaluation file)`` of what of ``work`` has no evaluation file in
     ``out`` yet; one already there is read and checked to be the one asked for (:func:`_check_done`,
     which refuses anything but a regular file in its place) and counted in ``summary.done``."""
     todo = []
     for scenario_set, path, result in work:
-        target = evaluation_path(out, scenario_set.name, result["run_id"])
+        target = evaluation_path(out, scenario_set.name, result.run_id)
         if os.path.lexists(target):
             _check_done(target, path, result, scenario_set, episodes)
             summary.done.append(target)
@@ -387,7 +388,7 @@ def _todo(
 
 
 def _checked_agents(
-    todo: Sequence[tuple[ScenarioSet, Path, dict[str, Any], Path]], allowed_imports: Collection[str]
+    todo: Sequence[tuple[ScenarioSet, Path, RunResult, Path]], allowed_imports: Collection[str]
 ) -> dict[Path, Any]:
     """The agent of every run of ``todo`` (:func:`run_agent`), by result file, once every scenario
     of its set fits the run's world: every input is checked before the first evaluation file is
@@ -403,7 +404,7 @@ def _checked_agents(
 
 
 def _evaluate_todo(
-    todo: Sequence[tuple[ScenarioSet, Path, dict[str, Any], Path]],
+    todo: Sequence[tuple[ScenarioSet, Path, RunResult, Path]],
     agents: Mapping[Path, Any],
     episodes: int,
     progress: tuple[bool, str],
@@ -423,7 +424,7 @@ def _evaluate_todo(
                 summary.done.append(target)
                 bar.update(1 + len(scenario_set.scenarios))
                 continue
-            bar.set_postfix_str(f"{scenario_set.name}: {result['run_id']}", refresh=False)
+            bar.set_postfix_str(f"{scenario_set.name}: {result.run_id}", refresh=False)
             document = evaluate_run(
                 path,
                 result,

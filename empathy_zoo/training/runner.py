@@ -25,6 +25,7 @@ from typing import Any
 
 from empathy_zoo.atomic import PROBE_BYTES, check_output_dir, remove_stale_temp_files
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, result_path
@@ -75,7 +76,7 @@ def train_runs(
     options: RunnerOptions = RunnerOptions(),
     on_result: Callable[[dict[str, Any]], None] | None = None,
     on_note: Callable[[str], None] | None = None,
-    finished: dict[Path, dict[str, Any]] | None = None,
+    finished: dict[Path, RunResult] | None = None,
 ) -> list[Path]:
     """Train every run not finished yet; returns the result files of all ``specs``.
 
@@ -121,10 +122,7 @@ def train_runs(
         finished = read_finished(out_dir)
     check_one_experiment_per_label(
         [
-            *(
-                (result.get("variant") or result["env"], result["method_label"], result["run_id"], str(path))
-                for path, result in finished.items()
-            ),
+            *((result.table_env, result.method_label, result.run_id, str(path)) for path, result in finished.items()),
             *((s.variant.label, s.display_label(), s.run_id, f"run {s.run_id}") for s in specs),
         ]
     )
@@ -153,7 +151,7 @@ def train_runs(
 def _runs_to_redo(
     specs: Sequence[RunSpec],
     out_dir: Path,
-    finished: dict[Path, dict[str, Any]],
+    finished: dict[Path, RunResult],
     options: RunnerOptions,
     note: Callable[[str], None],
 ) -> set[str]:
@@ -262,7 +260,7 @@ def _print_note(text: str) -> None:
     print(f"empathy-zoo: {text}", file=sys.stderr, flush=True)
 
 
-def read_finished(out_dir: str | Path) -> dict[Path, dict[str, Any]]:
+def read_finished(out_dir: str | Path) -> dict[Path, RunResult]:
     """Every result file in ``out_dir``, read (and checked: a damaged one raises, naming it), by path."""
     runs_dir = Path(out_dir) / RUNS_DIR
     paths = sorted(runs_dir.glob("*.json")) if runs_dir.is_dir() else []
