@@ -34,6 +34,7 @@ from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import argument_defaults
 from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES, default_policies, is_fixed_agent
+from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
@@ -385,7 +386,7 @@ def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -
     return None
 
 
-def read_evaluation(path: str | Path) -> dict[str, Any]:
+def read_evaluation(path: str | Path) -> EvaluationResult:
     """Read an evaluation file; a corrupted or malformed one raises ``ValueError`` naming it (and the
     field), as does one whose name is not ``<scenario set>/<run id>.json`` of the set and run it
     holds (:func:`evaluation_path`: where ``empathy-zoo evaluate`` writes it)."""
@@ -398,4 +399,4 @@ def read_evaluation(path: str | Path) -> dict[str, Any]:
             f"{evaluation['run_id']} in scenario set {evaluation['scenario_set']['name']} ({expected}): renamed or copied; "
             "move it away (empathy-zoo evaluate writes it again)"
         )
-    return evaluation
+    return EvaluationResult.from_checked(evaluation)

@@ -27,15 +27,15 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from empathy_zoo.data_files import data_files
 from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evaluation_mismatch, read_evaluation
+from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 
 __all__ = ["MatchedEvaluation", "evaluation_dir_files", "match_evaluations"]
 
-MatchedEvaluation = tuple[RunResult, dict[str, Any], Path]
+MatchedEvaluation = tuple[RunResult, EvaluationResult, Path]
 """``(run, evaluation, path)``: a run read for the leaderboard, its evaluation and the file it was read from."""
 
 
@@ -79,8 +79,8 @@ def _beside_runs(
         recorded = {(run.run_id, _recorded_sha(run)) for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
-            if (evaluation["run_id"], evaluation["agent"]["sha256"]) in recorded:
-                beside[(evaluation["run_id"], evaluation["scenario_set"]["name"])] = path
+            if (evaluation.run_id, evaluation.agent.sha256) in recorded:
+                beside[(evaluation.run_id, evaluation.scenario_set.name)] = path
     return beside
 
 
@@ -118,7 +118,7 @@ def match_evaluations(
     for directory in evaluation_dirs:
         for path in evaluation_dir_files(directory):
             evaluation = read_evaluation(path)
-            run_id, evaluated = evaluation["run_id"], evaluation["agent"]["sha256"]
+            run_id, evaluated = evaluation.run_id, evaluation.agent.sha256
             runs = by_id.get(run_id, [])
             if not runs:
                 raise ValueError(f"{path}: its run {run_id} is in none of the results directories read ({read})")
@@ -133,13 +133,13 @@ def match_evaluations(
                 )
             if len(same_agent) > 1:
                 raise ValueError(f"{path}: run {run_id} is read from {len(same_agent)} results directories; read it from one")
-            mismatch = evaluation_mismatch(evaluation, same_agent[0].to_document(series=False))
+            mismatch = evaluation_mismatch(evaluation.to_document(), same_agent[0].to_document(series=False))
             if mismatch is not None:
                 raise ValueError(
                     f"{path}: not the evaluation of run {run_id} its result file records ({mismatch}); "
                     "move it away and evaluate the run again"
                 )
-            key = (run_id, evaluation["scenario_set"]["name"])
+            key = (run_id, evaluation.scenario_set.name)
             if key in taken:
                 raise ValueError(
                     f"{path}: run {run_id} in scenario set {key[1]!r} is evaluated in {taken[key]} too; move one away"

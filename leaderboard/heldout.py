@@ -60,9 +60,9 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
+from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EFFECT_NAMES, HELDOUT_MARGINS, METRIC_RANGES, PER_OTHER_AGENT, RANGE_NOTES
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
@@ -180,12 +180,12 @@ def _range_text(metric: str) -> str:
 
 
 def _intro(group: HeldoutGroup, cells: Sequence[HeldoutCell] = ()) -> str:
-    description = group.scenario_set.get("description") or ""
+    description = group.scenario_set.description or ""
     seeds = "the runs' per-scenario means over seeds"
     return (
         (
             f"{description} Each run's trained agent played up to {group.episodes} greedy episodes with its own partners and "
-            f"world (trained with) and in each scenario of set `{group.scenario_set['name']}` (`empathy-zoo evaluate`); "
+            f"world (trained with) and in each scenario of set `{group.scenario_set.name}` (`empathy-zoo evaluate`); "
             f"each cell is the mean of {seeds} [its 95 % Student-t interval], ▲/▼ better/worse than DQN in the same "
             f"scenario by the exact permutation test at 5 % (⊘ too few seeds); {SAME_WORLD_MARK}: a scenario that is the "
             "run's own world."
@@ -239,7 +239,7 @@ def heldout_section(
     digits: int = 2,
     title: str = "Held-out partners",
     lead: str = "",
-    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, EvaluationResult, Path]] = (),
 ) -> HeldoutSection | None:
     """The "Held-out partners" section of the evaluation files of ``results_dirs`` and ``extra``
     (``None`` when there are none; ``origins`` and ``extra`` as :func:`load_heldout` takes them), its figures written into
@@ -257,11 +257,11 @@ def heldout_section(
     for group in groups:
         cells = heldout_cells(group)
         found = readings(group, cells)
-        title = f"{group.env}: scenario set {group.scenario_set['name']}"
+        title = f"{group.env}: scenario set {group.scenario_set.name}"
         markdown += ["", f"### {title}", "", _intro(group, cells), ""]
         page += [f"<h3>{html.escape(title)}</h3>", f'<p class="note">{html.escape(_intro(group, cells))}</p>']
         reasons = [[TRAINED_WITH, "the run's own partners and world"]] + [
-            [s["name"], s["reason"]] for s in group.scenario_set["scenarios"]
+            [s.name, s.reason] for s in group.scenario_set.scenarios
         ]
         markdown += [
             "| Scenario | Why it is there |",
@@ -280,7 +280,7 @@ def heldout_section(
             page += [f"<h4>{html.escape(heading)}</h4>", _html_table(header, rows)]
             page.append(f'<p class="note">{html.escape(_rule_text(group))}</p>')
         path = plot_heldout(group, cells, out / figures_dir)
-        key = f"figure:{group.env}:heldout_{group.scenario_set['name']}"
+        key = f"figure:{group.env}:heldout_{group.scenario_set.name}"
         figures[key] = path
         link = path.relative_to(out).as_posix()
         markdown += ["", f"![{title}: with its own partners against held-out ones]({link})"]
@@ -298,7 +298,7 @@ def add_heldout_section(
     markdown: str,
     html_page: str,
     origins: Sequence[str] | None = None,
-    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, EvaluationResult, Path]] = (),
 ) -> tuple[str, str, dict[str, Path]]:
     """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Held-out partners" section
     placed before their metric definitions, and the section's figures; the pages unchanged and no

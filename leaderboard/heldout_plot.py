@@ -102,7 +102,7 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
         title_fontsize="small",
     )
     panels[0].set_title(
-        f"{group.env}, scenario set {group.scenario_set['name']}: own partners against held-out ones", fontsize="medium"
+        f"{group.env}, scenario set {group.scenario_set.name}: own partners against held-out ones", fontsize="medium"
     )
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
@@ -118,4 +118,4 @@ def _tick(label: str, seeds: int) -> str:
 def plot_heldout(group: HeldoutGroup, cells: Sequence[HeldoutCell], figures_dir: str | os.PathLike[str]) -> Path:
     """Write the group's figure into ``figures_dir``; returns its path."""
     png = render_heldout_png(group, cells)
-    return write_figure(confined(figures_dir, heldout_filename(group.env, group.scenario_set["name"])), png)
+    return write_figure(confined(figures_dir, heldout_filename(group.env, group.scenario_set.name)), png)

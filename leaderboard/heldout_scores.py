@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,7 @@ import numpy as np
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
 from empathy_zoo.evaluation_file import TRAINED_WITH, evaluation_files, evaluation_mismatch, read_evaluation
+from empathy_zoo.evaluation_record import EvaluationResult, ScenarioSetDefinition
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import (
     DERIVED_DEFINITIONS,
@@ -164,9 +165,9 @@ class HeldoutGroup:
     """The table env (a run's variant, else its environment)."""
     base_env: str
     """The environment itself (``coexistence_v0``)."""
-    scenario_set: Mapping[str, Any]
+    scenario_set: ScenarioSetDefinition
     """The set's definition (as the evaluation files record it)."""
-    runs: dict[str, list[tuple[RunResult, dict[str, Any]]]]
+    runs: dict[str, list[tuple[RunResult, EvaluationResult]]]
     """``{method label: [(result, evaluation)]}``, methods in the leaderboard's order, runs by seed."""
     dqn_of: dict[str, str | None]
     """``{method label: the DQN row it is compared with}``: the first DQN row of its variant and
@@ -183,7 +184,7 @@ class HeldoutGroup:
     @property
     def scenarios(self) -> list[str]:
         """:data:`~empathy_zoo.scenarios.TRAINED_WITH` and the set's scenarios, in order."""
-        return [TRAINED_WITH, *(s["name"] for s in self.scenario_set["scenarios"])]
+        return [TRAINED_WITH, *(s.name for s in self.scenario_set.scenarios)]
 
     @property
     def metrics(self) -> tuple[str, ...]:
@@ -210,7 +211,7 @@ def load_heldout(
     results_dirs: ResultsDirs,
     results: Sequence[RunResult],
     origins: Sequence[str] | None = None,
-    extra: Sequence[tuple[RunResult, dict[str, Any], Path]] = (),
+    extra: Sequence[tuple[RunResult, EvaluationResult, Path]] = (),
 ) -> tuple[list[HeldoutGroup], list[str]]:
     """The evaluation files of ``results_dirs`` grouped by environment and scenario set, each matched
     with its run among ``results`` (as :func:`leaderboard.aggregate.load_results` gives them), and
@@ -228,27 +229,27 @@ def load_heldout(
     if origins is not None and len(origins) != len(results):
         raise ValueError(f"{len(origins)} origins for {len(results)} results")
     notes: list[str] = []
-    found: dict[tuple[str, str], list[tuple[RunResult, dict[str, Any], Path]]] = {}
+    found: dict[tuple[str, str], list[tuple[RunResult, EvaluationResult, Path]]] = {}
     for directory in dirs:
         mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == str(directory)]
         by_id = {run.run_id: run for run in mine}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
-            run = by_id.get(evaluation["run_id"])
+            run = by_id.get(evaluation.run_id)
             if run is None:
-                notes.append(f"{path}: its run {evaluation['run_id']} has no result file here; left out")
+                notes.append(f"{path}: its run {evaluation.run_id} has no result file here; left out")
                 continue
             recorded = None if run.agent is None else run.agent.sha256
-            if recorded != evaluation["agent"]["sha256"]:
+            if recorded != evaluation.agent.sha256:
                 notes.append(f"{path}: made of another agent than its result file records (trained again?); left out")
                 continue
-            mismatch = evaluation_mismatch(evaluation, run.to_document(series=False))
+            mismatch = evaluation_mismatch(evaluation.to_document(), run.to_document(series=False))
             if mismatch is not None:  # (the agent is the run's, the rest is not: a forged or damaged file)
                 raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
-            key = (run.table_env, evaluation["scenario_set"]["name"])
+            key = (run.table_env, evaluation.scenario_set.name)
             found.setdefault(key, []).append((run, evaluation, path))
     for run, evaluation, path in extra:
-        found.setdefault((run.table_env, evaluation["scenario_set"]["name"]), []).append((run, evaluation, path))
+        found.setdefault((run.table_env, evaluation.scenario_set.name), []).append((run, evaluation, path))
     for members in found.values():
         seen: dict[int, Path] = {}
         for run, _, path in members:
@@ -259,7 +260,7 @@ def load_heldout(
     for (env, set_name), members in sorted(found.items()):
         first = members[0]
         for _run, evaluation, path in members[1:]:
-            if evaluation["scenario_set"] != first[1]["scenario_set"]:
+            if evaluation.scenario_set != first[1].scenario_set:
                 raise ValueError(
                     f"{path} and {first[2]} were made with different definitions of scenario set {set_name!r}: "
                     "move the older ones away and run empathy-zoo evaluate again"
@@ -274,35 +275,35 @@ def load_heldout(
             references = baselines.get((env, budgets_of(row)), [])
             dqn_of[label] = None if all(is_dqn(run) for run in row) or not references else references[0]
         same = {
-            label: {entry["name"] for _, evaluation in pairs for entry in evaluation["scenarios"][1:] if not entry["held_out"]}
+            label: {entry.name for _, evaluation in pairs for entry in evaluation.scenarios[1:] if not entry.held_out}
             for label, pairs in runs.items()
         }
         groups.append(
             HeldoutGroup(
                 env,
-                first[1]["env"],
-                first[1]["scenario_set"],
+                first[1].env,
+                first[1].scenario_set,
                 runs,
                 dqn_of,
-                max(evaluation["episodes"] for _, evaluation, _ in members),
+                max(evaluation.episodes for _, evaluation, _ in members),
                 same,
             )
         )
     return groups, notes
 
 
-def _per_run(evaluation: Mapping[str, Any], scenario: str, metric: str, per_other: bool = False) -> float:
+def _per_run(evaluation: EvaluationResult, scenario: str, metric: str, per_other: bool = False) -> float:
     """A run's mean of ``metric`` over the episodes of ``scenario`` (per other agent with ``per_other``);
     a derived metric (:data:`~empathy_zoo.metrics.DERIVED_METRICS`) is the ratio of its two metrics' sums, scaled."""
-    entry = next((e for e in evaluation["scenarios"] if e["name"] == scenario), None)
+    entry = evaluation.scenario(scenario)
     if entry is None:
         return math.nan
     if metric in DERIVED_METRICS:
         numerator, denominator, scale = DERIVED_METRICS[metric]
-        below = float(np.sum(entry["metrics"][denominator]))
-        return scale * float(np.sum(entry["metrics"][numerator])) / below if below > 0 else math.nan
-    mean = float(np.mean(entry["metrics"][metric]))
-    return mean / max(1, len(entry["fixed"])) if per_other else mean
+        below = float(np.sum(entry.metrics[denominator]))
+        return scale * float(np.sum(entry.metrics[numerator])) / below if below > 0 else math.nan
+    mean = float(np.mean(entry.metrics[metric]))
+    return mean / max(1, len(entry.fixed)) if per_other else mean
 
 
 def higher_is_better(metric: str) -> bool:
@@ -369,12 +370,12 @@ def heldout_cells(group: HeldoutGroup) -> list[HeldoutCell]:
     return cells
 
 
-def _longest(pairs: Sequence[tuple[RunResult, dict[str, Any]]]) -> int | None:
+def _longest(pairs: Sequence[tuple[RunResult, EvaluationResult]]) -> int | None:
     """The most steps an episode of these evaluations could last (the bound of survival)."""
     cycles = [
-        int(entry["env_kwargs"].get("max_cycles", DEFAULT_ARGUMENTS[evaluation["env"]]["max_cycles"]))
+        int(entry.env_kwargs.get("max_cycles", DEFAULT_ARGUMENTS[evaluation.env]["max_cycles"]))
         for _, evaluation in pairs
-        for entry in evaluation["scenarios"]
+        for entry in evaluation.scenarios
     ]
     return max(cycles) if cycles else None
 

@@ -71,7 +71,7 @@ def test_one_checked_file_per_run_in_the_shipped_set(trained, evaluated) -> None
     assert [p.parent.name for p in files] == ["coexistence_v0"] * 4
     names = [TRAINED_WITH, *(s.name for s in load_scenario_set("coexistence_v0").scenarios)]
     for path in files:
-        evaluation = read_evaluation(path)
+        evaluation = read_evaluation(path).to_document()  # (as the file holds it, field for field)
         result = json.loads((results / "runs" / path.name).read_text())
         assert evaluation["agent"] == result[RESULT_FIELD] and evaluation["run_id"] == result["run_id"]
         assert evaluation["stream"] == STREAMS["heldout_eval"] and evaluation["episodes"] == EPISODES
@@ -177,7 +177,7 @@ def test_a_users_scenario_file_and_a_set_of_another_environment(trained, tmp_pat
     )
     summary = evaluate_results(results, [mine], episodes=2, out_dir=tmp_path / "out", progress=False)
     assert [p.parent.name for p in summary.written] == ["still_cats"] * 4
-    assert [e["name"] for e in read_evaluation(summary.written[0])["scenarios"]] == [TRAINED_WITH, "still"]
+    assert [e.name for e in read_evaluation(summary.written[0]).scenarios] == [TRAINED_WITH, "still"]
     with pytest.raises(ValueError, match="no scenario set is for the environments of the kept agents"):
         evaluate_results(results, ["sharing_v0"], episodes=2, out_dir=tmp_path / "out", progress=False)
 

@@ -84,8 +84,8 @@ def test_evaluations_apart_make_the_pages_they_make_beside_the_runs(apart, tmp_p
 def test_the_evaluations_folder_itself_may_be_given(apart, tmp_path: Path) -> None:
     results, evaluations, made = apart
     matched = match_evaluations([evaluations / EVALUATIONS_DIR], made, [results])
-    assert sorted(evaluation["run_id"] for _, evaluation, _ in matched) == sorted(run.run_id for run in made)
-    assert all(run.run_id == evaluation["run_id"] for run, evaluation, _ in matched)
+    assert sorted(evaluation.run_id for _, evaluation, _ in matched) == sorted(run.run_id for run in made)
+    assert all(run.run_id == evaluation.run_id for run, evaluation, _ in matched)
 
 
 def test_an_evaluation_of_another_agent_is_refused_naming_it(apart, tmp_path: Path, capsys) -> None:

@@ -1,6 +1,7 @@
-"""A result file read once, into a typed, frozen record (empathy_zoo.experiment.records): the
-shipped files give back their documents field for field, nothing in a record can be changed, and
-every document the checker accepts becomes a record the leaderboard reads."""
+"""A result or evaluation file read once, into a typed, frozen record
+(empathy_zoo.experiment.records, empathy_zoo.evaluation_record): the shipped files give back their
+documents field for field, nothing in a record can be changed, and every document the checker
+accepts becomes a record the leaderboard reads."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import pytest
 from helpers_results import synthetic_document
 
 from empathy_zoo.atomic import read_json
+from empathy_zoo.evaluation_file import check_evaluation, evaluation_files, read_evaluation
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.metrics import METRIC_NAMES
@@ -21,6 +23,7 @@ from leaderboard.aggregate import group_runs, learning_curves, result_files, run
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = [path for name in ("quick", "paper") for path in result_files(ROOT / "docs" / "results" / name)]
+EVALUATIONS = [path for name in ("quick", "paper") for path in evaluation_files(ROOT / "docs" / "results" / name)]
 
 
 def test_the_shipped_directories_hold_result_files() -> None:
@@ -103,3 +106,32 @@ def test_the_series_cost_eight_bytes_a_value() -> None:
     held = run.train.episode_end_step.nbytes + sum(s.nbytes for s in run.train.metrics.values())
     held += sum(s.nbytes for e in run.eval for s in e.metrics.values())
     assert held == 8 * values
+
+
+# ---------------------------------------------------------------------------- evaluation files
+def test_the_shipped_directories_hold_evaluation_files() -> None:
+    assert len(EVALUATIONS) >= 80  # (one per run of the quick and paper results)
+
+
+@pytest.mark.parametrize("path", EVALUATIONS, ids=lambda path: f"{path.parents[2].name}/{path.stem}")
+def test_a_shipped_evaluation_reads_back_as_its_document_field_for_field(path: Path) -> None:
+    document = check_evaluation(read_json(path, "evaluation file"), path)
+    evaluation = read_evaluation(path)
+    assert evaluation.to_document() == document
+    assert json.dumps(evaluation.to_document()) == json.dumps(document)
+    assert evaluation.scenario(evaluation.scenarios[-1].name) is evaluation.scenarios[-1] and evaluation.scenario("x") is None
+
+
+def test_an_evaluation_is_frozen_and_its_scores_read_only() -> None:
+    evaluation = read_evaluation(EVALUATIONS[0])
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        evaluation.episodes = 1  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        evaluation.scenarios[0].held_out = True  # type: ignore[misc]
+    for entry in evaluation.scenarios:
+        for series in entry.metrics.values():
+            with pytest.raises(ValueError, match="read-only"):
+                series[0] = 0
+        with pytest.raises(TypeError):
+            entry.fixed["cat_0"] = "stay"  # type: ignore[index]
+    assert evaluation.scenario_set == read_evaluation(EVALUATIONS[1]).scenario_set  # (one set: one definition)

@@ -33,6 +33,7 @@ from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_
 from empathy_zoo.data_files import data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
+from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.records import AgentRef, RunResult
 from empathy_zoo.experiment.result_reader import read_result
@@ -218,14 +219,14 @@ def evaluate_run(
     }
 
 
-def _identity(document: Mapping[str, Any]) -> dict[str, Any]:
+def _identity(evaluation: EvaluationResult) -> dict[str, Any]:
     """What must agree for an evaluation file to be the one asked for."""
     return {
-        "the run": document["run_id"],
-        "the agent file's SHA-256": document["agent"]["sha256"],
-        "the scenario set": document["scenario_set"],
-        "the episodes per scenario": document["episodes"],
-        "the start seeds' stream": document["stream"],
+        "the run": evaluation.run_id,
+        "the agent file's SHA-256": evaluation.agent.sha256,
+        "the scenario set": evaluation.scenario_set.to_document(),
+        "the episodes per scenario": evaluation.episodes,
+        "the start seeds' stream": evaluation.stream,
     }
 
 
