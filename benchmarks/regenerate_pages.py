@@ -45,11 +45,12 @@ LEADERBOARDS = ("quick", "methods", "paper", "sb3_transforms", "sharing_sensitiv
 SEPARATION = (
     ("coexistence_v0",),
     ("coexistence_v0", "max_cycles=501", "rules=authors"),
+    ("sharing_v0", "size=5", "view=3"),
     ("charger_v0",),
     ("vase_v0",),
     ("helping_v0",),
 )
-"""The arguments of every shipped separation table (their pages name them; Sharing has none)."""
+"""The arguments of every shipped separation table (their pages name them)."""
 SHIPPED_HEADER = re.compile(r"^Produced by `(?P<command>[^`]+)` with empathy-zoo [^,]+, commit `(?P<commit>[^`]+)`\.$")
 
 

@@ -7,8 +7,8 @@ field. Nothing in a record can be changed: its tables are read-only mappings of 
 (objects, arrays as tuples, strings, numbers, booleans, ``None``), and its per-episode series are
 read-only numpy arrays (:mod:`empathy_zoo.record_parts`), so a leaderboard holds a file in about the
 memory its numbers take (a list of Python floats takes four times that, and the objects around it
-more). A relabelled run (a
-directory's prefix, a budget, a row shown as DQN) is a new record, :func:`dataclasses.replace`.
+more). A relabelled run (a directory's prefix, a budget, a row shown as DQN) is a new record,
+:func:`dataclasses.replace`.
 
 A series is ``int64`` where the file writes whole numbers as integers (training's counts and end
 steps: every value an integer an ``int64`` holds) and ``float64`` otherwise (a JSON number with a
