@@ -36,6 +36,7 @@ __all__ = [
     "MAX_NOTE_BYTES",
     "MAX_REFERENCE_CYCLES",
     "MAX_REFERENCE_SIZE",
+    "MAX_REFERENCE_WORK",
     "MAX_RESULT_BYTES",
     "MAX_RUNS_LIST_BYTES",
     "MAX_RUNS",
@@ -125,6 +126,12 @@ MAX_REFERENCE_SIZE = 21
 MAX_REFERENCE_CYCLES = 10_000
 """Longest ``max_cycles`` of a run whose leaderboard curves get the exact reference: it takes one
 product with the step matrix per step of an episode, at every point of the curve."""
+MAX_REFERENCE_WORK = 100_000_000_000
+"""Most work of a leaderboard's reference curves, all groups of runs together, counted as
+``points × max_cycles × (size² + 2)²`` per group (``points``: the curve's, 50 by default): one
+group at both bounds above takes about 10¹¹, some 20 s on a laptop core; the paper's 50 points at
+size 7 and 500 cycles take 6.5·10⁷. A group that would pass it gets no reference curve, said in
+one line: a forged directory of many such groups costs one group's time, not each one's."""
 MAX_WATCH_STEPS = MAX_REFERENCE_CYCLES
 """Most steps ``watch`` plays of one episode: an agent file's ``max_cycles`` may be up to
 :data:`MAX_CYCLES`, and a longer episode is cut short there, said before it plays, as the
@@ -166,6 +173,7 @@ BOUNDS: Mapping[str, int] = {
     "trials": MAX_TRIALS,
     "reference curve size": MAX_REFERENCE_SIZE,
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
+    "reference curves' work": MAX_REFERENCE_WORK,
     "watch episode steps": MAX_WATCH_STEPS,
     "wall_time_s": MAX_WALL_TIME_S,
     "memory_bytes": MAX_LEARNER_BYTES,

@@ -39,6 +39,7 @@ from typing import Any
 from empathy_zoo.agent_file import load_agent
 from empathy_zoo.environments import default_policies
 from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
+from empathy_zoo.experiment.agent_method import check_agent_method
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name, confined
@@ -252,7 +253,7 @@ def play_row_episodes(
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue
         try:
-            agent = load_agent(agent_file, entry.sha256, result_file=result_file)
+            agent = check_agent_method(load_agent(agent_file, entry.sha256, result_file=result_file))
         except ImportError as error:
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue

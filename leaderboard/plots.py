@@ -28,7 +28,7 @@ from leaderboard.aggregate import (
     learning_curves,
 )
 from leaderboard.colours import label_colours
-from leaderboard.reference_curves import reference_curve
+from leaderboard.reference_curves import reference_curve, reference_refusals
 from leaderboard.row_names import dqn_rows_of
 
 __all__ = [
@@ -138,9 +138,12 @@ def plot_metric(
     title: str | None = None,
     n_points: int = N_POINTS,
     confidence: float = CONFIDENCE,
+    refused: Collection[tuple[str, str]] | None = None,
 ) -> Path:
     """Draw the training curves of ``metric`` on ``env`` (every method, with the exact reference
-    where it applies: :mod:`leaderboard.reference_curves`) and write the PNG to ``path``."""
+    where it applies: :mod:`leaderboard.reference_curves`) and write the PNG to ``path``.
+    ``refused``: the ``(env, label)`` groups drawn without it (by default those of
+    :func:`~leaderboard.reference_curves.reference_refusals` over ``results``)."""
     results = list(results)
     curves = learning_curves(
         results,
@@ -152,7 +155,11 @@ def plot_metric(
     if not curves:
         raise ValueError(f"no runs on env {env!r} to plot")
     groups = group_runs(results)
-    references = [reference_curve(groups[(curve.env, curve.method_label)], metric, curve.steps) for curve in curves]
+    refused = reference_refusals(groups, n_points) if refused is None else refused
+    references = []
+    for curve in curves:
+        key = (curve.env, curve.method_label)
+        references.append(None if key in refused else reference_curve(groups[key], metric, curve.steps))
     ylabel = ylabel or f"{metric} per episode"
     png = render_curves_png(
         curves,
@@ -179,6 +186,7 @@ def plot_learning_curves(
     Returns ``{(env, metric): path}``, envs sorted, metrics in spec order.
     """
     results = list(results)
+    refused = reference_refusals(group_runs(results), n_points)
     envs = sorted({env for env, _ in group_runs(results)})
     base_env = {run.table_env: run.env for run in results}  # a variant is drawn like its env
     paths: dict[tuple[str, str], Path] = {}
@@ -193,5 +201,6 @@ def plot_learning_curves(
                 ylabel=ylabel,
                 n_points=n_points,
                 confidence=confidence,
+                refused=refused,
             )
     return paths

@@ -7,16 +7,16 @@ training. Which target, β, γ and ε schedule a run has, its result file's desc
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, ENVIRONMENT_TABLE
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, format_bytes
+from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, MAX_REFERENCE_WORK, format_bytes
 from leaderboard.run_facts import description_of, exploration_of, in_paper_setting
 
-__all__ = ["MODELLED_ARGUMENTS", "reference_curve", "reference_refusal"]
+__all__ = ["MODELLED_ARGUMENTS", "reference_curve", "reference_refusal", "reference_refusals"]
 
 MODELLED_ARGUMENTS = ("size", "view", "max_cycles")
 """Environment arguments the reference takes; every other must be at its default."""
@@ -49,15 +49,18 @@ def reference_curve(runs: Sequence[RunResult], metric: str, steps: np.ndarray) -
 
 
 def reference_refusal(runs: Sequence[RunResult]) -> str | None:
-    """Why a group of runs the reference applies to gets none, in one line: a ``size`` beyond
+    """Why a group of runs the reference applies to gets none, in one line: a γ of 1 (the
+    discounted optimum exists only below it), a ``size`` beyond
     :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` (its step matrix alone takes ``8·(size² + 2)²``
     bytes) or a ``max_cycles`` beyond :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES` (a matrix
     product per step of an episode, at every point of the curve); ``None`` otherwise, and for
     runs the reference does not apply to."""
     if not _applies(runs):
         return None
-    modelled = {**DEFAULT_ARGUMENTS[runs[0].env], **_modelled(runs[0])}
-    size, cycles = int(modelled["size"]), int(modelled["max_cycles"])
+    gamma = float(description_of(runs[0])["gamma"])
+    if not 0.0 <= gamma < 1.0:
+        return f"its γ {gamma!r} is outside [0, 1), where the discounted optimum is defined"
+    size, cycles = _grid(runs[0])
     if size > MAX_REFERENCE_SIZE:
         return (
             f"its size {size:,} is beyond {MAX_REFERENCE_SIZE} (MAX_REFERENCE_SIZE), for which the exact optimum "
@@ -69,6 +72,36 @@ def reference_refusal(runs: Sequence[RunResult]) -> str | None:
             "optimum is computed (a matrix product per step of an episode; docs/limits.md)"
         )
     return None
+
+
+def reference_refusals(groups: Mapping[tuple[str, str], Sequence[RunResult]], n_points: int) -> dict[tuple[str, str], str]:
+    """Why each group of ``groups`` (``(env, label)`` to runs) gets no reference curve, for the groups
+    that get none: :func:`reference_refusal`'s reason, or the page's bound on the work of all
+    reference curves together (:data:`~empathy_zoo.limits.MAX_REFERENCE_WORK`, counted as
+    ``n_points × max_cycles × (size² + 2)²`` per group), which the groups spend in their order."""
+    refused: dict[tuple[str, str], str] = {}
+    spent = 0
+    for key, runs in groups.items():
+        refusal = reference_refusal(runs)
+        if refusal is None and _applies(runs):
+            size, cycles = _grid(runs[0])
+            work = n_points * cycles * (size * size + 2) ** 2
+            if spent + work > MAX_REFERENCE_WORK:
+                refusal = (
+                    f"its curve's {work:.2g} units of work ({n_points} points × max_cycles × (size² + 2)²) would take "
+                    f"this page's reference curves past {MAX_REFERENCE_WORK:.0e} (MAX_REFERENCE_WORK; docs/limits.md)"
+                )
+            else:
+                spent += work
+        if refusal is not None:
+            refused[key] = refusal
+    return refused
+
+
+def _grid(run: RunResult) -> tuple[int, int]:
+    """``(size, max_cycles)`` of ``run``'s environment, the defaults where it left them out."""
+    modelled = {**DEFAULT_ARGUMENTS[run.env], **_modelled(run)}
+    return int(modelled["size"]), int(modelled["max_cycles"])
 
 
 def _applies(runs: Sequence[RunResult]) -> bool:

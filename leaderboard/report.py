@@ -22,6 +22,7 @@ from empathy_zoo.atomic import (
 )
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_no_links, check_replaceable
+from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -40,7 +41,7 @@ from leaderboard.heldout import add_heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
 from leaderboard.plots import plot_learning_curves
 from leaderboard.profile_section import add_profile_section
-from leaderboard.reference_curves import reference_refusal
+from leaderboard.reference_curves import reference_refusals
 from leaderboard.row_names import dqn_rows_of, renaming_note
 from leaderboard.sources import ResultSet, load_results_dirs
 from leaderboard.tables import (
@@ -119,9 +120,12 @@ def write_leaderboard(
     are its files moved into place, figures first, pages last. A refusal (``ValueError``) or a write
     that fails (an ``OSError`` naming the file, e.g. on a full disk) leaves ``out_dir`` as it was:
     the staging directory is removed, and so is ``out_dir`` when this call created it. A run whose
-    curves get no exact reference because its grid or episodes are beyond
-    :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` or :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES`
-    is said in one line through ``on_note`` (default: stderr). A run whose recorded partner is a
+    curves get no exact reference because its γ is 1, its grid or episodes are beyond
+    :data:`~empathy_zoo.limits.MAX_REFERENCE_SIZE` or :data:`~empathy_zoo.limits.MAX_REFERENCE_CYCLES`,
+    or the page's reference curves would pass :data:`~empathy_zoo.limits.MAX_REFERENCE_WORK`,
+    is said in one line through ``on_note`` (default: stderr). A second leaderboard into the same
+    ``out_dir`` meanwhile is refused, naming this one (the lock is ``figures/``'s, so training may
+    go on in the directory: :func:`empathy_zoo.output_lock.hold_output_dir`). A run whose recorded partner is a
     plug-in policy gets no greedy episode unless the plug-in is in ``allowed_imports``: a result
     file never makes the leaderboard import code.
 
@@ -142,16 +146,14 @@ def write_leaderboard(
     read = load_results_dirs(dirs, labels, dqn_named=True)
     matched = match_evaluations(evaluations, read.results, dirs, read.origins)
     out = _checked_out(Path(dirs[0] if out_dir is None else out_dir))
-    for (env, label), runs in group_runs(read.results).items():
-        refusal = reference_refusal(runs)
-        if refusal is not None:
-            (on_note or _print_note)(f"no reference curve (the exact optimum) beside {label} on {env}: {refusal}")
+    for (env, label), refusal in reference_refusals(group_runs(read.results), n_points).items():
+        (on_note or _print_note)(f"no reference curve (the exact optimum) beside {label} on {env}: {refusal}")
     call = repr(str(dirs[0])) if not several else repr([str(directory) for directory in dirs])
     call += f", {str(out_dir)!r}" if several and out_dir is not None else ""
     command = command if command is not None else f"leaderboard.write_leaderboard({call})"
     created = [directory for directory in (out / FIGURES_DIR, out, *out.parents) if not directory.exists()]
     try:
-        with _staging(out) as stage:
+        with hold_output_dir(out / FIGURES_DIR, command), _staging(out) as stage:  # (one leaderboard at a time)
             staged = _render(
                 dirs,
                 read,

@@ -293,6 +293,21 @@ def test_a_forged_sb3_agent_is_refused_before_sb3_loads_it(sb3_agents, tmp_path,
     assert "\n" not in str(refused.value)
 
 
+@pytest.mark.parametrize("algorithm, arch", [("dqn", [8]), ("dqn", [128, 128, 8]), ("ppo", {"pi": [8], "vf": [8]})])
+def test_an_sb3_agent_whose_net_arch_is_not_its_weights_is_refused_in_one_line(sb3_agents, tmp_path, algorithm, arch) -> None:
+    """A ``net_arch`` within its bounds but not the networks the file's weights are: SB3 builds the
+    stated networks (their size bounded by the file's) and its strict weight load refuses them."""
+    path = tmp_path / "r.agent.zip"
+    path.write_bytes(_arch(arch)(sb3_agents[algorithm]))
+    refusal = rf"^agent file {path}: stable_baselines3 cannot load it \(RuntimeError: Error\(s\) in loading state_dict"
+    with pytest.raises(AgentFileError, match=refusal) as refused:
+        load_agent(path)
+    assert "\n" not in str(refused.value)
+    genuine = tmp_path / "genuine.agent.zip"
+    genuine.write_bytes(sb3_agents[algorithm])
+    load_agent(genuine)  # (the same file with its own net_arch loads)
+
+
 def test_nothing_of_an_sb3_agent_is_decompressed_before_its_directory_is_checked(sb3_agents, tmp_path, monkeypatch) -> None:
     path = tmp_path / "r.agent.zip"
     path.write_bytes(_declared_huge(sb3_agents["dqn"]))

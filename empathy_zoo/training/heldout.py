@@ -32,8 +32,16 @@ from empathy_zoo.agent_file import load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
 from empathy_zoo.data_files import data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
-from empathy_zoo.evaluation_file import FORMAT, SCHEMA, evaluation_path, evaluations_root, read_evaluation
+from empathy_zoo.evaluation_file import (
+    FORMAT,
+    SCHEMA,
+    evaluation_mismatch,
+    evaluation_path,
+    evaluations_root,
+    read_evaluation,
+)
 from empathy_zoo.evaluation_record import EvaluationResult
+from empathy_zoo.experiment.agent_method import check_agent_method
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.records import AgentRef, RunResult
 from empathy_zoo.experiment.result_reader import read_result
@@ -131,9 +139,10 @@ def same_world(a: EnvVariant, b: EnvVariant) -> bool:
 
 def run_agent(result_file: Path, result: RunResult, allowed_imports: Collection[str] = ()) -> Any:
     """The trained agent of the run whose result file (read as ``result``) is ``result_file``: loaded
-    from the agent file it names and checked against the SHA-256 recorded there, of the run's
-    environment and observation window; else a ``ValueError`` naming the file."""
-    agent = load_run_agent(result_file)
+    from the agent file it names and checked against the SHA-256 recorded there, of a method
+    registered here or a plug-in kept as text (:func:`~empathy_zoo.experiment.agent_method.check_agent_method`),
+    of the run's environment and observation window; else a ``ValueError`` naming the file."""
+    agent = check_agent_method(load_run_agent(result_file))
     described = agent.describe().get("env")
     if described is not None and described != result.env:
         raise ValueError(
@@ -232,8 +241,15 @@ def _identity(evaluation: EvaluationResult) -> dict[str, Any]:
 
 def _check_done(path: Path, result_file: Path, result: RunResult, scenario_set: ScenarioSet, episodes: int) -> None:
     """Raise ``ValueError`` naming ``path`` when the evaluation file there was made of another agent,
-    set or episode count than asked for now."""
+    set or episode count than asked for now, or says what its run is not (its environment,
+    variant, method, seed or own world: :func:`~empathy_zoo.evaluation_file.evaluation_mismatch`)."""
     existing = read_evaluation(path)
+    mismatch = evaluation_mismatch(existing.to_document(), result.to_document(series=False))
+    if mismatch is not None:
+        raise ValueError(
+            f"evaluation file {path} is not of its run's result file {result_file}: {mismatch}; move it away to "
+            "evaluate again, or write elsewhere (--out)"
+        )
     asked = {
         "the run": result.run_id,
         "the agent file's SHA-256": _agent_entry(result).sha256,
