@@ -1,0 +1,162 @@
+"""# Trained runs against the exact separation tables
+
+Reads a results directory (the scenarios profile's, or any with runs on a task that has an exact
+separation table) by the rule of :mod:`leaderboard.trained_separation`: every prediction the
+tables make, judged on the per-seed harms of each run's final greedy evaluation against DQN's.
+
+    python -m leaderboard.separation_reading RESULTS [--tables docs/results/separation]
+
+Runs are matched to a prediction by task (the run's environment, its own variant only: a
+variant is another world), method and, for a method with a selfishness weight, β = 0.5
+(:data:`~leaderboard.trained_separation.BETA`). A prediction with no runs of its method or of
+DQN is listed as such, never judged. The rule reads harms, so a task whose robot cannot harm
+(the environment table's ``can_harm``: Sharing) is listed as not read. Prints Markdown: per task, every judgement, then whether
+the task separates in trained runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from empathy_zoo.experiment.records import RunResult
+from leaderboard.trained_separation import BETA, FEWER, MORE, Judgement, Prediction, judge, predictions, task_separates
+
+__all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
+
+TABLES = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
+"""The shipped separation tables (``<task>.json``)."""
+MAX_TABLE_BYTES = 16 * 2**20
+"""The largest separation table read (the shipped ones are under 100 KB)."""
+
+_SHOWN = {FEWER: "▲ fewer", MORE: "▼ more"}
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One prediction and what trained runs say of it."""
+
+    prediction: Prediction
+    seeds: int
+    """Seeds of the method's runs read (0: none, and no judgement)."""
+    dqn_seeds: int
+    """Seeds of DQN's runs on the same task."""
+    judgement: Judgement | None
+    """``None`` when either side has no runs."""
+
+
+def final_harms(results: Sequence[RunResult], selfish_methods: Mapping[str, bool]) -> dict[tuple[str, str], list[float]]:
+    """``{(task, method): per-seed harms}``: each run's mean harms per episode over its final greedy
+    evaluation, in seed order, for runs of a task's own variant; a method ``selfish_methods`` marks
+    ``True`` is read at β = :data:`~leaderboard.trained_separation.BETA` only. A task with two runs
+    of one method and seed raises ``ValueError`` naming them."""
+    found: dict[tuple[str, str], dict[int, float]] = {}
+    for run in results:
+        if (run.variant or run.env) != run.env or not run.eval:
+            continue
+        if selfish_methods.get(run.method, False):
+            beta = run.config.settings.get("selfishness")
+            if beta is None or f"{float(beta):g}" != BETA:
+                continue
+        seeds = found.setdefault((run.env, run.method), {})
+        if run.seed in seeds:
+            raise ValueError(f"two runs of {run.method} on {run.env} with seed {run.seed} (one is {run.run_id})")
+        seeds[run.seed] = float(np.mean(run.eval[-1].metrics["harms"]))
+    return {key: [seeds[seed] for seed in sorted(seeds)] for key, seeds in found.items()}
+
+
+def read_runs(tables: Mapping[str, Mapping[str, Any]], results: Sequence[RunResult]) -> list[Reading]:
+    """Every prediction of ``tables`` (``{task: separation table}``) read against ``results``."""
+    selfish = {str(row["method"]): row.get("selfishness") is not None for table in tables.values() for row in table["rows"]}
+    harms = final_harms(results, selfish)
+    readings = []
+    for prediction in predictions({task: table for task, table in tables.items() if can_harm(task)}):
+        method = harms.get((prediction.task, prediction.method), [])
+        dqn = harms.get((prediction.task, "dqn"), [])
+        judgement = judge(prediction, method, dqn) if method and dqn else None
+        readings.append(Reading(prediction, len(method), len(dqn), judgement))
+    return readings
+
+
+def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]]) -> str:
+    """The readings as Markdown: a table per task, then whether each task separates."""
+    lines: list[str] = []
+    for task in tables:
+        if not can_harm(task):
+            lines += [f"## `{task}`", "", "Not read: its robot cannot harm, so harms are 0 by construction (`can_harm`).", ""]
+            continue
+        rows = [reading for reading in readings if reading.prediction.task == task]
+        if not rows:
+            continue
+        lines += [
+            f"## `{task}`",
+            "",
+            "| method | DQN's optimum | the method's | predicted | seeds (DQN) | P(fewer harms than DQN) | observed | outcome |",
+            "|---|---:|---:|---|---|---:|---|---|",
+        ]
+        for reading in rows:
+            p, j = reading.prediction, reading.judgement
+            probability = "—" if j is None or np.isnan(j.probability) else f"{j.probability:.2f}"
+            observed = "no runs" if j is None else _SHOWN.get(j.observed, j.observed)
+            outcome = "not judged" if j is None else j.outcome
+            lines.append(
+                f"| `{p.method}` | {p.dqn_harms:.3f} | {p.method_harms:.3f} | {_SHOWN.get(p.expected, p.expected)} "
+                f"| {reading.seeds} ({reading.dqn_seeds}) | {probability} | {observed} | {outcome} |"
+            )
+        judged = [reading.judgement for reading in rows if reading.judgement is not None]
+        verdict = "yes" if task_separates(judged, task) else "no"
+        lines += ["", f"Separates in trained runs: **{verdict}** (a ▲ or ▼ prediction holds).", ""]
+    return "\n".join(lines)
+
+
+def can_harm(task: str) -> bool:
+    """Whether ``task``'s robot can harm (the environment table's fact; an unknown task: no)."""
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
+
+    entry = ENVIRONMENT_TABLE.get(task)
+    return bool(entry is not None and entry.can_harm)
+
+
+def _read_tables(folder: Path, tasks: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The separation tables of ``tasks`` in ``folder``, those that exist (a bounded read each)."""
+    from empathy_zoo.limits import read_bounded
+
+    tables = {}
+    for task in tasks:
+        path = folder / f"{task}.json"
+        if path.is_file():
+            try:
+                tables[task] = json.loads(read_bounded(path, MAX_TABLE_BYTES, "separation table"))
+            except (OSError, ValueError) as error:
+                raise ValueError(f"separation table {path}: {error}") from None
+    return tables
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m leaderboard.separation_reading", description=__doc__.splitlines()[0][2:])
+    parser.add_argument("results", type=Path, help="a results directory (its runs/ or itself holds the result files)")
+    parser.add_argument("--tables", type=Path, default=TABLES, help="the separation tables' folder (default: the shipped ones)")
+    args = parser.parse_args(argv)
+    from empathy_zoo.training.heldout import results_of
+
+    try:
+        results = [result for _, result in results_of(args.results)]
+        tables = _read_tables(args.tables, sorted({run.env for run in results}))
+        if not tables:
+            raise ValueError(f"no separation table in {args.tables} is of a task the runs of {args.results} are on")
+        print(markdown(read_runs(tables, results), tables), end="")
+    except ValueError as error:
+        print(f"separation_reading: error: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
