@@ -10,13 +10,12 @@ uniformly random robot on the same environment.
 from __future__ import annotations
 
 import argparse
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.training import RunnerOptions, train_runs
 from empathy_zoo.vector import VectorEnv
 
@@ -71,7 +70,7 @@ def main() -> None:
     print(f"trained {len(specs)} runs × {args.steps:,} steps in {time.perf_counter() - start:.0f} s")
     table: dict[float, list[tuple[float, float]]] = {}
     for spec, path in zip(specs, paths, strict=True):
-        last = json.loads(Path(path).read_text())["eval"][-1]
+        last = read_result(path).eval[-1].metrics
         table.setdefault(spec.method_settings().selfishness, []).append((np.mean(last["survival"]), np.mean(last["harms"])))
     baseline = random_robot()
     print(f"random robot:        survival {baseline['survival']:6.1f}   harms/episode {baseline['harms']:.2f}")

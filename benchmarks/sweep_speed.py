@@ -15,7 +15,6 @@ Prints, in one run on this machine:
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
 import sys
 import tempfile
@@ -26,6 +25,7 @@ import torch
 from machine import describe_machine  # benchmarks/machine.py (this directory is on sys.path)
 
 from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.training import RunnerOptions, train_runs
 
 OBS, HIDDEN, ACTIONS, BATCH = 25, 128, 5, 32
@@ -90,9 +90,17 @@ def ensemble_rate(
         # imports and the compiled kernels' loading are not counted), so Σ steps / wall time over
         # the runs is Σ over the ensembles of K·steps / their time: the rate of the ensembles
         # running side by side
-        return sum(steps / json.loads(path.read_text())["wall_time_s"] for path in paths)
+        return sum(steps / _wall_time(path) for path in paths)
     finally:
         shutil.rmtree(out, ignore_errors=True)
+
+
+def _wall_time(path: Path) -> float:
+    """The training time a result file records (its ensemble's, from its first step)."""
+    wall = read_result(path).wall_time_s
+    if wall is None or wall <= 0:
+        raise ValueError(f"result file {path} records no training time")
+    return wall
 
 
 def sb3_rate(steps: int) -> float | None:

@@ -27,19 +27,22 @@ import os
 import re
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
 from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.engine.arguments import argument_defaults
 from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES, default_policies, is_fixed_agent
-from empathy_zoo.evaluation_record import EvaluationResult
+from empathy_zoo.evaluation_record import EvaluationResult, ScenarioScores
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.result_file import check_env_kwargs, episode_bounds
+
+if TYPE_CHECKING:
+    from empathy_zoo.experiment.records import RunResult
 
 __all__ = [
     "TRAINED_WITH",
@@ -251,11 +254,13 @@ def _only(check: DocumentChecker, table: Mapping[str, Any], fields: tuple[str, .
             raise check.fail(f"{prefix}{name}", f"no such field (one of {', '.join(fields)})", name)
 
 
-def _world(env: str, entry: Mapping[str, Any]) -> tuple[dict[str, Any], Any]:
-    """The world of a played scenario (checked): its arguments over ``env``'s defaults, and its fixed
-    agents' policy labels, as ``empathy-zoo evaluate`` compares them (``same_world``) to mark it
-    ``held_out``."""
-    return {**argument_defaults(ENGINES[env]), **entry["env_kwargs"]}, entry["fixed"]
+def _world(env: str, entry: Mapping[str, Any] | ScenarioScores) -> tuple[dict[str, Any], dict[str, str]]:
+    """The world of a played scenario (checked; a document's entry or a record's): its arguments
+    over ``env``'s defaults, and its fixed agents' policy labels, as ``empathy-zoo evaluate``
+    compares them (``same_world``) to mark it ``held_out``."""
+    if isinstance(entry, ScenarioScores):
+        return {**argument_defaults(ENGINES[env]), **entry.env_kwargs}, dict(entry.fixed)
+    return {**argument_defaults(ENGINES[env]), **entry["env_kwargs"]}, dict(entry["fixed"])
 
 
 def check_scenario_set(check: DocumentChecker, value: Any, where: str) -> dict[str, Any]:
@@ -352,32 +357,29 @@ def _others(env: str, env_kwargs: Mapping[str, Any]) -> str:
     return ", ".join(names)
 
 
-def evaluation_mismatch(evaluation: Mapping[str, Any], run: Mapping[str, Any]) -> str | None:
-    """What of ``evaluation`` (checked by :func:`check_evaluation`) is not of ``run`` (a result as
-    :func:`~empathy_zoo.experiment.result_reader.read_result` gives it), as ``"<what>: <found>, its run has
-    <value>"``, or ``None`` when it is that run's: its run id, environment, variant, method, seed,
-    the agent file's SHA-256 its result file records, its :data:`TRAINED_WITH` scenario the run's
-    own world and partners, and every other scenario ``held_out`` exactly when it is another world
-    than that (what ``empathy-zoo evaluate`` writes of the run)."""
-    agent = run.get("agent")
-    recorded = run.get("config")
-    config: Mapping[str, Any] = recorded if isinstance(recorded, Mapping) else {}
-    own = evaluation["scenarios"][0]
+def evaluation_mismatch(evaluation: EvaluationResult, run: RunResult) -> str | None:
+    """What of ``evaluation`` is not of ``run`` (both records of checked files), as ``"<what>:
+    <found>, its run has <value>"``, or ``None`` when it is that run's: its run id, environment,
+    variant, method, seed, the agent file's SHA-256 its result file records, its
+    :data:`TRAINED_WITH` scenario the run's own world and partners, and every other scenario
+    ``held_out`` exactly when it is another world than that (what ``empathy-zoo evaluate`` writes
+    of the run)."""
+    own = evaluation.scenarios[0]
     expected: list[tuple[str, Any, Any]] = [
-        ("run_id", evaluation["run_id"], run.get("run_id")),
-        ("env", evaluation["env"], run.get("env")),
-        ("variant", evaluation.get("variant"), run.get("variant") or run.get("env")),
-        ("method", evaluation["method"], run.get("method")),
-        ("seed", evaluation["seed"], run.get("seed")),
-        ("agent.sha256", evaluation["agent"]["sha256"], agent.get("sha256") if isinstance(agent, Mapping) else None),
-        (f"scenarios[0].env_kwargs ({TRAINED_WITH})", own["env_kwargs"], config.get("env_kwargs")),
-        (f"scenarios[0].fixed ({TRAINED_WITH})", own["fixed"], config.get("fixed")),
+        ("run_id", evaluation.run_id, run.run_id),
+        ("env", evaluation.env, run.env),
+        ("variant", evaluation.variant, run.variant or run.env),
+        ("method", evaluation.method, run.method),
+        ("seed", evaluation.seed, run.seed),
+        ("agent.sha256", evaluation.agent.sha256, None if run.agent is None else run.agent.sha256),
+        (f"scenarios[0].env_kwargs ({TRAINED_WITH})", dict(own.env_kwargs), dict(run.config.env_kwargs)),
+        (f"scenarios[0].fixed ({TRAINED_WITH})", dict(own.fixed), dict(run.config.fixed)),
     ]
-    own_world = _world(evaluation["env"], own)
-    for i, entry in enumerate(evaluation["scenarios"][1:], start=1):
-        held_out = _world(evaluation["env"], entry) != own_world
+    own_world = _world(evaluation.env, own)
+    for i, entry in enumerate(evaluation.scenarios[1:], start=1):
+        held_out = _world(evaluation.env, entry) != own_world
         where = "another world than" if held_out else "the same world as"
-        expected.append((f"scenarios[{i}].held_out ({entry['name']}: {where} its run's own)", entry["held_out"], held_out))
+        expected.append((f"scenarios[{i}].held_out ({entry.name}: {where} its run's own)", entry.held_out, held_out))
     for what, found, value in expected:
         if what == "variant" and found is None:
             continue  # (a file may leave it out: the run's environment)

@@ -133,7 +133,7 @@ def match_evaluations(
                 )
             if len(same_agent) > 1:
                 raise ValueError(f"{path}: run {run_id} is read from {len(same_agent)} results directories; read it from one")
-            mismatch = evaluation_mismatch(evaluation.to_document(), same_agent[0].to_document(series=False))
+            mismatch = evaluation_mismatch(evaluation, same_agent[0])
             if mismatch is not None:
                 raise ValueError(
                     f"{path}: not the evaluation of run {run_id} its result file records ({mismatch}); "

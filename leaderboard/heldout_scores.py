@@ -243,7 +243,7 @@ def load_heldout(
             if recorded != evaluation.agent.sha256:
                 notes.append(f"{path}: made of another agent than its result file records (trained again?); left out")
                 continue
-            mismatch = evaluation_mismatch(evaluation.to_document(), run.to_document(series=False))
+            mismatch = evaluation_mismatch(evaluation, run)
             if mismatch is not None:  # (the agent is the run's, the rest is not: a forged or damaged file)
                 raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
             key = (run.table_env, evaluation.scenario_set.name)

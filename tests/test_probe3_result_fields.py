@@ -25,6 +25,7 @@ import pytest
 from helpers_results import synthetic_schema_1
 
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation, evaluation_mismatch, read_evaluation
+from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.result_reader import MAX_SETTING, check_result, read_result
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.metrics import COUNT_PER_STEP, INTEGER_METRICS
@@ -289,8 +290,12 @@ def test_a_scenario_set_saying_it_is_not_held_out_is_refused(tmp_path: Path) -> 
 
 
 def test_an_evaluation_s_scenario_is_held_out_unless_it_is_the_run_s_own_world(tmp_path: Path) -> None:
-    evaluation, run = genuine(EVALUATION), read_result(REFERENCE_RUN).to_document(series=False)
-    assert evaluation_mismatch(check_evaluation(evaluation, EVALUATION), run) is None
+    evaluation, run = genuine(EVALUATION), read_result(REFERENCE_RUN)
+
+    def mismatch_of(document: dict) -> str | None:
+        return evaluation_mismatch(EvaluationResult.from_checked(check_evaluation(document, EVALUATION)), run)
+
+    assert mismatch_of(evaluation) is None
     forged = copy.deepcopy(evaluation)
     forged["scenarios"][1]["held_out"] = False  # (the cat stays: another partner than the run's)
     with pytest.raises(EvaluationFileError, match=r"field scenarios\[1\]\.held_out: expected true: a scenario of a held-out"):
@@ -298,10 +303,10 @@ def test_an_evaluation_s_scenario_is_held_out_unless_it_is_the_run_s_own_world(t
     own = copy.deepcopy(evaluation)
     own["scenarios"][1] |= {"env_kwargs": dict(own["scenarios"][0]["env_kwargs"]), "fixed": dict(own["scenarios"][0]["fixed"])}
     own["scenario_set"]["scenarios"][0]["fixed"] = dict(own["scenarios"][0]["fixed"])  # (played as its set defines it)
-    mismatch = evaluation_mismatch(check_evaluation(own, EVALUATION), run)  # (held out in the run's own world)
+    mismatch = mismatch_of(own)  # (held out in the run's own world)
     assert mismatch == "scenarios[1].held_out (cat_stays: the same world as its run's own): True, its run has False"
     own["scenarios"][1]["held_out"] = False
-    assert evaluation_mismatch(check_evaluation(own, EVALUATION), run) is None  # (the run's own world, played again)
+    assert mismatch_of(own) is None  # (the run's own world, played again)
 
 
 @pytest.mark.parametrize(

@@ -244,7 +244,7 @@ def _check_done(path: Path, result_file: Path, result: RunResult, scenario_set: 
     set or episode count than asked for now, or says what its run is not (its environment,
     variant, method, seed or own world: :func:`~empathy_zoo.evaluation_file.evaluation_mismatch`)."""
     existing = read_evaluation(path)
-    mismatch = evaluation_mismatch(existing.to_document(), result.to_document(series=False))
+    mismatch = evaluation_mismatch(existing, result)
     if mismatch is not None:
         raise ValueError(
             f"evaluation file {path} is not of its run's result file {result_file}: {mismatch}; move it away to "
