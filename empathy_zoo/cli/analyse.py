@@ -39,6 +39,7 @@ TOOLS: dict[str, Tool] = {
     "tuning-summary": Tool("leaderboard.tuning_summary", "what each tuned method chose, and its trials figure"),
     "tuning-effect": Tool("leaderboard.tuning_effect", "tuned against untuned rows, verdict by verdict"),
     "separation": Tool("baselines.separation_render", "a task's exact separation table (JSON and Markdown)"),
+    "population-reading": Tool("leaderboard.population_reading", "population-trained against default-trained runs, test split"),
     "separation-reading": Tool("leaderboard.separation_reading", "trained runs judged against the exact separation tables"),
     "discrimination": Tool("baselines.discrimination", "method pairs × tasks from the exact separation tables"),
 }

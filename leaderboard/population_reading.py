@@ -1,0 +1,172 @@
+"""# Population-trained runs against default-trained runs on the test split
+
+Reads the evaluations of the populations profile's runs and of the same methods trained beside
+the default partner, both on each environment's test split (``<env>_test``), by the rule of
+:mod:`leaderboard.population_transfer`: one primary comparison per environment and method, on
+the test population and the environment's side effect, judged with Holm's adjustment over all of
+them; every other scenario and the task metric as secondary comparisons, reported, not judged.
+
+    python -m leaderboard.population_reading POPULATION_DIR DEFAULT_DIR [DEFAULT_DIR ...]
+
+A run is read from its evaluation file in ``evaluations/<env>_test/``, checked against its result
+file (:func:`empathy_zoo.evaluation_file.evaluation_mismatch`). Runs read: DQN, and Empathic DQN
+at β = 0.5; in the default directories, only runs of an environment's own variant (beside its
+default partner). A seed's score is the mean over its evaluation episodes. Prints Markdown.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from empathy_zoo.evaluation_record import EvaluationResult
+from empathy_zoo.experiment.records import RunResult
+from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, changes_carry_over, compare
+
+__all__ = ["METHODS", "Scores", "GroupKey", "primary_and_secondary", "markdown", "read_scores", "main"]
+
+METHODS = {"dqn": None, "empathic_dqn": "0.5"}
+"""The methods the reading compares, and the β each is read at (``None``: no selfishness weight)."""
+POPULATION, DEFAULT = "population", "default"
+
+GroupKey = tuple[str, str, str]
+"""``(env, method, group)``: ``group`` is ``population`` or ``default``."""
+Scores = dict[GroupKey, dict[tuple[str, str], dict[int, float]]]
+"""Per group, per ``(scenario, metric)``, each seed's mean over its episodes."""
+
+
+@dataclass(frozen=True)
+class Row:
+    """One comparison of the reading."""
+
+    env: str
+    method: str
+    scenario: str
+    metric: str
+    seeds: tuple[int, int]
+    """Seeds read: population-trained, default-trained."""
+    comparison: Comparison
+
+
+def _read_at(run: RunResult) -> bool:
+    """Whether ``run`` is of a method the reading compares, at its β."""
+    if run.method not in METHODS:
+        return False
+    beta = METHODS[run.method]
+    selfishness = run.config.settings.get("selfishness")
+    return beta is None or (selfishness is not None and f"{float(selfishness):g}" == beta)
+
+
+def add_scores(scores: Scores, run: RunResult, evaluation: EvaluationResult, group: str) -> None:
+    """Add one run's evaluation on its test split to ``scores`` (every played scenario of the set
+    and metric); a second evaluation of one seed in a group raises ``ValueError``."""
+    key = (run.env, run.method, group)
+    played = {entry.name for entry in evaluation.scenario_set.scenarios}
+    for entry in evaluation.scenarios:
+        if entry.name not in played:
+            continue  # (the run's own world, played first)
+        for metric, values in entry.metrics.items():
+            seeds = scores.setdefault(key, {}).setdefault((entry.name, metric), {})
+            if run.seed in seeds:
+                raise ValueError(f"two {group}-trained runs of {run.method} on {run.env} with seed {run.seed}")
+            seeds[run.seed] = float(np.mean(values))
+
+
+def primary_and_secondary(scores: Scores) -> tuple[list[Row], list[bool], list[Row]]:
+    """The primary comparisons (environments in order, then methods), whether each changes what
+    carries over (Holm over all primaries), and the secondary comparisons: every other scenario
+    on the side effect, and every scenario on the task metric."""
+    from empathy_zoo.environments import ENVIRONMENT_TABLE
+    from empathy_zoo.metrics import HIGHER_IS_BETTER
+
+    primaries: list[Row] = []
+    secondaries: list[Row] = []
+    for env, method in sorted({(env, method) for env, method, _ in scores}):
+        population, default = scores.get((env, method, POPULATION)), scores.get((env, method, DEFAULT))
+        if population is None or default is None:
+            continue
+        entry = ENVIRONMENT_TABLE[env]
+        side_effect, task = entry.side_effects[0], entry.task
+        for scenario, metric in sorted(set(population) & set(default)):
+            if metric not in (side_effect, task):
+                continue
+            x, y = population[(scenario, metric)], default[(scenario, metric)]
+            row = Row(
+                env,
+                method,
+                scenario,
+                metric,
+                (len(x), len(y)),
+                compare([x[s] for s in sorted(x)], [y[s] for s in sorted(y)], HIGHER_IS_BETTER[metric]),
+            )
+            (primaries if (scenario, metric) == (PRIMARY_SCENARIO, side_effect) else secondaries).append(row)
+    return primaries, changes_carry_over([row.comparison for row in primaries]) if primaries else [], secondaries
+
+
+def _cells(row: Row) -> str:
+    c = row.comparison
+    probability = "—" if np.isnan(c.probability) else f"{c.probability:.2f} [{c.low:.2f}, {c.high:.2f}]"
+    where = f"| `{row.env}` | `{row.method}` | `{row.scenario}` | {row.metric} | {row.seeds[0]} ({row.seeds[1]})"
+    return f"{where} | {probability} | {c.p:.4f} | {c.observed} |"
+
+
+def markdown(primaries: Sequence[Row], carries: Sequence[bool], secondaries: Sequence[Row]) -> str:
+    """The reading as Markdown: the primary comparisons with their Holm verdicts, then the secondary."""
+    header = (
+        "| environment | method | scenario | metric | seeds (default) | P(population-trained better) [interval] | p | observed |"
+    )
+    rule = "|---|---|---|---|---|---:|---:|---|"
+    lines = ["## Primary comparisons", "", header[:-1] + " changes what carries over |", rule + "---|"]
+    lines += [_cells(row) + f" {'**yes**' if carry else 'no'} |" for row, carry in zip(primaries, carries, strict=True)]
+    lines += ["", "## Secondary comparisons (reported, not judged)", "", header, rule]
+    lines += [_cells(row) for row in secondaries]
+    return "\n".join(lines) + "\n"
+
+
+def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
+    """The scores of every run read (see the module page) from their test-split evaluations."""
+    from empathy_zoo.evaluation_file import evaluation_files, evaluation_mismatch, read_evaluation
+    from empathy_zoo.training.heldout import results_of
+
+    scores: Scores = {}
+    for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
+        runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
+        for path in evaluation_files(directory):
+            evaluation = read_evaluation(path)
+            if evaluation.scenario_set.name != f"{evaluation.env}_test":
+                continue
+            run = runs.get(evaluation.run_id)
+            if run is None:
+                raise ValueError(f"{path}: its run {evaluation.run_id} has no result file in {directory}")
+            mismatch = evaluation_mismatch(evaluation, run)
+            if mismatch is not None:
+                raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
+            if not _read_at(run) or (group == DEFAULT and (run.variant or run.env) != run.env):
+                continue
+            add_scores(scores, run, evaluation, group)
+    return scores
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m leaderboard.population_reading", description=__doc__.splitlines()[0][2:])
+    parser.add_argument("population", type=Path, help="the populations profile's results directory, evaluated on <env>_test")
+    parser.add_argument("default", type=Path, nargs="+", help="results directories of the methods beside the default partner")
+    args = parser.parse_args(argv)
+    try:
+        primaries, carries, secondaries = primary_and_secondary(read_scores(args.population, args.default))
+        if not primaries:
+            raise ValueError("no environment and method has runs of both groups evaluated on its test split (<env>_test)")
+        print(markdown(primaries, carries, secondaries), end="")
+    except ValueError as error:
+        print(f"population_reading: error: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
