@@ -6,6 +6,10 @@ policies, with arguments, and their number) and other world arguments (the grid'
 set* is a TOML file of scenarios for one environment; one per environment ships here, its default
 (:func:`shipped_sets`: ``coexistence_v0``, ``sharing_v0``, ``charger_v0``, ``vase_v0``,
 ``helping_v0``), and the opt-in ``coexistence_v0_noisy``, each written before any result was seen.
+Each environment also ships a partner split's two held-out sets, ``<env>_validation`` and
+``<env>_test`` (opt-in, ``--scenarios <env>_test``): populations of registered partners disjoint
+from each other and from its training population (the ``populations`` profile), each set holding
+the population and each member alone (docs/heldout.md, "Partner populations").
 ``empathy-zoo evaluate`` (:mod:`empathy_zoo.training.heldout`) plays every kept agent in every
 scenario of its environment, and in :func:`trained_with`, the run's own partners and world.
 
