@@ -475,9 +475,11 @@ def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons:
     return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> None:
-    """``python -m empathy_zoo.exact_solver [ENV] [ARG=VALUE ...]``: the exact outcome table."""
+def main(argv: list[str] | None = None) -> int:
+    """``python -m empathy_zoo.exact_solver [ENV] [ARG=VALUE ...]``: the exact outcome table
+    (``empathy-zoo analyse exact``); an environment or argument it cannot model is one line, status 2."""
     import argparse
+    import sys
 
     parser = argparse.ArgumentParser(prog="python -m empathy_zoo.exact_solver", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
@@ -489,8 +491,14 @@ def main(argv: list[str] | None = None) -> None:
         if not equals:
             parser.error(f"{item!r} is not ARG=VALUE")
         kwargs[key] = int(value) if value.isdigit() else value
-    print(outcome_table(tabular_model(args.env, **kwargs), (1.0, 0.75, 0.5, 0.25, 0.0), (0.0, 0.01, 0.05)))
+    try:
+        model = tabular_model(args.env, **kwargs)
+    except ValueError as error:
+        print(f"exact_solver: error: {error}", file=sys.stderr)
+        return 2
+    print(outcome_table(model, (1.0, 0.75, 0.5, 0.25, 0.0), (0.0, 0.01, 0.05)))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

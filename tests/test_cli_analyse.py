@@ -51,3 +51,12 @@ def test_an_unknown_tool_is_a_usage_error(capsys: pytest.CaptureFixture[str]) ->
 def test_every_tool_answers_help_with_status_zero(capsys: pytest.CaptureFixture[str], tool: str) -> None:
     assert main(["analyse", tool, "--help"]) == 0
     assert capsys.readouterr().out.strip()
+
+
+def test_exact_prints_a_small_tasks_table_and_refuses_what_it_cannot_model(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["analyse", "exact", "coexistence_v0", "size=5", "view=3"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "| β | ε | harms | survival |" and "| 1 | 0 | 1.0000 | 500.0 |" in lines
+    assert main(["analyse", "exact", "nope_v0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unknown environment 'nope_v0'" in err

@@ -38,6 +38,7 @@ TOOLS: dict[str, Tool] = {
     "coexistence-sensitivity": Tool("leaderboard.coexistence_sensitivity", "the claims under the authors' Coexistence rules"),
     "tuning-summary": Tool("leaderboard.tuning_summary", "what each tuned method chose, and its trials figure"),
     "tuning-effect": Tool("leaderboard.tuning_effect", "tuned against untuned rows, verdict by verdict"),
+    "exact": Tool("empathy_zoo.exact_solver", "a task's exact optimum per β and ε, from the engine's own rules"),
     "separation": Tool("baselines.separation_render", "a task's exact separation table (JSON and Markdown)"),
     "population-reading": Tool("leaderboard.population_reading", "population-trained against default-trained runs, test split"),
     "separation-reading": Tool("leaderboard.separation_reading", "trained runs judged against the exact separation tables"),
