@@ -30,11 +30,12 @@ of methods whether their optimal policies differ. Built on
   environment whose robot is never harmed, with the time limit's chance per step measured where
   episodes end on their own (Sharing: :func:`baselines.considerate_tabular.considerate_ending_policy`).
 * `dqn_relative_reachability`: `Q*` of the reward less λ = 100 times the deviation from the stepwise
-  inaction baseline (:mod:`baselines.separation_reachability`), the paper's rules; on an
-  environment with a state beyond the cells (the vase task), :mod:`baselines.separation_world`'s.
-* `dqn_aup`: on an environment with a state beyond the cells only, `Q*` of the reward less AUP's
-  penalty with exact auxiliary values, seed 0's (:mod:`baselines.separation_world`). Each world
-  row is computed up to a number of states (:data:`WORLD_STATES`): AUP's is not on Sharing.
+  inaction baseline: under Coexistence's paper rules from its displacement model
+  (:mod:`baselines.separation_reachability`); on every other model from the model's own states
+  (:mod:`baselines.separation_world`).
+* `dqn_aup`: `Q*` of the reward less AUP's penalty with exact auxiliary values, seed 0's
+  (:mod:`baselines.separation_world`). Each of these two rows is computed up to a number of
+  states (:data:`WORLD_STATES`): AUP's is not on Sharing.
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -107,13 +108,6 @@ RETURN = "return"
 """The task metric for which the outcomes hold both returns."""
 UNMARKED = "the methods registry marks no identity with DQN on this environment, and it has no exact model here"
 """Why a method whose registry entry names no identity here is not in the table."""
-OMISSIONS = (
-    (
-        "dqn_aup",
-        "its exact penalty tables live in tests/test_aup_calibration.py; "
-        "they depend on each run's seed (30 random auxiliary rewards)",
-    ),
-)
 
 
 @dataclass(frozen=True)
@@ -331,7 +325,12 @@ def _rows(
 
 
 WORLD_ROWS = ("dqn_relative_reachability", "dqn_aup")
-"""The rows an environment with a state beyond the cells adds (:mod:`baselines.separation_world`)."""
+"""The rows computed on the model's own states (:mod:`baselines.separation_world`), on every model
+small enough (:data:`WORLD_STATES`); relative reachability's under the paper's Coexistence rules
+is the displacement table's instead (:data:`PAPER_RR`)."""
+PAPER_RR = "dqn_relative_reachability"
+"""The world row that Coexistence under the paper's rules computes from its displacement model
+(:mod:`baselines.separation_reachability`), as the paper's runs read it."""
 WORLD_STATES = {"dqn_relative_reachability": 50_000, "dqn_aup": 10_000}
 """The most states of a model whose world rows are computed: relative reachability's table of the
 fewest steps holds a byte for every two states (1 GB for Sharing's 31,201 with the robot alone and
@@ -383,7 +382,7 @@ def separation_table(
     figures = layer_figures(model)
     returns = ENVIRONMENT_TABLE[model.env].task == RETURN or figures is not None
     world = model.layers > 1
-    world_rows = tuple(name for name in WORLD_ROWS if world and model.states <= WORLD_STATES[name])
+    world_rows = tuple(name for name in WORLD_ROWS if model.states <= WORLD_STATES[name] and not (paper and name == PAPER_RR))
     betas = tuple(float(beta) for beta in selfishness)
     rows = _rows(model.env, paper, betas, considerate, world_rows, figures is not None and "equality" in figures)
     marked = {row.name for row in rows if row.identical_to}
@@ -457,22 +456,17 @@ def separation_table(
                 )
             )
     names = {o.row for o in outcomes}
-    omitted = [Omission(m, why) for m, why in OMISSIONS if not (world and m in WORLD_ROWS)]
-    omitted += [Omission(m, _too_large(m, model.states)) for m in WORLD_ROWS if world and m not in world_rows]
+    uncomputed = [m for m in WORLD_ROWS if m not in world_rows and not (paper and m == PAPER_RR)]
+    omitted = [Omission(m, _too_large(m, model.states)) for m in uncomputed]
     unmarked = [name for name in TWINS if METHODS[name].identical_to.get(model.env) is None and name not in names]
     omitted += [Omission(name, UNMARKED) for name in unmarked]
     if not _coexistence(model):
-        if not world:
-            omitted.append(
-                Omission("dqn_relative_reachability", "its exact reachability table is built from Coexistence's rules")
-            )
         if not considerate:
             omitted.append(Omission("dqn_considerate", "its exact modules model a robot that is never harmed, or Coexistence"))
         elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):
             omitted.append(Omission("dqn_considerate", "at some ε its optimum and the other's value find no joint fixed point"))
     elif not paper:
         omitted.append(Omission("dqn_considerate", "its exact module models the paper's rules only"))
-        omitted.append(Omission("dqn_relative_reachability", "its exact reachability table is built from the paper's rules"))
     elif "dqn_considerate" not in names or len({o.epsilon for o in outcomes if o.row == "dqn_considerate"}) < len(epsilons):
         omitted.append(Omission("dqn_considerate", "at some ε its optimum and the cat's value find no joint fixed point"))
     return SeparationTable(

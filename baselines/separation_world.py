@@ -1,9 +1,10 @@
-"""# Relative reachability and AUP on the exact model of an environment with a state beyond the cells
+"""# Relative reachability and AUP on the exact model of any environment
 
 The separation table's rows of the two methods that penalise a change to the world, whoever cares
-about it, on a :class:`empathy_zoo.exact_solver.TabularModel` whose engine has a state beyond the
-two cells (``layers > 1``: the vase task). Every state of the model is a state here: each joint
-state, the robot alone in each cell and layer, and the end (the robot harmed). No rule is written
+about it, on a :class:`empathy_zoo.exact_solver.TabularModel`: the two cells, and where the engine
+has a state beyond them (``layers > 1``: the vase task, Sharing's batteries) that state too. Every
+state of the model is a state here: each joint state, the robot alone in each cell and layer, and
+the end (the robot harmed). No rule is written
 twice: every transition is the model's, read off the engine.
 
 * :func:`model_reachability`: the fewest steps between every two states, a step reaching ``y``
@@ -109,7 +110,8 @@ def _observations(model: TabularModel) -> np.ndarray:
     engine.reset()
     engine.cells = np.stack([robot, other], axis=1).astype(engine.cells.dtype)
     engine.present[model.states :, 1] = False
-    cast(LayeredEngine, engine).set_tabular_layer(layer)
+    if model.layers > 1:  # (a model of the cells only has no layer to set)
+        cast(LayeredEngine, engine).set_tabular_layer(layer)
     seen = np.asarray(engine.observe(0), dtype=np.float64)
     return np.concatenate([seen, np.zeros((1, seen.shape[1]))])
 
