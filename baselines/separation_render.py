@@ -222,8 +222,13 @@ def _identical(table: SeparationTable, row: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's files."""
+    """``python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's
+    files, each atomically; anything but a regular file in either's place (a link, a directory, a
+    FIFO) is refused before the table is computed, and nothing else in ``DIR`` is touched."""
     import argparse
+
+    from empathy_zoo.atomic import write_text_atomic
+    from empathy_zoo.names import check_replaceable
 
     parser = argparse.ArgumentParser(prog="python -m baselines.separation_render", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
@@ -236,15 +241,12 @@ def main(argv: list[str] | None = None) -> None:
         if not equals:
             parser.error(f"{item!r} is not ARG=VALUE")
         kwargs[key] = int(value) if value.isdigit() else value
-    table = separation_table(tabular_model(args.env, **kwargs))
-    args.out.mkdir(parents=True, exist_ok=True)
     name = file_name(args.env, kwargs)
-    for suffix, text in ((".json", to_json(table)), (".md", to_markdown(table))):
-        path = args.out / f"{name}{suffix}"
-        partial = path.with_suffix(suffix + ".partial")
-        partial.write_text(text, encoding="utf-8")
-        partial.replace(path)
-        print(path)
+    paths = [check_replaceable(args.out / f"{name}{suffix}") for suffix in (".json", ".md")]  # (before the long part)
+    model = tabular_model(args.env, **kwargs)
+    table = separation_table(model)
+    for path, text in zip(paths, (to_json(table), to_markdown(table)), strict=True):
+        print(write_text_atomic(path, text))
 
 
 if __name__ == "__main__":

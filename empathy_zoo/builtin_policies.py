@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS, Action
+from empathy_zoo.limits import MAX_CYCLES
 from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 
 __all__ = ["CounterStream", "CounterStreamBatch", "RandomWalk", "Patrol", "Stay"]
@@ -168,11 +169,11 @@ class Patrol:
     needs_observation = False
 
     def __init__(self, period: int = 7, first: int = Action.UP, then: int = Action.RIGHT) -> None:
-        if period < 1:
-            raise ValueError(f"period must be positive, got {period}")
+        if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or not 1 <= period <= MAX_CYCLES:
+            raise ValueError(f"period must be an int in [1, {MAX_CYCLES:,}], got {period!r:.80}")
         for name, action in (("first", first), ("then", then)):
-            if not 0 <= int(action) < NUM_ACTIONS:
-                raise ValueError(f"{name} must be an action in [0, {NUM_ACTIONS}), got {action}")
+            if isinstance(action, bool) or not isinstance(action, (int, np.integer)) or not 0 <= action < NUM_ACTIONS:
+                raise ValueError(f"{name} must be an action in [0, {NUM_ACTIONS}), got {action!r:.80}")
         self.period, self.first, self.then = int(period), int(first), int(then)
         self._t = 0
 
@@ -188,7 +189,10 @@ class Patrol:
         return {"t": self._t}
 
     def load_state(self, state: Mapping[str, Any]) -> None:
-        self._t = int(state["t"])
+        t = state.get("t") if isinstance(state, Mapping) and set(state) == {"t"} else None
+        if isinstance(t, bool) or not isinstance(t, (int, np.integer)) or not 0 <= t < 2**63:
+            raise ValueError(f"a patrol's state holds its step t, an int in [0, 2**63), got {_fields(state)}: {t!r:.80}")
+        self._t = int(t)
 
     def batched(self, num_envs: int) -> _PatrolBatch:
         return _PatrolBatch(self)

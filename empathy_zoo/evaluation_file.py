@@ -27,7 +27,7 @@ import os
 import re
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.data_files import data_files
@@ -39,10 +39,29 @@ from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 from empathy_zoo.randomness import STREAMS
+from empathy_zoo.record_parts import AgentRef
 from empathy_zoo.result_file import check_env_kwargs, episode_bounds
 
-if TYPE_CHECKING:
-    from empathy_zoo.experiment.records import RunResult
+
+class RunFacts(Protocol):
+    """What :func:`evaluation_mismatch` reads of a run: the fields of its
+    :class:`~empathy_zoo.experiment.records.RunResult` (a record of a higher layer, not imported here)."""
+
+    @property
+    def run_id(self) -> str: ...
+    @property
+    def env(self) -> str: ...
+    @property
+    def variant(self) -> str | None: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def agent(self) -> AgentRef | None: ...
+    @property
+    def config(self) -> Any: ...
+
 
 __all__ = [
     "TRAINED_WITH",
@@ -357,7 +376,7 @@ def _others(env: str, env_kwargs: Mapping[str, Any]) -> str:
     return ", ".join(names)
 
 
-def evaluation_mismatch(evaluation: EvaluationResult, run: RunResult) -> str | None:
+def evaluation_mismatch(evaluation: EvaluationResult, run: RunFacts) -> str | None:
     """What of ``evaluation`` is not of ``run`` (both records of checked files), as ``"<what>:
     <found>, its run has <value>"``, or ``None`` when it is that run's: its run id, environment,
     variant, method, seed, the agent file's SHA-256 its result file records, its

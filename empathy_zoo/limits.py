@@ -26,6 +26,7 @@ __all__ = [
     "MAX_CYCLES",
     "MAX_EVALUATIONS",
     "MAX_EVAL_EPISODES",
+    "MAX_EVALUATE_CYCLES",
     "MAX_EVALUATION_BYTES",
     "MAX_HIDDEN_SIZE",
     "MAX_JOURNAL_BYTES",
@@ -76,6 +77,10 @@ result file."""
 MAX_EVAL_EPISODES = 10_000
 """Most episodes of one greedy evaluation (``eval_episodes``): an ensemble evaluates
 ``runs × eval_episodes`` environments at once."""
+MAX_EVALUATE_CYCLES = 100_000
+"""Longest episode ``empathy-zoo evaluate`` plays (a run's ``max_cycles``, or a scenario's): a
+result file may record up to :data:`MAX_CYCLES`, and an evaluation plays every scenario's episodes
+to their end; a longer world is refused, naming the run, before anything is written."""
 MAX_SEEDS = 10_000
 """Most seeds of one experiment (``seeds = N`` or a list of seeds)."""
 MAX_SEED = 2**63 - 1
@@ -154,6 +159,7 @@ BOUNDS: Mapping[str, int] = {
     "checkpoint_interval": MAX_STEPS,
     "evaluations per run": MAX_EVALUATIONS,
     "eval_episodes": MAX_EVAL_EPISODES,
+    "evaluate episode steps": MAX_EVALUATE_CYCLES,
     "seeds per experiment": MAX_SEEDS,
     "seed": MAX_SEED,
     "runs per sweep": MAX_RUNS,

@@ -106,7 +106,8 @@ class _SlowWalkBatch(CounterStreamBatch):
     def act(self, observations: np.ndarray | None, steps: np.ndarray, active: np.ndarray) -> np.ndarray:
         draws = counter_uniform(*self._take(active))
         p = self.move_probability
-        moves = np.minimum((draws / p * 4).astype(np.int64), 3)
+        with np.errstate(over="ignore"):  # (a tiny p gives inf, capped before the cast: never a wrapped index)
+            moves = np.minimum(draws / p * 4, 3).astype(np.int64)
         return np.where(draws < p, np.asarray(_DIRECTIONS, dtype=np.int64)[moves], int(Action.STAY)).astype(np.int64)
 
 

@@ -267,10 +267,12 @@ def make_policy(spec: PolicyEntry | FixedPolicy, **kwargs: Any) -> FixedPolicy:
         factory = resolve_name(spec, POLICIES, "fixed policy")
         _check_factory(spec, factory)
         _check_arguments(spec, factory, kwargs)
+        for key, value in kwargs.items():
+            _check_value(spec, key, value)
         try:
             policy = factory(**kwargs)
-        except TypeError as error:
-            raise ValueError(f"cannot build fixed policy {spec!r} with {kwargs}: {error}") from error
+        except (TypeError, OverflowError) as error:
+            raise ValueError(f"cannot build fixed policy {spec!r} with {kwargs!r:.200}: {error}") from error
     if not isinstance(policy, FixedPolicy):
         raise ValueError(f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info)")
     return policy
@@ -286,6 +288,24 @@ def _check_factory(spec: str, factory: Any) -> None:
         raise ValueError(
             f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info) (no {', '.join(missing)})"
         )
+
+
+MAX_POLICY_INT = 1_000_000_000
+"""The largest magnitude of an int argument of a fixed policy (a period, a step count): no episode
+is longer (:data:`~empathy_zoo.limits.MAX_CYCLES`)."""
+
+
+def _check_value(spec: str, key: str, value: Any) -> None:
+    """Raise ``ValueError`` naming ``key`` when an argument value (or one inside a list) is a
+    number no policy takes: an int beyond :data:`MAX_POLICY_INT`, or a float that is not finite."""
+    values = value if isinstance(value, (list, tuple)) else [value]
+    for item in values:
+        if isinstance(item, (list, tuple)):
+            _check_value(spec, key, item)
+        elif isinstance(item, (int, np.integer)) and not isinstance(item, bool) and abs(int(item)) > MAX_POLICY_INT:
+            raise ValueError(f"cannot build fixed policy {spec!r}: {key} = {item!r:.40} is beyond ±{MAX_POLICY_INT:,}")
+        elif isinstance(item, (float, np.floating)) and not np.isfinite(item):
+            raise ValueError(f"cannot build fixed policy {spec!r}: {key} = {item!r} is not a finite number")
 
 
 def _check_arguments(spec: str, factory: Any, kwargs: Mapping[str, Any]) -> None:
@@ -432,6 +452,11 @@ MAX_LABEL_CHARS = 4_096
 """The longest fixed policy's label read back (a population of 16 members takes a few hundred)."""
 
 
+def _no_constant(name: str) -> Any:
+    """Refuse JSON's non-standard constants (``NaN``, ``Infinity``) in a label's values."""
+    raise ValueError(f"{name} is no number a policy takes")
+
+
 def parse_entry_label(label: str) -> PolicyEntry:
     """The policy entry whose :func:`~empathy_zoo.policies.entry_label` is ``label`` (what a result
     file's ``config.fixed`` records): ``"patrol"`` → ``"patrol"``, ``"patrol(period=3)"`` →
@@ -450,7 +475,7 @@ def parse_entry_label(label: str) -> PolicyEntry:
     name, bracket, body = label[:-1].partition("(")
     if not bracket or not name:
         raise ValueError(f"{label!r:.80} is not a fixed policy's label (name or name(argument=value, ...))")
-    decoder = json.JSONDecoder()
+    decoder = json.JSONDecoder(parse_constant=_no_constant)
     entry: dict[str, Any] = {"policy": name}
     position = 0
     while position < len(body):
@@ -460,7 +485,7 @@ def parse_entry_label(label: str) -> PolicyEntry:
             raise ValueError(f"{label!r:.80} is not a fixed policy's label: expected argument=value at {body[position:]!r:.40}")
         try:
             value, end = decoder.raw_decode(body, equals + 1)
-        except (json.JSONDecodeError, RecursionError) as error:
+        except (json.JSONDecodeError, RecursionError, ValueError) as error:
             why = "nested too deep" if isinstance(error, RecursionError) else str(error)
             raise ValueError(f"{label!r:.80} is not a fixed policy's label: the value of {key!r} is not JSON ({why})") from None
         entry[key] = value

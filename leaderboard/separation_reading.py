@@ -17,7 +17,7 @@ the task separates in trained runs.
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -33,8 +33,6 @@ __all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"
 
 TABLES = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
 """The shipped separation tables (``<task>.json``)."""
-MAX_TABLE_BYTES = 16 * 2**20
-"""The largest separation table read (the shipped ones are under 100 KB)."""
 
 _SHOWN = {FEWER: "▲ fewer", MORE: "▼ more"}
 
@@ -125,18 +123,14 @@ def can_harm(task: str) -> bool:
 
 
 def _read_tables(folder: Path, tasks: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """The separation tables of ``tasks`` in ``folder``, those that exist (a bounded read each)."""
-    from empathy_zoo.limits import read_bounded
+    """The separation tables of ``tasks`` in ``folder``, those there: each read and checked
+    (:func:`baselines.separation_file.read_separation_table`; anything in a table's place that is
+    no regular file, or a table out of range, is refused naming it)."""
+    from baselines.separation_file import read_separation_table
 
-    tables = {}
-    for task in tasks:
-        path = folder / f"{task}.json"
-        if path.is_file():
-            try:
-                tables[task] = json.loads(read_bounded(path, MAX_TABLE_BYTES, "separation table"))
-            except (OSError, ValueError) as error:
-                raise ValueError(f"separation table {path}: {error}") from None
-    return tables
+    if not folder.is_dir():
+        raise ValueError(f"separation tables' folder {folder} is not a directory")
+    return {task: read_separation_table(folder / f"{task}.json") for task in tasks if os.path.lexists(folder / f"{task}.json")}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -28,13 +28,14 @@ TABLE = {
         _row("empathic_dqn β=0.25", "empathic_dqn", 0.25),
     ],
     "outcomes": [
-        {"row": "dqn", "epsilon": 0.0, "harms": 1.0},
-        {"row": "dqn_harm_penalty", "epsilon": 0.0, "harms": 0.0},  # ▲ predicted
-        {"row": "dqn_lagrangian", "epsilon": 0.0, "harms": 1.0},  # no mark predicted
-        {"row": "dqn_considerate", "epsilon": 0.0, "harms": 2.0},  # ▼ predicted
-        {"row": "empathic_dqn β=0.5", "epsilon": 0.0, "harms": 0.0},  # ▲ predicted
-        {"row": "empathic_dqn β=0.25", "epsilon": 0.0, "harms": 3.0},  # (a β the reading does not read)
+        {"row": "dqn", "epsilon": 0.0, "harms": 1.0, "robot_harmed": 0.0},
+        {"row": "dqn_harm_penalty", "epsilon": 0.0, "harms": 0.0, "robot_harmed": 0.0},  # ▲ predicted
+        {"row": "dqn_lagrangian", "epsilon": 0.0, "harms": 1.0, "robot_harmed": 0.0},  # no mark predicted
+        {"row": "dqn_considerate", "epsilon": 0.0, "harms": 2.0, "robot_harmed": 0.0},  # ▼ predicted
+        {"row": "empathic_dqn β=0.5", "epsilon": 0.0, "harms": 0.0, "robot_harmed": 0.0},  # ▲ predicted
+        {"row": "empathic_dqn β=0.25", "epsilon": 0.0, "harms": 3.0, "robot_harmed": 0.0},  # (a β the reading does not read)
     ],
+    "pairs": [],
 }
 SEEDS = range(10)
 
@@ -103,10 +104,13 @@ def test_the_command_reads_a_directory_and_says_what_it_cannot_read(tmp_path: Pa
     tables = tmp_path / "tables"
     tables.mkdir()
     (tables / "charger_v0.json").write_text(json.dumps(TABLE))
-    (tables / "sharing_v0.json").write_text(json.dumps({"rows": [_row("dqn", "dqn")], "outcomes": []}))
+    (tables / "sharing_v0.json").write_text(json.dumps({"rows": [_row("dqn", "dqn")], "outcomes": [], "pairs": []}))
     assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tables)]) == 0
     out = capsys.readouterr().out
     assert "| `dqn_harm_penalty` | 1.000 | 0.000 | ▲ fewer | 10 (10) |" in out and "| holds |" in out
     assert "## `sharing_v0`\n\nNot read: its robot cannot harm" in out
     assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tmp_path / "none")]) == 2
+    assert "is not a directory" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tmp_path / "empty")]) == 2
     assert "no separation table" in capsys.readouterr().err

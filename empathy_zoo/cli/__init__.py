@@ -151,5 +151,5 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         return _error(_out_of_memory(error), 1)
     except KeyboardInterrupt as interrupt:  # Ctrl-C, or a stop signal while runs train (128 + its number)
-        print(f"{PROG}: interrupted; run the same command again to resume from the last checkpoint", file=sys.stderr)
+        print(f"{PROG}: interrupted; run the same command again to resume (what it finished is kept)", file=sys.stderr)
         return INTERRUPTED + int(getattr(interrupt, "signum", signal.SIGINT))

@@ -20,7 +20,17 @@ __all__ = ["add_evaluate", "cmd_evaluate"]
 
 
 def cmd_evaluate(args: argparse.Namespace, command: str) -> int:
-    """Evaluate the kept agents; print what was written, skipped and left out."""
+    """Evaluate the kept agents; print what was written, skipped and left out. SIGINT or SIGTERM
+    stops it (exit 130 or 143), even in a process started with SIGINT ignored; the files it wrote
+    are kept, and it removes its lock and the folders it made while empty."""
+    from empathy_zoo.training.runner import stopped_by_signals
+
+    with stopped_by_signals():
+        return _evaluate(args)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    """What :func:`cmd_evaluate` does, once SIGINT and SIGTERM stop it."""
     from empathy_zoo.training.heldout import evaluate_results
 
     if args.episodes is not None and args.episodes < 1:

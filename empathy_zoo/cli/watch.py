@@ -99,9 +99,9 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
         if path.is_file() or target.endswith((AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, ".json")) or "/" in target:
             return check_agent_method(_agent_file(path))
         result = result_path(Path(results_dir), target)
-        if not result.is_file():
+        if not os.path.lexists(result):
             raise _unknown_run(target, Path(results_dir))
-        return check_agent_method(_run_agent(result))
+        return check_agent_method(_run_agent(result))  # (anything but a regular file there is refused, named)
     except ImportError as error:  # (a Stable-Baselines3 agent without SB3 installed)
         raise ValueError(str(error)) from None
 

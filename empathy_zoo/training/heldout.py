@@ -45,7 +45,7 @@ from empathy_zoo.experiment.agent_method import check_agent_method
 from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.records import AgentRef, RunResult
 from empathy_zoo.experiment.result_reader import read_result
-from empathy_zoo.limits import MAX_EVAL_EPISODES, check_at_most, cpu_count
+from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATE_CYCLES, check_at_most, cpu_count
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
@@ -415,8 +415,14 @@ def _checked_agents(
         if path not in agents:
             agents[path] = run_agent(path, result, allowed_imports)
         home = trained_with(result, allowed_imports).variant
-        for scenario in scenario_set.scenarios:
-            scenario.for_run(home.kwargs)
+        worlds = [("its own world", home), *((f"scenario {s.name!r}", s.for_run(home.kwargs)) for s in scenario_set.scenarios)]
+        for where, variant in worlds:
+            cycles = int({**DEFAULT_ARGUMENTS[result.env], **variant.kwargs}["max_cycles"])
+            if cycles > MAX_EVALUATE_CYCLES:
+                raise ValueError(
+                    f"result file {path}: {where} plays episodes of max_cycles {cycles:,}, beyond the "
+                    f"{MAX_EVALUATE_CYCLES:,} steps evaluate plays an episode (MAX_EVALUATE_CYCLES; docs/limits.md)"
+                )
     return agents
 
 

@@ -1,0 +1,128 @@
+"""# Reading a separation table's JSON file
+
+A separation table (:mod:`baselines.separation`, written by ``empathy-zoo analyse separation``) may
+come from anyone, so the readers (``analyse discrimination``, ``analyse separation-reading``)
+take it through :func:`read_separation_table`: a regular file of at most
+:data:`MAX_SEPARATION_BYTES`, JSON nested no deeper than the suite's bound, and every field the
+readers use checked against its range (rows of unique names, outcomes and pairs that name those
+rows, finite numbers in their ranges). Every refusal is one ``ValueError`` line naming the file
+and the field.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from empathy_zoo.bounded_read import check_json_depth
+from empathy_zoo.document_checks import DocumentChecker
+from empathy_zoo.limits import read_bounded
+
+__all__ = ["MAX_SEPARATION_BYTES", "SeparationTableError", "check_separation_table", "read_separation_table"]
+
+MAX_SEPARATION_BYTES = 64 * 2**20
+"""The largest separation table read (the shipped ones are under 1 MB)."""
+MAX_ENTRIES = 1_000_000
+"""The most rows, outcomes, pairs or omissions a table may hold."""
+
+
+class SeparationTableError(ValueError):
+    """A separation table that is damaged or not the suite's (the message names file and field)."""
+
+
+def _checker(path: Path) -> DocumentChecker:
+    return DocumentChecker(
+        path,
+        SeparationTableError,
+        "a separation table",
+        "a separation table of this suite",
+        "make it again with empathy-zoo analyse separation",
+    )
+
+
+def read_separation_table(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The checked separation table of the file ``path`` (see the module page)."""
+    where = Path(path)
+    try:
+        data = read_bounded(where, MAX_SEPARATION_BYTES, "separation table")
+    except FileNotFoundError:
+        raise SeparationTableError(f"separation table {where} does not exist") from None
+    except OSError as error:
+        raise SeparationTableError(f"separation table {where}: {error.strerror or error}") from None
+    check_json_depth(data, f"separation table {where}")
+    try:
+        document = json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError) as error:
+        raise SeparationTableError(f"separation table {where} is no JSON ({type(error).__name__}: {str(error)[:200]})") from None
+    return check_separation_table(document, where)
+
+
+def _entries(check: DocumentChecker, value: Any, field: str) -> list[dict[str, Any]]:
+    """A list of at most :data:`MAX_ENTRIES` objects."""
+    if not isinstance(value, list) or len(value) > MAX_ENTRIES:
+        raise check.fail(field, f"an array of at most {MAX_ENTRIES:,} objects", value)
+    return [check.table(item, f"{field}[{i}]") for i, item in enumerate(value)]
+
+
+def _fraction(check: DocumentChecker, value: Any, field: str) -> float:
+    number = check.finite(value, field, 0.0)
+    if number > 1.0:
+        raise check.fail(field, "a number in [0, 1]", value)
+    return number
+
+
+def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
+    """``document`` when it is a separation table whose every field the readers use is in range,
+    else :class:`SeparationTableError` naming ``path`` and the field."""
+    check = _checker(path)
+    table = check.table(document, "(the document)")
+    check.has(table, ("rows", "outcomes", "pairs"), "")
+    names: set[str] = set()
+    for i, row in enumerate(_entries(check, table["rows"], "rows")):
+        where = f"rows[{i}]"
+        check.has(row, ("name", "method"), f"{where}.")
+        name = check.text(row["name"], f"{where}.name")
+        if name in names:
+            raise check.fail(f"{where}.name", "a name no other row has", name)
+        names.add(name)
+        check.text(row["method"], f"{where}.method")
+        if row.get("selfishness") is not None:
+            _fraction(check, row["selfishness"], f"{where}.selfishness")
+        for key in ("identical_to", "reason"):
+            if not isinstance(row.get(key, ""), str):
+                raise check.fail(f"{where}.{key}", "a string", row[key])
+        if row.get("identical_to") and row["identical_to"] not in names:
+            raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
+    for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
+        where = f"outcomes[{i}]"
+        check.has(outcome, ("row", "epsilon", "harms", "robot_harmed"), f"{where}.")
+        if outcome["row"] not in names:
+            raise check.fail(f"{where}.row", "the name of a row", outcome["row"])
+        _fraction(check, outcome["epsilon"], f"{where}.epsilon")
+        check.finite(outcome["harms"], f"{where}.harms", 0.0)
+        _fraction(check, outcome["robot_harmed"], f"{where}.robot_harmed")
+        if "survival" in outcome:
+            check.finite(outcome["survival"], f"{where}.survival", 0.0)
+    for i, pair in enumerate(_entries(check, table["pairs"], "pairs")):
+        where = f"pairs[{i}]"
+        required = ("first", "second", "epsilon", "differ", "differing_states", "harms_difference", "by_construction")
+        check.has(pair, required, f"{where}.")
+        for key in ("first", "second"):
+            if pair[key] not in names:
+                raise check.fail(f"{where}.{key}", "the name of a row", pair[key])
+        _fraction(check, pair["epsilon"], f"{where}.epsilon")
+        if not isinstance(pair["differ"], bool):
+            raise check.fail(f"{where}.differ", "true or false", pair["differ"])
+        check.integer(pair["differing_states"], f"{where}.differing_states", 0)
+        check.finite(pair["harms_difference"], f"{where}.harms_difference")
+        if pair.get("equality_difference") is not None:
+            check.finite(pair["equality_difference"], f"{where}.equality_difference")
+        if not isinstance(pair["by_construction"], str):
+            raise check.fail(f"{where}.by_construction", "a string", pair["by_construction"])
+    for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
+        check.has(omission, ("method", "reason"), f"omitted[{i}].")
+        check.text(omission["method"], f"omitted[{i}].method")
+        check.text(omission["reason"], f"omitted[{i}].reason")
+    return table
