@@ -16,24 +16,21 @@ from typing import Literal
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
 from leaderboard.improvement import Improvement
+from leaderboard.legends import IMPROVEMENT_NOTE, coverage_note, multiplicity_note, resolve_coverage
 from leaderboard.measured_coverage import MeasuredCoverage
 from leaderboard.page import Block, BulletList, DefinitionList, Figure, Heading, Page, Paragraph, Section, Table
 from leaderboard.page_html import to_html
 from leaderboard.page_markdown import markdown_text, to_markdown
 from leaderboard.tables import (
-    IMPROVEMENT_NOTE,
     NO_INTERVAL_NOTE,
     PHASE_TITLES,
     SINGLE_SEED_MARK,
     ZERO_WIDTH_MARK,
     ZERO_WIDTH_NOTE,
     Provenance,
-    coverage_note,
     env_metrics,
     improvement_sections,
-    multiplicity_note,
     names_baselines,
-    resolve_coverage,
     table_rows,
     table_seeds,
     uncompared_note,
@@ -180,7 +177,7 @@ def score_sections(
 
     ``uncompared`` names the ``(env, label)`` rows no DQN row is compared with; ``reference_note``
     (Markdown) says which rows are the DQN reference (:func:`leaderboard.row_names.renaming_note`);
-    ``coverage``: the measured coverage each table's legend quotes (:func:`leaderboard.tables.coverage_note`;
+    ``coverage``: the measured coverage each table's legend quotes (:func:`leaderboard.legends.coverage_note`;
     by default the committed figures)."""
     against = names_baselines(provenance, improvements)
     return [
