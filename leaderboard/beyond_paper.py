@@ -17,6 +17,7 @@ import os
 from pathlib import Path
 
 from leaderboard.heldout import heldout_section
+from leaderboard.page_markdown import section_markdown
 from leaderboard.sources import load_results_dirs
 
 __all__ = ["BEYOND_TITLE", "BEYOND_LEAD", "beyond_the_paper"]
@@ -45,4 +46,4 @@ def beyond_the_paper(results_dir: str | os.PathLike[str], report_path: str | os.
         title=BEYOND_TITLE,
         lead=BEYOND_LEAD,
     )
-    return "" if section is None else section.markdown.strip("\n")
+    return "" if section is None else section_markdown(section.section)

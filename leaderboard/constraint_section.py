@@ -10,7 +10,6 @@ episodes. A leaderboard without such rows has no such section.
 
 from __future__ import annotations
 
-import html
 from collections.abc import Sequence
 
 import numpy as np
@@ -18,9 +17,9 @@ import numpy as np
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import final_episode_count, group_runs
 from leaderboard.constraint import ConstraintCheck, PhaseCost, constraint_satisfaction
-from leaderboard.tables import markdown_table, place_before_definitions
+from leaderboard.page import Paragraph, Section, Table
 
-__all__ = ["SECTION_TITLE", "constraint_rows", "add_constraint_section"]
+__all__ = ["SECTION_TITLE", "constraint_rows", "constraint_section"]
 
 SECTION_TITLE = "Constraint satisfaction"
 VERDICTS = {"above": "met", "inside": "undecided", "below": "violated"}
@@ -64,12 +63,11 @@ def _cell(phase: PhaseCost) -> str:
     return f"{phase.mean:.2f} [{phase.low:.2f}, {phase.high:.2f}]: {VERDICTS[phase.limit_lies]}"
 
 
-def add_constraint_section(results: Sequence[RunResult], markdown: str, html_page: str) -> tuple[str, str]:
-    """``markdown`` and ``html_page`` with the section placed before their metric definitions;
-    unchanged where no row records a price."""
+def constraint_section(results: Sequence[RunResult]) -> Section | None:
+    """The section of ``results``' priced rows; ``None`` where no row records a price."""
     rows = constraint_rows(results)
     if not rows:
-        return markdown, html_page
+        return None
     priced = {(env, label) for env, label, *_ in rows}
     lambdas = {key: [_prices(run).tolist() for run in runs] for key, runs in group_runs(results).items() if key in priced}
     header = ["Variant", "Method", "d", "training, final 10 %", "final greedy evaluation", "λ at the end", "λ still rising"]
@@ -90,11 +88,4 @@ def add_constraint_section(results: Sequence[RunResult], markdown: str, html_pag
         "(the Lagrangian method): the mean over seeds [its interval across seeds, as the tables'], and whether d lies "
         "above the interval (met), inside it (undecided) or below it (violated)."
     )
-    section_md = "\n".join(["", f"## {SECTION_TITLE}", "", intro, "", markdown_table(header, table), ""])
-    head = "".join(f"<th>{html.escape(cell)}</th>" for cell in header)
-    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in table)
-    section_html = (
-        f'<h2>{SECTION_TITLE}</h2>\n<p class="note">{html.escape(intro)}</p>\n'
-        f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>\n"
-    )
-    return place_before_definitions(markdown, html_page, section_md, section_html)
+    return Section(SECTION_TITLE, [Paragraph(intro, note=True), Table(header, table)])

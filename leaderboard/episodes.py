@@ -17,7 +17,7 @@ on the labels beside it only where two would share a name).
 The section (:func:`episodes_section`) is a table per variant (the run, the steps shown and the
 episode's metrics) with each row's GIF, linked from ``LEADERBOARD.md`` and from ``leaderboard.html``
 (relative to it: keep ``figures/`` beside the page; its PNG figures stay embedded);
-:func:`add_episodes_section` places it before the metric definitions. A
+:mod:`leaderboard.report` places it before the metric definitions. A
 leaderboard whose runs kept no agent has no such section and no GIF. A row whose agent file is
 missing, or is a Stable-Baselines3 agent without Stable-Baselines3 installed, is named in a note
 instead of shown.
@@ -29,7 +29,6 @@ One episode illustrates what a method's robot does; it measures nothing (the tab
 from __future__ import annotations
 
 import hashlib
-import html
 import unicodedata
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
@@ -46,7 +45,9 @@ from empathy_zoo.names import check_path_name, confined
 from empathy_zoo.policies import PolicyEntry, make_policy, recorded_entry
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs
-from leaderboard.tables import env_metrics, markdown_table, place_before_definitions
+from leaderboard.page import Block, Figure, Heading, Paragraph, Section, Table
+from leaderboard.page_markdown import markdown_text
+from leaderboard.tables import env_metrics
 
 __all__ = [
     "SECTION_TITLE",
@@ -64,7 +65,6 @@ __all__ = [
     "ForgedWorld",
     "play_row_episodes",
     "episodes_section",
-    "add_episodes_section",
 ]
 
 SECTION_TITLE = "Greedy episodes"
@@ -105,10 +105,9 @@ class RowEpisode:
 
 @dataclass
 class EpisodeSection:
-    """The section's Markdown and HTML, and the GIFs it shows."""
+    """The section, and the GIFs it shows."""
 
-    markdown: str
-    html: str
+    section: Section
     figures: dict[str, Path]
     """``{"figure:<variant>:episode_<row slug>": path}`` of every GIF written."""
     episodes: list[RowEpisode]
@@ -309,18 +308,8 @@ def _table(episodes: Sequence[RowEpisode], metrics: Sequence[str]) -> tuple[list
     return header, rows
 
 
-def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    head = "".join(f"<th>{html.escape(cell, quote=False)}</th>" for cell in header)
-    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell, quote=False)}</td>" for cell in row) + "</tr>" for row in rows)
-    return f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
-
-
 def _alt(episode: RowEpisode) -> str:
     return f"{episode.label}: a greedy episode of {episode.run_id}"
-
-
-def _md_alt(text: str) -> str:
-    return text.replace("\\", "\\\\").replace("[", "\\[").replace("]", "\\]")
 
 
 def episodes_section(
@@ -338,50 +327,15 @@ def episodes_section(
         return None
     out = Path(out_dir)
     base_env = {run.table_env: run.env for run in results}
-    markdown = ["", f"## {SECTION_TITLE}", "", _intro()]
-    page = [f"<h2>{SECTION_TITLE}</h2>", f'<p class="note">{_html_code(_intro())}</p>']
+    blocks: list[Block] = [Paragraph(_intro(), note=True)]
     figures: dict[str, Path] = {}
     for env in dict.fromkeys(episode.env for episode in episodes):
         mine = [episode for episode in episodes if episode.env == env]
         header, rows = _table(mine, env_metrics(env, base_env, METRIC_NAMES))
-        markdown += ["", f"### {env}", "", markdown_table(header, rows)]
-        page += [f"<h3>{html.escape(env)}</h3>", _html_table(header, rows)]
+        blocks += [Heading(markdown_text(env)), Table(header, rows)]
         for episode in mine:
             path = episode.gif.path
             figures[f"figure:{env}:episode_{episode.slug}"] = path
-            link = path.relative_to(out).as_posix()
-            markdown += ["", f"![{_md_alt(_alt(episode))}]({link})"]
-            page.append(f"<h4>{html.escape(episode.label)}</h4>")
-            page.append(f'<img alt="{html.escape(_alt(episode))}" src="{html.escape(link)}">')  # (linked: GIFs are large)
-    for note in notes:
-        markdown += ["", f"Note: {note}"]
-        page.append(f'<p class="note">Note: {html.escape(note)}</p>')
-    return EpisodeSection("\n".join(markdown) + "\n", "\n".join(page) + "\n", figures, episodes)
-
-
-def _html_code(text: str) -> str:
-    """``text``'s `code spans` as ``<code>``, escaped."""
-    pieces = text.split("`")
-    return "".join(
-        f"<code>{html.escape(p, quote=False)}</code>" if i % 2 else html.escape(p, quote=False) for i, p in enumerate(pieces)
-    )
-
-
-def add_episodes_section(
-    results: Sequence[RunResult],
-    out_dir: str | Path,
-    markdown: str,
-    html_page: str,
-    origins: Sequence[str],
-    allowed_imports: Collection[str] = (),
-) -> tuple[str, str, dict[str, Path]]:
-    """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Greedy episodes" section
-    placed before their metric definitions (after any section placed there before), and the GIFs
-    written; the pages unchanged and nothing written when no run kept an agent. ``origins``: the
-    directory each result was read from (:attr:`leaderboard.sources.ResultSet.origins`);
-    ``allowed_imports``: plug-in partner policies the runs may name (:func:`trained_world`)."""
-    section = episodes_section(results, out_dir, origins, allowed_imports=allowed_imports)
-    if section is None:
-        return markdown, html_page, {}
-    markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)
-    return markdown, html_page, section.figures
+            blocks.append(Figure(_alt(episode), path.relative_to(out).as_posix()))  # (its GIF draws the label as its title)
+    blocks += [Paragraph(f"Note: {note}", note=True) for note in notes]
+    return EpisodeSection(Section(SECTION_TITLE, blocks), figures, episodes)

@@ -54,7 +54,6 @@ that nothing changed.
 
 from __future__ import annotations
 
-import html
 import math
 import os
 from collections.abc import Sequence
@@ -80,18 +79,12 @@ from leaderboard.heldout_scores import (
     metric_definition,
     readings,
 )
-from leaderboard.html_images import img_tag
 from leaderboard.improvement import VERDICT_MARKS
-from leaderboard.tables import (
-    NO_INTERVAL_NOTE,
-    ZERO_WIDTH_NOTE,
-    format_interval,
-    format_mean,
-    markdown_table,
-    place_before_definitions,
-)
+from leaderboard.page import Block, Figure, Heading, Paragraph, Section, Table
+from leaderboard.page_markdown import markdown_text
+from leaderboard.tables import NO_INTERVAL_NOTE, ZERO_WIDTH_NOTE, format_interval, format_mean
 
-__all__ = ["HeldoutSection", "heldout_section", "add_heldout_section"]
+__all__ = ["HeldoutSection", "heldout_section"]
 
 
 def _metric_title(metric: str) -> str:
@@ -210,24 +203,21 @@ def _references(group: HeldoutGroup) -> str:
     """Which DQN row each row is compared with, where the group has more than one DQN row."""
     if sum(group.is_dqn(label) for label in group.runs) < 2:
         return ""
-    pairs = [f"{label} with {reference}" for label, reference in group.dqn_of.items() if reference is not None]
+    pairs = [
+        f"{markdown_text(label)} with {markdown_text(reference)}"
+        for label, reference in group.dqn_of.items()
+        if reference is not None
+    ]
     return " Rows compared with DQN: " + "; ".join(pairs) + "." if pairs else ""
 
 
 @dataclass
 class HeldoutSection:
-    """The section's Markdown and HTML, and the figures it links."""
+    """The section, and the figures it shows."""
 
-    markdown: str
-    html: str
+    section: Section
     figures: dict[str, Path]
     """``{"figure:<env>:heldout_<set>": path}`` of every figure written."""
-
-
-def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    head = "".join(f"<th>{html.escape(cell, quote=False)}</th>" for cell in header)
-    body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell, quote=False)}</td>" for cell in row) + "</tr>" for row in rows)
-    return f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
 
 
 def heldout_section(
@@ -251,62 +241,32 @@ def heldout_section(
     if not groups and not notes:
         return None
     out = Path(out_dir)
-    markdown = ["", f"## {title}"] + (["", lead] if lead else [])
-    page = [f"<h2>{html.escape(title)}</h2>"] + ([f"<p>{html.escape(lead)}</p>"] if lead else [])
+    blocks: list[Block] = [Paragraph(lead)] if lead else []
     figures: dict[str, Path] = {}
     for group in groups:
         cells = heldout_cells(group)
         found = readings(group, cells)
-        title = f"{group.env}: scenario set {group.scenario_set.name}"
-        markdown += ["", f"### {title}", "", _intro(group, cells), ""]
-        page += [f"<h3>{html.escape(title)}</h3>", f'<p class="note">{html.escape(_intro(group, cells))}</p>']
+        heading = f"{group.env}: scenario set {group.scenario_set.name}"
         reasons = [[TRAINED_WITH, "the run's own partners and world"]] + [
             [s.name, s.reason] for s in group.scenario_set.scenarios
         ]
-        markdown += [
-            "| Scenario | Why it is there |",
-            "|:---|:---|",
-            *(f"| {name} | {reason.replace('|', chr(92) + '|')} |" for name, reason in reasons),
+        blocks += [
+            Heading(markdown_text(heading)),
+            Paragraph(_intro(group, cells), note=True),
+            Table(["Scenario", "Why it is there"], reasons, left_columns=2),
         ]
-        page.append(_html_table(["Scenario", "Why it is there"], reasons))
         for table_title, header, rows in _tables(group, cells, digits):
-            markdown += ["", f"#### {table_title}", "", markdown_table(header, rows)]
-            page += [f"<h4>{html.escape(table_title)}</h4>", _html_table(header, rows)]
+            blocks += [Heading(table_title, 4), Table(header, rows)]
         if group.effect is not None:
             header, rows = _reading_table(group, found, digits)
-            heading = f"Does its {EFFECT_NAMES.get(group.effect, group.effect + ' avoidance')} generalise?"
-            markdown += ["", f"#### {heading}", "", markdown_table(header, rows) if rows else "(no method but DQN)", ""]
-            markdown.append(_rule_text(group))
-            page += [f"<h4>{html.escape(heading)}</h4>", _html_table(header, rows)]
-            page.append(f'<p class="note">{html.escape(_rule_text(group))}</p>')
+            blocks += [
+                Heading(f"Does its {EFFECT_NAMES.get(group.effect, group.effect + ' avoidance')} generalise?", 4),
+                Table(header, rows) if rows else Paragraph("(no method but DQN)"),
+                Paragraph(_rule_text(group), note=True),
+            ]
         path = plot_heldout(group, cells, out / figures_dir)
-        key = f"figure:{group.env}:heldout_{group.scenario_set.name}"
-        figures[key] = path
-        link = path.relative_to(out).as_posix()
-        markdown += ["", f"![{title}: with its own partners against held-out ones]({link})"]
-        page.append(img_tag(path, title))
-    for note in notes:
-        markdown += ["", f"Note: {note}"]
-        page.append(f'<p class="note">Note: {html.escape(note)}</p>')
-    return HeldoutSection("\n".join(markdown) + "\n", "\n".join(page) + "\n", figures)
-
-
-def add_heldout_section(
-    results_dirs: ResultsDirs,
-    results: Sequence[RunResult],
-    out_dir: str | os.PathLike[str],
-    markdown: str,
-    html_page: str,
-    origins: Sequence[str] | None = None,
-    extra: Sequence[tuple[RunResult, EvaluationResult, Path]] = (),
-) -> tuple[str, str, dict[str, Path]]:
-    """``markdown`` and ``html_page`` (the leaderboard's pages) with the "Held-out partners" section
-    placed before their metric definitions, and the section's figures; the pages unchanged and no
-    figures when ``results_dirs`` hold no evaluation files and ``extra`` is empty. ``origins`` and
-    ``extra`` (evaluations read from elsewhere, matched to their runs): as :func:`load_heldout`
-    takes them (``origins`` needed with several directories)."""
-    section = heldout_section(results_dirs, results, out_dir, origins, extra=extra)
-    if section is None:
-        return markdown, html_page, {}
-    markdown, html_page = place_before_definitions(markdown, html_page, section.markdown, section.html)
-    return markdown, html_page, section.figures
+        figures[f"figure:{group.env}:heldout_{group.scenario_set.name}"] = path
+        alt = f"{heading}: with its own partners against held-out ones"
+        blocks.append(Figure(alt, path.relative_to(out).as_posix(), path.read_bytes()))
+    blocks += [Paragraph(f"Note: {note}", note=True) for note in notes]
+    return HeldoutSection(Section(title, blocks), figures)

@@ -22,7 +22,6 @@ environments have no normalized metric has no such section.
 
 from __future__ import annotations
 
-import html
 import math
 import os
 from collections.abc import Sequence
@@ -34,12 +33,13 @@ from empathy_zoo.environments import ENGINES
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_RANGES, PER_OTHER_AGENT
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, group_runs, run_scalars
-from leaderboard.html_images import img_tag
+from leaderboard.page import Block, Figure, Heading, Paragraph, Section, Table
+from leaderboard.page_markdown import markdown_text
 from leaderboard.profile_plot import plot_profiles
 from leaderboard.profiles import GAMMA, Profile, optimality_gaps, performance_profiles
 from leaderboard.row_names import dqn_rows_of
 from leaderboard.run_facts import env_argument
-from leaderboard.tables import format_mean, markdown_table, place_before_definitions, table_metrics
+from leaderboard.tables import format_mean, table_metrics
 
 __all__ = [
     "SECTION_TITLE",
@@ -48,7 +48,7 @@ __all__ = [
     "normalized_score",
     "normalized_scores",
     "profile_metrics",
-    "add_profile_section",
+    "profile_section",
 ]
 
 SECTION_TITLE = "Performance profiles and optimality gap"
@@ -153,46 +153,35 @@ def _gap_table(
     return header, rows, panels
 
 
-def add_profile_section(
+def profile_section(
     results: Sequence[RunResult],
     out_dir: str | os.PathLike[str],
-    markdown: str,
-    html_page: str,
     *,
     figures_dir: str = "figures",
     random_state: int = DEFAULT_SEED,
     n_resamples: int = N_RESAMPLES,
     confidence: float = CONFIDENCE,
-) -> tuple[str, str, dict[str, Path]]:
-    """``markdown`` and ``html_page`` with the section placed before their metric definitions, and
-    ``{"figure:<env>:profiles": path}`` of the figures written into ``out_dir / figures_dir``; the
-    pages unchanged and no figures where no environment has a normalized metric."""
+) -> tuple[Section | None, dict[str, Path]]:
+    """The section of ``results``, and ``{"figure:<env>:profiles": path}`` of the figures written
+    into ``out_dir / figures_dir`` (linked relative to ``out_dir``); ``(None, {})`` where no
+    environment has a normalized metric."""
     base_env = {run.table_env: run.env for run in results}
     envs = [(env, profile_metrics(env, base_env[env])) for env in sorted(base_env)]
     envs = [(env, metrics) for env, metrics in envs if metrics]
     if not envs:
-        return markdown, html_page, {}
+        return None, {}
     out = Path(out_dir)
-    intro = _intro(n_resamples, random_state, confidence)
-    md = ["", f"## {SECTION_TITLE}", "", intro]
-    page = [f"<h2>{html.escape(SECTION_TITLE)}</h2>", f'<p class="note">{html.escape(intro)}</p>']
+    blocks: list[Block] = [Paragraph(_intro(n_resamples, random_state, confidence), note=True)]
     figures: dict[str, Path] = {}
     dqn = dqn_rows_of(results)
     for env, metrics in envs:
         header, rows, panels = _gap_table(results, env, metrics, n_resamples, random_state, confidence)
-        heading = f"Optimality gap (γ = {GAMMA:g}; lower is better)"
         path = plot_profiles(env, panels, out / figures_dir, {label for row_env, label in dqn if row_env == env}, confidence)
         figures[f"figure:{env}:profiles"] = path
-        link = path.relative_to(out).as_posix()
-        alt = f"{env}: performance profiles"
-        md += ["", f"### {env}", "", f"#### {heading}", "", markdown_table(header, rows), "", f"![{alt}]({link})"]
-        head = "".join(f"<th>{html.escape(cell)}</th>" for cell in header)
-        body = "\n".join("<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in rows)
-        page += [
-            f"<h3>{html.escape(env)}</h3>",
-            f"<h4>{html.escape(heading)}</h4>",
-            f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>",
-            img_tag(path, alt),
+        blocks += [
+            Heading(markdown_text(env)),
+            Heading(f"Optimality gap (γ = {GAMMA:g}; lower is better)", 4),
+            Table(header, rows),
+            Figure(f"{env}: performance profiles", path.relative_to(out).as_posix(), path.read_bytes()),
         ]
-    markdown, html_page = place_before_definitions(markdown, html_page, "\n".join(md) + "\n", "\n".join(page) + "\n")
-    return markdown, html_page, figures
+    return Section(SECTION_TITLE, blocks), figures

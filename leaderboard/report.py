@@ -34,26 +34,21 @@ from leaderboard.aggregate import (
     score_runs,
 )
 from leaderboard.budgets import budgets_of
-from leaderboard.constraint_section import add_constraint_section
-from leaderboard.episodes import add_episodes_section
+from leaderboard.constraint_section import constraint_section
+from leaderboard.episodes import episodes_section
 from leaderboard.evaluation_dirs import MatchedEvaluation, match_evaluations
-from leaderboard.heldout import add_heldout_section
+from leaderboard.heldout import heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
+from leaderboard.leaderboard_page import TRADEOFF, definitions_section, leaderboard_page, score_sections
+from leaderboard.page import Section
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import markdown_text, to_markdown
 from leaderboard.plots import plot_learning_curves
-from leaderboard.profile_section import add_profile_section
+from leaderboard.profile_section import profile_section
 from leaderboard.reference_curves import reference_refusals
 from leaderboard.row_names import dqn_rows_of, renaming_note
 from leaderboard.sources import ResultSet, load_results_dirs
-from leaderboard.tables import (
-    TRADEOFF,
-    Provenance,
-    RowFacts,
-    csv_text,
-    env_metrics,
-    html_report,
-    markdown_report,
-    markdown_text,
-)
+from leaderboard.tables import Provenance, RowFacts, csv_text, env_metrics
 from leaderboard.tradeoff import plot_tradeoffs
 
 __all__ = ["MARKDOWN_NAME", "CSV_NAME", "HTML_NAME", "FIGURES_DIR", "write_leaderboard"]
@@ -227,37 +222,30 @@ def _render(
         rows = {row: RowFacts(budgets_of(runs)[0], directories[row]) for row, runs in group_runs(results).items()}
     tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env, dqn_rows)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
-    links = {key: path.relative_to(out).as_posix() for key, path in figures.items()}
-    pngs = {key: path.read_bytes() for key, path in figures.items()}
-    markdown_note = renaming_note(read.renamed, bool(dqn_rows), markdown_text)
-    markdown = markdown_report(
+    files = {key: (path.relative_to(out).as_posix(), path.read_bytes()) for key, path in figures.items()}
+    sections = score_sections(
         scores,
         provenance,
-        links,
+        files,
         base_env=base_env,
         improvements=improvements,
         uncompared=uncompared,
-        reference_note=markdown_note,
+        reference_note=renaming_note(read.renamed, bool(dqn_rows), markdown_text),
     )
-    html = html_report(
-        scores,
-        provenance,
-        pngs,
-        base_env=base_env,
-        improvements=improvements,
-        uncompared=uncompared,
-        reference_note=renaming_note(read.renamed, bool(dqn_rows)),
+    constraint = constraint_section(results)
+    profiles, profile_figures = profile_section(
+        results, out, random_state=random_state, n_resamples=n_resamples, confidence=confidence
     )
-    markdown, html = add_constraint_section(results, markdown, html)
-    markdown, html, profile_figures = add_profile_section(
-        results, out, markdown, html, random_state=random_state, n_resamples=n_resamples, confidence=confidence
-    )
-    markdown, html, heldout_figures = add_heldout_section(
-        dirs, results, out, markdown, html, origins=read.origins, extra=evaluations
-    )
-    markdown, html, episode_figures = add_episodes_section(
-        results, out, markdown, html, origins=read.origins, allowed_imports=allowed_imports
-    )
+    heldout = heldout_section(dirs, results, out, read.origins, extra=evaluations)
+    episodes = episodes_section(results, out, read.origins, allowed_imports=allowed_imports)
+    added: list[Section | None] = [
+        constraint,
+        profiles,
+        heldout.section if heldout else None,
+        episodes.section if episodes else None,
+    ]
+    page = leaderboard_page([*sections, *(section for section in added if section is not None), definitions_section()])
+    markdown, html = to_markdown(page), to_html(page)
     paths = {
         "csv": _write_page(out / CSV_NAME, csv_text(scores, provenance, rows)),
         "markdown": _write_page(out / MARKDOWN_NAME, markdown),
@@ -265,8 +253,8 @@ def _render(
     }
     paths.update({f"figure:{env}:{metric}": path for (env, metric), path in figures.items()})
     paths.update(profile_figures)
-    paths.update(heldout_figures)
-    paths.update(episode_figures)
+    paths.update(heldout.figures if heldout is not None else {})
+    paths.update(episodes.figures if episodes is not None else {})
     return paths
 
 

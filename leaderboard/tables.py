@@ -1,19 +1,21 @@
-"""Leaderboard formatting: Markdown, CSV and a self-contained HTML page from computed scores.
+"""The leaderboard's tables and their legends, and its CSV, from computed scores.
 
-Formatting only: every number comes from :func:`leaderboard.aggregate.score_runs`; every output
-carries the metric definitions and its :class:`Provenance` (command, package version, commit).
+Formatting only: every number comes from :func:`leaderboard.aggregate.score_runs`. What a cell
+says (:func:`format_mean`), the rows of each table (:func:`table_rows`, :func:`improvement_sections`)
+and the page's :class:`Provenance` (command, package version, commit); the long-format CSV
+(:func:`csv_text`). The legends under the tables are :mod:`leaderboard.legends`'; the pages are
+built of both by :mod:`leaderboard.leaderboard_page`. (:func:`markdown_text` and
+:func:`markdown_table` are :mod:`leaderboard.page_markdown`'s, named here too.)
 """
 
 from __future__ import annotations
 
 import csv
-import html
 import io
 import math
-import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 from empathy_zoo.environments import entry_of
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
@@ -29,38 +31,17 @@ from leaderboard.aggregate import (
     t_level,
 )
 from leaderboard.budgets import RunBudget, shows_evaluation
-from leaderboard.html_images import img_tag
-from leaderboard.improvement import (
-    TOO_FEW_SEEDS,
-    VERDICT_MARKS,
-    VERDICT_NOTE,
-    Improvement,
-    can_decide,
-    smallest_decidable_seeds,
-)
-from leaderboard.measured_coverage import SEED_TARGET, MeasuredCoverage, committed_coverage, seeds_needed
-from leaderboard.multiplicity import (
-    FAMILY_LEVEL,
-    HOLM_MARK,
-    benjamini_hochberg_adjusted,
-    expected_false_marks,
-    holm_adjusted,
-    rejected,
-)
+from leaderboard.improvement import VERDICT_MARKS, Improvement
+from leaderboard.legends import holm_survivors
+from leaderboard.multiplicity import HOLM_MARK
+from leaderboard.page_markdown import markdown_table, markdown_text
 from leaderboard.sources import BUDGET_SEPARATOR, ResultsDir
 
 __all__ = [
-    "HTML_ANCHOR",
-    "MARKDOWN_ANCHOR",
-    "place_before_definitions",
     "PHASE_TITLES",
     "SINGLE_SEED_MARK",
     "ZERO_WIDTH_MARK",
     "ZERO_WIDTH_NOTE",
-    "TWO_LEVEL_COMMAND",
-    "coverage_note",
-    "holm_survivors",
-    "multiplicity_note",
     "CSV_COLUMNS",
     "COMPARISON_CSV_COLUMNS",
     "RowFacts",
@@ -74,9 +55,8 @@ __all__ = [
     "uncompared_note",
     "markdown_table",
     "markdown_text",
-    "markdown_report",
+    "table_seeds",
     "csv_text",
-    "html_report",
 ]
 
 PHASE_TITLES: dict[str, str] = {
@@ -93,8 +73,6 @@ ZERO_WIDTH_NOTE = (
     "which does not mean that another seed could not differ (the measured coverage says how often that misleads)."
 )
 """The legend of :data:`ZERO_WIDTH_MARK`."""
-TWO_LEVEL_COMMAND = "python benchmarks/interval_coverage.py --two-level"
-"""The command that measures the coverage the legends print (:mod:`leaderboard.measured_coverage`)."""
 CSV_COLUMNS: tuple[str, ...] = (
     "env",
     "method_label",
@@ -199,10 +177,6 @@ class Provenance:
         return heading, lines, budget
 
 
-def _single_seed_note() -> str:
-    return f"{SINGLE_SEED_MARK} a single seed: no spread to measure."
-
-
 NO_INTERVAL_NOTE = (
     f"(n=1: no interval), (n=2: no interval): a mean over fewer than {MIN_INTERVAL_SEEDS} seeds is printed without "
     "its interval, which would not mean anything: with one seed there is no spread to measure, and with two the "
@@ -249,10 +223,6 @@ def env_metrics(env: str, base_env: Mapping[str, str] | None, metrics: Sequence[
     return table_metrics(env, (base_env or {}).get(env)) or metrics
 
 
-def _envs(scores: Sequence[Score]) -> list[str]:
-    return sorted({score.env for score in scores})
-
-
 def table_rows(
     scores: Sequence[Score], env: str, phase: str, metrics: Sequence[str] = METRIC_NAMES, digits: int = 2
 ) -> tuple[list[str], list[list[str]]]:
@@ -276,70 +246,6 @@ def table_rows(
             )
         rows.append(row)
     return header, rows
-
-
-def _sections(
-    scores: Sequence[Score],
-    metrics: Sequence[str],
-    digits: int,
-    base_env: Mapping[str, str] | None = None,
-) -> Iterator[tuple[str, str, list[str], list[list[str]]]]:
-    for env in _envs(scores):
-        for phase in PHASES:
-            header, rows = table_rows(scores, env, phase, env_metrics(env, base_env, metrics), digits)
-            if rows:
-                yield env, phase, header, rows
-
-
-def _family(cells: Sequence[Improvement]) -> list[int]:
-    """The indices of ``cells`` that can give a ▲ or ▼ (seed counts that can reach 5 %, a finite p):
-    the family of tests a page's marks come from."""
-    return [i for i, cell in enumerate(cells) if can_decide(cell.n_seeds, cell.n_baseline_seeds) and math.isfinite(cell.p_value)]
-
-
-def holm_survivors(cells: Sequence[Improvement], level: float = FAMILY_LEVEL) -> list[bool]:
-    """Per cell of ``cells`` (a page's), whether its ▲ / ▼ survives Holm's adjustment
-    (:func:`leaderboard.multiplicity.holm_adjusted`) over the cells that can give one, at family-wise ``level``."""
-    family = _family(cells)
-    adjusted = holm_adjusted([cells[i].p_value for i in family])
-    survives = [False] * len(cells)
-    for i, keep in zip(family, rejected(adjusted, level), strict=True):
-        survives[i] = bool(keep) and cells[i].verdict in ("better", "worse")
-    return survives
-
-
-def _number(value: float) -> str:
-    return f"{value:.2g}" if value < 10 else f"{value:.0f}"
-
-
-def multiplicity_note(
-    cells: Sequence[Improvement], level: float = FAMILY_LEVEL, where: str = "this page's P(improves on DQN) tables hold"
-) -> str:
-    """The sentence on a page's ▲ / ▼ as a family (``where`` names the tables, ending in a verb):
-    how many false marks its cells would give where no method differed from DQN, and how many
-    marks survive Holm (:data:`HOLM_MARK`) and Benjamini–Hochberg over them."""
-    family = _family(cells)
-    marked = [i for i in family if cells[i].verdict in ("better", "worse")]
-    holm = holm_survivors(cells, level)
-    bh = rejected(benjamini_hochberg_adjusted([cells[i].p_value for i in family]), level)
-    by_bh = sum(1 for i, keep in zip(family, bh, strict=True) if keep and i in marked)
-    percent = f"{100 * level:.0f} %"
-    smallest = min((2.0 / math.comb(cells[i].n_seeds + cells[i].n_baseline_seeds, cells[i].n_seeds) for i in family), default=0.0)
-    out_of_reach = (
-        f" No cell can: the smallest p these seed counts can give, {smallest:.2g}, is above {percent} / {len(family)}."
-        if family and smallest * len(family) > level + 1e-12
-        else ""
-    )
-    if not family:
-        return f"No cell of {where.rsplit(' ', 1)[0]} can give a ▲ or ▼ (too few seeds), so none can be a false mark."
-    return (
-        f"Many cells, many chances: {where} {len(family)} cells that can give a "
-        f"▲ or ▼, so ≈ {_number(expected_false_marks(len(family), level))} false marks expected among {len(family)} "
-        f"cells at {percent} if no method differed from DQN at all (each test's size is at most {percent}). "
-        f"{HOLM_MARK}: the mark survives Holm's adjustment of the p-values over those {len(family)} cells (family-wise "
-        f"{percent}: the chance of even one false {HOLM_MARK} is at most {percent}); {sum(holm)} of the {len(marked)} "
-        f"marks do ({by_bh} survive Benjamini–Hochberg at a false discovery rate of {percent}).{out_of_reach}"
-    )
 
 
 def improvement_sections(
@@ -390,216 +296,13 @@ def uncompared_note(uncompared: Sequence[tuple[str, str]], env: str | None, mark
     return "Not compared with DQN (no DQN row of their variant and budget): " + ", ".join(labels) + "."
 
 
-IMPROVEMENT_NOTE = (
-    "P(improves on DQN): the probability that a run of the method does better than a run of DQN in that "
-    "metric (fewer harms is better; 0.5 is a tie), over every pair of runs. ▲ / ▼: better / worse than DQN "
-    "by the exact two-sided Mann–Whitney permutation test at 5 % (every split of the runs counted, midranks "
-    "for ties); [interval]: the one that inverts that test (P ± the test's critical distance from 0.5), so "
-    f"▲ / ▼ stand exactly where it lies wholly above / below 0.5. {VERDICT_MARKS[TOO_FEW_SEEDS]}: "
-    f"{TOO_FEW_SEEDS} — with n runs against m where 2 / C(n + m, n) > 5 % (3 against 3: p = 0.1), even every "
-    "run of one side beating every run of the other is not rare enough, so no ▲ or ▼ can be given and the "
-    f"interval always contains 0.5; {smallest_decidable_seeds()} against {smallest_decidable_seeds()} (or 5 "
-    f"against 3) is the least that can give one. {VERDICT_NOTE} "
-    "IQM: the method's interquartile mean over seeds (its mean below 4 seeds)."
-)
-
-
-def _table_seeds(scores: Sequence[Score], env: str, phase: str) -> list[int]:
+def table_seeds(scores: Sequence[Score], env: str, phase: str) -> list[int]:
     """The seed counts of ``env``'s rows in ``phase`` that show an interval, ascending."""
     rows: dict[str, int] = {}
     for score in scores:
         if score.env == env and score.phase == phase:
             rows[score.method_label] = max(rows.get(score.method_label, 0), score.n_seeds)
     return sorted({n for n in rows.values() if n >= MIN_INTERVAL_SEEDS})
-
-
-def coverage_note(measured: MeasuredCoverage | None, phase: str, metrics: Sequence[str], seeds: Sequence[int]) -> str:
-    """The legend of one table (Markdown, the command in backticks): per seed count of its rows, the
-    coverage of its interval measured per metric (:class:`leaderboard.measured_coverage.MeasuredCoverage`),
-    "not measured" where there is none."""
-    if not seeds:
-        return ""
-    parts = []
-    for n in seeds:
-        found = {metric: measured.coverage(metric, phase, n) if measured is not None else None for metric in metrics}
-        figures = []
-        for metric, figure in found.items():
-            if figure is not None:
-                coverage, flat = figure
-                zero = f" ({100 * flat:.0f} % zero-width)" if flat >= 0.005 else ""
-                figures.append(f"{metric} {100 * coverage:.1f} %{zero}")
-        missing = [metric for metric, figure in found.items() if figure is None]
-        if not figures:
-            parts.append(f"at {n} seeds: not measured")
-            continue
-        rest = f"; {', '.join(missing)} not measured" if missing else ""
-        parts.append(f"at {n} seeds: {', '.join(figures)}{rest}")
-    command = measured.command if measured is not None else TWO_LEVEL_COMMAND
-    return (
-        f"Coverage of these intervals (nominal 97.5 %, for a claimed 95 %) measured by `{command}` (each shipped "
-        f"row's runs resampled, then each drawn run's episodes): {'; '.join(parts)}."
-        + _provisional(measured, phase, metrics, seeds)
-    )
-
-
-def _provisional(measured: MeasuredCoverage | None, phase: str, metrics: Sequence[str], seeds: Sequence[int]) -> str:
-    """A sentence saying the table's intervals and verdicts are provisional where a row has fewer
-    seeds than :func:`~leaderboard.measured_coverage.seeds_needed` asks for its measured metrics
-    (``""`` otherwise, or where nothing is measured)."""
-    if measured is None:
-        return ""
-    measured_reads = {(metric, kind) for (metric, kind, _) in measured.entries}
-    reads = [(metric, phase) for metric in metrics if (metric, phase) in measured_reads]
-    needed = seeds_needed(measured, reads, SEED_TARGET) if reads else None
-    if needed is None or min(seeds) >= needed:
-        return ""
-    return (
-        f" With fewer than {needed} seeds these intervals, and the verdicts that read them, are provisional: "
-        f"{needed} is the fewest at which every metric here was measured to be covered at least "
-        f"{100 * SEED_TARGET:.0f} % (`leaderboard.measured_coverage.seeds_needed`)."
-    )
-
-
-def _measured(coverage: MeasuredCoverage | Literal["committed"] | None) -> MeasuredCoverage | None:
-    return committed_coverage() if coverage == "committed" else coverage  # type: ignore[return-value]
-
-
-def _has_zero_width(rows: Sequence[Sequence[str]]) -> bool:
-    return any(cell.endswith(f" {ZERO_WIDTH_MARK}") for row in rows for cell in row[2:])
-
-
-def _has_single_seed(scores: Sequence[Score]) -> bool:
-    return any(score.n_seeds == 1 for score in scores)
-
-
-def _has_few_seeds(scores: Sequence[Score]) -> bool:
-    return any(0 < score.n_seeds < MIN_INTERVAL_SEEDS for score in scores)
-
-
-_MARKDOWN_SYNTAX = re.compile(r"[\\`*~\[\]<>&|]|(?<!\w)_|_(?!\w)")
-"""What text must not carry unescaped into Markdown to read as itself: a backslash, code, emphasis,
-strike-through, link and HTML characters, a table's ``|``, and a ``_`` at a word's edge (one
-inside a word, ``other_return``, is no emphasis and stays as it is)."""
-_MARKDOWN_CELL = re.compile(r"[\\<>&|]")
-"""What a cell of figures must not carry unescaped: HTML characters and a table's ``|``."""
-_LINE_BREAKS = re.compile(r"[\r\n\u2028\u2029]+")
-
-
-def markdown_text(text: str) -> str:
-    """``text`` (a label, a name: data) escaped for Markdown, so it reads as itself: no HTML (a
-    label ``<script>`` is shown, not run), no link, no emphasis, no code, no table cell of its
-    own, and on one line."""
-    return _MARKDOWN_SYNTAX.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
-
-
-def _md_cell(text: str) -> str:
-    return _MARKDOWN_CELL.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
-
-
-def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]], text_columns: int = 1) -> str:
-    """A Markdown table; the first column is left-aligned, the others right-aligned. The first
-    ``text_columns`` cells of each row (a method's label, and the DQN row it is compared with)
-    are :func:`markdown_text`; in every cell, HTML characters and ``|`` are escaped."""
-    lines = [
-        "| " + " | ".join(_md_cell(cell) for cell in header) + " |",
-        "|" + "|".join([":---", *(["---:"] * (len(header) - 1))]) + "|",
-    ]
-    lines += [
-        "| " + " | ".join(markdown_text(cell) if i < text_columns else _md_cell(cell) for i, cell in enumerate(row)) + " |"
-        for row in rows
-    ]
-    return "\n".join(lines)
-
-
-def markdown_report(
-    scores: Sequence[Score],
-    provenance: Provenance,
-    figures: Mapping[tuple[str, str], str] | None = None,
-    metrics: Sequence[str] = METRIC_NAMES,
-    digits: int = 2,
-    base_env: Mapping[str, str] | None = None,
-    improvements: Sequence[Improvement] = (),
-    uncompared: Sequence[tuple[str, str]] = (),
-    reference_note: str = "",
-    coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
-) -> str:
-    """The ``LEADERBOARD.md`` page: per-env tables, figure links, definitions, provenance.
-
-    ``figures`` maps ``(env, metric)`` to a link (a path relative to the page); ``uncompared``
-    names the ``(env, label)`` rows no DQN row is compared with (:func:`uncompared_note`);
-    ``reference_note`` (Markdown) says which rows are the DQN reference, under the paragraph on
-    what a cell means (:func:`leaderboard.row_names.renaming_note`); ``coverage``: the measured
-    coverage each table's legend quotes (:func:`coverage_note`; by default the committed figures).
-    """
-    figures = figures or {}
-    measured = _measured(coverage)
-    zero_width = False
-    against = names_baselines(provenance, improvements)
-    lines = [
-        "# empathy-zoo leaderboard",
-        "",
-        f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, commit `{provenance.commit_text()}`.",
-    ]
-    if provenance.comparison():
-        heading, directories, budget = provenance.source_lines()
-        lines += ["", heading, "", *(f"- {line}" for line in directories), *(["", budget] if budget else [])]
-    lines += ["", provenance.method_text()]
-    lines += ["", reference_note] if reference_note else []
-    current_env = None
-    for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
-        if env != current_env:
-            lines += _markdown_improvements(improvements, current_env, digits, against, uncompared)
-            lines += _markdown_figures(figures, current_env)
-            lines += ["", f"## {env}"]
-            current_env = env
-        lines += ["", f"### {PHASE_TITLES[phase]}", "", markdown_table(header, rows)]
-        note = coverage_note(measured, phase, header[2:], _table_seeds(scores, env, phase))
-        lines += ["", note] if note else []
-        zero_width = zero_width or _has_zero_width(rows)
-    lines += _markdown_improvements(improvements, current_env, digits, against, uncompared)
-    lines += _markdown_figures(figures, current_env)
-    if _has_single_seed(scores):
-        lines += ["", _single_seed_note()]
-    if zero_width:
-        lines += ["", ZERO_WIDTH_NOTE]
-    if _has_few_seeds(scores):
-        lines += ["", NO_INTERVAL_NOTE]
-    lines += ["", "## Metric definitions", ""]
-    lines += [f"- **{metric}**: {METRIC_DEFINITIONS.get(metric, '(no definition)')}" for metric in metrics]
-    return "\n".join(lines) + "\n"
-
-
-TRADEOFF = "tradeoff"
-"""The figure key (in place of a metric) of an env's task-against-side-effect figure."""
-
-
-def _figure_sections(figures: Mapping[tuple[str, str], Any], env: str | None) -> list[tuple[str, list[tuple[str, Any]]]]:
-    """``[(heading, [(alt text, figure)])]`` of ``env``: its trade-off, then its learning curves."""
-    mine = [(metric, figure) for (figure_env, metric), figure in figures.items() if figure_env == env]
-    tradeoff = [(f"{env}: task against side effect", figure) for metric, figure in mine if metric == TRADEOFF]
-    curves = [(f"{env}: {metric} vs training steps", figure) for metric, figure in mine if metric != TRADEOFF]
-    return [(heading, items) for heading, items in (("Task against side effect", tradeoff), ("Learning curves", curves)) if items]
-
-
-def _markdown_figures(figures: Mapping[tuple[str, str], str], env: str | None) -> list[str]:
-    lines = []
-    for heading, items in _figure_sections(figures, env):
-        lines += ["", f"### {heading}", ""]
-        for alt, link in items:
-            lines += [f"![{alt}]({link})", ""]
-        lines.pop()
-    return lines
-
-
-def _markdown_improvements(
-    cells: Sequence[Improvement], env: str | None, digits: int, against: bool, uncompared: Sequence[tuple[str, str]]
-) -> list[str]:
-    lines = []
-    for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
-        lines += ["", f"### P(improves on DQN): {PHASE_TITLES[phase]}", "", markdown_table(header, rows, 2 if against else 1)]
-    note = uncompared_note(uncompared, env, markdown=True)
-    legend = ["", IMPROVEMENT_NOTE, "", multiplicity_note(cells)] if lines else []
-    return lines + legend + (["", note] if note else [])
 
 
 def _csv_number(value: float) -> str:
@@ -638,149 +341,3 @@ def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tupl
 def _facts_cells(facts: RowFacts) -> list[Any]:
     budget = facts.budget
     return [budget.steps, budget.eval_interval or "", budget.eval_episodes or "", ";".join(facts.directories)]
-
-
-_CSS = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 76em; color: #222; }
-table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
-th, td { border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: right; white-space: nowrap; }
-th:first-child, td:first-child { text-align: left; }
-thead th { background: #f0f0f0; }
-img { max-width: 100%; margin: 0.5em 0; }
-code { background: #f4f4f4; padding: 0.1em 0.3em; }
-.note { color: #555; font-size: 0.9em; }
-"""
-
-
-def _text(text: str) -> str:
-    """Escape ``text`` for an HTML text node (quotes stay readable)."""
-    return html.escape(text, quote=False)
-
-
-def _html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    head = "".join(f"<th>{_text(cell)}</th>" for cell in header)
-    body = "\n".join("<tr>" + "".join(f"<td>{_text(cell)}</td>" for cell in row) + "</tr>" for row in rows)
-    return f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
-
-
-def _html_figures(figures: Mapping[tuple[str, str], bytes], env: str | None) -> list[str]:
-    lines = []
-    for heading, items in _figure_sections(figures, env):
-        lines.append(f"<h3>{html.escape(heading)}</h3>")
-        for alt, png in items:
-            lines.append(img_tag(png, alt))
-    return lines
-
-
-def _html_improvements(
-    cells: Sequence[Improvement], env: str | None, digits: int, against: bool, uncompared: Sequence[tuple[str, str]]
-) -> list[str]:
-    lines = []
-    for phase, header, rows in improvement_sections(cells, env, digits, against) if env is not None else []:
-        lines += [f"<h3>{_text('P(improves on DQN): ' + PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
-    note = uncompared_note(uncompared, env)
-    return (
-        lines
-        + (
-            [f'<p class="note">{_text(IMPROVEMENT_NOTE)}</p>', f'<p class="note">{_text(multiplicity_note(cells))}</p>']
-            if lines
-            else []
-        )
-        + ([f'<p class="note">{_text(note)}</p>'] if note else [])
-    )
-
-
-def _html_code(markdown: str) -> str:
-    """``markdown``'s text with its `code spans` as ``<code>``, escaped."""
-    pieces = markdown.split("`")
-    return "".join(f"<code>{_text(piece)}</code>" if i % 2 else _text(piece) for i, piece in enumerate(pieces))
-
-
-def html_report(
-    scores: Sequence[Score],
-    provenance: Provenance,
-    figures: Mapping[tuple[str, str], bytes] | None = None,
-    metrics: Sequence[str] = METRIC_NAMES,
-    digits: int = 2,
-    base_env: Mapping[str, str] | None = None,
-    improvements: Sequence[Improvement] = (),
-    uncompared: Sequence[tuple[str, str]] = (),
-    reference_note: str = "",
-    coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
-) -> str:
-    """A self-contained HTML page (inline CSS, ``figures`` embedded as base64 PNG).
-
-    ``figures`` maps ``(env, metric)`` to the PNG bytes; ``uncompared`` and ``coverage`` as
-    :func:`markdown_report`; ``reference_note`` as there, in plain text (escaped here).
-    """
-    figures = figures or {}
-    measured = _measured(coverage)
-    zero_width = False
-    esc = _text
-    against = names_baselines(provenance, improvements)
-    lines = [
-        "<!DOCTYPE html>",
-        '<html lang="en">',
-        "<head>",
-        '<meta charset="utf-8">',
-        "<title>empathy-zoo leaderboard</title>",
-        f"<style>{_CSS}</style>",
-        "</head>",
-        "<body>",
-        "<h1>empathy-zoo leaderboard</h1>",
-        f"<p>Produced by <code>{esc(provenance.command)}</code> with empathy-zoo {esc(provenance.version)}, "
-        f"commit <code>{esc(provenance.commit_text())}</code>.</p>",
-    ]
-    if provenance.comparison():
-        heading, directories, budget = provenance.source_lines()
-        lines += [f"<p>{esc(heading)}</p>", "<ul>", *(f"<li>{_html_code(line)}</li>" for line in directories), "</ul>"]
-        lines += [f"<p>{_html_code(budget)}</p>"] if budget else []
-    lines.append(f'<p class="note">{esc(provenance.method_text())}</p>')
-    lines += [f'<p class="note">{esc(reference_note)}</p>'] if reference_note else []
-    current_env = None
-    for env, phase, header, rows in _sections(scores, metrics, digits, base_env):
-        if env != current_env:
-            lines += _html_improvements(improvements, current_env, digits, against, uncompared)
-            lines += _html_figures(figures, current_env)
-            lines.append(f"<h2>{esc(env)}</h2>")
-            current_env = env
-        lines += [f"<h3>{esc(PHASE_TITLES[phase])}</h3>", _html_table(header, rows)]
-        note = coverage_note(measured, phase, header[2:], _table_seeds(scores, env, phase))
-        lines += [f'<p class="note">{_html_code(note)}</p>'] if note else []
-        zero_width = zero_width or _has_zero_width(rows)
-    lines += _html_improvements(improvements, current_env, digits, against, uncompared)
-    lines += _html_figures(figures, current_env)
-    if _has_single_seed(scores):
-        lines.append(f'<p class="note">{esc(_single_seed_note())}</p>')
-    if zero_width:
-        lines.append(f'<p class="note">{esc(ZERO_WIDTH_NOTE)}</p>')
-    if _has_few_seeds(scores):
-        lines.append(f'<p class="note">{esc(NO_INTERVAL_NOTE)}</p>')
-    lines += ["<h2>Metric definitions</h2>", "<dl>"]
-    for metric in metrics:
-        lines.append(f"<dt>{esc(metric)}</dt><dd>{esc(METRIC_DEFINITIONS.get(metric, '(no definition)'))}</dd>")
-    lines += ["</dl>", "</body>", "</html>"]
-    return "\n".join(lines) + "\n"
-
-
-MARKDOWN_ANCHOR = "\n## Metric definitions"
-"""Where a section of the Markdown page goes: before its metric definitions."""
-HTML_ANCHOR = "<h2>Metric definitions</h2>"
-"""Where a section of the HTML page goes: before its metric definitions (else before ``</body>``)."""
-
-
-def place_before_definitions(markdown: str, html_page: str, section_markdown: str, section_html: str) -> tuple[str, str]:
-    """The leaderboard's two pages with a section placed before their metric definitions (after
-    any section placed there before), or at their end where they have none."""
-    if MARKDOWN_ANCHOR in markdown:
-        before, after = markdown.split(MARKDOWN_ANCHOR, 1)
-        markdown = before.rstrip("\n") + "\n" + section_markdown + MARKDOWN_ANCHOR + after
-    else:
-        markdown = markdown.rstrip("\n") + "\n" + section_markdown
-    anchor = HTML_ANCHOR if HTML_ANCHOR in html_page else "</body>"
-    if anchor in html_page:
-        before, after = html_page.split(anchor, 1)
-        html_page = before + section_html + anchor + after
-    else:
-        html_page += section_html
-    return markdown, html_page

@@ -2,7 +2,7 @@
 last greedy evaluation and of the final 10 % of training episodes, each with its ▲ / ▼ / ⊘ marker
 (:func:`leaderboard.improvement.improvement_verdict`), DQN's own means in the heading; a mark that
 survives Holm's adjustment over every cell shown is followed by ◆, and the legend says how many false
-marks the cells would give where nothing differed (:func:`leaderboard.tables.multiplicity_note`).
+marks the cells would give where nothing differed (:func:`leaderboard.legends.multiplicity_note`).
 
     python -m leaderboard.versus_dqn docs/results/methods
 
@@ -19,8 +19,8 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
+from leaderboard.legends import holm_survivors, multiplicity_note
 from leaderboard.multiplicity import HOLM_MARK
-from leaderboard.tables import holm_survivors, multiplicity_note
 
 __all__ = ["versus_dqn_tables", "compact_metrics"]
 

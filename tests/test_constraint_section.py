@@ -8,7 +8,7 @@ import json
 from helpers_results import edited, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
-from leaderboard.constraint_section import SECTION_TITLE, add_constraint_section, constraint_rows
+from leaderboard.constraint_section import SECTION_TITLE, constraint_rows, constraint_section
 from leaderboard.report import write_leaderboard
 
 
@@ -38,7 +38,7 @@ def test_a_priced_row_is_set_against_its_limit() -> None:
 def test_rows_without_a_price_get_no_section() -> None:
     runs = [synthetic_result("coexistence_v0", "dqn", 1.0, seed) for seed in range(3)]
     assert constraint_rows(runs) == []
-    assert add_constraint_section(runs, "page", "<html></html>") == ("page", "<html></html>")
+    assert constraint_section(runs) is None
 
 
 def test_the_page_carries_the_section(tmp_path) -> None:

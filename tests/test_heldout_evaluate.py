@@ -199,14 +199,15 @@ def test_a_loaded_agent_replays_its_runs_last_greedy_evaluation(trained) -> None
 
 def test_the_leaderboard_section_renders_from_real_files(trained, evaluated, tmp_path) -> None:
     from leaderboard.aggregate import load_results
-    from leaderboard.heldout import add_heldout_section
+    from leaderboard.heldout import heldout_section
+    from leaderboard.page_markdown import section_markdown
 
     results, _ = trained
     shutil.copytree(results / "runs", tmp_path / "runs")
     shutil.copytree(evaluated / "evaluations", tmp_path / "evaluations")
-    markdown, _html, figures = add_heldout_section(
-        tmp_path, load_results(tmp_path), tmp_path, "# b\n\n## Metric definitions\n", "<h2>Metric definitions</h2>"
-    )
+    found = heldout_section(tmp_path, load_results(tmp_path), tmp_path)
+    assert found is not None
+    markdown, figures = section_markdown(found.section), found.figures
     assert "## Held-out partners" in markdown and "### coexistence_v0: scenario set coexistence_v0" in markdown
     assert "| Empathic DQN (β=0.5) | 2 |" in markdown and "Reading rule" in markdown
     assert [p.name for p in figures.values()] == ["coexistence_v0_heldout_coexistence_v0.png"]

@@ -13,7 +13,7 @@ from helpers_heldout import scenario_set, synthetic_run, write_synthetic
 
 from empathy_zoo.experiment.records import AgentRef
 from empathy_zoo.metrics import HELDOUT_MARGINS
-from leaderboard.heldout import add_heldout_section
+from leaderboard.heldout import heldout_section
 from leaderboard.heldout_scores import (
     DOES_NOT_GENERALISE,
     GENERALISES,
@@ -24,6 +24,9 @@ from leaderboard.heldout_scores import (
     readings,
 )
 from leaderboard.improvement import TOO_FEW_SEEDS
+from leaderboard.page import Page
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import section_markdown
 
 COEXISTENCE = "coexistence_v0"
 OWN = {"cat_0": "random_walk"}
@@ -160,10 +163,9 @@ def test_cells_are_the_means_over_seeds_with_the_suites_marks(synthetic) -> None
 
 def test_the_section_renders_with_its_rule_and_figure(synthetic) -> None:
     out, results = synthetic
-    page = "# board\n\n## coexistence_v0\n\n## Metric definitions\n\n- harms\n"
-    html = "<html><body><h2>Metric definitions</h2></body></html>"
-    markdown, html_page, figures = add_heldout_section(out, results, out, page, html)
-    section = markdown[markdown.index("## Held-out partners") : markdown.index("## Metric definitions")]
+    found = heldout_section(out, results, out)
+    assert found is not None and found.section.title == "Held-out partners"
+    section, html_page, figures = section_markdown(found.section), to_html(Page("board", [found.section])), found.figures
     for text in (
         "Reading rule",
         "✓ generalises",
@@ -173,15 +175,15 @@ def test_the_section_renders_with_its_rule_and_figure(synthetic) -> None:
         "Why kept.",
     ):
         assert text in section
-    assert html_page.index("Held-out partners") < html_page.index("<h2>Metric definitions</h2>")
+    assert "<h2>Held-out partners</h2>" in html_page
     (path,) = figures.values()
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"]({path.relative_to(out).as_posix()})" in section
 
 
-def test_without_evaluation_files_the_pages_are_unchanged(tmp_path) -> None:
+def test_without_evaluation_files_there_is_no_section(tmp_path) -> None:
     run = synthetic_run(COEXISTENCE, "dqn", 1.0, 0)
-    assert add_heldout_section(tmp_path, [run], tmp_path, "md", "html") == ("md", "html", {})
+    assert heldout_section(tmp_path, [run], tmp_path) is None
 
 
 def test_an_evaluation_of_another_agent_is_left_out_with_a_note(synthetic) -> None:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from helpers_heldout import EPISODES, scenario_set, synthetic_run, write_synthetic
 
-from leaderboard.heldout import add_heldout_section
+from leaderboard.heldout import heldout_section
 from leaderboard.heldout_scores import (
     DOES_NOT_GENERALISE,
     DOES_NOT_KEEP_ITS_LEVEL,
@@ -26,6 +26,7 @@ from leaderboard.heldout_scores import (
 )
 from leaderboard.heldout_verdicts import heldout_verdicts, verdicts_markdown
 from leaderboard.improvement import TOO_FEW_SEEDS
+from leaderboard.page_markdown import section_markdown
 
 COEXISTENCE = "coexistence_v0"
 OWN = {"cat_0": "random_walk"}
@@ -171,8 +172,9 @@ def test_harms_per_100_steps_is_compared_with_dqn_towards_fewer(synthetic) -> No
 
 def test_the_section_states_the_rule_its_blind_spots_and_both_measures(synthetic) -> None:
     out, results = synthetic
-    page = "# board\n\n## Metric definitions\n\n- harms\n"
-    markdown, _, _ = add_heldout_section(out, results, out, page, "<html><h2>Metric definitions</h2></html>")
+    found = heldout_section(out, results, out)
+    assert found is not None
+    markdown = section_markdown(found.section)
     for text in (
         "harms per 100 steps (lower is better)",
         "keeps its own level",

@@ -13,8 +13,9 @@ import pytest
 from helpers_results import EVAL_EPISODES, synthetic_result
 
 from leaderboard.aggregate import Score, run_scalars
+from leaderboard.leaderboard_page import html_report, markdown_report
 from leaderboard.measured_coverage import MeasuredCoverage, read_measured_coverage
-from leaderboard.tables import Provenance, format_mean, html_report, markdown_report, table_rows
+from leaderboard.tables import Provenance, format_mean, table_rows
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import interval_coverage as ic  # benchmarks/interval_coverage.py

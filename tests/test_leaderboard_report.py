@@ -17,14 +17,13 @@ from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAME
 from empathy_zoo.provenance import package_version
 from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
+from leaderboard.leaderboard_page import html_report, markdown_report
 from leaderboard.tables import (
     CSV_COLUMNS,
     NO_INTERVAL_NOTE,
     Provenance,
     csv_text,
     format_interval,
-    html_report,
-    markdown_report,
     markdown_table,
     table_rows,
 )

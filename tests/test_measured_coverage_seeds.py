@@ -41,8 +41,8 @@ def test_an_empty_reading_is_refused():
 
 
 def test_a_table_with_fewer_seeds_than_its_metrics_need_says_it_is_provisional():
+    from leaderboard.legends import coverage_note
     from leaderboard.measured_coverage import MeasuredCoverage
-    from leaderboard.tables import coverage_note
 
     measured = MeasuredCoverage(
         "cmd",

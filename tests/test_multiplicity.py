@@ -10,6 +10,8 @@ import pytest
 from helpers_results import synthetic_result
 
 from leaderboard.improvement import Improvement
+from leaderboard.leaderboard_page import html_report, markdown_report
+from leaderboard.legends import IMPROVEMENT_NOTE, multiplicity_note
 from leaderboard.multiplicity import (
     HOLM_MARK,
     benjamini_hochberg_adjusted,
@@ -17,7 +19,7 @@ from leaderboard.multiplicity import (
     holm_adjusted,
     rejected,
 )
-from leaderboard.tables import IMPROVEMENT_NOTE, Provenance, html_report, improvement_sections, markdown_report, multiplicity_note
+from leaderboard.tables import Provenance, improvement_sections
 from leaderboard.versus_dqn import versus_dqn_tables
 
 NAN = math.nan

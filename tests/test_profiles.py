@@ -11,14 +11,17 @@ import pytest
 from helpers_results import hand_made_result, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
+from leaderboard.page import Page
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import section_markdown
 from leaderboard.profile_plot import render_profiles_png
 from leaderboard.profile_section import (
     SECTION_TITLE,
-    add_profile_section,
     normalization,
     normalized_score,
     normalized_scores,
     profile_metrics,
+    profile_section,
 )
 from leaderboard.profiles import (
     GAMMA,
@@ -148,15 +151,15 @@ def test_the_section_states_its_normalization_and_gamma_and_draws_its_figure(tmp
         for method, beta, survival, harms in (("empathic_dqn", 1.0, 450.0, 0.9), ("empathic_dqn", 0.5, 300.0, 0.1))
         for seed in range(5)
     ]
-    page = "# x\n\n## Metric definitions\n"
-    markdown, html_page, figures = add_profile_section(results, tmp_path, page, "<h2>Metric definitions</h2>", n_resamples=200)
-    section = markdown.split(f"## {SECTION_TITLE}", 1)[1].split("## Metric definitions", 1)[0]
+    found, figures = profile_section(results, tmp_path, n_resamples=200)
+    assert found is not None and found.title == SECTION_TITLE
+    section, html_page = section_markdown(found), to_html(Page("x", [found]))
     assert "γ = 1" in section and "survival ÷ max_cycles" in section and "1 − harms per other agent" in section
     assert "| Method | Seeds | survival ÷ max_cycles | 1 − harms per other agent |" in section
     # β = 0.5: survival 300 + 0.01·seed of 500 → gap 1 − 300.02 / 500 = 0.39996; harms 0.1 + 0.01·seed of 1 cat → gap 0.12
     assert "| empathic_dqn 0.5 | 5 | 0.400 [" in section and "| 0.120 [" in section
     assert set(figures) == {"figure:coexistence_v0:profiles"} and figures["figure:coexistence_v0:profiles"].is_file()
-    assert html_page.index(SECTION_TITLE) < html_page.index("Metric definitions") and "data:image/png;base64," in html_page
+    assert f"<h2>{SECTION_TITLE}</h2>" in html_page and "data:image/png;base64," in html_page
 
 
 def test_a_figure_of_more_rows_than_columns_wraps() -> None:
