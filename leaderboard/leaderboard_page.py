@@ -4,8 +4,7 @@ metric definitions.
 
 :func:`score_sections` and :func:`definitions_section` give them as :mod:`leaderboard.page`
 sections; :mod:`leaderboard.report` puts the other modules' sections between them and renders the
-page once per format. :func:`markdown_report` and :func:`html_report` render a page of these
-sections alone.
+page once per format. :func:`report_page` is a page of these sections alone.
 """
 
 from __future__ import annotations
@@ -19,8 +18,7 @@ from leaderboard.improvement import Improvement
 from leaderboard.legends import IMPROVEMENT_NOTE, coverage_note, multiplicity_note, resolve_coverage
 from leaderboard.measured_coverage import MeasuredCoverage
 from leaderboard.page import Block, BulletList, DefinitionList, Figure, Heading, Page, Paragraph, Section, Table
-from leaderboard.page_html import to_html
-from leaderboard.page_markdown import markdown_text, to_markdown
+from leaderboard.page_markdown import markdown_text
 from leaderboard.tables import (
     NO_INTERVAL_NOTE,
     PHASE_TITLES,
@@ -46,8 +44,7 @@ __all__ = [
     "score_sections",
     "definitions_section",
     "leaderboard_page",
-    "markdown_report",
-    "html_report",
+    "report_page",
 ]
 
 TITLE = "empathy-zoo leaderboard"
@@ -200,10 +197,10 @@ def leaderboard_page(sections: Sequence[Section]) -> Page:
     return Page(TITLE, sections)
 
 
-def markdown_report(
+def report_page(
     scores: Sequence[Score],
     provenance: Provenance,
-    figures: Mapping[tuple[str, str], str] | None = None,
+    figures: Mapping[tuple[str, str], FigureFile] | None = None,
     metrics: Sequence[str] = METRIC_NAMES,
     digits: int = 2,
     base_env: Mapping[str, str] | None = None,
@@ -211,33 +208,11 @@ def markdown_report(
     uncompared: Sequence[tuple[str, str]] = (),
     reference_note: str = "",
     coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
-) -> str:
-    """The Markdown page of :func:`score_sections` and the metric definitions alone; ``figures``
-    maps ``(env, metric)`` to a link (a path relative to the page); the rest as :func:`score_sections`."""
-    files: dict[tuple[str, str], FigureFile] = {key: (link, None) for key, link in (figures or {}).items()}
+) -> Page:
+    """The page of :func:`score_sections` and the metric definitions alone, for either renderer
+    (:func:`~leaderboard.page_markdown.to_markdown`, :func:`~leaderboard.page_html.to_html`);
+    ``figures`` maps ``(env, metric)`` to its link and PNG bytes; the rest as :func:`score_sections`."""
     sections = score_sections(
-        scores, provenance, files, metrics, digits, base_env, improvements, uncompared, reference_note, coverage
+        scores, provenance, dict(figures or {}), metrics, digits, base_env, improvements, uncompared, reference_note, coverage
     )
-    return to_markdown(leaderboard_page([*sections, definitions_section(metrics)]))
-
-
-def html_report(
-    scores: Sequence[Score],
-    provenance: Provenance,
-    figures: Mapping[tuple[str, str], bytes] | None = None,
-    metrics: Sequence[str] = METRIC_NAMES,
-    digits: int = 2,
-    base_env: Mapping[str, str] | None = None,
-    improvements: Sequence[Improvement] = (),
-    uncompared: Sequence[tuple[str, str]] = (),
-    reference_note: str = "",
-    coverage: MeasuredCoverage | Literal["committed"] | None = "committed",
-) -> str:
-    """The self-contained HTML page of :func:`score_sections` and the metric definitions alone;
-    ``figures`` maps ``(env, metric)`` to its PNG bytes (embedded); ``reference_note`` is Markdown
-    (its escapes resolved in the HTML); the rest as :func:`score_sections`."""
-    files: dict[tuple[str, str], FigureFile] = {key: ("", png) for key, png in (figures or {}).items()}
-    sections = score_sections(
-        scores, provenance, files, metrics, digits, base_env, improvements, uncompared, reference_note, coverage
-    )
-    return to_html(leaderboard_page([*sections, definitions_section(metrics)]))
+    return leaderboard_page([*sections, definitions_section(metrics)])

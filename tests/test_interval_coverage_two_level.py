@@ -13,8 +13,10 @@ import pytest
 from helpers_results import EVAL_EPISODES, synthetic_result
 
 from leaderboard.aggregate import Score, run_scalars
-from leaderboard.leaderboard_page import html_report, markdown_report
+from leaderboard.leaderboard_page import report_page
 from leaderboard.measured_coverage import MeasuredCoverage, read_measured_coverage
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import to_markdown
 from leaderboard.tables import Provenance, format_mean, table_rows
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
@@ -102,18 +104,18 @@ def _scores(seeds: int, low: float = 0.1) -> list[Score]:
 def test_the_legend_says_the_nominal_level_and_the_coverage_measured_at_the_table_s_seeds() -> None:
     provenance = Provenance("cmd", "0.1.0", None)
     for page in (
-        markdown_report(_scores(5), provenance, metrics=("survival", "harms"), coverage=MEASURED),
-        html_report(_scores(5), provenance, metrics=("survival", "harms"), coverage=MEASURED),
+        to_markdown(report_page(_scores(5), provenance, metrics=("survival", "harms"), coverage=MEASURED)),
+        to_html(report_page(_scores(5), provenance, metrics=("survival", "harms"), coverage=MEASURED)),
     ):
         assert "97.5 % nominal" in page and "two-sided" in page
         assert "survival 96.1 %" in page and "harms 88.4 %" in page and "12 % zero-width" in page
         assert "--two-level" in page
-    page = markdown_report(_scores(4), provenance, metrics=("survival", "harms"), coverage=MEASURED)
+    page = to_markdown(report_page(_scores(4), provenance, metrics=("survival", "harms"), coverage=MEASURED))
     assert "at 4 seeds: not measured" in page
 
 
 def test_the_legend_says_not_measured_without_a_measurement() -> None:
-    page = markdown_report(_scores(5), Provenance("cmd", "0.1.0", None), metrics=("survival", "harms"), coverage=None)
+    page = to_markdown(report_page(_scores(5), Provenance("cmd", "0.1.0", None), metrics=("survival", "harms"), coverage=None))
     assert "not measured" in page
 
 
@@ -132,7 +134,7 @@ def test_a_zero_width_interval_is_marked_not_printed_as_an_interval() -> None:
     assert format_mean(0.5, 0.4999, 0.5001, 3, mark_equal=True) == "0.50 [0.50, 0.50]"  # narrow, not zero
     _, rows = table_rows(_scores(3, low=0.5), "coexistence_v0", "eval", ("harms", "survival"))
     assert rows[0][2] == "0.50 =" and rows[0][3] == "400.00 [300.00, 500.00]"
-    page = markdown_report(
-        _scores(3, low=0.5), Provenance("cmd", "0.1.0", None), metrics=("survival", "harms"), coverage=MEASURED
+    page = to_markdown(
+        report_page(_scores(3, low=0.5), Provenance("cmd", "0.1.0", None), metrics=("survival", "harms"), coverage=MEASURED)
     )
     assert "= every seed gave this value" in page

@@ -17,7 +17,9 @@ from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAME
 from empathy_zoo.provenance import package_version
 from leaderboard import write_leaderboard
 from leaderboard.aggregate import Score
-from leaderboard.leaderboard_page import html_report, markdown_report
+from leaderboard.leaderboard_page import report_page
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import to_markdown
 from leaderboard.tables import (
     CSV_COLUMNS,
     NO_INTERVAL_NOTE,
@@ -137,8 +139,8 @@ def test_csv_exact_lines() -> None:
 
 
 def test_markdown_and_html_pages_carry_definitions_provenance_and_single_seed_note() -> None:
-    page = markdown_report(tiny_scores(), PROVENANCE, {("coexistence_v0", "survival"): "figures/x.png"})
-    html = html_report(tiny_scores(), Provenance("cmd <&>", "0.1.0", None), {("coexistence_v0", "harms"): b"PNG"})
+    page = to_markdown(report_page(tiny_scores(), PROVENANCE, {("coexistence_v0", "survival"): ("figures/x.png", None)}))
+    html = to_html(report_page(tiny_scores(), Provenance("cmd <&>", "0.1.0", None), {("coexistence_v0", "harms"): ("", b"PNG")}))
     for text in (page, html):
         assert "single seed" in text and "Final greedy evaluation" in text
         assert all(METRIC_DEFINITIONS[metric].split("·")[0] in text for metric in METRIC_NAMES)

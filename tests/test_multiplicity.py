@@ -10,7 +10,7 @@ import pytest
 from helpers_results import synthetic_result
 
 from leaderboard.improvement import Improvement
-from leaderboard.leaderboard_page import html_report, markdown_report
+from leaderboard.leaderboard_page import report_page
 from leaderboard.legends import IMPROVEMENT_NOTE, multiplicity_note
 from leaderboard.multiplicity import (
     HOLM_MARK,
@@ -19,6 +19,8 @@ from leaderboard.multiplicity import (
     holm_adjusted,
     rejected,
 )
+from leaderboard.page_html import to_html
+from leaderboard.page_markdown import to_markdown
 from leaderboard.tables import Provenance, improvement_sections
 from leaderboard.versus_dqn import versus_dqn_tables
 
@@ -99,8 +101,8 @@ def test_the_pages_carry_the_multiplicity_note() -> None:
 
     scores = [Score("coexistence_v0", "DQN", "dqn", "eval", "harms", 0.5, 0.0, 1.0, 5)]
     for page in (
-        markdown_report(scores, provenance, improvements=cells),
-        html_report(scores, provenance, improvements=cells),
+        to_markdown(report_page(scores, provenance, improvements=cells)),
+        to_html(report_page(scores, provenance, improvements=cells)),
     ):
         assert "≈ 0.1 false marks expected among 2 cells" in page
         assert HOLM_MARK in page
