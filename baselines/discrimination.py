@@ -35,6 +35,7 @@ from typing import Any
 
 from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.markdown_escape import code_span, markdown_text
 
 __all__ = [
     "DEFAULT_DIR",
@@ -152,13 +153,14 @@ def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: fl
         "(`baselines/discrimination.py`) from the separation tables beside this page.",
         "A pair no task separates cannot be told apart by any run of these tasks.",
         "",
-        "| pair | " + " | ".join(f"`{task}`" for task in tasks) + " | separated by |",
+        "| pair | " + " | ".join(code_span(task) for task in tasks) + " | separated by |",
         "|---|" + "---|" * len(tasks) + "---:|",
     ]
     for first, second in itertools.combinations(methods, 2):
         cells = [cell(tables[task], first, second, epsilon) for task in tasks]
         count = sum(c.kind == "separated" for c in cells)
-        lines.append(f"| `{first}` / `{second}` | " + " | ".join(c.text() for c in cells) + f" | {count} of {len(tasks)} |")
+        pair = f"{code_span(first)} / {code_span(second)}"  # (names from the tables' files: data)
+        lines.append(f"| {pair} | " + " | ".join(c.text() for c in cells) + f" | {count} of {len(tasks)} |")
     lines += [
         "",
         "## Does β change the optimum?",
@@ -166,17 +168,18 @@ def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: fl
         "Distinct optima among each method's β rows (β = 0.75, 0.5, 0.25, 0 where the table has them);",
         "1 means β changes nothing on that task.",
         "",
-        "| method | " + " | ".join(f"`{task}`" for task in tasks) + " |",
+        "| method | " + " | ".join(code_span(task) for task in tasks) + " |",
         "|---|" + "---:|" * len(tasks),
     ]
     for method in methods:
         groups = [beta_groups(tables[task], method, epsilon) for task in tasks]
         if any(group is not None for group in groups):
-            lines.append(f"| `{method}` | " + " | ".join("–" if g is None else str(g) for g in groups) + " |")
+            lines.append(f"| {code_span(method)} | " + " | ".join("–" if g is None else str(g) for g in groups) + " |")
     omitted = [(task, entry) for task, table in tables.items() for entry in table.get("omitted", [])]
     if omitted:
         lines += ["", "## Not in a table", ""]
-        lines += [f"* `{entry['method']}` on `{task}`: {entry['reason']}" for task, entry in omitted]
+        for task, entry in omitted:  # (names and reasons from the tables' files: data)
+            lines.append(f"* {code_span(entry['method'])} on {code_span(task)}: {markdown_text(entry['reason'])}")
     return "\n".join(lines) + "\n"
 
 

@@ -240,7 +240,7 @@ def main(argv: list[str] | None = None) -> None:
         key, equals, value = item.partition("=")
         if not equals:
             parser.error(f"{item!r} is not ARG=VALUE")
-        kwargs[key] = int(value) if value.isdigit() else value
+        kwargs[key] = int(value) if value.isascii() and value.isdigit() and len(value) <= 18 else value
     name = file_name(args.env, kwargs)
     paths = [check_replaceable(args.out / f"{name}{suffix}") for suffix in (".json", ".md")]  # (before the long part)
     model = tabular_model(args.env, **kwargs)

@@ -65,9 +65,11 @@ from typing import Any, Protocol, cast
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS
+from empathy_zoo.engine.arguments import argument_defaults, check_env_arguments
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.exact_alone import alone_policy, alone_steps, alone_values, gone_continuation
 from empathy_zoo.exact_chance import FixedDraws, check_draws
+from empathy_zoo.limits import MAX_REFERENCE_CYCLES
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
 __all__ = [
@@ -194,6 +196,13 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     engine_class = ENGINES[env]
     if not hasattr(engine_class, "start_distribution"):
         raise ValueError(f"{env}'s engine tabulates no start distribution: it cannot be solved exactly here")
+    check_env_arguments(engine_class, env_kwargs)  # (an argument it does not take: one line naming it)
+    cycles = env_kwargs.get("max_cycles", argument_defaults(engine_class).get("max_cycles"))
+    if isinstance(cycles, int) and cycles > MAX_REFERENCE_CYCLES:
+        raise ValueError(
+            f"max_cycles {cycles:,} is beyond {MAX_REFERENCE_CYCLES:,} (MAX_REFERENCE_CYCLES), the longest episode the "
+            "exact model plays (a step of every state per step of an episode; docs/limits.md)"
+        )
     probe = engine_class(1, **env_kwargs)
     cells = probe.num_cells
     if probe.num_agents != 2:
@@ -490,7 +499,7 @@ def main(argv: list[str] | None = None) -> int:
         key, equals, value = item.partition("=")
         if not equals:
             parser.error(f"{item!r} is not ARG=VALUE")
-        kwargs[key] = int(value) if value.isdigit() else value
+        kwargs[key] = int(value) if value.isascii() and value.isdigit() and len(value) <= 18 else value
     try:
         model = tabular_model(args.env, **kwargs)
     except ValueError as error:

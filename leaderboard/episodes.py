@@ -337,5 +337,5 @@ def episodes_section(
             path = episode.gif.path
             figures[f"figure:{env}:episode_{episode.slug}"] = path
             blocks.append(Figure(_alt(episode), path.relative_to(out).as_posix()))  # (its GIF draws the label as its title)
-    blocks += [Paragraph(f"Note: {note}", note=True) for note in notes]
+    blocks += [Paragraph(f"Note: {markdown_text(note)}", note=True) for note in notes]  # (labels and errors are data)
     return EpisodeSection(Section(SECTION_TITLE, blocks), figures, episodes)

@@ -173,7 +173,7 @@ def _range_text(metric: str) -> str:
 
 
 def _intro(group: HeldoutGroup, cells: Sequence[HeldoutCell] = ()) -> str:
-    description = group.scenario_set.description or ""
+    description = markdown_text(group.scenario_set.description or "")  # (a file's text: data)
     seeds = "the runs' per-scenario means over seeds"
     return (
         (

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Literal
 
+from empathy_zoo.markdown_escape import code_span
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
 from leaderboard.improvement import Improvement
@@ -60,7 +61,8 @@ def header_section(provenance: Provenance, reference_note: str = "") -> Section:
     which rows are the DQN reference (``reference_note``, Markdown)."""
     blocks: list[Block] = [
         Paragraph(
-            f"Produced by `{provenance.command}` with empathy-zoo {provenance.version}, commit `{provenance.commit_text()}`."
+            f"Produced by {code_span(provenance.command)} with empathy-zoo {markdown_text(provenance.version)}, "
+            f"commit {code_span(provenance.commit_text())}."
         )
     ]
     if provenance.comparison():

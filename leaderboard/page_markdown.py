@@ -10,30 +10,14 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from empathy_zoo.markdown_escape import markdown_cell, markdown_text
 from leaderboard.page import Block, BulletList, DefinitionList, Figure, Heading, Page, Paragraph, Section, Table
 
 __all__ = ["markdown_text", "markdown_table", "markdown_block", "section_markdown", "to_markdown"]
 
-_MARKDOWN_SYNTAX = re.compile(r"[\\`*~\[\]<>&|]|(?<!\w)_|_(?!\w)")
-"""What text must not carry unescaped into Markdown to read as itself: a backslash, code, emphasis,
-strike-through, link and HTML characters, a table's ``|``, and a ``_`` at a word's edge (one
-inside a word, ``other_return``, is no emphasis and stays as it is)."""
-_MARKDOWN_CELL = re.compile(r"[\\<>&|]")
-"""What a cell of figures must not carry unescaped: HTML characters and a table's ``|``."""
 _LINE_BREAKS = re.compile(r"[\r\n\u2028\u2029]+")
 _ALT_SYNTAX = re.compile(r"[\\\[\]]")
 """What an image's alt text must not carry unescaped: a backslash and the brackets around it."""
-
-
-def markdown_text(text: str) -> str:
-    """``text`` (a label, a name: data) escaped for Markdown, so it reads as itself: no HTML (a
-    label ``<script>`` is shown, not run), no link, no emphasis, no code, no table cell of its
-    own, and on one line."""
-    return _MARKDOWN_SYNTAX.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
-
-
-def _md_cell(text: str) -> str:
-    return _MARKDOWN_CELL.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
 
 
 def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]], text_columns: int = 1, left_columns: int = 1) -> str:
@@ -41,9 +25,9 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]], text_co
     right-aligned. The first ``text_columns`` cells of each row (a method's label, and the DQN row
     it is compared with) are :func:`markdown_text`; in every cell, HTML characters and ``|`` are escaped."""
     align = [":---" if i < left_columns else "---:" for i in range(len(header))]
-    lines = ["| " + " | ".join(_md_cell(cell) for cell in header) + " |", "|" + "|".join(align) + "|"]
+    lines = ["| " + " | ".join(markdown_cell(cell) for cell in header) + " |", "|" + "|".join(align) + "|"]
     lines += [
-        "| " + " | ".join(markdown_text(cell) if i < text_columns else _md_cell(cell) for i, cell in enumerate(row)) + " |"
+        "| " + " | ".join(markdown_text(cell) if i < text_columns else markdown_cell(cell) for i, cell in enumerate(row)) + " |"
         for row in rows
     ]
     return "\n".join(lines)

@@ -121,7 +121,7 @@ def markdown(primaries: Sequence[Row], carries: Sequence[bool], secondaries: Seq
         "| environment | method | scenario | metric | seeds (default) | P(population-trained better) [interval] | p | observed |"
     )
     rule = "|---|---|---|---|---|---:|---:|---|"
-    lines = ["## Primary comparisons", "", header[:-1] + " changes what carries over |", rule + "---|"]
+    lines = ["## Primary comparisons", "", header + " changes what carries over |", rule + "---|"]
     lines += [_cells(row) + f" {'**yes**' if carry else 'no'} |" for row, carry in zip(primaries, carries, strict=True)]
     lines += ["", "## Secondary comparisons (reported, not judged)", "", header, rule]
     lines += [_cells(row) for row in secondaries]

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.markdown_escape import code_span
 from leaderboard.trained_separation import BETA, FEWER, MORE, Judgement, Prediction, judge, predictions, task_separates
 
 __all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
@@ -88,13 +89,14 @@ def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]
     lines: list[str] = []
     for task in tables:
         if not can_harm(task):
-            lines += [f"## `{task}`", "", "Not read: its robot cannot harm, so harms are 0 by construction (`can_harm`).", ""]
+            unread = "Not read: its robot cannot harm, so harms are 0 by construction (`can_harm`)."
+            lines += [f"## {code_span(task)}", "", unread, ""]
             continue
         rows = [reading for reading in readings if reading.prediction.task == task]
         if not rows:
             continue
         lines += [
-            f"## `{task}`",
+            f"## {code_span(task)}",
             "",
             "| method | DQN's optimum | the method's | predicted | seeds (DQN) | P(fewer harms than DQN) | observed | outcome |",
             "|---|---:|---:|---|---|---:|---|---|",
@@ -105,7 +107,7 @@ def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]
             observed = "no runs" if j is None else _SHOWN.get(j.observed, j.observed)
             outcome = "not judged" if j is None else j.outcome
             lines.append(
-                f"| `{p.method}` | {p.dqn_harms:.3f} | {p.method_harms:.3f} | {_SHOWN.get(p.expected, p.expected)} "
+                f"| {code_span(p.method)} | {p.dqn_harms:.3f} | {p.method_harms:.3f} | {_SHOWN.get(p.expected, p.expected)} "
                 f"| {reading.seeds} ({reading.dqn_seeds}) | {probability} | {observed} | {outcome} |"
             )
         judged = [reading.judgement for reading in rows if reading.judgement is not None]

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from empathy_zoo.environments import entry_of
+from empathy_zoo.markdown_escape import code_span
 from empathy_zoo.metrics import METRIC_DEFINITIONS, METRIC_NAMES
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -151,13 +152,12 @@ class Provenance:
         with_evaluation = shows_evaluation(self.budgets)
         lines = []
         for directory in self.directories:
-            prefix = f", labels prefixed `{directory.prefix}`" if directory.prefix else ""
+            prefix = f", labels prefixed {code_span(directory.prefix)}" if directory.prefix else ""
             budgets = "; ".join(budget.text(with_evaluation) for budget in directory.budgets)
-            versions = ", ".join(directory.versions) or "not recorded"
-            commits = ", ".join(f"`{commit}`" for commit in directory.commits) or "not recorded"
-            lines.append(
-                f"`{directory.path}`{prefix}: {directory.runs} runs, {budgets}; empathy-zoo {versions}, commit {commits}"
-            )
+            versions = ", ".join(markdown_text(version) for version in directory.versions) or "not recorded"
+            commits = ", ".join(code_span(commit) for commit in directory.commits) or "not recorded"
+            where = code_span(str(directory.path))
+            lines.append(f"{where}{prefix}: {directory.runs} runs, {budgets}; empathy-zoo {versions}, commit {commits}")
         evaluation = " (`eval 10,000 × 10`: a greedy evaluation of 10 episodes every 10,000 steps)"
         if len(self.budgets) > 1:
             budget = (

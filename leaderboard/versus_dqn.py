@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 
 from empathy_zoo.environments import ENVIRONMENT_TABLE, entry_of
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
@@ -92,7 +93,7 @@ def versus_dqn_tables(results: Sequence[RunResult], metrics_of: Mapping[str, Seq
                     mark += HOLM_MARK if id(cell) in holm else ""
                     parts.append(f"{mark} {_format(scores[(variant, label, phase, metric)].mean, metric)}".strip())
                 cells.append(" / ".join(parts))
-            lines.append(f"| {label} | {seeds[label]} | " + " | ".join(cells) + " |")
+            lines.append(f"| {markdown_text(label)} | {seeds[label]} | " + " | ".join(cells) + " |")
         lines.append("")
     if shown:
         lines += [

@@ -170,6 +170,9 @@ FORGERIES: dict[str, tuple[Callable[[list[Entry]], int], Callable[[Entry], None]
     "curve entry without value": (_nth(ATTR, 0, "curve"), _curve(_drop("value"))),
     "objective string": (_nth(STATE), _set("values", ["x"])),
     "objective 400 digits": (_nth(STATE), _set("values", [10**400])),
+    # probe 8 (#5): a refusal's reason the study file's reader would refuse
+    "refused reason of two lines": (_nth(ATTR, 0, "curve"), _set("user_attr", {"refused": "refused\n## <script>"})),
+    "refused reason with a bidi override": (_nth(ATTR, 0, "curve"), _set("user_attr", {"refused": "a \u202e b"})),
 }
 """Each forgery: ``(the line it edits, how)``."""
 

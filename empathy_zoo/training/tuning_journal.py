@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import json
 import math
+import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -47,6 +48,7 @@ from empathy_zoo.document_checks import shown
 from empathy_zoo.experiment.search_space import ParamSpec, point_runs
 from empathy_zoo.limits import MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_RANGES
+from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
 from empathy_zoo.training.study_plan import StudyPlan, curve_value
 
 __all__ = ["check_study_lines", "param_distribution", "stored_plan"]
@@ -66,6 +68,14 @@ MAX_DATETIME = 64
 EARLIEST, LATEST = datetime(1971, 1, 1, tzinfo=UTC), datetime(9999, 1, 1, tzinfo=UTC)
 """The range of a time stamp read (UTC): any zone's local time of one inside it is a ``datetime``
 (Optuna writes the time a trial started and ended)."""
+
+
+def _printable_line(text: str) -> bool:
+    """Whether ``text`` holds no control or format character and no line break (the rule of
+    :meth:`empathy_zoo.document_checks.DocumentChecker.text`, which the study file's reader applies)."""
+    return not any(unicodedata.category(character) in LABEL_REFUSED_CATEGORIES for character in text)
+
+
 MAX_REASON = 100_000
 """Longest reason for a refused point read (the method's one-line message)."""
 MAX_DISTRIBUTION = 1 << 20
@@ -298,7 +308,12 @@ class _StudyLines:
         if trial.wall or trial.refused:
             raise _Refusal(f"user_attr.{key} is set after the trial stopped")
         if key == _REFUSED:
-            _expect(isinstance(value, str) and 0 < len(value) <= MAX_REASON, "user_attr.refused", value, "the method's reason")
+            _expect(
+                isinstance(value, str) and 0 < len(value) <= MAX_REASON and _printable_line(value),
+                "user_attr.refused",
+                value,
+                "the method's reason, one line of printable text (as the study file holds it)",
+            )
             if trial.curve:
                 raise _Refusal("user_attr.refused is set on a trial that trained")
             trial.refused = True
