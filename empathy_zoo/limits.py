@@ -3,7 +3,7 @@
 Every number a user, a sweep file, a config file or a result file gives that sizes work or memory
 is bounded here: a value beyond its bound is refused with a ``ValueError`` that states the bound
 (:func:`check_at_most`), before anything is built, trained or written. The bounds lie far beyond
-what the suite's profiles use (the paper's run is 1,000,000 steps, 5 seeds, 10 evaluation
+what the suite's profiles use (the paper's run is 1,000,000 steps, 10 seeds, 10 evaluation
 episodes), so nothing within them trains differently; what they refuse would not finish, or not
 fit, on any machine. Two bounds are the machine's own: the CPUs (:func:`cpu_count`) and the memory
 available when a learner is built (:func:`available_memory`, :func:`check_memory`).

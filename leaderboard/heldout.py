@@ -48,7 +48,7 @@ level" says nothing of whether that level is good; whether a scenario could be h
 partner may make harm unavoidable: read DQN's row); anything about the task (a robot that stops
 moving avoids all harm: read survival and batteries beside it); partners beyond the few scenarios
 evaluated; a scenario that is the run's own world (not held out; marked ``=``) is not judged; and
-with the paper's 5 seeds, an undecided cell is the common case for small changes, not evidence
+at 5 to 10 seeds, an undecided cell is the common case for small changes, not evidence
 that nothing changed.
 """
 
