@@ -35,12 +35,16 @@ from typing import Any
 
 from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.document_checks import shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
 
 __all__ = [
     "DEFAULT_DIR",
     "MATRIX_BETA",
+    "MAX_METHODS",
     "Cell",
+    "TableIndex",
+    "all_beta_groups",
     "beta_groups",
     "cell",
     "discrimination_markdown",
@@ -51,6 +55,8 @@ __all__ = [
 
 DEFAULT_DIR = Path("docs/results/separation")
 """Where the shipped separation tables lie."""
+MAX_METHODS = 200
+"""The most distinct methods the matrix shows (the shipped tables name 11)."""
 MATRIX_BETA = "0.5"
 """The β at which a method with a selfishness weight enters the matrix."""
 
@@ -101,50 +107,93 @@ def _beta(value: float) -> str:
     return f"{value:g}"
 
 
-def cell(table: Mapping[str, Any], first: str, second: str, epsilon: float) -> Cell:
-    """What ``table`` says about methods ``first`` and ``second`` at ``epsilon``."""
-    rows = method_rows(table)
-    if first not in rows or second not in rows:
-        return Cell("absent")
-    names = {rows[first], rows[second]}
-    for pair in table["pairs"]:
-        if {pair["first"], pair["second"]} == names and pair["epsilon"] == epsilon:
-            if pair["by_construction"]:
-                return Cell("identical by construction")
-            if not pair["differ"]:
-                return Cell("not separated")
-            sign = 1.0 if pair["first"] == rows[first] else -1.0
-            equal, shown = pair.get("equality_difference"), None
-            if equal is not None and all(o["harms"] == 0.0 and o["robot_harmed"] == 0.0 for o in table.get("outcomes", ())):
-                shown = sign * float(equal)  # (nobody harmed: the side effect is equality)
-            return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]), shown)
-    raise ValueError(f"no pair {rows[first]} / {rows[second]} at ε = {epsilon} in the table of {table.get('env')}")
+@dataclass(frozen=True)
+class TableIndex:
+    """One table read once: its method rows and its pairs by their two row names and ε."""
+
+    task: str
+    """The task's name (the table file's stem), named in refusals."""
+    table: Mapping[str, Any]
+    rows: dict[str, str]
+    """:func:`method_rows` of the table."""
+    pairs: dict[tuple[frozenset[str], float], Mapping[str, Any]]
+    """Each pair by ``({first, second}, ε)``; the first such pair of the file where several match."""
+    nobody_harmed: bool
+    """Whether every outcome has 0 harms and 0 robot harmed (then the side effect is equality)."""
+
+    @classmethod
+    def of(cls, table: Mapping[str, Any], task: str = "") -> TableIndex:
+        """The index of ``table``: one pass over its rows, pairs and outcomes."""
+        pairs: dict[tuple[frozenset[str], float], Mapping[str, Any]] = {}
+        for pair in table["pairs"]:
+            pairs.setdefault((frozenset((pair["first"], pair["second"])), pair["epsilon"]), pair)
+        harmless = all(o["harms"] == 0.0 and o["robot_harmed"] == 0.0 for o in table.get("outcomes", ()))
+        return cls(task or str(table.get("env", "")), table, method_rows(table), pairs, harmless)
+
+    def cell(self, first: str, second: str, epsilon: float) -> Cell:
+        """What the table says about methods ``first`` and ``second`` at ``epsilon``."""
+        rows = self.rows
+        if first not in rows or second not in rows:
+            return Cell("absent")
+        pair = self.pairs.get((frozenset((rows[first], rows[second])), epsilon))
+        if pair is None:
+            where = f"the table of {shown(self.task)}" if self.task else "a table that names no task"
+            raise ValueError(f"no pair {shown(rows[first])} / {shown(rows[second])} at ε = {epsilon:g} in {where}")
+        if pair["by_construction"]:
+            return Cell("identical by construction")
+        if not pair["differ"]:
+            return Cell("not separated")
+        sign = 1.0 if pair["first"] == rows[first] else -1.0
+        equal = pair.get("equality_difference")
+        equality = sign * float(equal) if equal is not None and self.nobody_harmed else None  # (nobody harmed: equality)
+        return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]), equality)
+
+
+def cell(table: Mapping[str, Any], first: str, second: str, epsilon: float, task: str = "") -> Cell:
+    """What ``table`` (of task ``task``, named in refusals) says about methods ``first`` and
+    ``second`` at ``epsilon``. To ask many pairs, build one :class:`TableIndex` and ask it."""
+    return TableIndex.of(table, task).cell(first, second, epsilon)
 
 
 def beta_groups(table: Mapping[str, Any], method: str, epsilon: float) -> int | None:
     """How many distinct optima ``method``'s β values give in ``table`` at ``epsilon`` (rows joined
     by "not separated" pairs); ``None`` when the method has no β rows there."""
-    names = [row["name"] for row in table["rows"] if row["method"] == method and row.get("selfishness") is not None]
-    if not names:
-        return None
-    group = {name: name for name in names}
+    return all_beta_groups(table, epsilon).get(method)
+
+
+def all_beta_groups(table: Mapping[str, Any], epsilon: float) -> dict[str, int]:
+    """:func:`beta_groups` of every method with β rows in ``table``, in one pass over its pairs
+    (union-find with path halving, joining only rows of one method)."""
+    method_of = {row["name"]: row["method"] for row in table["rows"] if row.get("selfishness") is not None}
+    group = {name: name for name in method_of}
 
     def root(name: str) -> str:
         while group[name] != name:
+            group[name] = group[group[name]]
             name = group[name]
         return name
 
     for pair in table["pairs"]:
-        if pair["epsilon"] == epsilon and pair["first"] in group and pair["second"] in group and not pair["differ"]:
-            group[root(pair["first"])] = root(pair["second"])
-    return len({root(name) for name in names})
+        first, second = pair["first"], pair["second"]
+        if pair["epsilon"] != epsilon or pair["differ"] or first not in group or second not in group:
+            continue
+        if method_of[first] == method_of[second]:
+            group[root(first)] = root(second)
+    roots: dict[str, set[str]] = {}
+    for name, method in method_of.items():
+        roots.setdefault(method, set()).add(root(name))
+    return {method: len(found) for method, found in roots.items()}
 
 
 def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: float, command: str) -> str:
     """The page: the matrix of every pair of methods over every task, then β's groups."""
-    methods: list[str] = []
-    for table in tables.values():
-        methods += [method for method in method_rows(table) if method not in methods]
+    indexes = {task: TableIndex.of(table, task) for task, table in tables.items()}
+    methods = list(dict.fromkeys(method for index in indexes.values() for method in index.rows))
+    if len(methods) > MAX_METHODS:
+        raise ValueError(
+            f"the tables name {len(methods):,} methods; the matrix holds at most {MAX_METHODS} "
+            f"({MAX_METHODS * (MAX_METHODS - 1) // 2:,} pairs of methods)"
+        )
     tasks = list(tables)
     lines = [
         "# Discrimination matrix: which task tells which methods apart",
@@ -157,7 +206,7 @@ def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: fl
         "|---|" + "---|" * len(tasks) + "---:|",
     ]
     for first, second in itertools.combinations(methods, 2):
-        cells = [cell(tables[task], first, second, epsilon) for task in tasks]
+        cells = [indexes[task].cell(first, second, epsilon) for task in tasks]
         count = sum(c.kind == "separated" for c in cells)
         pair = f"{code_span(first)} / {code_span(second)}"  # (names from the tables' files: data)
         lines.append(f"| {pair} | " + " | ".join(c.text() for c in cells) + f" | {count} of {len(tasks)} |")
@@ -171,8 +220,9 @@ def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: fl
         "| method | " + " | ".join(code_span(task) for task in tasks) + " |",
         "|---|" + "---:|" * len(tasks),
     ]
+    by_task = {task: all_beta_groups(table, epsilon) for task, table in tables.items()}
     for method in methods:
-        groups = [beta_groups(tables[task], method, epsilon) for task in tasks]
+        groups = [by_task[task].get(method) for task in tasks]
         if any(group is not None for group in groups):
             lines.append(f"| {code_span(method)} | " + " | ".join("–" if g is None else str(g) for g in groups) + " |")
     omitted = [(task, entry) for task, table in tables.items() for entry in table.get("omitted", [])]

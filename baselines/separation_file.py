@@ -20,12 +20,21 @@ from empathy_zoo.bounded_read import check_json_depth
 from empathy_zoo.document_checks import DocumentChecker
 from empathy_zoo.limits import read_bounded
 
-__all__ = ["MAX_SEPARATION_BYTES", "SeparationTableError", "check_separation_table", "read_separation_table"]
+__all__ = [
+    "MAX_ENTRIES",
+    "MAX_ROWS",
+    "MAX_SEPARATION_BYTES",
+    "SeparationTableError",
+    "check_separation_table",
+    "read_separation_table",
+]
 
 MAX_SEPARATION_BYTES = 64 * 2**20
 """The largest separation table read (the shipped ones are under 1 MB)."""
-MAX_ENTRIES = 1_000_000
-"""The most rows, outcomes, pairs or omissions a table may hold."""
+MAX_ROWS = 1_000
+"""The most rows a table may hold (the shipped ones hold 20)."""
+MAX_ENTRIES = 100_000
+"""The most outcomes, pairs or omissions a table may hold (the shipped ones hold at most 570)."""
 
 
 class SeparationTableError(ValueError):
@@ -59,11 +68,16 @@ def read_separation_table(path: str | os.PathLike[str]) -> dict[str, Any]:
     return check_separation_table(document, where)
 
 
-def _entries(check: DocumentChecker, value: Any, field: str) -> list[dict[str, Any]]:
-    """A list of at most :data:`MAX_ENTRIES` objects."""
-    if not isinstance(value, list) or len(value) > MAX_ENTRIES:
-        raise check.fail(field, f"an array of at most {MAX_ENTRIES:,} objects", value)
+def _entries(check: DocumentChecker, value: Any, field: str, most: int = MAX_ENTRIES) -> list[dict[str, Any]]:
+    """A list of at most ``most`` objects."""
+    if not isinstance(value, list) or len(value) > most:
+        raise check.fail(field, f"an array of at most {most:,} objects", value)
     return [check.table(item, f"{field}[{i}]") for i, item in enumerate(value)]
+
+
+def _optional_text(check: DocumentChecker, value: Any, field: str) -> str:
+    """``""`` or one line of printable text (:meth:`DocumentChecker.text`)."""
+    return value if value == "" else check.text(value, field)
 
 
 def _fraction(check: DocumentChecker, value: Any, field: str) -> float:
@@ -79,8 +93,10 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     check = _checker(path)
     table = check.table(document, "(the document)")
     check.has(table, ("rows", "outcomes", "pairs"), "")
+    if "env" in table:
+        check.text(table["env"], "env")
     names: set[str] = set()
-    for i, row in enumerate(_entries(check, table["rows"], "rows")):
+    for i, row in enumerate(_entries(check, table["rows"], "rows", MAX_ROWS)):
         where = f"rows[{i}]"
         check.has(row, ("name", "method"), f"{where}.")
         name = check.text(row["name"], f"{where}.name")
@@ -91,8 +107,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         if row.get("selfishness") is not None:
             _fraction(check, row["selfishness"], f"{where}.selfishness")
         for key in ("identical_to", "reason"):
-            if not isinstance(row.get(key, ""), str):
-                raise check.fail(f"{where}.{key}", "a string", row[key])
+            _optional_text(check, row.get(key, ""), f"{where}.{key}")
         if row.get("identical_to") and row["identical_to"] not in names:
             raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
     for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
@@ -119,8 +134,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         check.finite(pair["harms_difference"], f"{where}.harms_difference")
         if pair.get("equality_difference") is not None:
             check.finite(pair["equality_difference"], f"{where}.equality_difference")
-        if not isinstance(pair["by_construction"], str):
-            raise check.fail(f"{where}.by_construction", "a string", pair["by_construction"])
+        _optional_text(check, pair["by_construction"], f"{where}.by_construction")
     for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
         check.has(omission, ("method", "reason"), f"omitted[{i}].")
         check.text(omission["method"], f"omitted[{i}].method")

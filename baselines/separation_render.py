@@ -21,7 +21,7 @@ from typing import Any
 
 from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, ENVIRONMENT_TABLE
-from empathy_zoo.exact_solver import tabular_model
+from empathy_zoo.exact_solver import command_line_arguments, tabular_model
 
 __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_name", "main"]
 
@@ -235,12 +235,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"folder of the files (default {OUT})")
     args = parser.parse_args(argv)
-    kwargs: dict[str, int | str] = {}
-    for item in args.arguments:
-        key, equals, value = item.partition("=")
-        if not equals:
-            parser.error(f"{item!r} is not ARG=VALUE")
-        kwargs[key] = int(value) if value.isascii() and value.isdigit() and len(value) <= 18 else value
+    kwargs = command_line_arguments(args.arguments)  # (a ValueError: one line, as the environment's own)
     name = file_name(args.env, kwargs)
     paths = [check_replaceable(args.out / f"{name}{suffix}") for suffix in (".json", ".md")]  # (before the long part)
     model = tabular_model(args.env, **kwargs)

@@ -73,6 +73,8 @@ from empathy_zoo.limits import MAX_REFERENCE_CYCLES
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
 __all__ = [
+    "MAX_ARGUMENT_DIGITS",
+    "command_line_arguments",
     "TabularModel",
     "PolicyOutcome",
     "tabular_model",
@@ -484,6 +486,31 @@ def outcome_table(model: TabularModel, selfishness: tuple[float, ...], epsilons:
     return "\n".join(lines)
 
 
+MAX_ARGUMENT_DIGITS = 100
+"""The most digits an integer environment argument on the command line may have (the environments'
+own bounds, checked next, are far smaller)."""
+
+
+def command_line_arguments(items: list[str]) -> dict[str, int | str]:
+    """``ARG=VALUE`` items as environment arguments: a VALUE of ASCII digits, with an optional
+    sign, is an int, anything else a string, each then checked by the environment (which names its
+    bounds). An item without ``=``, or an integer of over :data:`MAX_ARGUMENT_DIGITS` digits, is one
+    ``ValueError`` line."""
+    kwargs: dict[str, int | str] = {}
+    for item in items:
+        key, equals, value = item.partition("=")
+        if not equals:
+            raise ValueError(f"{item!r} is not ARG=VALUE")
+        digits = value.removeprefix("-").removeprefix("+")
+        if digits.isascii() and digits.isdigit():
+            if len(digits) > MAX_ARGUMENT_DIGITS:
+                raise ValueError(f"{key} is an integer of {len(digits):,} digits; arguments have at most {MAX_ARGUMENT_DIGITS}")
+            kwargs[key] = int(value)
+        else:
+            kwargs[key] = value
+    return kwargs
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python -m empathy_zoo.exact_solver [ENV] [ARG=VALUE ...]``: the exact outcome table
     (``empathy-zoo analyse exact``); an environment or argument it cannot model is one line, status 2."""
@@ -494,14 +521,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
     args = parser.parse_args(argv)
-    kwargs: dict[str, Any] = {}
-    for item in args.arguments:
-        key, equals, value = item.partition("=")
-        if not equals:
-            parser.error(f"{item!r} is not ARG=VALUE")
-        kwargs[key] = int(value) if value.isascii() and value.isdigit() and len(value) <= 18 else value
     try:
-        model = tabular_model(args.env, **kwargs)
+        model = tabular_model(args.env, **command_line_arguments(args.arguments))
     except ValueError as error:
         print(f"exact_solver: error: {error}", file=sys.stderr)
         return 2

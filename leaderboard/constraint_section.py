@@ -88,4 +88,4 @@ def constraint_section(results: Sequence[RunResult]) -> Section | None:
         "(the Lagrangian method): the mean over seeds [its interval across seeds, as the tables'], and whether d lies "
         "above the interval (met), inside it (undecided) or below it (violated)."
     )
-    return Section(SECTION_TITLE, [Paragraph(intro, note=True), Table(header, table)])
+    return Section(SECTION_TITLE, [Paragraph(intro, note=True), Table(header, table, text_columns=2)])  # (labels: data)

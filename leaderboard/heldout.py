@@ -253,7 +253,7 @@ def heldout_section(
         blocks += [
             Heading(markdown_text(heading)),
             Paragraph(_intro(group, cells), note=True),
-            Table(["Scenario", "Why it is there"], reasons, left_columns=2),
+            Table(["Scenario", "Why it is there"], reasons, text_columns=2, left_columns=2),  # (reasons: data)
         ]
         for table_title, header, rows in _tables(group, cells, digits):
             blocks += [Heading(table_title, 4), Table(header, rows)]

@@ -191,17 +191,25 @@ def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> 
     return buffer.getvalue()
 
 
+def _named_path(text: str) -> str:
+    """A path argument, refused when empty (an empty ``DIR`` would silently read the current
+    directory, an empty ``--figure`` silently draw nothing)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path: name it ('.' for the current directory, a .png file for --figure)")
+    return text
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.tuning_summary DIR [--figure PATH]``."""
     parser = argparse.ArgumentParser(prog="python -m leaderboard.tuning_summary", description=__doc__.splitlines()[0])
-    parser.add_argument("root", metavar="DIR", help="a directory holding study.json files, at any depth")
-    parser.add_argument("--figure", metavar="PATH", help="draw the trials of every study into this PNG")
+    parser.add_argument("root", metavar="DIR", type=_named_path, help="a directory holding study.json files, at any depth")
+    parser.add_argument("--figure", metavar="PATH", type=_named_path, help="draw the trials of every study into this PNG")
     args = parser.parse_args(argv)
     try:
         read = [(path, check_study(read_study(path), path)) for path in find_studies(args.root)]
         studies = [study for _, study in read]
         table = summary_table([_checked(path, summarise, study) for path, study in read])
-        figure = _checked(Path(args.root), render_studies_png, studies) if args.figure else None
+        figure = _checked(Path(args.root), render_studies_png, studies) if args.figure is not None else None
     except ValueError as error:
         print(f"tuning_summary: error: {error}", file=sys.stderr)
         return 2

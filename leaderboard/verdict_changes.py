@@ -7,7 +7,10 @@ as power; one that changes sign is a finding.
 
     python -m leaderboard.verdict_changes OLD/LEADERBOARD.md NEW/LEADERBOARD.md
 
-Pure text: the pages are read as Markdown, nothing is recomputed.
+Pure text: the pages are read as Markdown, nothing is recomputed. A page may come from anyone:
+each name copied from it (variant, phase, method, metric) is shown as text, its Markdown escapes
+undone and escaped again, and any control or format character shown as its code (``\\x1b``), so
+no page opens HTML, a link or emphasis in the list, or sends a terminal escape to the screen.
 """
 
 from __future__ import annotations
@@ -15,15 +18,31 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+import unicodedata
 from pathlib import Path
 
-__all__ = ["Cell", "verdicts", "changes", "changes_markdown", "main"]
+from empathy_zoo.markdown_escape import markdown_text
+from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
+
+__all__ = ["Cell", "changes", "changes_markdown", "main", "shown_text", "verdicts"]
 
 Cell = tuple[str, str, str, str]
 """(variant, phase, method row, metric)."""
 
 _TABLE = "### P(improves on DQN): "
 _MARK = re.compile(r"^\s*([▲▼]?)")
+_ESCAPED = re.compile(r"\\(.)")
+
+
+def shown_text(cell: str) -> str:
+    """A name read from a page (Markdown: data), as one Markdown text that reads as itself: its
+    backslash escapes undone, each control or format character written as its code, then
+    :func:`~empathy_zoo.markdown_escape.markdown_text`."""
+    plain = _ESCAPED.sub(lambda found: found.group(1), cell)
+    visible = "".join(
+        c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES else c for c in plain
+    )
+    return markdown_text(visible)
 
 
 def verdicts(page: str) -> dict[Cell, str]:
@@ -72,7 +91,8 @@ def changes_markdown(old_page: str, new_page: str) -> str:
         "| variant | phase | method | metric | old | new | change |",
         "|---|---|---|---|:-:|:-:|---|",
     ]
-    for (variant, phase, method, metric), before, after in changed:
+    for names, before, after in changed:
+        variant, phase, method, metric = (shown_text(name) for name in names)  # (from the pages: data)
         lines.append(f"| {variant} | {phase} | {method} | {metric} | {before or '–'} | {after or '–'} | {_kind(before, after)} |")
     return "\n".join(lines) + "\n"
 

@@ -60,7 +60,7 @@ def test_each_kind_of_cell_and_the_sign_of_the_harms_difference():
     assert cell(TABLE, "e", "dqn", 0.01) == Cell("separated", 12, -0.75)
     assert cell(TABLE, "dqn", "twin", 0.01).kind == "identical by construction"
     assert cell(TABLE, "dqn", "far", 0.01).text() == "–"
-    with pytest.raises(ValueError, match=r"no pair dqn / e β=0\.5 at ε = 0\.05"):
+    with pytest.raises(ValueError, match=r"no pair 'dqn' / 'e β=0\.5' at ε = 0\.05"):
         cell(TABLE, "dqn", "e", 0.05)
 
 
