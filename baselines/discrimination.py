@@ -31,7 +31,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
@@ -44,6 +44,7 @@ __all__ = [
     "MAX_METHODS",
     "Cell",
     "TableIndex",
+    "TrainedPart",
     "all_beta_groups",
     "beta_groups",
     "cell",
@@ -185,8 +186,24 @@ def all_beta_groups(table: Mapping[str, Any], epsilon: float) -> dict[str, int]:
     return {method: len(found) for method, found in roots.items()}
 
 
-def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: float, command: str) -> str:
-    """The page: the matrix of every pair of methods over every task, then β's groups."""
+class TrainedPart(Protocol):
+    """What trained runs say of one pair on one task (:class:`leaderboard.trained_discrimination.TrainedCell`)."""
+
+    @property
+    def separated(self) -> bool: ...
+
+    def text(self) -> str: ...
+
+
+def discrimination_markdown(
+    tables: Mapping[str, Mapping[str, Any]],
+    epsilon: float,
+    command: str,
+    trained: Mapping[tuple[str, str, str], TrainedPart] | None = None,
+) -> str:
+    """The page: the matrix of every pair of methods over every task, then β's groups. With
+    ``trained`` (``{(task, first, second): part}``, pairs in the matrix's order), each cell also
+    says what trained runs found, and a column counts the tasks whose runs separate the pair."""
     indexes = {task: TableIndex.of(table, task) for task, table in tables.items()}
     methods = list(dict.fromkeys(method for index in indexes.values() for method in index.rows))
     if len(methods) > MAX_METHODS:
@@ -198,18 +215,35 @@ def discrimination_markdown(tables: Mapping[str, Mapping[str, Any]], epsilon: fl
     lines = [
         "# Discrimination matrix: which task tells which methods apart",
         "",
-        f"Exact optima only, at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}. Made by `{command}`",
+        f"Exact optima{' only,' if trained is None else ''} at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}. Made by {code_span(command)}",
         "(`baselines/discrimination.py`) from the separation tables beside this page.",
         "A pair no task separates cannot be told apart by any run of these tasks.",
+    ]
+    if trained is not None:
+        lines += [
+            f"After `;`, trained runs: {len(trained)} cells tested, each at 5 %, unadjusted",
+            "(`leaderboard/trained_discrimination.py`: final greedy harms, seed against seed;",
+            "P = the probability that a seed of the first harms fewer than one of the second).",
+            "Where runs do not differ, about one tested cell in twenty reads separated by chance.",
+        ]
+    extra = " separated in trained runs |" if trained is not None else ""
+    lines += [
         "",
-        "| pair | " + " | ".join(code_span(task) for task in tasks) + " | separated by |",
-        "|---|" + "---|" * len(tasks) + "---:|",
+        "| pair | " + " | ".join(code_span(task) for task in tasks) + " | separated by |" + extra,
+        "|---|" + "---|" * len(tasks) + "---:|" + ("---:|" if extra else ""),
     ]
     for first, second in itertools.combinations(methods, 2):
         cells = [indexes[task].cell(first, second, epsilon) for task in tasks]
         count = sum(c.kind == "separated" for c in cells)
         pair = f"{code_span(first)} / {code_span(second)}"  # (names from the tables' files: data)
-        lines.append(f"| {pair} | " + " | ".join(c.text() for c in cells) + f" | {count} of {len(tasks)} |")
+        texts = [c.text() for c in cells]
+        row = f" | {count} of {len(tasks)} |"
+        if trained is not None:
+            parts = [trained.get((task, first, second)) for task in tasks]
+            texts = [text if part is None else f"{text}; {part.text()}" for text, part in zip(texts, parts, strict=True)]
+            tested = [part for part in parts if part is not None]
+            row += f" {sum(part.separated for part in tested)} of {len(tested)} |"
+        lines.append(f"| {pair} | " + " | ".join(texts) + row)
     lines += [
         "",
         "## Does β change the optimum?",

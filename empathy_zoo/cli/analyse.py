@@ -42,7 +42,9 @@ TOOLS: dict[str, Tool] = {
     "separation": Tool("baselines.separation_render", "a task's exact separation table (JSON and Markdown)"),
     "population-reading": Tool("leaderboard.population_reading", "population-trained against default-trained runs, test split"),
     "separation-reading": Tool("leaderboard.separation_reading", "trained runs judged against the exact separation tables"),
-    "discrimination": Tool("baselines.discrimination", "method pairs × tasks from the exact separation tables"),
+    "discrimination": Tool(
+        "leaderboard.trained_discrimination", "method pairs × tasks from the exact separation tables (and trained runs)"
+    ),
 }
 """Every tool ``analyse`` runs, by the name it takes."""
 

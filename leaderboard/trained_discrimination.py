@@ -1,0 +1,139 @@
+"""# The discrimination matrix with trained runs: which pairs the runs themselves tell apart
+
+Adds to each cell of the exact discrimination matrix (:mod:`baselines.discrimination`) what
+trained runs say of the same pair on the same task. The rule was fixed before the scenarios
+profile's runs were read (docs/results/scenarios/READING.md, addendum "the matrix's trained
+cells").
+
+**The rule.** For a task whose robot can harm, and two methods that both have trained runs of
+the task's own variant (a method with a β at β = 0.5, as the exact matrix reads it): each seed's
+score is its mean harms per episode over the final greedy evaluation
+(:func:`leaderboard.separation_reading.final_harms`). The two methods' seeds are compared by the
+leaderboard's own test (:func:`leaderboard.improvement.improvement_interval` and
+:func:`~leaderboard.improvement.improvement_verdict`: the exact two-sided permutation test at
+5 %, fewer harms better).
+
+* The interval excludes 0.5: **separated in trained runs**, with the probability that a seed of
+  the first harms fewer than one of the second.
+* It contains 0.5: **no difference detected**. At 10 seeds a side the test marks only
+  probabilities of at most 0.24 or at least 0.76.
+* The seed counts cannot reach the level: **undecidable**.
+* Either method without runs of the task, or a task whose robot cannot harm (its harms are 0 by
+  construction): no trained cell.
+
+Each cell is a test at 5 %, unadjusted, as the leaderboard's marks are: among pairs whose runs do
+not differ, about one cell in twenty is marked by chance. The page counts the cells tested.
+
+    empathy-zoo analyse discrimination --results DIR [--results DIR ...]   # -> the page with trained cells
+
+Everything but :func:`main` is a pure function of tables and per-seed arrays.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from baselines.discrimination import DEFAULT_DIR, TableIndex, discrimination_markdown, load_tables
+from empathy_zoo.atomic import write_text_atomic
+from leaderboard.improvement import TOO_FEW_SEEDS, improvement_interval, improvement_verdict
+
+__all__ = ["NO_DIFFERENCE", "SEPARATED", "UNDECIDABLE", "TrainedCell", "trained_cell", "trained_cells", "main"]
+
+SEPARATED, NO_DIFFERENCE, UNDECIDABLE = "separated in trained runs", "no difference detected", "undecidable"
+
+
+@dataclass(frozen=True)
+class TrainedCell:
+    """What trained runs say of one pair of methods on one task."""
+
+    kind: str
+    """:data:`SEPARATED`, :data:`NO_DIFFERENCE` or :data:`UNDECIDABLE`."""
+    probability: float
+    """P(a seed of the first method harms fewer than one of the second), ties halved."""
+    seeds: tuple[int, int]
+    """Seeds read of the first and the second method."""
+
+    @property
+    def separated(self) -> bool:
+        """Whether the runs separate the pair."""
+        return self.kind == SEPARATED
+
+    def text(self) -> str:
+        """The cell's trained part, as the matrix shows it."""
+        if self.kind == UNDECIDABLE:
+            return f"trained: undecidable ({self.seeds[0]} vs {self.seeds[1]} seeds)"
+        return f"trained: {'separated' if self.separated else 'no difference detected'}, P {self.probability:.2f}"
+
+
+def trained_cell(first: Sequence[float], second: Sequence[float]) -> TrainedCell:
+    """The rule (see the module page) on the per-seed harms of two methods' runs."""
+    probability, low, high = improvement_interval(first, second, higher_is_better=False)
+    verdict = improvement_verdict(low, high, len(first), len(second))
+    seeds = (len(first), len(second))
+    if verdict == TOO_FEW_SEEDS or math.isnan(probability):
+        return TrainedCell(UNDECIDABLE, probability, seeds)
+    return TrainedCell(NO_DIFFERENCE if verdict == "no clear difference" else SEPARATED, probability, seeds)
+
+
+def trained_cells(
+    tasks: Sequence[str], methods: Sequence[str], harms: Mapping[tuple[str, str], Sequence[float]], can_harm: Mapping[str, bool]
+) -> dict[tuple[str, str, str], TrainedCell]:
+    """``{(task, first, second): cell}`` for every pair of ``methods`` (in their order) on every
+    task of ``tasks`` whose robot can harm and where both have runs (``harms``: per-seed harms by
+    ``(task, method)``)."""
+    cells = {}
+    for task in tasks:
+        if not can_harm.get(task, False):
+            continue
+        for i, first in enumerate(methods):
+            for second in methods[i + 1 :]:
+                a, b = harms.get((task, first), ()), harms.get((task, second), ())
+                if a and b:
+                    cells[task, first, second] = trained_cell(a, b)
+    return cells
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``empathy-zoo analyse discrimination [DIR] [--epsilon E] [--results RESULTS ...] [--out FILE]``."""
+    from leaderboard.separation_reading import can_harm, final_harms
+
+    parser = argparse.ArgumentParser(prog="empathy-zoo analyse discrimination", description=__doc__.splitlines()[0][2:])
+    parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
+    parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
+    parser.add_argument(
+        "--results", type=Path, action="append", default=[], metavar="DIR", help="a results directory of trained runs (repeat)"
+    )
+    parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
+    args = parser.parse_args(argv)
+    out = args.out or args.directory / "DISCRIMINATION.md"
+    command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
+    if args.epsilon != 0.01:
+        command += f" --epsilon {args.epsilon:g}"
+    command += "".join(f" --results {path}" for path in args.results)
+    try:
+        tables = load_tables(args.directory)
+        trained = None
+        if args.results:
+            from empathy_zoo.training.heldout import results_of
+
+            results = [result for directory in args.results for _, result in results_of(directory)]
+            indexes = [TableIndex.of(table, task) for task, table in tables.items()]
+            methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
+            selfish = {str(row["method"]): row.get("selfishness") is not None for t in tables.values() for row in t["rows"]}
+            tasks = list(tables)
+            trained = trained_cells(tasks, methods, final_harms(results, selfish), {task: can_harm(task) for task in tasks})
+        page = discrimination_markdown(tables, args.epsilon, command, trained)
+    except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
+        print(f"discrimination: error: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {write_text_atomic(out, page)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
