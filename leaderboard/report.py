@@ -35,6 +35,7 @@ from leaderboard.aggregate import (
 )
 from leaderboard.budgets import budgets_of
 from leaderboard.constraint_section import constraint_section
+from leaderboard.discrimination_section import discrimination_section
 from leaderboard.episodes import episodes_section
 from leaderboard.evaluation_dirs import MatchedEvaluation, match_evaluations
 from leaderboard.heldout import heldout_section
@@ -220,6 +221,7 @@ def _render(
     if comparison:
         directories = read.row_directories()
         rows = {row: RowFacts(budgets_of(runs)[0], directories[row]) for row, runs in group_runs(results).items()}
+    discrimination = discrimination_section(results)  # (before any figure is written: it reads the tables)
     tradeoffs = plot_tradeoffs(scores, out / FIGURES_DIR, base_env, dqn_rows)
     figures = {**{(env, TRADEOFF): path for env, path in tradeoffs.items()}, **curves}
     files = {key: (path.relative_to(out).as_posix(), path.read_bytes()) for key, path in figures.items()}
@@ -240,6 +242,7 @@ def _render(
     episodes = episodes_section(results, out, read.origins, allowed_imports=allowed_imports)
     added: list[Section | None] = [
         constraint,
+        discrimination,
         profiles,
         heldout.section if heldout else None,
         episodes.section if episodes else None,
