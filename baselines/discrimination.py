@@ -215,13 +215,14 @@ def discrimination_markdown(
     lines = [
         "# Discrimination matrix: which task tells which methods apart",
         "",
-        f"Exact optima{' only,' if trained is None else ''} at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}. Made by {code_span(command)}",
+        f"Exact optima{' only,' if trained is None else ''} at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}."
+        f" Made by {code_span(command)}",
         "(`baselines/discrimination.py`) from the separation tables beside this page.",
         "A pair no task separates cannot be told apart by any run of these tasks.",
     ]
     if trained is not None:
         lines += [
-            f"After `;`, trained runs: {len(trained)} cells tested, each at 5 %, unadjusted",
+            f"After `;`, trained runs (cells tested: {len(trained)}), each cell at 5 %, unadjusted",
             "(`leaderboard/trained_discrimination.py`: final greedy harms, seed against seed;",
             "P = the probability that a seed of the first harms fewer than one of the second).",
             "Where runs do not differ, about one tested cell in twenty reads separated by chance.",

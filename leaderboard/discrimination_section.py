@@ -31,8 +31,8 @@ def discrimination_section(results: Sequence[RunResult], tables_dir: Path | None
     (default: the shipped ones); ``None`` where it would hold no pair."""
     from baselines.discrimination import TableIndex
     from baselines.separation_file import read_separation_table
-    from leaderboard.separation_reading import TABLES, can_harm, final_harms
-    from leaderboard.trained_discrimination import trained_cells
+    from leaderboard.separation_reading import TABLES, can_harm
+    from leaderboard.trained_discrimination import method_harms, trained_cells
 
     folder = TABLES if tables_dir is None else tables_dir
     envs = sorted({run.env for run in results if (run.variant or run.env) == run.env})
@@ -41,13 +41,7 @@ def discrimination_section(results: Sequence[RunResult], tables_dir: Path | None
         return None
     indexes = {task: TableIndex.of(table, task) for task, table in tables.items()}
     selfish = {str(row["method"]): row.get("selfishness") is not None for table in tables.values() for row in table["rows"]}
-    harms: dict[tuple[str, str], list[float]] = {}
-    shared: list[str] = []
-    for method in dict.fromkeys(run.method for run in results):
-        try:
-            harms.update(final_harms([run for run in results if run.method == method], selfish))
-        except ValueError:  # (two rows of one method share a seed: say so, read neither)
-            shared.append(method)
+    harms, shared = method_harms(results, selfish)
     ran = {key for key in harms if key[0] in tables}
     methods = list(dict.fromkeys(m for index in indexes.values() for m in index.rows if any((t, m) in ran for t in tables)))
     tasks = list(tables)
@@ -62,15 +56,15 @@ def discrimination_section(results: Sequence[RunResult], tables_dir: Path | None
                 text = indexes[task].cell(first, second, EPSILON).text()
                 part = trained.get((task, first, second))
                 cells.append(text if part is None else f"{text}; {part.text()}")
-            rows.append([f"{first} / {second}", *cells])  # (method names: the tables' and the runs', data)
+            rows.append([f"{first} / {second}", *cells])  # (method names: the tables' and the runs')
     if not rows:
         return None
     intro = (
         f"Each pair of methods with trained rows here, on each task with an exact separation table (docs/separation.md). "
         f"Before `;`: the exact optima (ε = {EPSILON:g}, β = 0.5; `separated (N states, Δharms x)`: their policies differ in N "
         "reachable states, x = harms of the first − the second). After `;`: these runs, final greedy harms seed against "
-        f"seed, the permutation test at 5 %, unadjusted ({len(trained)} cells tested: about one in twenty reads separated by "
-        "chance where runs do not differ); P = the probability that a seed of the first harms fewer than one of the second. "
+        f"seed, the permutation test at 5 %, unadjusted (cells tested: {len(trained)}; where runs do not differ, about one in "
+        "twenty reads separated by chance); P = the probability that a seed of the first harms fewer than one of the second. "
         "The whole matrix: `empathy-zoo analyse discrimination --results DIR`."
     )
     if shared:

@@ -32,6 +32,7 @@ Everything but :func:`main` is a pure function of tables and per-seed arrays.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 from collections.abc import Mapping, Sequence
@@ -40,9 +41,10 @@ from pathlib import Path
 
 from baselines.discrimination import DEFAULT_DIR, TableIndex, discrimination_markdown, load_tables
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import TOO_FEW_SEEDS, improvement_interval, improvement_verdict
 
-__all__ = ["NO_DIFFERENCE", "SEPARATED", "UNDECIDABLE", "TrainedCell", "trained_cell", "trained_cells", "main"]
+__all__ = ["NO_DIFFERENCE", "SEPARATED", "UNDECIDABLE", "TrainedCell", "method_harms", "trained_cell", "trained_cells", "main"]
 
 SEPARATED, NO_DIFFERENCE, UNDECIDABLE = "separated in trained runs", "no difference detected", "undecidable"
 
@@ -80,6 +82,33 @@ def trained_cell(first: Sequence[float], second: Sequence[float]) -> TrainedCell
     return TrainedCell(NO_DIFFERENCE if verdict == "no clear difference" else SEPARATED, probability, seeds)
 
 
+Harms = dict[tuple[str, str], list[float]]
+"""Per-seed harms by ``(task, method)``."""
+
+
+def method_harms(results: Sequence[RunResult], selfish: Mapping[str, bool]) -> tuple[Harms, list[str]]:
+    """``({(task, method): per-seed harms}, methods not read)``: each method's runs read by
+    :func:`leaderboard.separation_reading.final_harms` (a method with β at β = 0.5), a run its
+    result file describes as standard DQN read as ``dqn`` (the paper's profile trains DQN as Empathic
+    DQN at β = 1). A method two of whose rows share a seed on one task (a tuned row beside an
+    untuned one) is not read, and listed."""
+    from leaderboard.improvement import is_dqn
+    from leaderboard.separation_reading import final_harms
+
+    by_method: dict[str, list[RunResult]] = {}
+    for run in results:
+        method = "dqn" if is_dqn(run) else run.method
+        by_method.setdefault(method, []).append(run if method == run.method else dataclasses.replace(run, method=method))
+    harms: Harms = {}
+    shared = []
+    for method, runs in by_method.items():
+        try:
+            harms.update(final_harms(runs, selfish))
+        except ValueError:
+            shared.append(method)
+    return harms, shared
+
+
 def trained_cells(
     tasks: Sequence[str], methods: Sequence[str], harms: Mapping[tuple[str, str], Sequence[float]], can_harm: Mapping[str, bool]
 ) -> dict[tuple[str, str, str], TrainedCell]:
@@ -100,7 +129,7 @@ def trained_cells(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``empathy-zoo analyse discrimination [DIR] [--epsilon E] [--results RESULTS ...] [--out FILE]``."""
-    from leaderboard.separation_reading import can_harm, final_harms
+    from leaderboard.separation_reading import can_harm
 
     parser = argparse.ArgumentParser(prog="empathy-zoo analyse discrimination", description=__doc__.splitlines()[0][2:])
     parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
@@ -126,7 +155,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
             selfish = {str(row["method"]): row.get("selfishness") is not None for t in tables.values() for row in t["rows"]}
             tasks = list(tables)
-            trained = trained_cells(tasks, methods, final_harms(results, selfish), {task: can_harm(task) for task in tasks})
+            harms, shared = method_harms(results, selfish)
+            if shared:
+                raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
+            trained = trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
         page = discrimination_markdown(tables, args.epsilon, command, trained)
     except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
         print(f"discrimination: error: {error}", file=sys.stderr)

@@ -42,7 +42,7 @@ def test_each_pair_that_ran_gets_its_exact_and_its_trained_cell(tmp_path: Path) 
     section = discrimination_section(results, tables(tmp_path))
     assert section is not None and section.title == SECTION_TITLE
     intro, table = section.blocks
-    assert isinstance(intro, Paragraph) and "3 cells tested" in intro.text
+    assert isinstance(intro, Paragraph) and "cells tested: 3;" in intro.text
     assert isinstance(table, Table) and table.header == ["Pair", "charger_v0"]
     assert table.rows == [
         ["dqn / dqn_harm_penalty", "separated (4 states, Δharms +0.900); trained: separated, P 0.00"],
@@ -67,3 +67,13 @@ def test_a_method_whose_rows_share_a_seed_is_named_and_not_read(tmp_path: Path) 
     assert isinstance(intro, Paragraph) and "share a seed on one task: dqn\\_harm\\_penalty" not in intro.text
     assert "share a seed on one task: dqn_harm_penalty." in intro.text
     assert isinstance(table, Table) and [row[0] for row in table.rows] == ["dqn / empathic_dqn"]
+
+
+def test_a_run_described_as_standard_dqn_is_read_as_dqn(tmp_path: Path) -> None:
+    """The paper's profile trains DQN as Empathic DQN at β = 1: its result file says it is DQN."""
+    results = runs("empathic_dqn", 1.0, 1.0) + runs("dqn_harm_penalty", 1.0, 0.0)
+    section = discrimination_section(results, tables(tmp_path))
+    assert section is not None
+    table = section.blocks[1]
+    assert isinstance(table, Table)
+    assert table.rows == [["dqn / dqn_harm_penalty", "separated (4 states, Δharms +0.900); trained: separated, P 0.00"]]

@@ -81,7 +81,7 @@ def test_the_page_shows_each_trained_part_and_counts_the_tasks_that_separate() -
     shown = "separated (5 states, Δharms +1.000); trained: separated, P 0.00"
     assert f"| `dqn` / `dqn_harm_penalty` | {shown} | 1 of 1 | 1 of 1 |" in page
     assert "| `dqn` / `empathic_dqn` | separated (5 states, Δharms +1.000) | 1 of 1 | 0 of 0 |" in page
-    assert "1 cells tested, each at 5 %, unadjusted" in page
+    assert "(cells tested: 1), each cell at 5 %, unadjusted" in page
     assert "trained" not in discrimination_markdown({"charger_v0": TABLE}, 0.01, "cmd")
 
 
