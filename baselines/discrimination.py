@@ -43,6 +43,7 @@ __all__ = [
     "MATRIX_BETA",
     "MAX_METHODS",
     "Cell",
+    "MissingPair",
     "TableIndex",
     "TrainedPart",
     "all_beta_groups",
@@ -108,6 +109,18 @@ def _beta(value: float) -> str:
     return f"{value:g}"
 
 
+class MissingPair(ValueError):
+    """A table without the pair a cell asks for; ``task`` names the table (its file's stem)."""
+
+    def __init__(self, message: str, task: str) -> None:
+        super().__init__(message)
+        self.task = task
+
+    def in_folder(self, folder: Path) -> str:
+        """The message naming the table's file in ``folder``."""
+        return f"separation table {folder / (self.task + '.json')}: {self}"
+
+
 @dataclass(frozen=True)
 class TableIndex:
     """One table read once: its method rows and its pairs by their two row names and ε."""
@@ -139,7 +152,7 @@ class TableIndex:
         pair = self.pairs.get((frozenset((rows[first], rows[second])), epsilon))
         if pair is None:
             where = f"the table of {shown(self.task)}" if self.task else "a table that names no task"
-            raise ValueError(f"no pair {shown(rows[first])} / {shown(rows[second])} at ε = {epsilon:g} in {where}")
+            raise MissingPair(f"no pair {shown(rows[first])} / {shown(rows[second])} at ε = {epsilon:g} in {where}", self.task)
         if pair["by_construction"]:
             return Cell("identical by construction")
         if not pair["differ"]:
@@ -281,6 +294,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         command += f" --epsilon {args.epsilon:g}"
     try:
         page = discrimination_markdown(load_tables(args.directory), args.epsilon, command)
+    except MissingPair as error:
+        print(f"discrimination: error: {error.in_folder(args.directory)}", file=sys.stderr)
+        return 2
     except ValueError as error:  # (a table refused: one line naming it, no usage text)
         print(f"discrimination: error: {error}", file=sys.stderr)
         return 2

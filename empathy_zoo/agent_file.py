@@ -258,6 +258,8 @@ def _check_heads(heads: Any, acting: Any, budget: int | None = None) -> tuple[di
             if bias.shape not in ((width,), (1, width)):
                 raise ValueError(f"head {name!r} bias {layer + 1} must be ({width},), got shape {tuple(bias.shape)}")
             tensors += [weight, bias.reshape(width)]
+        if not all(bool(torch.isfinite(layer).all()) for layer in tensors):
+            raise ValueError(f"head {name!r} holds a weight that is no finite number")  # (read or about to be written)
         checked[name] = tensors
         sizes.add((int(tensors[0].shape[0]), int(tensors[-1].shape[0])))
     if len(sizes) != 1:
@@ -402,9 +404,6 @@ def load_agent(
     _check_keys(path, document, DOCUMENT_KEYS, "agent file")
     try:
         heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"), budget=len(data))
-        for name, layers in heads.items():
-            if not all(bool(torch.isfinite(layer).all()) for layer in layers):
-                raise ValueError(f"head {name!r} holds a weight that is no finite number")
         header = _check_header(document.get("header"))
         if (document.get("obs_size"), document.get("num_actions")) != (obs_size, num_actions):
             raise ValueError(

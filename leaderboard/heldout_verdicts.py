@@ -45,7 +45,8 @@ def verdicts_markdown(rows: Sequence[Reading]) -> str:
     changed = sum(r.verdict != r.old_verdict for r in rows)
     counts = Counter((r.env, r.old_verdict, r.verdict) for r in rows)
     summary = [f"- {env}: {old} → {new}: {n}" for (env, old, new), n in sorted(counts.items())]
-    return "\n".join([markdown_table(header, body), "", f"changed: {changed} of {len(rows)}", *summary])
+    table = markdown_table(header, body, text_columns=3)  # (environment, label, scenario: data, as text)
+    return "\n".join([table, "", f"changed: {changed} of {len(rows)}", *summary])
 
 
 def main(argv: Sequence[str] | None = None) -> int:

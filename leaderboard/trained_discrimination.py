@@ -39,7 +39,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from baselines.discrimination import DEFAULT_DIR, TableIndex, discrimination_markdown, load_tables
+from baselines.discrimination import DEFAULT_DIR, MissingPair, TableIndex, discrimination_markdown, load_tables
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import TOO_FEW_SEEDS, improvement_interval, improvement_verdict
@@ -160,6 +160,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
             trained = trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
         page = discrimination_markdown(tables, args.epsilon, command, trained)
+    except MissingPair as error:
+        print(f"discrimination: error: {error.in_folder(args.directory)}", file=sys.stderr)
+        return 2
     except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
         print(f"discrimination: error: {error}", file=sys.stderr)
         return 2

@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.markdown_escape import markdown_text
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
 from leaderboard.versus_dqn import compact_metrics
@@ -127,19 +128,21 @@ def tuning_effect_table(effect: TuningEffect, changed_only: bool = False) -> str
     lines: list[str] = []
     for variant in sorted({p.variant for p in effect.pairs}):
         rows = [p for p in effect.pairs if p.variant == variant and (p.changed or not changed_only)]
-        lines += [f"### {variant}", "", "| method | metric | phase | untuned vs DQN | tuned vs tuned DQN | verdict |"]
+        header = "| method | metric | phase | untuned vs DQN | tuned vs tuned DQN | verdict |"
+        lines += [f"### {markdown_text(variant)}", "", header]
         lines.append("|---|---|---|---|---|---|")
         for p in rows:
             said = "(the reference)" if p.untuned_verdict is None else ("**changed by tuning**" if p.changed else "same")
+            label = markdown_text(p.label)  # (from the result files: data)
             lines.append(
-                f"| {p.label} | {p.metric} | {PHASE_NAMES[p.phase]} | {_cell(p.untuned_mean, p.untuned_verdict)} | "
+                f"| {label} | {p.metric} | {PHASE_NAMES[p.phase]} | {_cell(p.untuned_mean, p.untuned_verdict)} | "
                 f"{_cell(p.tuned_mean, p.tuned_verdict)} | {said} |"
             )
         lines.append("")
     compared = [p for p in effect.pairs if p.untuned_verdict is not None]
     lines.append(f"Verdicts changed by tuning: {sum(p.changed for p in compared)} of {len(compared)}.")
     if effect.unmatched:
-        shown = ", ".join(f"{label!r} ({variant})" for variant, label in effect.unmatched)
+        shown = ", ".join(f"'{markdown_text(label)}' ({markdown_text(variant)})" for variant, label in effect.unmatched)
         lines.append(f"Tuned rows with no untuned row (not compared): {shown}.")
     return "\n".join(lines)
 

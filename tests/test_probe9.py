@@ -113,6 +113,7 @@ def test_a_missing_pair_is_refused_naming_the_task(tmp_path, capsys) -> None:
     assert discrimination.main([str(tmp_path), "--out", str(tmp_path / "D.md")]) == 2
     error = capsys.readouterr().err
     assert "in the table of 'mytask_v0'" in error and "None" not in error
+    assert f"separation table {tmp_path / 'mytask_v0.json'}: no pair" in error
     assert not (tmp_path / "D.md").exists()
 
 

@@ -398,7 +398,7 @@ def test_a_forged_checkpoint_without_the_learners_state_is_said_corrupted_naming
     [
         ("<script>alert(1)</script>", r"\<script\>alert(1)\</script\>"),
         ("[click](javascript:alert(1))", r"\[click\](javascript:alert(1))"),
-        ("![x](http://example.com/x.png)", r"!\[x\](http://example.com/x.png)"),
+        ("![x](http://example.com/x.png)", r"!\[x\](http\://example.com/x.png)"),
         ("*bold* _it_ `code` ~~gone~~", r"\*bold\* \_it\_ \`code\` \~\~gone\~\~"),
         ("<img src=x onerror=alert(1)> &amp; a|b", r"\<img src=x onerror=alert(1)\> \&amp; a\|b"),
     ],

@@ -82,6 +82,9 @@ LOG_COLUMNS = ("episode_end_step", *METRIC_NAMES)
 price of its cost after each episode, for a run whose reward transform prices costs when sampled)."""
 
 
+SAVED_KERNELS = ("numba", "torch")
+"""The update kernels a learner's checkpoint may name (``learner.update_kernel``)."""
+
 MESSAGE_CHARS = 300
 """Most characters of what was wrong that a refused checkpoint's message quotes."""
 
@@ -354,6 +357,9 @@ def _check_learner(path: Path, state: Mapping[str, Any], step: int, runs: int) -
     its networks' copies (target, Adam's moments) of its networks' shapes, its replay memory's size
     and position those of one transition a step, its buffers of its runs and size."""
     env_steps, grad_steps = state.get("env_steps"), state.get("grad_steps")
+    kernel = state.get("update_kernel")
+    if kernel is not None and kernel not in SAVED_KERNELS:
+        raise corrupted(path, f"learner.update_kernel is {shown(kernel)}, not one of {', '.join(SAVED_KERNELS)}")
     if "env_steps" in state and not number(env_steps, step, step, whole=True):
         raise corrupted(
             path, f"learner.env_steps is {shown(env_steps)}: its learner has taken other steps than its ensemble's {step}"
@@ -394,6 +400,13 @@ def _check_networks(path: Path, state: Mapping[str, Any], runs: int) -> None:
         for i, (copy, shape) in enumerate(zip(copies, shapes, strict=True)):
             if tuple(copy.shape) != shape:
                 raise corrupted(path, f"learner.{name}[{i}] has shape {tuple(copy.shape)}, not {shape} (its networks')")
+            if copy.dtype != torch.float32:
+                raise corrupted(path, f"learner.{name}[{i}] has dtype {copy.dtype}, not torch.float32 (its networks')")
+            if name == "optimizer.exp_avg_sq" and bool((copy < 0).any()):
+                raise corrupted(path, f"learner.{name}[{i}] holds a negative value (Adam's mean of squared gradients)")
+    for i, parameter in enumerate(online):
+        if parameter.dtype != torch.float32:
+            raise corrupted(path, f"learner.online[{i}] has dtype {parameter.dtype}, not torch.float32 (the suite's precision)")
     counts, updates = optimizer.get("steps"), state.get("grad_steps")
     if counts is None:
         return

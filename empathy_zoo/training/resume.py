@@ -14,6 +14,9 @@ checkpoint of the output directory:
 * one that holds only runs not asked for here (another sweep's) is kept;
 * one that holds runs asked for here beside runs that cannot be rebuilt from those asked for is
   kept (it resumes when they are asked for too), and its runs asked for start again from scratch;
+  where those runs, grouped as asked, would train under its very name (its list of runs was
+  edited), it is set aside as ``<name>.disowned`` instead, so that nothing resumes from it or
+  deletes it;
 * one that cannot be resumed (the code that defines its runs changed, or it overlaps a newer one)
   is removed, and its runs still to do start again from scratch;
 * one that holds other runs than its name says (a renamed or copied file) is set aside as
@@ -64,6 +67,9 @@ UNREADABLE_SUFFIX = ".unreadable"
 """Suffix a list of runs that cannot be read is set aside with."""
 MISNAMED_SUFFIX = ".misnamed"
 """Suffix a checkpoint is set aside with when it holds other runs than its name says (renamed or copied)."""
+DISOWNED_SUFFIX = ".disowned"
+"""Suffix a checkpoint is set aside with when its list of runs cannot be rebuilt from the runs asked
+for, yet those runs, grouped as this invocation groups them, would train under its very name."""
 REQUEST_KEYS = frozenset(inspect.signature(RunSpec.of).parameters)
 """The keys a record of a list of runs may hold (those of :meth:`RunSpec.request`), besides ``run_id``."""
 
@@ -107,11 +113,11 @@ def _free_suffix(suffix: str, *paths: Path) -> str:
         number += 1
 
 
-def _set_aside_misnamed(checkpoint: Path) -> Path:
-    """Rename ``checkpoint`` (and its list of runs) to ``<name>.misnamed`` (``.misnamed.2``, … where
-    that name is taken: never over anything)."""
+def _set_aside_misnamed(checkpoint: Path, suffix: str = MISNAMED_SUFFIX) -> Path:
+    """Rename ``checkpoint`` (and its list of runs) to ``<name><suffix>`` (``.misnamed``, or
+    ``.misnamed.2``, … where that name is taken: never over anything)."""
     manifest = manifest_path(checkpoint)
-    tail = _free_suffix(MISNAMED_SUFFIX, checkpoint, manifest)
+    tail = _free_suffix(suffix, checkpoint, manifest)
     aside = checkpoint.with_name(checkpoint.name + tail)
     checkpoint.replace(aside)
     if manifest.exists():
@@ -279,6 +285,7 @@ def plan_ensembles(
         if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists():
             manifest.unlink()
     checkpoints = sorted(directory.glob("*.pt"), key=lambda p: (-p.stat().st_mtime_ns, p.name)) if directory.is_dir() else []
+    kept: list[tuple[Path, str, list[str]]] = []
     runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if every_run is None else every_run)})
     for checkpoint in checkpoints:  # the most recent first: it wins an overlap
         ensemble = _ensemble_of(checkpoint, runs_asked, on_note)
@@ -311,10 +318,7 @@ def plan_ensembles(
         elif not asked:
             on_note(f"kept checkpoint {checkpoint}: it holds unfinished runs not asked for here ({', '.join(ids)})")
         elif not overlap and not ensemble.dead:
-            on_note(
-                f"kept checkpoint {checkpoint}: {ensemble.problem}; it resumes when they are asked for too; "
-                f"these runs start again from scratch: {', '.join(asked)}"
-            )
+            kept.append((checkpoint, ensemble.problem, asked))  # (said below, once the fresh ensembles are known)
         else:
             why = f"it overlaps the newer checkpoint {claimed[overlap[0]]}" if overlap else ensemble.problem
             remove_checkpoint(checkpoint)
@@ -324,4 +328,19 @@ def plan_ensembles(
                 + (f"; these runs start again from scratch: {', '.join(restart)}" if restart else "")
             )
     rest = [spec for spec in todo if spec.run_id not in claimed]
-    return chunks + group_specs(rest, max_parallel_runs)
+    fresh = group_specs(rest, max_parallel_runs)
+    taken = {checkpoint_path(out_dir, chunk) for chunk in fresh}
+    for checkpoint, problem, asked in kept:
+        if checkpoint in taken:  # (a fresh ensemble of these very runs would resume from it, then delete it)
+            aside = _set_aside_misnamed(checkpoint, DISOWNED_SUFFIX)
+            on_note(
+                f"set aside checkpoint {checkpoint} as {aside.name}: {problem}, yet its name is that of these runs, "
+                f"which start again from scratch: {', '.join(asked)}; to resume from it, give it back its name "
+                "and its list of runs the specs of its runs"
+            )
+        else:
+            on_note(
+                f"kept checkpoint {checkpoint}: {problem}; it resumes when they are asked for too; "
+                f"these runs start again from scratch: {', '.join(asked)}"
+            )
+    return chunks + fresh
