@@ -33,6 +33,8 @@ MAX_SEPARATION_BYTES = 64 * 2**20
 """The largest separation table read (the shipped ones are under 1 MB)."""
 MAX_ROWS = 1_000
 """The most rows a table may hold (the shipped ones hold 20)."""
+MAX_ARGUMENTS = 20
+"""The most environment arguments a table may record."""
 MAX_ENTRIES = 100_000
 """The most outcomes, pairs or omissions a table may hold (the shipped ones hold at most 570)."""
 
@@ -95,6 +97,17 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     check.has(table, ("rows", "outcomes", "pairs"), "")
     if "env" in table:
         check.text(table["env"], "env")
+    arguments = table.get("arguments", [])
+    if not isinstance(arguments, list) or len(arguments) > MAX_ARGUMENTS:
+        raise check.fail("arguments", f"an array of at most {MAX_ARGUMENTS} [name, value] pairs", arguments)
+    for i, pair in enumerate(arguments):
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise check.fail(f"arguments[{i}]", "a [name, value] pair", pair)
+        check.text(pair[0], f"arguments[{i}][0]")
+        if isinstance(pair[1], str):
+            check.text(pair[1], f"arguments[{i}][1]")
+        else:
+            check.integer(pair[1], f"arguments[{i}][1]", -(10**9), 10**9)
     names: set[str] = set()
     for i, row in enumerate(_entries(check, table["rows"], "rows", MAX_ROWS)):
         where = f"rows[{i}]"

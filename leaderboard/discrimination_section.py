@@ -12,8 +12,9 @@ runs are on no such task, or of fewer than two of the tables' methods, has no su
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
@@ -24,6 +25,14 @@ __all__ = ["EPSILON", "SECTION_TITLE", "discrimination_section"]
 SECTION_TITLE = "Discrimination: which task tells which methods apart"
 EPSILON = 0.01
 """The ε of the exact pairs read (the discrimination page's)."""
+
+
+def _column(task: str, table: Mapping[str, Any]) -> str:
+    """A task's column heading; a table of another variant than the default (Sharing's, smaller so
+    that it can be enumerated) says which."""
+    arguments = table.get("arguments") or []
+    shown = ", ".join(f"{pair[0]}={pair[1]}" for pair in arguments if isinstance(pair, list) and len(pair) == 2)
+    return f"{task} (exact: {shown})" if shown else task
 
 
 def discrimination_section(results: Sequence[RunResult], tables_dir: Path | None = None) -> Section | None:
@@ -65,9 +74,10 @@ def discrimination_section(results: Sequence[RunResult], tables_dir: Path | None
         "reachable states, x = harms of the first − the second). After `;`: these runs, final greedy harms seed against "
         f"seed, the permutation test at 5 %, unadjusted (cells tested: {len(trained)}; where runs do not differ, about one in "
         "twenty reads separated by chance); P = the probability that a seed of the first harms fewer than one of the second. "
+        "A column whose exact table is of a smaller variant names it. "
         "The whole matrix: `empathy-zoo analyse discrimination --results DIR`."
     )
     if shared:
         intro += " Not read, as two of their rows share a seed on one task: " + ", ".join(markdown_text(m) for m in shared) + "."
-    header = ["Pair", *tasks]
+    header = ["Pair", *(_column(task, tables[task]) for task in tasks)]
     return Section(SECTION_TITLE, [Paragraph(intro, note=True), Table(header, rows, left_columns=len(header))])

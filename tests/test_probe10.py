@@ -141,3 +141,22 @@ def test_heldout_verdicts_shows_labels_and_names_as_text() -> None:
 )
 def test_a_bare_address_in_data_opens_no_link(text, shown) -> None:
     assert markdown_text(text) == shown
+
+
+# ---------------------------------------------------------------------------- 6. a table's arguments
+@pytest.mark.parametrize("arguments", [[["size", f"5{ESC}[2J"]], [["size"]], "size=5", [["size", 10**30]], [["a", 1]] * 21])
+def test_a_separation_tables_arguments_are_checked(tmp_path, arguments) -> None:
+    from baselines.separation_file import SeparationTableError, read_separation_table
+
+    document = json.loads((Path(__file__).resolve().parents[1] / "docs/results/separation/sharing_v0.json").read_text())
+    document["arguments"] = arguments
+    (tmp_path / "t.json").write_text(json.dumps(document))
+    with pytest.raises(SeparationTableError, match=r"field arguments"):
+        read_separation_table(tmp_path / "t.json")
+
+
+def test_a_column_of_a_smaller_variant_names_it() -> None:
+    from leaderboard.discrimination_section import _column
+
+    assert _column("sharing_v0", {"arguments": [["size", 5], ["view", 3]]}) == "sharing_v0 (exact: size=5, view=3)"
+    assert _column("coexistence_v0", {"arguments": []}) == "coexistence_v0"
