@@ -160,3 +160,20 @@ def test_a_column_of_a_smaller_variant_names_it() -> None:
 
     assert _column("sharing_v0", {"arguments": [["size", 5], ["view", 3]]}) == "sharing_v0 (exact: size=5, view=3)"
     assert _column("coexistence_v0", {"arguments": []}) == "coexistence_v0"
+
+
+# ---------------------------------------------------------------------------- 7. an agent's settings
+SHIPPED_AGENT = Path(__file__).resolve().parents[1] / "docs/results/quick/runs"
+
+
+@pytest.mark.parametrize("settings", [{"selfishness": float("nan")}, {"selfishness": -3}, {"selfishness": "x"}, {"__class__": 1}])
+def test_watch_refuses_an_agent_whose_settings_are_out_of_range(tmp_path, capsys, settings) -> None:
+    source = sorted(SHIPPED_AGENT.glob("*empathic_dqn*.agent.pt"))[0]
+    document = torch.load(source, weights_only=True)
+    document["header"]["settings"] = {**document["header"]["settings"], **settings}
+    forged_file = tmp_path / source.name
+    torch.save(document, forged_file)
+    capsys.readouterr()
+    assert main(["watch", str(forged_file), "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "field header.settings" in err and err.count("\n") == 1
