@@ -18,6 +18,7 @@ one of several). Nothing new is tested: this is a view of two leaderboards' cell
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -154,6 +155,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("tuned", help="results directory of the tuned rows (with the tuned DQN)")
     parser.add_argument("--changed-only", action="store_true", help="list only the verdicts tuning changed")
     args = parser.parse_args(argv)
+    if os.path.realpath(args.untuned) == os.path.realpath(args.tuned):
+        parser.error(f"UNTUNED_DIR and TUNED_DIR are one directory ({args.tuned}): give the untuned rows' and the tuned rows'")
     print(tuning_effect_table(tuning_effect(load_results(args.untuned), load_results(args.tuned)), args.changed_only))
     return 0
 
