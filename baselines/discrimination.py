@@ -28,7 +28,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -45,6 +45,7 @@ __all__ = [
     "Cell",
     "MissingPair",
     "TableIndex",
+    "TrainedCells",
     "TrainedPart",
     "all_beta_groups",
     "beta_groups",
@@ -281,23 +282,43 @@ def discrimination_markdown(
     return "\n".join(lines) + "\n"
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``."""
-    parser = argparse.ArgumentParser(prog="python -m baselines.discrimination", description=__doc__.splitlines()[0])
+TrainedCells = Callable[[Mapping[str, Mapping[str, Any]], Sequence[Path]], Mapping[tuple[str, str, str], TrainedPart]]
+"""What reads trained runs into cells: ``(tables, results directories) -> {(task, first, second): part}``."""
+
+
+def main(
+    argv: Sequence[str] | None = None, trained: TrainedCells | None = None, prog: str = "python -m baselines.discrimination"
+) -> int:
+    """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``; with ``trained``
+    (:func:`leaderboard.trained_discrimination.main` passes it), ``--results DIR`` too."""
+    parser = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
-    parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the pairs read (default: 0.01)")
+    parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
+    if trained is not None:
+        parser.add_argument(
+            "--results",
+            type=Path,
+            action="append",
+            default=[],
+            metavar="DIR",
+            help="a results directory of trained runs (repeat)",
+        )
     parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
     args = parser.parse_args(argv)
+    results: list[Path] = getattr(args, "results", [])
     out = args.out or args.directory / "DISCRIMINATION.md"
     command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
     if args.epsilon != 0.01:
         command += f" --epsilon {args.epsilon:g}"
+    command += "".join(f" --results {path}" for path in results)
     try:
-        page = discrimination_markdown(load_tables(args.directory), args.epsilon, command)
+        tables = load_tables(args.directory)
+        cells = trained(tables, results) if trained is not None and results else None
+        page = discrimination_markdown(tables, args.epsilon, command, cells)
     except MissingPair as error:
         print(f"discrimination: error: {error.in_folder(args.directory)}", file=sys.stderr)
         return 2
-    except ValueError as error:  # (a table refused: one line naming it, no usage text)
+    except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
         print(f"discrimination: error: {error}", file=sys.stderr)
         return 2
     print(f"wrote {write_text_atomic(out, page)}")

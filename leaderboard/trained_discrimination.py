@@ -31,20 +31,29 @@ Everything but :func:`main` is a pure function of tables and per-seed arrays.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-from baselines.discrimination import DEFAULT_DIR, MissingPair, TableIndex, discrimination_markdown, load_tables
-from empathy_zoo.atomic import write_text_atomic
+from baselines.discrimination import TableIndex
+from baselines.discrimination import main as discrimination_main
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import TOO_FEW_SEEDS, improvement_interval, improvement_verdict
 
-__all__ = ["NO_DIFFERENCE", "SEPARATED", "UNDECIDABLE", "TrainedCell", "method_harms", "trained_cell", "trained_cells", "main"]
+__all__ = [
+    "NO_DIFFERENCE",
+    "SEPARATED",
+    "UNDECIDABLE",
+    "TrainedCell",
+    "cells_of_results",
+    "method_harms",
+    "trained_cell",
+    "trained_cells",
+    "main",
+]
 
 SEPARATED, NO_DIFFERENCE, UNDECIDABLE = "separated in trained runs", "no difference detected", "undecidable"
 
@@ -127,47 +136,28 @@ def trained_cells(
     return cells
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``empathy-zoo analyse discrimination [DIR] [--epsilon E] [--results RESULTS ...] [--out FILE]``."""
+def cells_of_results(
+    tables: Mapping[str, Mapping[str, Any]], results_dirs: Sequence[Path]
+) -> dict[tuple[str, str, str], TrainedCell]:
+    """The trained cells of the result files of ``results_dirs`` for the matrix of ``tables``
+    (every method of the tables, in their order; a task whose robot can harm)."""
+    from empathy_zoo.training.heldout import results_of
     from leaderboard.separation_reading import can_harm
 
-    parser = argparse.ArgumentParser(prog="empathy-zoo analyse discrimination", description=__doc__.splitlines()[0][2:])
-    parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
-    parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
-    parser.add_argument(
-        "--results", type=Path, action="append", default=[], metavar="DIR", help="a results directory of trained runs (repeat)"
-    )
-    parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
-    args = parser.parse_args(argv)
-    out = args.out or args.directory / "DISCRIMINATION.md"
-    command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
-    if args.epsilon != 0.01:
-        command += f" --epsilon {args.epsilon:g}"
-    command += "".join(f" --results {path}" for path in args.results)
-    try:
-        tables = load_tables(args.directory)
-        trained = None
-        if args.results:
-            from empathy_zoo.training.heldout import results_of
+    results = [result for directory in results_dirs for _, result in results_of(directory)]
+    indexes = [TableIndex.of(table, task) for task, table in tables.items()]
+    methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
+    selfish = {str(row["method"]): row.get("selfishness") is not None for t in tables.values() for row in t["rows"]}
+    harms, shared = method_harms(results, selfish)
+    if shared:
+        raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
+    tasks = list(tables)
+    return trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
 
-            results = [result for directory in args.results for _, result in results_of(directory)]
-            indexes = [TableIndex.of(table, task) for task, table in tables.items()]
-            methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
-            selfish = {str(row["method"]): row.get("selfishness") is not None for t in tables.values() for row in t["rows"]}
-            tasks = list(tables)
-            harms, shared = method_harms(results, selfish)
-            if shared:
-                raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
-            trained = trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
-        page = discrimination_markdown(tables, args.epsilon, command, trained)
-    except MissingPair as error:
-        print(f"discrimination: error: {error.in_folder(args.directory)}", file=sys.stderr)
-        return 2
-    except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
-        print(f"discrimination: error: {error}", file=sys.stderr)
-        return 2
-    print(f"wrote {write_text_atomic(out, page)}")
-    return 0
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``empathy-zoo analyse discrimination [DIR] [--epsilon E] [--results RESULTS ...] [--out FILE]``."""
+    return discrimination_main(argv, cells_of_results, prog="empathy-zoo analyse discrimination")
 
 
 if __name__ == "__main__":
