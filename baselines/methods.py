@@ -123,7 +123,7 @@ BASELINE_METHODS: dict[str, Method] = {
         label=lambda s: "DQN + relative reachability (stepwise, no rollouts)",
         description="DQN trained on reward − 100·relative reachability lost against the stepwise inaction "
         "baseline without rollouts (step_noroll in Krakovna et al.'s code), none on the step the "
-        "robot is harmed, exact on Coexistence (Krakovna et al. 2019)",
+        "robot is harmed, exact on Coexistence, Charger, Helping and the vase task (Krakovna et al. 2019)",
     ),
     "dqn_considerate": Method(
         name="dqn_considerate",

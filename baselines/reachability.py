@@ -1,6 +1,6 @@
 """Relative reachability with a stepwise inaction baseline without rollouts (Krakovna, Orseau,
 Kumar, Martic, Legg 2019, "Penalizing side effects using stepwise relative reachability"), on
-Coexistence.
+Coexistence and every environment the exact solver models.
 
     r'ₜ = rₜ − λ · d(s'ₜ; b'ₜ)   (rₜ itself on the step the robot is harmed),
     d(x; y) = (1/|S|) · Σₛ max(R(y; s) − R(x; s), 0),
@@ -79,13 +79,18 @@ than from the baseline, each losing a fraction ``1 − γᵣ`` of its reachabili
 0.0018 and 0.0020 for every harmless move of the robot at ``size = 7``: about 0.2 a step); the
 no-op costs nothing. λ was fixed from this reasoning before any training run, not tuned on results.
 
-**Scope.** Coexistence with one cat only (``coexistence_v0``, ``robot_0`` and ``cat_0``), on grids up
-to ``size = 9`` (|S| = 2,206 states at the default ``size = 7``, the table built once per process in
-about 0.2 s). Not on Sharing: a state there also holds which of the batteries are left and who
-holds how many (49·49 cells × 2⁹ battery sets ≈ 1.2 million states at ``size = 7``, before
-inventories), so the exact table would hold about 1.5 × 10¹² entries; an approximation (sampled
-goal states, or the UVFA reachability of Krakovna et al. 2020) would be another method. Several
-cats multiply the states by 49 per cat and are refused for the same reason.
+**Scope.** Coexistence with one cat (``coexistence_v0``, ``robot_0`` and ``cat_0``) on grids up
+to ``size = 9``, from its own table (|S| = 2,206 states at the default ``size = 7``, built once
+per process in about 0.2 s). Every other environment the exact solver models, one robot and one
+other agent (Charger, Helping, the vase task), from that model's table
+(:mod:`baselines.model_reachability`): the same deviation, step for step, as the separation
+table's exact row (:mod:`baselines.separation_world`). Its states are every joint state, the robot
+alone and the end, reachable from a start or not, as that row counts them (Coexistence's own
+table counts only the states reachable from a start: its runs are unchanged). A model of more
+than 10,000 states is refused: Sharing (31,201 states at ``size = 5``, about 6.9 million at
+``size = 7``), whose batteries multiply the states; an approximation (sampled goal states, or the
+UVFA reachability of Krakovna et al. 2020) would be another method. Several cats multiply the
+states by 49 per cat and are refused for the same reason.
 """
 
 from __future__ import annotations
@@ -99,8 +104,10 @@ import numpy as np
 from agents.rewards import StepWatcherFactory
 from agents.step_batch import StepBatch
 from baselines.inaction_baseline import InactionBaseline
-from baselines.reachability_table import MAX_TABLE_SIZE, coexistence_codes, coexistence_reachability
+from baselines.model_reachability import ModelReachability, engine_state_codes, model_reachability_table
+from baselines.reachability_table import MAX_TABLE_SIZE, ReachabilityTable, coexistence_codes, coexistence_reachability
 from empathy_zoo.engine import GridEngine
+from empathy_zoo.environments import ENGINES
 
 __all__ = ["FINAL_PENALTIES", "RelativeReachability", "SIZE_STRIDE", "truncated_deviation"]
 
@@ -108,9 +115,33 @@ FINAL_PENALTIES = ("none", "last_deviation")
 """The values of :attr:`RelativeReachability.final_penalty` (see the module page)."""
 
 SIZE_STRIDE = 1 << 24
-"""A state code of :meth:`RelativeReachability.state_codes` is ``size · SIZE_STRIDE + `` its code
-on that grid (:func:`baselines.reachability_table.coexistence_codes`), so a code says which
-table it belongs to."""
+"""A state code of :meth:`RelativeReachability.state_codes` is ``tag · SIZE_STRIDE + `` its code
+in its table, so a code says which table it belongs to: on Coexistence ``tag`` is the grid's side
+(:func:`baselines.reachability_table.coexistence_codes`), elsewhere ``MODEL_TAG · (1 + the
+environment's place in MODELLED) + size`` (:func:`baselines.model_reachability.engine_state_codes`)."""
+MODEL_TAG = 1024
+"""Tags from here on name a table of an exact model (a grid side is below it)."""
+MODELLED = tuple(
+    sorted(name for name, engine in ENGINES.items() if name != "coexistence_v0" and hasattr(engine, "start_distribution"))
+)
+"""The environments other than Coexistence whose exact model gives relative reachability its table."""
+
+
+def _model_tag(env: str, size: int) -> int:
+    """The tag of ``env``'s model on a ``size × size`` grid (see :data:`SIZE_STRIDE`)."""
+    if not 0 < size < MODEL_TAG:
+        raise ValueError(f"grid size {size} out of range for an exact reachability table")
+    return MODEL_TAG * (1 + MODELLED.index(env)) + size
+
+
+def _table(tag: int) -> ReachabilityTable | ModelReachability:
+    """The table a tag names (see :data:`SIZE_STRIDE`)."""
+    if 0 < tag < MODEL_TAG:
+        return coexistence_reachability(tag)
+    place, size = divmod(tag, MODEL_TAG)
+    if not 1 <= place <= len(MODELLED) or size == 0:
+        raise ValueError(f"state code tag {tag} names no reachability table")
+    return model_reachability_table(MODELLED[place - 1], size)
 
 
 def truncated_deviation(after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
@@ -156,32 +187,42 @@ class RelativeReachability:
         return {"last_deviation": np.zeros((num_runs, envs_per_run), dtype=np.float64)}
 
     def state_codes(self, engine: GridEngine) -> np.ndarray:
-        """``(N,)`` codes of the states of ``engine``'s environments; ``ValueError`` for an
-        environment other than Coexistence with one cat, or a grid too large for an exact table."""
+        """``(N,)`` codes of the states of ``engine``'s environments: Coexistence with one cat in
+        its own table, any other environment the exact solver models in that model's
+        (:mod:`baselines.model_reachability`); ``ValueError`` for any other environment, or a
+        grid too large for an exact table."""
         agents = tuple(engine.agents)
-        if engine.name != "coexistence_v0" or agents != ("robot_0", "cat_0"):
+        if engine.name == "coexistence_v0":
+            if agents != ("robot_0", "cat_0"):
+                raise ValueError(
+                    f"relative reachability is computed exactly on Coexistence with one cat (robot_0 and cat_0), "
+                    f"not with agents {list(agents)}: several cats make the state space too large for an exact table"
+                )
+            if engine.size > MAX_TABLE_SIZE:
+                raise ValueError(
+                    f"relative reachability builds an exact table of Coexistence for sizes up to {MAX_TABLE_SIZE}, "
+                    f"not size={engine.size}"
+                )
+            coexistence_reachability(engine.size)  # built now, once per process
+            return engine.size * SIZE_STRIDE + coexistence_codes(engine.cells, engine.present, engine.size)
+        if engine.name not in MODELLED or len(agents) != 2:
             raise ValueError(
-                f"relative reachability is computed exactly on Coexistence with one cat (coexistence_v0 with "
-                f"robot_0 and cat_0), not on {engine.name} with agents {list(agents)}: Sharing's batteries and "
-                "several cats make the state space too large for an exact reachability table"
+                f"relative reachability is computed exactly on an environment the exact solver models (one robot "
+                f"and one other agent: {sorted(MODELLED)}), not on {engine.name} with agents {list(agents)}"
             )
-        if engine.size > MAX_TABLE_SIZE:
-            raise ValueError(
-                f"relative reachability builds an exact table for sizes up to {MAX_TABLE_SIZE}, not size={engine.size}"
-            )
-        coexistence_reachability(engine.size)  # built now, once per process
-        return engine.size * SIZE_STRIDE + coexistence_codes(engine.cells, engine.present, engine.size)
+        table = model_reachability_table(engine.name, engine.size)  # built now, once per process
+        return _model_tag(engine.name, engine.size) * SIZE_STRIDE + engine_state_codes(engine, table)
 
     def deviation(self, after: np.ndarray, baseline: np.ndarray) -> np.ndarray:
         """``d(after; baseline)`` for every pair of state codes (arrays of one shape, codes of
-        :meth:`state_codes` on one grid size)."""
+        :meth:`state_codes` of one environment and grid size)."""
         after, baseline = np.asarray(after, dtype=np.int64), np.asarray(baseline, dtype=np.int64)
         if after.shape != baseline.shape:
             raise ValueError(f"state codes of shapes {after.shape} and {baseline.shape}")
-        sizes = np.unique(np.concatenate([after.ravel(), baseline.ravel()]) // SIZE_STRIDE)
-        if len(sizes) != 1:
-            raise ValueError(f"state codes of several grid sizes {sizes.tolist()} in one batch")
-        table = coexistence_reachability(int(sizes[0]))
+        tags = np.unique(np.concatenate([after.ravel(), baseline.ravel()]) // SIZE_STRIDE)
+        if len(tags) != 1:
+            raise ValueError(f"state codes of several environments or grid sizes {tags.tolist()} in one batch")
+        table = _table(int(tags[0]))
         return truncated_deviation(
             table.reachability(after % SIZE_STRIDE, self.discount), table.reachability(baseline % SIZE_STRIDE, self.discount)
         )

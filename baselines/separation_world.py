@@ -31,8 +31,10 @@ from typing import cast
 import numpy as np
 
 from baselines.aup import NO_OP, AttainableUtility, auxiliary_reward_map
+from baselines.model_reachability import model_state_codes as state_codes
+from baselines.model_reachability import model_successors, reachability_powers
 from baselines.reachability import RelativeReachability, truncated_deviation
-from baselines.reachability_table import UNREACHABLE, _shortest_steps
+from baselines.reachability_table import _shortest_steps
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.exact_solver import LayeredEngine, TabularModel
@@ -45,34 +47,10 @@ PAIR_CHUNK = 1024
 """Pairs of a state reached and its baseline whose deviations are computed at once."""
 
 
-def state_codes(model: TabularModel) -> np.ndarray:
-    """The model's shape: the code of the state each step ends in: a joint state's own index, the
-    robot alone ``states + layer · cells + cell``, the end ``states + alone_states``."""
-    end = model.states + model.alone_states
-    ends = model.robot_harmed | model.ended
-    return np.select([ends, model.other_harmed], [end, model.states + model.after // model.cells], model.after)
-
-
-def _successors(model: TabularModel) -> np.ndarray:
-    """``(states + alone_states + 1, 25)``: the code every joint action leads to from every state."""
-    end = model.states + model.alone_states
-    width = NUM_ACTIONS * model.other_moves
-    joint = state_codes(model).reshape(model.states, width)
-    alone = np.repeat(model.states + model.alone_after, model.other_moves, axis=1)
-    return np.concatenate([joint, alone, np.full((1, width), end)])
-
-
 def model_reachability(model: TabularModel, discount: float) -> np.ndarray:
     """``(S, S)``: ``discount ** (fewest steps from x to y)``, 0 where none reach it, over every
     state of the model (see the module page)."""
-    return _powers(discount)[_shortest_steps(_successors(model))]
-
-
-def _powers(discount: float) -> np.ndarray:
-    """``discount ** k`` for every distance ``k``, 0 for :data:`UNREACHABLE`."""
-    powers = discount ** np.arange(UNREACHABLE + 1, dtype=np.float64)
-    powers[UNREACHABLE] = 0.0
-    return powers
+    return reachability_powers(discount)[_shortest_steps(model_successors(model))]
 
 
 def relative_reachability_reward(model: TabularModel, transform: RelativeReachability | None = None) -> np.ndarray:
@@ -81,8 +59,8 @@ def relative_reachability_reward(model: TabularModel, transform: RelativeReachab
     one state), from the fewest steps between states, :data:`PAIR_CHUNK` rows of reachability at a
     time (Sharing's 31,201 states would take 7.8 GB as one matrix of reachability)."""
     transform = RelativeReachability() if transform is None else transform
-    distances = _shortest_steps(_successors(model))
-    powers = _powers(transform.discount)
+    distances = _shortest_steps(model_successors(model))
+    powers = reachability_powers(transform.discount)
     codes = state_codes(model)
     baseline = np.broadcast_to(codes[:, NO_OP : NO_OP + 1, :], codes.shape)
     moved = codes != baseline
@@ -124,7 +102,7 @@ def auxiliary_values(model: TabularModel, gamma: float, seed: int = AUP_SEED, to
     rewards = observations @ auxiliary_reward_map(seed, observations.shape[1], aup.num_rewards).astype(np.float64)
     rewards /= observations.shape[1]
     rewards[-1] = 0.0  # (the end pays nothing and leads nowhere)
-    successors = _successors(model).reshape(-1, NUM_ACTIONS, model.other_moves)
+    successors = model_successors(model).reshape(-1, NUM_ACTIONS, model.other_moves)
     live = np.ones(len(successors), dtype=bool)
     live[-1] = False
     v = np.zeros(rewards.shape)

@@ -95,7 +95,7 @@ def test_harming_the_cat_loses_almost_every_state_a_harmless_move_almost_none() 
     harm = rr.deviation(np.array([code + alone((4, 3))]), np.array([code + both((3, 3), (5, 3))]))
     move = rr.deviation(np.array([code + both((2, 3), (5, 3))]), np.array([code + both((3, 3), (5, 3))]))
     assert 0.9 < harm[0] < 1.0 and 0.0 < move[0] < 0.01
-    with pytest.raises(ValueError, match="several grid sizes"):
+    with pytest.raises(ValueError, match="several environments or grid sizes"):
         rr.deviation(np.array([code]), np.array([5 * SIZE_STRIDE]))
 
 
@@ -231,9 +231,9 @@ def test_the_baseline_is_the_engines_outcome_of_the_no_op_step() -> None:
     assert checked > 300 and harms > 0
 
 
-def test_only_coexistence_with_one_cat_is_accepted() -> None:
+def test_only_coexistence_with_one_cat_and_small_exact_models_are_accepted() -> None:
     assert InactionBaseline.for_transforms(VectorEnv("coexistence_v0", 1), [None, HarmPenalty()]) is None
-    with pytest.raises(ValueError, match=r"Coexistence with one cat.*Sharing"):
+    with pytest.raises(ValueError, match=r"sharing_v0 on size=7 has 6,899,201 states.*at most 10,000"):
         InactionBaseline.for_transforms(VectorEnv("sharing_v0", 1), [RelativeReachability()])
     with pytest.raises(ValueError, match=r"Coexistence with one cat.*several cats"):
         InactionBaseline.for_transforms(VectorEnv("coexistence_v0", 1, num_cats=2), [RelativeReachability()])
