@@ -44,7 +44,7 @@ import numpy as np
 import torch
 
 from agents.base import UPDATE_KERNELS, StepBatch
-from agents.replay import StackedReplay
+from agents.replay import StackedReplay, check_keys
 from agents.settings import EmpathicDQNSettings
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
@@ -68,6 +68,10 @@ if TYPE_CHECKING:
     from agents.fused_update import NumbaUpdate
 
 STREAM_INIT, STREAM_EXPLORE, STREAM_SAMPLE = STREAMS["network_init"], STREAMS["exploration"], STREAMS["replay_sample"]
+LEARNER_STATE_KEYS = frozenset(
+    {"online", "target", "optimizer", "replay", "env_steps", "grad_steps", "seeds", "update_kernel", "prices"}
+)
+"""The keys of :meth:`EmpathicDQN.state_dict` (``prices``: a learner that prices costs only)."""
 
 
 def double_dqn_target(
@@ -653,6 +657,7 @@ class EmpathicDQN:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
+        check_keys(state, LEARNER_STATE_KEYS, "learner checkpoint", "Empathic DQN")
         if list(state["seeds"]) != self.seeds:
             raise ValueError(f"checkpoint is for seeds {state['seeds']}, not {self.seeds}")
         shapes = [tuple(p.shape) for p in state["online"]]

@@ -22,17 +22,27 @@ before.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import torch
 
+from empathy_zoo.actions import NUM_ACTIONS
+from empathy_zoo.document_checks import shown
 from empathy_zoo.observation_codes import DECODE_TABLE, MAX_VALUE, MIN_VALUE, encode
 
-__all__ = ["StackedReplay", "REPLAY_LAYOUT"]
+__all__ = ["StackedReplay", "REPLAY_LAYOUT", "MAX_ABS_REWARD", "STATE_KEYS", "check_keys"]
 
 OBS, NEXT_OBS, SWAPPED = 0, 1, 2
 ACTION, TERMINATED, OTHERS = 0, 1, 2
 GONE, LEFT_IN_STEP, PRESENT, UNSEEN = 0, 1, 2, 3
 """The codes of an other agent (see :attr:`StackedReplay.flags`)."""
+MAX_ABS_REWARD = 1e6
+"""The largest reward or cost a transition may hold, in magnitude (the suite's rewards and
+penalties are a few hundred at most; beyond this a network's squared errors leave float32)."""
+STATE_KEYS = frozenset({"observations", "flags", "reward", "position", "size", "layout", "cost"})
+"""The keys of :meth:`StackedReplay.state_dict`."""
 
 REPLAY_LAYOUT = 2
 """Layout of :meth:`StackedReplay.state_dict` (1, unmarked: with one other agent stored, its code
@@ -66,6 +76,8 @@ class StackedReplay:
         """(K, C) float32: each transition's cost, priced when it is sampled (``None``: not kept)."""
         self.position = 0
         self.size = 0
+        self._codes = (0, 255)
+        """The smallest and largest observation code the environment can give (:meth:`check_range`)."""
         self._first_row = torch.arange(k, device=device)[:, None] * c
         self._arrays = (
             (self.observations.numpy(), self.flags.numpy(), self.reward.numpy()) if torch.device(device).type == "cpu" else None
@@ -81,6 +93,7 @@ class StackedReplay:
                 f"observations range over [{low:g}, {high:g}], but the replay memory stores values in "
                 f"[{MIN_VALUE:g}, {MAX_VALUE:g}] only (one-byte codes); use a smaller env (fewer batteries)"
             )
+        self._codes = (int(encode(np.array([low], dtype=np.float32))[0]), int(encode(np.array([high], dtype=np.float32))[0]))
 
     def add(
         self,
@@ -114,6 +127,9 @@ class StackedReplay:
                 f"expected swapped observations {(*expected, self.obs_size)} and present/live/unseen {expected} "
                 f"for {self.others} other agent(s), got {swapped.shape} and {shapes}"
             )
+        _check_bounded("reward", np.asarray(reward, dtype=np.float64))
+        if cost is not None:
+            _check_bounded("cost", np.asarray(cost, dtype=np.float64), low=0.0)
         rows = (np.arange(m) + self.position) % self.capacity
         packed = encode(np.concatenate([obs[:, :, None], next_obs[:, :, None], swapped], axis=2))  # raises unless exact
         codes = np.where(present, PRESENT, np.where(unseen, UNSEEN, np.where(live, LEFT_IN_STEP, GONE)))
@@ -196,6 +212,7 @@ class StackedReplay:
         observations) is converted: integer ``v`` becomes code ``20·v + 20``, the same value; so
         is one of layout 1 keeping one other agent (its codes 0, 1, 2 become 0, 2, 3: the same
         facts, see :data:`REPLAY_LAYOUT`)."""
+        check_keys(state, STATE_KEYS, "replay checkpoint", "a replay memory")
         size = int(state["size"])
         if self.cost is not None and "cost" not in state:
             raise ValueError(
@@ -223,9 +240,59 @@ class StackedReplay:
             raise ValueError(
                 f"replay checkpoint holds observations of dtype {observations.dtype}; expected uint8 codes (or int8 values)"
             )
+        self._check_stored(observations, flags, state["reward"], state.get("cost"))
         self.observations[:, :size] = observations
         self.flags[:, :size] = flags
         self.reward[:, :size] = state["reward"]
         if self.cost is not None:
             self.cost[:, :size] = state["cost"]
         self.position, self.size = int(state["position"]), size
+
+    def _check_stored(self, observations: torch.Tensor, flags: torch.Tensor, reward: Any, cost: Any) -> None:
+        """``ValueError`` naming the first stored value out of its range: an observation code the
+        environment cannot give (:meth:`check_range`), an action, a terminated flag or an other
+        agent's code that is none, a reward or cost that is no finite float32 within
+        :data:`MAX_ABS_REWARD` (a cost also ≥ 0)."""
+        low, high = self._codes
+        wrong = (observations < low) | (observations > high)
+        if bool(wrong.any()):
+            code = int(observations[wrong][0])
+            raise ValueError(
+                f"replay checkpoint holds observation code {code} (value {float(DECODE_TABLE[code]):g}), outside this "
+                f"environment's observations [{float(DECODE_TABLE[low]):g}, {float(DECODE_TABLE[high]):g}]"
+            )
+        if flags.dtype != torch.uint8:
+            raise ValueError(f"replay checkpoint holds flags of dtype {flags.dtype}, not torch.uint8")
+        for column, name, limit in ((ACTION, "action", NUM_ACTIONS - 1), (TERMINATED, "terminated flag", 1)):
+            if bool((flags[:, :, column] > limit).any()):
+                raise ValueError(f"replay checkpoint holds {name} {int(flags[:, :, column].max())}, not in [0, {limit}]")
+        if bool((flags[:, :, OTHERS:] > UNSEEN).any()):
+            code = int(flags[:, :, OTHERS:].max())
+            raise ValueError(f"replay checkpoint holds other agent's code {code}, not one of {GONE}–{UNSEEN}")
+        for name, values, floor in (("reward", reward, None), ("cost", cost, 0.0)):
+            if values is None:
+                continue
+            if not isinstance(values, torch.Tensor) or values.dtype != torch.float32:
+                kind = values.dtype if isinstance(values, torch.Tensor) else type(values).__name__
+                raise ValueError(f"replay checkpoint holds a {name} of dtype {kind}, not torch.float32")
+            _check_bounded(f"replay checkpoint's {name}", values.double().numpy(force=True), low=floor)
+
+
+def check_keys(state: Mapping[Any, Any], known: frozenset[str], what: str, keeper: str) -> None:
+    """``ValueError`` naming (at most four of) the keys of ``state`` not in ``known``."""
+    unknown = [key for key in state if key not in known]
+    if unknown:
+        names = ", ".join(shown(key) for key in unknown[:4])
+        raise ValueError(f"{what} holds key(s) {names} that {keeper} does not keep")
+
+
+def _check_bounded(name: str, values: np.ndarray, low: float | None = None) -> None:
+    """``ValueError`` unless every value is finite, within :data:`MAX_ABS_REWARD` in magnitude and
+    (where ``low`` is given) at least ``low``."""
+    bad = ~np.isfinite(values) | (np.abs(values) > MAX_ABS_REWARD)
+    if low is not None:
+        bad |= values < low
+    if bad.any():
+        value = float(values[bad].flat[0])
+        floor = "" if low is None else f" and >= {low:g}"
+        raise ValueError(f"a {name} of {value:g}: each must be finite, within ±{MAX_ABS_REWARD:g}{floor}")

@@ -177,12 +177,12 @@ def _train_ensemble(
     if options.checkpoint_interval > 0:
         venv.check_checkpointable()  # (now reset: each fixed policy's state() is taken once, as a checkpoint takes it)
     step, elapsed = 0, 0.0
+    check_range = _optional(learner, "check_observation_range")
+    if check_range is not None:  # fail now, not mid-run; a checkpoint's replay is checked against it
+        check_range(venv.engine.obs_low, venv.engine.obs_high)
     ckpt = checkpoint_path(out_dir, specs)
     if ckpt.exists():
         obs, evaluations, step, elapsed = _restore(ckpt, specs, learner, train_rewards, venv, logs)
-    check_range = _optional(learner, "check_observation_range")
-    if check_range is not None:  # fail now, not mid-run
-        check_range(venv.engine.obs_low, venv.engine.obs_high)
     replay_bytes = _optional(learner, "replay_bytes_per_run")
     replay_of = _optional(learner, "replay_bytes_of")
     bytes_of = _optional(learner, "memory_bytes_of")
