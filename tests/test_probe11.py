@@ -88,3 +88,29 @@ def test_a_reward_beyond_the_bound_is_refused_when_added() -> None:
             flags,
             flags,
         )
+
+
+def _fill(path: str, value: Any) -> Any:
+    """A forgery: every number of the saved array at the dotted ``path`` set to ``value``."""
+
+    def change(payload: dict[str, Any]) -> None:
+        table = payload
+        for part in path.split("."):
+            table = table[part]
+        table["__ndarray__"][:] = value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "field"),
+    [
+        ("vector.engine.episode_return", 12345.0, "vector.engine.episode_return"),
+        ("vector.engine.episode_return", 1e300, "vector.engine.episode_return"),
+        ("vector.engine.episode_battery_return", 5000.0, "vector.engine.episode_battery_return"),
+        ("vector.engine.running", False, "vector.engine.running"),
+    ],
+)
+def test_an_engine_total_beyond_its_clock_or_an_ended_episode_is_refused(checkpointed, tmp_path, capsys, path, value, field):  # noqa: F811
+    out, checkpoint = forged(checkpointed, tmp_path, _fill(path, value))
+    assert_refused(out, checkpoint, field, capsys)

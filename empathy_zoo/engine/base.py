@@ -91,6 +91,10 @@ class GridEngine:
     """Actions of every agent (up, down, left, right, stay)."""
     obs_low: ClassVar[float]
     obs_high: float
+    step_reward_bound: float = 1.0
+    """The largest reward any agent gets in one step, in magnitude (every reward of the suite's
+    engines is ≥ 0 but Sharing's late batteries); a checkpoint's episode returns are checked
+    against ``t`` times it. An engine whose rewards can be larger sets it."""
     """The largest observation value: the class gives it, or an engine whose values depend on its
     arguments sets it per instance (Sharing: the value of an agent holding every battery)."""
     extra_arguments: ClassVar[Mapping[str, tuple[str, ...]]] = {}

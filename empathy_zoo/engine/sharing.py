@@ -169,6 +169,8 @@ class SharingEngine(GridEngine):
         else:
             self._agent_value = agent_value
         self.obs_high = float(self._agent_value(self.num_batteries))
+        self.step_reward_bound = float(max(abs(battery_value(1)), abs(battery_value(self.num_batteries))))
+        """One battery a step at most: the first's worth, or the last's where it is larger in magnitude."""
         if start == "centre":
             self.start_order = cells_by_distance(self.size, (self.size // 2, self.size // 2))
         self._free_cells = np.flatnonzero(~self.initial_batteries)

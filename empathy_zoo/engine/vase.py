@@ -70,6 +70,8 @@ class VaseEngine(GridEngine):
     obs_low = -1.0
     obs_high = 1.0
     tabular_layers: ClassVar[int] = 2
+    step_reward_bound = 1.0 + VASE_PAY
+    """The cat's pay beside a standing vase (the robot's bench pays at most 1)."""
     """States beyond the two cells (:mod:`empathy_zoo.exact_solver`): the vase standing (0) or broken (1)."""
 
     def __init__(self, num_envs: int = 1, size: int = 5, view: int = 3, max_cycles: int = 500) -> None:

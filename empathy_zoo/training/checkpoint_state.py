@@ -4,8 +4,10 @@
 arrays an environment built with the runs' arguments holds (reset and stepped once): the same
 names, dtypes and shapes for the checkpoint's number of runs; every cell on the grid, every clock
 within ``max_cycles``, when an agent left and what it collected or harmed within its episode's
-clock; the random streams (:class:`empathy_zoo.randomness.EnvStreams`) a PCG64 state, the seed each
-run's training environments are given, uniform numbers in ``[0, 1)`` and where the next one is; the
+clock, its returns within the clock times its engine's largest reward a step, every episode
+running (a checkpoint is taken after ended episodes reset); the random streams
+(:class:`empathy_zoo.randomness.EnvStreams`) a PCG64 state, the seed each run's training
+environments are given, uniform numbers in ``[0, 1)`` and where the next one is; the
 last step's events; the observations to act on those of the environments, of their size and range.
 Without the runs' settings (no list of runs beside the checkpoint) the same is checked against the
 checkpoint's own other fields and the bounds of every run. :func:`bit_generator_problem` checks any
@@ -130,6 +132,7 @@ def _template(runs: Mapping[str, Any] | None) -> dict[str, Any] | None:
         "obs_size": engine.obs_size,
         "range": (low, high),
         "block": engine.streams.block,
+        "reward_bound": engine.step_reward_bound,
     }
 
 
@@ -192,6 +195,13 @@ def check_vector(saved: Any, obs: Any, runs: int, settings: Mapping[str, Any] | 
     _within(engine["left_at"], "vector.engine.left_at", 0, t[:, None], "[0, t] (when an agent left its episode)")
     _within(engine["inventory"], "vector.engine.inventory", 0, t[:, None], "[0, t] (a battery a step at most)")
     _within(engine["episode_harms"], "vector.engine.episode_harms", 0, t[:, None] * (agents - 1), "[0, t·others] (harms)")
+    if not engine["running"].all():
+        raise ForgedState("vector.engine.running holds False: a checkpoint is taken with every episode running")
+    if template:
+        bound = template["reward_bound"]
+        for key in ("episode_return", "episode_battery_return"):
+            limit = t[:, None] * bound
+            _within(engine[key], f"vector.engine.{key}", -limit, limit, f"±t·{bound:g} (its engine's largest reward a step)")
     _check_streams(engine["streams"], runs, seeds, template["block"] if template else -1)
     _check_events(state.get("events"), runs, agents, template["events"] if template else None)
     _array(state.get("fresh"), "vector.fresh", (runs,), kind="b")
