@@ -61,6 +61,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeGuard, runtime_ch
 import numpy as np
 
 from agents.step_batch import StepBatch
+from agents.transform_state import CheckedState, StateBounds, check_like
 
 if TYPE_CHECKING:
     from empathy_zoo.engine import GridEngine
@@ -364,8 +365,26 @@ class TrainRewards:
         """The stateful transforms' states (for checkpoints)."""
         return [None if state is None else {key: value.copy() for key, value in state.items()} for state in self.states]
 
-    def load_state(self, states: Sequence[Any]) -> None:
-        """Continue from :meth:`state`."""
+    def load_state(self, states: Sequence[Any], bounds: Callable[[int], StateBounds] | None = None) -> None:
+        """Continue from :meth:`state`, every saved state checked first (:mod:`agents.transform_state`):
+        against the state each transform holds now, and by the transform's own ``check_state``
+        given ``bounds(runs)`` (what the checkpoint's runs allow); ``ValueError`` naming the field."""
         if len(states) != len(self.states) or any((a is None) != (b is None) for a, b in zip(states, self.states, strict=True)):
             raise ValueError("this checkpoint holds the state of other reward transforms; move it away to restart")
-        self.states = [None if state is None else {key: np.array(value) for key, value in state.items()} for state in states]
+        loaded: list[dict[str, np.ndarray] | None] = []
+        for i, (transform, saved, initial, rows) in enumerate(zip(self.distinct, states, self.states, self.rows, strict=True)):
+            if saved is None or initial is None:
+                loaded.append(None)
+                continue
+            try:
+                if not isinstance(saved, dict) or not all(isinstance(key, str) for key in saved):
+                    raise ValueError("is no table of named arrays")
+                saved = {key: np.array(value) for key, value in saved.items()}
+                loaded.append(saved)
+                if bounds is not None and isinstance(transform, CheckedState):
+                    transform.check_state(saved, initial, bounds(len(rows)))
+                else:
+                    check_like(saved, initial)
+            except ValueError as error:
+                raise ValueError(f"rewards[{i}] ({transform.name}): {error}") from None
+        self.states = loaded

@@ -110,9 +110,9 @@ on 32 transitions: about 0.45 ms per step for 1 to 5 runs beside the DQN learner
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -120,6 +120,7 @@ import torch
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from agents.step_batch import StepBatch
+from agents.transform_state import StateBounds, check_same, check_side_learner, check_within
 from baselines.side_network import train_side_network
 from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
@@ -248,6 +249,19 @@ class AttainableUtility:
             "updates": np.zeros(1, dtype=np.int64),
             "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64),
         }
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's AUP state (:func:`agents.transform_state.check_side_learner`); once built,
+        its auxiliary rewards those its seeds draw and its actions actions."""
+        built = {}
+
+        def build() -> dict[str, np.ndarray]:
+            built.update(self._build(initial["seeds"], bounds.obs_size))
+            return built
+
+        if check_side_learner(state, initial, build, bounds, ("obs", "next_obs")):
+            check_same(state, built, "reward_map", "the auxiliary rewards its seeds draw")
+            check_within(state, "action", 0, NUM_ACTIONS - 1, "an action")
 
     def _build(self, seeds: np.ndarray, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's auxiliary rewards, networks, optimiser moments and empty replay."""

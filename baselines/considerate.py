@@ -112,9 +112,9 @@ its seed, its own transitions and the transform's fields only, alone or in any e
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -122,6 +122,7 @@ import torch
 from agents.stacked_adam import StackedAdam
 from agents.stacked_mlp import StackedMLP, init_stacked_mlp
 from agents.step_batch import StepBatch
+from agents.transform_state import StateBounds, check_side_learner, check_within
 from baselines.side_network import train_side_network
 from empathy_zoo.randomness import STREAMS, check_seed, counter_integers, derive_key
 
@@ -229,6 +230,18 @@ class Considerate:
             "updates": np.zeros(1, dtype=np.int64),
             "seeds": np.array([_run_seed(s) for s in seeds], dtype=np.int64),
         }
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's Be Considerate state (:func:`agents.transform_state.check_side_learner`);
+        once built, the other's rewards within the engine's largest a step and each run's stored
+        transitions within those seen."""
+
+        def build() -> dict[str, np.ndarray]:
+            return self._build(initial["seeds"], bounds.envs_per_run, bounds.obs_size)
+
+        if check_side_learner(state, initial, build, bounds, ("obs", "next_obs", "last_obs")):
+            check_within(state, "reward", -bounds.reward_bound, bounds.reward_bound, "the other's reward of a step")
+            check_within(state, "stored", 0, int(state["seen"].max()), "transitions stored: at most one per transition seen")
 
     def _build(self, seeds: np.ndarray, envs: int, obs_size: int) -> dict[str, np.ndarray]:
         """Every run's value network, optimiser moments, empty replay and no last observation."""

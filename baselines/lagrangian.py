@@ -56,12 +56,14 @@ harms at about what a random robot causes. In Sharing nobody is harmed: every ep
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from agents.step_batch import StepBatch
+from agents.transform_state import StateBounds, check_like, check_within
 
 __all__ = ["Lagrangian", "dual_ascent"]
 
@@ -99,6 +101,15 @@ class Lagrangian:
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         """Each run's multiplier ``λ`` and each environment's cost so far in its episode."""
         return {"multiplier": np.full(num_runs, float(self.lambda_init)), "episode_cost": np.zeros((num_runs, envs_per_run))}
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's λ and episode costs: ``0 ≤ λ ≤ λ₀ + η·(every harm the run's
+        environments could have done)``, each episode's cost within ``[0, step · others]``."""
+        check_like(state, initial)
+        harms = bounds.step * bounds.others
+        check_within(state, "episode_cost", 0.0, harms, "harms so far in an episode")
+        top = self.lambda_init + self.lambda_lr * harms * bounds.envs_per_run
+        check_within(state, "multiplier", 0.0, top, "λ: its start plus η times every harm its runs could have done")
 
     def __call__(
         self, batch: StepBatch, state: dict[str, np.ndarray]

@@ -96,13 +96,15 @@ states by 49 per cat and are refused for the same reason.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from agents.rewards import StepWatcherFactory
 from agents.step_batch import StepBatch
+from agents.transform_state import StateBounds, check_like, check_within
 from baselines.inaction_baseline import InactionBaseline
 from baselines.model_reachability import ModelReachability, engine_state_codes, model_reachability_table
 from baselines.reachability_table import MAX_TABLE_SIZE, ReachabilityTable, coexistence_codes, coexistence_reachability
@@ -185,6 +187,11 @@ class RelativeReachability:
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         """``(K, M)`` the deviation of each environment's last step in its episode (0 at its start)."""
         return {"last_deviation": np.zeros((num_runs, envs_per_run), dtype=np.float64)}
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's last deviations: each in ``[0, 1]`` (a mean of reachabilities lost)."""
+        check_like(state, initial)
+        check_within(state, "last_deviation", 0.0, 1.0, "a deviation")
 
     def state_codes(self, engine: GridEngine) -> np.ndarray:
         """``(N,)`` codes of the states of ``engine``'s environments: Coexistence with one cat in

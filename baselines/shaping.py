@@ -7,12 +7,14 @@ a :class:`agents.base.Method` composes (see :mod:`baselines.methods`)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from agents.base import StepBatch
+from agents.transform_state import StateBounds, check_smoothed
 from empathy_zoo.metrics import equality
 
 __all__ = ["HarmPenalty", "EqualityScaling", "InequityAversion", "NegativeRewardEmpathy", "HARM_PENALTY"]
@@ -67,6 +69,10 @@ class InequityAversion:
 
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         return {side: np.zeros((num_runs, envs_per_run)) for side in ("own", "other")}
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's smoothed rewards (:func:`agents.transform_state.check_smoothed`)."""
+        check_smoothed(state, initial, bounds, self.smoothing)
 
     def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         if batch.other_rewards is None:

@@ -33,12 +33,14 @@ harmed cat's rewards stop and the angle falls towards 0°); in Sharing it follow
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from agents.step_batch import StepBatch
+from agents.transform_state import StateBounds, check_smoothed
 
 __all__ = ["SocialValueOrientation", "reward_angle"]
 
@@ -72,6 +74,10 @@ class SocialValueOrientation:
 
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         return {side: np.zeros((num_runs, envs_per_run)) for side in ("own", "other")}
+
+    def check_state(self, state: Mapping[str, Any], initial: Mapping[str, np.ndarray], bounds: StateBounds) -> None:
+        """A checkpoint's smoothed rewards (:func:`agents.transform_state.check_smoothed`)."""
+        check_smoothed(state, initial, bounds, self.smoothing)
 
     def __call__(self, batch: StepBatch, state: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         if batch.other_rewards is None:

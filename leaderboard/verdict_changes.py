@@ -32,13 +32,17 @@ Cell = tuple[str, str, str, str]
 _TABLE = "### P(improves on DQN): "
 _MARK = re.compile(r"^\s*([▲▼]?)")
 _ESCAPED = re.compile(r"\\(.)")
+MAX_SHOWN = 200
+"""Characters of a name shown (a page's names are a few dozen; a longer one is cut, with ``…``)."""
 
 
 def shown_text(cell: str) -> str:
     """A name read from a page (Markdown: data), as one Markdown text that reads as itself: its
-    backslash escapes undone, each control or format character written as its code, then
-    :func:`~empathy_zoo.markdown_escape.markdown_text`."""
-    plain = _ESCAPED.sub(lambda found: found.group(1), cell)
+    backslash escapes undone, cut to :data:`MAX_SHOWN` characters, each control or format
+    character written as its code, then :func:`~empathy_zoo.markdown_escape.markdown_text`."""
+    plain = _ESCAPED.sub(lambda found: found.group(1), cell[: 2 * MAX_SHOWN + 2])
+    if len(plain) > MAX_SHOWN:
+        plain = plain[: MAX_SHOWN - 1] + "…"
     visible = "".join(
         c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES else c for c in plain
     )

@@ -114,3 +114,24 @@ def _fill(path: str, value: Any) -> Any:
 def test_an_engine_total_beyond_its_clock_or_an_ended_episode_is_refused(checkpointed, tmp_path, capsys, path, value, field):  # noqa: F811
     out, checkpoint = forged(checkpointed, tmp_path, _fill(path, value))
     assert_refused(out, checkpoint, field, capsys)
+
+
+def test_verdict_changes_shows_each_name_cut_so_its_output_stays_small() -> None:
+    from leaderboard.verdict_changes import MAX_SHOWN, changes_markdown
+
+    heading = "## " + "v" * 1_000_000
+    metrics = [f"m{i}" for i in range(100)]
+
+    def page(mark: str) -> str:
+        rows = [
+            f"| method | {' | '.join(metrics)} |",
+            "|---" * (len(metrics) + 1) + "|",
+            f"| dqn_x | {' | '.join([mark] * 100)} |",
+        ]
+        return "\n".join([heading, "### P(improves on DQN): greedy", *rows]) + "\n"
+
+    shown = changes_markdown(page("▲ 0.99"), page("▼ 0.01"))
+    lines = [line for line in shown.splitlines() if line.startswith("| vv")]
+    assert len(lines) >= 99  # (every metric column that changed sign)
+    assert all(len(line) < MAX_SHOWN + 200 for line in lines)
+    assert "v" * (MAX_SHOWN - 1) + "…" in lines[0]

@@ -24,6 +24,7 @@ import torch
 
 from agents.base import StepBatch
 from agents.rewards import TrainRewards, step_watcher
+from agents.transform_state import StateBounds
 from empathy_zoo.agent_file import agent_bytes
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.grid import torus_distance
@@ -347,7 +348,22 @@ def _restore(
         if forged_key is not None:
             raise corrupted(ckpt, f"vector.{forged_key}")
         learner.load_state_dict(learner_state)
-        train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))))
+        engine = venv.engine
+
+        def bounds(runs: int) -> StateBounds:
+            """What the checkpoint's runs allow a reward transform's state to hold."""
+            return StateBounds(
+                runs=runs,
+                envs_per_run=1,
+                step=int(saved["step"]),
+                obs_size=engine.obs_size,
+                obs_low=float(engine.obs_low),
+                obs_high=float(engine.obs_high),
+                reward_bound=float(engine.step_reward_bound),
+                others=engine.num_agents - 1,
+            )
+
+        train_rewards.load_state(from_safe(saved.get("rewards", [None] * len(train_rewards.states))), bounds)
         venv.load_state(vector)
         observations = from_safe(saved["obs"])
     except CheckpointError:
