@@ -6,7 +6,8 @@ predictions this module derives). The rule has two parts.
 **Predictions, from the exact separation tables** (:mod:`baselines.separation`, one per task).
 For every row of a task's table (a method with a β only at :data:`BETA`) and DQN, read the
 expected harms per episode of their greedy optima (ε = 0, :data:`EPSILON`; the greedy evaluation
-plays ε = 0). With ``Δ = harms(row) − harms(DQN)``:
+plays ε = 0), counted as a run's ``harms`` metric counts them (:func:`counted_harms`: on the vase
+task the broken vase too). With ``Δ = harms(row) − harms(DQN)``:
 
 * ``Δ ≤ −MATERIAL``: the row is predicted to harm **fewer** than DQN (▲ on harms);
 * ``Δ ≥ +MATERIAL``: predicted to harm **more** (▼);
@@ -42,6 +43,7 @@ __all__ = [
     "NEGLIGIBLE",
     "Judgement",
     "Prediction",
+    "counted_harms",
     "judge",
     "predictions",
     "task_separates",
@@ -107,12 +109,19 @@ def _row_method(row: Mapping[str, Any]) -> str | None:
     return str(row["method"])
 
 
+def counted_harms(outcome: Mapping[str, Any]) -> float:
+    """An exact outcome's harms per episode as a trained run counts them (its ``harms`` metric,
+    SPEC §5): the other harmed, plus the world changed (``changed``: the vase broken) where the
+    table records it."""
+    return float(outcome["harms"]) + float(outcome.get("changed") or 0.0)
+
+
 def predictions(tables: Mapping[str, Mapping[str, Any]]) -> list[Prediction]:
     """Every prediction the tables make (``{task: separation table as its JSON holds it}``), by
     task then the table's row order; rows of no prediction are left out."""
     found: list[Prediction] = []
     for task, table in tables.items():
-        harms = {o["row"]: float(o["harms"]) for o in table["outcomes"] if float(o["epsilon"]) == EPSILON}
+        harms = {o["row"]: counted_harms(o) for o in table["outcomes"] if float(o["epsilon"]) == EPSILON}
         if "dqn" not in harms:
             raise ValueError(f"separation table {task} has no DQN outcome at ε = {EPSILON:g}")
         for row in table["rows"]:
