@@ -142,6 +142,10 @@ The exact optima are in docs/results/separation/helping_v0.md (full observabilit
   differently in 155 of 1,173 reachable states, DQN and the silver rule in 472 of 1,146.
 * Be Considerate acts as DQN at ε = 0. Its bonus, the human's own value paid at the time limit, is
   too small to outweigh the batteries a living human takes.
+* Trained, Be Considerate's runs equal DQN's seed for seed (the scenarios profile, 10 seeds). In
+  each of DQN's 1,000 training episodes the robot harms the human before the time limit, so the
+  bonus, paid at the time limit for a human still there, is 0 throughout. This is not by
+  construction: a robot that spared the human would be paid it.
 * Relative reachability (`dqn_relative_reachability`) uses 0.2 batteries: picking one up changes
   who carries, which its inaction baseline does not, and λ = 100 prices that above a battery. AUP
   (seed 0) harms the human in every episode.
