@@ -27,7 +27,7 @@ ALLOWED: dict[str, str] = {
     "leaderboard/reproduction.py": "the paper's claims (C1–C5) are about its two environments, by name",
     "leaderboard/sensitivity.py": "the study of Sharing under its own fidelity options and partner (claim C5)",
     "baselines/methods.py": "a method records the environments where it reduces to DQN (its penalty is always 0 there)",
-    "baselines/reachability.py": "relative reachability keeps Coexistence's own one-cat table (its runs unchanged); other tasks use their exact model",
+    "baselines/reachability.py": "relative reachability keeps Coexistence's own one-cat table; other tasks use their exact model",
 }
 """Modules that may name an environment or list metrics, and why."""
 METRICS = frozenset(METRIC_NAMES) | frozenset(DERIVED_METRICS)
