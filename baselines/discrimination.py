@@ -37,11 +37,14 @@ from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.document_checks import shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
+from empathy_zoo.names import check_path_name, terminal_line
 
 __all__ = [
     "DEFAULT_DIR",
     "MATRIX_BETA",
     "MAX_METHODS",
+    "MAX_TABLES",
+    "MAX_CELLS",
     "Cell",
     "MissingPair",
     "TableIndex",
@@ -59,6 +62,11 @@ __all__ = [
 DEFAULT_DIR = Path("docs/results/separation")
 """Where the shipped separation tables lie."""
 MAX_METHODS = 200
+MAX_TABLES = 50
+"""The most separation tables (tasks) the matrix reads (the suite ships 6)."""
+MAX_CELLS = 100_000
+"""The most cells (pairs of methods × tasks) of a matrix (the shipped one has 546; a page of this many
+is about 10 MB)."""
 """The most distinct methods the matrix shows (the shipped tables name 11)."""
 MATRIX_BETA = "0.5"
 """The β at which a method with a selfishness weight enters the matrix."""
@@ -87,10 +95,21 @@ class Cell:
 
 
 def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
-    """Every ``*.json`` separation table of ``directory``, by task name (its file's stem), sorted."""
+    """Every ``*.json`` separation table of ``directory``, by task name (its file's stem), sorted;
+    at most :data:`MAX_TABLES`, each named as a file name the suite makes (letters, digits, ``_``,
+    ``-``, ``.``)."""
+    paths = sorted(directory.glob("*.json"))
+    if len(paths) > MAX_TABLES:
+        raise ValueError(f"{directory}: {len(paths):,} separation tables; the matrix reads at most {MAX_TABLES}")
     tables = {}
-    for path in sorted(directory.glob("*.json")):
-        tables[path.stem] = read_separation_table(path)  # (checked: a regular file, bounded, every field in range)
+    for path in paths:
+        try:
+            task = check_path_name(path.stem, "a task name")
+        except ValueError:
+            raise ValueError(
+                f"{directory}: a separation table's file name is no task name (letters, digits, '_', '-', '.'): {path.name!r}"
+            ) from None
+        tables[task] = read_separation_table(path)  # (checked: a regular file, bounded, every field in range)
     if not tables:
         raise ValueError(f"{directory}: no separation table (*.json); make one with empathy-zoo analyse separation")
     return tables
@@ -226,6 +245,9 @@ def discrimination_markdown(
             f"({MAX_METHODS * (MAX_METHODS - 1) // 2:,} pairs of methods)"
         )
     tasks = list(tables)
+    extent = len(methods) * (len(methods) - 1) // 2 * len(tasks)
+    if extent > MAX_CELLS:
+        raise ValueError(f"the matrix would hold {extent:,} cells (pairs of methods × tasks); it holds at most {MAX_CELLS:,}")
     lines = [
         "# Discrimination matrix: which task tells which methods apart",
         "",
@@ -316,10 +338,10 @@ def main(
         cells = trained(tables, results) if trained is not None and results else None
         page = discrimination_markdown(tables, args.epsilon, command, cells)
     except MissingPair as error:
-        print(f"discrimination: error: {error.in_folder(args.directory)}", file=sys.stderr)
+        print(f"discrimination: error: {terminal_line(error.in_folder(args.directory))}", file=sys.stderr)
         return 2
     except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
-        print(f"discrimination: error: {error}", file=sys.stderr)
+        print(f"discrimination: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(f"wrote {write_text_atomic(out, page)}")
     return 0

@@ -37,6 +37,12 @@ MAX_ARGUMENTS = 20
 """The most environment arguments a table may record."""
 MAX_ENTRIES = 100_000
 """The most outcomes, pairs or omissions a table may hold (the shipped ones hold at most 570)."""
+MAX_ROW_NAME = 200
+"""The longest row name or method name (the shipped ones are under 40 characters)."""
+ROUNDING = 1e-9
+"""How far a probability summed over states may pass 1 by rounding."""
+MAX_COUNT = 10**9
+"""The largest harms, survival or count of states a table may hold (the bound of ``max_cycles``)."""
 
 
 class SeparationTableError(ValueError):
@@ -89,6 +95,38 @@ def _fraction(check: DocumentChecker, value: Any, field: str) -> float:
     return number
 
 
+def _probability(check: DocumentChecker, value: Any, field: str) -> float:
+    """A probability summed over an episode's states: in ``[0, 1]`` up to a float's rounding
+    (:data:`ROUNDING`; the shipped vase table holds 1.0000000000000044)."""
+    number = check.finite(value, field, 0.0)
+    if number > 1.0 + ROUNDING:
+        raise check.fail(field, "a probability in [0, 1]", value)
+    return number
+
+
+def _bounded(check: DocumentChecker, value: Any, field: str, low: float | None = 0.0) -> float:
+    """A finite number within ``[low, MAX_COUNT]`` (``[-MAX_COUNT, MAX_COUNT]`` without ``low``)."""
+    number = check.finite(value, field, -MAX_COUNT if low is None else low)
+    if number > MAX_COUNT:
+        raise check.fail(field, f"a number of at most {MAX_COUNT:,}", value)
+    return number
+
+
+def _short(check: DocumentChecker, value: Any, field: str) -> str:
+    """One line of printable text of at most :data:`MAX_ROW_NAME` characters."""
+    text = check.text(value, field)
+    if len(text) > MAX_ROW_NAME:
+        raise check.fail(field, f"a name of at most {MAX_ROW_NAME} characters", value)
+    return text
+
+
+def _row_name(check: DocumentChecker, value: Any, field: str, names: set[str]) -> str:
+    """The name of one of the table's rows."""
+    if not isinstance(value, str) or value not in names:
+        raise check.fail(field, "the name of a row", value)
+    return value
+
+
 def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     """``document`` when it is a separation table whose every field the readers use is in range,
     else :class:`SeparationTableError` naming ``path`` and the field."""
@@ -103,50 +141,51 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     for i, pair in enumerate(arguments):
         if not isinstance(pair, list) or len(pair) != 2:
             raise check.fail(f"arguments[{i}]", "a [name, value] pair", pair)
-        check.text(pair[0], f"arguments[{i}][0]")
+        if not isinstance(pair[0], str) or not pair[0].isidentifier() or not pair[0].isascii() or len(pair[0]) > 64:
+            raise check.fail(f"arguments[{i}][0]", "an environment argument's name (a Python identifier)", pair[0])
         if isinstance(pair[1], str):
-            check.text(pair[1], f"arguments[{i}][1]")
+            check.name(pair[1], f"arguments[{i}][1]")  # (an option's word: shown in page headings)
         else:
             check.integer(pair[1], f"arguments[{i}][1]", -(10**9), 10**9)
     names: set[str] = set()
     for i, row in enumerate(_entries(check, table["rows"], "rows", MAX_ROWS)):
         where = f"rows[{i}]"
         check.has(row, ("name", "method"), f"{where}.")
-        name = check.text(row["name"], f"{where}.name")
+        name = _short(check, row["name"], f"{where}.name")
         if name in names:
             raise check.fail(f"{where}.name", "a name no other row has", name)
         names.add(name)
-        check.text(row["method"], f"{where}.method")
+        _short(check, row["method"], f"{where}.method")
         if row.get("selfishness") is not None:
             _fraction(check, row["selfishness"], f"{where}.selfishness")
         for key in ("identical_to", "reason"):
             _optional_text(check, row.get(key, ""), f"{where}.{key}")
-        if row.get("identical_to") and row["identical_to"] not in names:
+        if row.get("identical_to") and row["identical_to"] not in names:  # (text: checked above)
             raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
     for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
         where = f"outcomes[{i}]"
         check.has(outcome, ("row", "epsilon", "harms", "robot_harmed"), f"{where}.")
-        if outcome["row"] not in names:
-            raise check.fail(f"{where}.row", "the name of a row", outcome["row"])
+        _row_name(check, outcome["row"], f"{where}.row", names)
         _fraction(check, outcome["epsilon"], f"{where}.epsilon")
-        check.finite(outcome["harms"], f"{where}.harms", 0.0)
+        _bounded(check, outcome["harms"], f"{where}.harms")
         _fraction(check, outcome["robot_harmed"], f"{where}.robot_harmed")
         if "survival" in outcome:
-            check.finite(outcome["survival"], f"{where}.survival", 0.0)
+            _bounded(check, outcome["survival"], f"{where}.survival")
+        if outcome.get("changed") is not None:
+            _probability(check, outcome["changed"], f"{where}.changed")
     for i, pair in enumerate(_entries(check, table["pairs"], "pairs")):
         where = f"pairs[{i}]"
         required = ("first", "second", "epsilon", "differ", "differing_states", "harms_difference", "by_construction")
         check.has(pair, required, f"{where}.")
         for key in ("first", "second"):
-            if pair[key] not in names:
-                raise check.fail(f"{where}.{key}", "the name of a row", pair[key])
+            _row_name(check, pair[key], f"{where}.{key}", names)
         _fraction(check, pair["epsilon"], f"{where}.epsilon")
         if not isinstance(pair["differ"], bool):
             raise check.fail(f"{where}.differ", "true or false", pair["differ"])
-        check.integer(pair["differing_states"], f"{where}.differing_states", 0)
-        check.finite(pair["harms_difference"], f"{where}.harms_difference")
+        check.integer(pair["differing_states"], f"{where}.differing_states", 0, MAX_COUNT)
+        _bounded(check, pair["harms_difference"], f"{where}.harms_difference", None)
         if pair.get("equality_difference") is not None:
-            check.finite(pair["equality_difference"], f"{where}.equality_difference")
+            _bounded(check, pair["equality_difference"], f"{where}.equality_difference", None)
         _optional_text(check, pair["by_construction"], f"{where}.by_construction")
     for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
         check.has(omission, ("method", "reason"), f"omitted[{i}].")

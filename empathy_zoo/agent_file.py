@@ -615,8 +615,13 @@ def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
         raise check.fail("header.env", f"a registered environment ({', '.join(ENGINES)})", env)
     check_env_kwargs(check, env, header["env_kwargs"], "header.env_kwargs")
     if header.get("fixed") is not None:
+        agents = ENGINES[env](1, **header["env_kwargs"]).agents  # (its arguments checked above)
         for agent, policy in check.table(header["fixed"], "header.fixed").items():
             check.name(agent, f"header.fixed (the agent {agent!r})")
+            if agent not in agents[1:]:
+                raise check.fail(
+                    f"header.fixed (the agent {agent!r})", f"an other agent of {env} ({', '.join(agents[1:])})", agent
+                )
             check.policy_label(policy, f"header.fixed.{agent}")
     for name in ("run_id", "variant"):
         if header.get(name) is not None:
@@ -632,6 +637,9 @@ def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
     for name, (low, high) in bounds.items():
         if header.get(name) is not None:
             check.integer(header[name], f"header.{name}", low, high)
+    seed, run_id = header.get("seed"), header.get("run_id")
+    if seed is not None and run_id is not None and not run_id.endswith(f"__s{seed}"):
+        raise check.fail("header.seed", f"the seed its run id {run_id!r} ends with (__s<seed>)", seed)
     for name in ("reward", "description"):
         check.plain(header.get(name), f"header.{name}")
     return header

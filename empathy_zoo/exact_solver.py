@@ -70,6 +70,7 @@ from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.exact_alone import alone_policy, alone_steps, alone_values, gone_continuation
 from empathy_zoo.exact_chance import FixedDraws, check_draws
 from empathy_zoo.limits import MAX_REFERENCE_CYCLES
+from empathy_zoo.names import terminal_line
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
 __all__ = [
@@ -524,7 +525,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         model = tabular_model(args.env, **command_line_arguments(args.arguments))
     except ValueError as error:
-        print(f"exact_solver: error: {error}", file=sys.stderr)
+        print(f"exact_solver: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(outcome_table(model, (1.0, 0.75, 0.5, 0.25, 0.0), (0.0, 0.01, 0.05)))
     return 0

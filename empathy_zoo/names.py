@@ -145,3 +145,14 @@ def check_replaceable(path: str | os.PathLike[str]) -> Path:
         f"{target} is {kind}, not a regular file: the suite replaces only a regular file it may write, "
         "and never writes through a link; move it away or choose another path"
     )
+
+
+def terminal_line(text: object) -> str:
+    """``text`` as one line that shows as itself on a terminal: each control or format character,
+    line break or lone surrogate (:data:`LABEL_REFUSED_CATEGORIES`) written as its code
+    (``\\x1b``), so a name read from a file or a file name cannot move the cursor, retitle the
+    window or break the line."""
+    return "".join(
+        c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES else c
+        for c in str(text)
+    )

@@ -22,6 +22,7 @@ from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.names import terminal_line
 from leaderboard.aggregate import load_results
 from leaderboard.reproduction import (
     BETAS,
@@ -210,7 +211,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             print(sensitivity_markdown(load_results(args.results_dir), command))
     except ValueError as error:
-        parser.exit(2, f"{parser.prog}: error: {error}\n")
+        parser.exit(2, f"{parser.prog}: error: {terminal_line(error)}\n")
     return 0
 
 

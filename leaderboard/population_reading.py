@@ -26,6 +26,7 @@ import numpy as np
 
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.names import terminal_line
 from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, changes_carry_over, compare
 
 __all__ = ["METHODS", "Scores", "GroupKey", "primary_and_secondary", "markdown", "read_scores", "main"]
@@ -163,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError("no environment and method has runs of both groups evaluated on its test split (<env>_test)")
         print(markdown(primaries, carries, secondaries), end="")
     except ValueError as error:
-        print(f"population_reading: error: {error}", file=sys.stderr)
+        print(f"population_reading: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     return 0
 

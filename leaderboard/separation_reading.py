@@ -28,6 +28,7 @@ import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import code_span
+from empathy_zoo.names import terminal_line
 from leaderboard.trained_separation import BETA, FEWER, MORE, Judgement, Prediction, judge, predictions, task_separates
 
 __all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
@@ -149,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"no separation table in {args.tables} is of a task the runs of {args.results} are on")
         print(markdown(read_runs(tables, results), tables), end="")
     except ValueError as error:
-        print(f"separation_reading: error: {error}", file=sys.stderr)
+        print(f"separation_reading: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     return 0
 

@@ -32,6 +32,7 @@ from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.names import terminal_line
 from leaderboard.tables import markdown_text
 
 __all__ = [
@@ -211,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         table = summary_table([_checked(path, summarise, study) for path, study in read])
         figure = _checked(Path(args.root), render_studies_png, studies) if args.figure is not None else None
     except ValueError as error:
-        print(f"tuning_summary: error: {error}", file=sys.stderr)
+        print(f"tuning_summary: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(table)
     if figure is not None:

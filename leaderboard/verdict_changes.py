@@ -18,11 +18,10 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import unicodedata
 from pathlib import Path
 
 from empathy_zoo.markdown_escape import markdown_text
-from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
+from empathy_zoo.names import terminal_line
 
 __all__ = ["Cell", "changes", "changes_markdown", "main", "shown_text", "verdicts"]
 
@@ -43,9 +42,7 @@ def shown_text(cell: str) -> str:
     plain = _ESCAPED.sub(lambda found: found.group(1), cell[: 2 * MAX_SHOWN + 2])
     if len(plain) > MAX_SHOWN:
         plain = plain[: MAX_SHOWN - 1] + "…"
-    visible = "".join(
-        c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES else c for c in plain
-    )
+    visible = terminal_line(plain)
     return markdown_text(visible)
 
 
@@ -109,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         old, new = (_read_page(path) for path in (args.old, args.new))
     except ValueError as error:
-        print(f"verdict_changes: error: {error}", file=sys.stderr)
+        print(f"verdict_changes: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(changes_markdown(old, new), end="")
     return 0

@@ -28,7 +28,9 @@ STEPS = 300
 
 
 def header(run: int, beta: float) -> dict:
-    return {**HEADER, "settings": {**TINY, "selfishness": beta}, "env_kwargs": {"max_cycles": 60}, "seed": run}
+    """Run ``run``'s header: its run id ends with its seed, as every run id does."""
+    run_id = HEADER["run_id"].removesuffix("__s0") + f"__s{run}"
+    return {**HEADER, "run_id": run_id, "settings": {**TINY, "selfishness": beta}, "env_kwargs": {"max_cycles": 60}, "seed": run}
 
 
 def drive(learner, venv: VectorEnv, steps: int, seed: int = 0) -> np.ndarray:
@@ -112,7 +114,7 @@ def test_describe_says_what_the_agent_is(trained) -> None:
     for run, (path, sha, beta) in enumerate(zip(paths, hashes, BETAS, strict=True)):
         d = load_agent(path).describe()
         assert d["method"] == "empathic_dqn" and d["env"] == "coexistence_v0" and d["env_kwargs"] == {"max_cycles": 60}
-        assert d["settings"]["selfishness"] == beta and d["seed"] == run and d["run_id"] == HEADER["run_id"]
+        assert d["settings"]["selfishness"] == beta and d["seed"] == run and d["run_id"].endswith(f"__s{run}")
         assert (d["obs_size"], d["num_actions"], d["layers"]) == (25, 5, [25, 128, 128, 5])
         assert d["heads"] == (["q"] if beta == 1.0 else ["q", "q_emp"])
         assert d["acting"] == ("q" if beta == 1.0 else "q_emp")
@@ -353,7 +355,7 @@ def test_a_result_file_names_its_agent_and_the_reader_checks_it(trained, tmp_pat
     from empathy_zoo.agent_file import load_run_agent, result_entry
 
     learner, observations, _, _ = trained
-    result = tmp_path / "runs" / "coexistence_v0__empathic_dqn-abc__s0.json"
+    result = tmp_path / "runs" / "coexistence_v0__empathic_dqn-abc__s2.json"
     written = write_agent_file(learner, 2, agent_path(result), header(2, BETAS[2]))
     result.write_text(json.dumps({"run_id": result.stem, "agent": result_entry(written)}))
     agent = load_run_agent(result)

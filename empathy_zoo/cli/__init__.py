@@ -47,6 +47,7 @@ from empathy_zoo.cli.sweep import add_sweep_commands
 from empathy_zoo.cli.train import RUN_KEYS, add_train, train_method
 from empathy_zoo.cli.tune import add_tune
 from empathy_zoo.cli.watch import add_watch
+from empathy_zoo.names import terminal_line
 
 __all__ = ["main", "build_parser", "parse_args", "RUN_KEYS", "RUN_DEFAULTS"]
 
@@ -62,7 +63,7 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         see = "" if "--help" in message else f" (see {self.prog} --help)"
-        self.exit(2, f"{self.prog}: error: {message}{see}\n")
+        self.exit(2, f"{self.prog}: error: {terminal_line(message)}{see}\n")
 
 
 def build_parser(method: str = RUN_DEFAULTS["method"]) -> argparse.ArgumentParser:
@@ -107,7 +108,7 @@ def parse_args(argv: Sequence[str]) -> argparse.Namespace:
 
 
 def _error(error: object, status: int) -> int:
-    print(f"{PROG}: error: {error}", file=sys.stderr)
+    print(f"{PROG}: error: {terminal_line(error)}", file=sys.stderr)
     return status
 
 
