@@ -29,7 +29,8 @@ from typing import cast
 
 import numpy as np
 
-from baselines.reachability_table import UNREACHABLE, _shortest_steps
+from baselines.reachability_table import _discounted as reachability_powers
+from baselines.reachability_table import _shortest_steps
 from empathy_zoo.actions import NUM_ACTIONS
 from empathy_zoo.engine import GridEngine
 from empathy_zoo.environments import ENGINES
@@ -67,15 +68,6 @@ def model_successors(model: TabularModel) -> np.ndarray:
     joint = model_state_codes(model).reshape(model.states, width)
     alone = np.repeat(model.states + model.alone_after, model.other_moves, axis=1)
     return np.concatenate([joint, alone, np.full((1, width), end)])
-
-
-@functools.lru_cache(maxsize=8)
-def reachability_powers(discount: float) -> np.ndarray:
-    """``(256,)`` read-only: ``discount ** k`` for every distance ``k``, 0 for :data:`UNREACHABLE`."""
-    powers = discount ** np.arange(UNREACHABLE + 1, dtype=np.float64)
-    powers[UNREACHABLE] = 0.0
-    powers.flags.writeable = False
-    return powers
 
 
 def _probe(env: str, size: int) -> GridEngine:
