@@ -21,6 +21,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -135,12 +136,20 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
     from empathy_zoo.training.heldout import results_of
 
     scores: Scores = {}
+    definitions: dict[str, tuple[Any, Path]] = {}
+    """Each test split's definition, as the first evaluation read holds it, and that file."""
     for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
         runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             if evaluation.scenario_set.name != f"{evaluation.env}_test":
                 continue
+            first = definitions.setdefault(evaluation.scenario_set.name, (evaluation.scenario_set, path))
+            if evaluation.scenario_set != first[0]:
+                raise ValueError(
+                    f"{path} and {first[1]} were made with different definitions of scenario set "
+                    f"{evaluation.scenario_set.name!r}: move the older ones away and run empathy-zoo evaluate again"
+                )
             run = runs.get(evaluation.run_id)
             if run is None:
                 raise ValueError(f"{path}: its run {evaluation.run_id} has no result file in {directory}")

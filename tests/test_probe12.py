@@ -141,3 +141,24 @@ def test_an_agent_headers_fixed_agents_are_its_worlds(tmp_path, capsys) -> None:
     assert main(["watch", str(forged), "--episodes", "1"]) == 2
     err = capsys.readouterr().err
     assert "field header.fixed" in err and "cat_5" in err and str(forged) in err
+
+
+def test_population_reading_refuses_two_definitions_of_one_test_split(tmp_path) -> None:
+    from leaderboard.population_reading import read_scores
+
+    shipped = ROOT / "docs" / "results" / "populations"
+    population, default = tmp_path / "population", tmp_path / "default"
+    for source, target in ((shipped, population), (shipped / "default_trained", default)):
+        (target / "evaluations").mkdir(parents=True)
+        shutil.copytree(source / "runs", target / "runs", ignore=shutil.ignore_patterns("*.agent.*"))
+        shutil.copytree(source / "evaluations" / "coexistence_v0_test", target / "evaluations" / "coexistence_v0_test")
+    read_scores(population, [default])  # (as shipped: one definition)
+    for path in sorted((default / "evaluations" / "coexistence_v0_test").glob("*.json")):
+        document = json.loads(path.read_text())
+        for scenarios in (document["scenario_set"]["scenarios"], document["scenarios"]):
+            for scenario in scenarios:
+                if scenario["name"] == "test_population":
+                    scenario.get("fixed", scenario.get("scenario", {}).get("fixed", {}))["cat_0"] = "stay"
+        path.write_text(json.dumps(document))
+    with pytest.raises(ValueError, match="different definitions of scenario set 'coexistence_v0_test'"):
+        read_scores(population, [default])
