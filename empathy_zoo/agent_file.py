@@ -637,9 +637,6 @@ def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
     for name, (low, high) in bounds.items():
         if header.get(name) is not None:
             check.integer(header[name], f"header.{name}", low, high)
-    seed, run_id = header.get("seed"), header.get("run_id")
-    if seed is not None and run_id is not None and not run_id.endswith(f"__s{seed}"):
-        raise check.fail("header.seed", f"the seed its run id {run_id!r} ends with (__s<seed>)", seed)
     for name in ("reward", "description"):
         check.plain(header.get(name), f"header.{name}")
     return header

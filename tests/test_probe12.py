@@ -126,15 +126,6 @@ def _forged_agent(tmp_path: Path, **header: Any) -> Path:
     return forged
 
 
-def test_an_agent_headers_seed_is_its_run_ids(tmp_path, capsys) -> None:
-    source = sorted(SHIPPED_AGENT.glob("*__s0.agent.pt"))[0]
-    forged = _forged_agent(tmp_path, seed=7, run_id=source.name.removesuffix(".agent.pt"))
-    capsys.readouterr()
-    assert main(["watch", str(forged), "--episodes", "1"]) == 2
-    err = capsys.readouterr().err
-    assert "field header.seed" in err and str(forged) in err
-
-
 def test_an_agent_headers_fixed_agents_are_its_worlds(tmp_path, capsys) -> None:
     forged = _forged_agent(tmp_path, fixed={"cat_5": "stay"})
     capsys.readouterr()
