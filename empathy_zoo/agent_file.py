@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from empathy_zoo import run_ids
 from empathy_zoo.atomic import read_json, write_bytes_atomic
 from empathy_zoo.bounded_read import CAPS, check_json_depth, read_data
 from empathy_zoo.document_checks import DocumentChecker, one_line, shown
@@ -390,6 +391,7 @@ def load_agent(
     if member is not None:
         if result_file is not None:
             check_against_result(path, member["header"], result_file, recorded)
+        _check_header_run_id(path, member["header"])
         return _load_library_agent(path, data, member, source)
     problem = torch_zip_problem(members, len(data))
     if problem:
@@ -420,6 +422,7 @@ def load_agent(
     _check_hidden_size(path, header, heads)
     if result_file is not None:
         check_against_result(path, header, result_file, recorded)
+    _check_header_run_id(path, header)
     description = _description(header, obs_size, num_actions, list(heads), document["acting"], source)
     description["layers"] = [obs_size] + [int(t.shape[0]) for t in heads[document["acting"]][1::2]]
     return TrainedAgent(heads, document["acting"], description)
@@ -465,6 +468,24 @@ def check_against_result(
                 f"agent file {path}: field header.{key}: {shown(header[key])}, but its result file {result_file} records "
                 f"{where} {shown(value)}: the agent file is not that run's; move it away (train the run again to make it anew)"
             )
+
+
+def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
+    """Refuse (:class:`AgentFileError` naming the file and the field) a header (checked) whose
+    ``run_id`` is not the id its own fields give (:func:`~empathy_zoo.run_ids.run_id`: the trainer
+    writes ``{"run_id": ..., **config}``), so an agent read alone (``watch``) is the run it names.
+    Checked after the comparison with a result file, whose message names both files; a header
+    without ``run_id`` or ``seed`` has no id to compare."""
+    if "run_id" not in header or "seed" not in header:
+        return
+    config = {key: value for key, value in header.items() if key != "run_id"}
+    expected = run_ids.run_id(str(header.get("variant") or header["env"]), header["method"], config, header["seed"])
+    if header["run_id"] != expected:
+        raise _checker(path).fail(
+            "header.run_id",
+            f"{expected} (the id its header gives: a hash of the run's configuration without seed and description)",
+            header["run_id"],
+        )
 
 
 def _check_hidden_size(path: Path, header: Mapping[str, Any], heads: Mapping[str, list[torch.Tensor]]) -> None:

@@ -27,6 +27,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+from empathy_zoo import run_ids
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
 from empathy_zoo.environments import ENGINES
@@ -510,6 +511,23 @@ def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
             "config.description" + ("" if error.field.startswith("(") else f".{error.field}"), error.expected, error.value
         ) from None
     check.plain(config["description"], "config.description")
+
+
+def check_run_id(check: DocumentChecker, result: Mapping[str, Any], config: Mapping[str, Any]) -> None:
+    """``run_id`` (its seed checked already) if it is the id :func:`~empathy_zoo.run_ids.run_id`
+    derives from ``config`` as the file holds it (before any schema upgrade: the trainer named the
+    run from that record), the variant and the method: a configuration changed after the run,
+    which would pool the run with another experiment's, is refused. Checked last, by
+    :func:`empathy_zoo.experiment.result_reader.check_result`, so a value out of its range is named
+    as such first."""
+    variant = config.get("variant") or result.get("variant") or result["env"]
+    expected = run_ids.run_id(str(variant), result["method"], config, result["seed"])
+    if result["run_id"] != expected:
+        raise check.fail(
+            "run_id",
+            f"{expected} (the id its config gives: a hash of the config without seed and description)",
+            result["run_id"],
+        )
 
 
 def _check_grid(check: DocumentChecker, engine: Any, env_kwargs: Mapping[str, Any], field: str = "config.env_kwargs") -> None:

@@ -131,24 +131,35 @@ def markdown(primaries: Sequence[Row], carries: Sequence[bool], secondaries: Seq
 
 
 def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
-    """The scores of every run read (see the module page) from their test-split evaluations."""
+    """The scores of every run read (see the module page) from their test-split evaluations.
+
+    Raises ``ValueError``, naming the files, where a directory is given twice, the population
+    directory holds no population-trained run of a compared method, a test split was evaluated
+    with another definition than the shipped one (``empathy_zoo/scenarios/<env>_test.toml``), or
+    two evaluations give one group one seed twice."""
     from empathy_zoo.evaluation_file import evaluation_files, evaluation_mismatch, read_evaluation
+    from empathy_zoo.scenarios import load_scenario_set, scenario_set_path
     from empathy_zoo.training.heldout import results_of
 
+    _check_distinct(population_dir, default_dirs)
     scores: Scores = {}
-    definitions: dict[str, tuple[Any, Path]] = {}
-    """Each test split's definition, as the first evaluation read holds it, and that file."""
+    shipped: dict[str, dict[str, Any]] = {}
+    """Each test split's shipped definition, as an evaluation file records one."""
+    read_from: dict[tuple[str, str, str, int], Path] = {}
+    """The evaluation file each group's seed was read from."""
     for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
         runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
-            if evaluation.scenario_set.name != f"{evaluation.env}_test":
+            name = evaluation.scenario_set.name
+            if name != f"{evaluation.env}_test":
                 continue
-            first = definitions.setdefault(evaluation.scenario_set.name, (evaluation.scenario_set, path))
-            if evaluation.scenario_set != first[0]:
+            if name not in shipped:
+                shipped[name] = load_scenario_set(name).definition()
+            if evaluation.scenario_set.to_document() != shipped[name]:
                 raise ValueError(
-                    f"{path} and {first[1]} were made with different definitions of scenario set "
-                    f"{evaluation.scenario_set.name!r}: move the older ones away and run empathy-zoo evaluate again"
+                    f"{path} was made with another definition of scenario set {name!r} than the shipped one "
+                    f"({scenario_set_path(name)}): move it away and run empathy-zoo evaluate again"
                 )
             run = runs.get(evaluation.run_id)
             if run is None:
@@ -156,10 +167,39 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
             mismatch = evaluation_mismatch(evaluation, run)
             if mismatch is not None:
                 raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
-            if not _read_at(run) or (group == DEFAULT and (run.variant or run.env) != run.env):
+            if not _read_at(run) or _population_trained(run) != (group == POPULATION):
                 continue
+            if group == DEFAULT and (run.variant or run.env) != run.env:
+                continue
+            seed = (group, run.env, run.method, run.seed)
+            if seed in read_from:
+                raise ValueError(
+                    f"{read_from[seed]} and {path}: two {group}-trained runs of {run.method} on {run.env} "
+                    f"with seed {run.seed}; move one away"
+                )
+            read_from[seed] = path
             add_scores(scores, run, evaluation, group)
+    if not any(group == POPULATION for (group, *_rest) in read_from):
+        raise ValueError(
+            f"{population_dir} holds no population-trained run of {' or '.join(METHODS)} evaluated on a test split "
+            "(a run whose partner is a population: empathy-zoo reproduce --profile populations, then evaluate)"
+        )
     return scores
+
+
+def _population_trained(run: RunResult) -> bool:
+    """Whether a partner of ``run`` was a population (its label ``population(...)``)."""
+    return any(str(label).startswith("population(") for label in run.config.fixed.values())
+
+
+def _check_distinct(population_dir: Path, default_dirs: Sequence[Path]) -> None:
+    """Refuse (``ValueError``) a directory given twice: its runs would be compared with themselves."""
+    seen: dict[Path, Path] = {}
+    for directory in (population_dir, *default_dirs):
+        resolved = Path(directory).resolve()
+        if resolved in seen:
+            raise ValueError(f"{directory} is given twice (as {seen[resolved]} too): its runs would be compared with themselves")
+        seen[resolved] = Path(directory)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -305,12 +305,23 @@ def table_seeds(scores: Sequence[Score], env: str, phase: str) -> list[int]:
     return sorted({n for n in rows.values() if n >= MIN_INTERVAL_SEEDS})
 
 
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+"""First characters that make a spreadsheet read a cell as a formula."""
+
+
+def csv_text_cell(value: str) -> str:
+    """``value`` as a CSV text cell a spreadsheet shows as text: one starting a formula
+    (:data:`FORMULA_STARTS`, e.g. a label ``=HYPERLINK(...)`` from a result file) gets a leading ``'``."""
+    return f"'{value}" if value.startswith(FORMULA_STARTS) else value
+
+
 def _csv_number(value: float) -> str:
     return repr(float(value)) if math.isfinite(value) else ""
 
 
 def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tuple[str, str], RowFacts] | None = None) -> str:
-    """Long-format CSV (:data:`CSV_COLUMNS`), one row per score; NaN is an empty cell. With
+    """Long-format CSV (:data:`CSV_COLUMNS`), one row per score; NaN is an empty cell, a text cell
+    that would start a formula is quoted (:func:`csv_text_cell`). With
     ``rows`` (the facts of every ``(env, method_label)``), :data:`COMPARISON_CSV_COLUMNS` follow."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
@@ -320,8 +331,8 @@ def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tupl
         writer.writerow(
             [
                 s.env,
-                s.method_label,
-                s.method,
+                csv_text_cell(s.method_label),
+                csv_text_cell(s.method),
                 s.phase,
                 s.metric,
                 _csv_number(s.mean),
@@ -329,7 +340,7 @@ def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tupl
                 _csv_number(s.ci_high),
                 s.n_seeds,
                 METRIC_DEFINITIONS.get(s.metric, ""),
-                provenance.command,
+                csv_text_cell(provenance.command),
                 provenance.version,
                 provenance.commit or "",
                 *facts,
@@ -340,4 +351,4 @@ def csv_text(scores: Sequence[Score], provenance: Provenance, rows: Mapping[tupl
 
 def _facts_cells(facts: RowFacts) -> list[Any]:
     budget = facts.budget
-    return [budget.steps, budget.eval_interval or "", budget.eval_episodes or "", ";".join(facts.directories)]
+    return [budget.steps, budget.eval_interval or "", budget.eval_episodes or "", csv_text_cell(";".join(facts.directories))]

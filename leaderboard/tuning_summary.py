@@ -33,6 +33,7 @@ from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.names import terminal_line
+from empathy_zoo.training.study_plan import DIRECTIONS
 from leaderboard.tables import markdown_text
 
 __all__ = [
@@ -265,7 +266,9 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
     tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
     and the budget's last); ``best`` the finished trial its ``number`` names, with its value and
-    parameters."""
+    parameters, and no finished trial better in the objective's ``direction``; the budget
+    ``trials × tuning seeds × steps`` for at most :data:`MAX_TRIALS` trials, no more trials than it
+    holds (an interrupted trial, run again, not counted) and ``env_steps_trained`` within it."""
     check = DocumentChecker(
         Path(path), StudyFileError, "a study file", "a study that empathy-zoo tune wrote", "move it away (tune writes it again)"
     )
@@ -284,18 +287,35 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         raise check.fail("plan.objective.metric", f"one of the suite's metrics ({', '.join(METRIC_NAMES)})", metric)
     if objective.get("over", "last") not in ("last", "curve"):
         raise check.fail("plan.objective.over", "last or curve", objective["over"])
+    direction = objective.get("direction")
+    if direction is not None and direction not in DIRECTIONS:
+        raise check.fail("plan.objective.direction", " or ".join(DIRECTIONS), direction)
     budget = check.table(plan["budget"], "plan.budget")
     check.has(budget, ("env_steps_at_most", "steps", "eval_interval"), "plan.budget.")
-    check.integer(budget["env_steps_at_most"], "plan.budget.env_steps_at_most", 1, MAX_ENV_STEPS)
+    at_most = check.integer(budget["env_steps_at_most"], "plan.budget.env_steps_at_most", 1, MAX_ENV_STEPS)
     steps = check.integer(budget["steps"], "plan.budget.steps", 1, MAX_STEPS)
     interval = check.integer(budget["eval_interval"], "plan.budget.eval_interval", 1, MAX_STEPS)
     seeds = _tuning_seeds(check, plan["tuning_seeds"])
+    per_trial = len(seeds) * steps
+    if at_most % per_trial or not 1 <= at_most // per_trial <= MAX_TRIALS:
+        raise check.fail(
+            "plan.budget.env_steps_at_most",
+            f"trials × {len(seeds):,} tuning seeds × {steps:,} steps, for 1 to {MAX_TRIALS:,} trials",
+            at_most,
+        )
     bounds = metric_bounds(metric)
-    check.integer(study["env_steps_trained"], "env_steps_trained", 0, MAX_ENV_STEPS)
+    check.integer(study["env_steps_trained"], "env_steps_trained", 0, at_most)
     specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
     trials = study["trials"]
     if not isinstance(trials, list) or not trials:
         raise check.fail("trials", "a non-empty array of trials (tune writes one once a trial has run)", trials)
+    counted = sum(1 for trial in trials if not (isinstance(trial, dict) and trial.get("state") == "INTERRUPTED"))
+    if counted > at_most // per_trial:
+        raise check.fail(
+            "trials",
+            f"at most the plan's {at_most // per_trial:,} trials (an interrupted one not counted)",
+            f"{counted:,} trials",
+        )
     numbers: dict[int, dict[str, Any]] = {}
     for i, trial in enumerate(trials):
         where = f"trials[{i}]"
@@ -327,7 +347,23 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         for name in ("value", "params"):
             if best[name] != chosen.get(name):
                 raise check.fail(f"best.{name}", f"its trial {best['number']}'s {name}, {shown(chosen.get(name))}", best[name])
+        _check_best(check, best, numbers, direction)
     return study
+
+
+def _check_best(
+    check: DocumentChecker, best: Mapping[str, Any], numbers: Mapping[int, Mapping[str, Any]], direction: Any
+) -> None:
+    """Refuse a ``best`` whose value another finished trial beats in the plan's ``direction``
+    (none given: not compared)."""
+    finished = [trial for trial in numbers.values() if trial["state"] == "COMPLETE" and trial.get("value") is not None]
+    if direction is None or not finished:
+        return
+    top = (max if direction == "maximize" else min)(finished, key=lambda trial: trial["value"])
+    if (best["value"] < top["value"]) if direction == "maximize" else (best["value"] > top["value"]):
+        raise check.fail(
+            "best.number", f"the best finished trial ({direction}: trial {top['number']}, value {top['value']!r})", best["number"]
+        )
 
 
 def metric_bounds(metric: str) -> tuple[float, float | None]:

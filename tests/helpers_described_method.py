@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from helpers_results import SETTINGS, synthetic_schema_1
+from helpers_results import SETTINGS, derive_run_id, synthetic_schema_1
 
 from agents.base import Method
 from empathy_zoo.experiment.records import RunResult
@@ -59,15 +59,10 @@ def kind_result(env: str, beta: float, seed: int, fixed: dict | None = None, **m
 
 
 def kind_document(env: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
-    """A schema-3 result of :data:`KIND_DQN` at β (care = 1 − β) with the numbers
+    """A schema-3 result of :data:`KIND_DQN` at β (care = 1 − β), under the run id its config gives, with the numbers
     ``helpers_results.synthetic_result`` gives Empathic DQN at that β."""
     run = synthetic_schema_1(env, "empathic_dqn", beta, seed, fixed, **means)
     settings = KindSettings(care=1.0 - beta)
-    run |= {
-        "schema": 3,
-        "method": NAME,
-        "method_label": KIND_DQN.display_name(settings),
-        "run_id": f"{env}__kind-{beta}__s{seed}",
-    }
+    run |= {"schema": 3, "method": NAME, "method_label": KIND_DQN.display_name(settings)}
     run["config"] = {**run["config"], "settings": asdict(settings), "description": KIND_DQN.describe(settings, None)}
-    return check_result(run, "kind.json")
+    return check_result(derive_run_id(run), "kind.json")

@@ -17,6 +17,7 @@ from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.run_ids import run_id
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
 """Schedule of the synthetic runs: 4,000 steps, ε at its floor on the last one."""
@@ -53,7 +54,7 @@ def hand_made_result(
     count = len(next((v for k, v in last.items() if k != "step"), []))
     document = {
         "schema": 1,
-        "run_id": f"{env}__{method}-{''.join(c if c.isascii() and c.isalnum() else '_' for c in label)}__s{seed}",
+        "run_id": "(derived below)",
         "env": env,
         "method": method,
         "method_label": label,
@@ -63,18 +64,36 @@ def hand_made_result(
             "settings": {**(settings or {}), **SCHEMA_1_SHAPING.get(method, {})},
             "env_kwargs": dict(env_kwargs or {}),
             "fixed": dict(DEFAULT_POLICIES[env]),
+            "label": label,
         },
         "train": {"episode_end_step": list(train["episode_end_step"]), **filled(train, episodes)},
         "eval": [{"step": e["step"], **filled(e, count)} for e in evaluations],
     }
-    return record(document)
+    return RunResult.from_checked(as_schema_3(document))
+
+
+def as_schema_3(document: dict, path: str = "synthetic.json") -> dict:
+    """``document`` (any schema) checked as the suite reads it, then under the run id its checked
+    config gives: a schema-3 document a file may hold (an upgrade adds to the config the id was
+    made of, so a schema-1 document's id is not the one its upgrade gives)."""
+    return check_result(derive_run_id(check_result(derive_run_id(document), path)), path)
+
+
+def derive_run_id(document: dict) -> dict:
+    """``document`` (changed in place) with the run id its config gives, as the trainer names a
+    run (:func:`~empathy_zoo.run_ids.run_id`; the result-file checker recomputes it)."""
+    config = document["config"]
+    variant = config.get("variant") or document.get("variant") or document["env"]
+    document["run_id"] = run_id(variant, document["method"], config, document["seed"])
+    return document
 
 
 def edited(run: RunResult, change: Callable[[dict], object]) -> RunResult:
-    """``run`` with ``change`` made to its document (in place), read again through the checker."""
+    """``run`` with ``change`` made to its document (in place), read again through the checker;
+    unless ``change`` sets the run id, the id is the one the changed config gives."""
     document = run.to_document()
     change(document)
-    return record(document)
+    return record(derive_run_id(document) if document["run_id"] == run.run_id else document)
 
 
 def with_training(run: RunResult, **columns: Sequence[float]) -> RunResult:
@@ -107,18 +126,18 @@ def synthetic_document(env: str, method: str, beta: float, seed: int, fixed: dic
     gets DQN's document with its own method, reward record and description, as it records them."""
     own = METHODS[method].reward if method in METHODS else None
     if own is None or method in SCHEMA_1_SHAPING:
-        return check_result(synthetic_schema_1(env, method, beta, seed, fixed, **means), "synthetic.json")
+        return as_schema_3(synthetic_schema_1(env, method, beta, seed, fixed, **means))
     document = check_result(synthetic_schema_1(env, "dqn", beta, seed, fixed, **means), "synthetic.json")
     registered = METHODS[method]
     reward = registered.make_reward({})
     settings = registered.make_settings(dict(document["config"]["settings"]))
-    document.update(method=method, method_label=f"{method} {beta}", run_id=f"{env}__{method}-{beta}__s{seed}")
+    document.update(method=method, method_label=f"{method} {beta}")
     document["config"] = {
         **document["config"],
         "reward": {"name": reward.name, **asdict(reward)},
         "description": registered.describe(settings, reward),
     }
-    return check_result(document, "synthetic.json")
+    return as_schema_3(document)
 
 
 MAX_CYCLES = 500
@@ -167,20 +186,22 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
         else:
             train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
     settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS)) | SCHEMA_1_SHAPING.get(method, {})
-    return {
-        "schema": 1,
-        "run_id": f"{env}__{method}-{beta}__s{seed}",
-        "env": env,
-        "method": method,
-        "method_label": f"{method} {beta}",
-        "seed": seed,
-        "steps": 4000,
-        "config": {
-            "settings": settings,
-            "variant": env,
-            "env_kwargs": {},
-            "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
-        },
-        "train": train,
-        "eval": [{"step": 4000, **{m: greedy_episodes(means.get(m, 0.0) + 0.01 * seed, rng, m) for m in METRIC_NAMES}}],
-    }
+    return derive_run_id(
+        {
+            "schema": 1,
+            "run_id": "(derived below)",
+            "env": env,
+            "method": method,
+            "method_label": f"{method} {beta}",
+            "seed": seed,
+            "steps": 4000,
+            "config": {
+                "settings": settings,
+                "variant": env,
+                "env_kwargs": {},
+                "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
+            },
+            "train": train,
+            "eval": [{"step": 4000, **{m: greedy_episodes(means.get(m, 0.0) + 0.01 * seed, rng, m) for m in METRIC_NAMES}}],
+        }
+    )

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import record, synthetic_schema_1
+from helpers_results import derive_run_id, record, synthetic_schema_1
 
 import leaderboard.report as report
 from empathy_zoo.agent_file import RESULT_FIELD
@@ -57,7 +57,7 @@ def write_results(directory: Path, env: str = "coexistence_v0") -> Path:
             document = synthetic_schema_1("coexistence_v0", method, 0.5, seed, survival=0.9, harms=0.1)
             if env != "coexistence_v0":
                 document["env"] = document["config"]["variant"] = env
-                document["run_id"] = document["run_id"].replace("coexistence_v0", env)
+                derive_run_id(document)
             (directory / "runs" / f"{document['run_id']}.json").write_text(json.dumps(document))
     return directory
 
@@ -233,7 +233,7 @@ def reference_runs(**env_kwargs: int) -> list[RunResult]:
     for seed in range(2):
         document = synthetic_schema_1("coexistence_v0", "empathic_dqn", 0.5, seed, harms=0.1, survival=400)
         document["config"]["env_kwargs"] = env_kwargs
-        runs.append(record(document))
+        runs.append(record(derive_run_id(document)))
     return runs
 
 
@@ -270,7 +270,7 @@ def test_the_leaderboard_says_why_a_run_has_no_reference_curve(tmp_path, capsys)
 def synthetic_schema_1_of(run: RunResult) -> dict:
     document = synthetic_schema_1("coexistence_v0", "empathic_dqn", 0.5, run.seed, harms=0.1, survival=400)
     document["config"]["env_kwargs"] = dict(run.config.env_kwargs)
-    return document
+    return derive_run_id(document)
 
 
 # ---------------------------------------------------------------------------- paths

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import pytest
-from helpers_results import record, synthetic_document, synthetic_result
+from helpers_results import derive_run_id, record, synthetic_document, synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.experiment.records import RunResult
@@ -52,7 +52,7 @@ def condition(variant: str, env_kwargs: dict[str, Any], low_beta_harms: float) -
         made.append(synthetic_document("coexistence_v0", "dqn_harm_penalty", 1.0, seed, harms=0.2, survival=470.0))
         for run in made:
             run["config"] = {**run["config"], "variant": variant, "env_kwargs": dict(env_kwargs)}
-            run["run_id"] = f"{variant}__{run['run_id']}"
+            derive_run_id(run)
         runs += [record(run) for run in made]
     return runs
 

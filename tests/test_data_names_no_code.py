@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import torch
 from helpers_heldout import dqn_and_empathic_runs
-from helpers_results import record
+from helpers_results import derive_run_id, record
 
 from empathy_zoo import coexistence_v0
 from empathy_zoo.cli import main
@@ -29,6 +29,7 @@ from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.greedy_episode import agent_policies
 from empathy_zoo.policies import POLICIES, make_policy, recorded_entry
+from empathy_zoo.run_ids import run_id
 from empathy_zoo.scenarios import parse_scenario_set
 from empathy_zoo.scenarios import trained_with as trained_with_scenario
 from empathy_zoo.training import RunnerOptions, train_runs
@@ -59,23 +60,35 @@ def exit_code(argv: list[str]) -> int:
 def forged_copy(trained: Path, target: Path, label: str = FORGED) -> Path:
     """A copy of ``trained`` whose runs trained beside ``label`` as the cat's policy: each result
     file records it, and so does its agent file's header (one run's: the reader compares them),
-    the result file recording that agent file's SHA-256."""
+    each under the run id its changed config gives (:func:`renamed`), the result file recording
+    that agent file's SHA-256."""
     runs = target / "runs"
     runs.mkdir(parents=True)
     for path in (trained / "runs").iterdir():
-        if path.name.endswith(".agent.pt"):
-            document = torch.load(path, weights_only=True)
-            document["header"]["fixed"] = {"cat_0": label}
-            torch.save(document, runs / path.name)
-        elif path.is_file() and not path.name.endswith(".json"):
+        if path.is_file() and not path.name.endswith((".json", ".agent.pt")):
             (runs / path.name).write_bytes(path.read_bytes())
     for path in (trained / "runs").glob("*.json"):
         result = json.loads(path.read_text())
+        kept = result.get("agent")
         result["config"]["fixed"] = {"cat_0": label}
-        if result.get("agent"):
+        renamed(result)
+        if kept:
+            document = torch.load(trained / "runs" / kept["file"], weights_only=True)
+            document["header"]["fixed"] = {"cat_0": label}
+            document["header"]["run_id"] = result["run_id"]
+            torch.save(document, runs / result["agent"]["file"])
             result["agent"]["sha256"] = hashlib.sha256((runs / result["agent"]["file"]).read_bytes()).hexdigest()
-        (runs / path.name).write_text(json.dumps(result))
+        (runs / f"{result['run_id']}.json").write_text(json.dumps(result))
     return target
+
+
+def renamed(result: dict) -> dict:
+    """``result`` (changed in place) under the run id its config gives, its agent file (if it
+    kept one) named after that id."""
+    derive_run_id(result)
+    if result.get("agent"):
+        result["agent"] = {**result["agent"], "file": f"{result['run_id']}.agent.pt"}
+    return result
 
 
 def forged_agent_file(trained: Path, target: Path, label: str = FORGED) -> Path:
@@ -83,6 +96,9 @@ def forged_agent_file(trained: Path, target: Path, label: str = FORGED) -> Path:
     source = next((trained / "runs").glob("*.agent.pt"))
     document = torch.load(source, weights_only=True)
     document["header"]["fixed"] = {"cat_0": label}
+    header = document["header"]  # (under the run id its changed fields give, as the trainer writes it)
+    config = {key: value for key, value in header.items() if key != "run_id"}
+    header["run_id"] = run_id(header.get("variant") or header["env"], header["method"], config, header["seed"])
     path = target / "forged.agent.pt"
     torch.save(document, path)
     return path
@@ -147,7 +163,7 @@ def test_the_trained_with_scenario_resolves_only_registered_partners(trained, tm
         trained_with_scenario(read_result(path))
     document = json.loads(path.read_text())
     document["config"]["fixed"] = {"cat_0": "helpers_policies:AlwaysLeft"}
-    scenario = trained_with_scenario(record(document, str(path)), {"helpers_policies:AlwaysLeft"})
+    scenario = trained_with_scenario(record(renamed(document), str(path)), {"helpers_policies:AlwaysLeft"})
     assert scenario.variant.fixed_policies()["cat_0"] == "helpers_policies:AlwaysLeft"
 
 

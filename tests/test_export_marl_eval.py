@@ -12,7 +12,7 @@ import re
 from pathlib import Path
 
 import pytest
-from helpers_results import record, synthetic_document
+from helpers_results import derive_run_id, record, synthetic_document
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -57,7 +57,6 @@ def run_document(
         result["config"] = {**result["config"], "variant": variant}
     if label is not None:
         result["method_label"] = label
-    result["run_id"] = f"{variant or ENV}__{method}-{beta}-{steps}__s{seed}"
     result["eval"] = [
         {
             "step": step,
@@ -68,7 +67,7 @@ def run_document(
         }
         for i, step in enumerate([*(s for s in EVAL_STEPS if s < steps), steps])  # (every 2,000 steps and the last, as trained)
     ]
-    return result
+    return derive_run_id(result)
 
 
 def write_dir(directory: Path, runs: list[dict]) -> Path:
@@ -159,7 +158,7 @@ def test_commas_are_dropped_from_algorithm_names_and_names_one_to_marl_eval_are_
 def test_a_run_without_greedy_evaluation_is_refused_naming_it() -> None:
     document = run_document("empathic_dqn", 0.5, 0)
     del document["config"]["eval_interval"]  # (a file made before it was recorded: any evaluations, or none)
-    empty = record({**document, "eval": []})
+    empty = record(derive_run_id({**document, "eval": []}))
     with pytest.raises(ValueError, match=re.escape(f"run {empty.run_id} has no greedy evaluation")):
         marl_eval_layout([empty])
 
@@ -180,7 +179,9 @@ def test_several_directories_keep_their_rows_apart_as_the_leaderboard_does(
     argv = ["export", str(mine), str(theirs), "--format", "marl-eval", "--out", str(out)]
     assert main(argv) == 0  # two budgets: every label ends with its budget (commas dropped)
     assert list(json.loads(out.read_text())[ENV][ENV]) == ["empathic_dqn 0.5 · 3000 steps", "empathic_dqn 0.5 · 4000 steps"]
-    other_experiment = {**run_document("empathic_dqn", 0.5, 0), "run_id": f"{ENV}__empathic_dqn-0.5-other__s0"}
+    other_experiment = run_document("empathic_dqn", 0.5, 0)  # (another learning rate: another experiment, one label)
+    other_experiment["config"]["settings"] = {**other_experiment["config"]["settings"], "learning_rate": 0.0005}
+    derive_run_id(other_experiment)
     same_budget = write_dir(tmp_path / "same", [other_experiment])
     out.unlink()
     assert main(["export", str(mine), str(same_budget), "--format", "marl-eval", "--out", str(out)]) == 2

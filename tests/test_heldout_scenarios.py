@@ -5,7 +5,7 @@ table and key; a run's own partners read back from its result file; a scenario l
 from __future__ import annotations
 
 import pytest
-from helpers_results import record, synthetic_document
+from helpers_results import derive_run_id, record, synthetic_document
 
 from empathy_zoo.environments import ENVIRONMENT_TABLE
 from empathy_zoo.experiment.values import SweepConfigError
@@ -186,7 +186,7 @@ def test_a_malformed_label_is_refused(label) -> None:
 def test_the_runs_own_partners_come_from_its_result_file() -> None:
     result = synthetic_document("sharing_v0", "dqn", 1.0, 0, fixed={"human_0": "patrol(period=3)"})
     result["config"]["env_kwargs"] = {"max_cycles": 50}
-    own = trained_with(record(result))
+    own = trained_with(record(derive_run_id(result)))
     assert own.name == TRAINED_WITH
     assert own.variant.fixed_policies() == {"human_0": {"policy": "patrol", "period": 3}}
     assert own.for_run(result["config"]["env_kwargs"]).kwargs == {"max_cycles": 50}

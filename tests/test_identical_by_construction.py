@@ -138,7 +138,7 @@ def test_reproduce_dry_run_plans_and_writes_nothing(tmp_path, capsys) -> None:
 
 
 def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_path) -> None:
-    from helpers_results import edited, record, synthetic_document, synthetic_result
+    from helpers_results import derive_run_id, edited, record, synthetic_document, synthetic_result
 
     from empathy_zoo.experiment.records import RunResult
     from leaderboard.report import write_leaderboard
@@ -148,8 +148,7 @@ def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_pa
         made = [synthetic_document("coexistence_v0", method, 1.0, seed, survival=survival) for seed in seeds]
         for run in made:
             run["method_label"] = label
-            run["run_id"] = f"coexistence_v0__{label.replace(' ', '_')}__s{run['seed']}"
-        return [record(run) for run in made]
+        return [record(derive_run_id(run)) for run in made]
 
     dqn, considerate = row("dqn", "DQN"), row("dqn_considerate", "Be Considerate")
     assert same_runs_row_names(dqn + considerate) == {("coexistence_v0", "Be Considerate"): "Be Considerate" + SAME_RUNS_MARK}

@@ -7,7 +7,7 @@ import json
 import math
 
 import pytest
-from helpers_results import hand_made_result
+from helpers_results import derive_run_id, hand_made_result
 
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import (
@@ -84,7 +84,8 @@ def test_the_leaderboard_shows_the_tables(tmp_path) -> None:
         result = json.loads(path.read_text())
         if result["method_label"] == "DQN":
             result["method"], result["config"]["settings"] = "dqn", {"selfishness": 1.0}
-            path.write_text(json.dumps(result))
+            path.unlink()  # (the run's id, and so its file's name, is the one its changed config gives)
+            path.with_name(f"{derive_run_id(result)['run_id']}.json").write_text(json.dumps(result))
     markdown = write_leaderboard(tmp_path, command="c")["markdown"].read_text(encoding="utf-8")
     assert markdown.count("### P(improves on DQN)") == 4 and "· IQM" in markdown
     # 3 seeds against 3: every cell is marked as too few seeds for a verdict, and the legend says so

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers_results import hand_made_result, record, synthetic_document, synthetic_result
+from helpers_results import derive_run_id, hand_made_result, record, synthetic_document, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import bootstrap_mean_ci, mean_ci, student_t_interval
@@ -185,5 +185,5 @@ def test_survival_stays_below_the_longest_episode() -> None:
     assert high == 500.0 and 0.0 <= low < 200.0
     shorter = synthetic_document("sharing_v0", "dqn", 1.0, 0)
     shorter["config"]["env_kwargs"] = {"max_cycles": 40}
-    runs = [synthetic_result("coexistence_v0", "dqn", 1.0, 0), record(shorter)]
+    runs = [synthetic_result("coexistence_v0", "dqn", 1.0, 0), record(derive_run_id(shorter))]
     assert longest_episode(runs) == 500 and longest_episode(runs[1:]) == 40  # the environment's default where unset

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from helpers_results import record
+from helpers_results import derive_run_id, record
 
 from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.metrics import METRIC_NAMES
@@ -59,22 +59,24 @@ def make_document(
     evaluations = []
     if eval_survival is not None:
         evaluations.append({"step": steps, **{metric: column(eval_survival, metric) for metric in METRIC_NAMES}})
-    return {
-        "schema": 1,
-        "run_id": f"{env}__{''.join(c if c.isascii() and c.isalnum() else '_' for c in label)}__s{seed}",
-        "env": env,
-        "method": method,
-        "method_label": label,
-        "seed": seed,
-        "steps": steps,
-        "config": {"settings": {}, "env_kwargs": {}, "fixed": {}},
-        "train": train,
-        "eval": evaluations,
-        "wall_time_s": 0.0,
-        "version": "0.1.0",
-        "commit": None,
-        "created": "2026-01-01T00:00:00+00:00",
-    }
+    return derive_run_id(
+        {
+            "schema": 1,
+            "run_id": "(derived below)",
+            "env": env,
+            "method": method,
+            "method_label": label,
+            "seed": seed,
+            "steps": steps,
+            "config": {"settings": {}, "env_kwargs": {}, "fixed": {}},
+            "train": train,
+            "eval": evaluations,
+            "wall_time_s": 0.0,
+            "version": "0.1.0",
+            "commit": None,
+            "created": "2026-01-01T00:00:00+00:00",
+        }
+    )
 
 
 def make_run(env: str, label: str, seed: int, survival: list[float], **options: Any) -> RunResult:
@@ -285,10 +287,11 @@ def write_runs(directory: Path, runs: list[dict[str, Any]]) -> None:
 
 
 def test_load_results_reads_runs_subdirectory_and_ignores_temp_files(tmp_path: Path) -> None:
-    write_runs(tmp_path / "runs", [make_document("coexistence_v0", "DQN", s, [1.0]) for s in (1, 0)])
-    (tmp_path / "runs" / ".coexistence_v0__DQN__s2.json.abc.tmp").write_text("{half", encoding="utf-8")
+    documents = [make_document("coexistence_v0", "DQN", s, [1.0]) for s in (1, 0, 2)]
+    write_runs(tmp_path / "runs", documents[:2])
+    (tmp_path / "runs" / f".{documents[2]['run_id']}.json.abc.tmp").write_text("{half", encoding="utf-8")
     (tmp_path / "runs" / ".hidden.json").write_text("{half", encoding="utf-8")
-    assert [p.name for p in result_files(tmp_path)] == ["coexistence_v0__DQN__s0.json", "coexistence_v0__DQN__s1.json"]
+    assert [p.name for p in result_files(tmp_path)] == [f"{documents[1]['run_id']}.json", f"{documents[0]['run_id']}.json"]
     assert [r.seed for r in load_results(tmp_path)] == [0, 1]
 
 
@@ -328,7 +331,8 @@ def test_load_results_rejects_ragged_columns_and_duplicate_runs(tmp_path: Path) 
     (tmp_path / "b" / "copy.json").write_text(json.dumps(duplicate))  # one run, two files
     with pytest.raises(ValueError, match="same run"):
         load_results(tmp_path / "b")
-    write_runs(tmp_path / "c", [duplicate, {**duplicate, "run_id": "coexistence_v0__copy__s0"}])  # another experiment, one label
+    other = {**duplicate, "config": {**duplicate["config"], "env_kwargs": {"max_cycles": 400}}}  # another experiment, one label
+    write_runs(tmp_path / "c", [duplicate, derive_run_id(other)])
     with pytest.raises(ValueError, match=r"same label 'DQN'.*two experiments"):
         load_results(tmp_path / "c")
 

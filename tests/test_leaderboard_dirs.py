@@ -9,7 +9,7 @@ import io
 from pathlib import Path
 
 import pytest
-from helpers_results import EVAL_EPISODES, record, synthetic_document
+from helpers_results import EVAL_EPISODES, derive_run_id, record, synthetic_document
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -31,15 +31,17 @@ EMPATHIC = "empathic_dqn 0.5"
 PENALTY = "dqn_harm_penalty 1.0"
 
 
-def run(method: str, beta: float, seed: int, steps: int = 4000, experiment: str = "", **means: float) -> dict:
-    """A synthetic result of ``steps`` training steps; ``experiment`` tells two experiments of one
-    label apart (their run ids differ by more than the seed)."""
+def run(method: str, beta: float, seed: int, steps: int = 4000, learning_rate: float | None = None, **means: float) -> dict:
+    """A synthetic result of ``steps`` training steps; ``learning_rate`` (in place of the default)
+    tells two experiments of one label apart (their configs, so their run ids, differ by more than
+    the seed)."""
     result = synthetic_document(ENV, method, beta, seed, **means)
     result["steps"] = steps
     result["config"] = {**result["config"], "steps": steps, "eval_interval": 2000, "eval_episodes": EVAL_EPISODES}
+    if learning_rate is not None:
+        result["config"]["settings"] = {**result["config"]["settings"], "learning_rate": learning_rate}
     result["eval"] = [{**result["eval"][-1], "step": step} for step in range(2000, steps + 1, 2000)]  # (as trained: every 2,000)
-    result["run_id"] = f"{ENV}__{method}-{beta}-{steps}{experiment}__s{seed}"
-    return result
+    return derive_run_id(result)
 
 
 def write_dir(directory: Path, runs: list[dict]) -> Path:
@@ -48,8 +50,8 @@ def write_dir(directory: Path, runs: list[dict]) -> Path:
     return directory
 
 
-def dqn(steps: int = 4000, harms: float = 0.1, experiment: str = "") -> list[dict]:
-    return [run("empathic_dqn", 1.0, seed, steps, experiment, harms=harms, survival=400.0) for seed in SEEDS]
+def dqn(steps: int = 4000, harms: float = 0.1, learning_rate: float | None = None) -> list[dict]:
+    return [run("empathic_dqn", 1.0, seed, steps, learning_rate, harms=harms, survival=400.0) for seed in SEEDS]
 
 
 def empathic(steps: int = 4000, harms: float = 0.5) -> list[dict]:
@@ -131,7 +133,7 @@ def test_evaluation_settings_join_the_budget_where_they_differ(tmp_path: Path) -
             {key: [values[0]] * 10 if key != "step" else values for key, values in entry.items()} for entry in result["eval"]
         ]
         assert all(len(entry["survival"]) == 10 for entry in result["eval"])  # (ten episodes evaluated)
-        result["run_id"] = result["run_id"].replace("4000", "4000-ten")
+        derive_run_id(result)
     read = load_results_dirs([write_dir(tmp_path / "a", dqn()), write_dir(tmp_path / "b", other)])
     assert sorted({result.method_label for result in read.results}) == [
         f"{DQN} · 4,000 steps, eval 2,000 × 10",
@@ -153,7 +155,7 @@ def test_a_row_without_dqn_of_its_budget_is_named_not_compared(tmp_path: Path) -
 
 def test_a_label_clash_between_directories_is_refused_naming_both_and_the_option(tmp_path: Path) -> None:
     first = write_dir(tmp_path / "first", dqn() + empathic())
-    second = write_dir(tmp_path / "second", dqn(experiment="-other-lr", harms=0.9))
+    second = write_dir(tmp_path / "second", dqn(learning_rate=0.0005, harms=0.9))
     with pytest.raises(ValueError) as refused:
         write_leaderboard([first, second], tmp_path / "out")
     message = str(refused.value)
@@ -164,7 +166,7 @@ def test_a_label_clash_between_directories_is_refused_naming_both_and_the_option
 
 def test_a_label_prefix_resolves_the_clash_and_each_row_is_compared_with_both_dqn_rows(tmp_path: Path) -> None:
     first = write_dir(tmp_path / "first", dqn() + empathic())
-    second = write_dir(tmp_path / "second", dqn(experiment="-other-lr", harms=0.9))
+    second = write_dir(tmp_path / "second", dqn(learning_rate=0.0005, harms=0.9))
     paths = write_leaderboard([first, second], tmp_path / "out", labels={second: "mine:"})
     markdown = paths["markdown"].read_text(encoding="utf-8")
     rows = [row.split(" | ")[0] for row in table_lines(markdown, "Final greedy evaluation")]
@@ -236,7 +238,7 @@ def test_budgets_in_labels_sort_by_value() -> None:
 
 def test_the_command_line_reads_two_directories(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     first = write_dir(tmp_path / "first", dqn() + empathic())
-    second = write_dir(tmp_path / "second", dqn(experiment="-other-lr", harms=0.9))
+    second = write_dir(tmp_path / "second", dqn(learning_rate=0.0005, harms=0.9))
     out = tmp_path / "out"
     assert main(["leaderboard", str(first), str(second)]) == 2
     assert "--out OUT" in capsys.readouterr().err

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from helpers_results import derive_run_id
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAMES
 from empathy_zoo.provenance import package_version
@@ -69,10 +70,9 @@ def write_synthetic_results(
                         name: (np.round(value) if name in INTEGER_METRICS else value).tolist() for name, value in clipped.items()
                     }
 
-                run_id = f"{env}__{method}__s{seed}"
                 result: dict[str, Any] = {
                     "schema": 1,
-                    "run_id": run_id,
+                    "run_id": "(derived below)",
                     "env": env,
                     "method": method,
                     "method_label": label,
@@ -90,7 +90,7 @@ def write_synthetic_results(
                     "commit": None,
                     "created": "2026-01-01T00:00:00Z",
                 }
-                path = directory / f"{run_id}.json"
+                path = directory / f"{derive_run_id(result)['run_id']}.json"
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_text(json.dumps(result), encoding="utf-8")
                 paths.append(path)
@@ -256,8 +256,8 @@ def test_a_failing_write_leaves_the_old_files_intact(tmp_path: Path, monkeypatch
 def test_each_environment_s_tables_show_its_own_metrics_a_variant_its_environment_s(tmp_path: Path) -> None:
     paths = write_synthetic_results(tmp_path / "sweep" / "runs")
     variant = json.loads(paths[-1].read_text(encoding="utf-8"))  # a sharing_v0 run, as a variant
-    run_id = f"sharing_centre__x__s{variant['seed']}"
-    variant.update(variant="sharing_centre", run_id=run_id, method_label="Centre")
+    variant.update(variant="sharing_centre", method_label="Centre")
+    run_id = derive_run_id(variant)["run_id"]
     (tmp_path / "sweep" / "runs" / f"{run_id}.json").write_text(json.dumps(variant), encoding="utf-8")
     markdown = write_leaderboard(tmp_path / "sweep", command="c")["markdown"].read_text(encoding="utf-8")
     headers = {}

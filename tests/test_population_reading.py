@@ -62,19 +62,28 @@ def test_a_mark_that_does_not_survive_holm_does_not_carry_over(monkeypatch) -> N
     assert carries == [False] * 10
 
 
+def _copy_runs(pattern: str, source: Path, runs: Path) -> None:
+    runs.mkdir(parents=True, exist_ok=True)
+    for path in source.glob(pattern):
+        shutil.copy(path, runs / path.name)
+
+
 def test_the_command_reads_checked_evaluations_of_the_test_split(tmp_path: Path, capsys) -> None:
-    quick = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / "runs"
-    for group in ("population", "default"):
-        runs = tmp_path / group / "runs"
-        runs.mkdir(parents=True)
-        for path in quick.glob("coexistence_v0__empathic_dqn-ceb94979__s*"):  # (β = 0.5, 3 seeds)
-            shutil.copy(path, runs / path.name)
+    shipped = Path(__file__).resolve().parents[1] / "docs" / "results"
+    population, default = tmp_path / "population", tmp_path / "default"
+    for seed in range(3):  # (Empathic DQN at β = 0.5, 3 seeds each)
+        _copy_runs(
+            f"coexistence_v0_population__empathic_dqn-6ba763c0__s{seed}.*", shipped / "populations" / "runs", population / "runs"
+        )
+    _copy_runs("coexistence_v0__empathic_dqn-ceb94979__s*", shipped / "quick" / "runs", default / "runs")
     argv = ["--scenarios", "coexistence_v0_test", "--episodes", "2", "--progress", "plain"]
-    assert main(["evaluate", str(tmp_path / "population"), *argv]) == 0
-    assert main(["analyse", "population-reading", str(tmp_path / "population"), str(tmp_path / "default")]) == 2
+    assert main(["evaluate", str(population), *argv]) == 0
+    assert main(["analyse", "population-reading", str(population), str(default)]) == 2
     assert "no environment and method has runs of both groups" in capsys.readouterr().err
-    shutil.copytree(tmp_path / "population" / "evaluations", tmp_path / "default" / "evaluations")
-    assert main(["analyse", "population-reading", str(tmp_path / "population"), str(tmp_path / "default")]) == 0
+    assert main(["evaluate", str(default), *argv]) == 0
+    assert main(["analyse", "population-reading", str(population), str(default)]) == 0
     out = capsys.readouterr().out
-    assert "| `coexistence_v0` | `empathic_dqn` | `test_population` | harms | 3 (3) |" in out and "| undecidable | no |" in out
+    assert "| `coexistence_v0` | `empathic_dqn` | `test_population` | harms | 3 (3) |" in out
     assert "`cat_keep_away`" in out and "`cat_stay`" in out
+    assert main(["analyse", "population-reading", str(default), str(population)]) == 2  # (the groups swapped)
+    assert f"{default} holds no population-trained run" in capsys.readouterr().err

@@ -27,6 +27,7 @@ from test_checkpoint_forgeries import _first, _set, assert_refused, checkpointed
 from empathy_zoo.agent_file import agent_document
 from empathy_zoo.cli import main
 from empathy_zoo.markdown_escape import markdown_text
+from empathy_zoo.run_ids import run_id
 from leaderboard.heldout_verdicts import Reading, verdicts_markdown
 from leaderboard.tuning_effect import tuning_effect, tuning_effect_table
 
@@ -170,7 +171,10 @@ SHIPPED_AGENT = Path(__file__).resolve().parents[1] / "docs/results/quick/runs"
 def test_watch_refuses_an_agent_whose_settings_are_out_of_range(tmp_path, capsys, settings) -> None:
     source = sorted(SHIPPED_AGENT.glob("*empathic_dqn*.agent.pt"))[0]
     document = torch.load(source, weights_only=True)
-    document["header"]["settings"] = {**document["header"]["settings"], **settings}
+    header = document["header"]
+    header["settings"] = {**header["settings"], **settings}
+    config = {key: value for key, value in header.items() if key != "run_id"}
+    header["run_id"] = run_id(header["variant"], header["method"], config, header["seed"])  # (a forgery consistent with itself)
     forged_file = tmp_path / source.name
     torch.save(document, forged_file)
     capsys.readouterr()

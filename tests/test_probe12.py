@@ -151,5 +151,5 @@ def test_population_reading_refuses_two_definitions_of_one_test_split(tmp_path) 
                 if scenario["name"] == "test_population":
                     scenario.get("fixed", scenario.get("scenario", {}).get("fixed", {}))["cat_0"] = "stay"
         path.write_text(json.dumps(document))
-    with pytest.raises(ValueError, match="different definitions of scenario set 'coexistence_v0_test'"):
+    with pytest.raises(ValueError, match="another definition of scenario set 'coexistence_v0_test' than the shipped one"):
         read_scores(population, [default])

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -111,9 +112,10 @@ def test_the_closed_form_counts_exactly_what_reading_every_step_counts(counted_s
 @pytest.mark.parametrize("field, value", [("start", float("nan")), ("end", 1.5), ("warmup", float("inf"))])
 def test_a_schedule_outside_its_range_is_refused_naming_the_run(field, value) -> None:
     schedule = {"start": 1.0, "end": 0.01, "warmup": 100, "decay_steps": 3900, field: value}
-    where = rf"coexistence_v0__empathic_dqn-0.5__s0: field config\.description\.exploration\.{field}"
+    run = _window_run(3600, 4000, schedule)
+    where = rf"{re.escape(run.run_id)}: field config\.description\.exploration\.{field}"
     with pytest.raises(ValueError, match=where):
-        training_window_epsilons(_window_run(3600, 4000, schedule))
+        training_window_epsilons(run)
 
 
 def _paper_runs(forged: int) -> list[dict]:

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from helpers_results import synthetic_schema_1
+from helpers_results import derive_run_id, synthetic_schema_1
 
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation, evaluation_mismatch, read_evaluation
 from empathy_zoo.evaluation_record import EvaluationResult
@@ -225,6 +225,8 @@ def test_a_plug_in_s_settings_are_plain_data(tmp_path: Path) -> None:
     document = genuine(REFERENCE_RUN)
     document["method"] = document["config"]["method"] = "my_plugins.methods:MINE"
     document["config"]["description"]["family"] = "my_plugins.methods:MINE"
+    derive_run_id(document)  # (the plug-in's run: the id its config gives, its agent file named so)
+    document["agent"]["file"] = f"{document['run_id']}.agent.pt"
     assert read_result(written(document, tmp_path)).method == "my_plugins.methods:MINE"  # (never imported)
     document["config"]["settings"]["width"] = float("inf")
     refused(written(document, tmp_path), "config.settings.width")

@@ -47,7 +47,7 @@ def test_the_trained_world_names_the_run_and_field_of_bad_partner_arguments(fixe
     import json
     from pathlib import Path
 
-    from helpers_results import record
+    from helpers_results import derive_run_id, record
 
     from leaderboard.episodes import trained_world
 
@@ -55,6 +55,9 @@ def test_the_trained_world_names_the_run_and_field_of_bad_partner_arguments(fixe
     path = next(quick.glob("coexistence_v0__*__s0.json"))
     document = json.loads(path.read_text())
     document["config"]["fixed"] = fixed  # (labels the result-file checker reads as text: they resolve here)
+    derive_run_id(document)  # (the run of that config: its id, and its agent file named after it)
+    if document.get("agent"):
+        document["agent"]["file"] = f"{document['run_id']}.agent.pt"
     run = record(document, str(path))
     with pytest.raises(ValueError, match=f"run {run.run_id}: {says}"):
         trained_world(run)

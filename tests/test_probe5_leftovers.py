@@ -18,6 +18,7 @@ from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation
 from empathy_zoo.fixed_agents import policy_seed
 from empathy_zoo.partner_policies import Population
 from empathy_zoo.policies import batched, make_policy
+from empathy_zoo.run_ids import run_id
 from empathy_zoo.vector import VectorEnv
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "results"
@@ -230,6 +231,7 @@ def test_watch_cuts_an_agent_files_long_episode_at_its_cap_and_says_so(tmp_path:
     header: dict[str, Any] = {"run_id": "coexistence_v0__dqn-long__s0", "method": "empathic_dqn", "seed": 0}
     header |= {"settings": {"hidden_size": 8}, "env": "coexistence_v0", "fixed": {"cat_0": "stay"}}
     header |= {"env_kwargs": {"max_cycles": MAX_CYCLES}}  # (the most a header may say: 10⁹)
+    header["run_id"] = run_id("coexistence_v0", "empathic_dqn", {k: v for k, v in header.items() if k != "run_id"}, 0)
     written = write_agent_file(learner, 0, tmp_path / "long.agent.pt", header)
     assert written is not None
     name = written[0]

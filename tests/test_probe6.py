@@ -425,6 +425,18 @@ def _forged_agent(tmp_path: Path, change: Any, beside: bool = False) -> Path:
     return path
 
 
+def _consistent(change: Any) -> Any:
+    """``change`` of a header, then the run id the changed header gives (a forgery consistent with itself)."""
+    from empathy_zoo.run_ids import run_id
+
+    def changed(header: dict) -> None:
+        change(header)
+        config = {key: value for key, value in header.items() if key != "run_id"}
+        header["run_id"] = run_id(header["variant"], header["method"], config, header["seed"])
+
+    return changed
+
+
 AGENT_FORGERIES = {
     "unknown header key": (lambda h: h.__setitem__("zzz", 1), "header (the key 'zzz')"),
     "hidden_size not its networks'": (lambda h: h["settings"].__setitem__("hidden_size", 64), "header.settings.hidden_size"),
@@ -462,10 +474,10 @@ def test_a_plug_in_method_is_kept_as_text_and_an_unregistered_name_is_refused(tm
     from empathy_zoo.cli import main
     from empathy_zoo.experiment.agent_method import check_agent_method
 
-    plug_in = _forged_agent(tmp_path, lambda h: h.__setitem__("method", "probe6_never_imported.module:Method"))
+    plug_in = _forged_agent(tmp_path, _consistent(lambda h: h.__setitem__("method", "probe6_never_imported.module:Method")))
     agent = load_agent(plug_in)
     assert check_agent_method(agent) is agent and "probe6_never_imported" not in sys.modules
-    unregistered = _forged_agent(tmp_path, lambda h: h.__setitem__("method", "no_such_method"))
+    unregistered = _forged_agent(tmp_path, _consistent(lambda h: h.__setitem__("method", "no_such_method")))
     load_agent(unregistered)  # (the reader below the registry checks the name's shape only)
     assert main(["watch", str(unregistered)]) == 2
     err = capsys.readouterr().err
@@ -499,4 +511,5 @@ def test_an_agent_header_that_is_not_its_result_files_run_is_refused(tmp_path: P
         load_agent(path, json.loads(result.read_text())["agent"]["sha256"], result_file=result)
     assert main(["watch", str(result)]) == 2
     assert field in capsys.readouterr().err
-    load_agent(path)  # (alone, the header is a run's as it says)
+    with pytest.raises(AgentFileError, match=re.escape(f"{path}: field header.run_id: expected")):
+        load_agent(path)  # (alone, the header contradicts the run id it holds)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import record, synthetic_schema_1
+from helpers_results import derive_run_id, record, synthetic_schema_1
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_REFERENCE_SIZE, MAX_REFERENCE_WORK
@@ -29,7 +29,7 @@ def _document(seed: int, gamma: float = 0.99, beta: float = 0.5, **env_kwargs: i
     document = synthetic_schema_1("coexistence_v0", "empathic_dqn", beta, seed, harms=0.1, survival=400)
     document["config"]["settings"]["gamma"] = gamma
     document["config"]["env_kwargs"] = env_kwargs
-    return document
+    return derive_run_id(document)
 
 
 def _never(*args: object, **kwargs: object) -> None:

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from helpers_results import derive_run_id
 
 from empathy_zoo.cli import main
 
@@ -26,7 +27,8 @@ SHIPPED_TABLES = Path(__file__).resolve().parents[1] / "docs" / "results" / "sep
 
 def _forged_run(tmp_path: Path, run_id: str, change: Any) -> Path:
     """A copy of the quick run ``run_id`` (result and agent file) in ``tmp_path/runs`` whose result
-    ``config`` and agent header are both ``change``d, the agent's SHA-256 recorded anew."""
+    ``config`` and agent header are both ``change``d, under the run id the changed config gives
+    (the files named after it), the agent's SHA-256 recorded anew."""
     import torch
 
     runs = tmp_path / "runs"
@@ -35,11 +37,14 @@ def _forged_run(tmp_path: Path, run_id: str, change: Any) -> Path:
     agent = torch.load(QUICK / f"{run_id}.agent.pt", weights_only=True)
     change(result["config"])
     change(agent["header"])
-    agent_path = runs / f"{run_id}.agent.pt"
+    forged = derive_run_id(result)["run_id"]
+    agent["header"]["run_id"] = forged
+    result["agent"]["file"] = f"{forged}.agent.pt"
+    agent_path = runs / result["agent"]["file"]
     torch.save(agent, agent_path)
     result["agent"]["sha256"] = hashlib.sha256(agent_path.read_bytes()).hexdigest()
-    (runs / f"{run_id}.json").write_text(json.dumps(result))
-    return runs / f"{run_id}.json"
+    (runs / f"{forged}.json").write_text(json.dumps(result))
+    return runs / f"{forged}.json"
 
 
 SHARING = "sharing_v0__empathic_dqn-24777995__s0"
@@ -66,11 +71,11 @@ def test_a_partner_label_with_numbers_out_of_range_is_refused_in_one_line(label:
 
 
 def test_commands_refuse_a_forged_partner_label_without_a_traceback(tmp_path: Path, capsys) -> None:
-    _forged_run(tmp_path, SHARING, lambda config: config.__setitem__("fixed", {"human_0": "patrol(period=1e+300)"}))
+    forged = _forged_run(tmp_path, SHARING, lambda config: config.__setitem__("fixed", {"human_0": "patrol(period=1e+300)"}))
     assert main(["evaluate", str(tmp_path), "--episodes", "2", "--progress", "plain"]) == 2
     assert "period must be an int" in capsys.readouterr().err
     assert not (tmp_path / "evaluations").exists()
-    assert main(["watch", SHARING, "--dir", str(tmp_path), "--episodes", "1"]) == 2
+    assert main(["watch", forged.stem, "--dir", str(tmp_path), "--episodes", "1"]) == 2
     assert "period must be an int" in capsys.readouterr().err
 
 

@@ -27,6 +27,7 @@ from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.experiment.values import SweepConfigError
 from empathy_zoo.limits import MAX_SCENARIOS
 from empathy_zoo.result_file import ResultFileError
+from empathy_zoo.run_ids import run_id
 from empathy_zoo.scenarios import load_scenario_set
 from empathy_zoo.training.heldout import evaluate_results
 from leaderboard.evaluation_dirs import match_evaluations
@@ -298,11 +299,13 @@ def library_zip(members: dict[str, bytes]) -> bytes:
 def library_member(trained: Path) -> dict[str, Any]:
     """An :data:`LIBRARY_MEMBER` of a Stable-Baselines3 DQN agent, its header the trained run's."""
     _, agent = agent_file_of(trained, "empathic_dqn")
-    header = torch.load(agent, weights_only=True)["header"]
+    header = {**torch.load(agent, weights_only=True)["header"], "method": "sb3_dqn"}
+    config = {key: value for key, value in header.items() if key != "run_id"}
+    header["run_id"] = run_id(header["variant"], "sb3_dqn", config, header["seed"])  # (the id its header gives)
     return {
         "format": FORMAT,
         "version": VERSION,
-        "header": {**header, "method": "sb3_dqn"},
+        "header": header,
         "library": "stable_baselines3",
         "algorithm": "DQN",
         "policy": "MlpPolicy",

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import synthetic_document
+from helpers_results import derive_run_id, synthetic_document
 
 from empathy_zoo.atomic import read_json
 from empathy_zoo.evaluation_file import check_evaluation, evaluation_files, read_evaluation
@@ -77,7 +77,7 @@ def _edge_document() -> dict:
     document["train"]["equality"] = [1] * len(document["train"]["equality"])
     document.update(variant=None, agent=None, eval=[], notes={"who": ["me", {"why": 1}]})
     document["config"] = {**document["config"], "comment": "by hand"}
-    return document
+    return derive_run_id(document)
 
 
 def test_every_document_the_checker_accepts_is_a_record_the_leaderboard_reads() -> None:

@@ -21,7 +21,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from helpers_results import synthetic_document, synthetic_schema_1
+from helpers_results import derive_run_id, synthetic_document, synthetic_schema_1
 from helpers_resume import TINY_SETTINGS
 
 from empathy_zoo import coexistence_v0, sharing_v0
@@ -437,7 +437,7 @@ def test_schema_1_shaping_of_the_right_types_is_read_as_before():
     assert check_result(document, "x.json")["config"]["reward"] == {"name": "equality_scaling"}
     document = synthetic_schema_1("coexistence_v0", "dqn_harm_penalty", 1.0, 0)
     document["config"]["settings"]["harm_penalty"] = -100  # (an int is a number)
-    assert check_result(document, "x.json")["config"]["reward"] == {"name": "harm_penalty", "penalty": -100}
+    assert check_result(derive_run_id(document), "x.json")["config"]["reward"] == {"name": "harm_penalty", "penalty": -100}
 
 
 # ---------------------------------------------------------------------------- the command line

@@ -10,7 +10,7 @@ import os
 import re
 
 import pytest
-from helpers_results import synthetic_document, synthetic_result
+from helpers_results import derive_run_id, synthetic_document, synthetic_result
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -203,7 +203,8 @@ def test_train_runs_refuses_two_experiments_with_one_label_in_one_call(tmp_path)
 def test_the_leaderboard_names_two_experiments_with_one_label(tmp_path):
     a = synthetic_document("coexistence_v0", "dqn", 1.0, 0)
     b = copy.deepcopy(synthetic_document("coexistence_v0", "dqn", 1.0, 1))
-    b["run_id"] = "coexistence_v0__dqn-other__s1"
+    b["config"]["settings"]["learning_rate"] = 0.0005  # (another experiment: its id is its config's)
+    derive_run_id(b)
     write_runs(tmp_path, [a, b])
     with pytest.raises(ValueError, match=r"run1\.json.*same label 'dqn 1\.0' on coexistence_v0.*other settings"):
         write_leaderboard(tmp_path)

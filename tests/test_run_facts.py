@@ -7,7 +7,7 @@ import dataclasses
 from types import MappingProxyType
 
 import pytest
-from helpers_results import record, synthetic_document, synthetic_result
+from helpers_results import derive_run_id, record, synthetic_document, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.schedules import check_schedule, epsilon_at
@@ -17,7 +17,7 @@ from leaderboard.run_facts import empathic_selfishness, env_argument, exploratio
 def _with(document: dict, **env_kwargs) -> RunResult:
     """The run of ``document`` had it been built with ``env_kwargs``."""
     document["config"]["env_kwargs"] = env_kwargs
-    return record(document)
+    return record(derive_run_id(document))
 
 
 def test_the_paper_s_setting_is_every_argument_at_its_default_and_the_default_fixed_agents() -> None:

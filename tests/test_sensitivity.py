@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from helpers_results import record, synthetic_document, synthetic_result
+from helpers_results import derive_run_id, record, synthetic_document, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.sensitivity import DEFAULT_CONDITION, condition_of, sensitivity_markdown, sensitivity_rows
@@ -26,7 +26,7 @@ def _condition_runs(start: str, encoding: str, human: str, equality_at_half: flo
             run["config"]["env_kwargs"] = {"start": start, "inventory_encoding": encoding}
             if (start, encoding, human) == DEFAULT_CONDITION:
                 run["config"]["env_kwargs"] = {}
-            runs.append(record(run))
+            runs.append(record(derive_run_id(run)))
     return runs
 
 

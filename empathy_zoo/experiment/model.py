@@ -10,7 +10,6 @@ result file keeps.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, fields
@@ -19,6 +18,7 @@ from typing import Any
 from agents.base import Method
 from agents.rewards import RewardTransform, transform_config
 from baselines.registry import get_method
+from empathy_zoo import run_ids
 from empathy_zoo.engine.arguments import check_choice, check_env_arguments
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, default_policies
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATIONS, MAX_SEED, MAX_STEPS, check_at_most
@@ -320,15 +320,12 @@ class RunSpec:
 
     def experiment_hash(self) -> str:
         """Hash of everything but the seed (the runs of one experiment share it)."""
-        config = self.config()
-        del config["seed"], config["description"]  # (derived from the rest: no part of the identity)
-        return hashlib.sha256(json.dumps(config, sort_keys=True, default=str).encode()).hexdigest()[:8]
+        return run_ids.config_hash(self.config())
 
     @property
     def experiment_id(self) -> str:
         """What the runs of one experiment (all seeds) share: ``<variant>__<method>-<hash>``."""
-        method = self.method.replace(":", "_").replace(".", "_")
-        return f"{self.variant.label}__{method}-{self.experiment_hash()}"
+        return run_ids.experiment_id(self.variant.label, self.method, self.config())
 
     @property
     def run_id(self) -> str:

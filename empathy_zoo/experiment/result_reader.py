@@ -28,7 +28,7 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.values import field_types
 from empathy_zoo.limits import MAX_STEPS
 from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
-from empathy_zoo.result_file import ResultFileError, check_result_fields, result_checker
+from empathy_zoo.result_file import ResultFileError, check_result_fields, check_run_id, result_checker
 
 __all__ = ["MAX_SETTING", "check_result", "read_result"]
 
@@ -40,7 +40,8 @@ longest run, and no rate or weight is larger."""
 
 def check_result(document: Any, path: str | Path) -> dict[str, Any]:
     """``document`` (a parsed result file) if it follows the schema and a registered method's
-    settings, reward transform and description are ones it gives a run, else
+    settings, reward transform and description are ones it gives a run, and its run id is the one
+    its config gives (:func:`~empathy_zoo.result_file.check_run_id`), else
     :class:`~empathy_zoo.result_file.ResultFileError` naming ``path`` and the field."""
     from baselines.registry import METHODS  # (lazily: the registry imports the learners, and torch)
 
@@ -51,6 +52,7 @@ def check_result(document: Any, path: str | Path) -> dict[str, Any]:
         settings = _settings(check, method, result)
         reward = _reward(check, method, result)
         _check_described(check, method, settings, reward, result)
+    check_run_id(result_checker(Path(path)), result, document["config"])
     return result
 
 
