@@ -475,13 +475,15 @@ def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
     ``run_id`` is not the id its own fields give (:func:`~empathy_zoo.run_ids.run_id`: the trainer
     writes ``{"run_id": ..., **config}``), so an agent read alone (``watch``) is the run it names.
     Checked after the comparison with a result file, whose message names both files; a header
-    without ``run_id`` or ``seed`` has no id to compare."""
-    if "run_id" not in header or "seed" not in header:
+    with a ``run_id`` must hold its ``seed`` (a whole number), one without has no id to compare."""
+    if "run_id" not in header:
         return
+    check = _checker(path)
+    seed = check.integer(header.get("seed"), "header.seed", 0, MAX_SEED)  # (a run id ends with its seed)
     config = {key: value for key, value in header.items() if key != "run_id"}
-    expected = run_ids.run_id(str(header.get("variant") or header["env"]), header["method"], config, header["seed"])
+    expected = run_ids.run_id(str(header.get("variant") or header["env"]), header["method"], config, seed)
     if header["run_id"] != expected:
-        raise _checker(path).fail(
+        raise check.fail(
             "header.run_id",
             f"{expected} (the id its header gives: a hash of the run's configuration without seed and description)",
             header["run_id"],

@@ -281,14 +281,14 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     check.name(plan["variant"], "plan.variant")
     check.label(plan["label"], "plan.label")
     objective = check.table(plan["objective"], "plan.objective")
-    check.has(objective, ("metric",), "plan.objective.")
+    check.has(objective, ("metric", "direction"), "plan.objective.")
     metric = objective["metric"]
     if metric not in METRIC_NAMES:
         raise check.fail("plan.objective.metric", f"one of the suite's metrics ({', '.join(METRIC_NAMES)})", metric)
     if objective.get("over", "last") not in ("last", "curve"):
         raise check.fail("plan.objective.over", "last or curve", objective["over"])
-    direction = objective.get("direction")
-    if direction is not None and direction not in DIRECTIONS:
+    direction = objective["direction"]
+    if direction not in DIRECTIONS:
         raise check.fail("plan.objective.direction", " or ".join(DIRECTIONS), direction)
     budget = check.table(plan["budget"], "plan.budget")
     check.has(budget, ("env_steps_at_most", "steps", "eval_interval"), "plan.budget.")
@@ -331,6 +331,8 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         if number in numbers:
             raise check.fail(f"{where}.number", "a trial number of its own (each trial is numbered once)", number)
         numbers[number] = trial
+        if trial["state"] == "COMPLETE" and trial.get("value") is None:
+            raise check.fail(f"{where}.value", "the value of a finished trial (tune writes one)", trial.get("value"))
         for name in ("value", "last_value"):
             if trial.get(name) is not None:
                 _in_range(check, trial[name], f"{where}.{name}", metric, bounds)
@@ -354,11 +356,8 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
 def _check_best(
     check: DocumentChecker, best: Mapping[str, Any], numbers: Mapping[int, Mapping[str, Any]], direction: Any
 ) -> None:
-    """Refuse a ``best`` whose value another finished trial beats in the plan's ``direction``
-    (none given: not compared)."""
-    finished = [trial for trial in numbers.values() if trial["state"] == "COMPLETE" and trial.get("value") is not None]
-    if direction is None or not finished:
-        return
+    """Refuse a ``best`` whose value another finished trial (each holds one) beats in the plan's ``direction``."""
+    finished = [trial for trial in numbers.values() if trial["state"] == "COMPLETE"]
     top = (max if direction == "maximize" else min)(finished, key=lambda trial: trial["value"])
     if (best["value"] < top["value"]) if direction == "maximize" else (best["value"] > top["value"]):
         raise check.fail(

@@ -18,19 +18,26 @@ from baselines.registry import METHODS
 from empathy_zoo import FixedAgents, TrainedAgent, coexistence_v0, load_agent
 from empathy_zoo.agent_file import FORMAT, agent_path, file_sha256, write_agent_file
 from empathy_zoo.policies import FixedPolicy, make_policy
+from empathy_zoo.run_ids import run_id
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
 
 TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 300, "target_update_interval": 50}
 BETAS = (0.5, 1.0, 0.25)
-HEADER = {"run_id": "coexistence_v0__empathic_dqn-abc__s0", "method": "empathic_dqn", "env": "coexistence_v0"}
+HEADER = {"method": "empathic_dqn", "env": "coexistence_v0"}
 STEPS = 300
 
 
-def header(run: int, beta: float) -> dict:
-    """Run ``run``'s header: its run id ends with its seed, as every run id does."""
-    run_id = HEADER["run_id"].removesuffix("__s0") + f"__s{run}"
-    return {**HEADER, "run_id": run_id, "settings": {**TINY, "selfishness": beta}, "env_kwargs": {"max_cycles": 60}, "seed": run}
+def header(run: int, beta: float, method: str = "empathic_dqn") -> dict:
+    """Run ``run``'s header: its run id the one its fields give (ending with its seed), as the trainer writes it."""
+    fields = {
+        **HEADER,
+        "method": method,
+        "settings": {**TINY, "selfishness": beta},
+        "env_kwargs": {"max_cycles": 60},
+        "seed": run,
+    }
+    return {"run_id": run_id("coexistence_v0", method, fields, run), **fields}
 
 
 def drive(learner, venv: VectorEnv, steps: int, seed: int = 0) -> np.ndarray:
@@ -252,7 +259,7 @@ def test_every_method_built_on_empathic_dqn_acts_on_its_own_acting_head(method: 
         25,
         5,
     )
-    name, sha = write_agent_file(learner, 0, tmp_path / "m.agent.pt", {**header(0, beta), "method": method})
+    name, sha = write_agent_file(learner, 0, tmp_path / "m.agent.pt", header(0, beta, method))
     agent = load_agent(tmp_path / name, expected_sha256=sha)
     observations = np.random.default_rng(3).integers(-1, 2, (300, 25)).astype(np.float32)
     assert np.array_equal(agent.act_batch(observations), learner_greedy(learner, observations)[0])
@@ -355,7 +362,7 @@ def test_a_result_file_names_its_agent_and_the_reader_checks_it(trained, tmp_pat
     from empathy_zoo.agent_file import load_run_agent, result_entry
 
     learner, observations, _, _ = trained
-    result = tmp_path / "runs" / "coexistence_v0__empathic_dqn-abc__s2.json"
+    result = tmp_path / "runs" / f"{header(2, BETAS[2])['run_id']}.json"
     written = write_agent_file(learner, 2, agent_path(result), header(2, BETAS[2]))
     result.write_text(json.dumps({"run_id": result.stem, "agent": result_entry(written)}))
     agent = load_run_agent(result)

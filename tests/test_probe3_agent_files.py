@@ -25,17 +25,19 @@ from test_checkpoint_forgeries import assert_refused, checkpointed, forged  # no
 
 from empathy_zoo import load_agent
 from empathy_zoo.agent_file import AgentFileError, file_sha256, write_agent_file
+from empathy_zoo.run_ids import run_id
 from empathy_zoo.safe_data import zip_members
 from empathy_zoo.training.checkpoint import CheckpointError, check_checkpoint_keys, load_checkpoint, save_checkpoint
 
-HEADER = {
-    "run_id": "coexistence_v0__empathic_dqn-abc__s0",
+FIELDS = {
     "method": "empathic_dqn",
     "env": "coexistence_v0",
     "settings": {"hidden_size": 8},
     "env_kwargs": {"max_cycles": 60},
     "seed": 0,
 }
+HEADER = {"run_id": run_id("coexistence_v0", "empathic_dqn", FIELDS, 0), **FIELDS}
+"""A header as the trainer writes one: its run id the one its fields give."""
 ZEROS = 8 << 20
 """Bytes of zeros a real bomb deflates (8 MiB: a few KiB in the file)."""
 

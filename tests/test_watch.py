@@ -26,6 +26,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import entry_label
 from empathy_zoo.render import legend, scaled
 from empathy_zoo.result_file import RUNS_DIR
+from empathy_zoo.run_ids import run_id as derived_run_id
 from empathy_zoo.training.ensemble import learner_batch
 from empathy_zoo.vector import VectorEnv
 
@@ -37,8 +38,21 @@ ENVS = {"coexistence_v0": {"cat_0": "random_walk"}, "sharing_v0": {"human_0": {"
 NO_AGENT = "coexistence_v0__dqn-0000__s0"
 
 
+def header_fields(env: str) -> dict:
+    """The header of the run trained on ``env`` but its run id."""
+    return {
+        "method": "empathic_dqn",
+        "settings": {**TINY, "selfishness": 0.5},
+        "env": env,
+        "env_kwargs": {"max_cycles": MAX_CYCLES},
+        "fixed": {agent: entry_label(entry) for agent, entry in ENVS[env].items()},
+        "seed": 0,
+    }
+
+
 def run_id(env: str) -> str:
-    return f"{env}__empathic_dqn-watch__s0"
+    """The run id its header's fields give, as the trainer names a run."""
+    return derived_run_id(env, "empathic_dqn", header_fields(env), 0)
 
 
 def trained_agent_file(env: str, runs: Path) -> Path:
@@ -53,15 +67,7 @@ def trained_agent_file(env: str, runs: Path) -> Path:
         learner.observe(learner_batch(obs, actions, result))
         obs = result.observations[:, 0]
     assert learner.grad_steps > 0
-    header = {
-        "run_id": run_id(env),
-        "method": "empathic_dqn",
-        "settings": {**TINY, "selfishness": 0.5},
-        "env": env,
-        "env_kwargs": {"max_cycles": MAX_CYCLES},
-        "fixed": {agent: entry_label(entry) for agent, entry in ENVS[env].items()},
-        "seed": 0,
-    }
+    header = {"run_id": run_id(env), **header_fields(env)}
     written = write_agent_file(learner, 0, runs / f"{run_id(env)}.agent.pt", header)
     (runs / f"{run_id(env)}.json").write_text(json.dumps({"run_id": run_id(env), "agent": result_entry(written)}))
     return runs / written[0]
