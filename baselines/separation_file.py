@@ -5,18 +5,18 @@ come from anyone, so the readers (``analyse discrimination``, ``analyse separati
 take it through :func:`read_separation_table`: a regular file of at most
 :data:`MAX_SEPARATION_BYTES`, JSON nested no deeper than the suite's bound, and every field the
 readers use checked against its range (rows of unique names, outcomes and pairs that name those
-rows, finite numbers in their ranges). Every refusal is one ``ValueError`` line naming the file
-and the field.
+rows, finite numbers in their ranges, and a pair's ``differ`` true exactly when its
+``differing_states`` is above 0, those at most its ``reachable_states``, as the producer writes
+them). Every refusal is one ``ValueError`` line naming the file and the field.
 """
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.bounded_read import check_json_depth
+from empathy_zoo.bounded_read import check_json_depth, parse_json
 from empathy_zoo.document_checks import DocumentChecker
 from empathy_zoo.limits import read_bounded
 
@@ -70,7 +70,7 @@ def read_separation_table(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise SeparationTableError(f"separation table {where}: {error.strerror or error}") from None
     check_json_depth(data, f"separation table {where}")
     try:
-        document = json.loads(data.decode("utf-8"))
+        document = parse_json(data.decode("utf-8"))
     except (ValueError, RecursionError) as error:
         raise SeparationTableError(f"separation table {where} is no JSON ({type(error).__name__}: {str(error)[:200]})") from None
     return check_separation_table(document, where)
@@ -182,7 +182,15 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         _fraction(check, pair["epsilon"], f"{where}.epsilon")
         if not isinstance(pair["differ"], bool):
             raise check.fail(f"{where}.differ", "true or false", pair["differ"])
-        check.integer(pair["differing_states"], f"{where}.differing_states", 0, MAX_COUNT)
+        differing = check.integer(pair["differing_states"], f"{where}.differing_states", 0, MAX_COUNT)
+        if pair["differ"] != (differing > 0):  # (the producer: differ exactly where a reachable state differs)
+            expected = f"{str(differing > 0).lower()} (differing_states is {differing})"
+            raise check.fail(f"{where}.differ", expected, pair["differ"])
+        if "reachable_states" in pair:  # (tables made by hand, the tests', may leave it out)
+            check.integer(pair["reachable_states"], f"{where}.reachable_states", 0, MAX_COUNT)
+            if differing > pair["reachable_states"]:
+                expected = f"at most reachable_states ({pair['reachable_states']:,}): states that differ are reachable"
+                raise check.fail(f"{where}.differing_states", expected, differing)
         _bounded(check, pair["harms_difference"], f"{where}.harms_difference", None)
         if pair.get("equality_difference") is not None:
             _bounded(check, pair["equality_difference"], f"{where}.equality_difference", None)

@@ -52,7 +52,7 @@ import torch
 
 from empathy_zoo import run_ids
 from empathy_zoo.atomic import read_json, write_bytes_atomic
-from empathy_zoo.bounded_read import CAPS, check_json_depth, read_data
+from empathy_zoo.bounded_read import CAPS, check_json_depth, parse_json, read_data
 from empathy_zoo.document_checks import DocumentChecker, one_line, shown
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.extras import install_command
@@ -205,6 +205,30 @@ def _check_header(header: Any) -> dict[str, Any]:
     return json.loads(json.dumps(dict(header)))  # (tuples become lists, as when it is read back)
 
 
+def _written_header(header: Any) -> dict[str, Any]:
+    """``header`` as a writer stores it (:func:`_check_header`), its ``run_id`` (where it has one)
+    the id its fields give, as the readers require (:func:`_check_header_run_id`): no agent file is
+    written that they refuse; ``ValueError`` otherwise."""
+    checked = _check_header(header)
+    if "run_id" in checked:
+        seed = checked.get("seed")
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+            raise ValueError(f"an agent file's header with a run_id holds its seed (0 to {MAX_SEED:,}), got {seed!r}")
+        if checked["run_id"] != _header_run_id(checked, seed):
+            raise ValueError(
+                f"an agent file's header run_id {checked['run_id']!r} is not the id its fields give, "
+                f"{_header_run_id(checked, seed)} (empathy_zoo.run_ids.run_id); leave run_id out of a header of no run"
+            )
+    return checked
+
+
+def _header_run_id(header: Mapping[str, Any], seed: int) -> str:
+    """The run id ``header``'s own fields give (:func:`~empathy_zoo.run_ids.run_id`: the trainer
+    writes ``{"run_id": ..., **config}``)."""
+    config = {key: value for key, value in header.items() if key != "run_id"}
+    return run_ids.run_id(str(header.get("variant") or header["env"]), header["method"], config, seed)
+
+
 def _as_tensor(value: Any, where: str, budget: list[int] | None = None) -> torch.Tensor:
     """``value`` (a float32 dense tensor or numpy array) as a CPU copy of its own. With ``budget``
     (``[bytes left]``), its elements are counted first and the copy refused when it would take
@@ -281,7 +305,7 @@ def agent_document(state: Mapping[str, Any], header: Mapping[str, Any]) -> dict[
     return {
         "format": FORMAT,
         "version": VERSION,
-        "header": _check_header(header),
+        "header": _written_header(header),
         "obs_size": obs_size,
         "num_actions": num_actions,
         "activation": "relu",
@@ -344,7 +368,7 @@ def _library_file(learner: Any, run: int, header: Mapping[str, Any]) -> bytes:
     member = {
         "format": FORMAT,
         "version": VERSION,
-        "header": _check_header(header),
+        "header": _written_header(header),
         "library": info["library"],
         "algorithm": info["algorithm"],
         "policy": str(info.get("policy", "MlpPolicy")),
@@ -480,8 +504,7 @@ def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
         return
     check = _checker(path)
     seed = check.integer(header.get("seed"), "header.seed", 0, MAX_SEED)  # (a run id ends with its seed)
-    config = {key: value for key, value in header.items() if key != "run_id"}
-    expected = run_ids.run_id(str(header.get("variant") or header["env"]), header["method"], config, seed)
+    expected = _header_run_id(header, seed)
     if header["run_id"] != expected:
         raise check.fail(
             "header.run_id",
@@ -697,7 +720,7 @@ def _json_member(path: Path, archive: zipfile.ZipFile, name: str) -> Any:
     data = archive.read(name)
     check_json_depth(data, f"agent file {path}: its member {name}")
     try:
-        return json.loads(data)
+        return parse_json(data)
     except (ValueError, RecursionError) as error:
         raise AgentFileError(f"agent file {path}: its {name} is corrupted ({one_line(str(error), MESSAGE_CHARS)})") from None
 

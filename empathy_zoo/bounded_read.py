@@ -6,7 +6,8 @@ is no regular file (a FIFO, a device, a directory, a dangling symbolic link or a
 refused without waiting on it, one larger than the cap of its kind (:data:`CAPS`, the bounds of
 :mod:`empathy_zoo.limits`) is refused by its size before it is read, and JSON nested deeper than
 :data:`~empathy_zoo.limits.MAX_JSON_DEPTH` is refused before it is parsed (:func:`check_json_depth`).
-Every refusal is one ``ValueError`` line naming the file.
+JSON is parsed by :func:`parse_json`, which refuses an object holding one key twice (Python's
+reader would keep the last silently, and another reader the first). Every refusal is one ``ValueError`` line naming the file.
 """
 
 from __future__ import annotations
@@ -25,7 +26,16 @@ from empathy_zoo.limits import (
     read_bounded,
 )
 
-__all__ = ["CAPS", "check_json_depth", "json_depth", "open_data", "read_data", "read_json_data"]
+__all__ = [
+    "CAPS",
+    "DuplicateKeyError",
+    "check_json_depth",
+    "json_depth",
+    "open_data",
+    "parse_json",
+    "read_data",
+    "read_json_data",
+]
 
 FILE_KINDS = ("result file", "evaluation file", "agent file", "checkpoint", "list of runs", "tuning journal")
 """The kinds of file read through :func:`read_data`, as :data:`~empathy_zoo.limits.BOUNDS` names them."""
@@ -109,13 +119,33 @@ def check_json_depth(data: bytes, where: str, limit: int = MAX_JSON_DEPTH) -> No
         )
 
 
+class DuplicateKeyError(ValueError):
+    """A JSON object holds one key twice."""
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """The object of ``pairs``, else :class:`DuplicateKeyError` naming the first key given twice."""
+    table: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in table:
+            raise DuplicateKeyError(f"an object holds the key {key[:60]!r} twice")
+        table[key] = value
+    return table
+
+
+def parse_json(text: str | bytes) -> Any:
+    """The JSON document ``text`` (``json.loads``), an object holding one key twice refused with
+    :class:`DuplicateKeyError` (a ``ValueError``): which of the two a reader keeps is no rule."""
+    return json.loads(text, object_pairs_hook=_unique_keys)
+
+
 def read_json_data(path: str | os.PathLike[str], kind: str) -> Any:
     """The JSON document of the file ``path`` of ``kind`` (:func:`read_data`, then
     :func:`check_json_depth`); text that is no JSON raises ``ValueError`` naming the file."""
     data = read_data(path, kind)
     check_json_depth(data, f"{kind} {os.fspath(path)}")
     try:
-        return json.loads(data.decode("utf-8"))
-    except (ValueError, RecursionError) as error:  # (bad JSON or UTF-8, an int of over 4,300 digits)
+        return parse_json(data.decode("utf-8"))
+    except (ValueError, RecursionError) as error:  # (bad JSON or UTF-8, an int of over 4,300 digits, a key twice)
         why = f"{type(error).__name__}: {str(error)[:200]}"
         raise ValueError(f"{os.fspath(path)} is corrupted ({why}); move it away to redo that run") from None

@@ -181,9 +181,12 @@ class DocumentChecker:
     def plain(self, value: Any, field: str) -> Any:
         """Plain data a method records (a reward transform's fields, a description): objects, arrays,
         ``null``, booleans, finite numbers (:func:`finite_float`) and strings of printable text (as
-        :meth:`text`, empty allowed), at any depth; the first value that is not is named."""
+        :meth:`text`, empty allowed; an object's keys too), at any depth; the first value that is
+        not is named."""
         if isinstance(value, dict):
             for key, item in self.table(value, field).items():
+                if key:
+                    self.text(key, f"{field} (the key {key[:60]!r})")
                 self.plain(item, f"{field}.{key}")
         elif isinstance(value, list):
             for i, item in enumerate(value):

@@ -40,7 +40,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.record_parts import AgentRef
-from empathy_zoo.result_file import check_env_kwargs, episode_bounds
+from empathy_zoo.result_file import check_agent_record, check_env_kwargs, episode_bounds
 
 
 class RunFacts(Protocol):
@@ -115,7 +115,6 @@ SET_FIELDS = ("name", "env", "description", "scenarios")
 STREAM = STREAMS["heldout_eval"]
 """The random stream of every evaluation's start seeds (``stream``): ``empathy-zoo evaluate`` plays
 every scenario from ``derive_key(seed, STREAM, episode)`` and refuses a file made with another."""
-_SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
 class EvaluationFileError(ValueError):
@@ -182,11 +181,7 @@ def check_evaluation(document: Any, path: str | Path) -> dict[str, Any]:
     seed = check.integer(evaluation["seed"], "seed", 0, MAX_SEED)
     if not evaluation["run_id"].endswith(f"__s{seed}"):
         raise check.fail("seed", f"the seed its run id {evaluation['run_id']!r} ends with (__s<seed>)", seed)
-    agent = check.table(evaluation["agent"], "agent")
-    check.has(agent, ("file", "sha256"), "agent.")
-    check.text(agent["file"], "agent.file")
-    if not isinstance(agent["sha256"], str) or not _SHA256.fullmatch(agent["sha256"]):
-        raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", agent["sha256"])
+    check_agent_record(check, evaluation["agent"], evaluation["run_id"])
     scenario_set = check_scenario_set(check, evaluation["scenario_set"], "scenario_set")
     if scenario_set["env"] != evaluation["env"]:
         raise check.fail("scenario_set.env", f"the run's environment {evaluation['env']!r}", scenario_set["env"])

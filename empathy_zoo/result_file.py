@@ -47,11 +47,13 @@ from empathy_zoo.names import check_path_name
 
 __all__ = [
     "AGENT_SUFFIXES",
+    "KNOWN_FIELDS",
     "PRICE_COLUMN",
     "SCHEMA",
     "REQUIRED_FIELDS",
     "RUNS_DIR",
     "ResultFileError",
+    "check_agent_record",
     "check_result_fields",
     "result_checker",
     "check_env_kwargs",
@@ -77,6 +79,21 @@ unit of cost after each training episode, a finite number >= 0 per episode. File
 (every other method's, and those made before it was recorded) are read as they are."""
 UPDATE_KERNELS_RECORDED = ("numba", "torch")
 """The update kernels a result file may name (``update_kernel``; ``null``: the learner has no choice)."""
+KNOWN_FIELDS = (
+    *REQUIRED_FIELDS,
+    "variant",
+    "memory_bytes",
+    "wall_time_s",
+    "version",
+    "commit",
+    "plugin_sha256",
+    "update_kernel",
+    "agent",
+    "created",
+)
+"""Every top-level field this checker reads; any other is kept as written (a record's ``extra``),
+checked as plain data (:meth:`~empathy_zoo.document_checks.DocumentChecker.plain`: finite numbers,
+printable text)."""
 MEMORY_FIGURES = ("replay_per_run", "learner_per_run")
 """The figures of ``memory_bytes`` (bytes of a run's replay memory and of its whole learner): no others."""
 CONFIG_TABLES = ("settings", "env_kwargs", "fixed", "description")
@@ -187,6 +204,8 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
             if episodes is None and not values:
                 raise check.fail(f"eval[{i}].{name}", "at least one greedy episode (an evaluation plays 1 or more)", values)
             episodes = len(values) if episodes is None else episodes
+    for name in [name for name in result if name not in KNOWN_FIELDS]:  # (kept as written: plain data, like a method's records)
+        check.plain(result[name], name)
     made = [entry["step"] for entry in result["eval"]]
     if schedule is not None and made != schedule:
         interval = result["config"]["eval_interval"]
@@ -226,16 +245,22 @@ def _check_agent(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     """``agent``: the agent file the run kept beside its result file, ``{"file": "<run id>.agent.pt",
     "sha256": ...}``, or null when its method keeps none (absent in files made before runs kept
     their agents)."""
-    agent = result.get("agent")
-    if agent is None:
-        return
-    entry = check.table(agent, "agent")
+    if result.get("agent") is not None:
+        check_agent_record(check, result["agent"], result["run_id"])
+
+
+def check_agent_record(check: DocumentChecker, value: Any, run_id: str) -> dict[str, Any]:
+    """``agent`` (``value``), the record of run ``run_id``'s agent file, as a result or an
+    evaluation file holds it: ``{"file": "<run id>.agent.pt", "sha256": ...}``, the file's name
+    the run's id and one of :data:`AGENT_SUFFIXES`."""
+    entry = check.table(value, "agent")
     check.has(entry, ("file", "sha256"), "agent.")
     name = check.name(check.text(entry["file"], "agent.file"), "agent.file")
-    if name not in {result["run_id"] + suffix for suffix in AGENT_SUFFIXES}:
-        raise check.fail("agent.file", f"the run's agent file, {result['run_id']} + one of {AGENT_SUFFIXES}", name)
+    if name not in {run_id + suffix for suffix in AGENT_SUFFIXES}:
+        raise check.fail("agent.file", f"the run's agent file, {run_id} + one of {AGENT_SUFFIXES}", name)
     if not (isinstance(entry["sha256"], str) and _SHA256.fullmatch(entry["sha256"])):
         raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", entry["sha256"])
+    return entry
 
 
 LEGACY_SHAPING = {"harm_penalty": 0.0, "equality_shaping": False}
@@ -517,9 +542,12 @@ def check_run_id(check: DocumentChecker, result: Mapping[str, Any], config: Mapp
     """``run_id`` (its seed checked already) if it is the id :func:`~empathy_zoo.run_ids.run_id`
     derives from ``config`` as the file holds it (before any schema upgrade: the trainer named the
     run from that record), the variant and the method: a configuration changed after the run,
-    which would pool the run with another experiment's, is refused. Checked last, by
+    which would pool the run with another experiment's, is refused. Every value of ``config`` is
+    plain data first (a field a schema upgrade replaced, or one no check reads, is hashed too).
+    Checked last, by
     :func:`empathy_zoo.experiment.result_reader.check_result`, so a value out of its range is named
     as such first."""
+    check.plain(config, "config")  # (what the hash reads: a field the upgrade replaced, or one no check knows)
     variant = config.get("variant") or result.get("variant") or result["env"]
     expected = run_ids.run_id(str(variant), result["method"], config, result["seed"])
     if result["run_id"] != expected:

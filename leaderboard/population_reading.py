@@ -32,8 +32,9 @@ from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, change
 
 __all__ = ["METHODS", "Scores", "GroupKey", "primary_and_secondary", "markdown", "read_scores", "main"]
 
-METHODS = {"dqn": None, "empathic_dqn": "0.5"}
-"""The methods the reading compares, and the β each is read at (``None``: no selfishness weight)."""
+METHODS: dict[str, float | None] = {"dqn": None, "empathic_dqn": 0.5}
+"""The methods the reading compares, and the β each is read at (``None``: no selfishness weight);
+a run is read at a β only where its selfishness is that number exactly (0.5000001 is not 0.5)."""
 POPULATION, DEFAULT = "population", "default"
 
 GroupKey = tuple[str, str, str]
@@ -56,12 +57,15 @@ class Row:
 
 
 def _read_at(run: RunResult) -> bool:
-    """Whether ``run`` is of a method the reading compares, at its β."""
+    """Whether ``run`` is of a method the reading compares, at its β (the number itself, never a
+    rounded text of it: a run at another β is not read, however close)."""
     if run.method not in METHODS:
         return False
     beta = METHODS[run.method]
     selfishness = run.config.settings.get("selfishness")
-    return beta is None or (selfishness is not None and f"{float(selfishness):g}" == beta)
+    if beta is None:
+        return True
+    return isinstance(selfishness, int | float) and not isinstance(selfishness, bool) and float(selfishness) == beta
 
 
 def add_scores(scores: Scores, run: RunResult, evaluation: EvaluationResult, group: str) -> None:
@@ -135,10 +139,10 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
 
     Raises ``ValueError``, naming the files, where a directory is given twice, the population
     directory holds no population-trained run of a compared method, a test split was evaluated
-    with another definition than the shipped one (``empathy_zoo/scenarios/<env>_test.toml``), or
-    two evaluations give one group one seed twice."""
+    with another definition than the shipped one (``empathy_zoo/scenarios/<env>_test.toml``) or of
+    an environment that ships no test split, or two evaluations give one group one seed twice."""
     from empathy_zoo.evaluation_file import evaluation_files, evaluation_mismatch, read_evaluation
-    from empathy_zoo.scenarios import load_scenario_set, scenario_set_path
+    from empathy_zoo.scenarios import scenario_set_path
     from empathy_zoo.training.heldout import results_of
 
     _check_distinct(population_dir, default_dirs)
@@ -155,7 +159,7 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
             if name != f"{evaluation.env}_test":
                 continue
             if name not in shipped:
-                shipped[name] = load_scenario_set(name).definition()
+                shipped[name] = _shipped_test_split(path, name, evaluation.env)
             if evaluation.scenario_set.to_document() != shipped[name]:
                 raise ValueError(
                     f"{path} was made with another definition of scenario set {name!r} than the shipped one "
@@ -185,6 +189,22 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
             "(a run whose partner is a population: empathy-zoo reproduce --profile populations, then evaluate)"
         )
     return scores
+
+
+def _shipped_test_split(path: Path, name: str, env: str) -> dict[str, Any]:
+    """The shipped definition of test split ``name`` (of ``env``, named by the evaluation file
+    ``path``); ``ValueError`` naming ``path`` where none ships (a plug-in environment's, say)."""
+    from empathy_zoo.scenarios import load_scenario_set, shipped_sets
+
+    sets = shipped_sets()
+    if name not in sets:
+        having = ", ".join(s.removesuffix("_test") for s in sets if s.endswith("_test")) or "none"
+        raise ValueError(
+            f"{path}: field scenario_set.name: {name!r}, but environment {env!r} ships no test split "
+            f"(empathy_zoo/scenarios/{name}.toml); population-reading reads only the shipped test splits, "
+            f"of the environments {having}"
+        )
+    return load_scenario_set(name).definition()
 
 
 def _population_trained(run: RunResult) -> bool:

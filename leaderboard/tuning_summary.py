@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import os
 import sys
 from collections.abc import Mapping, Sequence
@@ -229,14 +228,14 @@ MAX_STUDY_BYTES = 64 * 2**20
 def read_study(path: Path) -> Any:
     """A ``study.json``: a regular file of at most :data:`MAX_STUDY_BYTES`, JSON nested within the
     suite's bound, else a ``ValueError`` naming it."""
-    from empathy_zoo.bounded_read import check_json_depth
+    from empathy_zoo.bounded_read import check_json_depth, parse_json
     from empathy_zoo.limits import read_bounded
 
     data = read_bounded(path, MAX_STUDY_BYTES, "study file")
     check_json_depth(data, str(path))
     try:
-        return json.loads(data)
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        return parse_json(data)
+    except (UnicodeDecodeError, ValueError) as error:  # (no JSON, a key given twice)
         raise ValueError(f"{path} is not JSON ({error})") from None
 
 
@@ -261,7 +260,10 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     each env step count a whole number within ``trials × tuning seeds × steps`` at their bounds;
     each trial's state one ``tune`` writes, its wall time within ten years; every parameter value
     one of the plan's parameters, within its range; the best value finite, within its metric's range.
-    The fields agree with each other: ``trials`` not empty, each trial's number its own; every value
+    The fields agree with each other: ``trials`` not empty, each trial's number its own and below
+    their count (``tune`` numbers them from 0); a trial's ``steps_trained`` its curve's last step,
+    ``env_steps_trained`` the counted trials' sum times the tuning seeds; ``plan.budget.trials``
+    the trials ``env_steps_at_most`` holds; a ``log`` range above 0; every value
     of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
     within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
     tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
@@ -303,8 +305,15 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
             f"trials × {len(seeds):,} tuning seeds × {steps:,} steps, for 1 to {MAX_TRIALS:,} trials",
             at_most,
         )
+    if "trials" in budget and check.integer(budget["trials"], "plan.budget.trials", 1, MAX_TRIALS) != at_most // per_trial:
+        raise check.fail(
+            "plan.budget.trials",
+            f"{at_most // per_trial:,}, the trials of env_steps_at_most ({at_most:,} = trials × {len(seeds):,} tuning "
+            f"seeds × {steps:,} steps)",
+            budget["trials"],
+        )
     bounds = metric_bounds(metric)
-    check.integer(study["env_steps_trained"], "env_steps_trained", 0, at_most)
+    trained = check.integer(study["env_steps_trained"], "env_steps_trained", 0, at_most)
     specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
     trials = study["trials"]
     if not isinstance(trials, list) or not trials:
@@ -327,7 +336,7 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         if wall is not None and not 0 <= check.finite(wall, f"{where}.wall_time_s") <= MAX_WALL_TIME_S:
             raise check.fail(f"{where}.wall_time_s", f"seconds in [0, {MAX_WALL_TIME_S:,}] (ten years)", wall)
         _params(check, trial["params"], specs, f"{where}.params")
-        number = check.integer(trial.get("number"), f"{where}.number", 0)
+        number = check.integer(trial.get("number"), f"{where}.number", 0, len(trials) - 1)  # (tune numbers them from 0)
         if number in numbers:
             raise check.fail(f"{where}.number", "a trial number of its own (each trial is numbered once)", number)
         numbers[number] = trial
@@ -336,7 +345,23 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
         for name in ("value", "last_value"):
             if trial.get(name) is not None:
                 _in_range(check, trial[name], f"{where}.{name}", metric, bounds)
-        _curve(check, trial.get("curve", []), f"{where}.curve", metric, bounds, len(seeds), (steps, interval))
+        curve = trial.get("curve", [])
+        _curve(check, curve, f"{where}.curve", metric, bounds, len(seeds), (steps, interval))
+        if "steps_trained" in trial:
+            done = curve[-1]["step"] if curve else 0
+            if check.integer(trial["steps_trained"], f"{where}.steps_trained", 0, steps) != done:
+                raise check.fail(
+                    f"{where}.steps_trained",
+                    f"{done:,}, the step of its curve's last point (0 without one)",
+                    trial["steps_trained"],
+                )
+    counted_steps = [trial.get("steps_trained") for trial in trials if trial["state"] != "INTERRUPTED"]
+    if None not in counted_steps and trained != sum(counted_steps) * len(seeds):
+        raise check.fail(
+            "env_steps_trained",
+            f"{sum(counted_steps) * len(seeds):,}: each counted trial's steps_trained × {len(seeds):,} tuning seeds",
+            trained,
+        )
     best = study["best"]
     if best is not None:
         best = check.table(best, "best")
@@ -437,8 +462,10 @@ def _spec(check: DocumentChecker, name: str, spec: Any) -> tuple[str, float, flo
     if kind == "choice" and rest:
         return kind, 0.0, 0.0
     ends = [_finite(end) for end in rest.split(":")] if kind in RANGE_KINDS else []
-    if len(ends) != 2 or ends[0] is None or ends[1] is None or ends[0] > ends[1]:
-        raise check.fail(where, "a parameter's spec (log:LOW:HIGH, float:LOW:HIGH, int:LOW:HIGH or choice:A,B,...)", spec)
+    if len(ends) != 2 or ends[0] is None or ends[1] is None or ends[0] > ends[1] or (kind == "log" and ends[0] <= 0):
+        raise check.fail(
+            where, "a parameter's spec (log:LOW:HIGH with 0 < LOW, float:LOW:HIGH, int:LOW:HIGH or choice:A,B,...)", spec
+        )
     return kind, ends[0], ends[1]
 
 

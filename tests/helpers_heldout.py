@@ -4,6 +4,7 @@ run and scenario, the per-episode values of every metric are given, so each verd
 from __future__ import annotations
 
 import hashlib
+import shutil
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -143,3 +144,22 @@ def dqn_and_empathic_runs(seeds: Sequence[int], max_cycles: int, eval_episodes: 
         for method, extra in methods.items()
         for seed in seeds
     ]
+
+
+POPULATIONS = Path(__file__).resolve().parents[1] / "docs" / "results" / "populations"
+"""The shipped population-trained runs (``default_trained`` within: the default-trained ones)."""
+
+
+def population_dirs(tmp_path: Path) -> tuple[Path, Path]:
+    """The shipped population-trained and default-trained Coexistence runs and their test-split
+    evaluations, copied into ``tmp_path`` (agent files left out: population-reading opens none)."""
+    population, default = tmp_path / "population", tmp_path / "default"
+    for source, target in ((POPULATIONS, population), (POPULATIONS / "default_trained", default)):
+        (target / "evaluations").mkdir(parents=True)
+        shutil.copytree(
+            source / "runs",
+            target / "runs",
+            ignore=shutil.ignore_patterns("*.agent.*", "sharing*", "charger*", "helping*", "vase*"),
+        )
+        shutil.copytree(source / "evaluations" / "coexistence_v0_test", target / "evaluations" / "coexistence_v0_test")
+    return population, default

@@ -91,6 +91,14 @@ def _both(*changes: Callable[[dict[str, Any]], None]) -> Callable[[dict[str, Any
     return change
 
 
+def _left_while_present(payload: dict[str, Any]) -> None:
+    """A forgery: every agent still present given its run's clock as the time it left (within [0, t])."""
+    engine = payload["vector"]["engine"]
+    present, t = engine["present"]["__ndarray__"], engine["t"]["__ndarray__"]
+    assert bool((present & (t[:, None] > 0)).any()), "a present agent on a clock past 0 to forge"
+    engine["left_at"]["__ndarray__"] = torch.where(present, t[:, None].expand_as(present), engine["left_at"]["__ndarray__"])
+
+
 ENGINE = "vector.engine"
 STREAM = f"{ENGINE}.streams"
 GENERATOR = f"{STREAM}.bit_generators.0"
@@ -143,6 +151,7 @@ FORGERIES: dict[str, tuple[Callable[[dict[str, Any]], None], str]] = {
     "left_at beyond max_cycles": (_set(f"{ENGINE}.left_at.__ndarray__", _full(10**9)), "left_at"),
     "left_at after the clock": (_set(f"{ENGINE}.left_at.__ndarray__", _full(39)), "left_at"),
     "left_at negative": (_set(f"{ENGINE}.left_at.__ndarray__", _first(-1)), "left_at"),
+    "left_at of a present agent": (_left_while_present, "left_at holds a time for an agent still present"),
     "inventory 10**6": (_set(f"{ENGINE}.inventory.__ndarray__", _first(10**6)), "inventory"),
     "harms negative": (_set(f"{ENGINE}.episode_harms.__ndarray__", _first(-1)), "episode_harms"),
     "cells of one agent": (_set(f"{ENGINE}.cells.__ndarray__", lambda t: t[:, :1].clone()), "cells"),

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from helpers_heldout import population_dirs
 
 from empathy_zoo.cli import main
 from empathy_zoo.experiment.result_reader import read_result
@@ -94,26 +95,8 @@ def test_the_leaderboard_refuses_a_changed_run_pooled_with_its_seeds(tmp_path: P
     assert not (tmp_path / "board").exists()
 
 
-POPULATIONS = ROOT / "docs" / "results" / "populations"
-
-
-def _population_dirs(tmp_path: Path) -> tuple[Path, Path]:
-    """The shipped population-trained and default-trained Coexistence runs and their test-split
-    evaluations, copied (agent files left out: the reading opens none)."""
-    population, default = tmp_path / "population", tmp_path / "default"
-    for source, target in ((POPULATIONS, population), (POPULATIONS / "default_trained", default)):
-        (target / "evaluations").mkdir(parents=True)
-        shutil.copytree(
-            source / "runs",
-            target / "runs",
-            ignore=shutil.ignore_patterns("*.agent.*", "sharing*", "charger*", "helping*", "vase*"),
-        )
-        shutil.copytree(source / "evaluations" / "coexistence_v0_test", target / "evaluations" / "coexistence_v0_test")
-    return population, default
-
-
 def test_population_reading_refuses_one_directory_twice(tmp_path: Path, capsys) -> None:
-    population, default = _population_dirs(tmp_path)
+    population, default = population_dirs(tmp_path)
     for argv in ([default, default], [population, default, population], [population, tmp_path / "." / "default", default]):
         assert main(["analyse", "population-reading", *map(str, argv)]) == 2
         err = capsys.readouterr().err
@@ -122,7 +105,7 @@ def test_population_reading_refuses_one_directory_twice(tmp_path: Path, capsys) 
 
 
 def test_population_reading_refuses_a_population_directory_of_default_trained_runs(tmp_path: Path, capsys) -> None:
-    population, default = _population_dirs(tmp_path)
+    population, default = population_dirs(tmp_path)
     shutil.rmtree(population / "runs")
     shutil.rmtree(population / "evaluations")
     shutil.copytree(default, population, dirs_exist_ok=True)  # (default-trained runs under another name)
@@ -134,7 +117,7 @@ def test_population_reading_refuses_a_population_directory_of_default_trained_ru
 def test_population_readings_second_evaluation_of_a_seed_names_both_files(tmp_path: Path) -> None:
     from leaderboard.population_reading import read_scores
 
-    population, default = _population_dirs(tmp_path)
+    population, default = population_dirs(tmp_path)
     again = shutil.copytree(default, tmp_path / "again")  # (one directory's copy: each seed twice)
     with pytest.raises(ValueError, match="two default-trained runs of dqn on coexistence_v0 with seed 0") as refused:
         read_scores(population, [default, again])
@@ -147,7 +130,7 @@ def test_population_reading_refuses_a_test_split_renamed_in_every_file(tmp_path:
     file) is no longer the shipped split: refused, naming the file and the shipped definition."""
     from leaderboard.population_reading import read_scores
 
-    population, default = _population_dirs(tmp_path)
+    population, default = population_dirs(tmp_path)
     for path in sorted((tmp_path).glob("*/evaluations/coexistence_v0_test/*.json")):
         document = json.loads(path.read_text())
         for scenario in document["scenario_set"]["scenarios"]:

@@ -179,7 +179,7 @@ STUDY_FORGERIES = {
     "over unknown": (_setter("plan", "objective", "over", value="all"), "plan.objective.over"),
     "parameter name with a line break": (
         _setter("plan", "params", value={"learning\nrate": "log:0.0001:0.003"}),
-        "plan.params (the parameter",
+        "plan.params (the key 'learning\\nrate')",  # (every key of a study is printable text)
     ),
     "parameter spec not a range": (_setter("plan", "params", "learning_rate", value="log:x:1e999"), "plan.params.learning_rate"),
     "env steps negative": (_setter("env_steps_trained", value=-5), "env_steps_trained"),

@@ -34,7 +34,7 @@ import numpy as np
 
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.record_parts import AgentRef, PlainTable, empty_table, frozen_plain, listed, read_only_series, thawed
-from empathy_zoo.result_file import PRICE_COLUMN, experiment_of
+from empathy_zoo.result_file import KNOWN_FIELDS, PRICE_COLUMN, experiment_of
 
 __all__ = [
     "PlainTable",
@@ -222,29 +222,6 @@ class EvalPoint:
         return {"step": self.step, **{name: listed(series) for name, series in self.metrics.items()}}
 
 
-_RESULT_FIELDS = (
-    "schema",
-    "run_id",
-    "env",
-    "variant",
-    "method",
-    "method_label",
-    "seed",
-    "config",
-    "steps",
-    "train",
-    "eval",
-    "memory_bytes",
-    "wall_time_s",
-    "version",
-    "commit",
-    "plugin_sha256",
-    "update_kernel",
-    "agent",
-    "created",
-)
-
-
 @dataclass(frozen=True, eq=False)
 class RunResult:
     """One finished run, as its result file records it (docs/formats.md), checked.
@@ -322,7 +299,7 @@ class RunResult:
             update_kernel=document.get("update_kernel"),
             agent=None if agent is None else AgentRef.from_checked(agent),
             created=document.get("created"),
-            extra=frozen_plain({key: value for key, value in document.items() if key not in _RESULT_FIELDS}),
+            extra=frozen_plain({key: value for key, value in document.items() if key not in KNOWN_FIELDS}),
             fields=tuple(document),
         )
 

@@ -193,6 +193,10 @@ def check_vector(saved: Any, obs: Any, runs: int, settings: Mapping[str, Any] | 
     _within(engine["cells"], "vector.engine.cells", 0, settings["cells"] - 1 if settings else np.inf, "the grid's cells")
     _within(t, "vector.engine.t", 0, settings["max_cycles"] if settings else MAX_CYCLES, "[0, max_cycles] (the episodes' clocks)")
     _within(engine["left_at"], "vector.engine.left_at", 0, t[:, None], "[0, t] (when an agent left its episode)")
+    if np.any(engine["present"] & (engine["left_at"] != 0)):
+        raise ForgedState(
+            "vector.engine.left_at holds a time for an agent still present (vector.engine.present): 0 until it leaves"
+        )
     _within(engine["inventory"], "vector.engine.inventory", 0, t[:, None], "[0, t] (a battery a step at most)")
     _within(engine["episode_harms"], "vector.engine.episode_harms", 0, t[:, None] * (agents - 1), "[0, t·others] (harms)")
     if not engine["running"].all():

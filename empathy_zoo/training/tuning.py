@@ -72,7 +72,6 @@ in one line where it is missing.
 from __future__ import annotations
 
 import importlib
-import json
 import multiprocessing
 import os
 import sys
@@ -87,7 +86,7 @@ import numpy as np
 
 from empathy_zoo._version import __version__
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic, write_text_atomic
-from empathy_zoo.bounded_read import check_json_depth, read_data
+from empathy_zoo.bounded_read import check_json_depth, parse_json, read_data
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
@@ -368,7 +367,7 @@ def check_journal(
         where = f"tuning journal {path}, line {number}"
         check_json_depth(line, where)
         try:
-            entry = json.loads(line)
+            entry = parse_json(line)
         except (ValueError, RecursionError) as error:
             raise ValueError(
                 f"{where} is no JSON ({str(error)[:200]}): the journal is damaged; move it away to start the study again"
