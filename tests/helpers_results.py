@@ -52,24 +52,44 @@ def hand_made_result(
 
     last = evaluations[-1] if evaluations else {}
     count = len(next((v for k, v in last.items() if k != "step"), []))
-    document = {
-        "schema": 1,
-        "run_id": "(derived below)",
-        "env": env,
-        "method": method,
-        "method_label": label,
-        "seed": seed,
-        "steps": steps if steps is not None else max([*train["episode_end_step"], *(e["step"] for e in evaluations), 1]),
-        "config": {
+    document = schema_1_document(
+        env,
+        method,
+        label,
+        seed,
+        steps if steps is not None else max([*train["episode_end_step"], *(e["step"] for e in evaluations), 1]),
+        {
             "settings": {**(settings or {}), **SCHEMA_1_SHAPING.get(method, {})},
             "env_kwargs": dict(env_kwargs or {}),
             "fixed": dict(DEFAULT_POLICIES[env]),
             "label": label,
         },
-        "train": {"episode_end_step": list(train["episode_end_step"]), **filled(train, episodes)},
-        "eval": [{"step": e["step"], **filled(e, count)} for e in evaluations],
-    }
+        {"episode_end_step": list(train["episode_end_step"]), **filled(train, episodes)},
+        [{"step": e["step"], **filled(e, count)} for e in evaluations],
+    )
     return RunResult.from_checked(as_schema_3(document))
+
+
+def schema_1_document(
+    env: str, method: str, label: str, seed: int, steps: int, config: dict, train: dict, evaluations: list, **more: object
+) -> dict:
+    """A schema-1 result document of these fields (and ``more`` top-level ones), under the run id
+    its config gives (:func:`derive_run_id`)."""
+    return derive_run_id(
+        {
+            "schema": 1,
+            "run_id": "(derived below)",
+            "env": env,
+            "method": method,
+            "method_label": label,
+            "seed": seed,
+            "steps": steps,
+            "config": config,
+            "train": train,
+            "eval": evaluations,
+            **more,
+        }
+    )
 
 
 def as_schema_3(document: dict, path: str = "synthetic.json") -> dict:

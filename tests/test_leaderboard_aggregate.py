@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, record
+from helpers_results import derive_run_id, record, schema_1_document
 
 from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.metrics import METRIC_NAMES
@@ -59,23 +59,19 @@ def make_document(
     evaluations = []
     if eval_survival is not None:
         evaluations.append({"step": steps, **{metric: column(eval_survival, metric) for metric in METRIC_NAMES}})
-    return derive_run_id(
-        {
-            "schema": 1,
-            "run_id": "(derived below)",
-            "env": env,
-            "method": method,
-            "method_label": label,
-            "seed": seed,
-            "steps": steps,
-            "config": {"settings": {}, "env_kwargs": {}, "fixed": {}},
-            "train": train,
-            "eval": evaluations,
-            "wall_time_s": 0.0,
-            "version": "0.1.0",
-            "commit": None,
-            "created": "2026-01-01T00:00:00+00:00",
-        }
+    return schema_1_document(
+        env,
+        method,
+        label,
+        seed,
+        steps,
+        {"settings": {}, "env_kwargs": {}, "fixed": {}},
+        train,
+        evaluations,
+        wall_time_s=0.0,
+        version="0.1.0",
+        commit=None,
+        created="2026-01-01T00:00:00+00:00",
     )
 
 

@@ -8,11 +8,10 @@ import json
 import os
 import re
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id
+from helpers_results import derive_run_id, schema_1_document
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAMES
 from empathy_zoo.provenance import package_version
@@ -70,27 +69,21 @@ def write_synthetic_results(
                         name: (np.round(value) if name in INTEGER_METRICS else value).tolist() for name, value in clipped.items()
                     }
 
-                result: dict[str, Any] = {
-                    "schema": 1,
-                    "run_id": "(derived below)",
-                    "env": env,
-                    "method": method,
-                    "method_label": label,
-                    "seed": seed,
-                    "steps": steps,
-                    "config": {
-                        "settings": {"selfishness": 0.5} if method == "empathic_dqn" else {},
-                        "env_kwargs": {},
-                        "fixed": {},
-                    },
-                    "train": {"episode_end_step": end_steps, **columns(n)},
-                    "eval": [{"step": s, **columns(5)} for s in (steps // 2, steps)],
-                    "wall_time_s": 1.0,
-                    "version": "0.1.0",
-                    "commit": None,
-                    "created": "2026-01-01T00:00:00Z",
-                }
-                path = directory / f"{derive_run_id(result)['run_id']}.json"
+                result = schema_1_document(
+                    env,
+                    method,
+                    label,
+                    seed,
+                    steps,
+                    {"settings": {"selfishness": 0.5} if method == "empathic_dqn" else {}, "env_kwargs": {}, "fixed": {}},
+                    {"episode_end_step": end_steps, **columns(n)},
+                    [{"step": s, **columns(5)} for s in (steps // 2, steps)],
+                    wall_time_s=1.0,
+                    version="0.1.0",
+                    commit=None,
+                    created="2026-01-01T00:00:00Z",
+                )
+                path = directory / f"{result['run_id']}.json"
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_text(json.dumps(result), encoding="utf-8")
                 paths.append(path)
