@@ -172,3 +172,23 @@ def test_the_writer_refuses_a_header_the_readers_refuse(tmp_path: Path) -> None:
             write_agent_file(_Plain(), 0, tmp_path / f"{name}.agent.pt", header)
         assert not (tmp_path / f"{name}.agent.pt").exists()
     assert write_agent_file(_Plain(), 0, tmp_path / "alone.agent.pt", {k: v for k, v in no_seed.items() if k != "run_id"})
+
+
+@pytest.mark.parametrize("env", ["charger_v0", "coexistence_v0", "helping_v0", "sharing_v0", "vase_v0"])
+def test_an_agent_still_present_has_left_at_0_on_every_engine(env: str) -> None:
+    """The rule a checkpoint's ``left_at`` is held to (a present agent has not left) holds on random play."""
+    from empathy_zoo.environments import ENGINES
+
+    engine = ENGINES[env](32, max_cycles=40)
+    rng = np.random.default_rng(1)
+    engine.reset(seeds=list(range(32)))
+    left = 0
+    for _ in range(300):
+        events = engine.step(rng.integers(0, engine.num_actions, size=(engine.num_envs, engine.num_agents)))
+        assert not np.any(engine.present & (engine.left_at != 0))
+        left += int(np.count_nonzero(engine.left_at))
+        over = np.flatnonzero(events.episode_over)
+        if over.size:
+            engine.reset(over)
+    assert sorted(ENGINES) == ["charger_v0", "coexistence_v0", "helping_v0", "sharing_v0", "vase_v0"]
+    assert (left > 0) == (env != "sharing_v0"), "agents leave an episode (left_at set) but in Sharing, where none does"
