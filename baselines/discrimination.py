@@ -35,7 +35,7 @@ from typing import Any, Protocol
 
 from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
-from empathy_zoo.document_checks import shown
+from empathy_zoo.document_checks import finite_float, shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
 from empathy_zoo.names import check_path_name, terminal_line
 
@@ -120,13 +120,9 @@ def method_rows(table: Mapping[str, Any]) -> dict[str, str]:
     rows: dict[str, str] = {}
     for row in table["rows"]:
         beta = row.get("selfishness")
-        if beta is None or _beta(beta) == MATRIX_BETA:
+        if beta is None or finite_float(beta) == float(MATRIX_BETA):  # (the number itself: 0.5000001 is not 0.5)
             rows.setdefault(row["method"], row["name"])
     return rows
-
-
-def _beta(value: float) -> str:
-    return f"{value:g}"
 
 
 class MissingPair(ValueError):
@@ -304,6 +300,24 @@ def discrimination_markdown(
     return "\n".join(lines) + "\n"
 
 
+def _path(text: str) -> Path | str:
+    """A path argument as a :class:`~pathlib.Path`; an empty one kept as ``""`` for :func:`main` to
+    refuse (``Path("")`` is the current directory: an empty argument must not read or write there)."""
+    return Path(text) if text else ""
+
+
+def _refused_argument(args: argparse.Namespace) -> str | None:
+    """What is wrong with an argument of ``args`` (its option named), or ``None``."""
+    for option, value in (("directory", args.directory), ("--out", args.out)):
+        if value == "":
+            return f"argument {option}: an empty path; give a file or folder"
+    if any(path == "" for path in getattr(args, "results", [])):
+        return "argument --results: an empty path; give a results directory"
+    if finite_float(args.epsilon) is None or not 0.0 <= args.epsilon <= 1.0:
+        return f"argument --epsilon: expected an exploration rate in [0, 1], got {shown(args.epsilon)}"
+    return None
+
+
 TrainedCells = Callable[[Mapping[str, Mapping[str, Any]], Sequence[Path]], Mapping[tuple[str, str, str], TrainedPart]]
 """What reads trained runs into cells: ``(tables, results directories) -> {(task, first, second): part}``."""
 
@@ -314,19 +328,23 @@ def main(
     """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``; with ``trained``
     (:func:`leaderboard.trained_discrimination.main` passes it), ``--results DIR`` too."""
     parser = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
-    parser.add_argument("directory", nargs="?", type=Path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
+    parser.add_argument("directory", nargs="?", type=_path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
     parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
     if trained is not None:
         parser.add_argument(
             "--results",
-            type=Path,
+            type=_path,
             action="append",
             default=[],
             metavar="DIR",
             help="a results directory of trained runs (repeat)",
         )
-    parser.add_argument("--out", type=Path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
+    parser.add_argument("--out", type=_path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
     args = parser.parse_args(argv)
+    refused = _refused_argument(args)
+    if refused is not None:  # (before any table is read: the argument itself, one line)
+        print(f"discrimination: error: {terminal_line(refused)}", file=sys.stderr)
+        return 2
     results: list[Path] = getattr(args, "results", [])
     out = args.out or args.directory / "DISCRIMINATION.md"
     command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")

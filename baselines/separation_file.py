@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.bounded_read import check_json_depth, parse_json
-from empathy_zoo.document_checks import DocumentChecker
+from empathy_zoo.document_checks import DocumentChecker, shown
 from empathy_zoo.limits import read_bounded
 
 __all__ = [
@@ -127,6 +127,47 @@ def _row_name(check: DocumentChecker, value: Any, field: str, names: set[str]) -
     return value
 
 
+def _plain_rest(check: DocumentChecker, entry: dict[str, Any], read: frozenset[str], where: str) -> None:
+    """Every field of ``entry`` that no check reads (``where`` is its prefix, ``"rows[0]."``) plain
+    data (:meth:`DocumentChecker.plain`): a reader may show it, so nothing that is no finite
+    number or printable text passes unseen (``zzz: NaN``, an escape in a note)."""
+    for key, value in entry.items():
+        if key in read:
+            continue
+        if key:
+            check.text(key, f"{where or '(the document) '}(the key {key[:60]!r})")
+        check.plain(value, f"{where}{key}")
+
+
+_READ_TOP = frozenset(("env", "arguments", "rows", "outcomes", "pairs", "omitted"))
+_READ_ROW = frozenset(("name", "method", "selfishness", "identical_to", "reason"))
+_READ_OUTCOME = frozenset(("row", "epsilon", "harms", "robot_harmed", "survival", "changed"))
+_READ_PAIR = frozenset(
+    (
+        "first",
+        "second",
+        "epsilon",
+        "differ",
+        "differing_states",
+        "reachable_states",
+        "harms_difference",
+        "equality_difference",
+        "by_construction",
+    )
+)
+_READ_OMISSION = frozenset(("method", "reason"))
+
+
+def _environment(check: DocumentChecker, value: Any) -> str:
+    """The name of a registered environment (:data:`empathy_zoo.environments.ENGINES`)."""
+    from empathy_zoo.environments import ENGINES
+
+    name = check.text(value, "env")
+    if name not in ENGINES:
+        raise check.fail("env", f"a registered environment ({', '.join(sorted(ENGINES))})", value)
+    return name
+
+
 def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     """``document`` when it is a separation table whose every field the readers use is in range,
     else :class:`SeparationTableError` naming ``path`` and the field."""
@@ -134,7 +175,8 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
     table = check.table(document, "(the document)")
     check.has(table, ("rows", "outcomes", "pairs"), "")
     if "env" in table:
-        check.text(table["env"], "env")
+        _environment(check, table["env"])
+    _plain_rest(check, table, _READ_TOP, "")
     arguments = table.get("arguments", [])
     if not isinstance(arguments, list) or len(arguments) > MAX_ARGUMENTS:
         raise check.fail("arguments", f"an array of at most {MAX_ARGUMENTS} [name, value] pairs", arguments)
@@ -148,8 +190,10 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         else:
             check.integer(pair[1], f"arguments[{i}][1]", -(10**9), 10**9)
     names: set[str] = set()
+    same_as: dict[str, str] = {}  # (each row's first row by identical_to: rows marked identical, directly or not, share it)
     for i, row in enumerate(_entries(check, table["rows"], "rows", MAX_ROWS)):
         where = f"rows[{i}]"
+        _plain_rest(check, row, _READ_ROW, f"{where}.")
         check.has(row, ("name", "method"), f"{where}.")
         name = _short(check, row["name"], f"{where}.name")
         if name in names:
@@ -162,26 +206,45 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
             _optional_text(check, row.get(key, ""), f"{where}.{key}")
         if row.get("identical_to") and row["identical_to"] not in names:  # (text: checked above)
             raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
+        same_as[name] = same_as[row["identical_to"]] if row.get("identical_to") else name
+    outcomes: set[tuple[str, float]] = set()
     for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
         where = f"outcomes[{i}]"
         check.has(outcome, ("row", "epsilon", "harms", "robot_harmed"), f"{where}.")
-        _row_name(check, outcome["row"], f"{where}.row", names)
-        _fraction(check, outcome["epsilon"], f"{where}.epsilon")
+        _plain_rest(check, outcome, _READ_OUTCOME, f"{where}.")
+        row_name = _row_name(check, outcome["row"], f"{where}.row", names)
+        epsilon = _fraction(check, outcome["epsilon"], f"{where}.epsilon")
+        if (row_name, epsilon) in outcomes:
+            raise check.fail(f"{where}.epsilon", f"an ε at which row {shown(row_name)} has no other outcome", epsilon)
+        outcomes.add((row_name, epsilon))
         _bounded(check, outcome["harms"], f"{where}.harms")
         _fraction(check, outcome["robot_harmed"], f"{where}.robot_harmed")
         if "survival" in outcome:
             _bounded(check, outcome["survival"], f"{where}.survival")
         if outcome.get("changed") is not None:
             _probability(check, outcome["changed"], f"{where}.changed")
+    epsilons = {epsilon for _, epsilon in outcomes}
+    pairs: set[tuple[frozenset[str], float]] = set()
     for i, pair in enumerate(_entries(check, table["pairs"], "pairs")):
         where = f"pairs[{i}]"
         required = ("first", "second", "epsilon", "differ", "differing_states", "harms_difference", "by_construction")
         check.has(pair, required, f"{where}.")
-        for key in ("first", "second"):
-            _row_name(check, pair[key], f"{where}.{key}", names)
-        _fraction(check, pair["epsilon"], f"{where}.epsilon")
+        _plain_rest(check, pair, _READ_PAIR, f"{where}.")
+        first, second = (_row_name(check, pair[key], f"{where}.{key}", names) for key in ("first", "second"))
+        if second == first:
+            raise check.fail(f"{where}.second", f"a row other than the first ({shown(first)})", second)
+        epsilon = _fraction(check, pair["epsilon"], f"{where}.epsilon")
+        if epsilon not in epsilons:
+            shown_epsilons = ", ".join(f"{e!r}" for e in sorted(epsilons)[:10])
+            raise check.fail(f"{where}.epsilon", f"an ε of the outcomes ({shown_epsilons or 'none'})", epsilon)
+        if (frozenset((first, second)), epsilon) in pairs:
+            raise check.fail(f"{where}.second", f"a row not paired with {shown(first)} at ε = {epsilon!r} before", second)
+        pairs.add((frozenset((first, second)), epsilon))
         if not isinstance(pair["differ"], bool):
             raise check.fail(f"{where}.differ", "true or false", pair["differ"])
+        if pair["differ"] and same_as[first] == same_as[second]:
+            expected = f"false ({shown(first)} and {shown(second)} are marked identical: identical_to)"
+            raise check.fail(f"{where}.differ", expected, pair["differ"])
         differing = check.integer(pair["differing_states"], f"{where}.differing_states", 0, MAX_COUNT)
         if pair["differ"] != (differing > 0):  # (the producer: differ exactly where a reachable state differs)
             expected = f"{str(differing > 0).lower()} (differing_states is {differing})"
@@ -197,6 +260,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         _optional_text(check, pair["by_construction"], f"{where}.by_construction")
     for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
         check.has(omission, ("method", "reason"), f"omitted[{i}].")
+        _plain_rest(check, omission, _READ_OMISSION, f"omitted[{i}].")
         check.text(omission["method"], f"omitted[{i}].method")
         check.text(omission["reason"], f"omitted[{i}].reason")
     return table

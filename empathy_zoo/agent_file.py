@@ -206,19 +206,19 @@ def _check_header(header: Any) -> dict[str, Any]:
 
 
 def _written_header(header: Any) -> dict[str, Any]:
-    """``header`` as a writer stores it (:func:`_check_header`), its ``run_id`` (where it has one)
-    the id its fields give, as the readers require (:func:`_check_header_run_id`): no agent file is
-    written that they refuse; ``ValueError`` otherwise."""
+    """``header`` as a writer stores it (:func:`_check_header`), once every field is one the readers
+    take (:func:`_check_header_fields`, :func:`_check_header_run_id`): no agent file is written that
+    they refuse; ``ValueError`` naming the field otherwise."""
     checked = _check_header(header)
-    if "run_id" in checked:
-        seed = checked.get("seed")
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-            raise ValueError(f"an agent file's header with a run_id holds its seed (0 to {MAX_SEED:,}), got {seed!r}")
-        if checked["run_id"] != _header_run_id(checked, seed):
-            raise ValueError(
-                f"an agent file's header run_id {checked['run_id']!r} is not the id its fields give, "
-                f"{_header_run_id(checked, seed)} (empathy_zoo.run_ids.run_id); leave run_id out of a header of no run"
-            )
+    check = DocumentChecker(
+        Path("the agent file's header to write"),
+        ValueError,
+        "an agent file's header",
+        "a header the readers take",
+        "write the run's configuration as the trainer does (docs/formats.md, the agent file)",
+    )
+    _check_header_fields(Path(), checked, check)
+    _check_header_run_id(Path(), checked, check)
     return checked
 
 
@@ -416,6 +416,7 @@ def load_agent(
         if result_file is not None:
             check_against_result(path, member["header"], result_file, recorded)
         _check_header_run_id(path, member["header"])
+        _check_env_sizes(path, member["header"], int(member["obs_size"]), int(member["num_actions"]))
         return _load_library_agent(path, data, member, source)
     problem = torch_zip_problem(members, len(data))
     if problem:
@@ -447,6 +448,7 @@ def load_agent(
     if result_file is not None:
         check_against_result(path, header, result_file, recorded)
     _check_header_run_id(path, header)
+    _check_env_sizes(path, header, obs_size, num_actions)
     description = _description(header, obs_size, num_actions, list(heads), document["acting"], source)
     description["layers"] = [obs_size] + [int(t.shape[0]) for t in heads[document["acting"]][1::2]]
     return TrainedAgent(heads, document["acting"], description)
@@ -494,7 +496,7 @@ def check_against_result(
             )
 
 
-def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
+def _check_header_run_id(path: Path, header: Mapping[str, Any], check: DocumentChecker | None = None) -> None:
     """Refuse (:class:`AgentFileError` naming the file and the field) a header (checked) whose
     ``run_id`` is not the id its own fields give (:func:`~empathy_zoo.run_ids.run_id`: the trainer
     writes ``{"run_id": ..., **config}``), so an agent read alone (``watch``) is the run it names.
@@ -502,7 +504,7 @@ def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
     with a ``run_id`` must hold its ``seed`` (a whole number), one without has no id to compare."""
     if "run_id" not in header:
         return
-    check = _checker(path)
+    check = check or _checker(path)
     seed = check.integer(header.get("seed"), "header.seed", 0, MAX_SEED)  # (a run id ends with its seed)
     expected = _header_run_id(header, seed)
     if header["run_id"] != expected:
@@ -510,6 +512,33 @@ def _check_header_run_id(path: Path, header: Mapping[str, Any]) -> None:
             "header.run_id",
             f"{expected} (the id its header gives: a hash of the run's configuration without seed and description)",
             header["run_id"],
+        )
+
+
+def _check_env_sizes(path: Path, header: Mapping[str, Any], obs_size: int, num_actions: int) -> None:
+    """Refuse (:class:`AgentFileError` naming the file and the field) an agent whose networks do
+    not fit the environment its header (checked) names: ``num_actions`` outputs, one per action of
+    its engine, and an input of the observation its ``env_kwargs`` give (the environment is built
+    for one episode to measure it; nothing is played). Checked last, so a header that contradicts
+    its result file is named as such first; before anything is played or written."""
+    check = _checker(path)
+    engine = ENGINES[header["env"]]
+    if num_actions != engine.num_actions:
+        raise check.fail(
+            "num_actions", f"{engine.num_actions}, the actions of {header['env']} (its networks' outputs)", num_actions
+        )
+    try:
+        size = int(engine(1, **header["env_kwargs"]).obs_size)
+    except ValueError as error:
+        raise check.fail(
+            "header.env_kwargs", f"arguments {header['env']} is built with ({one_line(str(error), 200)})", header["env_kwargs"]
+        ) from None
+    if size != obs_size:
+        raise check.fail(
+            "header.env_kwargs",
+            f"arguments giving the observation its network reads ({obs_size:,} values; {header['env']} with these "
+            f"gives {size:,})",
+            header["env_kwargs"],
         )
 
 
@@ -626,7 +655,7 @@ def _checker(path: Path) -> DocumentChecker:
     )
 
 
-def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
+def _check_header_fields(path: Path, header: dict[str, Any], check: DocumentChecker | None = None) -> dict[str, Any]:
     """``header`` (plain data with :data:`HEADER_KEYS`, read from the agent file at ``path``) if each
     field a reader uses is what the trainer writes (the run's configuration, as its result file's
     ``config``): no key but :data:`HEADER_KEYS` and :data:`HEADER_OPTIONAL`; ``method`` a registered
@@ -638,9 +667,9 @@ def _check_header_fields(path: Path, header: dict[str, Any]) -> dict[str, Any]:
     file-name-safe names, ``label`` a label, ``fixed`` agent names and policy labels (parsed as
     text, nothing resolved), ``seed``, ``steps``, ``eval_interval`` and ``eval_episodes`` within
     their bounds, ``reward`` and ``description`` plain data of finite numbers and printable text.
-    Anything else raises :class:`AgentFileError` naming the file and the field; nothing read from
-    it is printed or built before."""
-    check = _checker(path)
+    Anything else raises :class:`AgentFileError` naming the file and the field (``check``'s error,
+    where given: the writer's); nothing read from it is printed or built before."""
+    check = check or _checker(path)
     for key in header:
         if key not in HEADER_KEYS and key not in HEADER_OPTIONAL:
             raise check.fail(

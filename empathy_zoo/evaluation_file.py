@@ -374,7 +374,7 @@ def _others(env: str, env_kwargs: Mapping[str, Any]) -> str:
 def evaluation_mismatch(evaluation: EvaluationResult, run: RunFacts) -> str | None:
     """What of ``evaluation`` is not of ``run`` (both records of checked files), as ``"<what>:
     <found>, its run has <value>"``, or ``None`` when it is that run's: its run id, environment,
-    variant, method, seed, the agent file's SHA-256 its result file records, its
+    variant, method, seed, the agent file (name and SHA-256) its result file records, its
     :data:`TRAINED_WITH` scenario the run's own world and partners, and every other scenario
     ``held_out`` exactly when it is another world than that (what ``empathy-zoo evaluate`` writes
     of the run)."""
@@ -385,6 +385,7 @@ def evaluation_mismatch(evaluation: EvaluationResult, run: RunFacts) -> str | No
         ("variant", evaluation.variant, run.variant or run.env),
         ("method", evaluation.method, run.method),
         ("seed", evaluation.seed, run.seed),
+        ("agent.file", evaluation.agent.file, None if run.agent is None else run.agent.file),
         ("agent.sha256", evaluation.agent.sha256, None if run.agent is None else run.agent.sha256),
         (f"scenarios[0].env_kwargs ({TRAINED_WITH})", dict(own.env_kwargs), dict(run.config.env_kwargs)),
         (f"scenarios[0].fixed ({TRAINED_WITH})", dict(own.fixed), dict(run.config.fixed)),

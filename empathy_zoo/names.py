@@ -20,6 +20,7 @@ __all__ = [
     "MAX_NAME",
     "PATH_NAME",
     "check_label",
+    "check_output_file",
     "check_no_links",
     "check_path_name",
     "check_replaceable",
@@ -117,6 +118,23 @@ _KINDS = (
     (stat.S_ISSOCK, "a socket"),
 )
 """What may lie in a file's place but a regular file or a link, as a refusal names it."""
+
+
+def check_output_file(out: str | os.PathLike[str], kind: str, suffix: str, example: str) -> Path:
+    """``out`` as a path if a ``kind`` file (``"PNG"``, ``"JSON"``) can be written there; else a
+    ``ValueError`` naming it: an existing directory, a name not ending in ``suffix``, anything but
+    a regular file in its place (:func:`check_replaceable`), or a parent that is a file. ``example``
+    is a file name a message suggests."""
+    path = Path(out)
+    if path.is_dir() and not path.is_symlink():
+        raise ValueError(f"{out} is a directory: name the {kind} file to write (e.g. {path / example})")
+    if path.suffix.lower() != suffix:
+        raise ValueError(f"{out} is no {kind} file name: name the file to write, ending in {suffix} (e.g. {example})")
+    check_replaceable(path)  # (only nothing or a regular file is replaced: never a link, a FIFO or a device)
+    parent = next((folder for folder in path.absolute().parents if folder.exists()), None)
+    if parent is not None and not parent.is_dir():
+        raise ValueError(f"{out} cannot be written: {parent} is a file, not a directory")
+    return path
 
 
 def check_replaceable(path: str | os.PathLike[str]) -> Path:

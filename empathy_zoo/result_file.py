@@ -252,7 +252,7 @@ def _check_agent(check: DocumentChecker, result: Mapping[str, Any]) -> None:
 def check_agent_record(check: DocumentChecker, value: Any, run_id: str) -> dict[str, Any]:
     """``agent`` (``value``), the record of run ``run_id``'s agent file, as a result or an
     evaluation file holds it: ``{"file": "<run id>.agent.pt", "sha256": ...}``, the file's name
-    the run's id and one of :data:`AGENT_SUFFIXES`."""
+    the run's id and one of :data:`AGENT_SUFFIXES`; any other field plain data."""
     entry = check.table(value, "agent")
     check.has(entry, ("file", "sha256"), "agent.")
     name = check.name(check.text(entry["file"], "agent.file"), "agent.file")
@@ -260,6 +260,8 @@ def check_agent_record(check: DocumentChecker, value: Any, run_id: str) -> dict[
         raise check.fail("agent.file", f"the run's agent file, {run_id} + one of {AGENT_SUFFIXES}", name)
     if not (isinstance(entry["sha256"], str) and _SHA256.fullmatch(entry["sha256"])):
         raise check.fail("agent.sha256", "a SHA-256 (64 lowercase hex digits)", entry["sha256"])
+    for key in [key for key in entry if key not in ("file", "sha256")]:  # (kept as written: plain data)
+        check.plain(entry[key], f"agent.{key}")
     return entry
 
 

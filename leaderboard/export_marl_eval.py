@@ -44,7 +44,7 @@ from typing import Any
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_replaceable
+from empathy_zoo.names import check_output_file
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs
 from leaderboard.sources import load_results_dirs
@@ -136,15 +136,7 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
     symbolic link, named with its target, a FIFO, a device: :func:`empathy_zoo.names.check_replaceable`),
     a parent that is a file, or the folder the result files of one of ``results_dirs`` are read
     from (:func:`leaderboard.aggregate.result_files`)."""
-    path = Path(out)
-    if path.is_dir() and not path.is_symlink():
-        raise ValueError(f"{out} is a directory: name the JSON file to write (e.g. {path / 'marl_eval.json'})")
-    if path.suffix.lower() != ".json":
-        raise ValueError(f"{out} is no JSON file name: name the file to write, ending in .json (e.g. marl_eval.json)")
-    check_replaceable(path)  # (only nothing or a regular file is replaced: never a link, a FIFO or a device)
-    parent = next((folder for folder in path.absolute().parents if folder.exists()), None)
-    if parent is not None and not parent.is_dir():
-        raise ValueError(f"{out} cannot be written: {parent} is a file, not a directory")
+    path = check_output_file(out, "JSON", ".json", "marl_eval.json")
     for directory in results_dirs:
         root = Path(directory) / RUNS_DIR if (Path(directory) / RUNS_DIR).is_dir() else Path(directory)
         if root.is_dir() and path.absolute().parent.resolve() == root.resolve():

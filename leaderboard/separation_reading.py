@@ -29,7 +29,7 @@ import numpy as np
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import code_span
 from empathy_zoo.names import terminal_line
-from leaderboard.trained_separation import BETA, FEWER, MORE, Judgement, Prediction, judge, predictions, task_separates
+from leaderboard.trained_separation import FEWER, MORE, Judgement, Prediction, at_beta, judge, predictions, task_separates
 
 __all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
 
@@ -63,7 +63,7 @@ def final_harms(results: Sequence[RunResult], selfish_methods: Mapping[str, bool
             continue
         if selfish_methods.get(run.method, False):
             beta = run.config.settings.get("selfishness")
-            if beta is None or f"{float(beta):g}" != BETA:
+            if beta is None or not at_beta(beta):  # (the number itself: 0.5000001 is not 0.5)
                 continue
         seeds = found.setdefault((run.env, run.method), {})
         if run.seed in seeds:
@@ -136,11 +136,21 @@ def _read_tables(folder: Path, tasks: Sequence[str]) -> dict[str, dict[str, Any]
     return {task: read_separation_table(folder / f"{task}.json") for task in tasks if os.path.lexists(folder / f"{task}.json")}
 
 
+def _path(text: str) -> Path | str:
+    """A path argument as a :class:`~pathlib.Path`; an empty one kept as ``""`` for :func:`main` to
+    refuse (``Path("")`` is the current directory: an empty argument must not read there)."""
+    return Path(text) if text else ""
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m leaderboard.separation_reading", description=__doc__.splitlines()[0][2:])
-    parser.add_argument("results", type=Path, help="a results directory (its runs/ or itself holds the result files)")
-    parser.add_argument("--tables", type=Path, default=TABLES, help="the separation tables' folder (default: the shipped ones)")
+    parser.add_argument("results", type=_path, help="a results directory (its runs/ or itself holds the result files)")
+    parser.add_argument("--tables", type=_path, default=TABLES, help="the separation tables' folder (default: the shipped ones)")
     args = parser.parse_args(argv)
+    for option, value in (("results", args.results), ("--tables", args.tables)):
+        if value == "":  # (the argument itself, before anything is read: one line)
+            print(f"separation_reading: error: argument {option}: an empty path; give a folder", file=sys.stderr)
+            return 2
     from empathy_zoo.training.heldout import results_of
 
     try:

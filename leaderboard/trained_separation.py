@@ -34,6 +34,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from empathy_zoo.document_checks import finite_float
 from leaderboard.improvement import TOO_FEW_SEEDS, improvement_interval, improvement_verdict
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "MATERIAL",
     "NEGLIGIBLE",
     "Judgement",
+    "at_beta",
     "Prediction",
     "counted_harms",
     "judge",
@@ -101,10 +103,16 @@ class Judgement:
         return "not confirmed"
 
 
+def at_beta(value: Any) -> bool:
+    """Whether the selfishness weight ``value`` is :data:`BETA` itself: the number, never its
+    rounded text (a β of 0.5000001, which ``:g`` prints as 0.5, is another β: not read)."""
+    return finite_float(value) == float(BETA)
+
+
 def _row_method(row: Mapping[str, Any]) -> str | None:
     """The method a table row stands for in the reading, or ``None`` for a β it does not read."""
     beta = row.get("selfishness")
-    if beta is not None and f"{float(beta):g}" != BETA:
+    if beta is not None and not at_beta(beta):
         return None
     return str(row["method"])
 

@@ -16,9 +16,12 @@ checked field by field (:func:`check_study`) before anything is printed or drawn
 from __future__ import annotations
 
 import argparse
+import contextlib
 import io
+import math
 import os
 import sys
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,13 +34,14 @@ from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.names import terminal_line
-from empathy_zoo.training.study_plan import DIRECTIONS
+from empathy_zoo.names import check_output_file, terminal_line
+from empathy_zoo.training.study_plan import DIRECTIONS, curve_value
 from leaderboard.tables import markdown_text
 
 __all__ = [
     "StudySummary",
     "StudyFileError",
+    "check_figure_path",
     "check_study",
     "find_studies",
     "summarise",
@@ -207,18 +211,49 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--figure", metavar="PATH", type=_named_path, help="draw the trials of every study into this PNG")
     args = parser.parse_args(argv)
     try:
-        read = [(path, check_study(read_study(path), path)) for path in find_studies(args.root)]
+        if args.figure is not None:
+            check_figure_path(args.figure)
+        paths = find_studies(args.root)
+        if args.figure is not None:
+            check_figure_path(args.figure, paths)
+        read = [(path, check_study(read_study(path), path)) for path in paths]
         studies = [study for _, study in read]
         table = summary_table([_checked(path, summarise, study) for path, study in read])
         figure = _checked(Path(args.root), render_studies_png, studies) if args.figure is not None else None
-    except ValueError as error:
+        if figure is not None:
+            write_bytes_atomic(args.figure, figure)
+    except (ValueError, OSError) as error:
         print(f"tuning_summary: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(table)
     if figure is not None:
-        write_bytes_atomic(args.figure, figure)
         print(f"\nwrote {args.figure}")
     return 0
+
+
+def check_figure_path(figure: str | os.PathLike[str], studies: Sequence[Path] = ()) -> Path:
+    """``figure`` as a path if the figure can be written there; ``ValueError`` naming it otherwise
+    (before anything is read or written): a name not ending in ``.png``, an existing directory,
+    anything but a regular file in its place (a symbolic link, named with its target, a FIFO, a
+    device: :func:`empathy_zoo.names.check_replaceable`), a parent that is a file, or one of the
+    ``studies`` read (the same file, by its resolved path or, once there, by device and inode:
+    drawing would replace it)."""
+    path = Path(figure)
+    for study in studies:
+        if path.resolve() == study.resolve() or (path.exists() and _same_file(path, study)):
+            raise ValueError(
+                f"{figure} lies where the study file {study} is read (it is that file): the figure would replace it; "
+                "write it elsewhere"
+            )
+    return check_output_file(path, "PNG", ".png", "studies.png")
+
+
+def _same_file(path: Path, other: Path) -> bool:
+    """Whether ``path`` and ``other`` are one file (a hard link); ``False`` where either cannot be looked at."""
+    try:
+        return os.path.samefile(path, other)
+    except OSError:
+        return False
 
 
 MAX_STUDY_BYTES = 64 * 2**20
@@ -249,6 +284,23 @@ MAX_ENV_STEPS = MAX_TRIALS * MAX_SEEDS * MAX_STEPS
 """The most env steps a study may spend: its trials, each on its tuning seeds, each of its steps."""
 RANGE_KINDS = ("log", "float", "int")
 """The kinds of a parameter spec that give a range (``choice`` lists its values)."""
+STUDY_SCHEMA = 1
+"""The layout of ``study.json`` that ``tune`` writes (:data:`empathy_zoo.training.tuning.STUDY_SCHEMA`;
+a study written before it held none)."""
+MAX_RANGE_END = 1e300
+"""The largest magnitude of a range's end (a ``log`` range's low end at least its inverse): ``tune``
+takes any finite one, but the figure draws a margin past each end, which past this is no float."""
+
+
+@dataclass(frozen=True)
+class _Spec:
+    """A parameter's spec as read: its kind, a range's ends, a choice's values (each as its text
+    and, where the text is a TOML literal, that value)."""
+
+    kind: str
+    low: float = 0.0
+    high: float = 0.0
+    choices: tuple[tuple[str, Any], ...] = ()
 
 
 def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -259,11 +311,18 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     (:func:`empathy_zoo.names.check_label`); the objective's metric and its reduction the suite's;
     each env step count a whole number within ``trials × tuning seeds × steps`` at their bounds;
     each trial's state one ``tune`` writes, its wall time within ten years; every parameter value
-    one of the plan's parameters, within its range; the best value finite, within its metric's range.
+    one of the plan's parameters, within its range (a ``choice``'s one of its values: a number or a
+    boolean as :func:`tomllib` reads the spec's text, text as text), every trial but an interrupted
+    one holding each of them; ``schema`` the one ``tune`` writes (or none); a range's ends ``LOW <
+    HIGH`` within :data:`MAX_RANGE_END`, so the figure's margins are floats; the best value finite,
+    within its metric's range.
     The fields agree with each other: ``trials`` not empty, each trial's number its own and below
-    their count (``tune`` numbers them from 0); a trial's ``steps_trained`` its curve's last step,
-    ``env_steps_trained`` the counted trials' sum times the tuning seeds; ``plan.budget.trials``
-    the trials ``env_steps_at_most`` holds; a ``log`` range above 0; every value
+    their count (``tune`` numbers them from 0); every trial's ``steps_trained`` (``tune`` writes it)
+    its curve's last step, ``env_steps_trained`` the counted trials' sum times the tuning seeds; a
+    finished trial's curve up to the budget's last step, its ``value`` and every trial's
+    ``last_value`` what its curve gives over the objective (last point or mean, up to float
+    rounding), no ``value`` for a trial that did not finish; ``best`` set once a trial finished;
+    ``plan.budget.trials`` the trials ``env_steps_at_most`` holds; a ``log`` range above 0; every value
     of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
     within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
     tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
@@ -278,6 +337,11 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     for key, item in study.items():
         check.plain(item, key)  # (every string one line of printable text, every number finite)
     check.has(study, ("plan", "env_steps_trained", "best", "trials"), "")
+    schema = study.get("schema", STUDY_SCHEMA)
+    if isinstance(schema, bool) or not isinstance(schema, int) or schema != STUDY_SCHEMA:
+        raise check.fail(
+            "schema", f"{STUDY_SCHEMA}, the layout tune writes (or none, a study written before it)", study["schema"]
+        )
     plan = check.table(study["plan"], "plan")
     check.has(plan, ("variant", "label", "params", "objective", "budget", "tuning_seeds"), "plan.")
     check.name(plan["variant"], "plan.variant")
@@ -315,6 +379,7 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     bounds = metric_bounds(metric)
     trained = check.integer(study["env_steps_trained"], "env_steps_trained", 0, at_most)
     specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
+    over = objective.get("over", "last")
     trials = study["trials"]
     if not isinstance(trials, list) or not trials:
         raise check.fail("trials", "a non-empty array of trials (tune writes one once a trial has run)", trials)
@@ -329,40 +394,51 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     for i, trial in enumerate(trials):
         where = f"trials[{i}]"
         trial = check.table(trial, where)
-        check.has(trial, ("state", "params"), f"{where}.")
+        check.has(trial, ("state", "params", "steps_trained"), f"{where}.")
         if trial["state"] not in TRIAL_STATES:
             raise check.fail(f"{where}.state", f"one of {', '.join(TRIAL_STATES)}", trial["state"])
         wall = trial.get("wall_time_s")
         if wall is not None and not 0 <= check.finite(wall, f"{where}.wall_time_s") <= MAX_WALL_TIME_S:
             raise check.fail(f"{where}.wall_time_s", f"seconds in [0, {MAX_WALL_TIME_S:,}] (ten years)", wall)
-        _params(check, trial["params"], specs, f"{where}.params")
+        _params(check, trial["params"], specs, f"{where}.params", whole=trial["state"] != "INTERRUPTED")
         number = check.integer(trial.get("number"), f"{where}.number", 0, len(trials) - 1)  # (tune numbers them from 0)
         if number in numbers:
             raise check.fail(f"{where}.number", "a trial number of its own (each trial is numbered once)", number)
         numbers[number] = trial
         if trial["state"] == "COMPLETE" and trial.get("value") is None:
             raise check.fail(f"{where}.value", "the value of a finished trial (tune writes one)", trial.get("value"))
+        if trial["state"] != "COMPLETE" and trial.get("value") is not None:
+            raise check.fail(f"{where}.value", f"null: tune writes no value of a {trial['state']} trial", trial["value"])
         for name in ("value", "last_value"):
             if trial.get(name) is not None:
                 _in_range(check, trial[name], f"{where}.{name}", metric, bounds)
         curve = trial.get("curve", [])
         _curve(check, curve, f"{where}.curve", metric, bounds, len(seeds), (steps, interval))
-        if "steps_trained" in trial:
-            done = curve[-1]["step"] if curve else 0
-            if check.integer(trial["steps_trained"], f"{where}.steps_trained", 0, steps) != done:
-                raise check.fail(
-                    f"{where}.steps_trained",
-                    f"{done:,}, the step of its curve's last point (0 without one)",
-                    trial["steps_trained"],
-                )
-    counted_steps = [trial.get("steps_trained") for trial in trials if trial["state"] != "INTERRUPTED"]
-    if None not in counted_steps and trained != sum(counted_steps) * len(seeds):
+        done = curve[-1]["step"] if curve else 0
+        if check.integer(trial["steps_trained"], f"{where}.steps_trained", 0, steps) != done:
+            raise check.fail(
+                f"{where}.steps_trained",
+                f"{done:,}, the step of its curve's last point (0 without one)",
+                trial["steps_trained"],
+            )
+        if trial["state"] == "COMPLETE" and done != steps:
+            raise check.fail(
+                f"{where}.curve",
+                f"points up to the budget's last step ({steps:,}): a finished trial trained all of it",
+                f"{len(curve):,} points, the last at step {done:,}",
+            )
+        _curve_values(check, trial, where, curve, over)
+    counted_steps = [trial["steps_trained"] for trial in trials if trial["state"] != "INTERRUPTED"]
+    if trained != sum(counted_steps) * len(seeds):
         raise check.fail(
             "env_steps_trained",
             f"{sum(counted_steps) * len(seeds):,}: each counted trial's steps_trained × {len(seeds):,} tuning seeds",
             trained,
         )
     best = study["best"]
+    if best is None and any(trial["state"] == "COMPLETE" for trial in trials):
+        first = next(trial["number"] for trial in trials if trial["state"] == "COMPLETE")
+        raise check.fail("best", f"the best finished trial (trial {first} and maybe others finished)", best)
     if best is not None:
         best = check.table(best, "best")
         check.has(best, ("value", "params"), "best.")
@@ -388,6 +464,23 @@ def _check_best(
         raise check.fail(
             "best.number", f"the best finished trial ({direction}: trial {top['number']}, value {top['value']!r})", best["number"]
         )
+
+
+def _curve_values(check: DocumentChecker, trial: Mapping[str, Any], where: str, curve: list[Any], over: str) -> None:
+    """A trial's ``value`` (a finished one's) and ``last_value`` what its ``curve`` gives over the
+    objective (:func:`~empathy_zoo.training.study_plan.curve_value`: its last point or their mean, as
+    ``tune`` computes them; equal up to float rounding), ``last_value`` null without a curve."""
+    given = curve_value([point["value"] for point in curve], over) if curve else None
+    for name in ("value", "last_value") if trial["state"] == "COMPLETE" else ("last_value",):
+        value = trial.get(name)
+        agrees = value is None if given is None else value is not None and math.isclose(value, given, rel_tol=1e-9, abs_tol=1e-12)
+        if not agrees:
+            expected = (
+                "null, as a trial without a curve has"
+                if given is None
+                else f"{given!r}, what its curve gives ({'its last point' if over == 'last' else 'the mean of its points'})"
+            )
+            raise check.fail(f"{where}.{name}", expected, value)
 
 
 def metric_bounds(metric: str) -> tuple[float, float | None]:
@@ -452,21 +545,55 @@ def _curve(
             _in_range(check, part, f"{at}.per_seed[{j}]", metric, bounds)
 
 
-def _spec(check: DocumentChecker, name: str, spec: Any) -> tuple[str, float, float]:
-    """A parameter's name and spec (``log:1e-4:1e-2``, ``choice:a,b``) as labels; a range's ends
-    finite, in order: ``(kind, low, high)`` (a choice's ends are not used)."""
+def _spec(check: DocumentChecker, name: str, spec: Any) -> _Spec:
+    """A parameter's name and spec (``log:1e-4:1e-2``, ``choice:a,b``) as labels; a choice's values
+    at least two, none empty; a range's ends finite, ``LOW < HIGH`` (as ``tune`` takes them) and
+    within :data:`MAX_RANGE_END` (a ``log`` range's ``LOW`` at least its inverse)."""
     check.label(name, f"plan.params (the parameter {name[:60]!r})")
     where = f"plan.params.{name}"
     check.label(spec, where)
     kind, _, rest = spec.partition(":")
-    if kind == "choice" and rest:
-        return kind, 0.0, 0.0
+    items = [item.strip() for item in rest.split(",")]
+    if kind == "choice" and len(items) >= 2 and all(items):
+        return _Spec(kind, choices=tuple((item, _literal(item)) for item in items))
     ends = [_finite(end) for end in rest.split(":")] if kind in RANGE_KINDS else []
-    if len(ends) != 2 or ends[0] is None or ends[1] is None or ends[0] > ends[1] or (kind == "log" and ends[0] <= 0):
+    if (
+        len(ends) != 2
+        or ends[0] is None
+        or ends[1] is None
+        or not -MAX_RANGE_END <= ends[0] < ends[1] <= MAX_RANGE_END
+        or (kind == "log" and ends[0] < 1 / MAX_RANGE_END)
+    ):
         raise check.fail(
-            where, "a parameter's spec (log:LOW:HIGH with 0 < LOW, float:LOW:HIGH, int:LOW:HIGH or choice:A,B,...)", spec
+            where,
+            f"a parameter's spec (log:LOW:HIGH with 0 < LOW, float:LOW:HIGH, int:LOW:HIGH: LOW < HIGH, each within "
+            f"±{MAX_RANGE_END:g}, a log range's LOW at least {1 / MAX_RANGE_END:g}; or choice:A,B,... of two values or more)",
+            spec,
         )
-    return kind, ends[0], ends[1]
+    return _Spec(kind, ends[0], ends[1])
+
+
+_NO_LITERAL = object()
+"""A choice's text that is no TOML literal (a text value)."""
+
+
+def _literal(text: str) -> Any:
+    """``text`` read as a TOML literal (``0.5``, ``true``), as ``tune`` reads a choice's value
+    (:func:`empathy_zoo.experiment.search_space.parse_param`), or :data:`_NO_LITERAL`."""
+    with contextlib.suppress(tomllib.TOMLDecodeError):
+        return tomllib.loads(f"v = {text}")["v"]
+    return _NO_LITERAL
+
+
+def _is_choice(value: Any, choices: tuple[tuple[str, Any], ...]) -> bool:
+    """Whether ``value`` is one of ``choices``: a text one of their texts, a boolean or a number one
+    of their literals of its kind (a boolean is no number here, ``true`` no ``1``)."""
+    if isinstance(value, str):
+        return any(value == text for text, _ in choices)
+    return any(
+        isinstance(literal, (bool, int, float)) and isinstance(literal, bool) == isinstance(value, bool) and literal == value
+        for _, literal in choices
+    )
 
 
 def _finite(text: str) -> float | None:
@@ -477,23 +604,32 @@ def _finite(text: str) -> float | None:
         return None
 
 
-def _params(check: DocumentChecker, value: Any, specs: Mapping[str, tuple[str, float, float]], where: str) -> None:
-    """A trial's parameter values: each of a parameter of the plan; a range's a number within it
-    (a whole one for an ``int``), a choice's a boolean, a finite number or a label."""
-    for name, item in check.table(value, where).items():
+def _params(check: DocumentChecker, value: Any, specs: Mapping[str, _Spec], where: str, whole: bool = True) -> None:
+    """A trial's parameter values: each of a parameter of the plan and, where ``whole`` (every trial
+    but an interrupted one, which may have stopped before its parameters were drawn), every one of
+    them; a range's a number within it (a whole one for an ``int``), a choice's one of its values."""
+    table = check.table(value, where)
+    for name, item in table.items():
         field = f"{where}.{name}" if name in specs else f"{where} (the parameter {name[:60]!r})"
         if name not in specs:
             raise check.fail(field, f"one of the plan's parameters ({', '.join(specs)})", name)
-        kind, low, high = specs[name]
+        spec = specs[name]
+        kind, low, high = spec.kind, spec.low, spec.high
         if kind == "choice":
             if isinstance(item, str):
                 check.label(item, field)
             elif not isinstance(item, bool):
                 check.finite(item, field)
+            if not _is_choice(item, spec.choices):
+                texts = ", ".join(text for text, _ in spec.choices)
+                raise check.fail(field, f"one of its choices ({texts}; a number as a number, text as text)", item)
             continue
         number = finite_float(item)
         if number is None or isinstance(item, bool) or not low <= number <= high or (kind == "int" and number != int(number)):
             raise check.fail(field, f"{'a whole number' if kind == 'int' else 'a number'} in [{low:g}, {high:g}]", item)
+    missing = [name for name in specs if name not in table] if whole else []
+    if missing:
+        raise check.fail(f"{where}.{missing[0]}", f"a value of each of the plan's parameters ({', '.join(specs)})", None)
 
 
 def _checked(where: Path, make: Any, study: Any) -> Any:

@@ -30,7 +30,6 @@ def pair(first: str, second: str, differ: bool, states: int = 0, harms: float = 
 
 
 TABLE = {
-    "env": "toy_v0",
     "rows": [
         row("dqn", "dqn"),
         row("twin", "twin"),
@@ -46,7 +45,7 @@ TABLE = {
         pair("e β=0.5", "e β=0", True, 3, -0.5),
         pair("e β=0.25", "e β=0", True, 3, -0.5),
     ],
-    "outcomes": [],
+    "outcomes": [{"row": "dqn", "epsilon": 0.01, "harms": 1.0, "robot_harmed": 0.0}],
     "omitted": [{"method": "far", "reason": "no exact model"}],
 }
 

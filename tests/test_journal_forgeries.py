@@ -135,6 +135,14 @@ FORGERIES: dict[str, tuple[Callable[[list[Entry]], int], Callable[[Entry], None]
             json.dumps({"name": "FloatDistribution", "attributes": {"step": None, "low": 1e-4, "high": 1.0, "log": True}}),
         ),
     ),
+    "distribution with a key twice": (  # (read last-wins, it would equal the study's own)
+        _nth(PARAM, 1),
+        _set(
+            "distribution",
+            '{"name": "Evil", "name": "FloatDistribution", '
+            '"attributes": {"step": null, "low": 0.0001, "high": 0.01, "log": true}}',
+        ),
+    ),
     # d02: non-finite or out-of-range values, trial ids the writer never writes
     "values Infinity": (_nth(STATE), _set("values", [float("inf")])),
     "values NaN": (_nth(STATE), _set("values", [float("nan")])),

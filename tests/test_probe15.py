@@ -164,9 +164,9 @@ def test_the_writer_refuses_a_header_the_readers_refuse(tmp_path: Path) -> None:
     assert load_agent(tmp_path / "good.agent.pt").describe()["method"] == "empathic_dqn"
     no_seed = {key: value for key, value in good.items() if key != "seed"}
     for name, header, message in (
-        ("demo", {**good, "run_id": "demo"}, "run_id 'demo' is not the id its fields give"),
-        ("changed", {**good, "settings": {"learning_rate": 0.5}}, "is not the id its fields give"),
-        ("no-seed", no_seed, "holds its seed"),
+        ("demo", {**good, "run_id": "demo"}, r"field header\.run_id: expected coexistence_v0__empathic_dqn-"),
+        ("changed", {**good, "settings": {"learning_rate": 0.5}}, r"field header\.run_id: expected"),
+        ("no-seed", no_seed, r"field header\.seed: expected"),
     ):
         with pytest.raises(ValueError, match=message):
             write_agent_file(_Plain(), 0, tmp_path / f"{name}.agent.pt", header)

@@ -39,7 +39,6 @@ def table(rows: int = 3, methods: int = 3) -> dict[str, Any]:
     """A valid separation table: ``rows`` rows of ``methods`` methods (β 0.5 each), every pair at ε 0.01."""
     names = [f"r{i}" for i in range(rows)]
     return {
-        "env": "toy_v0",
         "rows": [{"name": n, "method": f"m{i % methods}", "selfishness": 0.5} for i, n in enumerate(names)],
         "outcomes": [{"row": n, "epsilon": 0.01, "harms": 0.1, "robot_harmed": 0.0} for n in names],
         "pairs": [

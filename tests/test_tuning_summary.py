@@ -13,13 +13,29 @@ import pytest
 from leaderboard.tuning_summary import find_studies, main, render_studies_png, summarise, summary_table
 
 
+def _curve(state: str, value: float | None) -> list[dict[str, Any]]:
+    """What tune writes of a trial's curve (evaluated every 20 of 100 steps on one seed): a finished
+    one's to the last step (``value`` at each point, so over the curve its value), a pruned one's
+    to step 60, none for a refused one."""
+    steps = {"COMPLETE": [20, 40, 60, 80, 100], "PRUNED": [20, 40, 60]}.get(state, [])
+    point = 250.0 if value is None else value
+    return [{"step": step, "value": point, "per_seed": [point]} for step in steps]
+
+
 def _study(variant: str, label: str, rates: list[float], states: list[str], values: list[float | None]) -> dict[str, Any]:
     trials = [
         {"number": i, "state": s, "params": {"learning_rate": r}, "value": v, "wall_time_s": 30.0}
         for i, (r, s, v) in enumerate(zip(rates, states, values, strict=True))
     ]
+    for trial in trials:  # (the fields tune writes of each trial: its curve, its value over it, its steps)
+        curve = _curve(trial["state"], trial["value"])
+        trial.update(
+            curve=curve, last_value=curve[-1]["value"] if curve else None, steps_trained=curve[-1]["step"] if curve else 0
+        )
     finished = [t for t in trials if t["state"] == "COMPLETE"]
     best = max(finished, key=lambda t: t["value"]) if finished else None
+    interrupted = {"number": len(trials), "state": "INTERRUPTED", "params": {}, "value": None, "wall_time_s": 5.0}
+    interrupted.update(curve=[], last_value=None, steps_trained=0)
     return {
         "plan": {
             "variant": variant,
@@ -27,10 +43,10 @@ def _study(variant: str, label: str, rates: list[float], states: list[str], valu
             "params": {"learning_rate": "log:0.0001:0.003"},
             "objective": {"metric": "survival", "direction": "maximize", "over": "curve"},
             "tuning_seeds": [10000],
-            "budget": {"env_steps_at_most": 400, "steps": 100, "eval_interval": 50},
+            "budget": {"env_steps_at_most": 400, "steps": 100, "eval_interval": 20},
         },
-        "trials": [*trials, {"number": len(trials), "state": "INTERRUPTED", "params": {}, "value": None, "wall_time_s": 5.0}],
-        "env_steps_trained": 260,
+        "trials": [*trials, interrupted],
+        "env_steps_trained": sum(t["steps_trained"] for t in trials),  # (× 1 tuning seed)
         "best": best and {"number": best["number"], "value": best["value"], "params": best["params"]},
     }
 

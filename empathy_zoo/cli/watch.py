@@ -25,7 +25,7 @@ from typing import Any
 from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, AgentPolicies, agent_policy, positive
 
-__all__ = ["add_watch", "check_episodes", "check_gif_path", "check_observation_size", "cmd_watch", "find_agent", "write_gif"]
+__all__ = ["add_watch", "check_episodes", "check_gif_path", "cmd_watch", "find_agent", "write_gif"]
 
 GIF_PROBE_PREFIX = ".ezoo-gif-probe-"
 """Name prefix of the empty file ``--gif`` writes and removes to see that its directory takes a file."""
@@ -104,37 +104,6 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
         return check_agent_method(_run_agent(result))  # (anything but a regular file there is refused, named)
     except ImportError as error:  # (a Stable-Baselines3 agent without SB3 installed)
         raise ValueError(str(error)) from None
-
-
-def check_observation_size(agent: Any) -> None:
-    """Refuse (:class:`~empathy_zoo.agent_file.AgentFileError` naming the agent file and
-    ``header.env_kwargs``) an agent whose header's environment arguments give an observation of
-    another size than its network reads (another ``view``): checked before anything is played.
-    Arguments the environment does not take are left to :func:`~empathy_zoo.greedy_episode.agent_env`,
-    which says so."""
-    from empathy_zoo.agent_file import AgentFileError
-    from empathy_zoo.document_checks import DocumentChecker
-    from empathy_zoo.environments import ENGINES
-
-    d = agent.describe()
-    env, kwargs = d.get("env"), dict(d.get("env_kwargs") or {})
-    if env not in ENGINES:
-        return
-    try:
-        reads = int(d["obs_size"])  # (the width of its network's input: checked against its layers when read)
-        size = int(ENGINES[env](1, **kwargs).obs_size)
-    except (KeyError, TypeError, ValueError):  # (no size said, or arguments it does not take: agent_env says which)
-        return
-    if size != reads:
-        check = DocumentChecker(
-            Path(str(d.get("file") or "the agent file")),
-            AgentFileError,
-            "an agent file's header",
-            "an agent of this suite",
-            "move it away (train the run again to make it anew)",
-        )
-        expected = f"arguments giving the observation its network reads ({reads:,} values; {env} with these gives {size:,})"
-        raise check.fail("header.env_kwargs", expected, kwargs)
 
 
 def check_episodes(episodes: int, seed: int) -> None:
@@ -216,7 +185,6 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     if args.gif is not None:
         check_gif_path(args.gif)  # (its directory is made when the GIF is written: a refusal creates none)
     agent = find_agent(args.target, args.dir)
-    check_observation_size(agent)  # (bound to its environment: the header's arguments give what its network reads)
     fixed = dict(args.fixed or [])
     allowed = frozenset(args.allow_import or ())
     env = agent_env(agent, fixed, render_mode="rgb_array" if args.gif else None, allowed_imports=allowed)

@@ -138,6 +138,9 @@ def read_manifest(manifest: Path, checkpoint: Path) -> list[dict[str, Any]]:
     data = read_json(manifest, "list of runs")  # (bounded: a regular file of at most MAX_RUNS_LIST_BYTES)
     if not isinstance(data, dict) or data.get("format") not in (1, MANIFEST_FORMAT):
         raise ValueError(f"not a list of runs of format 1 or {MANIFEST_FORMAT}")
+    unknown_top = sorted(str(key) for key in data if key not in ("format", "runs"))
+    if unknown_top:
+        raise ValueError(f"it has unknown key(s) {unknown_top} (a list of runs holds format and runs)")
     runs = data.get("runs")
     if not isinstance(runs, list) or not runs or not all(isinstance(record, dict) for record in runs):
         raise ValueError("'runs' must be a non-empty list of tables")

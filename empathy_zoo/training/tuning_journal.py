@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from empathy_zoo.bounded_read import check_json_depth
+from empathy_zoo.bounded_read import check_json_depth, parse_json
 from empathy_zoo.document_checks import shown
 from empathy_zoo.experiment.search_space import ParamSpec, point_runs
 from empathy_zoo.limits import MAX_WALL_TIME_S
@@ -289,7 +289,7 @@ class _StudyLines:
         _expect(isinstance(text, str) and len(text) <= MAX_DISTRIBUTION, "distribution", text, f"the distribution of {spec.text}")
         try:
             check_json_depth(text.encode("utf-8", "surrogatepass"), "the distribution")
-            parsed = json.loads(text)
+            parsed = parse_json(text)  # (a key given twice is no distribution tune writes)
         except (ValueError, RecursionError):
             parsed = None
         _expect(parsed == self.distributions[name], "distribution", text, f"the distribution of {spec.text}")
