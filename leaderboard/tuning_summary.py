@@ -322,7 +322,8 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     finished trial's curve up to the budget's last step, its ``value`` and every trial's
     ``last_value`` what its curve gives over the objective (last point or mean, up to float
     rounding), no ``value`` for a trial that did not finish; ``best`` set once a trial finished;
-    ``plan.budget.trials`` the trials ``env_steps_at_most`` holds; a ``log`` range above 0; every value
+    ``plan.budget.trials`` the trials ``env_steps_at_most`` holds, ``trials_done`` the counted
+    ones; an ``int`` range of whole ends, a ``log`` range above 0; every value
     of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
     within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
     tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
@@ -389,6 +390,10 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
             "trials",
             f"at most the plan's {at_most // per_trial:,} trials (an interrupted one not counted)",
             f"{counted:,} trials",
+        )
+    if "trials_done" in study and study["trials_done"] != counted:
+        raise check.fail(
+            "trials_done", f"{counted:,}, its trials but the interrupted ones (as tune counts them)", study["trials_done"]
         )
     numbers: dict[int, dict[str, Any]] = {}
     for i, trial in enumerate(trials):
@@ -563,10 +568,11 @@ def _spec(check: DocumentChecker, name: str, spec: Any) -> _Spec:
         or ends[1] is None
         or not -MAX_RANGE_END <= ends[0] < ends[1] <= MAX_RANGE_END
         or (kind == "log" and ends[0] < 1 / MAX_RANGE_END)
+        or (kind == "int" and any(end != int(end) for end in ends if end is not None))
     ):
         raise check.fail(
             where,
-            f"a parameter's spec (log:LOW:HIGH with 0 < LOW, float:LOW:HIGH, int:LOW:HIGH: LOW < HIGH, each within "
+            f"a parameter's spec (log:LOW:HIGH with 0 < LOW, float:LOW:HIGH, int:LOW:HIGH of whole ends: LOW < HIGH, each within "
             f"±{MAX_RANGE_END:g}, a log range's LOW at least {1 / MAX_RANGE_END:g}; or choice:A,B,... of two values or more)",
             spec,
         )

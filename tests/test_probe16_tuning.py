@@ -246,3 +246,16 @@ def test_a_range_the_figure_cannot_draw_is_refused(tmp_path: Path, capsys: Any, 
     figure = tmp_path / "figure.png"
     _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(figure)], str(path), "plan.params.learning_rate")
     assert not figure.exists()
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        (lambda d: d.__setitem__("trials_done", d["trials_done"] + 1), "trials_done"),
+        (lambda d: d["plan"]["params"].__setitem__("learning_rate", "int:1.5:3"), "plan.params.learning_rate"),
+    ],
+    ids=["trials_done not its trials'", "an int range of no whole ends"],
+)
+def test_a_study_s_count_of_trials_and_its_int_ranges_agree(tmp_path: Path, change: Any, field: str) -> None:
+    with pytest.raises(StudyFileError, match=rf"field {field}: expected"):
+        check_study(_document(change), tmp_path / "study.json")
