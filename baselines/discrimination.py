@@ -311,6 +311,8 @@ def _refused_argument(args: argparse.Namespace) -> str | None:
     for option, value in (("directory", args.directory), ("--out", args.out)):
         if value == "":
             return f"argument {option}: an empty path; give a file or folder"
+    if args.out is not None and Path(args.out).suffix.lower() != ".md":  # (never a table it reads, *.json)
+        return f"argument --out: {args.out} is no Markdown file name: name the page to write, ending in .md"
     if any(path == "" for path in getattr(args, "results", [])):
         return "argument --results: an empty path; give a results directory"
     if finite_float(args.epsilon) is None or not 0.0 <= args.epsilon <= 1.0:

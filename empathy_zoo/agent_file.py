@@ -205,10 +205,14 @@ def _check_header(header: Any) -> dict[str, Any]:
     return json.loads(json.dumps(dict(header)))  # (tuples become lists, as when it is read back)
 
 
-def _written_header(header: Any) -> dict[str, Any]:
+def _written_header(
+    header: Any, obs_size: int, num_actions: int, heads: Mapping[str, list[torch.Tensor]] | None = None
+) -> dict[str, Any]:
     """``header`` as a writer stores it (:func:`_check_header`), once every field is one the readers
-    take (:func:`_check_header_fields`, :func:`_check_header_run_id`): no agent file is written that
-    they refuse; ``ValueError`` naming the field otherwise."""
+    take, beside networks of ``obs_size`` inputs, ``num_actions`` outputs and (where given) the
+    layers of ``heads`` (:func:`_check_header_fields`, :func:`_check_header_run_id`,
+    :func:`_check_hidden_size`, :func:`_check_env_sizes`): no agent file is written that they
+    refuse; ``ValueError`` naming the field otherwise."""
     checked = _check_header(header)
     check = DocumentChecker(
         Path("the agent file's header to write"),
@@ -219,6 +223,9 @@ def _written_header(header: Any) -> dict[str, Any]:
     )
     _check_header_fields(Path(), checked, check)
     _check_header_run_id(Path(), checked, check)
+    if heads is not None:
+        _check_hidden_size(Path(), checked, heads, check)
+    _check_env_sizes(Path(), checked, obs_size, num_actions, check)
     return checked
 
 
@@ -305,7 +312,7 @@ def agent_document(state: Mapping[str, Any], header: Mapping[str, Any]) -> dict[
     return {
         "format": FORMAT,
         "version": VERSION,
-        "header": _written_header(header),
+        "header": _written_header(header, obs_size, num_actions, heads),
         "obs_size": obs_size,
         "num_actions": num_actions,
         "activation": "relu",
@@ -368,7 +375,7 @@ def _library_file(learner: Any, run: int, header: Mapping[str, Any]) -> bytes:
     member = {
         "format": FORMAT,
         "version": VERSION,
-        "header": _written_header(header),
+        "header": _written_header(header, int(info["obs_size"]), int(info["num_actions"])),
         "library": info["library"],
         "algorithm": info["algorithm"],
         "policy": str(info.get("policy", "MlpPolicy")),
@@ -515,13 +522,15 @@ def _check_header_run_id(path: Path, header: Mapping[str, Any], check: DocumentC
         )
 
 
-def _check_env_sizes(path: Path, header: Mapping[str, Any], obs_size: int, num_actions: int) -> None:
+def _check_env_sizes(
+    path: Path, header: Mapping[str, Any], obs_size: int, num_actions: int, check: DocumentChecker | None = None
+) -> None:
     """Refuse (:class:`AgentFileError` naming the file and the field) an agent whose networks do
     not fit the environment its header (checked) names: ``num_actions`` outputs, one per action of
     its engine, and an input of the observation its ``env_kwargs`` give (the environment is built
     for one episode to measure it; nothing is played). Checked last, so a header that contradicts
     its result file is named as such first; before anything is played or written."""
-    check = _checker(path)
+    check = check or _checker(path)
     engine = ENGINES[header["env"]]
     if num_actions != engine.num_actions:
         raise check.fail(
@@ -542,7 +551,9 @@ def _check_env_sizes(path: Path, header: Mapping[str, Any], obs_size: int, num_a
         )
 
 
-def _check_hidden_size(path: Path, header: Mapping[str, Any], heads: Mapping[str, list[torch.Tensor]]) -> None:
+def _check_hidden_size(
+    path: Path, header: Mapping[str, Any], heads: Mapping[str, list[torch.Tensor]], check: DocumentChecker | None = None
+) -> None:
     """Refuse (:class:`AgentFileError` naming the file and the field) a header whose
     ``settings.hidden_size`` is not the width of every hidden layer of every head (a registered
     method's networks are ``obs → hidden → hidden → actions``). A plug-in's settings are its own:
@@ -550,7 +561,7 @@ def _check_hidden_size(path: Path, header: Mapping[str, Any], heads: Mapping[str
     settings = header["settings"]
     if "hidden_size" not in settings or PLUGIN_NAME.fullmatch(header["method"]):
         return
-    check = _checker(path)
+    check = check or _checker(path)
     hidden = check.integer(settings["hidden_size"], "header.settings.hidden_size", 1, MAX_HIDDEN_SIZE)
     widths = sorted({int(layer.shape[0]) for layers in heads.values() for layer in layers[1:-1:2]})
     if widths != [hidden]:

@@ -241,7 +241,7 @@ HEADER = {"method": "dqn", "settings": {}, "env": "coexistence_v0", "env_kwargs"
 
 
 def agent_file(tmp_path: Path, change: Callable[[dict[str, Any]], None] | None = None) -> Path:
-    document = agent_document({"heads": {"q": [torch.ones(100, 5), torch.zeros(5)]}, "acting": "q"}, HEADER)
+    document = agent_document({"heads": {"q": [torch.ones(25, 5), torch.zeros(5)]}, "acting": "q"}, HEADER)
     if change is not None:
         change(document)
     path = tmp_path / "x.agent.pt"
@@ -254,11 +254,11 @@ def _layer(index: int, tensor: torch.Tensor) -> Callable[[dict[str, Any]], None]
 
 
 AGENT_FORGERIES = {
-    "sparse weight": _layer(0, torch.ones(100, 5).to_sparse()),
-    "NaN weight": _layer(0, torch.full((100, 5), math.nan)),
+    "sparse weight": _layer(0, torch.ones(25, 5).to_sparse()),
+    "NaN weight": _layer(0, torch.full((25, 5), math.nan)),
     "inf bias": _layer(1, torch.full((5,), math.inf)),
-    "float64 weight": _layer(0, torch.ones(100, 5, dtype=torch.float64)),
-    "int weight": _layer(0, torch.ones(100, 5, dtype=torch.int64)),
+    "float64 weight": _layer(0, torch.ones(25, 5, dtype=torch.float64)),
+    "int weight": _layer(0, torch.ones(25, 5, dtype=torch.int64)),
 }
 
 

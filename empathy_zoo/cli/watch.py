@@ -136,7 +136,8 @@ def write_gif(path: str, data: bytes) -> Path:
 
 def check_gif_path(path: str) -> Path:
     """``path`` if a GIF may be written there, checked before any episode is played and creating
-    nothing: a path is given (``""`` is refused, not read as the current directory), nothing or a
+    nothing: a path ending in ``.gif`` is given (``""`` is refused, not read as the current
+    directory; any other suffix too, so a result or agent file is never replaced), nothing or a
     regular file is there (never a directory, a link, a device or a pipe: only a regular file is
     ever replaced, :func:`empathy_zoo.names.check_replaceable`), and its directory takes a file
     (probed with a file of the suite's own name, removed at once; where the directory is missing,
@@ -155,6 +156,8 @@ def check_gif_path(path: str) -> Path:
         raise ValueError(f"--gif {path}: cannot be examined ({error.strerror or error})") from None
     if target.is_dir() and not target.is_symlink():
         raise ValueError(f"--gif {path} is a directory; give the GIF's file name")
+    if target.suffix.lower() != ".gif":  # (so no input of the suite's own, .json or .agent.pt, is replaced)
+        raise ValueError(f"--gif {path} is no GIF file name: name the file to write, ending in .gif (e.g. --gif episode.gif)")
     try:
         check_replaceable(target)
     except ValueError as error:
