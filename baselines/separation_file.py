@@ -198,7 +198,6 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         name = _short(check, row["name"], f"{where}.name")
         if name in names:
             raise check.fail(f"{where}.name", "a name no other row has", name)
-        names.add(name)
         _short(check, row["method"], f"{where}.method")
         if row.get("selfishness") is not None:
             _fraction(check, row["selfishness"], f"{where}.selfishness")
@@ -207,6 +206,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         if row.get("identical_to") and row["identical_to"] not in names:  # (text: checked above)
             raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
         same_as[name] = same_as[row["identical_to"]] if row.get("identical_to") else name
+        names.add(name)  # (after identical_to is checked: a row is never identical to itself)
     outcomes: set[tuple[str, float]] = set()
     for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
         where = f"outcomes[{i}]"

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.evaluation_file import EVALUATIONS_DIR
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_output_file
@@ -134,9 +135,21 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
     """``out`` as a path if an export can be written there; ``ValueError`` naming it otherwise: a name
     not ending in ``.json``, an existing directory, anything but a regular file in its place (a
     symbolic link, named with its target, a FIFO, a device: :func:`empathy_zoo.names.check_replaceable`),
-    a parent that is a file, or the folder the result files of one of ``results_dirs`` are read
-    from (:func:`leaderboard.aggregate.result_files`)."""
+    a parent that is a file, the folder the result files of one of ``results_dirs`` are read
+    from (:func:`leaderboard.aggregate.result_files`), a ``runs`` folder or an evaluation set's
+    folder of any results directory, or an existing file that is not an earlier export
+    (:func:`_is_export`): an export never replaces a file of another kind."""
     path = check_output_file(out, "JSON", ".json", "marl_eval.json")
+    if path.parent.name == RUNS_DIR or path.parent.parent.name == EVALUATIONS_DIR:
+        raise ValueError(
+            f"{out} lies in a folder of a results directory ({path.parent}), whose JSON files are read as results "
+            "or evaluations: write it elsewhere"
+        )
+    if path.is_file() and not _is_export(path):
+        raise ValueError(
+            f"{out} exists and is no marl-eval export of this suite: an export replaces only an earlier export "
+            "(move the file away, or name another file)"
+        )
     for directory in results_dirs:
         root = Path(directory) / RUNS_DIR if (Path(directory) / RUNS_DIR).is_dir() else Path(directory)
         if root.is_dir() and path.absolute().parent.resolve() == root.resolve():
@@ -144,6 +157,24 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
                 f"{out} lies where the result files of {directory} are read ({root}): it would be read as one; write it elsewhere"
             )
     return path
+
+
+EXPORT_HEAD_BYTES = 4_096
+"""The bytes of an existing file read to tell whether it is an earlier export."""
+
+
+def _is_export(path: Path) -> bool:
+    """Whether the regular file ``path`` is empty or begins as :func:`write_marl_eval` writes: ``{``,
+    then a registered environment's name as the first key (at most :data:`EXPORT_HEAD_BYTES` are
+    read; a result, evaluation, study or other JSON file begins otherwise)."""
+    from empathy_zoo.environments import ENGINES
+
+    with path.open("rb") as file:
+        head = file.read(EXPORT_HEAD_BYTES)
+    if not head:
+        return True
+    text = head.decode("utf-8", errors="replace")
+    return any(text.startswith(f'{{\n "{name}": {{') for name in ENGINES)
 
 
 @dataclass(frozen=True)

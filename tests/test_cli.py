@@ -176,7 +176,7 @@ def test_bad_config_file_exits_2_naming_file_and_key(tmp_path, capsys, content, 
 )
 def test_bad_input_exits_2_with_a_message(tmp_path, capsys, argv, expected):
     argv = [*argv, "--out", str(tmp_path / "out")] if argv[0] in ("train", "reproduce") else argv
-    argv = [str(tmp_path / "out") if a == "-" else a for a in argv]
+    argv = [str(tmp_path / "out.md") if a == "-" else a for a in argv]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("empathy-zoo: error: ") and expected in err, err

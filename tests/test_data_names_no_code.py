@@ -212,9 +212,13 @@ def test_allow_import_takes_only_a_plugin_name(capsys) -> None:
 # ---------------------------------------------------------------------------- watch --gif's path
 @pytest.mark.skipif(not Path("/dev/null").exists(), reason="needs /dev/null")
 def test_watch_gif_never_replaces_a_device_a_link_or_a_directory(tmp_path) -> None:
-    with pytest.raises(ValueError, match="not a regular file"):
+    with pytest.raises(ValueError, match="no GIF file name"):
         check_gif_path("/dev/null")
     assert Path("/dev/null").is_char_device()
+    os.mkfifo(tmp_path / "pipe.gif")
+    with pytest.raises(ValueError, match="not a regular file"):
+        check_gif_path(str(tmp_path / "pipe.gif"))
+    (tmp_path / "pipe.gif").unlink()
     (tmp_path / "real.gif").write_bytes(b"GIF89a")
     os.symlink(tmp_path / "real.gif", tmp_path / "link.gif")
     with pytest.raises(ValueError, match="symbolic link"):

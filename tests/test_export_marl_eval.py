@@ -194,7 +194,9 @@ def test_several_directories_keep_their_rows_apart_as_the_leaderboard_does(
 
 def test_the_write_is_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "quick.json"
-    out.write_text("the previous export\n")
+    assert main(["export", str(QUICK), "--format", "marl-eval", "--out", str(out)]) == 0
+    previous = out.read_text()
+    capsys.readouterr()
 
     def fail(source: object, destination: object) -> None:
         raise OSError(28, "No space left on device")
@@ -203,7 +205,7 @@ def test_the_write_is_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ca
     assert main(["export", str(QUICK), "--format", "marl-eval", "--out", str(out)]) == 1
     error = capsys.readouterr().err
     assert error == f"empathy-zoo: error: --out {out}: cannot write it (No space left on device)\n"
-    assert out.read_text() == "the previous export\n"
+    assert out.read_text() == previous
     assert [path.name for path in tmp_path.iterdir()] == ["quick.json"]  # no temporary file left
 
 
@@ -216,7 +218,7 @@ def test_the_write_is_atomic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ca
         (["--format", "marl-eval", "--out", "{tmp}"], "is a directory: name the JSON file to write"),
         (["--format", "marl-eval", "--out", "{tmp}/export.txt"], "is no JSON file name"),
         (["--format", "marl-eval", "--out", "{tmp}/a_file/x.json"], "a_file is a file, not a directory"),
-        (["--format", "marl-eval", "--out", "{results}/runs/x.json"], "it would be read as one"),
+        (["--format", "marl-eval", "--out", "{results}/runs/x.json"], "folder of a results directory"),
         (["--format", "marl-eval", "--out", "{tmp}/x.json", "--label", "nowhere"], "--label takes DIR=PREFIX"),
         (["--format", "marl-eval", "--out", "{tmp}/x.json", "--label", "other=p"], "is not one of the results directories read"),
     ],

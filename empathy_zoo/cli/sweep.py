@@ -101,6 +101,7 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     from leaderboard.reproduction import NotThePaperSweep, load_checked_results, missing_paper_experiments, write_reproduction
     from leaderboard.sensitivity import sensitivity_markdown
 
+    out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"  # (checked before anything is read)
     note = _read_note(args.note)
     appendix = ""
     if args.sensitivity:
@@ -118,7 +119,6 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
             f"(result files in {args.coexistence_sensitivity}; its LEADERBOARD.md names the exact command)",
         )
         appendix = "\n\n".join(part for part in (appendix, rules) if part)
-    out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"
     missing = missing_paper_experiments(load_checked_results(args.results))  # (a forged file: refused before any figure)
     if missing:  # (refused before any figure of the held-out section is drawn)
         raise NotThePaperSweep(f"these results do not contain the paper's experiments (missing: {', '.join(missing)})")
@@ -133,20 +133,31 @@ def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
     """Write SENSITIVITY.md of existing results."""
     from leaderboard.sensitivity import write_sensitivity
 
+    out = _report_out(args)  # (checked before anything is read)
     note = _read_note(args.note)
-    print(
-        f"{PROG}: wrote {write_sensitivity(args.results, _report_out(args), command=args.produced_by or PRODUCED_BY, note=note)}"
-    )
+    print(f"{PROG}: wrote {write_sensitivity(args.results, out, command=args.produced_by or PRODUCED_BY, note=note)}")
     return 0
 
 
 def _report_out(args: argparse.Namespace) -> Path | None:
     """Where a report goes: ``--out`` as given, or the report's own name inside it when it is an
-    existing directory (``None``: the report's default, inside the results directory)."""
+    existing directory (``None``: the report's default, inside the results directory). Only a
+    Markdown file name is taken (``.md``: never a result, agent or other file the command reads),
+    never the ``--note`` file it reads, and its parent must be a directory; else a ``ValueError``
+    naming ``--out``, before anything is read or written."""
+    from empathy_zoo.names import check_output_file
+
     if args.out is None:
         return None
     out = Path(args.out)
-    return out / args.report_name if out.is_dir() else out
+    out = out / args.report_name if out.is_dir() and not out.is_symlink() else out
+    try:
+        check_output_file(out, "Markdown", ".md", args.report_name)
+    except ValueError as error:
+        raise ValueError(f"--out {error}") from None
+    if args.note and out.exists() and Path(args.note).exists() and out.samefile(args.note):
+        raise ValueError(f"--out {out} is the --note file the report reads: name another file to write")
+    return out
 
 
 MAX_COMMAND_CHARS = 2_000
