@@ -246,5 +246,20 @@ def main(argv: list[str] | None = None) -> None:
         print(write_text_atomic(path, text))
 
 
+def module_main(argv: list[str] | None = None) -> int:
+    """:func:`main` as ``python -m`` runs it: a refusal (``ValueError``) is one line on stderr and
+    exit status 2, as through ``empathy-zoo analyse separation``."""
+    import sys
+
+    from empathy_zoo.names import terminal_line
+
+    try:
+        main(argv)
+    except ValueError as error:
+        print(f"separation_render: error: {terminal_line(error)}", file=sys.stderr)
+        return 2
+    return 0
+
+
 if __name__ == "__main__":
-    main()
+    raise SystemExit(module_main())

@@ -111,3 +111,11 @@ def test_export_still_refuses_the_folder_a_flat_results_directory_is_read_from(t
     shutil.copy(RESULT, flat / RESULT.name)
     _refused(["export", str(flat), "--format", "marl-eval", "--out", str(flat / "x.json")], capsys, "it would be read as one")
     assert not (flat / "x.json").exists()
+
+
+def test_the_separation_module_refuses_in_one_line(capsys) -> None:
+    from baselines.separation_render import module_main
+
+    assert module_main(["bogus"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "unknown environment 'bogus'" in err, err
