@@ -28,6 +28,8 @@ __all__ = [
     "MAX_EVAL_EPISODES",
     "MAX_EVALUATE_CYCLES",
     "MAX_EVALUATION_BYTES",
+    "MAX_FIGURE_PIXELS",
+    "MAX_FIGURE_SIDE",
     "MAX_HIDDEN_SIZE",
     "MAX_JOURNAL_BYTES",
     "MAX_JSON_DEPTH",
@@ -35,6 +37,7 @@ __all__ = [
     "MAX_LEARNER_BYTES",
     "MAX_NAME",
     "MAX_NOTE_BYTES",
+    "MAX_RANGE_END",
     "MAX_REFERENCE_CYCLES",
     "MAX_REFERENCE_SIZE",
     "MAX_REFERENCE_WORK",
@@ -149,6 +152,15 @@ the learner's networks and replay memory are what its checkpoint holds (:data:`M
 MAX_HIDDEN_SIZE = 1 << 19
 """Widest hidden layer a result file records (``hidden_size`` of its settings): one layer of
 ``hidden_size²`` float32 weights already takes :data:`MAX_LEARNER_BYTES`."""
+MAX_RANGE_END = 1e300
+"""Largest magnitude of a tuned range's end (``tune --param``, a study's ``plan.params``); a
+``log`` range's ``LOW`` is at least its inverse. Every float drawn within such a range, and the
+figure's margins past its ends, stay finite."""
+MAX_FIGURE_SIDE = 16_384
+"""Most pixels a side of ``analyse tuning-summary --figure`` (6.2 inches per variant, 0.38 per study
+of a variant, at 110 dpi: 24 variants, or 389 studies of one)."""
+MAX_FIGURE_PIXELS = 32_000_000
+"""Most pixels of ``analyse tuning-summary --figure`` in all: 128 MB of RGBA buffer while it is drawn."""
 
 BOUNDS: Mapping[str, int] = {
     "size": MAX_SIZE,

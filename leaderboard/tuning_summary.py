@@ -10,7 +10,9 @@ value and the settings chosen) and, with ``--figure``, draws the trials of studi
 numeric parameter: one panel per variant, one line per study, each trial a dot at its value of
 the parameter (finished filled, pruned hollow), the chosen one a star, the range's ends dotted. Read from the study files
 alone; nothing is trained or tested. A study file may come from anyone: each is read bounded and
-checked field by field (:func:`check_study`) before anything is printed or drawn.
+checked field by field (:func:`check_study`) before anything is printed or drawn; the figure's size
+is checked against its bound before it is drawn (:func:`check_figure_size`), and the text it shows
+from the files is drawn as that text, never as mathtext.
 """
 
 from __future__ import annotations
@@ -27,21 +29,35 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogLocator
 
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
-from empathy_zoo.limits import MAX_CYCLES, MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, MAX_WALL_TIME_S
+from empathy_zoo.limits import (
+    MAX_CYCLES,
+    MAX_FIGURE_PIXELS,
+    MAX_FIGURE_SIDE,
+    MAX_RANGE_END,
+    MAX_SEED,
+    MAX_SEEDS,
+    MAX_STEPS,
+    MAX_TRIALS,
+    MAX_WALL_TIME_S,
+)
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.names import check_output_file, terminal_line
 from empathy_zoo.training.study_plan import DIRECTIONS, curve_value
+from empathy_zoo.training.trials_figure import literal_text
 from leaderboard.tables import markdown_text
 
 __all__ = [
     "StudySummary",
     "StudyFileError",
     "check_figure_path",
+    "check_figure_size",
     "check_study",
     "find_studies",
     "summarise",
@@ -147,19 +163,69 @@ def _parameter(studies: Sequence[Mapping[str, Any]]) -> tuple[str, bool, tuple[f
     return name, kind == "log", (low, high)
 
 
+PANEL_WIDTH = 6.2
+"""Inches of the figure's width per variant (one panel each)."""
+ROW_HEIGHT = 0.38
+"""Inches of the figure's height per study of the variant with the most."""
+TITLE_HEIGHT = 0.9
+"""Inches of the figure's height above and below the studies' lines (title, axis, labels)."""
+
+
+def _figure_inches(studies: Sequence[Mapping[str, Any]]) -> tuple[float, float]:
+    """Width and height, in inches, of the figure of ``studies``: :data:`PANEL_WIDTH` per variant and
+    :data:`ROW_HEIGHT` per study of the variant with the most, past :data:`TITLE_HEIGHT`."""
+    rows: dict[str, int] = {}
+    for study in studies:
+        rows[study["plan"]["variant"]] = rows.get(study["plan"]["variant"], 0) + 1
+    return PANEL_WIDTH * len(rows), TITLE_HEIGHT + ROW_HEIGHT * max(rows.values(), default=0)
+
+
+def check_figure_size(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> tuple[float, float]:
+    """The figure's size in inches (:func:`_figure_inches`), or a ``ValueError`` naming ``--figure``
+    where at ``dpi`` a side would pass :data:`~empathy_zoo.limits.MAX_FIGURE_SIDE` pixels or the
+    whole :data:`~empathy_zoo.limits.MAX_FIGURE_PIXELS` (the figure is drawn in memory, 4 bytes a
+    pixel). Only the studies' count per variant is read; nothing is drawn."""
+    width, height = _figure_inches(studies)
+    pixels = (math.ceil(width * dpi), math.ceil(height * dpi))
+    if max(pixels) > MAX_FIGURE_SIDE or pixels[0] * pixels[1] > MAX_FIGURE_PIXELS:
+        variants = sorted({study["plan"]["variant"] for study in studies})
+        most = max(sum(1 for study in studies if study["plan"]["variant"] == variant) for variant in variants)
+        raise ValueError(
+            f"--figure: {len(studies):,} studies on {len(variants):,} variants (at most {most:,} on one) make a "
+            f"{pixels[0]:,} × {pixels[1]:,} px figure, past its bound of {MAX_FIGURE_SIDE:,} px a side and "
+            f"{MAX_FIGURE_PIXELS:,} px in all (docs/limits.md); draw fewer: point DIR at a part of them"
+        )
+    return width, height
+
+
+class _FiniteLogLocator(LogLocator):
+    """Matplotlib's :class:`~matplotlib.ticker.LogLocator`, less the ticks that are no float.
+    It places ticks a stride of decades past each end of the axis (outside the view, never drawn):
+    past 1e308 for a range that ends near :data:`~empathy_zoo.limits.MAX_RANGE_END`, an overflow
+    that fails the figure. Those ticks are dropped, unwarned; every other is kept."""
+
+    def tick_values(self, vmin: float, vmax: float) -> Sequence[float]:
+        """The ticks :class:`~matplotlib.ticker.LogLocator` places from ``vmin`` to ``vmax``, each finite."""
+        with np.errstate(over="ignore"):
+            ticks = np.asarray(super().tick_values(vmin, vmax), dtype=float)
+        return ticks[np.isfinite(ticks)]
+
+
 def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> bytes:
-    """PNG bytes of the figure of ``studies`` (``study.json`` documents of one parameter)."""
+    """PNG bytes of the figure of ``studies`` (``study.json`` documents of one parameter), its size
+    checked before anything is drawn (:func:`check_figure_size`). Text read from the studies (a
+    label, the parameter's name) is drawn as that text (:func:`~empathy_zoo.training.trials_figure.literal_text`)."""
     if not studies:
         raise ValueError("no studies to draw")
     name, log, (low, high) = _parameter(studies)
+    size = check_figure_size(studies, dpi)
     variants = sorted({study["plan"]["variant"] for study in studies})
     rows = {v: [s for s in studies if s["plan"]["variant"] == v] for v in variants}
-    height = max(len(r) for r in rows.values())
-    figure = Figure(figsize=(6.2 * len(variants), 0.9 + 0.38 * height), layout="constrained")
+    figure = Figure(figsize=size, layout="constrained")
     FigureCanvasAgg(figure)
     axes_row = figure.subplots(1, len(variants), squeeze=False)[0]
     for axes, variant in zip(axes_row, variants, strict=True):
-        labels = [s["plan"]["label"] for s in rows[variant]]
+        labels = [literal_text(s["plan"]["label"]) for s in rows[variant]]
         for y, study in enumerate(rows[variant]):
             trials = [t for t in study["trials"] if name in t["params"] and t["state"] != "INTERRUPTED"]
             done = [t["params"][name] for t in trials if t["state"] == "COMPLETE"]
@@ -182,13 +248,15 @@ def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> 
         if log:
             axes.set_xscale("log")
             axes.set_xlim(low / 1.25, high * 1.25)
+            axes.xaxis.set_major_locator(_FiniteLogLocator())
+            axes.xaxis.set_minor_locator(_FiniteLogLocator(subs="auto"))
         else:
             axes.set_xlim(low - 0.05 * (high - low), high + 0.05 * (high - low))
         for end in (low, high):
             axes.axvline(end, color="0.6", linewidth=0.8, linestyle=":")
-        axes.set_xlabel(name)
+        axes.set_xlabel(literal_text(name))
         metric = rows[variant][0]["plan"]["objective"]
-        axes.set_title(f"{variant}: objective {metric['metric']} ({metric.get('over', 'last')})", fontsize="medium")
+        axes.set_title(literal_text(f"{variant}: objective {metric['metric']} ({metric.get('over', 'last')})"), fontsize="medium")
         axes.grid(True, axis="x", alpha=0.3)
         axes.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
     buffer = io.BytesIO()
@@ -287,9 +355,6 @@ RANGE_KINDS = ("log", "float", "int")
 STUDY_SCHEMA = 1
 """The layout of ``study.json`` that ``tune`` writes (:data:`empathy_zoo.training.tuning.STUDY_SCHEMA`;
 a study written before it held none)."""
-MAX_RANGE_END = 1e300
-"""The largest magnitude of a range's end (a ``log`` range's low end at least its inverse): ``tune``
-takes any finite one, but the figure draws a margin past each end, which past this is no float."""
 
 
 @dataclass(frozen=True)
@@ -322,8 +387,8 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     finished trial's curve up to the budget's last step, its ``value`` and every trial's
     ``last_value`` what its curve gives over the objective (last point or mean, up to float
     rounding), no ``value`` for a trial that did not finish; ``best`` set once a trial finished;
-    ``plan.budget.trials`` the trials ``env_steps_at_most`` holds, ``trials_done`` the counted
-    ones; an ``int`` range of whole ends, a ``log`` range above 0; every value
+    ``plan.budget.trials`` the trials ``env_steps_at_most`` holds, ``trials_done`` (an int) the
+    counted ones; an ``int`` range of whole ends, a ``log`` range above 0; every value
     of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
     within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
     tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
@@ -391,7 +456,7 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
             f"at most the plan's {at_most // per_trial:,} trials (an interrupted one not counted)",
             f"{counted:,} trials",
         )
-    if "trials_done" in study and study["trials_done"] != counted:
+    if "trials_done" in study and check.integer(study["trials_done"], "trials_done", 0, MAX_TRIALS) != counted:
         raise check.fail(
             "trials_done", f"{counted:,}, its trials but the interrupted ones (as tune counts them)", study["trials_done"]
         )

@@ -17,7 +17,9 @@ samples them with Optuna):
 transform, ``reward.<field>`` for a field named like a setting (as in sweep files: ``dqn_aup``'s
 ``reward.learning_rate``). A bad spec raises ``ValueError`` naming the part that is wrong and what
 it takes; a bound is never clipped or rounded to fit: the settings class's own checks run at both
-ends of every range before a study starts (:func:`check_ends`).
+ends of every range before a study starts (:func:`check_ends`). A range's ends lie within
+±:data:`~empathy_zoo.limits.MAX_RANGE_END` (a ``log`` range's ``LOW`` at least its inverse), as
+a study's checker (``analyse tuning-summary``) takes them.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from typing import Any
 from agents.base import Method
 from empathy_zoo.experiment.model import MethodEntry, RunSpec
 from empathy_zoo.experiment.values import SweepConfigError, check_value, describe_type, field_types
+from empathy_zoo.limits import MAX_RANGE_END
 
 __all__ = ["KINDS", "REWARD_PREFIX", "ParamSpec", "check_ends", "parse_param", "parse_params", "point_runs", "tunable_names"]
 
@@ -41,6 +44,11 @@ REWARD_PREFIX = "reward."
 """How a spec names a reward transform's field that shares its name with a setting."""
 _CATEGORICAL = (bool, int, float, str)
 """The values a choice may take (those Optuna stores)."""
+_RANGE_BOUND = (
+    f"a range's ends lie within ±{MAX_RANGE_END:g}, a log range's LOW at least {1 / MAX_RANGE_END:g} "
+    "(the bound of a study's ranges, docs/limits.md)"
+)
+"""What a refusal of a range's end past :data:`~empathy_zoo.limits.MAX_RANGE_END` says."""
 
 
 @dataclass(frozen=True)
@@ -121,13 +129,17 @@ def _target(name: str, method: Method, where: str) -> tuple[str, str, Any]:
 
 
 def _number(text: str, integer: bool, where: str, what: str) -> float:
+    """``text``, an end of a range, as a number (a whole one where ``integer``): finite and within
+    ±:data:`~empathy_zoo.limits.MAX_RANGE_END`, else a ``ValueError`` naming ``what`` it is."""
     try:
         value = int(text) if integer else float(text)
     except ValueError:
         kind = "a whole number" if integer else "a number"
         raise ValueError(f"{where}: {what} {text!r} is not {kind}") from None
-    if not math.isfinite(value):
+    if not integer and not math.isfinite(value):
         raise ValueError(f"{where}: {what} {text!r} is not finite")
+    if abs(value) > MAX_RANGE_END:  # (an int compared exactly: no float of it is made)
+        raise ValueError(f"{where}: {what} {text!r} is out of bounds: {_RANGE_BOUND}")
     return value
 
 
@@ -163,6 +175,8 @@ def parse_param(text: str, method: Method) -> ParamSpec:
         raise ValueError(f"{where}: LOW must be below HIGH, got LOW={bounds[0]} and HIGH={bounds[1]}")
     if kind == "log" and low <= 0:
         raise ValueError(f"{where}: a log range needs LOW > 0, got LOW={bounds[0]} (use {'int' if integer else 'float'}:)")
+    if kind == "log" and low < 1 / MAX_RANGE_END:
+        raise ValueError(f"{where}: LOW {bounds[0].strip()!r} is out of bounds: {_RANGE_BOUND}")
     return ParamSpec(name, part, field, kind, integer, float(low), float(high))
 
 

@@ -17,7 +17,9 @@ scikit-learn and a seed. The figure is skipped, with a one-line reason
 trials, and a study whose finished trials cannot tell the parameters apart (PED-ANOVA's own
 warning).
 
-Matplotlib and Optuna are imported when a figure is drawn, never when this module is imported.
+Text a figure shows from a sweep or study file (a label, a parameter's name or spec) is drawn as
+that text, never as mathtext (:func:`literal_text`). Matplotlib and Optuna are imported when a
+figure is drawn, never when this module is imported.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ __all__ = [
     "IMPORTANCE_FIGURE",
     "TRIALS_FIGURE",
     "importance_skipped",
+    "literal_text",
     "param_importances",
     "render_importance_png",
     "render_trials_png",
@@ -48,6 +51,13 @@ IMPORTANCE_FIGURE = "importance.png"
 """The parameter-importance figure's file name beside ``study.json``."""
 _CANNOT_TELL = "importances will be equal"
 """What PED-ANOVA warns when the finished trials cannot tell the parameters apart."""
+
+
+def literal_text(text: str) -> str:
+    """``text`` as Matplotlib draws it letter for letter: each ``$`` escaped, so no part of it is
+    mathtext (a label like ``$\\foo$`` would fail to parse, ``$x$`` be drawn as math). Matplotlib
+    draws ``\\$`` as ``$`` in text without mathtext, and every other character as it is."""
+    return text.replace("$", "\\$")
 
 
 def _figure(size: tuple[float, float]) -> Any:
@@ -114,8 +124,10 @@ def render_trials_png(study: Mapping[str, Any], dpi: int = 110) -> bytes:
     axes.legend(fontsize="small", frameon=False)
     budget = plan["budget"]
     axes.set_title(
-        f"{plan['label']} on {plan['variant']}: {len(trials)} of {budget['trials']} trials × "
-        f"{len(plan['tuning_seeds'])} seeds × {budget['steps']:,} steps",
+        literal_text(
+            f"{plan['label']} on {plan['variant']}: {len(trials)} of {budget['trials']} trials × "
+            f"{len(plan['tuning_seeds'])} seeds × {budget['steps']:,} steps"
+        ),
         fontsize="medium",
     )
     return _png(figure, dpi)
@@ -181,15 +193,18 @@ def render_importance_png(study: Mapping[str, Any], importances: Mapping[str, fl
     values = [importances[name] for name in names]
     figure = _figure((7.5, 1.6 + 0.45 * len(names)))
     axes = figure.subplots()
-    bars = axes.barh([f"{name}\n({plan['params'][name]})" for name in names], values, color="#0072B2", height=0.6)
+    labels = [literal_text(f"{name}\n({plan['params'][name]})") for name in names]
+    bars = axes.barh(labels, values, color="#0072B2", height=0.6)
     axes.bar_label(bars, labels=[f"{value:.2f}" for value in values], padding=3, fontsize="small")
     axes.set_xlim(0, max(1.0, max(values) * 1.15))
     axes.set_xlabel("importance to the objective (PED-ANOVA, share of the total)")
     axes.grid(True, axis="x", alpha=0.3)
     objective = plan["objective"]
     axes.set_title(
-        f"What mattered to {objective['metric']} ({objective['direction']}): {plan['label']} on {plan['variant']},\n"
-        f"over its {len(_finished(study))} finished trial(s) of {len(study['trials'])}",
+        literal_text(
+            f"What mattered to {objective['metric']} ({objective['direction']}): {plan['label']} on {plan['variant']},\n"
+            f"over its {len(_finished(study))} finished trial(s) of {len(study['trials'])}"
+        ),
         fontsize="medium",
     )
     axes.tick_params(axis="y", labelsize="small")
