@@ -22,6 +22,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from empathy_zoo.evaluation_file import TRAINED_WITH
+from empathy_zoo.figure_text import literal_text
 from empathy_zoo.metrics import HARMS_PER_100_STEPS
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS
@@ -41,7 +42,8 @@ def heldout_filename(env: str, scenario_set: str) -> str:
 
 
 def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: int = 110) -> bytes:
-    """PNG bytes of the group's figure (see the module page)."""
+    """PNG bytes of the group's figure (see the module page). The labels, scenario names and
+    ``env`` are drawn as written, never as mathtext (:func:`~empathy_zoo.figure_text.literal_text`)."""
     by_key = {(c.method_label, c.scenario, c.metric): c for c in cells}
     labels = list(group.runs)
     held_out = group.scenarios[1:]
@@ -88,7 +90,9 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
         Line2D([], [], color="black", linewidth=2.0, label="trained with (own partners)"),
         Patch(color="0.85", label="its 95 % interval over seeds"),
     ]
-    handles += [Line2D([], [], marker="o", linestyle="", color=colours[j], label=name) for j, name in enumerate(held_out)]
+    handles += [
+        Line2D([], [], marker="o", linestyle="", color=colours[j], label=literal_text(name)) for j, name in enumerate(held_out)
+    ]
     if any(group.same_world.values()):
         handles.append(
             Line2D([], [], marker="o", linestyle="", color="0.4", markerfacecolor="white", label="= the run's own world")
@@ -102,7 +106,8 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
         title_fontsize="small",
     )
     panels[0].set_title(
-        f"{group.env}, scenario set {group.scenario_set.name}: own partners against held-out ones", fontsize="medium"
+        literal_text(f"{group.env}, scenario set {group.scenario_set.name}: own partners against held-out ones"),
+        fontsize="medium",
     )
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
@@ -111,8 +116,8 @@ def render_heldout_png(group: HeldoutGroup, cells: Sequence[HeldoutCell], dpi: i
 
 def _tick(label: str, seeds: int) -> str:
     """A row's label under its group: its seed count, and that it has no interval below
-    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS`."""
-    return f"{label} (n={seeds})" if seeds >= MIN_INTERVAL_SEEDS else f"{label} (n={seeds}: no interval)"
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS`; drawn as written (never as mathtext)."""
+    return literal_text(f"{label} (n={seeds})" if seeds >= MIN_INTERVAL_SEEDS else f"{label} (n={seeds}: no interval)")
 
 
 def plot_heldout(group: HeldoutGroup, cells: Sequence[HeldoutCell], figures_dir: str | os.PathLike[str]) -> Path:

@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.environments import entry_of
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.figure_text import literal_text
 from empathy_zoo.names import confined
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -91,7 +92,9 @@ def render_curves_png(
     (:func:`leaderboard.colours.label_colours`; ``dqn_labels`` are the DQN reference rows, said so
     in the legend) with its interval shaded (none below
     :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds, said in the legend), and, where
-    ``references[i]`` is given, that curve's exact reference dashed in the same colour."""
+    ``references[i]`` is given, that curve's exact reference dashed in the same colour. The labels,
+    ``title``, ``ylabel`` and ``xlabel`` are drawn as written, never as mathtext
+    (:func:`~empathy_zoo.figure_text.literal_text`)."""
     figure = Figure(figsize=(7.5, 4.2), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
@@ -99,7 +102,7 @@ def render_curves_png(
     colours = [by_label[curve.method_label] for curve in curves]
     for curve, colour in zip(curves, colours, strict=True):
         role = ", the DQN reference" if curve.method_label in dqn_labels else ""
-        label = f"{curve.method_label} ({seeds_text(curve.n_seeds)}{role})"
+        label = literal_text(f"{curve.method_label} ({seeds_text(curve.n_seeds)}{role})")
         axes.plot(curve.steps, curve.mean, color=colour, linewidth=1.8, label=label)
         if curve.n_seeds >= MIN_INTERVAL_SEEDS:
             axes.fill_between(curve.steps, curve.ci_low, curve.ci_high, color=colour, alpha=0.2, linewidth=0)
@@ -109,9 +112,9 @@ def render_curves_png(
             axes.plot(curve.steps, reference, color=colour, linewidth=1.2, linestyle="--")
     if drawn:  # one neutral legend entry for every dashed line
         axes.plot([], [], color="0.4", linewidth=1.2, linestyle="--", label="exact optimum of that β at the run's ε")
-    axes.set_title(title)
-    axes.set_xlabel(xlabel)
-    axes.set_ylabel(ylabel)
+    axes.set_title(literal_text(title))
+    axes.set_xlabel(literal_text(xlabel))
+    axes.set_ylabel(literal_text(ylabel))
     axes.grid(True, alpha=0.3)
     axes.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
     if curves:

@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from empathy_zoo.figure_text import literal_text
 from empathy_zoo.names import confined
 from leaderboard.aggregate import CONFIDENCE, MIN_INTERVAL_SEEDS
 from leaderboard.colours import label_colours
@@ -50,7 +51,9 @@ def render_profiles_png(
     """PNG bytes of one environment's figure: ``panels`` is ``[(metric's axis label, {row: profile})]``;
     rows in the order given, each in its label's colour (:func:`leaderboard.colours.label_colours`),
     its band shaded (none below :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` runs, said in the
-    panel's title); ``dqn_labels``' profiles dashed in every other panel of their metric."""
+    panel's title); ``dqn_labels``' profiles dashed in every other panel of their metric. The labels,
+    axis labels and ``title`` are drawn as written, never as mathtext
+    (:func:`~empathy_zoo.figure_text.literal_text`)."""
     labels = list(dict.fromkeys(label for _, profiles in panels for label in profiles))
     colours = label_colours(labels, dqn_labels)
     columns = max(1, min(MAX_COLUMNS, len(labels)))
@@ -83,12 +86,12 @@ def render_profiles_png(
                     axes.fill_between(profile.taus, profile.low, profile.high, step="post", color=colour, alpha=0.25, linewidth=0)
                 axes.plot(profile.taus, profile.fraction, drawstyle="steps-post", color=colour, linewidth=2.0)
             runs = seeds_text(profile.runs) if profile is not None else "no runs"
-            axes.set_title("\n".join(textwrap.wrap(f"{label} ({runs})", 30)), fontsize="small")
+            axes.set_title(literal_text("\n".join(textwrap.wrap(f"{label} ({runs})", 30))), fontsize="small")
             axes.set_xlim(0.0, 1.0)
             axes.set_ylim(-0.03, 1.03)
             axes.grid(True, alpha=0.3)
             axes.tick_params(labelsize="small", labelbottom=True, labelleft=i % columns == 0)
-            axes.set_xlabel(f"τ: {xlabel}", fontsize="small")
+            axes.set_xlabel(f"τ: {literal_text(xlabel)}", fontsize="small")
             if i % columns == 0:
                 axes.set_ylabel("fraction of runs > τ", fontsize="small")
     handles = [Line2D([], [], color="0.35", linewidth=2.0), Patch(color="0.35", alpha=0.25, linewidth=0)]
@@ -97,7 +100,7 @@ def render_profiles_png(
         handles.append(Line2D([], [], color="black", linestyle="--", linewidth=1.0))
         names.append("the DQN reference, for comparison")
     figure.legend(handles, names, loc="outside lower center", ncols=len(handles), fontsize="small", frameon=False)
-    figure.suptitle(title)
+    figure.suptitle(literal_text(title))
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return buffer.getvalue()

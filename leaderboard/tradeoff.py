@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from empathy_zoo.environments import entry_of
+from empathy_zoo.figure_text import literal_text
 from empathy_zoo.metrics import HIGHER_IS_BETTER
 from empathy_zoo.names import confined
 from leaderboard.aggregate import MIN_INTERVAL_SEEDS, PHASES, Score
@@ -94,7 +95,8 @@ def render_tradeoff_png(
     """PNG bytes of ``env``'s trade-off, one panel per phase, from the leaderboard's ``scores``:
     each method in its label's colour (:func:`leaderboard.colours.label_colours`; ``dqn_labels``
     are the DQN reference rows, said so in the legend), without bars below
-    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds (said in the legend)."""
+    :data:`~leaderboard.aggregate.MIN_INTERVAL_SEEDS` seeds (said in the legend). The labels and
+    ``env`` are drawn as written, never as mathtext (:func:`~empathy_zoo.figure_text.literal_text`)."""
     scores = [s for s in scores if s.env == env]
     labels = list(dict.fromkeys(s.method_label for s in scores))
     by_label = label_colours(labels, dqn_labels)
@@ -139,7 +141,7 @@ def render_tradeoff_png(
             linestyle="",
             color=colours[i],
             markersize=8,
-            label=f"{label} ({seeds_text(seeds[label])}{', the DQN reference' if label in dqn_labels else ''})",
+            label=literal_text(f"{label} ({seeds_text(seeds[label])}{', the DQN reference' if label in dqn_labels else ''})"),
         )
         for i, label in enumerate(labels)
     ]
@@ -155,7 +157,7 @@ def render_tradeoff_png(
         title="method (bars: 95 % CI over seeds)",
         title_fontsize="small",
     )
-    figure.suptitle(f"{env}: task against side effect")
+    figure.suptitle(f"{literal_text(env)}: task against side effect")
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return buffer.getvalue()

@@ -18,8 +18,9 @@ trials, and a study whose finished trials cannot tell the parameters apart (PED-
 warning).
 
 Text a figure shows from a sweep or study file (a label, a parameter's name or spec) is drawn as
-that text, never as mathtext (:func:`literal_text`). Matplotlib and Optuna are imported when a
-figure is drawn, never when this module is imported.
+that text, never as mathtext (:func:`~empathy_zoo.figure_text.literal_text`, imported here for
+the callers that import it from this module). Matplotlib and Optuna are imported when a figure is
+drawn, never when this module is imported.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.figure_text import literal_text
 
 __all__ = [
     "IMPORTANCE_FIGURE",
@@ -51,13 +53,6 @@ IMPORTANCE_FIGURE = "importance.png"
 """The parameter-importance figure's file name beside ``study.json``."""
 _CANNOT_TELL = "importances will be equal"
 """What PED-ANOVA warns when the finished trials cannot tell the parameters apart."""
-
-
-def literal_text(text: str) -> str:
-    """``text`` as Matplotlib draws it letter for letter: each ``$`` escaped, so no part of it is
-    mathtext (a label like ``$\\foo$`` would fail to parse, ``$x$`` be drawn as math). Matplotlib
-    draws ``\\$`` as ``$`` in text without mathtext, and every other character as it is."""
-    return text.replace("$", "\\$")
 
 
 def _figure(size: tuple[float, float]) -> Any:
