@@ -17,6 +17,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from agents.rewards import RewardTransform, configure_transform, transform_config, transform_fields
+from agents.setting_values import check_recorded_settings, settings_record
 from agents.step_batch import StepBatch
 from empathy_zoo.method_description import check_description, default_description
 
@@ -197,7 +198,12 @@ class Method:
             raise ValueError(f"method {self.name!r}: {error}") from None
 
     def make_settings(self, overrides: dict[str, Any]) -> Any:
-        """The method's settings with ``overrides``; overriding a preset raises ``ValueError``."""
+        """The method's settings with ``overrides``; overriding a preset raises ``ValueError``, as
+        does a value the result reader would refuse in the run's ``config.settings``
+        (:func:`agents.setting_values.check_recorded_settings`, the reader's own rule: an int in
+        ``[0, MAX_SETTING]``, a finite float of magnitude at most ``MAX_SETTING``, ...), checked in
+        ``overrides`` before the settings class sees them and in the settings it makes (their
+        record, :func:`agents.setting_values.settings_record`) after."""
         clash = sorted(k for k in overrides if k in self.preset and overrides[k] != self.preset[k])
         if clash:
             raise ValueError(f"method {self.name!r} fixes {', '.join(f'{k}={self.preset[k]!r}' for k in clash)}")
@@ -208,7 +214,10 @@ class Method:
         for name, value in overrides.items():  # (a settings class need not think of inf and NaN)
             if isinstance(value, float) and not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
-        return self.settings(**{**overrides, **self.preset})
+        check_recorded_settings(self.settings, overrides)  # (the reader's rule, before the class computes with them)
+        settings = self.settings(**{**overrides, **self.preset})
+        check_recorded_settings(self.settings, settings_record(settings))  # (and its defaults, as recorded)
+        return settings
 
     def make_reward(self, overrides: Mapping[str, Any]) -> RewardTransform | None:
         """The method's reward transform with the fields ``overrides`` set (the transform itself

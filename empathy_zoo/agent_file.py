@@ -173,7 +173,9 @@ def _why(error: BaseException) -> str:
     return one_line(f"{type(error).__name__}: {error}", MESSAGE_CHARS)
 
 
-_HEAD_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
+_HEAD_NAME = re.compile(r"[a-z_][a-z0-9_]*")
+"""A head's name: a lower-case identifier, the whole name (matched with ``fullmatch``: ``$`` would
+let a trailing line break through)."""
 _LIBRARIES = {"stable_baselines3": ("DQN", "PPO")}
 """Libraries (and their classes) whose own agent files :func:`load_agent` reads."""
 
@@ -271,7 +273,7 @@ def _check_heads(heads: Any, acting: Any, budget: int | None = None) -> tuple[di
     checked: dict[str, list[torch.Tensor]] = {}
     sizes: set[tuple[int, int]] = set()
     for name, layers in heads.items():
-        if not isinstance(name, str) or not _HEAD_NAME.match(name):
+        if not isinstance(name, str) or not _HEAD_NAME.fullmatch(name):
             raise ValueError(f"head name {name!r} must be a lower-case identifier (like 'q' or 'q_emp')")
         if not isinstance(layers, (list, tuple)) or not layers or len(layers) % 2:
             raise ValueError(f"head {name!r} must be a list [W1, b1, W2, b2, ...] of weights and biases")
@@ -778,10 +780,10 @@ def _read_member(path: Path, archive: zipfile.ZipFile) -> dict[str, Any]:
     for name in ("obs_size", "num_actions"):
         check.integer(member.get(name), f"{LIBRARY_MEMBER}.{name}", 1, MAX_OBSERVATION)
     heads = member.get("heads")
-    if not isinstance(heads, list) or not all(isinstance(head, str) and _HEAD_NAME.match(head) for head in heads):
+    if not isinstance(heads, list) or not all(isinstance(head, str) and _HEAD_NAME.fullmatch(head) for head in heads):
         raise check.fail(f"{LIBRARY_MEMBER}.heads", "an array of head names (lower-case identifiers)", heads)
     acting = member.get("acting")
-    if not (isinstance(acting, str) and _HEAD_NAME.match(acting)) or (heads and acting not in heads):
+    if not (isinstance(acting, str) and _HEAD_NAME.fullmatch(acting)) or (heads and acting not in heads):
         raise check.fail(f"{LIBRARY_MEMBER}.acting", f"one of its heads {heads} (a policy's name without heads)", acting)
     check.text(member.get("policy"), f"{LIBRARY_MEMBER}.policy")
     try:

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterable, Mapping
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from agents.base import Method
 from agents.rewards import RewardTransform, transform_config
+from agents.setting_values import settings_record
 from baselines.registry import get_method
 from empathy_zoo import run_ids
 from empathy_zoo.engine.arguments import check_choice, check_env_arguments
@@ -361,12 +362,6 @@ def group_specs(specs: Iterable[RunSpec], max_parallel_runs: int) -> list[list[R
     for members in groups.values():
         chunks += [members[i : i + max_parallel_runs] for i in range(0, len(members), max_parallel_runs)]
     return chunks
-
-
-def settings_record(settings: Any) -> dict[str, Any]:
-    """``settings`` as a result file records them: ``settings.record()`` where the settings class
-    has one (it leaves out fields at their default that were added later), else every field."""
-    return settings.record() if hasattr(settings, "record") else asdict(settings)
 
 
 def _shared(settings: Any) -> Any:

@@ -16,26 +16,17 @@ would count its run twice), and gives the run as a typed, frozen record
 from __future__ import annotations
 
 import json
-import types
-import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Union, get_args, get_origin
+from typing import Any
 
+from agents.setting_values import MAX_SETTING, recorded_problem
 from empathy_zoo.atomic import read_json
-from empathy_zoo.document_checks import DocumentChecker, finite_float, one_line
+from empathy_zoo.document_checks import DocumentChecker, one_line
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.experiment.values import field_types
-from empathy_zoo.limits import MAX_STEPS
-from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
 from empathy_zoo.result_file import ResultFileError, check_result_fields, check_run_id, result_checker
 
 __all__ = ["MAX_SETTING", "check_result", "read_result"]
-
-MAX_SETTING = MAX_STEPS
-"""The largest magnitude of a number in a registered method's settings (as a result file records
-them): every count a setting gives (steps, transitions, widths) is at most the steps of the
-longest run, and no rate or weight is larger."""
 
 
 def check_result(document: Any, path: str | Path) -> dict[str, Any]:
@@ -79,87 +70,22 @@ def _named(result: dict[str, Any], path: str | Path) -> dict[str, Any]:
 
 def _settings(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:
     """The settings object of ``result``'s ``config.settings``: each field one of ``method``'s
-    settings class, of the type it declares (:func:`_setting_problem`), then accepted by the class
+    settings class, of the type it declares (:func:`agents.setting_values.recorded_problem`, the rule
+    every run's settings are built by: :meth:`agents.base.Method.make_settings`), then accepted by the class
     itself (its ranges). A refusal names ``config.settings`` and,
     in it, the setting: ``expected settings of dqn (selfishness: a finite number ...)``."""
     settings = result["config"]["settings"]
-    kinds = field_types(method.settings)
 
     def refuse(why: str, value: Any) -> ValueError:
         return check.fail("config.settings", f"settings of {result['method']} ({one_line(why, 300)})", value)
 
-    for name, value in settings.items():
-        if name not in kinds:
-            raise refuse(f"{name}: no such setting; its settings: {', '.join(kinds)}", name)
-        problem = _setting_problem(value, kinds[name], name)
-        if problem is not None:
-            raise refuse(f"{problem[0]}: {problem[1]}", problem[2])
+    problem = recorded_problem(method.settings, settings)
+    if problem is not None:
+        raise refuse(f"{problem[0]}: {problem[1]}", problem[2])
     try:
         return method.settings(**settings)
     except (TypeError, ValueError, OverflowError) as error:
         raise refuse(str(error), settings) from None
-
-
-Problem = tuple[str, str, Any]
-"""Where in a setting a value is wrong, what it should be, and the value."""
-
-
-def _setting_problem(value: Any, kind: Any, where: str) -> Problem | None:
-    """What is wrong with ``value`` for the type ``kind`` declares, or ``None``: an ``int`` an int (not
-    a boolean) in ``[0, MAX_SETTING]``; a ``float`` a finite number of magnitude at most
-    :data:`MAX_SETTING`; a ``bool`` true or false; a ``str`` one line of printable text; ``X | None``
-    null or an ``X``; a tuple or list an array of its items; anything else plain data
-    (:func:`_plain_problem`)."""
-    origin, arguments = get_origin(kind), get_args(kind)
-    if origin in (Union, types.UnionType) and type(None) in arguments:
-        if value is None:
-            return None
-        rest = [argument for argument in arguments if argument is not type(None)]
-        kind, origin, arguments = (rest[0], get_origin(rest[0]), get_args(rest[0])) if len(rest) == 1 else (Any, None, ())
-    if kind is bool:
-        return None if isinstance(value, bool) else (where, "true or false", value)
-    if kind is int:
-        whole = not isinstance(value, bool) and isinstance(value, int) and 0 <= value <= MAX_SETTING
-        return None if whole else (where, f"an int in [0, {MAX_SETTING:,}]", value)
-    if kind is float:
-        number = finite_float(value) is not None and abs(value) <= MAX_SETTING
-        return None if number else (where, f"a finite number in [-{MAX_SETTING:,}, {MAX_SETTING:,}]", value)
-    if kind is str:
-        text = isinstance(value, str) and bool(value) and _unprintable(value) is None
-        return None if text else (where, "a non-empty line of printable text", value)
-    if origin in (tuple, list):
-        if not isinstance(value, list):
-            return where, "an array", value
-        item_kind = arguments[0] if arguments and (len(arguments) == 1 or arguments[1] is Ellipsis) else Any
-        return next(
-            (problem for i, item in enumerate(value) if (problem := _setting_problem(item, item_kind, f"{where}[{i}]"))), None
-        )
-    return _plain_problem(value, where)
-
-
-def _plain_problem(value: Any, where: str) -> Problem | None:
-    """What is not plain data in ``value`` (as :meth:`DocumentChecker.plain` reads it: objects with
-    string keys, arrays, ``null``, booleans, finite numbers, printable text), or ``None``."""
-    if isinstance(value, dict):
-        for key, item in value.items():
-            if not isinstance(key, str):
-                return where, "an object (string keys)", key
-            if (problem := _plain_problem(item, f"{where}.{key}")) is not None:
-                return problem
-    elif isinstance(value, list):
-        return next((problem for i, item in enumerate(value) if (problem := _plain_problem(item, f"{where}[{i}]"))), None)
-    elif isinstance(value, str):
-        if _unprintable(value) is not None:
-            return where, "one line of printable text", value
-    elif value is not None and not isinstance(value, bool) and finite_float(value) is None:
-        return where, "plain data (an object, array, string, boolean, null or finite number)", value
-    return None
-
-
-def _unprintable(text: str) -> str | None:
-    """The first character of ``text`` one line of text may not hold (a control or format character,
-    a line break: :data:`~empathy_zoo.names.LABEL_REFUSED_CATEGORIES`), or ``None``."""
-    return next((c for c in text if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES), None)
 
 
 def _reward(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:

@@ -14,10 +14,10 @@ from __future__ import annotations
 import tomllib
 import types
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import fields
 from pathlib import Path
-from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
+from typing import Any, Literal, Union, get_args, get_origin
 
+from agents.setting_values import field_types  # (here too: a config file's settings are read by their annotations)
 from empathy_zoo.limits import MAX_CONFIG_BYTES, MAX_SEED, MAX_SEEDS, read_bounded
 
 __all__ = [
@@ -159,15 +159,6 @@ def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str) -> 
     for key in table:
         if key not in allowed:
             raise SweepConfigError(f"{where}: unknown key {key!r}; allowed keys: {', '.join(allowed)}")
-
-
-def field_types(cls: type) -> dict[str, Any]:
-    """``{field: annotation}`` of a dataclass (annotations resolved; ``Any`` where one cannot be)."""
-    try:
-        hints = get_type_hints(cls)
-    except (NameError, TypeError):
-        hints = {}
-    return {f.name: hints.get(f.name, Any) for f in fields(cls)}
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

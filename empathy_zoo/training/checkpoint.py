@@ -4,7 +4,9 @@
 A checkpoint may come from anyone, so it is read as data and checked before anything of it is
 used: read through the bounded reader (a regular file of at most
 :data:`~empathy_zoo.limits.MAX_CHECKPOINT_BYTES`), every tensor dense, of a numeric dtype, and every
-floating one finite; an ensemble's checkpoint (:func:`check_checkpoint_keys`) also has every
+floating one of its learner finite (Adam's means of squared gradients finite or ``+inf``,
+:data:`SQUARES`); :func:`save_checkpoint` writes no checkpoint that this reading refuses (runs that
+diverged: :class:`DivergedError`); an ensemble's checkpoint (:func:`check_checkpoint_keys`) also has every
 counter within its range and consistent with the others and with the settings of its runs (from
 the list of runs beside it, when there is one): its elapsed time within a result file's
 ``wall_time_s`` (:data:`~empathy_zoo.limits.MAX_WALL_TIME_S`), every log entry and evaluation of its
@@ -20,6 +22,7 @@ file and the field (:func:`corrupted`)."""
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -44,6 +47,10 @@ __all__ = [
     "to_safe",
     "from_safe",
     "CheckpointError",
+    "DIVERGED_FIX",
+    "DivergedError",
+    "check_writable",
+    "diverged_runs",
     "RUNS_LIST_SUFFIX",
     "KEYS",
     "MAX_MEMBERS",
@@ -93,13 +100,41 @@ class CheckpointError(ValueError):
     """A checkpoint exists but cannot be used."""
 
 
+class DivergedError(ValueError):
+    """Runs diverged (a learner's weights or memories hold numbers that are no finite ones): nothing
+    of them is written, neither a checkpoint (:func:`save_checkpoint`) nor a result; the message
+    names the runs and what to do (:data:`DIVERGED_FIX`)."""
+
+
+SQUARES = "the checkpoint['learner']['optimizer']['exp_avg_sq']"
+"""Where a learner's checkpoint keeps Adam's means of squared gradients: a square that overflowed
+float32 (a gradient past ≈ 1.8e19) is ``+inf`` there, a state Adam trains on from (its step for
+that weight is 0 from then on, the weight finite), so a checkpoint holds it and is read back with it."""
+NOT_FINITE = "holds a value that is no finite number"
+"""What a checkpoint's tensor holds where its learner diverged (how its reader says it)."""
+DIVERGED_FIX = "lower the learning rate (or change the settings that let it diverge) and train again"
+"""What a refusal of diverged runs tells to do."""
+
+
+def diverged_runs(run_ids: Any) -> str:
+    """``run A`` or ``runs A, B``: the runs of ``run_ids`` (a list of run ids) as a refusal names
+    them (``these runs`` where it is no list of strings)."""
+    if not isinstance(run_ids, list) or not run_ids or not all(isinstance(run, str) for run in run_ids):
+        return "these runs"
+    return f"run {run_ids[0]}" if len(run_ids) == 1 else f"runs {', '.join(run_ids)}"
+
+
 def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
     """Write ``payload`` to ``path`` atomically, streamed into the temporary file (no copy of the
     checkpoint is held in memory: an ensemble's replay memories are ≈ 1 GB in the paper profile).
 
-    A write that fails (a full disk) raises ``OSError`` with its ``errno``, naming the checkpoint
-    and saying whether an earlier one is kept (torch reports a failed write as a ``RuntimeError``
-    of its zip writer, the ``OSError`` in its context)."""
+    A payload :func:`load_checkpoint` would refuse is not written, and any earlier checkpoint at
+    ``path`` is kept: a learner's tensor that holds a number that is no finite one raises
+    :class:`DivergedError` naming the runs (``payload["run_ids"]``) and the tensor; another tensor
+    it refuses, ``ValueError``. A write that fails (a full disk) raises ``OSError`` with its
+    ``errno``, naming the checkpoint and saying whether an earlier one is kept (torch reports a
+    failed write as a ``RuntimeError`` of its zip writer, the ``OSError`` in its context)."""
+    check_writable(path, payload)
     try:
         write_with_atomic(path, lambda handle: torch.save({"format": FORMAT, **payload}, handle))
     except (OSError, RuntimeError) as error:
@@ -112,6 +147,18 @@ def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
             else "no earlier checkpoint was written: free space and run the same command again to start these runs again"
         )
         raise OSError(cause.errno, f"cannot write checkpoint {path} ({cause.strerror or cause}); {kept}") from error
+
+
+def check_writable(path: Path, payload: Mapping[str, Any]) -> None:
+    """Refuse a checkpoint ``payload`` for ``path`` that :func:`load_checkpoint` would refuse (see
+    :func:`save_checkpoint`, which calls it first), saying that any earlier checkpoint at ``path`` is
+    kept; nothing is written."""
+    problem = _payload_problem(payload)
+    if problem:
+        kept = f"the checkpoint {path} of an earlier step is kept" if path.exists() else "no checkpoint was written"
+        if problem.endswith(NOT_FINITE):
+            raise DivergedError(f"{diverged_runs(payload.get('run_ids'))} diverged: {problem}; {DIVERGED_FIX}; {kept}")
+        raise ValueError(f"checkpoint {path} not written: {problem} (a checkpoint's reader refuses it); {kept}")
 
 
 def runs_list_path(checkpoint: Path) -> Path:
@@ -141,11 +188,23 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
             raise corrupted(path, error) from error
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise CheckpointError(f"checkpoint {path} has an unknown format; delete or move it to restart")
-    for where, tensor in _tensors(payload, "the checkpoint"):
-        problem = _tensor_problem(tensor, finite=where.startswith("the checkpoint['learner']"))
-        if problem:
-            raise corrupted(path, f"{where} {problem}")
+    problem = _payload_problem(payload)
+    if problem:
+        raise corrupted(path, problem)
     return payload
+
+
+def _payload_problem(payload: Mapping[str, Any]) -> str:
+    """What is wrong with the first tensor of a checkpoint's ``payload`` that is wrong, and where
+    (``""``: nothing): what :func:`load_checkpoint` refuses, and so what :func:`save_checkpoint`
+    never writes."""
+    for where, tensor in _tensors(payload, "the checkpoint"):
+        problem = _tensor_problem(
+            tensor, finite=where.startswith("the checkpoint['learner']"), overflow=where.startswith(SQUARES)
+        )
+        if problem:
+            return f"{where} {problem}"
+    return ""
 
 
 def _tensors(value: Any, where: str) -> Iterator[tuple[str, torch.Tensor]]:
@@ -160,15 +219,20 @@ def _tensors(value: Any, where: str) -> Iterator[tuple[str, torch.Tensor]]:
             yield from _tensors(item, f"{where}[{index}]")
 
 
-def _tensor_problem(tensor: torch.Tensor, finite: bool) -> str:
+def _tensor_problem(tensor: torch.Tensor, finite: bool, overflow: bool = False) -> str:
     """What is wrong with a tensor of a checkpoint (``""``: nothing); a floating one must be finite
-    where ``finite`` (a learner's weights and memories)."""
+    where ``finite`` (a learner's weights and memories), or, where ``overflow`` (Adam's mean of
+    squared gradients, :data:`SQUARES`), finite or ``+inf``."""
     if tensor.layout != torch.strided or tensor.is_quantized:
         return f"is a {tensor.layout} tensor, not a dense one"
     if tensor.dtype not in TENSOR_DTYPES:
         return f"has dtype {tensor.dtype}"
-    if finite and tensor.is_floating_point() and not bool(torch.isfinite(tensor).all()):
-        return "holds a value that is no finite number"
+    if finite and tensor.is_floating_point():
+        bad = (
+            bool(torch.isnan(tensor).any() or (tensor == -math.inf).any()) if overflow else not bool(torch.isfinite(tensor).all())
+        )
+        if bad:
+            return NOT_FINITE
     return ""
 
 

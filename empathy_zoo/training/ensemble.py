@@ -33,9 +33,13 @@ from empathy_zoo.provenance import git_commit
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.result_file import PRICE_COLUMN, result_path
 from empathy_zoo.training.checkpoint import (
+    DIVERGED_FIX,
     CheckpointError,
+    DivergedError,
     check_checkpoint_keys,
+    check_writable,
     corrupted,
+    diverged_runs,
     from_safe,
     load_checkpoint,
     save_checkpoint,
@@ -252,6 +256,7 @@ def _train_ensemble(
         if tracker is not None and (step % LOG_INTERVAL == 0 or step == total):
             tracker.interval(step, learner, (step - first_step) / max(time.perf_counter() - started - elapsed, 1e-9))
     wall = time.perf_counter() - started
+    _refuse_diverged(ckpt, specs, step, learner)  # (before any result or agent file of them is written)
     results = []
     for r, spec in enumerate(specs):
         agent = agent_bytes(learner, r, {"run_id": spec.run_id, **spec.config()})  # (None: the method keeps none)
@@ -283,21 +288,52 @@ def _checkpoint(
     evaluations: list[list[dict[str, Any]]],
     train_rewards: TrainRewards,
 ) -> None:
-    """Write the ensemble's checkpoint ``ckpt`` at ``step`` (and the list of its runs beside it)."""
+    """Write the ensemble's checkpoint ``ckpt`` at ``step`` (and the list of its runs beside it);
+    where a run diverged, write nothing (:func:`_refuse_diverged`; the checkpoint of an earlier step is kept)."""
+    _refuse_diverged(ckpt, specs, step, learner)
+    payload = {
+        "run_ids": [s.run_id for s in specs],
+        "step": step,
+        "elapsed": elapsed,
+        "learner": learner.state_dict(),
+        "vector": to_safe(venv.state()),
+        "obs": to_safe(obs),
+        "logs": [log.columns for log in logs],
+        "evaluations": evaluations,
+        "rewards": to_safe(train_rewards.state()),
+    }
+    check_writable(ckpt, payload)  # (before the list of its runs: nothing is written for a checkpoint refused)
     write_manifest(ckpt, specs)
-    save_checkpoint(
-        ckpt,
-        {
-            "run_ids": [s.run_id for s in specs],
-            "step": step,
-            "elapsed": elapsed,
-            "learner": learner.state_dict(),
-            "vector": to_safe(venv.state()),
-            "obs": to_safe(obs),
-            "logs": [log.columns for log in logs],
-            "evaluations": evaluations,
-            "rewards": to_safe(train_rewards.state()),
-        },
+    save_checkpoint(ckpt, payload)
+
+
+def _refuse_diverged(ckpt: Path, specs: Sequence[RunSpec], step: int, learner: Any) -> None:
+    """Raise :class:`~empathy_zoo.training.checkpoint.DivergedError` naming the runs of ``specs``
+    whose networks (``learner.agent_state(run)``'s heads, where the learner keeps an agent that
+    way) hold a weight that is no finite number at ``step``: no result, agent file or checkpoint of
+    their ensemble is written; an earlier checkpoint ``ckpt`` is kept (a rerun resumes from it, and
+    meets the same refusal). Only reads the weights. A learner of another kind is checked where
+    its checkpoint is written (:func:`~empathy_zoo.training.checkpoint.save_checkpoint`)."""
+    agent_state = _optional(learner, "agent_state")
+    if agent_state is None:
+        return
+    diverged = [
+        spec.run_id
+        for r, spec in enumerate(specs)
+        if not all(
+            bool(torch.isfinite(torch.as_tensor(layer)).all()) for layers in agent_state(r)["heads"].values() for layer in layers
+        )
+    ]
+    if not diverged:
+        return
+    one = len(diverged) == 1
+    networks = "its network's" if one else "their networks'"
+    others = len(specs) - len(diverged)
+    stop = f" (its {others} other run(s) stop with {'it' if one else 'them'})" if others else ""
+    kept = f"its checkpoint {ckpt} of an earlier step is kept" if ckpt.exists() else "no checkpoint of it was written"
+    raise DivergedError(
+        f"{diverged_runs(diverged)} diverged by step {step:,}: {networks} weights are no longer finite numbers; "
+        f"{DIVERGED_FIX}; no result of {'its' if one else 'their'} ensemble was written{stop} and {kept}"
     )
 
 

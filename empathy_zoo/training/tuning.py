@@ -63,7 +63,8 @@ Each is rewritten (atomically) after every trial. Decisions, and why (the plan's
   is a finished trial that waited on an unfinished one before it in its batch.
 * **Refused points**: a point whose settings the method refuses (a warm-up longer than the
   budget, say) is a trial in state ``FAIL`` with the reason in ``study.json``; the ends of every
-  range are checked before the study starts, so this is rare.
+  range are checked before the study starts, so this is rare. So is a point whose runs diverged
+  (their weights no longer finite numbers: a learning rate too high), with the refusal naming them.
 
 Optuna is an optional extra (``pip install -e ".[tune]"``): :func:`import_optuna` says so
 in one line where it is missing.
@@ -93,6 +94,7 @@ from empathy_zoo.experiment.sweep_writer import experiment_sweep
 from empathy_zoo.extras import install_command
 from empathy_zoo.names import check_no_links, check_replaceable
 from empathy_zoo.output_lock import hold_output_dir
+from empathy_zoo.training.checkpoint import DivergedError
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training
@@ -193,11 +195,13 @@ def _pruner(optuna: Any, plan: StudyPlan) -> Any:
     return optuna.pruners.MedianPruner(n_startup_trials=PRUNE_STARTUP_TRIALS, n_warmup_steps=plan.prune_from)
 
 
-def _train_point(point: _Point) -> _Outcome:
+def _train_point(point: _Point) -> _Outcome | str:
     """Train ``point`` (here, or in a worker process): its runs on the plan's tuning seeds, the
     objective taken at each greedy evaluation and shown to the plan's pruner, which judges it
     against the trials finished before its batch (in a study in memory, as Optuna's
-    ``Trial.should_prune`` does in the study itself)."""
+    ``Trial.should_prune`` does in the study itself). A point whose runs diverged
+    (:class:`~empathy_zoo.training.checkpoint.DivergedError`) gives the refusal's message: its
+    trial is refused with that reason, as a point the method refuses is, and the study goes on."""
     optuna = import_optuna()
     plan = point.plan
     judge = optuna.create_study(direction=plan.direction, pruner=_pruner(optuna, plan), sampler=optuna.samplers.RandomSampler(0))
@@ -219,6 +223,8 @@ def _train_point(point: _Point) -> _Outcome:
         train_trial(specs, point.out, point.options, report)
     except _Pruned:
         pruned = True
+    except DivergedError as error:
+        return str(error)
     return _Outcome(curve, round(time.perf_counter() - started, 3), pruned)
 
 
@@ -238,7 +244,7 @@ class _Workers:
         self.count = min(count, batch)
         self.pool: ProcessPoolExecutor | None = None
 
-    def train(self, points: list[tuple[list[int], _Point]]) -> Iterator[tuple[list[int], _Outcome]]:
+    def train(self, points: list[tuple[list[int], _Point]]) -> Iterator[tuple[list[int], _Outcome | str]]:
         """Each ``(slots, point)`` of ``points`` trained: ``(slots, its outcome)`` as each finishes
         (in the order given, here). An interruption stops the workers; another error lets the
         running points finish."""
@@ -249,7 +255,7 @@ class _Workers:
         if self.pool is None:
             context = multiprocessing.get_context("spawn")
             self.pool = ProcessPoolExecutor(self.count, mp_context=context, initializer=_worker_started, initargs=(os.getpid(),))
-        futures: dict[Future[_Outcome], list[int]] = {}
+        futures: dict[Future[_Outcome | str], list[int]] = {}
         for slots, point in points:
             options = replace(point.options, workers=1, progress=False, threads=point.options.threads or 1)
             futures[self.pool.submit(_train_point, replace(point, options=options))] = slots
