@@ -17,9 +17,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from agents.rewards import RewardTransform, configure_transform, transform_config, transform_fields
-from agents.setting_values import check_recorded_settings, settings_record
 from agents.step_batch import StepBatch
 from empathy_zoo.method_description import check_description, default_description
+from empathy_zoo.setting_values import check_recorded_settings, settings_record
 
 __all__ = ["StepBatch", "Learner", "Method", "SETTINGS_DESCRIBE", "UPDATE_KERNELS"]
 
@@ -200,10 +200,10 @@ class Method:
     def make_settings(self, overrides: dict[str, Any]) -> Any:
         """The method's settings with ``overrides``; overriding a preset raises ``ValueError``, as
         does a value the result reader would refuse in the run's ``config.settings``
-        (:func:`agents.setting_values.check_recorded_settings`, the reader's own rule: an int in
+        (:func:`empathy_zoo.setting_values.check_recorded_settings`, the reader's own rule: an int in
         ``[0, MAX_SETTING]``, a finite float of magnitude at most ``MAX_SETTING``, ...), checked in
         ``overrides`` before the settings class sees them and in the settings it makes (their
-        record, :func:`agents.setting_values.settings_record`) after."""
+        record, :func:`empathy_zoo.setting_values.settings_record`) after."""
         clash = sorted(k for k in overrides if k in self.preset and overrides[k] != self.preset[k])
         if clash:
             raise ValueError(f"method {self.name!r} fixes {', '.join(f'{k}={self.preset[k]!r}' for k in clash)}")

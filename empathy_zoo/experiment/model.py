@@ -17,7 +17,6 @@ from typing import Any
 
 from agents.base import Method
 from agents.rewards import RewardTransform, transform_config
-from agents.setting_values import settings_record
 from baselines.registry import get_method
 from empathy_zoo import run_ids
 from empathy_zoo.engine.arguments import check_choice, check_env_arguments
@@ -25,6 +24,7 @@ from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, default_polic
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATIONS, MAX_SEED, MAX_STEPS, check_at_most
 from empathy_zoo.names import check_label, check_path_name
 from empathy_zoo.policies import PolicyEntry, entry_label, make_policy, policy_entry
+from empathy_zoo.setting_values import settings_record
 
 __all__ = ["DEFAULT_METHOD", "Budget", "EnvVariant", "MethodEntry", "RunSpec", "group_specs"]
 

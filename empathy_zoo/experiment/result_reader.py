@@ -20,11 +20,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from agents.setting_values import MAX_SETTING, recorded_problem
 from empathy_zoo.atomic import read_json
 from empathy_zoo.document_checks import DocumentChecker, one_line
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.result_file import ResultFileError, check_result_fields, check_run_id, result_checker
+from empathy_zoo.setting_values import MAX_SETTING, recorded_problem
 
 __all__ = ["MAX_SETTING", "check_result", "read_result"]
 
@@ -70,7 +70,7 @@ def _named(result: dict[str, Any], path: str | Path) -> dict[str, Any]:
 
 def _settings(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:
     """The settings object of ``result``'s ``config.settings``: each field one of ``method``'s
-    settings class, of the type it declares (:func:`agents.setting_values.recorded_problem`, the rule
+    settings class, of the type it declares (:func:`empathy_zoo.setting_values.recorded_problem`, the rule
     every run's settings are built by: :meth:`agents.base.Method.make_settings`), then accepted by the class
     itself (its ranges). A refusal names ``config.settings`` and,
     in it, the setting: ``expected settings of dqn (selfishness: a finite number ...)``."""

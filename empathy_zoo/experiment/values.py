@@ -17,8 +17,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
-from agents.setting_values import field_types  # (here too: a config file's settings are read by their annotations)
 from empathy_zoo.limits import MAX_CONFIG_BYTES, MAX_SEED, MAX_SEEDS, read_bounded
+from empathy_zoo.setting_values import field_types  # (here too: a config file's settings are read by their annotations)
 
 __all__ = [
     "SweepConfigError",
