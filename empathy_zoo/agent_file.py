@@ -298,8 +298,8 @@ def _check_heads(heads: Any, acting: Any, budget: int | None = None) -> tuple[di
         sizes.add((int(tensors[0].shape[0]), int(tensors[-1].shape[0])))
     if len(sizes) != 1:
         raise ValueError(f"every head must take the same observation and give the same actions; got (in, out) {sorted(sizes)}")
-    if acting not in checked:
-        raise ValueError(f"'acting' must name one of the heads {sorted(checked)}, got {acting!r}")
+    if not isinstance(acting, str) or acting not in checked:  # (a list or dict is no name: never hashed)
+        raise ValueError(f"'acting' must name one of the heads {sorted(checked)}, got {shown(acting)}")
     ((obs_size, num_actions),) = sizes
     return checked, obs_size, num_actions
 
@@ -441,7 +441,8 @@ def load_agent(
     try:
         heads, obs_size, num_actions = _check_heads(document.get("heads"), document.get("acting"), budget=len(data))
         header = _check_header(document.get("header"))
-        if (document.get("obs_size"), document.get("num_actions")) != (obs_size, num_actions):
+        sizes = (document.get("obs_size"), document.get("num_actions"))
+        if not all(type(size) is int for size in sizes) or sizes != (obs_size, num_actions):  # (no tensor, float or bool)
             raise ValueError(
                 f"its sizes {shown(document.get('obs_size'))}→{shown(document.get('num_actions'))} "
                 f"are not its networks' {obs_size}→{num_actions}"

@@ -22,7 +22,7 @@ from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.names import terminal_line
+from empathy_zoo.names import check_output_file, terminal_line
 from leaderboard.aggregate import load_results
 from leaderboard.reproduction import (
     BETAS,
@@ -191,9 +191,11 @@ def reproduction_section(results: Sequence[RunResult], command: str, reference_o
 
 
 def write_coexistence_sensitivity(results_dir: str | os.PathLike[str], out_path: str | os.PathLike[str], command: str) -> Path:
-    """Judge ``results_dir`` and write the page to ``out_path``; nothing is written on a refusal."""
+    """Judge ``results_dir`` and write the page to ``out_path``; nothing is written on a refusal.
+    ``out_path`` must be a Markdown file name (``.md``: never a result or agent file the page is
+    made of, :func:`empathy_zoo.names.check_output_file`), checked before anything is read."""
+    path = check_output_file(out_path, "Markdown", ".md", "COEXISTENCE_SENSITIVITY.md")
     text = sensitivity_markdown(load_results(results_dir), command)
-    path = Path(out_path)
     write_text_atomic(path, text + "\n")
     return path
 
@@ -206,6 +208,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     command = f"empathy-zoo analyse coexistence-sensitivity {args.results_dir}" + (f" --out {args.out}" if args.out else "")
     try:
+        if args.out == "":  # (not taken for "print it": an empty path names no file)
+            raise ValueError("argument --out: an empty path; name the Markdown file to write, or leave --out out to print")
         if args.out:
             write_coexistence_sensitivity(args.results_dir, args.out, command)
         else:

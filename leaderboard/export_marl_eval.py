@@ -140,11 +140,12 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
     folder of any results directory, or an existing file that is not an earlier export
     (:func:`_is_export`): an export never replaces a file of another kind."""
     path = check_output_file(out, "JSON", ".json", "marl_eval.json")
-    if path.parent.name == RUNS_DIR or path.parent.parent.name == EVALUATIONS_DIR:
-        raise ValueError(
-            f"{out} lies in a folder of a results directory ({path.parent}), whose JSON files are read as results "
-            "or evaluations: write it elsewhere"
-        )
+    for folder in (path.parent, path.absolute().parent.resolve()):  # (as typed, and where `..` and links lead)
+        if folder.name == RUNS_DIR or folder.parent.name == EVALUATIONS_DIR:
+            raise ValueError(
+                f"{out} lies in a folder of a results directory ({folder}), whose JSON files are read as results "
+                "or evaluations: write it elsewhere"
+            )
     if path.is_file() and not _is_export(path):
         raise ValueError(
             f"{out} exists and is no marl-eval export of this suite: an export replaces only an earlier export "
