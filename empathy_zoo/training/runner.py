@@ -18,29 +18,33 @@ import threading
 import time
 from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import PROBE_BYTES, check_output_dir, remove_stale_temp_files
-from empathy_zoo.experiment.model import RunSpec
+from empathy_zoo.data_files import data_files
+from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import read_result
+from empathy_zoo.names import check_no_links, check_replaceable
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, check_one_experiment_per_label, result_path
+from empathy_zoo.training.checkpoint import RUNS_LIST_SUFFIX, runs_list_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.fingerprint import code_changes, listing
 from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training, largest_checkpoint_bytes
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
-from empathy_zoo.training.resume import CHECKPOINT_DIR, plan_ensembles
+from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, plan_ensembles
 from empathy_zoo.training.tracking import check_log_places, log_subdirs
 
 __all__ = [
     "RunnerOptions",
     "Stopped",
+    "check_file_places",
     "read_finished",
     "stopped_by_signals",
     "train_runs",
@@ -134,18 +138,51 @@ def train_runs(
     todo = [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo]
     room = max(PROBE_BYTES, largest_checkpoint_bytes(todo, options)) if local_checkpoints and todo else PROBE_BYTES
     check_log_places(out_dir, options.log, [s.run_id for s in todo])  # (no link where a run logs)
+    check_file_places(out_dir, todo, options.max_parallel_runs if local_checkpoints else None)
     subdirs = (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ()), *log_subdirs(options.log))
     with hold_output_dir(out_dir, command_line(), note):
+        made = list(
+            dict.fromkeys(f for sub in subdirs for f in (*reversed((out_dir / sub).parents), out_dir / sub) if not f.exists())
+        )
         check_output_dir(out_dir, subdirs, largest_file=room)  # (inside the lock: nothing made before it)
-        for warning in warnings:  # (said once everything before training has passed)
-            note(warning)
-        stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
-        if stale:
-            note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
-        _settle_superseded(out_dir / RUNS_DIR)
-        with _set_aside(out_dir, redo), stopped_by_signals():
-            _train_todo(specs, out_dir, options, on_result, note)
+        try:
+            for warning in warnings:  # (said once everything before training has passed)
+                note(warning)
+            stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
+            if stale:
+                note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
+            _settle_superseded(out_dir / RUNS_DIR)
+            with _set_aside(out_dir, redo), stopped_by_signals():
+                _train_todo(specs, out_dir, options, on_result, note)
+        except BaseException:
+            for folder in reversed(made):  # (a call that stopped leaves no empty folder it made; one holding a file stays)
+                with suppress(OSError):
+                    folder.rmdir()
+            raise
     return [result_path(out_dir, s.run_id) for s in specs]
+
+
+def check_file_places(out_dir: Path, todo: Sequence[RunSpec], max_parallel_runs: int | None) -> None:
+    """Refuse (``ValueError`` naming it) every place a run of ``todo`` writes a file in ``out_dir``
+    that holds anything but nothing or a regular file, or lies through a link
+    (:func:`empathy_zoo.names.check_replaceable`, :func:`~empathy_zoo.names.check_no_links`): its
+    result file, its agent file (either suffix) and, with local checkpoints (``max_parallel_runs``
+    given, the most runs of an ensemble), each checkpoint and list of runs in ``checkpoints/`` and
+    those of the fresh ensembles ``todo`` groups into. Asked before any directory is made and any
+    run trains, so a refusal leaves the output directory as it was (and trains nothing)."""
+    places = []
+    for spec in todo:
+        result = result_path(out_dir, spec.run_id)
+        places += [result, *(result.with_name(spec.run_id + suffix) for suffix in AGENT_SUFFIXES)]
+    if max_parallel_runs is not None:
+        directory = out_dir / CHECKPOINT_DIR
+        data_files(directory, "*.pt", "checkpoint")  # (each there a regular file, as plan_ensembles asks)
+        data_files(directory, f"*{RUNS_LIST_SUFFIX}", "list of runs")
+        for chunk in group_specs(todo, max_parallel_runs):
+            checkpoint = checkpoint_path(out_dir, chunk)
+            places += [checkpoint, runs_list_path(checkpoint)]
+    for place in places:
+        check_replaceable(check_no_links(out_dir, place))
 
 
 def _runs_to_redo(

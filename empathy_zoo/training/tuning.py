@@ -60,7 +60,9 @@ Each is rewritten (atomically) after every trial. Decisions, and why (the plan's
 * **Equal budgets**: a study runs exactly ``trials`` trials (finished, pruned or refused), each of
   ``len(seeds)`` runs of ``budget.steps`` env steps at most; a trial stopped by an interruption
   does not count and is run again when the study resumes (its runs keep no checkpoint), and so
-  is a finished trial that waited on an unfinished one before it in its batch.
+  is a finished trial that waited on an unfinished one before it in its batch. A study resumed
+  with fewer ``trials`` than it has done (or whose journal holds more) is refused before it opens
+  (:func:`check_journal`): its ``study.json`` would hold more trials than its plan.
 * **Refused points**: a point whose settings the method refuses (a warm-up longer than the
   budget, say) is a trial in state ``FAIL`` with the reason in ``study.json``; the ends of every
   range are checked before the study starts, so this is rare. So is a point whose runs diverged
@@ -72,6 +74,7 @@ in one line where it is missing.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import multiprocessing
 import os
@@ -341,8 +344,16 @@ def run_study(
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     try:
         with hold_output_dir(out, command or "run_study", note):
+            subdirs = [out / sub for sub in log_subdirs(options.log)]
+            made = [folder for sub in subdirs for folder in (*reversed(sub.parents), sub) if not folder.exists()]
             check_output_dir(out, log_subdirs(options.log))
-            has_plan = check_journal(out / JOURNAL_FILE, note, plan, options.update_kernel)
+            try:
+                has_plan = check_journal(out / JOURNAL_FILE, note, plan, options.update_kernel)
+            except BaseException:
+                for folder in reversed(list(dict.fromkeys(made))):  # (a refused journal leaves no folder made for it)
+                    with contextlib.suppress(OSError):
+                        folder.rmdir()
+                raise
             for stale in remove_stale_temp_files(out):
                 note(f"removed {stale}, a write killed mid-way")
             return _study(optuna, plan, out, options, command, progress, on_trial, note, has_plan)
@@ -597,6 +608,11 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, updat
 def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any, options: RunnerOptions) -> dict[str, Any]:
     """Write ``study.json`` and, once a trial finished, ``tuned.toml``; return the document."""
     document = study_document(study, plan, command, optuna, options.update_kernel)
+    if document["trials_done"] > plan.trials:  # (checked before the study opened: its reader refuses such a study)
+        raise ValueError(
+            f"{out / JOURNAL_FILE} holds {document['trials_done']} trial(s) done, more than --trials {plan.trials}: "
+            f"resume it with --trials {document['trials_done']} or more"
+        )
     best = document["best"]
     if best is not None:
         tuned = point_runs(plan.base, plan.params, best["params"], plan.reporting_seeds[:1])[0]

@@ -25,7 +25,9 @@ trial at a time), with exactly that operation's fields, each of its type and wit
   far (:func:`~empathy_zoo.training.study_plan.curve_value`);
 * 6 (a trial ended): finished (its value the last intermediate value, its point one the method
   takes), pruned (the same) or failed (refused or interrupted, no value); nothing of a trial
-  follows its end.
+  follows its end; the trials ended finished, pruned or refused (those the study counts done)
+  no more than the plan's :attr:`~empathy_zoo.training.study_plan.StudyPlan.trials` (a study
+  resumed with a lower ``--trials`` than it has done is refused, naming the journal and the count).
 
 Any other line, field or value is refused with a ``ValueError`` that names the file and the line.
 """
@@ -195,6 +197,8 @@ class _StudyLines:
         """The trials created since the study was last opened and not ended, by number."""
         self.number = 0
         """The number of the line being checked (in the journal)."""
+        self.done = 0
+        """The trials that ended counted (finished, pruned or refused), as the study counts them."""
 
     def line(self, entry: dict[str, Any]) -> None:
         """Check one line (a JSON object), given every line before it was checked."""
@@ -427,6 +431,8 @@ class _StudyLines:
                     raise _Refusal(
                         f"the finished trial's point is one method {self.plan.base.method!r} refuses ({error})"
                     ) from None
+        if state != FAIL or trial.refused:
+            self.done += 1
         del self.running[trial.number]
 
 
@@ -466,7 +472,8 @@ def check_study_lines(lines: Sequence[tuple[int, dict[str, Any]]], path: Path, p
     """Check the journal ``path``'s lines ``lines`` (``(line number, JSON object)``, in order)
     against what a study of ``plan``, trained with ``update_kernel``, writes (see the module
     documentation); a study of another plan, or any line that is not what the study writes, is
-    refused with a one-line ``ValueError`` naming the file (and the line)."""
+    refused with a one-line ``ValueError`` naming the file (and the line), and so is a journal that
+    holds more trials done than ``plan.trials`` (naming the file, ``--trials`` and the count done)."""
     check = _StudyLines(plan, update_kernel, path.parent)
     for number, entry in lines:
         check.number = number
@@ -477,3 +484,8 @@ def check_study_lines(lines: Sequence[tuple[int, dict[str, Any]]], path: Path, p
                 f"tuning journal {path}, line {number}: {error}; the journal is damaged or not this study's: "
                 "move it away to start the study again"
             ) from None
+    if check.done > plan.trials:  # (a study of fewer trials than its journal holds done is no study its reader takes)
+        raise ValueError(
+            f"tuning journal {path} holds {check.done} trial(s) done, more than --trials {plan.trials}: resume it "
+            f"with --trials {check.done} or more (--trials may change on resume, never below the trials done)"
+        )
