@@ -69,3 +69,29 @@ selfishness = 0.5
 method = "dqn"
 """
 """Empathic DQN (β = 0.5) and DQN on both environments, 2 seeds, 300 steps: 8 runs in 4 ensembles."""
+
+TUNE_SWEEP = """
+[sweep]
+seeds = [0, 1]
+steps = 300
+eval_interval = 100
+eval_episodes = 1
+
+[settings]
+learning_starts = 32
+replay_capacity = 300
+hidden_size = 8
+target_update_interval = 50
+epsilon_decay_steps = 200
+
+[envs.coexistence_v0]
+max_cycles = 40
+
+[[methods]]
+method = "dqn_harm_penalty"
+"""
+"""One 300-step experiment on reporting seeds 0 and 1 (three greedy evaluations per run): what the
+`tune` tests tune."""
+
+TUNE_PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4:1e-2"]
+"""The search space of :data:`TUNE_SWEEP`: penalty (uniform) and learning_rate (log-uniform)."""

@@ -18,33 +18,14 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from helpers_sweeps import TUNE_PARAMS, TUNE_SWEEP
 
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.experiment.model import RunSpec
 
-SWEEP = """
-[sweep]
-seeds = [0, 1]
-steps = 300
-eval_interval = 100
-eval_episodes = 1
+SWEEP = TUNE_SWEEP
 
-[settings]
-learning_starts = 32
-replay_capacity = 300
-hidden_size = 8
-target_update_interval = 50
-epsilon_decay_steps = 200
-
-[envs.coexistence_v0]
-max_cycles = 40
-
-[[methods]]
-method = "dqn_harm_penalty"
-"""
-"""One 300-step experiment on reporting seeds 0 and 1 (as tests/test_journal_forgeries.py)."""
-
-PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4:1e-2"]
+PARAMS = TUNE_PARAMS
 
 
 def _snapshot(directory: Path) -> dict[str, bytes | None]:

@@ -14,6 +14,8 @@ import pytest
 
 pytest.importorskip("optuna")
 
+from helpers_sweeps import TUNE_SWEEP
+
 from baselines.registry import get_method
 from empathy_zoo.cli import main
 from empathy_zoo.experiment import load_sweep
@@ -22,27 +24,7 @@ from empathy_zoo.training import study_plan, tuning
 from empathy_zoo.training.study_plan import select_experiment, tuning_seeds
 from empathy_zoo.training.tuning import STUDY_FILE, TUNED_FILE
 
-SWEEP = """
-[sweep]
-seeds = [0, 1]
-steps = 300
-eval_interval = 100
-eval_episodes = 1
-
-[settings]
-learning_starts = 32
-replay_capacity = 300
-hidden_size = 8
-target_update_interval = 50
-epsilon_decay_steps = 200
-
-[envs.coexistence_v0]
-max_cycles = 40
-
-[[methods]]
-method = "dqn_harm_penalty"
-"""
-"""One 300-step experiment on reporting seeds 0 and 1 (three greedy evaluations per run)."""
+SWEEP = TUNE_SWEEP
 
 TUNE = [
     "--method",
