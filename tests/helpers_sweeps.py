@@ -95,3 +95,23 @@ method = "dqn_harm_penalty"
 
 TUNE_PARAMS = ["--param", "penalty=float:-200:-1", "--param", "learning_rate=log:1e-4:1e-2"]
 """The search space of :data:`TUNE_SWEEP`: penalty (uniform) and learning_rate (log-uniform)."""
+
+TINY_DQN_TRAIN = [
+    "train",
+    "--method",
+    "dqn",
+    "--eval-episodes",
+    "1",
+    "--hidden-size",
+    "8",
+    "--learning-starts",
+    "50",
+    "--replay-capacity",
+    "100",
+    "--batch-size",
+    "8",
+    "--epsilon-decay-steps",
+    "10",
+    "--no-progress",
+]
+"""A DQN run of a few hundred steps, without its steps and evaluation interval (each test adds them)."""

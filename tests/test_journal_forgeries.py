@@ -19,8 +19,8 @@ import pytest
 pytest.importorskip("optuna")
 
 from helpers_sweeps import TUNE_PARAMS, TUNE_SWEEP
+from helpers_tune import run_tune, snapshot, tiny_plan, tiny_study
 
-from empathy_zoo.cli import main
 from empathy_zoo.training.tuning import JOURNAL_FILE, check_journal
 
 SWEEP = TUNE_SWEEP
@@ -29,27 +29,16 @@ PARAMS = TUNE_PARAMS
 
 
 def _tune(sweep: Path, out: Path, trials: int, params: list[str] = PARAMS) -> int:
-    tuning = ["--trials", str(trials), "--tuning-seeds", "1", "--startup-trials", "2", "--no-progress", "--out", str(out)]
-    return main(["tune", str(sweep), "--method", "dqn_harm_penalty", *params, *tuning])
+    return run_tune(sweep, out, trials, params=params)
 
 
 @pytest.fixture(scope="module")
 def genuine(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """``(sweep file, study directory)`` of a genuine study: one trial, then a second resumed."""
-    root = tmp_path_factory.mktemp("genuine")
-    sweep = root / "tiny.toml"
-    sweep.write_text(SWEEP)
-    out = root / "study"
-    assert _tune(sweep, out, 1) == 0
-    assert _tune(sweep, out, 2) == 0
-    return sweep, out
+    return tiny_study(tmp_path_factory.mktemp("genuine"), 1, 2)
 
 
-def _snapshot(directory: Path) -> dict[str, bytes | None]:
-    """Every path under ``directory``: a file's bytes, ``None`` for a directory."""
-    return {
-        str(path.relative_to(directory)): None if path.is_dir() else path.read_bytes() for path in sorted(directory.rglob("*"))
-    }
+_snapshot = snapshot
 
 
 Entry = dict[str, Any]
@@ -203,10 +192,6 @@ def test_check_journal_refuses_a_forgery_and_keeps_a_torn_last_line(
     name: str, genuine: tuple[Path, Path], tmp_path: Path
 ) -> None:
     """The checker itself: a ``ValueError`` naming file and line; the cut last line is not dropped."""
-    from empathy_zoo.cli.tune import default_objective
-    from empathy_zoo.experiment import load_sweep
-    from empathy_zoo.experiment.search_space import parse_params
-    from empathy_zoo.training.study_plan import StudyPlan, select_experiment, tuning_seeds
 
     sweep, study = genuine
     journal = tmp_path / JOURNAL_FILE
@@ -215,20 +200,8 @@ def test_check_journal_refuses_a_forgery_and_keeps_a_torn_last_line(
     with journal.open("a") as handle:
         handle.write('{"op_code": 4, "worker_id"')
     before = journal.read_bytes()
-    base = select_experiment(load_sweep(sweep), "dqn_harm_penalty")
     stored = json.loads(journal.read_text().splitlines()[1])["user_attr"]["plan"]
-    plan = StudyPlan(
-        source=str(sweep),
-        base=base,
-        params=parse_params(PARAMS[1::2], base.method_object()),
-        metric="survival",
-        direction=default_objective(base.env)[1],
-        seeds=tuning_seeds(1, [0, 1]),
-        reporting_seeds=(0, 1),
-        reporting_budget=base.budget,
-        trials=3,
-        startup_trials=2,
-    )
+    plan = tiny_plan(sweep, 3)
     notes: list[str] = []
     with pytest.raises(ValueError, match=rf"^tuning journal {re.escape(str(journal))}, line {number}: ") as error:
         check_journal(journal, notes.append, plan, stored["update_kernel"])

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 import torch
+from helpers_sweeps import TINY_DQN_TRAIN
 
 from empathy_zoo.cli import main
 
@@ -25,24 +26,7 @@ RUNS = ROOT / "docs" / "results" / "quick" / "runs"
 CRASH = Path(__file__).with_name("helpers_crash.py")
 LIBRARY_RUNS = ROOT / "docs" / "results" / "sb3_transforms" / "runs"
 
-TINY = [
-    "train",
-    "--method",
-    "dqn",
-    "--eval-episodes",
-    "1",
-    "--hidden-size",
-    "8",
-    "--learning-starts",
-    "50",
-    "--replay-capacity",
-    "100",
-    "--batch-size",
-    "8",
-    "--epsilon-decay-steps",
-    "10",
-    "--no-progress",
-]
+TINY = TINY_DQN_TRAIN
 """A tiny run of DQN (a few hundred steps take a second or two)."""
 
 

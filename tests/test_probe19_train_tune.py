@@ -18,7 +18,8 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from helpers_sweeps import TUNE_PARAMS, TUNE_SWEEP
+from helpers_sweeps import TINY_DQN_TRAIN, TUNE_PARAMS, TUNE_SWEEP
+from helpers_tune import run_tune, snapshot, tiny_plan, tiny_study
 
 from empathy_zoo.cli import main, parse_args
 from empathy_zoo.experiment.model import RunSpec
@@ -28,29 +29,17 @@ SWEEP = TUNE_SWEEP
 PARAMS = TUNE_PARAMS
 
 
-def _snapshot(directory: Path) -> dict[str, bytes | None]:
-    """Every path under ``directory``: a file's bytes, ``None`` for a directory."""
-    return {
-        str(path.relative_to(directory)): None if path.is_dir() else path.read_bytes() for path in sorted(directory.rglob("*"))
-    }
+_snapshot = snapshot
 
 
-def _tune(sweep: Path, out: Path, trials: int, *extra: str) -> int:
-    tuning = ["--trials", str(trials), "--tuning-seeds", "1", "--startup-trials", "2", "--no-progress", "--out", str(out)]
-    return main(["tune", str(sweep), "--method", "dqn_harm_penalty", *PARAMS, *tuning, *extra])
+_tune = run_tune
 
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """``(sweep file, study directory)`` of a genuine study of two trials (one, then one more resumed)."""
     pytest.importorskip("optuna")
-    root = tmp_path_factory.mktemp("study")
-    sweep = root / "tiny.toml"
-    sweep.write_text(SWEEP)
-    out = root / "study"
-    assert _tune(sweep, out, 1) == 0
-    assert _tune(sweep, out, 2) == 0
-    return sweep, out
+    return tiny_study(tmp_path_factory.mktemp("study"), 1, 2)
 
 
 @pytest.mark.parametrize("extra", [(), ("--log", "csv")])
@@ -90,10 +79,6 @@ def test_check_journal_refuses_more_done_trials_than_the_plan_naming_the_journal
 ) -> None:
     """The journal's own check: a journal holding more trials done than the plan's ``--trials`` (a
     forged extra trial, or a study resumed with fewer) is refused naming the file, unchanged."""
-    from empathy_zoo.cli.tune import default_objective
-    from empathy_zoo.experiment import load_sweep
-    from empathy_zoo.experiment.search_space import parse_params
-    from empathy_zoo.training.study_plan import StudyPlan, select_experiment, tuning_seeds
     from empathy_zoo.training.tuning import JOURNAL_FILE, check_journal
 
     sweep, genuine = study
@@ -101,19 +86,7 @@ def test_check_journal_refuses_more_done_trials_than_the_plan_naming_the_journal
     shutil.copy(genuine / JOURNAL_FILE, journal)
     before = journal.read_bytes()
     stored = json.loads(journal.read_text().splitlines()[1])["user_attr"]["plan"]
-    base = select_experiment(load_sweep(sweep), "dqn_harm_penalty")
-    plan = StudyPlan(
-        source=str(sweep),
-        base=base,
-        params=parse_params(PARAMS[1::2], base.method_object()),
-        metric="survival",
-        direction=default_objective(base.env)[1],
-        seeds=tuning_seeds(1, [0, 1]),
-        reporting_seeds=(0, 1),
-        reporting_budget=base.budget,
-        trials=1,
-        startup_trials=2,
-    )
+    plan = tiny_plan(sweep, 1)
     notes: list[str] = []
     with pytest.raises(ValueError, match=rf"^tuning journal {re.escape(str(journal))} holds 2 trial\(s\) done") as error:
         check_journal(journal, notes.append, plan, stored["update_kernel"])
@@ -122,27 +95,7 @@ def test_check_journal_refuses_more_done_trials_than_the_plan_naming_the_journal
     assert check_journal(journal, notes.append, replace(plan, trials=2), stored["update_kernel"])
 
 
-TRAIN = [
-    "train",
-    "--method",
-    "dqn",
-    "--steps",
-    "300",
-    "--eval-interval",
-    "300",
-    "--eval-episodes",
-    "1",
-    "--hidden-size",
-    "8",
-    "--learning-starts",
-    "50",
-    "--replay-capacity",
-    "100",
-    "--batch-size",
-    "8",
-    "--epsilon-decay-steps",
-    "10",
-]
+TRAIN = [*TINY_DQN_TRAIN, "--steps", "300", "--eval-interval", "300"]
 
 
 def _run(out: Path) -> RunSpec:

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from test_journal_forgeries import PARAMS, SWEEP
+from helpers_tune import run_tune, snapshot, tiny_study
 
 from empathy_zoo.bounded_read import check_json_depth, json_depth, read_json_data
 from empathy_zoo.limits import MAX_JSON_DEPTH
@@ -114,30 +114,17 @@ LOCK = "study.journal.lock"
 """The name Optuna gives the lock file of a journal ``study.journal``."""
 
 
-def _tune(sweep: Path, out: Path, trials: int) -> int:
-    from empathy_zoo.cli import main
-
-    tuning = ["--trials", str(trials), "--tuning-seeds", "1", "--startup-trials", "2", "--no-progress", "--out", str(out)]
-    return main(["tune", str(sweep), "--method", "dqn_harm_penalty", *PARAMS, *tuning])
+_tune = run_tune
 
 
-def _snapshot(directory: Path) -> dict[str, bytes | None]:
-    """Every path under ``directory``: a file's bytes, ``None`` for a directory."""
-    return {
-        str(path.relative_to(directory)): None if path.is_dir() else path.read_bytes() for path in sorted(directory.rglob("*"))
-    }
+_snapshot = snapshot
 
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """``(sweep file, study directory)`` of a genuine study of one trial."""
     pytest.importorskip("optuna")
-    root = tmp_path_factory.mktemp("study")
-    sweep = root / "tiny.toml"
-    sweep.write_text(SWEEP)
-    out = root / "study"
-    assert _tune(sweep, out, 1) == 0
-    return sweep, out
+    return tiny_study(tmp_path_factory.mktemp("study"), 1)
 
 
 OUT_OF_RANGE = {
