@@ -345,7 +345,7 @@ def main(
     args = parser.parse_args(argv)
     refused = _refused_argument(args)
     if refused is not None:  # (before any table is read: the argument itself, one line)
-        print(f"discrimination: error: {terminal_line(refused)}", file=sys.stderr)
+        print(f"{prog}: error: {terminal_line(refused)}", file=sys.stderr)
         return 2
     results: list[Path] = getattr(args, "results", [])
     out = args.out or args.directory / "DISCRIMINATION.md"
@@ -358,10 +358,10 @@ def main(
         cells = trained(tables, results) if trained is not None and results else None
         page = discrimination_markdown(tables, args.epsilon, command, cells)
     except MissingPair as error:
-        print(f"discrimination: error: {terminal_line(error.in_folder(args.directory))}", file=sys.stderr)
+        print(f"{prog}: error: {terminal_line(error.in_folder(args.directory))}", file=sys.stderr)
         return 2
     except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
-        print(f"discrimination: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(f"wrote {write_text_atomic(out, page)}")
     return 0

@@ -256,7 +256,7 @@ def module_main(argv: list[str] | None = None) -> int:
     try:
         main(argv)
     except ValueError as error:
-        print(f"separation_render: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"python -m baselines.separation_render: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     return 0
 

@@ -525,7 +525,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         model = tabular_model(args.env, **command_line_arguments(args.arguments))
     except ValueError as error:
-        print(f"exact_solver: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(outcome_table(model, (1.0, 0.75, 0.5, 0.25, 0.0), (0.0, 0.01, 0.05)))
     return 0

@@ -8,7 +8,9 @@ from __future__ import annotations
 import os
 import re
 import stat
+import sys
 import unicodedata
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +27,8 @@ __all__ = [
     "check_path_name",
     "check_replaceable",
     "confined",
+    "positional_tool",
+    "terminal_line",
 ]
 
 PATH_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
@@ -174,3 +178,19 @@ def terminal_line(text: object) -> str:
         c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) in LABEL_REFUSED_CATEGORIES else c
         for c in str(text)
     )
+
+
+def positional_tool(prog: str, usage: str, args: Sequence[str], count: int, body: Callable[[list[str]], int]) -> int:
+    """Run a tool that takes ``count`` paths and nothing else: ``body(paths)``'s status, or 2 with
+    ``usage`` (``usage: python -m ...``) when the arguments are not ``count`` paths (an unknown
+    option included), or 2 with one line ``prog: error: ...`` when a file it reads is refused
+    (a ``ValueError`` or ``OSError``: never a traceback)."""
+    paths = list(args)
+    if len(paths) != count or any(path.startswith("-") for path in paths):
+        print(usage, file=sys.stderr)
+        return 2
+    try:
+        return body(paths)
+    except (ValueError, OSError) as error:
+        print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
+        return 2

@@ -14,8 +14,11 @@ import sys
 from collections.abc import Sequence
 
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import load_results
 from leaderboard.run_facts import description_of
+
+PROG = "python -m leaderboard.compare_runs"
 
 __all__ = ["run_key", "compare_runs"]
 
@@ -54,9 +57,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args in (["-h"], ["--help"]):
         print(main.__doc__)
         return 0
-    if len(args) != 2:
-        sys.exit("usage: python -m leaderboard.compare_runs OLD_DIR NEW_DIR")
-    result = compare_runs(load_results(args[0]), load_results(args[1]))
+    return positional_tool(PROG, f"usage: {PROG} OLD_DIR NEW_DIR", args, 2, _print_comparison)
+
+
+def _print_comparison(paths: list[str]) -> int:
+    result = compare_runs(load_results(paths[0]), load_results(paths[1]))
     for verdict in ("same", "different"):
         for key in result[verdict]:
             print(f"{verdict:9s} {key}")

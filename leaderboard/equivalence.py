@@ -60,6 +60,7 @@ import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
+from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import run_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
@@ -430,14 +431,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(main.__doc__, "--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS.")
         return 0
     options = {"--all", "--tost"}
-    args = [a for a in given if a not in options]
-    if len(args) != 2:
-        sys.exit(
-            "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]   "
-            "(--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS)"
-        )
-    print(report(args[0], args[1], every_cell="--all" in given, with_tost="--tost" in given))
-    return 0
+    usage = (
+        "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]   "
+        "(--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS)"
+    )
+
+    def print_report(paths: list[str]) -> int:
+        print(report(paths[0], paths[1], every_cell="--all" in given, with_tost="--tost" in given))
+        return 0
+
+    return positional_tool("python -m leaderboard.equivalence", usage, [a for a in given if a not in options], 2, print_report)
 
 
 if __name__ == "__main__":

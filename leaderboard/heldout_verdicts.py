@@ -14,9 +14,12 @@ import os
 from collections import Counter
 from collections.abc import Sequence
 
+from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import load_results
 from leaderboard.heldout_scores import Reading, heldout_cells, load_heldout, readings
 from leaderboard.tables import markdown_table
+
+PROG = "python -m leaderboard.heldout_verdicts"
 
 __all__ = ["heldout_verdicts", "verdicts_markdown"]
 
@@ -57,9 +60,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args in (["-h"], ["--help"]):
         print(main.__doc__)
         return 0
-    if len(args) != 1:
-        sys.exit("usage: python -m leaderboard.heldout_verdicts RESULTS_DIR")
-    print(verdicts_markdown(heldout_verdicts(args[0])))
+    return positional_tool(PROG, f"usage: {PROG} RESULTS_DIR", args, 1, _print_verdicts)
+
+
+def _print_verdicts(paths: list[str]) -> int:
+    print(verdicts_markdown(heldout_verdicts(paths[0])))
     return 0
 
 

@@ -233,7 +233,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError("no environment and method has runs of both groups evaluated on its test split (<env>_test)")
         print(markdown(primaries, carries, secondaries), end="")
     except ValueError as error:
-        print(f"population_reading: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     return 0
 

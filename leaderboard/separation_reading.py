@@ -149,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     for option, value in (("results", args.results), ("--tables", args.tables)):
         if value == "":  # (the argument itself, before anything is read: one line)
-            print(f"separation_reading: error: argument {option}: an empty path; give a folder", file=sys.stderr)
+            print(f"{parser.prog}: error: argument {option}: an empty path; give a folder", file=sys.stderr)
             return 2
     from empathy_zoo.training.heldout import results_of
 
@@ -160,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"no separation table in {args.tables} is of a task the runs of {args.results} are on")
         print(markdown(read_runs(tables, results), tables), end="")
     except ValueError as error:
-        print(f"separation_reading: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     return 0
 

@@ -291,7 +291,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if figure is not None:
             write_bytes_atomic(args.figure, figure)
     except (ValueError, OSError) as error:
-        print(f"tuning_summary: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(table)
     if figure is not None:

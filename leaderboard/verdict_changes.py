@@ -106,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         old, new = (_read_page(path) for path in (args.old, args.new))
     except ValueError as error:
-        print(f"verdict_changes: error: {terminal_line(error)}", file=sys.stderr)
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(changes_markdown(old, new), end="")
     return 0

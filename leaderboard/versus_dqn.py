@@ -18,10 +18,13 @@ from empathy_zoo.environments import ENVIRONMENT_TABLE, entry_of
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
+from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
 from leaderboard.legends import holm_survivors, multiplicity_note
 from leaderboard.multiplicity import HOLM_MARK
+
+PROG = "python -m leaderboard.versus_dqn"
 
 __all__ = ["versus_dqn_tables", "compact_metrics"]
 
@@ -110,9 +113,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args in (["-h"], ["--help"]):
         print(main.__doc__)
         return 0
-    if len(args) != 1:
-        sys.exit("usage: python -m leaderboard.versus_dqn RESULTS_DIR")
-    print(versus_dqn_tables(load_results(args[0])))
+    return positional_tool(PROG, f"usage: {PROG} RESULTS_DIR", args, 1, _print_tables)
+
+
+def _print_tables(paths: list[str]) -> int:
+    print(versus_dqn_tables(load_results(paths[0])))
     return 0
 
 

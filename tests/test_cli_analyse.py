@@ -60,3 +60,56 @@ def test_exact_prints_a_small_tasks_table_and_refuses_what_it_cannot_model(capsy
     assert main(["analyse", "exact", "nope_v0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown environment 'nope_v0'" in err
+
+
+@pytest.mark.parametrize("tool", list(TOOLS))
+def test_every_tools_usage_error_names_the_command_typed(capsys: pytest.CaptureFixture[str], tool: str) -> None:
+    assert main(["analyse", tool, "--no-such-option"]) == 2
+    err = capsys.readouterr().err
+    assert f"empathy-zoo analyse {tool}" in err and "python -m" not in err
+
+
+@pytest.mark.parametrize(
+    ("tool", "args"),
+    [
+        ("tuning-summary", ["{missing}"]),
+        ("population-reading", ["{missing}", "{missing}"]),
+        ("verdict-changes", ["{missing}", "{missing}"]),
+        ("separation-reading", ["{missing}"]),
+        ("discrimination", ["{missing}"]),
+    ],
+)
+def test_a_tools_refusal_names_the_command_typed(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, tool: str, args: list[str]
+) -> None:
+    missing = str(tmp_path / "missing")
+    assert main(["analyse", tool, *(a.format(missing=missing) for a in args)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"empathy-zoo analyse {tool}: error: ") and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(
+    ("module", "count"),
+    [("compare_runs", 2), ("versus_dqn", 1), ("heldout_verdicts", 1), ("equivalence", 2)],
+)
+def test_a_positional_tool_refuses_a_missing_or_forged_directory_in_one_line(tmp_path: Path, module: str, count: int) -> None:
+    forged = tmp_path / "forged"
+    (forged / "runs").mkdir(parents=True)
+    (forged / "runs" / "x.json").write_text('{"schema": 1, "run_id": 5}', encoding="utf-8")
+    for directory in (tmp_path / "missing", forged):
+        done = subprocess.run(
+            [sys.executable, "-m", f"leaderboard.{module}", *[str(directory)] * count],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+        )
+        assert done.returncode == 2 and done.stderr.startswith(f"python -m leaderboard.{module}: error: "), done.stderr
+        assert done.stderr.count("\n") == 1 and str(directory) in done.stderr
+
+
+@pytest.mark.parametrize("module", ["compare_runs", "versus_dqn", "heldout_verdicts", "equivalence"])
+def test_a_positional_tool_takes_no_unknown_option_for_a_path(module: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", f"leaderboard.{module}", "--bogus", str(QUICK)], capture_output=True, text=True, cwd=ROOT
+    )
+    assert done.returncode == 2 and done.stderr.startswith(f"usage: python -m leaderboard.{module} "), done.stderr

@@ -248,7 +248,10 @@ def test_the_command_refuses_a_figure_past_its_bound_in_one_line(tmp_path: Path,
     figure = tmp_path / "figure.png"
     status, out, err, _ = _summary([str(tmp_path / "studies"), "--figure", str(figure)], capsys)
     assert (status, out, err.count("\n")) == (2, "", 1) and "Traceback" not in err
-    assert err.startswith("tuning_summary: error: --figure: 80 studies on 21 variants") and f"{MAX_FIGURE_PIXELS:,}" in err
+    assert (
+        err.startswith("empathy-zoo analyse tuning-summary: error: --figure: 80 studies on 21 variants")
+        and f"{MAX_FIGURE_PIXELS:,}" in err
+    )
     assert not figure.exists()
 
 

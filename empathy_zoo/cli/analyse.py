@@ -11,10 +11,12 @@ modules stay runnable as ``python -m MODULE`` too.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import io
 import sys
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TextIO
 
 from empathy_zoo.cli.common import PROG
 
@@ -53,14 +55,39 @@ def cmd_analyse(args: argparse.Namespace, command: str) -> int:
     """Run the chosen tool's ``main`` on the remaining arguments; its exit status is the command's."""
     tool = TOOLS[args.tool]
     main = importlib.import_module(tool.module).main
+    renamed = _Renamed(sys.stderr, f"python -m {tool.module}", f"{PROG} analyse {args.tool}")
     try:
-        status = main(list(args.args))
+        with contextlib.redirect_stderr(renamed):
+            status = main(list(args.args))
     except SystemExit as exit_:  # a tool's own usage message (a string) or status
         if isinstance(exit_.code, str):
-            print(exit_.code.replace(f"python -m {tool.module}", f"{PROG} analyse {args.tool}"), file=sys.stderr)
+            print(renamed.rename(exit_.code), file=sys.stderr)
             return 2
         return int(exit_.code or 0)
     return int(status or 0)
+
+
+class _Renamed(io.TextIOBase):
+    """A text stream that writes to ``stream`` at once, with the tool's name as ``python -m``
+    knows it (``old``) written as ``analyse`` names it (``new``): a message names the command
+    the user typed."""
+
+    def __init__(self, stream: TextIO, old: str, new: str) -> None:
+        self._stream, self._old, self._new = stream, old, new
+
+    def rename(self, text: str) -> str:
+        """``text`` with the tool's ``python -m`` name written as ``analyse`` names it."""
+        return text.replace(self._old, self._new)
+
+    def write(self, text: str) -> int:
+        self._stream.write(self.rename(text))
+        return len(text)
+
+    def flush(self) -> None:
+        self._stream.flush()
+
+    def isatty(self) -> bool:
+        return self._stream.isatty()
 
 
 def add_analyse(sub: Any) -> None:
