@@ -173,9 +173,9 @@ def _why(error: BaseException) -> str:
     return one_line(f"{type(error).__name__}: {error}", MESSAGE_CHARS)
 
 
-_HEAD_NAME = re.compile(r"[a-z_][a-z0-9_]*")
-"""A head's name: a lower-case identifier, the whole name (matched with ``fullmatch``: ``$`` would
-let a trailing line break through)."""
+_HEAD_NAME = re.compile(r"[a-z][a-z0-9_]*")
+"""A head's name: a lower-case identifier that starts with a letter (never ``__class__``), the
+whole name (matched with ``fullmatch``: ``$`` would let a trailing line break through)."""
 _LIBRARIES = {"stable_baselines3": ("DQN", "PPO")}
 """Libraries (and their classes) whose own agent files :func:`load_agent` reads."""
 
