@@ -117,8 +117,9 @@ class TrainedAgent:
         with torch.no_grad():
             values = mlp_values(self._heads[self.acting], torch.as_tensor(x, dtype=torch.float32)[None])
             if not bool(torch.isfinite(values).all()):  # (weights whose products overflow float32: no greedy action)
+                where = self._description.get("file", "(not from a file)")
                 raise ValueError(
-                    f"agent file {self._description.get('file', '(not from a file)')}: its head {self.acting!r} gives values that are no finite numbers "
+                    f"agent file {where}: its head {self.acting!r} gives values that are no finite numbers "
                     "(its weights overflow float32): it has no greedy action"
                 )
             return values.argmax(dim=2)[0].numpy()

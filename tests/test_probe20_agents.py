@@ -33,7 +33,7 @@ def test_a_head_name_that_does_not_start_with_a_letter_is_refused(tmp_path: Path
         document["heads"] = {name: document["heads"][document["acting"]]}
         document["acting"] = name
 
-    with pytest.raises(AgentFileError, match="forged.agent.pt"):
+    with pytest.raises(AgentFileError, match=r"forged\.agent\.pt"):
         load_agent(_forged(tmp_path, rename))
 
 
