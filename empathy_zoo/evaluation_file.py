@@ -40,7 +40,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.record_parts import AgentRef
-from empathy_zoo.result_file import check_agent_record, check_env_kwargs, episode_bounds
+from empathy_zoo.result_file import RUNS_DIR, check_agent_record, check_env_kwargs, episode_bounds
 
 
 class RunFacts(Protocol):
@@ -71,6 +71,7 @@ __all__ = [
     "EvaluationFileError",
     "evaluation_path",
     "evaluations_root",
+    "check_not_read_folder",
     "evaluation_files",
     "check_evaluation",
     "check_scenario_set",
@@ -125,6 +126,20 @@ def evaluations_root(results_dir: str | os.PathLike[str]) -> Path:
     """Where the evaluation files of ``results_dir`` go: ``<results_dir>/evaluations`` (a results
     directory holds its result files in ``runs/``, or is itself a folder of result files)."""
     return Path(results_dir) / EVALUATIONS_DIR
+
+
+def check_not_read_folder(folder: str | os.PathLike[str], what: str) -> None:
+    """Refuse (``ValueError`` naming ``what``, the file or folder to write) a ``folder`` whose JSON
+    files a results directory reads as its own: a ``runs`` folder, or an evaluation set's folder
+    (``evaluations/<set>``), as typed and where ``..`` and links lead. A file written there would
+    be read as a broken result or evaluation, and refuse the whole directory."""
+    typed = Path(folder)
+    for place in (typed, typed.absolute().resolve()):
+        if place.name == RUNS_DIR or place.parent.name == EVALUATIONS_DIR:
+            raise ValueError(
+                f"{what} lies in a folder of a results directory ({place}), whose JSON files are read as results "
+                "or evaluations: write it elsewhere"
+            )
 
 
 def evaluation_path(results_dir: str | os.PathLike[str], scenario_set: str, run_id: str) -> Path:

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from empathy_zoo.atomic import write_text_atomic
-from empathy_zoo.evaluation_file import EVALUATIONS_DIR
+from empathy_zoo.evaluation_file import check_not_read_folder
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_output_file
@@ -140,12 +140,7 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
     folder of any results directory, or an existing file that is not an earlier export
     (:func:`_is_export`): an export never replaces a file of another kind."""
     path = check_output_file(out, "JSON", ".json", "marl_eval.json")
-    for folder in (path.parent, path.absolute().parent.resolve()):  # (as typed, and where `..` and links lead)
-        if folder.name == RUNS_DIR or folder.parent.name == EVALUATIONS_DIR:
-            raise ValueError(
-                f"{out} lies in a folder of a results directory ({folder}), whose JSON files are read as results "
-                "or evaluations: write it elsewhere"
-            )
+    check_not_read_folder(path.parent, str(out))  # (as typed, and where `..` and links lead)
     if path.is_file() and not _is_export(path):
         raise ValueError(
             f"{out} exists and is no marl-eval export of this suite: an export replaces only an earlier export "

@@ -52,6 +52,7 @@ def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
 def cmd_tune(args: argparse.Namespace, command: str) -> int:
     """Run (or resume) the study; print what it wrote and its best trial. Every argument is
     checked, each size within its bound, before anything is written."""
+    from empathy_zoo.evaluation_file import check_not_read_folder
     from empathy_zoo.experiment.log_backends import parse_log
     from empathy_zoo.experiment.model import Budget
     from empathy_zoo.experiment.search_space import parse_params
@@ -108,6 +109,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
         log=log,
     )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
+    check_not_read_folder(out, f"--out {out} (its study.json, tuned.toml and trials' results)")
     side_by_side = min(jobs, plan.batch)
     batches = f" in batches of {plan.batch} ({side_by_side} trained at a time)" if plan.batch > 1 else ""
     if jobs > plan.batch:
