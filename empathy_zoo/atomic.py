@@ -25,7 +25,7 @@ from typing import Any, BinaryIO
 
 from empathy_zoo.bounded_read import read_json_data
 from empathy_zoo.limits import format_bytes
-from empathy_zoo.names import check_no_links, check_replaceable
+from empathy_zoo.names import cannot_create, check_no_links, check_replaceable
 
 __all__ = [
     "write_bytes_atomic",
@@ -158,9 +158,7 @@ def _check_directory(directory: Path, largest_file: int) -> None:
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise ValueError(
-            f"cannot create output directory {directory} ({error.strerror or error}); choose another output directory (--out)"
-        ) from None
+        raise cannot_create(directory, error) from None
     probe = directory / f"{PROBE_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
     try:
         write_bytes_atomic(probe, bytes(PROBE_BYTES))

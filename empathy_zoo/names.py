@@ -26,6 +26,7 @@ __all__ = [
     "check_no_links",
     "check_path_name",
     "check_replaceable",
+    "cannot_create",
     "confined",
     "positional_tool",
     "terminal_line",
@@ -194,3 +195,15 @@ def positional_tool(prog: str, usage: str, args: Sequence[str], count: int, body
     except (ValueError, OSError) as error:
         print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
+
+
+def cannot_create(directory: Path, error: OSError) -> ValueError:
+    """The refusal of an output ``directory`` that ``mkdir`` could not create (``error``): what
+    is in the way where a plain "File exists" would not say (a symbolic link, on its path, to
+    nothing), and what to do."""
+    reason = error.strerror or str(error)
+    for place in (directory, *directory.parents):
+        if place.is_symlink() and not place.exists():
+            reason = f"{place} is a symbolic link to {os.readlink(place)}, which does not exist"
+            break
+    return ValueError(f"cannot create output directory {directory} ({reason}); choose another output directory (--out)")

@@ -35,6 +35,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
+from empathy_zoo.names import cannot_create
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - Windows
@@ -206,9 +208,7 @@ def _make_directory(root: Path) -> list[Path]:
         for folder in reversed(created):
             with suppress(OSError):
                 folder.rmdir()
-        raise ValueError(
-            f"cannot create output directory {root} ({error.strerror or error}); choose another output directory (--out)"
-        ) from None
+        raise cannot_create(root, error) from None
     return created
 
 
