@@ -136,6 +136,8 @@ FORGERIES: dict[str, tuple[Callable[[list[Entry]], int], Callable[[Entry], None]
     "study_id 3": (_nth(CREATE), _set("study_id", 3)),
     "wall time NaN": (_nth(ATTR, 0, "wall_time_s"), _set("user_attr", {"wall_time_s": float("nan")})),
     "op_code 99": (_nth(CREATE, 1), _set("op_code", 99)),
+    "worker_id with an escape": (_nth(CREATE), _set("worker_id", "w\x1b[2J")),
+    "worker_id with a line break": (_nth(PARAM), _set("worker_id", "w\u2028x")),
     "directions of another objective": (_nth(0, 1), _set("directions", [1])),
     "datetime_start not a time": (_nth(CREATE), _set("datetime_start", "yesterday")),
     "an extra field": (_nth(STATE), _set("exec", "evilmod:X")),

@@ -219,7 +219,12 @@ class _StudyLines:
                 )
             )
         worker = entry["worker_id"]
-        _expect(isinstance(worker, str) and 0 < len(worker) <= MAX_WORKER_ID, "worker_id", worker, "a worker's id")
+        _expect(
+            isinstance(worker, str) and 0 < len(worker) <= MAX_WORKER_ID and _printable_line(worker),
+            "worker_id",
+            worker,
+            "a worker's id (one line of printable text)",
+        )
         if op != CREATE_STUDY and not self.opened:
             raise _Refusal(f"operation {op} comes before the study was created (operation 0)")
         if op in (SET_STUDY_USER_ATTR, CREATE_TRIAL):
