@@ -5,13 +5,14 @@ value (what a version that changed nothing a run computes must give).
 
     python -m leaderboard.compare_runs OLD_DIR NEW_DIR
 
-prints one line per matched pair and the counts; runs without a partner are counted apart.
+prints one line per matched pair and the counts; runs without a partner are counted apart. Two
+runs of one directory that match the same key are refused (:func:`runs_by_key`).
 """
 
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import positional_tool
@@ -20,7 +21,7 @@ from leaderboard.run_facts import description_of
 
 PROG = "python -m leaderboard.compare_runs"
 
-__all__ = ["run_key", "compare_runs"]
+__all__ = ["run_key", "runs_by_key", "compare_runs"]
 
 
 def run_key(run: RunResult) -> tuple:
@@ -35,11 +36,26 @@ def run_key(run: RunResult) -> tuple:
     )
 
 
+def runs_by_key(runs: Sequence[RunResult], key: Callable[[RunResult], tuple] = run_key) -> dict[tuple, RunResult]:
+    """``runs`` by their ``key``; two runs of one key (two experiments that differ only in what
+    the key leaves out: a γ, a label) raise ``ValueError`` naming both, since neither could be
+    matched, nor pooled, without dropping the other."""
+    keyed: dict[tuple, RunResult] = {}
+    for run in runs:
+        other = keyed.setdefault(key(run), run)
+        if other is not run:
+            raise ValueError(
+                f"runs {other.run_id} and {run.run_id} are one experiment's seed {run.seed} to this tool (same variant, "
+                "method, β, aggregation of the others, reward transform and seed) but two runs: it would match or pool "
+                "one and drop the other; compare directories that hold one of them each"
+            )
+    return keyed
+
+
 def compare_runs(old: Sequence[RunResult], new: Sequence[RunResult]) -> dict[str, list[tuple]]:
     """``{"same": [...], "different": [...], "only_old": [...], "only_new": [...]}``: the keys
     (:func:`run_key`) of the matched pairs by outcome, and of the runs without a partner."""
-    by_key_old = {run_key(run): run for run in old}
-    by_key_new = {run_key(run): run for run in new}
+    by_key_old, by_key_new = runs_by_key(old), runs_by_key(new)
     outcome: dict[str, list[tuple]] = {"same": [], "different": [], "only_old": [], "only_new": []}
     for key in sorted(by_key_new, key=repr):
         if key not in by_key_old:

@@ -62,7 +62,7 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import PHASES, run_scalars, table_env
-from leaderboard.compare_runs import run_key
+from leaderboard.compare_runs import run_key, runs_by_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import table_metrics
 from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
@@ -246,6 +246,8 @@ def _experiment(run: RunResult) -> tuple:
 
 
 def _per_experiment(runs: Sequence[RunResult]) -> dict[tuple, list[RunResult]]:
+    """``runs`` by experiment (:func:`_experiment`); a seed twice in one is refused (:func:`runs_by_key`)."""
+    runs_by_key(runs, lambda run: (*_experiment(run), run.seed))
     groups: dict[tuple, list[RunResult]] = {}
     for run in runs:
         groups.setdefault(_experiment(run), []).append(run)

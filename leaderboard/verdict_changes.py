@@ -31,6 +31,8 @@ Cell = tuple[str, str, str, str]
 _TABLE = "### P(improves on DQN): "
 _MARK = re.compile(r"^\s*([▲▼]?)")
 _ESCAPED = re.compile(r"\\(.)")
+_CELL_BAR = re.compile(r"(?<!\\)\|")
+"""A bar that ends a table cell: one no backslash escapes (a label's own ``|`` is written ``\\|``)."""
 MAX_SHOWN = 200
 """Characters of a name shown (a page's names are a few dozen; a longer one is cut, with ``…``)."""
 
@@ -58,7 +60,7 @@ def verdicts(page: str) -> dict[Cell, str]:
             phase = line[len(_TABLE) :].strip() if line.startswith(_TABLE) else ""
             header = []
         elif phase and line.startswith("|"):
-            parts = [part.strip() for part in line.strip().strip("|").split("|")]
+            parts = [part.strip().replace("\\|", "|") for part in _CELL_BAR.split(line.strip().strip("|"))]
             if not header:
                 header = parts
             elif not set(parts[0]) <= set(":-"):

@@ -1,0 +1,83 @@
+"""The twentieth probe's findings on the analysis tools: two experiments that one tool's key cannot
+tell apart are refused (never one matched or pooled and the other dropped), and a page's label
+holding an escaped ``|`` is read as one cell."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from empathy_zoo.run_ids import run_id
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = ROOT / "docs" / "results" / "quick"
+EXPERIMENT = "coexistence_v0__dqn_harm_penalty-684a7c7f"
+
+
+def _copy(directory: Path, gamma: float | None = None) -> None:
+    """The quick profile's three runs of :data:`EXPERIMENT` into ``directory/runs``; with ``gamma``,
+    as another experiment that differs only in γ (and its label)."""
+    (directory / "runs").mkdir(parents=True, exist_ok=True)
+    for source in sorted((QUICK / "runs").glob(f"{EXPERIMENT}__s*.json")):
+        document = json.loads(source.read_text(encoding="utf-8"))
+        document["agent"] = None
+        if gamma is not None:
+            config = document["config"]
+            config["settings"]["gamma"] = config["description"]["gamma"] = gamma
+            config["label"] = document["method_label"] = f"γ {gamma}"
+            document["run_id"] = run_id(document["variant"], document["method"], config, document["seed"])
+        (directory / "runs" / f"{document['run_id']}.json").write_text(json.dumps(document), encoding="utf-8")
+
+
+@pytest.mark.parametrize("module", ["compare_runs", "equivalence"])
+def test_two_experiments_one_key_cannot_tell_apart_are_refused(tmp_path: Path, module: str) -> None:
+    _copy(tmp_path / "one")
+    _copy(tmp_path / "two")
+    _copy(tmp_path / "two", gamma=0.98)
+    done = subprocess.run(
+        [sys.executable, "-m", f"leaderboard.{module}", str(tmp_path / "one"), str(tmp_path / "two")],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert done.returncode == 2 and done.stdout == "", done
+    assert done.stderr.count("\n") == 1 and "are one experiment's seed" in done.stderr and EXPERIMENT in done.stderr
+
+
+def test_one_experiment_each_still_compares(tmp_path: Path) -> None:
+    from leaderboard.aggregate import load_results
+    from leaderboard.compare_runs import compare_runs
+
+    _copy(tmp_path / "one")
+    _copy(tmp_path / "two")
+    outcome = compare_runs(load_results(tmp_path / "one"), load_results(tmp_path / "two"))
+    assert [len(outcome[k]) for k in ("same", "different", "only_old", "only_new")] == [3, 0, 0, 0]
+
+
+PAGE = """## coexistence_v0
+
+### P(improves on DQN): Final greedy evaluation
+
+| Method | Seeds | survival | harms | other_return |
+|:---|---:|---:|---:|---:|
+| a\\|b | 5 | {mark}0.90 [0.6, 1.0] · IQM 1 | 0.50 [0.2, 0.8] · IQM 0 | 0.50 [0.2, 0.8] · IQM 0 |
+| a\\|c | 5 | 0.50 [0.2, 0.8] · IQM 1 | 0.50 [0.2, 0.8] · IQM 0 | 0.50 [0.2, 0.8] · IQM 0 |
+"""
+
+
+def test_verdict_changes_reads_an_escaped_bar_as_part_of_the_label(tmp_path: Path) -> None:
+    from leaderboard.verdict_changes import verdicts
+
+    old, new = tmp_path / "old.md", tmp_path / "new.md"
+    old.write_text(PAGE.format(mark="▲ "), encoding="utf-8")
+    new.write_text(PAGE.format(mark=""), encoding="utf-8")
+    before, after = verdicts(old.read_text(encoding="utf-8")), verdicts(new.read_text(encoding="utf-8"))
+    assert len(before) == len(after) == 6
+    changed = {key: (before[key], after[key]) for key in before if before[key] != after[key]}
+    assert len(changed) == 1
+    (key, (was, now)), = changed.items()
+    assert "a|b" in key and "survival" in key and was == "▲" and now != "▲"
