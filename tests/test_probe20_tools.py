@@ -79,5 +79,5 @@ def test_verdict_changes_reads_an_escaped_bar_as_part_of_the_label(tmp_path: Pat
     assert len(before) == len(after) == 6
     changed = {key: (before[key], after[key]) for key in before if before[key] != after[key]}
     assert len(changed) == 1
-    (key, (was, now)), = changed.items()
+    ((key, (was, now)),) = changed.items()
     assert "a|b" in key and "survival" in key and was == "▲" and now != "▲"
