@@ -16,8 +16,10 @@ is never given: where one would be, that variant's rows keep their labels.
 
 from __future__ import annotations
 
+import unicodedata
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +28,7 @@ from leaderboard.run_facts import is_dqn_reference
 
 __all__ = [
     "DQN_NAME",
+    "check_reserved_label",
     "IDENTICAL_MARK",
     "dqn_row_names",
     "identical_row_names",
@@ -38,6 +41,40 @@ __all__ = [
 
 DQN_NAME = "DQN"
 """What a DQN reference row is called."""
+
+
+_INVISIBLE = frozenset("\u115f\u1160\u3164\uffa0")
+"""Hangul fillers: letters (category Lo) that draw as nothing."""
+
+
+def _folded(label: str) -> str:
+    """``label`` as it reads: its compatibility form (NFKC: a full-width letter is the letter), without
+    spaces of any kind, format characters and letters that draw as nothing."""
+    return "".join(
+        c
+        for c in unicodedata.normalize("NFKC", label)
+        if not (unicodedata.category(c).startswith("Z") or unicodedata.category(c) == "Cf" or c.isspace() or c in _INVISIBLE)
+    )
+
+
+def check_reserved_label(run: RunResult, path: Path) -> None:
+    """Refuse (``ValueError`` naming the file) a run whose label reads as a name the leaderboard
+    gives (:func:`_folded`): ``DQN`` or ``DQN, as …`` on a run that is no DQN reference, or a label
+    ending in a mark the leaderboard appends (:data:`IDENTICAL_MARK`, :data:`SAME_RUNS_MARK`). The
+    page would name the wrong row as the reference, or mark a row it did not mark."""
+    label = _folded(run.method_label)
+    dqn = _folded(DQN_NAME)
+    marks = [mark for mark in (IDENTICAL_MARK, SAME_RUNS_MARK) if label.endswith(_folded(mark))]
+    if marks:
+        why = f"ends in “{marks[0].strip()}”, the mark the leaderboard gives a row it finds to train as DQN"
+    elif (label == dqn or label.startswith(_folded(f"{DQN_NAME}, as"))) and not is_dqn_reference(run):
+        why = f"reads as {DQN_NAME!r}, the leaderboard's name of the DQN reference, and this run is none"
+    else:
+        return
+    raise ValueError(
+        f"result file {path}: its label {run.method_label!r} {why} (config.description.dqn_reference); "
+        "prefix the directory's labels (--label DIR=PREFIX) to table it"
+    )
 
 
 def _qualified(label: str) -> str:

@@ -35,7 +35,13 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import check_label
 from leaderboard.aggregate import check_runs, load_result_files
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
-from leaderboard.row_names import dqn_row_names, identical_row_names, rename_dqn_rows, same_runs_row_names
+from leaderboard.row_names import (
+    check_reserved_label,
+    dqn_row_names,
+    identical_row_names,
+    rename_dqn_rows,
+    same_runs_row_names,
+)
 
 __all__ = ["BUDGET_SEPARATOR", "ResultsDir", "ResultSet", "load_results_dirs", "parse_label_option", "parse_label_options"]
 
@@ -178,6 +184,10 @@ def load_results_dirs(
         # (a prefix and a label of at most 200 characters each can make one longer than a label may be)
         return check_label(shown, f"--label {given[i]}: the label of run {result.run_id} with its prefix")
 
+    if dqn_named:  # (a label that reads as a name the page gives, where no prefix sets it apart)
+        for i, path, result in files:
+            if prefixes[i] is None:
+                check_reserved_label(result, path)
     read = [(i, path, replace(result, method_label=label(i, result, result.method_label))) for i, path, result in files]
     try:  # (on the labels of the result files: a clash names what a user finds in them)
         check_runs([(path, result) for _, path, result in read])

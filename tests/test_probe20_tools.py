@@ -18,9 +18,9 @@ QUICK = ROOT / "docs" / "results" / "quick"
 EXPERIMENT = "coexistence_v0__dqn_harm_penalty-684a7c7f"
 
 
-def _copy(directory: Path, gamma: float | None = None) -> None:
+def _copy(directory: Path, gamma: float | None = None, label: str | None = None) -> None:
     """The quick profile's three runs of :data:`EXPERIMENT` into ``directory/runs``; with ``gamma``,
-    as another experiment that differs only in γ (and its label)."""
+    as another experiment that differs only in γ (and its label); with ``label``, so labelled."""
     (directory / "runs").mkdir(parents=True, exist_ok=True)
     for source in sorted((QUICK / "runs").glob(f"{EXPERIMENT}__s*.json")):
         document = json.loads(source.read_text(encoding="utf-8"))
@@ -29,7 +29,10 @@ def _copy(directory: Path, gamma: float | None = None) -> None:
             config = document["config"]
             config["settings"]["gamma"] = config["description"]["gamma"] = gamma
             config["label"] = document["method_label"] = f"γ {gamma}"
-            document["run_id"] = run_id(document["variant"], document["method"], config, document["seed"])
+        if label is not None:
+            document["config"]["label"] = document["method_label"] = label
+        if gamma is not None or label is not None:
+            document["run_id"] = run_id(document["variant"], document["method"], document["config"], document["seed"])
         (directory / "runs" / f"{document['run_id']}.json").write_text(json.dumps(document), encoding="utf-8")
 
 
@@ -81,3 +84,35 @@ def test_verdict_changes_reads_an_escaped_bar_as_part_of_the_label(tmp_path: Pat
     assert len(changed) == 1
     ((key, (was, now)),) = changed.items()
     assert "a|b" in key and "survival" in key and was == "▲" and now != "▲"
+
+
+LOOKALIKES = [
+    "DQN",
+    "DQN\u00a0",
+    "\uff24\uff31\uff2e",
+    "DQN\u3164",
+    "DQN ",
+    "DQN, as Mine",
+    "Mine ≡ DQN",
+    "Mine = DQN's runs",
+]
+
+
+@pytest.mark.parametrize("label", LOOKALIKES, ids=[ascii(label) for label in LOOKALIKES])
+def test_a_label_that_reads_as_a_name_the_leaderboard_gives_is_refused(tmp_path: Path, capsys, label: str) -> None:
+    from empathy_zoo.cli import main
+
+    _copy(tmp_path / "dir", label=label)
+    capsys.readouterr()
+    assert main(["leaderboard", str(tmp_path / "dir"), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--label DIR=PREFIX" in err and "result file" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_prefix_sets_such_a_label_apart(tmp_path: Path) -> None:
+    from leaderboard.sources import load_results_dirs
+
+    _copy(tmp_path / "dir", label="DQN")
+    read = load_results_dirs([tmp_path / "dir"], {tmp_path / "dir": "Theirs"}, dqn_named=True)
+    assert {run.method_label for run in read.results} == {"Theirs DQN"}
