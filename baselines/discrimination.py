@@ -37,7 +37,7 @@ from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.document_checks import finite_float, shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
-from empathy_zoo.names import check_path_name, terminal_line
+from empathy_zoo.names import check_own_file, check_path_name, terminal_line
 
 __all__ = [
     "DEFAULT_DIR",
@@ -60,6 +60,8 @@ __all__ = [
 ]
 
 DEFAULT_DIR = Path("docs/results/separation")
+TITLE = "# Discrimination matrix: which task tells which methods apart"
+"""The page's first line (a file that does not begin so is no page of this tool: ``--out`` never replaces it)."""
 """Where the shipped separation tables lie."""
 MAX_METHODS = 200
 MAX_TABLES = 50
@@ -245,7 +247,7 @@ def discrimination_markdown(
     if extent > MAX_CELLS:
         raise ValueError(f"the matrix would hold {extent:,} cells (pairs of methods × tasks); it holds at most {MAX_CELLS:,}")
     lines = [
-        "# Discrimination matrix: which task tells which methods apart",
+        TITLE,
         "",
         f"Exact optima{' only,' if trained is None else ''} at ε = {epsilon:g}; a method with β at β = {MATRIX_BETA}."
         f" Made by {code_span(command)}",
@@ -354,6 +356,7 @@ def main(
         command += f" --epsilon {args.epsilon:g}"
     command += "".join(f" --results {path}" for path in results)
     try:
+        check_own_file(out, "discrimination page", TITLE.encode())  # (before any table is read)
         tables = load_tables(args.directory)
         cells = trained(tables, results) if trained is not None and results else None
         page = discrimination_markdown(tables, args.epsilon, command, cells)

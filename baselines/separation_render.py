@@ -228,7 +228,8 @@ def main(argv: list[str] | None = None) -> None:
     import argparse
 
     from empathy_zoo.atomic import write_text_atomic
-    from empathy_zoo.names import check_replaceable
+    from empathy_zoo.evaluation_file import check_not_read_folder
+    from empathy_zoo.names import check_own_file, check_replaceable
 
     parser = argparse.ArgumentParser(prog="python -m baselines.separation_render", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
@@ -240,6 +241,9 @@ def main(argv: list[str] | None = None) -> None:
     kwargs = command_line_arguments(args.arguments)  # (a ValueError: one line, as the environment's own)
     name = file_name(args.env, kwargs)
     paths = [check_replaceable(Path(args.out) / f"{name}{suffix}") for suffix in (".json", ".md")]  # (before the long part)
+    check_not_read_folder(args.out, f"--out {args.out} (its separation tables)")
+    check_own_file(paths[0], "separation table", b'{\n "env": ')
+    check_own_file(paths[1], "separation page", b"# Separation table: ")
     model = tabular_model(args.env, **kwargs)
     table = separation_table(model)
     for path, text in zip(paths, (to_json(table), to_markdown(table)), strict=True):

@@ -26,7 +26,10 @@ __all__ = [
     "check_no_links",
     "check_path_name",
     "check_replaceable",
+    "check_own_file",
     "cannot_create",
+    "PNG_OPENING",
+    "GIF_OPENING",
     "confined",
     "positional_tool",
     "terminal_line",
@@ -125,17 +128,49 @@ _KINDS = (
 """What may lie in a file's place but a regular file or a link, as a refusal names it."""
 
 
-def check_output_file(out: str | os.PathLike[str], kind: str, suffix: str, example: str) -> Path:
+PNG_OPENING = b"\x89PNG\r\n\x1a\n"
+"""The first bytes of every PNG file."""
+GIF_OPENING = b"GIF8"
+"""The first bytes of every GIF file (``GIF87a``, ``GIF89a``)."""
+
+
+def check_own_file(path: str | os.PathLike[str], kind: str, opening: bytes) -> Path:
+    """``path`` if nothing is there, or anything but a regular file (:func:`check_replaceable`
+    says what of those), or a regular file that begins with ``opening`` (the first bytes of every
+    ``kind`` file the writer makes: a page's title, a figure's signature); else a ``ValueError``
+    naming it: the suite replaces a file only with one of the same kind, never a user's other file
+    of that name. Only ``len(opening)`` bytes are read."""
+    target = Path(path)
+    try:
+        if not stat.S_ISREG(os.lstat(target).st_mode):
+            return target
+        with open(target, "rb") as handle:
+            head = handle.read(len(opening))
+    except OSError:
+        return target
+    if head != opening:
+        shown = terminal_line(opening.rstrip(b"\n").decode("utf-8", errors="backslashreplace"))
+        raise ValueError(
+            f"{target} exists and is no {kind} this suite writes (those begin “{shown}”): the suite replaces only "
+            "its own; move the file away or name another"
+        )
+    return target
+
+
+def check_output_file(out: str | os.PathLike[str], kind: str, suffix: str, example: str, opening: bytes | None = None) -> Path:
     """``out`` as a path if a ``kind`` file (``"PNG"``, ``"JSON"``) can be written there; else a
     ``ValueError`` naming it: an existing directory, a name not ending in ``suffix``, anything but
-    a regular file in its place (:func:`check_replaceable`), or a parent that is a file. ``example``
-    is a file name a message suggests."""
+    a regular file in its place (:func:`check_replaceable`), a regular file that does not begin
+    with ``opening`` where one is given (:func:`check_own_file`), or a parent that is a file.
+    ``example`` is a file name a message suggests."""
     path = Path(out)
     if path.is_dir() and not path.is_symlink():
         raise ValueError(f"{out} is a directory: name the {kind} file to write (e.g. {path / example})")
     if path.suffix.lower() != suffix:
         raise ValueError(f"{out} is no {kind} file name: name the file to write, ending in {suffix} (e.g. {example})")
     check_replaceable(path)  # (only nothing or a regular file is replaced: never a link, a FIFO or a device)
+    if opening is not None:
+        check_own_file(path, f"{kind} file", opening)
     parent = next((folder for folder in path.absolute().parents if folder.exists()), None)
     if parent is not None and not parent.is_dir():
         raise ValueError(f"{out} cannot be written: {parent} is a file, not a directory")

@@ -21,7 +21,7 @@ from empathy_zoo.atomic import (
     write_text_atomic,
 )
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_no_links, check_replaceable
+from empathy_zoo.names import GIF_OPENING, PNG_OPENING, check_no_links, check_own_file, check_replaceable
 from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
@@ -329,6 +329,20 @@ def _check_targets(staged: dict[str, Path], stage: Path, out: Path) -> None:
         target = out / source.relative_to(stage)
         check_no_links(out, target)
         check_replaceable(target)
+        check_own_file(target, "leaderboard file", _opening(source))
+
+
+def _opening(rendered: Path) -> bytes:
+    """What every file of ``rendered``'s kind begins with: an image's signature, the HTML page up to
+    its title, another page's first line (its title, or the CSV's header)."""
+    if rendered.suffix == ".png":
+        return PNG_OPENING
+    if rendered.suffix == ".gif":
+        return GIF_OPENING
+    with open(rendered, "rb") as handle:
+        head = handle.read(4096)
+    end = head.find(b"</title>") + len(b"</title>") if rendered.suffix == ".html" else head.find(b"\n") + 1
+    return head[:end] if end > 0 else head
 
 
 def _publish(staged: dict[str, Path], stage: Path, out: Path) -> dict[str, Path]:

@@ -81,6 +81,8 @@ __all__ = [
     "survival_rise",
 ]
 
+REPORT_TITLE = "# Reproduction report"
+"""The report's first line (a file that does not begin so is no report: ``--out`` never replaces it)."""
 BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
 """Verdict phase → the leaderboard phase it reads."""
@@ -652,7 +654,7 @@ def assess_claims(
 def reproduction_markdown(claims: Sequence[Claim], command: str, results_dir: str, note: str = "", appendix: str = "") -> str:
     """The report: how it was made, the rules, a verdict table, then the evidence per claim."""
     lines = [
-        "# Reproduction report",
+        REPORT_TITLE,
         "",
         f"Claims of *Towards Empathic Deep Q-Learning* (SPEC §7), judged on the result files in `{results_dir}`, produced by:",
         "",

@@ -40,6 +40,8 @@ __all__ = [
     "write_sensitivity",
 ]
 
+REPORT_TITLE = "# Sharing under its fidelity options"
+"""The report's first line (a file that does not begin so is no report: ``--out`` never replaces it)."""
 BETAS = (1.0, 0.75, 0.5, 0.25)
 PHASES = {"greedy": "eval", "training": "train_final10"}
 SHARING = "sharing_v0"
@@ -263,7 +265,7 @@ def write_sensitivity(
     the rules it applies."""
     text = "\n".join(
         [
-            "# Sharing under its fidelity options",
+            REPORT_TITLE,
             "",
             *([note, ""] if note else []),
             RULES,

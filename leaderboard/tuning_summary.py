@@ -48,7 +48,7 @@ from empathy_zoo.limits import (
     MAX_WALL_TIME_S,
 )
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.names import check_output_file, terminal_line
+from empathy_zoo.names import PNG_OPENING, check_output_file, terminal_line
 from empathy_zoo.training.study_plan import DIRECTIONS, curve_value
 from empathy_zoo.training.trials_figure import literal_text
 from leaderboard.tables import markdown_text
@@ -313,7 +313,7 @@ def check_figure_path(figure: str | os.PathLike[str], studies: Sequence[Path] = 
                 f"{figure} lies where the study file {study} is read (it is that file): the figure would replace it; "
                 "write it elsewhere"
             )
-    return check_output_file(path, "PNG", ".png", "studies.png")
+    return check_output_file(path, "PNG", ".png", "studies.png", PNG_OPENING)
 
 
 def _same_file(path: Path, other: Path) -> bool:

@@ -102,7 +102,7 @@ def test_the_figure_is_never_written_over_a_study(tmp_path: Path, capsys: Any) -
     _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(link)], str(link))
     hard = tmp_path / "elsewhere.png"
     os.link(path, hard)  # (the same file under a .png name)
-    _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(hard)], str(hard), str(path))
+    _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(hard)], str(hard), "is no PNG file")
     assert path.read_bytes() == before and hard.read_bytes() == before
 
 

@@ -151,13 +151,23 @@ def _report_out(args: argparse.Namespace) -> Path | None:
         return None
     out = Path(args.out)
     out = out / args.report_name if out.is_dir() and not out.is_symlink() else out
-    try:
-        check_output_file(out, "Markdown", ".md", args.report_name)
-    except ValueError as error:
-        raise ValueError(f"--out {error}") from None
     if args.note and out.exists() and Path(args.note).exists() and out.samefile(args.note):
         raise ValueError(f"--out {out} is the --note file the report reads: name another file to write")
+    try:
+        check_output_file(out, "Markdown", ".md", args.report_name, _report_title(args.report_name).encode())
+    except ValueError as error:
+        raise ValueError(f"--out {error}") from None
     return out
+
+
+def _report_title(report_name: str) -> str:
+    """The first line of the report ``report_name`` (a file at ``--out`` that does not begin so is
+    no such report, and is never replaced)."""
+    if report_name == "SENSITIVITY.md":
+        from leaderboard.sensitivity import REPORT_TITLE
+    else:
+        from leaderboard.reproduction import REPORT_TITLE
+    return REPORT_TITLE
 
 
 MAX_COMMAND_CHARS = 2_000

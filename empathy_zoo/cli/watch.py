@@ -143,7 +143,7 @@ def check_gif_path(path: str) -> Path:
     (probed with a file of the suite's own name, removed at once; where the directory is missing,
     its nearest existing parent is probed and the directory is made only when the GIF is
     written); else a ``ValueError`` naming it."""
-    from empathy_zoo.names import check_replaceable
+    from empathy_zoo.names import GIF_OPENING, check_own_file, check_replaceable
 
     if not path:
         raise ValueError("--gif '': an empty path; name the GIF's file (e.g. --gif episode.gif)")
@@ -160,6 +160,7 @@ def check_gif_path(path: str) -> Path:
         raise ValueError(f"--gif {path} is no GIF file name: name the file to write, ending in .gif (e.g. --gif episode.gif)")
     try:
         check_replaceable(target)
+        check_own_file(target, "GIF file", GIF_OPENING)  # (never a user's other file of that name)
     except ValueError as error:
         raise ValueError(f"--gif {error}") from None
     parent = next((folder for folder in target.absolute().parents if folder.exists() or folder.is_symlink()), None)
