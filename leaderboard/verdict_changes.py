@@ -34,6 +34,11 @@ _ESCAPED = re.compile(r"\\(.)")
 _CELL_BAR = re.compile(r"(?<!\\)\|")
 """A bar that ends a table cell: one no backslash escapes (a label's own ``|`` is written ``\\|``)."""
 MAX_SHOWN = 200
+MAX_COLUMNS = 1_000
+"""The most cells a table row of a page may hold (the shipped ones hold at most 12)."""
+MAX_CELLS = 100_000
+"""The most cells of "P(improves on DQN)" tables a page may hold (the shipped ones hold at most 240);
+a page past it is refused before its cells fill memory."""
 """Characters of a name shown (a page's names are a few dozen; a longer one is cut, with ``…``)."""
 
 
@@ -60,6 +65,8 @@ def verdicts(page: str) -> dict[Cell, str]:
             phase = line[len(_TABLE) :].strip() if line.startswith(_TABLE) else ""
             header = []
         elif phase and line.startswith("|"):
+            if line.count("|") > MAX_COLUMNS + 1:
+                raise ValueError(f"a table row holds more than {MAX_COLUMNS:,} cells, the most one may (docs/limits.md)")
             parts = [part.strip().replace("\\|", "|") for part in _CELL_BAR.split(line.strip().strip("|"))]
             if not header:
                 header = parts
@@ -69,6 +76,8 @@ def verdicts(page: str) -> dict[Cell, str]:
                 for metric, value in zip(header[2:], parts[2:], strict=False):
                     match = _MARK.match(value)
                     cells[(variant, phase, parts[0], metric)] = match.group(1) if match else ""
+                if len(cells) > MAX_CELLS:
+                    raise ValueError(f"the page holds more than {MAX_CELLS:,} verdict cells, the most it may (docs/limits.md)")
     return cells
 
 
@@ -119,16 +128,21 @@ MAX_PAGE_BYTES = 64 * 2**20
 
 
 def _read_page(path: Path) -> str:
-    """A leaderboard page's text: a regular UTF-8 file of at most :data:`MAX_PAGE_BYTES`, else a
-    ``ValueError`` naming it (a FIFO, a device or a directory is refused, never read)."""
+    """A leaderboard page's text: a regular UTF-8 file of at most :data:`MAX_PAGE_BYTES` holding at
+    most :data:`MAX_CELLS` verdict cells, else a ``ValueError`` naming it (a FIFO, a device or a
+    directory is refused, never read)."""
     from empathy_zoo.limits import read_bounded
 
     try:
-        return read_bounded(path, MAX_PAGE_BYTES, "leaderboard page").decode("utf-8")
+        text = read_bounded(path, MAX_PAGE_BYTES, "leaderboard page").decode("utf-8")
+        verdicts(text)  # (its cells within their bound, before two pages' are compared)
     except UnicodeDecodeError as error:
         raise ValueError(f"{path} is not UTF-8 text ({error})") from None
     except OSError as error:
         raise ValueError(f"{path}: {error.strerror or error}") from None
+    except ValueError as error:
+        raise ValueError(f"leaderboard page {path}: {error}") from None
+    return text
 
 
 if __name__ == "__main__":

@@ -116,3 +116,18 @@ def test_a_prefix_sets_such_a_label_apart(tmp_path: Path) -> None:
     _copy(tmp_path / "dir", label="DQN")
     read = load_results_dirs([tmp_path / "dir"], {tmp_path / "dir": "Theirs"}, dqn_named=True)
     assert {run.method_label for run in read.results} == {"Theirs DQN"}
+
+
+@pytest.mark.parametrize(
+    ("columns", "rows", "words"), [(2_000, 1, "more than 1,000 cells"), (500, 300, "more than 100,000 verdict")]
+)
+def test_verdict_changes_bounds_the_cells_of_a_page(tmp_path: Path, capsys, columns: int, rows: int, words: str) -> None:
+    from leaderboard.verdict_changes import main
+
+    header = "| M | S |" + "|".join(f"m{i}" for i in range(columns)) + "|\n"
+    body = "".join(f"| r{r} | 5 |" + "▲|" * columns + "\n" for r in range(rows))
+    page = tmp_path / "big.md"
+    page.write_text(f"## v\n\n### P(improves on DQN): x\n\n{header}|---|\n{body}", encoding="utf-8")
+    assert main([str(page), str(page)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and str(page) in err, err
