@@ -59,7 +59,8 @@ __all__ = [
     "method_rows",
 ]
 
-DEFAULT_DIR = Path("docs/results/separation")
+DEFAULT_DIR = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
+"""The shipped separation tables, wherever the command runs from."""
 TITLE = "# Discrimination matrix: which task tells which methods apart"
 """The page's first line (a file that does not begin so is no page of this tool: ``--out`` never replaces it)."""
 """Where the shipped separation tables lie."""
@@ -332,7 +333,7 @@ def main(
     """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``; with ``trained``
     (:func:`leaderboard.trained_discrimination.main` passes it), ``--results DIR`` too."""
     parser = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
-    parser.add_argument("directory", nargs="?", type=_path, default=DEFAULT_DIR, help=f"the tables (default: {DEFAULT_DIR})")
+    parser.add_argument("directory", nargs="?", type=_path, default=DEFAULT_DIR, help="the tables (default: the shipped ones, docs/results/separation)")
     parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
     if trained is not None:
         parser.add_argument(
@@ -351,7 +352,7 @@ def main(
         return 2
     results: list[Path] = getattr(args, "results", [])
     out = args.out or args.directory / "DISCRIMINATION.md"
-    command = "empathy-zoo analyse discrimination" + ("" if args.directory == DEFAULT_DIR else f" {args.directory}")
+    command = "empathy-zoo analyse discrimination" + ("" if Path(args.directory).resolve() == DEFAULT_DIR else f" {args.directory}")
     if args.epsilon != 0.01:
         command += f" --epsilon {args.epsilon:g}"
     command += "".join(f" --results {path}" for path in results)

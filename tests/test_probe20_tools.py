@@ -131,3 +131,11 @@ def test_verdict_changes_bounds_the_cells_of_a_page(tmp_path: Path, capsys, colu
     assert main([str(page), str(page)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err and str(page) in err, err
+
+
+def test_discrimination_finds_the_shipped_tables_from_any_folder(tmp_path: Path, monkeypatch) -> None:
+    from empathy_zoo.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["analyse", "discrimination", "--out", str(tmp_path / "page.md")]) == 0
+    assert (tmp_path / "page.md").read_text(encoding="utf-8").startswith("# Discrimination matrix")
