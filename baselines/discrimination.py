@@ -333,7 +333,13 @@ def main(
     """``python -m baselines.discrimination [DIR] [--epsilon E] [--out FILE]``; with ``trained``
     (:func:`leaderboard.trained_discrimination.main` passes it), ``--results DIR`` too."""
     parser = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
-    parser.add_argument("directory", nargs="?", type=_path, default=DEFAULT_DIR, help="the tables (default: the shipped ones, docs/results/separation)")
+    parser.add_argument(
+        "directory",
+        nargs="?",
+        type=_path,
+        default=DEFAULT_DIR,
+        help="the tables (default: the shipped ones, docs/results/separation)",
+    )
     parser.add_argument("--epsilon", type=float, default=0.01, help="the ε of the exact pairs read (default: 0.01)")
     if trained is not None:
         parser.add_argument(
@@ -352,7 +358,9 @@ def main(
         return 2
     results: list[Path] = getattr(args, "results", [])
     out = args.out or args.directory / "DISCRIMINATION.md"
-    command = "empathy-zoo analyse discrimination" + ("" if Path(args.directory).resolve() == DEFAULT_DIR else f" {args.directory}")
+    command = "empathy-zoo analyse discrimination" + (
+        "" if Path(args.directory).resolve() == DEFAULT_DIR else f" {args.directory}"
+    )
     if args.epsilon != 0.01:
         command += f" --epsilon {args.epsilon:g}"
     command += "".join(f" --results {path}" for path in results)
