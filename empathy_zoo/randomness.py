@@ -90,10 +90,15 @@ def derive_key(seed: int, *stream: int) -> int:
     return int(np.random.SeedSequence([int(seed), *map(int, stream)]).generate_state(1, np.uint64)[0])
 
 
+MAX_ENV_SEED = 2**64 - 1
+"""The largest seed an environment takes: 64 bits, as every key :func:`derive_key` makes."""
+
+
 def check_seed(seed: int | None) -> int | None:
-    """``seed`` if it is a non-negative int (or ``None``: fresh entropy), else ``ValueError``."""
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
-        raise ValueError(f"seed must be a non-negative int or None, got {seed!r}")
+    """``seed`` if it is an int in ``0 … 2⁶⁴ − 1`` (or ``None``: fresh entropy), else ``ValueError``."""
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_ENV_SEED):
+        shown = repr(seed) if not isinstance(seed, int) or seed.bit_length() <= 128 else f"an int of {seed.bit_length():,} bits"
+        raise ValueError(f"seed must be an int in 0 … 2⁶⁴ − 1 (64 bits) or None, got {shown}")
     return seed
 
 

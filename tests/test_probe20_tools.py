@@ -139,3 +139,23 @@ def test_discrimination_finds_the_shipped_tables_from_any_folder(tmp_path: Path,
     monkeypatch.chdir(tmp_path)
     assert main(["analyse", "discrimination", "--out", str(tmp_path / "page.md")]) == 0
     assert (tmp_path / "page.md").read_text(encoding="utf-8").startswith("# Discrimination matrix")
+
+
+@pytest.mark.parametrize("seed", [2**64, 10**4000, -1])
+def test_an_environment_seed_is_at_most_64_bits(seed: int) -> None:
+    from empathy_zoo import coexistence_v0
+
+    env = coexistence_v0.parallel_env()
+    with pytest.raises(ValueError, match="seed must be an int in 0 … 2⁶⁴ − 1"):
+        env.reset(seed=seed)
+    env.reset(seed=2**64 - 1)
+
+
+@pytest.mark.parametrize("cells", [{(1, 1): 1, (2, 2): 5}, {(1, 1), (2, 2)}, "11"])
+def test_sharing_takes_its_batteries_as_a_list_of_cells_only(cells: object) -> None:
+    from empathy_zoo import sharing_v0
+
+    env = sharing_v0.parallel_env()
+    with pytest.raises(ValueError, match=r"options\['batteries'\] must be a list of \(row, col\) cells"):
+        env.reset(seed=0, options={"batteries": cells})
+    env.reset(seed=0, options={"batteries": [(1, 1), (2, 2)]})

@@ -203,8 +203,8 @@ class SharingEngine(GridEngine):
         if "batteries" not in options or options["batteries"] is None:
             return {"batteries"}
         cells = options["batteries"]
-        if isinstance(cells, (str, bytes)) or not hasattr(cells, "__iter__"):
-            raise ValueError(f"options['batteries'] must be a list of (row, col) cells, got {cells!r}")
+        if not isinstance(cells, (list, tuple, np.ndarray)):  # (never a dict's keys, a set's order or a string's letters)
+            raise ValueError(f"options['batteries'] must be a list of (row, col) cells, got {type(cells).__name__}")
         layout = np.zeros(self.size * self.size, dtype=bool)
         for k, cell in enumerate(cells):
             row, col = check_cell(cell, f"options['batteries'][{k}]", self.size)
