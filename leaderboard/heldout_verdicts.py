@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 from collections import Counter
 from collections.abc import Sequence
+from dataclasses import replace
 
 from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import load_results
@@ -25,9 +26,16 @@ __all__ = ["heldout_verdicts", "verdicts_markdown"]
 
 
 def heldout_verdicts(results_dir: str | os.PathLike[str]) -> list[Reading]:
-    """The readings (old and new verdicts) of every method and held-out scenario of the directory."""
+    """The readings (old and new verdicts) of every method and held-out scenario of the directory;
+    where an environment was evaluated in several scenario sets, each scenario is named with its
+    set (``set: scenario``), so two sets' scenarios of one name stay apart."""
     groups, _ = load_heldout(results_dir, load_results(results_dir))
-    return [reading for group in groups for reading in readings(group, heldout_cells(group))]
+    sets = Counter(group.env for group in groups)
+    return [
+        reading if sets[group.env] == 1 else replace(reading, scenario=f"{group.scenario_set.name}: {reading.scenario}")
+        for group in groups
+        for reading in readings(group, heldout_cells(group))
+    ]
 
 
 def verdicts_markdown(rows: Sequence[Reading]) -> str:

@@ -200,3 +200,16 @@ def test_the_command_lists_old_and_new_verdicts(synthetic) -> None:
     text = verdicts_markdown(rows)
     assert "| old rule | new rule |" in text and "keeps its own level" in text
     assert "changed: 3 of 6" in text
+
+
+def test_two_sets_scenarios_of_one_name_are_told_apart(synthetic) -> None:
+    from empathy_zoo.atomic import write_json_atomic
+
+    out, results = synthetic
+    pairs = [(run, dqn_values(run.seed) if run.method == "dqn" else careful_values(run.seed)) for run in results]
+    write_synthetic(out, pairs, scenario_set(COEXISTENCE, SCENARIOS, name="again"), OWN)
+    for run in results:
+        write_json_atomic(out / "runs" / f"{run.run_id}.json", run.to_document())
+    rows = heldout_verdicts(out)
+    assert len(rows) == 12 and len({(r.method_label, r.scenario) for r in rows}) == 12
+    assert {r.scenario for r in rows} == {f"{name}: {s}" for name in ("again", "synthetic") for s in SCENARIOS}
