@@ -34,6 +34,7 @@ from leaderboard.reproduction import (
     coexistence_claims,
     method_key,
 )
+from leaderboard.run_facts import check_one_experiment
 
 TITLE = "# Coexistence: do the paper's claims depend on the rules?"
 """The page's first line (a file that does not begin so is no page of this tool: never replaced)."""
@@ -87,6 +88,14 @@ def condition_runs(results: Sequence[RunResult]) -> dict[str, dict[str, list[Run
         missing = [key for key in NEEDED if key not in runs]
         if missing:
             raise ValueError(f"condition {variant!r} lacks the paper's experiments {', '.join(missing)}")
+        check_one_experiment({f"the {key} runs of condition {variant!r}": group for key, group in runs.items()})
+        first = next(iter(runs.values()))[0]
+        for run in (run for group in runs.values() for run in group):
+            if dict(run.config.env_kwargs) != dict(first.config.env_kwargs):
+                raise ValueError(
+                    f"runs {first.run_id} and {run.run_id} are both of condition {variant!r} but of two worlds "
+                    f"(env_kwargs {dict(first.config.env_kwargs)} and {dict(run.config.env_kwargs)}): a condition is one world"
+                )
     return out
 
 

@@ -1,7 +1,7 @@
 """Which runs of two results directories computed the same thing: each run of one is matched with
-the run of the other of the same variant, method, β, aggregation of the others, reward transform
-and seed, and the pair is *same* when their training and evaluation columns are equal value for
-value (what a version that changed nothing a run computes must give).
+the run of the other of the same variant, method, β, aggregation of the others, reward transform,
+world, partners and seed, and the pair is *same* when their training and evaluation columns are
+equal value for value (what a version that changed nothing a run computes must give).
 
     python -m leaderboard.compare_runs OLD_DIR NEW_DIR
 
@@ -25,13 +25,17 @@ __all__ = ["run_key", "runs_by_key", "compare_runs"]
 
 
 def run_key(run: RunResult) -> tuple:
-    """What two versions' runs must share to be the same experiment."""
+    """What two versions' runs must share to be the same experiment: variant, method, β, the
+    aggregation of the others, reward transform, world (environment arguments) and partners (fixed
+    agents), and seed (last)."""
     return (
         run.config.variant or run.env,
         run.method,
         description_of(run)["selfishness"],
         run.config.settings.get("others", "closest"),
         run.config.reward_name,
+        tuple(sorted((name, repr(value)) for name, value in run.config.env_kwargs.items())),
+        tuple(sorted(run.config.fixed.items())),
         run.seed,
     )
 
@@ -46,7 +50,8 @@ def runs_by_key(runs: Sequence[RunResult], key: Callable[[RunResult], tuple] = r
         if other is not run:
             raise ValueError(
                 f"runs {other.run_id} and {run.run_id} are one experiment's seed {run.seed} to this tool (same variant, "
-                "method, β, aggregation of the others, reward transform and seed) but two runs: it would match or pool "
+                "method, β, aggregation of the others, reward transform, world, partners and seed) but two runs: it would "
+                "match or pool "
                 "one and drop the other; compare directories that hold one of them each"
             )
     return keyed

@@ -53,7 +53,14 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.result_file import result_checker
 from leaderboard.aggregate import final_episode_count, load_result_files, longest_episode, run_scalars
 from leaderboard.claim_rules import less_than, reference_reading
-from leaderboard.run_facts import description_of, empathic_selfishness, env_argument, exploration_of, in_paper_setting
+from leaderboard.run_facts import (
+    check_one_experiment,
+    description_of,
+    empathic_selfishness,
+    env_argument,
+    exploration_of,
+    in_paper_setting,
+)
 from leaderboard.verdicts import RULES, Cell, below, cell_of, falls, matches_reference, peaks
 
 __all__ = [
@@ -164,6 +171,8 @@ def paper_runs(results: Sequence[RunResult]) -> dict[str, dict[str, list[RunResu
     for run in results:
         if run.env in out and in_paper_setting(run):
             out[run.env].setdefault(method_key(run), []).append(run)
+    for env, cells in out.items():  # (one experiment a cell: two would be pooled into one claim)
+        check_one_experiment({f"the paper's {key} in {env}": runs for key, runs in cells.items()})
     return out
 
 

@@ -10,7 +10,7 @@ gives them: files of every schema get a description there).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
@@ -24,6 +24,7 @@ __all__ = [
     "exploration_of",
     "env_argument",
     "in_paper_setting",
+    "check_one_experiment",
 ]
 
 
@@ -87,3 +88,22 @@ def in_paper_setting(run: RunResult, varying: Sequence[str] = ()) -> bool:
         all(name in defaults and (name in varying or defaults[name] == value) for name, value in run.config.env_kwargs.items())
         and dict(run.config.fixed) == DEFAULT_POLICIES[run.env]
     )
+
+
+def check_one_experiment(cells: Mapping[str, Sequence[RunResult]]) -> None:
+    """Refuse (``ValueError`` naming two runs) a cell of ``cells`` (``{what the cell is: runs}``)
+    whose runs are of two experiments (their run ids differ beyond the seed: another label,
+    setting, world or budget), or that holds a seed twice: a claim judges one experiment's seeds,
+    never a pool of two."""
+    for cell, runs in cells.items():
+        seen: dict[int, RunResult] = {}
+        for run in runs:
+            first = runs[0]
+            if run.experiment != first.experiment:
+                raise ValueError(
+                    f"runs {first.run_id} and {run.run_id} are both {cell} but of two experiments (another label, setting, "
+                    "world or budget): a claim judges one experiment's seeds; keep one experiment of them in the directory"
+                )
+            other = seen.setdefault(run.seed, run)
+            if other is not run:
+                raise ValueError(f"runs {other.run_id} and {run.run_id} are both seed {run.seed} of {cell}: keep one")

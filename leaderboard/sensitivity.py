@@ -26,7 +26,7 @@ from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import final_episode_count, load_results, run_scalars
-from leaderboard.run_facts import empathic_selfishness
+from leaderboard.run_facts import check_one_experiment, empathic_selfishness
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
 
 __all__ = [
@@ -72,9 +72,29 @@ def _empathic_sharing_runs(results: Sequence[RunResult]) -> dict[Condition, dict
     groups: dict[Condition, dict[float, list[RunResult]]] = {}
     for run in results:
         beta = empathic_selfishness(run) if run.env == SHARING else None
-        if beta is not None:
-            groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+        if beta is None:
+            continue
+        others = {agent: policy for agent, policy in run.config.fixed.items() if agent != "human_0"}
+        paper_others = {agent: policy for agent, policy in DEFAULT_POLICIES[SHARING].items() if agent != "human_0"}
+        if others != paper_others or not _defaults_but_conditions(run):
+            raise ValueError(
+                f"run {run.run_id} sets what no condition varies (env_kwargs {dict(run.config.env_kwargs)}, "
+                f"fixed {dict(run.config.fixed)}): a condition is a start, an inventory encoding and a human policy, "
+                "the rest at its default"
+            )
+        groups.setdefault(condition_of(run), {}).setdefault(beta, []).append(run)
+    for condition, cells in groups.items():
+        check_one_experiment({f"β={beta:g} under {_condition_text(condition)}": runs for beta, runs in cells.items()})
     return groups
+
+
+def _defaults_but_conditions(run: RunResult) -> bool:
+    """Whether every environment argument of ``run`` but the conditions' is at its default."""
+    defaults = DEFAULT_ARGUMENTS[SHARING]
+    return all(
+        name in ("start", "inventory_encoding") or (name in defaults and defaults[name] == value)
+        for name, value in run.config.env_kwargs.items()
+    )
 
 
 def _condition_text(condition: Condition) -> str:
