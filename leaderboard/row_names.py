@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
+from leaderboard.label_skeleton import skeleton
 from leaderboard.run_facts import is_dqn_reference
 
 __all__ = [
@@ -43,31 +44,27 @@ DQN_NAME = "DQN"
 """What a DQN reference row is called."""
 
 
-_INVISIBLE = frozenset("\u115f\u1160\u3164\uffa0")
-"""Hangul fillers: letters (category Lo) that draw as nothing."""
-
-
-def _folded(label: str) -> str:
-    """``label`` as it reads: its compatibility form (NFKC: a full-width letter is the letter), without
-    spaces of any kind, format characters and letters that draw as nothing."""
-    return "".join(
-        c
-        for c in unicodedata.normalize("NFKC", label)
-        if not (unicodedata.category(c).startswith("Z") or unicodedata.category(c) == "Cf" or c.isspace() or c in _INVISIBLE)
-    )
+def _ends_in_a_mark(label: str) -> bool:
+    """Whether ``label`` (a :func:`~leaderboard.label_skeleton.skeleton`) ends as a mark the
+    leaderboard appends does: a mathematical symbol (``≡``, ``=``, ``≣``, …), then ``dqn`` or
+    ``dqn's runs``."""
+    for tail in (skeleton(DQN_NAME), skeleton(SAME_RUNS_MARK.split("=", 1)[1])):
+        if label.endswith(tail) and len(label) > len(tail) and unicodedata.category(label[-len(tail) - 1]) == "Sm":
+            return True
+    return False
 
 
 def check_reserved_label(run: RunResult, path: Path) -> None:
     """Refuse (``ValueError`` naming the file) a run whose label reads as a name the leaderboard
-    gives (:func:`_folded`): ``DQN`` or ``DQN, as …`` on a run that is no DQN reference, or a label
-    ending in a mark the leaderboard appends (:data:`IDENTICAL_MARK`, :data:`SAME_RUNS_MARK`). The
+    gives (:func:`~leaderboard.label_skeleton.skeleton`: lookalike letters, case, marks and
+    spaces aside): ``DQN`` or ``DQN, as …`` on a run that is no DQN reference, or a label ending
+    as a mark the leaderboard appends does (:data:`IDENTICAL_MARK`, :data:`SAME_RUNS_MARK`). The
     page would name the wrong row as the reference, or mark a row it did not mark."""
-    label = _folded(run.method_label)
-    dqn = _folded(DQN_NAME)
-    marks = [mark for mark in (IDENTICAL_MARK, SAME_RUNS_MARK) if label.endswith(_folded(mark))]
-    if marks:
-        why = f"ends in “{marks[0].strip()}”, the mark the leaderboard gives a row it finds to train as DQN"
-    elif (label == dqn or label.startswith(_folded(f"{DQN_NAME}, as"))) and not is_dqn_reference(run):
+    label = skeleton(run.method_label)
+    dqn = skeleton(DQN_NAME)
+    if _ends_in_a_mark(label):
+        why = "ends as a mark the leaderboard gives a row it finds to train as DQN (“≡ DQN”, “= DQN's runs”)"
+    elif (label == dqn or label.startswith(skeleton(f"{DQN_NAME}, as"))) and not is_dqn_reference(run):
         why = f"reads as {DQN_NAME!r}, the leaderboard's name of the DQN reference, and this run is none"
     else:
         return

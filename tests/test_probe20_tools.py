@@ -95,6 +95,15 @@ LOOKALIKES = [
     "DQN, as Mine",
     "Mine ≡ DQN",
     "Mine = DQN's runs",
+    "DQN\u034f",
+    "DQ\u039d",
+    "\u0500QN",
+    "DQN\u0301",
+    "dqn",
+    "x ≣ DQN",
+    "x ≡ DQ\u039d",
+    "DQ\u039d, as Empathic DQN (β=1)",
+    "Mine = DQN\u2019s runs",
 ]
 
 
