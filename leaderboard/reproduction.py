@@ -731,12 +731,20 @@ def write_reproduction(
     return path
 
 
-if __name__ == "__main__":
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m leaderboard.reproduction RESULTS_DIR``: each claim's old and new verdict, printed."""
     import sys
 
-    if len(sys.argv) != 2:
-        sys.exit("usage: python -m leaderboard.reproduction RESULTS_DIR   (each claim's old and new verdict; writes nothing)")
-    try:
-        print(claim_verdicts_markdown(assess_claims(load_checked_results(sys.argv[1]))))
-    except ValueError as error:
-        sys.exit(f"{sys.argv[1]}: {error}")
+    from empathy_zoo.names import positional_tool
+
+    def verdicts(paths: list[str]) -> int:
+        print(claim_verdicts_markdown(assess_claims(load_checked_results(paths[0]))))
+        return 0
+
+    prog = "python -m leaderboard.reproduction"
+    usage = f"usage: {prog} RESULTS_DIR   (each claim's old and new verdict; writes nothing)"
+    return positional_tool(prog, usage, list(sys.argv[1:] if argv is None else argv), 1, verdicts)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -90,7 +90,7 @@ def test_a_tools_refusal_names_the_command_typed(
 
 @pytest.mark.parametrize(
     ("module", "count"),
-    [("compare_runs", 2), ("versus_dqn", 1), ("heldout_verdicts", 1), ("equivalence", 2)],
+    [("compare_runs", 2), ("versus_dqn", 1), ("heldout_verdicts", 1), ("equivalence", 2), ("reproduction", 1)],
 )
 def test_a_positional_tool_refuses_a_missing_or_forged_directory_in_one_line(tmp_path: Path, module: str, count: int) -> None:
     forged = tmp_path / "forged"
@@ -107,7 +107,7 @@ def test_a_positional_tool_refuses_a_missing_or_forged_directory_in_one_line(tmp
         assert done.stderr.count("\n") == 1 and str(directory) in done.stderr
 
 
-@pytest.mark.parametrize("module", ["compare_runs", "versus_dqn", "heldout_verdicts", "equivalence"])
+@pytest.mark.parametrize("module", ["compare_runs", "versus_dqn", "heldout_verdicts", "equivalence", "reproduction"])
 def test_a_positional_tool_takes_no_unknown_option_for_a_path(module: str) -> None:
     done = subprocess.run(
         [sys.executable, "-m", f"leaderboard.{module}", "--bogus", str(QUICK)], capture_output=True, text=True, cwd=ROOT

@@ -128,3 +128,22 @@ def test_runs_of_two_worlds_or_partners_are_never_paired(tmp_path: Path, module:
         assert done.stdout.splitlines()[-1] == "same: 0, different: 0, only_old: 3, only_new: 3"
     else:
         assert "experiments without a partner: 1 + 1" in done.stdout, done.stdout
+
+
+@pytest.mark.parametrize(("text", "words"), [("hello\x00 world\n", "U+0000"), ("a\u202eb\n", "U+202E RIGHT-TO-LEFT OVERRIDE")])
+def test_a_note_is_lines_of_printable_text(tmp_path: Path, capsys, text: str, words: str) -> None:
+    note = tmp_path / "note.md"
+    note.write_text(text, encoding="utf-8")
+    capsys.readouterr()
+    assert main(["sensitivity", str(RESULTS / "sharing_sensitivity"), "--note", str(note), "--out", str(tmp_path / "s.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--note {note}, line 1: holds {words}" in err, err
+    assert not (tmp_path / "s.md").exists()
+
+
+def test_a_note_with_windows_line_ends_reads_as_its_lines(tmp_path: Path) -> None:
+    from empathy_zoo.cli.sweep import _read_note
+
+    note = tmp_path / "note.md"
+    note.write_bytes(b"first\r\nsecond\tcolumn\r\n")
+    assert _read_note(str(note)) == "first\nsecond\tcolumn\n"

@@ -192,8 +192,13 @@ def _command_text(text: str) -> str:
 
 def _read_note(path: str | None) -> str:
     """The ``--note`` file's text (``""`` without one); one larger than
-    :data:`~empathy_zoo.limits.MAX_NOTE_BYTES` is refused (``ValueError``), never read to its end."""
+    :data:`~empathy_zoo.limits.MAX_NOTE_BYTES` is refused (``ValueError``), never read to its end,
+    and so is one holding a control or format character but a line break or a tab (a NUL, an
+    escape, a right-to-left override: the report is a page people read)."""
+    import unicodedata
+
     from empathy_zoo.limits import MAX_NOTE_BYTES, read_bounded
+    from empathy_zoo.names import LABEL_REFUSED_CATEGORIES
 
     if not path:
         return ""
@@ -201,9 +206,19 @@ def _read_note(path: str | None) -> str:
         what = "is a directory, not a file" if Path(path).is_dir() else "does not exist"
         raise ValueError(f"--note {path} {what} (give a Markdown file of prose)")
     try:
-        return read_bounded(path, MAX_NOTE_BYTES, "--note").decode("utf-8")
+        text = read_bounded(path, MAX_NOTE_BYTES, "--note").decode("utf-8")
     except UnicodeDecodeError as error:
         raise ValueError(f"--note {path} is not UTF-8 text ({error})") from None
+    text = text.replace("\r\n", "\n")  # (a note saved with Windows line ends reads as the same lines)
+    for number, line in enumerate(text.split("\n"), 1):
+        bad = next((c for c in line if c != "\t" and unicodedata.category(c) in LABEL_REFUSED_CATEGORIES), None)
+        if bad is not None:
+            name = unicodedata.name(bad, "")
+            raise ValueError(
+                f"--note {path}, line {number}: holds U+{ord(bad):04X}{f' {name}' if name else ''}; "
+                "a note is lines of printable text"
+            )
+    return text
 
 
 def dry_run_plan(
