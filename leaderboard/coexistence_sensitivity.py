@@ -23,7 +23,6 @@ from typing import Any
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import check_output_file, terminal_line
-from leaderboard.aggregate import load_results
 from leaderboard.reproduction import (
     BETAS,
     COEXISTENCE,
@@ -32,6 +31,7 @@ from leaderboard.reproduction import (
     Reference,
     Verdict,
     coexistence_claims,
+    load_checked_results,
     method_key,
 )
 from leaderboard.run_facts import check_one_experiment
@@ -207,7 +207,7 @@ def write_coexistence_sensitivity(results_dir: str | os.PathLike[str], out_path:
     ``out_path`` must be a Markdown file name (``.md``: never a result or agent file the page is
     made of, :func:`empathy_zoo.names.check_output_file`), checked before anything is read."""
     path = check_output_file(out_path, "Markdown", ".md", "COEXISTENCE_SENSITIVITY.md", TITLE.encode())
-    text = sensitivity_markdown(load_results(results_dir), command)
+    text = sensitivity_markdown(load_checked_results(results_dir), command)
     write_text_atomic(path, text + "\n")
     return path
 
@@ -225,7 +225,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.out:
             write_coexistence_sensitivity(args.results_dir, args.out, command)
         else:
-            print(sensitivity_markdown(load_results(args.results_dir), command))
+            print(sensitivity_markdown(load_checked_results(args.results_dir), command))
     except ValueError as error:
         parser.exit(2, f"{parser.prog}: error: {terminal_line(error)}\n")
     return 0

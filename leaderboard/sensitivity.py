@@ -25,7 +25,8 @@ import numpy as np
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.environments import DEFAULT_ARGUMENTS, DEFAULT_POLICIES
 from empathy_zoo.experiment.records import RunResult
-from leaderboard.aggregate import final_episode_count, load_results, run_scalars
+from leaderboard.aggregate import final_episode_count, run_scalars
+from leaderboard.reproduction import load_checked_results
 from leaderboard.run_facts import check_one_experiment, empathic_selfishness
 from leaderboard.verdicts import RULES, Cell, cell_of, falls, peaks
 
@@ -290,7 +291,7 @@ def write_sensitivity(
             *([note, ""] if note else []),
             RULES,
             "",
-            sensitivity_markdown(load_results(results_dir), command),
+            sensitivity_markdown(load_checked_results(results_dir), command),
         ]
     )
     path = Path(out_path) if out_path else Path(results_dir) / "SENSITIVITY.md"
