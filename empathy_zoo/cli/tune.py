@@ -110,6 +110,8 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     )
     out = Path(args.out) if args.out else Path("results") / "tuning" / base.variant.label / base.method
     check_not_read_folder(out, f"--out {out} (its study.json, tuned.toml and trials' results)")
+    if (out / TUNED_FILE).exists() and (out / TUNED_FILE).samefile(path):
+        raise ValueError(f"--out {out}: its {TUNED_FILE} is the sweep file {args.sweep} this study reads; give another --out")
     side_by_side = min(jobs, plan.batch)
     batches = f" in batches of {plan.batch} ({side_by_side} trained at a time)" if plan.batch > 1 else ""
     if jobs > plan.batch:

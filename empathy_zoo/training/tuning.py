@@ -95,7 +95,7 @@ from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
 from empathy_zoo.extras import install_command
-from empathy_zoo.names import check_no_links, check_replaceable
+from empathy_zoo.names import PNG_OPENING, check_no_links, check_own_file, check_replaceable
 from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.checkpoint import DivergedError
 from empathy_zoo.training.ensemble import train_ensemble
@@ -339,7 +339,7 @@ def run_study(
     for warning in check_before_training(first, options):
         note(warning)
     for name in (*OUTPUT_FILES, *also_writes):
-        check_replaceable(check_no_links(out, out / name))
+        _check_own_output(check_replaceable(check_no_links(out, out / name)))
     verbosity = optuna.logging.get_verbosity()
     optuna.logging.set_verbosity(optuna.logging.ERROR)
     try:
@@ -603,6 +603,32 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, updat
         "tuned_sweep_file": TUNED_FILE if best is not None else None,
         "trials": trials,
     }
+
+
+_OPENINGS = {STUDY_FILE: b'{\n "schema": ', JOURNAL_FILE: b'{"op_code":', ".png": PNG_OPENING}
+"""What every file of each name (a figure: of each suffix) that a study writes begins with."""
+TUNED_MARK = b"(study.json beside this file)"
+"""What the first line of every ``tuned.toml`` holds (its comment names the study it comes from)."""
+
+
+def _check_own_output(path: Path) -> None:
+    """Refuse (``ValueError`` naming it) a regular file at ``path`` that is not what a study writes
+    there (:data:`_OPENINGS`, :data:`TUNED_MARK`): a user's notes, a sweep file, another file named
+    so is never replaced. An empty file holds nothing to lose."""
+    if not path.is_file() or path.stat().st_size == 0:
+        return
+    if path.name == TUNED_FILE:
+        with open(path, "rb") as handle:
+            first = handle.readline(4096)
+        if TUNED_MARK not in first:
+            raise ValueError(
+                f"{path} exists and is no tuned sweep file a study wrote (its first line names the study.json beside it): "
+                "the suite replaces only its own; move the file away or give another --out"
+            )
+        return
+    opening = _OPENINGS.get(path.name) or _OPENINGS.get(path.suffix)
+    if opening is not None:
+        check_own_file(path, f"{path.name} of a study", opening)
 
 
 def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any, options: RunnerOptions) -> dict[str, Any]:
