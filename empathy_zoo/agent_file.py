@@ -488,8 +488,9 @@ def check_against_result(
     a header (checked) that is not the run its result file records: the trainer writes both from one
     run (``{"run_id": ..., **config}``), so every field of the header the result file's ``config``
     holds too (the environment and its arguments, partners, method, settings, reward, seed, budget,
-    label) is equal to it, and ``run_id`` to its ``run_id`` (a field either leaves out is not
-    compared: the result file's own reader requires its fields). ``recorded``: the result file's
+    label) is equal to it, and ``run_id`` to its ``run_id``. A field the result file records that the
+    header leaves out is refused too: ``watch`` builds its world from the header, so a header that
+    drops its partners would play beside others than the run's. ``recorded``: the result file's
     document, else it is read (bounded)."""
     document = read_json(result_file, "result file") if recorded is None else recorded
     if not isinstance(document, Mapping):
@@ -497,9 +498,14 @@ def check_against_result(
     config = document.get("config")
     config = config if isinstance(config, Mapping) else {}  # (what a result file holds is checked by its reader)
     pairs = [("run_id", "run_id", document["run_id"])] if "run_id" in document else []
-    pairs += [(key, f"config.{key}", config[key]) for key in header if key != "run_id" and key in config]
+    pairs += [(key, f"config.{key}", config[key]) for key in config if key != "run_id"]
     for key, where, value in pairs:
-        if key in header and header[key] != value:
+        if key not in header:
+            raise AgentFileError(
+                f"agent file {path}: its header has no field {key}, but its result file {result_file} records {where} "
+                f"{shown(value)}: the agent file is not that run's as written; move it away (train the run again to make it anew)"
+            )
+        if header[key] != value:
             raise AgentFileError(
                 f"agent file {path}: field header.{key}: {shown(header[key])}, but its result file {result_file} records "
                 f"{where} {shown(value)}: the agent file is not that run's; move it away (train the run again to make it anew)"

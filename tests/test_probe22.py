@@ -47,3 +47,36 @@ def test_tune_never_replaces_a_users_file_named_like_its_outputs(tmp_path: Path,
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{out / name} exists and is no" in err, err
     assert snapshot(out) == before
+
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK_RUNS = ROOT / "docs" / "results" / "quick" / "runs"
+
+
+@pytest.mark.parametrize("dropped", [("fixed",), ("run_id",), ("fixed", "run_id"), ("label", "steps")])
+def test_watch_refuses_a_re_signed_header_that_drops_a_field_of_its_run(tmp_path: Path, capsys, dropped: tuple) -> None:
+    import hashlib
+    import json
+    import shutil
+
+    import torch
+
+    from empathy_zoo.cli import main
+
+    agent = sorted(QUICK_RUNS.glob("coexistence_v0__empathic_dqn-*__s0.agent.pt"))[0]
+    result = agent.with_name(agent.name.removesuffix(".agent.pt") + ".json")
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    shutil.copy(result, runs / result.name)
+    document = torch.load(agent, weights_only=True)
+    for key in dropped:
+        del document["header"][key]
+    torch.save(document, runs / agent.name)
+    recorded = json.loads((runs / result.name).read_text(encoding="utf-8"))
+    recorded["agent"]["sha256"] = hashlib.sha256((runs / agent.name).read_bytes()).hexdigest()
+    (runs / result.name).write_text(json.dumps(recorded), encoding="utf-8")
+    capsys.readouterr()
+    assert main(["watch", result.stem, "--dir", str(tmp_path), "--episodes", "1"]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "its header has no field" in captured.err, captured.err
+    assert "survival" not in captured.out
