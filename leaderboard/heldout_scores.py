@@ -36,13 +36,13 @@ from empathy_zoo.metrics import (
     PER_OTHER_AGENT,
 )
 from leaderboard.aggregate import group_runs, mean_ci
-from leaderboard.budgets import budgets_of
 from leaderboard.improvement import (
     TOO_FEW_SEEDS,
     dqn_rows,
     improvement_interval,
     improvement_verdict,
     is_dqn,
+    row_key,
 )
 
 __all__ = [
@@ -272,7 +272,7 @@ def load_heldout(
         dqn_of: dict[str, str | None] = {}
         for label, pairs in runs.items():
             row = [run for run, _ in pairs]
-            references = baselines.get((env, budgets_of(row)), [])
+            references = baselines.get(row_key(env, row), [])
             dqn_of[label] = None if all(is_dqn(run) for run in row) or not references else references[0]
         same = {
             label: {entry.name for _, evaluation in pairs for entry in evaluation.scenarios[1:] if not entry.held_out}

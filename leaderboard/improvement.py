@@ -38,6 +38,7 @@ import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -58,6 +59,8 @@ __all__ = [
     "interquartile_mean",
     "is_dqn",
     "dqn_rows",
+    "row_key",
+    "RowKey",
     "uncompared_rows",
     "improvements_over_dqn",
     "improvement_verdict",
@@ -300,24 +303,42 @@ def is_dqn(run: RunResult) -> bool:
     return is_dqn_reference(run)
 
 
-def dqn_rows(results: Sequence[RunResult]) -> dict[tuple[str, tuple[RunBudget, ...]], list[str]]:
-    """The labels of the DQN rows (:func:`is_dqn`) per ``(variant, budgets of the row's runs)``, in
-    row order (:func:`leaderboard.aggregate.group_runs`)."""
-    rows: dict[tuple[str, tuple[RunBudget, ...]], list[str]] = {}
+RowKey = tuple[str, tuple[RunBudget, ...], tuple[tuple[Any, ...], ...]]
+"""What a row and the DQN row it is compared with share: variant, budgets and worlds (:func:`row_key`)."""
+
+
+def row_key(env: str, runs: Sequence[RunResult]) -> RowKey:
+    """``(variant, budgets, worlds)`` of a row of ``runs`` in the table ``env``: its runs' budgets,
+    and their worlds (environment arguments and partners: a run of ``train --fixed cat_0=stay``
+    keeps its variant's name, and is compared only with a DQN of its own world)."""
+    worlds = {
+        (
+            tuple(sorted((name, repr(value)) for name, value in run.config.env_kwargs.items())),
+            tuple(sorted(run.config.fixed.items())),
+        )
+        for run in runs
+    }
+    return env, budgets_of(runs), tuple(sorted(worlds))
+
+
+def dqn_rows(results: Sequence[RunResult]) -> dict[RowKey, list[str]]:
+    """The labels of the DQN rows (:func:`is_dqn`) per :func:`row_key` (variant, budgets and worlds
+    of the row's runs), in row order (:func:`leaderboard.aggregate.group_runs`)."""
+    rows: dict[RowKey, list[str]] = {}
     for (env, label), runs in group_runs(results).items():
         if all(is_dqn(run) for run in runs):
-            rows.setdefault((env, budgets_of(runs)), []).append(label)
+            rows.setdefault(row_key(env, runs), []).append(label)
     return rows
 
 
 def uncompared_rows(results: Sequence[RunResult]) -> list[tuple[str, str]]:
-    """The ``(variant, label)`` rows other than DQN's that no DQN row of their variant and budget
-    is compared with (:func:`improvements_over_dqn` gives them no cell), in row order."""
+    """The ``(variant, label)`` rows other than DQN's that no DQN row of their variant, budget and
+    world is compared with (:func:`improvements_over_dqn` gives them no cell), in row order."""
     baselines = dqn_rows(results)
     return [
         row
         for row, runs in group_runs(results).items()
-        if not all(is_dqn(run) for run in runs) and not baselines.get((row[0], budgets_of(runs)))
+        if not all(is_dqn(run) for run in runs) and not baselines.get(row_key(row[0], runs))
     ]
 
 
@@ -330,14 +351,14 @@ def improvements_over_dqn(
     """Every method's probability of improving on DQN in its environment, per phase and metric
     (``metrics_of[env]``: the metrics of that env's tables), with the interval that inverts the
     exact permutation test (:func:`improvement_interval`) and the test's p; a row is compared with
-    every other DQN row of its variant and budget (:func:`dqn_rows`), one cell each, in row order.
+    every other DQN row of its variant, budget and world (:func:`dqn_rows`), one cell each, in row order.
     A row without such a DQN row has none. The intervals draw nothing."""
     groups = group_runs(results)
     baselines = dqn_rows(results)
     scalars = {key: [run_scalars(run) for run in runs] for key, runs in groups.items()}
     cells: list[Improvement] = []
     for (env, label), runs in groups.items():
-        for baseline in baselines.get((env, budgets_of(runs)), []):
+        for baseline in baselines.get(row_key(env, runs), []):
             if baseline == label:
                 continue
             mine, theirs = scalars[(env, label)], scalars[(env, baseline)]

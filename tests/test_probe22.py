@@ -80,3 +80,28 @@ def test_watch_refuses_a_re_signed_header_that_drops_a_field_of_its_run(tmp_path
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1 and "its header has no field" in captured.err, captured.err
     assert "survival" not in captured.out
+
+
+def test_a_row_is_compared_only_with_a_dqn_of_its_own_world(tmp_path: Path) -> None:
+    import json
+
+    from empathy_zoo.run_ids import run_id
+    from leaderboard.aggregate import load_results
+    from leaderboard.improvement import improvements_over_dqn, uncompared_rows
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for source in sorted(QUICK_RUNS.glob("coexistence_v0__empathic_dqn-*.json")):
+        document = json.loads(source.read_text(encoding="utf-8"))
+        beta = document["config"]["description"]["selfishness"]
+        if beta not in (0.5, 1.0):
+            continue
+        document["agent"] = None
+        if beta == 1.0:  # (the DQN reference, trained beside a cat that stays)
+            document["config"]["fixed"] = {"cat_0": "stay"}
+            document["run_id"] = run_id(document["variant"], document["method"], document["config"], document["seed"])
+        (runs / f"{document['run_id']}.json").write_text(json.dumps(document), encoding="utf-8")
+    results = load_results(tmp_path)
+    assert len(results) == 6
+    assert improvements_over_dqn(results, {"coexistence_v0": ["harms"]}) == []
+    assert [label for _, label in uncompared_rows(results)] == ["Empathic DQN (β=0.5)"]
