@@ -29,6 +29,7 @@ import numpy as np
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import code_span
 from empathy_zoo.names import terminal_line
+from leaderboard.run_facts import in_paper_setting
 from leaderboard.trained_separation import FEWER, MORE, Judgement, Prediction, at_beta, judge, predictions, task_separates
 
 __all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
@@ -54,17 +55,26 @@ class Reading:
 
 def final_harms(results: Sequence[RunResult], selfish_methods: Mapping[str, bool]) -> dict[tuple[str, str], list[float]]:
     """``{(task, method): per-seed harms}``: each run's mean harms per episode over its final greedy
-    evaluation, in seed order, for runs of a task's own variant; a method ``selfish_methods`` marks
-    ``True`` is read at β = :data:`~leaderboard.trained_separation.BETA` only. A task with two runs
-    of one method and seed raises ``ValueError`` naming them."""
+    evaluation, in seed order, for runs of a task's own variant in its default world (the world
+    the exact tables model: every environment argument and partner at its default); a method
+    ``selfish_methods`` marks ``True`` is read at β = :data:`~leaderboard.trained_separation.BETA`
+    only. A task with two runs of one method and seed, or runs of one method from two experiments
+    (another label, setting or budget), raises ``ValueError`` naming them."""
     found: dict[tuple[str, str], dict[int, float]] = {}
+    experiments: dict[tuple[str, str], RunResult] = {}
     for run in results:
-        if (run.variant or run.env) != run.env or not run.eval:
+        if (run.variant or run.env) != run.env or not run.eval or not in_paper_setting(run):
             continue
         if selfish_methods.get(run.method, False):
             beta = run.config.settings.get("selfishness")
             if beta is None or not at_beta(beta):  # (the number itself: 0.5000001 is not 0.5)
                 continue
+        first = experiments.setdefault((run.env, run.method), run)
+        if first.experiment != run.experiment:
+            raise ValueError(
+                f"runs {first.run_id} and {run.run_id} are both {run.method} on {run.env} but of two experiments "
+                "(another label, setting or budget): a prediction is read on one experiment's seeds; keep one of them"
+            )
         seeds = found.setdefault((run.env, run.method), {})
         if run.seed in seeds:
             raise ValueError(f"two runs of {run.method} on {run.env} with seed {run.seed} (one is {run.run_id})")

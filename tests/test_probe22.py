@@ -105,3 +105,45 @@ def test_a_row_is_compared_only_with_a_dqn_of_its_own_world(tmp_path: Path) -> N
     assert len(results) == 6
     assert improvements_over_dqn(results, {"coexistence_v0": ["harms"]}) == []
     assert [label for _, label in uncompared_rows(results)] == ["Empathic DQN (β=0.5)"]
+
+
+def _vase_dqn(tmp_path: Path, change=None, label: str | None = None, seeds: range = range(3)) -> None:
+    """The shipped vase_v0 DQN runs of ``seeds`` (without agents) into ``tmp_path/runs``; with
+    ``change`` and ``label``, as another experiment of seeds 10 on."""
+    import json
+
+    from empathy_zoo.run_ids import run_id
+
+    runs = tmp_path / "runs"
+    runs.mkdir(exist_ok=True)
+    shipped = ROOT / "docs" / "results" / "scenarios" / "runs"
+    for seed in seeds:
+        document = json.loads(next(shipped.glob(f"vase_v0__dqn-*__s{seed}.json")).read_text(encoding="utf-8"))
+        document["agent"] = None
+        if change is not None:
+            change(document["config"])
+            document["config"]["label"] = document["method_label"] = label
+            document["seed"] = document["config"]["seed"] = seed + 10
+            document["run_id"] = run_id(document["variant"], document["method"], document["config"], document["seed"])
+        (runs / f"{document['run_id']}.json").write_text(json.dumps(document), encoding="utf-8")
+
+
+def test_separation_reading_never_pools_two_experiments_of_one_method(tmp_path: Path) -> None:
+    from leaderboard.aggregate import load_results
+    from leaderboard.separation_reading import final_harms
+
+    _vase_dqn(tmp_path)
+    assert len(final_harms(load_results(tmp_path), {})[("vase_v0", "dqn")]) == 3
+    _vase_dqn(tmp_path, lambda config: config["settings"].update(learning_rate=0.0005), "DQN, another rate")
+    with pytest.raises(ValueError, match="are both dqn on vase_v0 but of two experiments"):
+        final_harms(load_results(tmp_path), {})
+
+
+def test_separation_reading_reads_only_the_world_its_tables_model(tmp_path: Path) -> None:
+    from leaderboard.aggregate import load_results
+    from leaderboard.separation_reading import final_harms
+
+    _vase_dqn(tmp_path)
+    _vase_dqn(tmp_path, lambda config: config["fixed"].update(cat_0="stay"), "DQN beside a still cat")
+    assert len(load_results(tmp_path)) == 6
+    assert len(final_harms(load_results(tmp_path), {})[("vase_v0", "dqn")]) == 3

@@ -82,10 +82,8 @@ def test_a_variant_and_an_unread_beta_are_left_out_and_a_repeated_seed_refused()
 
     variant = RunResult.from_checked({**document, "variant": "charger_big", "run_id": "charger_big__e-0.5__s2"})
     assert final_harms([own, other_beta, variant], {"empathic_dqn": True}) == {("charger_v0", "empathic_dqn"): [1.0]}
-    assert final_harms([own, other_beta], {"empathic_dqn": False})[("charger_v0", "empathic_dqn")] == [
-        1.0,
-        1.01,
-    ]  # (seed s adds 0.01·s)
+    with pytest.raises(ValueError, match="are both empathic_dqn on charger_v0 but of two experiments"):
+        final_harms([own, other_beta], {"empathic_dqn": False})  # (two β of a method read at any β: never pooled)
     with pytest.raises(ValueError, match="two runs of empathic_dqn on charger_v0 with seed 0"):
         final_harms([own, own], {"empathic_dqn": True})
 
