@@ -12,7 +12,8 @@ Per metric (:func:`leaderboard.versus_dqn.compact_metrics`) and phase the table 
 means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
 no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
 named, never dropped; a directory with two DQN rows in one variant is refused (a verdict would be
-one of several). Nothing new is tested: this is a view of two leaderboards' cells.
+one of several), and so is a tuned row whose method, world or budget is not its untuned row's.
+Nothing new is tested: this is a view of two leaderboards' cells.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from dataclasses import dataclass
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
 from leaderboard.aggregate import group_runs, load_results, score_runs
-from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn
+from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn, row_key
 from leaderboard.versus_dqn import compact_metrics
 
 __all__ = ["TUNED_SUFFIX", "VerdictPair", "TuningEffect", "tuning_effect", "tuning_effect_table"]
@@ -90,7 +91,8 @@ def tuning_effect(
     metrics = {v: compact_metrics(v, env, metrics_of) for v, env in variants.items()}
     old_means, old_verdicts, old_references = _cells(untuned, metrics)
     new_means, new_verdicts, new_references = _cells(tuned, metrics)
-    old_rows = set(group_runs(untuned))
+    untuned_groups = group_runs(untuned)
+    old_rows = set(untuned_groups)
     pairs: list[VerdictPair] = []
     unmatched: list[tuple[str, str]] = []
     for variant, label in groups:
@@ -98,6 +100,7 @@ def tuning_effect(
         if base == label or (variant, base) not in old_rows:
             unmatched.append((variant, label))
             continue
+        _check_tuning_only(variant, groups[(variant, label)], untuned_groups[(variant, base)])
         reference = (variant, label) in new_references
         if reference != ((variant, base) in old_references):
             raise ValueError(f"{variant}: {label!r} and {base!r} are not both DQN references or both methods")
@@ -116,6 +119,23 @@ def tuning_effect(
                     )
                 )
     return TuningEffect(tuple(pairs), tuple(unmatched))
+
+
+def _check_tuning_only(variant: str, tuned: Sequence[RunResult], untuned: Sequence[RunResult]) -> None:
+    """Refuse (``ValueError`` naming both rows) a tuned row whose runs differ from its untuned row's
+    in more than settings and seeds: its method or world (environment arguments and partners) and budget.
+    What ``tune`` writes changes only the tuned settings; any other difference would read as tuning's effect."""
+    facts = {
+        "method": lambda runs: sorted({run.method for run in runs}),
+        "world and budget": lambda runs: row_key(variant, runs),
+    }
+    for what, fact in facts.items():
+        if fact(tuned) != fact(untuned):
+            raise ValueError(
+                f"{variant}: the tuned row {tuned[0].method_label!r} ({tuned[0].run_id}) and the untuned row "
+                f"{untuned[0].method_label!r} ({untuned[0].run_id}) differ in their {what}: tuning changes only settings, "
+                "so the two are no tuned and untuned row of one method"
+            )
 
 
 def _cell(mean: float, verdict: str | None) -> str:

@@ -147,3 +147,37 @@ def test_separation_reading_reads_only_the_world_its_tables_model(tmp_path: Path
     _vase_dqn(tmp_path, lambda config: config["fixed"].update(cat_0="stay"), "DQN beside a still cat")
     assert len(load_results(tmp_path)) == 6
     assert len(final_harms(load_results(tmp_path), {})[("vase_v0", "dqn")]) == 3
+
+
+def _tuned_copies(tmp_path: Path, change) -> tuple[Path, Path]:
+    """The quick profile's Coexistence DQN-reference and β = 0.5 runs as an untuned directory, and
+    as a tuned one: each run changed by ``change`` (its config), labelled ``…, tuned``."""
+    import json
+
+    from empathy_zoo.run_ids import run_id
+
+    untuned, tuned = tmp_path / "untuned" / "runs", tmp_path / "tuned" / "runs"
+    untuned.mkdir(parents=True)
+    tuned.mkdir(parents=True)
+    for source in sorted(QUICK_RUNS.glob("coexistence_v0__empathic_dqn-*.json")):
+        document = json.loads(source.read_text(encoding="utf-8"))
+        if document["config"]["description"]["selfishness"] not in (0.5, 1.0):
+            continue
+        document["agent"] = None
+        (untuned / source.name).write_text(json.dumps(document), encoding="utf-8")
+        change(document["config"])
+        document["config"]["label"] = document["method_label"] = document["method_label"] + ", tuned"
+        document["run_id"] = run_id(document["variant"], document["method"], document["config"], document["seed"])
+        (tuned / f"{document['run_id']}.json").write_text(json.dumps(document), encoding="utf-8")
+    return untuned.parent, tuned.parent
+
+
+def test_tuning_effect_pairs_rows_that_differ_in_settings_only(tmp_path: Path) -> None:
+    from leaderboard.aggregate import load_results
+    from leaderboard.tuning_effect import tuning_effect
+
+    untuned, tuned = _tuned_copies(tmp_path / "a", lambda config: config["settings"].update(learning_rate=0.0005))
+    assert tuning_effect(load_results(untuned), load_results(tuned)).pairs
+    untuned, tuned = _tuned_copies(tmp_path / "b", lambda config: config["fixed"].update(cat_0="stay"))
+    with pytest.raises(ValueError, match="differ in their world and budget"):
+        tuning_effect(load_results(untuned), load_results(tuned))
