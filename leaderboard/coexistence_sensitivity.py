@@ -88,9 +88,9 @@ def condition_runs(results: Sequence[RunResult]) -> dict[str, dict[str, list[Run
         missing = [key for key in NEEDED if key not in runs]
         if missing:
             raise ValueError(f"condition {variant!r} lacks the paper's experiments {', '.join(missing)}")
-        check_one_experiment({f"the {key} runs of condition {variant!r}": group for key, group in runs.items()})
-        first = next(iter(runs.values()))[0]
-        for run in (run for group in runs.values() for run in group):
+        check_one_experiment({f"the {key} runs of condition {variant!r}": runs[key] for key in NEEDED})
+        first = runs[NEEDED[0]][0]
+        for run in (run for key in NEEDED for run in runs[key]):
             if dict(run.config.env_kwargs) != dict(first.config.env_kwargs):
                 raise ValueError(
                     f"runs {first.run_id} and {run.run_id} are both of condition {variant!r} but of two worlds "
