@@ -268,5 +268,5 @@ def heldout_section(
         figures[f"figure:{group.env}:heldout_{group.scenario_set.name}"] = path
         alt = f"{heading}: with its own partners against held-out ones"
         blocks.append(Figure(alt, path.relative_to(out).as_posix(), path.read_bytes()))
-    blocks += [Paragraph(f"Note: {note}", note=True) for note in notes]
+    blocks += [Paragraph(f"Note: {markdown_text(note)}", note=True) for note in notes]  # (paths, labels: data)
     return HeldoutSection(Section(title, blocks), figures)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -229,6 +229,7 @@ def load_heldout(
     if origins is not None and len(origins) != len(results):
         raise ValueError(f"{len(origins)} origins for {len(results)} results")
     notes: list[str] = []
+    noted: set[int] = set()  # (runs whose evaluation a note has left out already)
     found: dict[tuple[str, str], list[tuple[RunResult, EvaluationResult, Path]]] = {}
     for directory in dirs:
         mine = results if origins is None else [r for r, o in zip(results, origins, strict=True) if o == str(directory)]
@@ -242,6 +243,7 @@ def load_heldout(
             recorded = None if run.agent is None else run.agent.sha256
             if recorded != evaluation.agent.sha256:
                 notes.append(f"{path}: made of another agent than its result file records (trained again?); left out")
+                noted.add(id(run))
                 continue
             mismatch = evaluation_mismatch(evaluation, run)
             if mismatch is not None:  # (the agent is the run's, the rest is not: a forged or damaged file)
@@ -278,6 +280,7 @@ def load_heldout(
             label: {entry.name for _, evaluation in pairs for entry in evaluation.scenarios[1:] if not entry.held_out}
             for label, pairs in runs.items()
         }
+        notes += _unevaluated(env, set_name, runs, results, noted)
         groups.append(
             HeldoutGroup(
                 env,
@@ -290,6 +293,29 @@ def load_heldout(
             )
         )
     return groups, notes
+
+
+def _unevaluated(
+    env: str,
+    set_name: str,
+    runs: Mapping[str, Sequence[tuple[RunResult, EvaluationResult]]],
+    results: Sequence[RunResult],
+    noted: set[int],
+) -> list[str]:
+    """A note per run of a row of the set (``runs``) that ``results`` holds and that has no
+    evaluation in it, naming the run and how many of its row's runs the row counts; a run a note
+    has left out already (``noted``) is not named twice, and a row of no evaluation is no row of the set."""
+    notes = []
+    for label, pairs in runs.items():
+        evaluated = {id(run) for run, _ in pairs}
+        row = [run for run in results if run.table_env == env and run.method_label == label]
+        for run in row:
+            if id(run) not in evaluated and id(run) not in noted:
+                notes.append(
+                    f"{env}, scenario set {set_name}: run {run.run_id} ({label}, seed {run.seed}) has no evaluation "
+                    f"in it, so its row counts {len(pairs)} of its {len(row)} runs (empathy-zoo evaluate writes it)"
+                )
+    return notes
 
 
 def _per_run(evaluation: EvaluationResult, scenario: str, metric: str, per_other: bool = False) -> float:

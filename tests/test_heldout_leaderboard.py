@@ -195,6 +195,24 @@ def test_an_evaluation_of_another_agent_is_left_out_with_a_note(synthetic) -> No
     assert all(len(pairs) == 4 for pairs in group.runs.values())
 
 
+def test_a_run_without_an_evaluation_is_named_in_a_note_with_its_rows_count(synthetic) -> None:
+    from empathy_zoo.evaluation_file import evaluation_path
+
+    out, results = synthetic
+    (missing,) = [run for run in results if run.method == "empathic_dqn" and run.seed == 2]
+    evaluation_path(out, "synthetic", missing.run_id).unlink()
+    (group,), notes = load_heldout(out, results)
+    assert len(group.runs["empathic_dqn 0.5"]) == 4 and len(group.runs["dqn 1.0"]) == 5
+    (note,) = notes
+    assert missing.run_id in note and "seed 2" in note and "empathic_dqn 0.5" in note and "4 of its 5 runs" in note
+    section = heldout_section(out, results, out)
+    assert section is not None
+    assert missing.run_id in section_markdown(section.section)
+    unevaluated = [synthetic_run(COEXISTENCE, "empathic_dqn", 0.9, seed) for seed in SEEDS]  # (a row of no evaluation:
+    (group,), notes = load_heldout(out, [*results, *unevaluated])  # absent from the section, as it is from the set)
+    assert "empathic_dqn 0.9" not in group.runs and len(notes) == 1
+
+
 def test_several_results_directories_match_each_evaluation_in_its_own(synthetic, tmp_path) -> None:
     import shutil
 
