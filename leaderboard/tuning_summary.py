@@ -61,6 +61,7 @@ __all__ = [
     "check_study",
     "find_studies",
     "summarise",
+    "study_names",
     "summary_table",
     "render_studies_png",
     "main",
@@ -91,6 +92,9 @@ class StudySummary:
     """The trials' wall time, summed."""
     best_value: float | None
     best_params: Mapping[str, Any]
+    study: str = ""
+    """Where its ``study.json`` lies (its folder, relative to the directory read): how a table tells
+    two studies of one variant and label apart."""
 
 
 def find_studies(root: str | os.PathLike[str]) -> list[Path]:
@@ -101,8 +105,8 @@ def find_studies(root: str | os.PathLike[str]) -> list[Path]:
     return found
 
 
-def summarise(study: Mapping[str, Any]) -> StudySummary:
-    """The :class:`StudySummary` of a ``study.json`` document."""
+def summarise(study: Mapping[str, Any], where: str = "") -> StudySummary:
+    """The :class:`StudySummary` of a ``study.json`` document, ``where`` its folder (relative to the directory read)."""
     plan = study["plan"]
     counted = [t for t in study["trials"] if t["state"] != "INTERRUPTED"]
     states = [t["state"] for t in counted]
@@ -121,6 +125,7 @@ def summarise(study: Mapping[str, Any]) -> StudySummary:
         wall_time_s=float(sum(t.get("wall_time_s") or 0.0 for t in counted)),
         best_value=None if best is None else float(best["value"]),
         best_params={} if best is None else dict(best["params"]),
+        study=where,
     )
 
 
@@ -128,19 +133,29 @@ def _value(value: Any) -> str:
     return f"{value:.3g}" if isinstance(value, float) else str(value)
 
 
+def study_names(studies: Sequence[tuple[str, str, str]]) -> list[str]:
+    """Each study's label (of ``(variant, label, folder)``), followed by its folder (``DQN (study
+    a/DQN)``) where another study has its variant and label: their lines would read alike."""
+    shared = [(variant, label) for variant, label, _ in studies]
+    return [
+        f"{label} (study {folder or '.'})" if shared.count((variant, label)) > 1 else label for variant, label, folder in studies
+    ]
+
+
 def summary_table(summaries: Sequence[StudySummary]) -> str:
     """Markdown: one line per study, in the order given; its text (a label, a parameter's name or
-    chosen value: data) escaped (:func:`~leaderboard.tables.markdown_text`), so a ``|`` is no cell."""
+    chosen value: data) escaped (:func:`~leaderboard.tables.markdown_text`), so a ``|`` is no cell.
+    Two studies of one variant and label are told apart by their folders (:func:`study_names`)."""
     lines = [
         "| variant | method | trials: finished / pruned / refused | env steps (of at most) | trials' wall time | "
         "best value | chosen |",
         "|---|---|---|---|---|---|---|",
     ]
-    for s in summaries:
+    for s, name in zip(summaries, study_names([(s.variant, s.label, s.study) for s in summaries]), strict=True):
         best = "none finished" if s.best_value is None else f"{s.metric} {s.best_value:.4g} ({s.over})"
         chosen = ", ".join(f"{name} = {_value(value)}" for name, value in s.best_params.items()) or "—"
         lines.append(
-            f"| {markdown_text(s.variant)} | {markdown_text(s.label)} | {s.trials}: {s.finished} / {s.pruned} / {s.refused} | "
+            f"| {markdown_text(s.variant)} | {markdown_text(name)} | {s.trials}: {s.finished} / {s.pruned} / {s.refused} | "
             f"{s.env_steps_trained:,} ({s.env_steps_at_most:,}) | {s.wall_time_s / 60:.1f} min | {best} | "
             f"{markdown_text(chosen)} |"
         )
@@ -211,12 +226,19 @@ class _FiniteLogLocator(LogLocator):
         return ticks[np.isfinite(ticks)]
 
 
-def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> bytes:
+def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110, folders: Sequence[str] = ()) -> bytes:
     """PNG bytes of the figure of ``studies`` (``study.json`` documents of one parameter), its size
     checked before anything is drawn (:func:`check_figure_size`). Text read from the studies (a
-    label, the parameter's name) is drawn as that text (:func:`~empathy_zoo.training.trials_figure.literal_text`)."""
+    label, the parameter's name) is drawn as that text (:func:`~empathy_zoo.training.trials_figure.literal_text`).
+    ``folders`` (each study's, relative to the directory read) tell two studies of one variant and
+    label apart (:func:`study_names`)."""
     if not studies:
         raise ValueError("no studies to draw")
+    if folders and len(folders) != len(studies):
+        raise ValueError(f"{len(folders)} folders for {len(studies)} studies")
+    where = list(folders) or [""] * len(studies)
+    named = study_names([(s["plan"]["variant"], s["plan"]["label"], f) for s, f in zip(studies, where, strict=True)])
+    name_of = {id(study): text for study, text in zip(studies, named, strict=True)}
     name, log, (low, high) = _parameter(studies)
     size = check_figure_size(studies, dpi)
     variants = sorted({study["plan"]["variant"] for study in studies})
@@ -225,7 +247,7 @@ def render_studies_png(studies: Sequence[Mapping[str, Any]], dpi: int = 110) -> 
     FigureCanvasAgg(figure)
     axes_row = figure.subplots(1, len(variants), squeeze=False)[0]
     for axes, variant in zip(axes_row, variants, strict=True):
-        labels = [literal_text(s["plan"]["label"]) for s in rows[variant]]
+        labels = [literal_text(name_of[id(s)]) for s in rows[variant]]
         for y, study in enumerate(rows[variant]):
             trials = [t for t in study["trials"] if name in t["params"] and t["state"] != "INTERRUPTED"]
             done = [t["params"][name] for t in trials if t["state"] == "COMPLETE"]
@@ -286,8 +308,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_figure_path(args.figure, paths)
         read = [(path, check_study(read_study(path), path)) for path in paths]
         studies = [study for _, study in read]
-        table = summary_table([_checked(path, summarise, study) for path, study in read])
-        figure = _checked(Path(args.root), render_studies_png, studies) if args.figure is not None else None
+        folders = [_folder(path, args.root) for path, _ in read]
+        pairs = zip(read, folders, strict=True)
+        table = summary_table([_checked(path, lambda s, f=folder: summarise(s, f), study) for (path, study), folder in pairs])
+        figure = None
+        if args.figure is not None:
+            figure = _checked(Path(args.root), lambda s: render_studies_png(s, folders=folders), studies)
         if figure is not None:
             write_bytes_atomic(args.figure, figure)
     except (ValueError, OSError) as error:
@@ -297,6 +323,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if figure is not None:
         print(f"\nwrote {args.figure}")
     return 0
+
+
+def _folder(path: Path, root: str) -> str:
+    """The folder of the study file ``path``, relative to ``root`` (``.`` for ``root`` itself); a
+    name holding a character that is not printable (an escape sequence) as Python writes it."""
+    folder = path.parent.relative_to(root).as_posix()
+    return folder if folder.isprintable() else ascii(folder)
 
 
 def check_figure_path(figure: str | os.PathLike[str], studies: Sequence[Path] = ()) -> Path:

@@ -95,3 +95,33 @@ def test_the_command_finds_studies_at_any_depth(tmp_path: Path, capsys) -> None:
     assert (tmp_path / "studies.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match=re.escape("no study.json")):
         find_studies(tmp_path / "coexistence_v0" / "nowhere")
+
+
+def test_two_studies_of_one_variant_and_label_are_told_apart_by_their_folders(tmp_path: Path, capsys, monkeypatch) -> None:
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
+
+    from leaderboard import tuning_summary
+
+    for folder in ("first", "second"):  # (two studies of coexistence_v0's DQN, copied apart)
+        where = tmp_path / folder / "DQN"
+        where.mkdir(parents=True)
+        (where / "study.json").write_text(json.dumps(STUDIES[0]))
+    (tmp_path / "third").mkdir()
+    (tmp_path / "third" / "study.json").write_text(json.dumps(STUDIES[1]))
+    made: list[Figure] = []
+
+    class Recorded(Figure):
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(tuning_summary, "Figure", Recorded)
+    assert main([str(tmp_path), "--figure", str(tmp_path / "studies.png")]) == 0
+    out = capsys.readouterr().out
+    names = [line.split(" | ")[1] for line in out.splitlines() if line.startswith("| coexistence_v0")]
+    assert names == ["DQN (study first/DQN)", "DQN (study second/DQN)"]
+    assert "| sharing_v0 | DQN |" in out  # (a study alone with its variant and label keeps the label alone)
+    (figure,) = made
+    drawn = {text.get_text() for text in figure.findobj(Text)}
+    assert {"DQN (study first/DQN)", "DQN (study second/DQN)", "DQN"} <= drawn
