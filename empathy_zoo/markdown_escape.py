@@ -20,6 +20,9 @@ inside a word, ``other_return``, is no emphasis and stays as it is)."""
 _BARE_LINK = re.compile(r"(?<=[A-Za-z0-9])(:)(?=//)|(?<![A-Za-z0-9])(www)(\.)", re.IGNORECASE)
 """Where a renderer that links bare addresses (GitHub's) would start a link: the ``:`` of
 ``scheme://`` and the ``.`` of ``www.``."""
+_EMAIL_AT = re.compile(r"(?<=[A-Za-z0-9.+_\-])@(?=[A-Za-z0-9_\-])")
+"""The ``@`` of an e-mail address (``name@host``), which a renderer that links bare addresses
+(GitHub's) would make a ``mailto:`` link."""
 _MARKDOWN_CELL = re.compile(r"[\\<>&|]")
 """What a cell of figures must not carry unescaped: HTML characters and a table's ``|``."""
 _LINE_BREAKS = re.compile(r"[\r\n\u2028\u2029]+")
@@ -28,9 +31,10 @@ _LINE_BREAKS = re.compile(r"[\r\n\u2028\u2029]+")
 def markdown_text(text: str) -> str:
     """``text`` (a label, a name: data) escaped for Markdown, so it reads as itself: no HTML (a
     label ``<script>`` is shown, not run), no link (a bare ``https://`` or ``www.`` address
-    included), no emphasis, no code, no table cell of its own, and on one line."""
+    included, and an e-mail address), no emphasis, no code, no table cell of its own, and on one line."""
     escaped = _MARKDOWN_SYNTAX.sub(lambda found: "\\" + found.group(), _LINE_BREAKS.sub(" ", text))
-    return _BARE_LINK.sub(lambda found: "\\:" if found.group(1) else found.group(2) + "\\.", escaped)
+    unlinked = _BARE_LINK.sub(lambda found: "\\:" if found.group(1) else found.group(2) + "\\.", escaped)
+    return _EMAIL_AT.sub("\\\\@", unlinked)
 
 
 def markdown_cell(text: str) -> str:

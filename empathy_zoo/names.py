@@ -136,13 +136,14 @@ GIF_OPENING = b"GIF8"
 
 def check_own_file(path: str | os.PathLike[str], kind: str, opening: bytes) -> Path:
     """``path`` if nothing is there, or anything but a regular file (:func:`check_replaceable`
-    says what of those), or a regular file that begins with ``opening`` (the first bytes of every
-    ``kind`` file the writer makes: a page's title, a figure's signature); else a ``ValueError``
-    naming it: the suite replaces a file only with one of the same kind, never a user's other file
-    of that name. Only ``len(opening)`` bytes are read."""
+    says what of those), or an empty file (it holds nothing to lose), or a regular file that begins
+    with ``opening`` (the first bytes of every ``kind`` file the writer makes: a page's title, a
+    figure's signature); else a ``ValueError`` naming it: the suite replaces a file only with one of
+    the same kind, never a user's other file of that name. Only ``len(opening)`` bytes are read."""
     target = Path(path)
     try:
-        if not stat.S_ISREG(os.lstat(target).st_mode):
+        status = os.lstat(target)
+        if not stat.S_ISREG(status.st_mode) or status.st_size == 0:
             return target
         with open(target, "rb") as handle:
             head = handle.read(len(opening))

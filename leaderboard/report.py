@@ -332,13 +332,20 @@ def _check_targets(staged: dict[str, Path], stage: Path, out: Path) -> None:
         check_own_file(target, "leaderboard file", _opening(source))
 
 
+CSV_OPENING = b"env,method_label,"
+"""What every leaderboard CSV begins with: the first columns of its header, which one directory's
+and several directories' CSVs share (the latter adds columns at the end)."""
+
+
 def _opening(rendered: Path) -> bytes:
-    """What every file of ``rendered``'s kind begins with: an image's signature, the HTML page up to
-    its title, another page's first line (its title, or the CSV's header)."""
+    """What every file of ``rendered``'s kind begins with: an image's signature, the CSV's first
+    columns (:data:`CSV_OPENING`), the HTML page up to its title, the Markdown page's title line."""
     if rendered.suffix == ".png":
         return PNG_OPENING
     if rendered.suffix == ".gif":
         return GIF_OPENING
+    if rendered.suffix == ".csv":
+        return CSV_OPENING
     with open(rendered, "rb") as handle:
         head = handle.read(4096)
     end = head.find(b"</title>") + len(b"</title>") if rendered.suffix == ".html" else head.find(b"\n") + 1

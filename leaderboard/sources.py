@@ -107,7 +107,8 @@ class ResultSet:
 
 
 def parse_label_option(text: str) -> tuple[str, str]:
-    """``"DIR=PREFIX"`` (a ``--label`` option) as ``(DIR, PREFIX)``; ``ValueError`` if it is not that."""
+    """``"DIR=PREFIX"`` (a ``--label`` option) as ``(DIR, PREFIX)``, split at the last ``=`` (a
+    directory's name may hold one, a prefix none); ``ValueError`` if it is not that."""
     directory, equals, prefix = text.rpartition("=")
     if not equals or not directory or not prefix.strip():
         raise ValueError(f"--label takes DIR=PREFIX (a results directory and the prefix of its labels), got {text[:200]!r}")
@@ -132,7 +133,14 @@ def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[st
         where = Path(directory).resolve()
         if where not in resolved:
             read = ", ".join(given)
-            raise ValueError(f"--label {directory}={prefix}: {directory} is not one of the results directories read ({read})")
+            split = (
+                f" (the option is split at its last '=': a prefix holds none, so {directory} is read as the directory)"
+                if "=" in os.fspath(directory)
+                else ""
+            )
+            raise ValueError(
+                f"--label {directory}={prefix}: {directory} is not one of the results directories read ({read}){split}"
+            )
         if not isinstance(prefix, str) or not prefix.strip():
             raise ValueError(f"--label {directory}: the prefix must be a non-empty one-line text, got {prefix!r}")
         prefixes[resolved.index(where)] = check_label(prefix.strip(), f"--label {directory}=: the prefix")

@@ -81,6 +81,20 @@ def test_the_leaderboard_never_replaces_a_users_file_of_its_names(tmp_path: Path
     assert snapshot(out) == before
 
 
+def test_a_one_directory_leaderboard_replaces_a_several_directories_one_and_back(tmp_path: Path) -> None:
+    from leaderboard.tables import CSV_COLUMNS
+
+    results, copy, out = _small_results(tmp_path / "a"), _small_results(tmp_path / "b"), tmp_path / "out"
+    assert main(["leaderboard", str(results), str(copy), "--label", f"{copy}=B", "--out", str(out)]) == 0
+    several = (out / "leaderboard.csv").read_text(encoding="utf-8").splitlines()[0]
+    assert several.startswith(",".join(CSV_COLUMNS)) and several != ",".join(CSV_COLUMNS)  # (its header has more columns)
+    assert main(["leaderboard", str(results), "--out", str(out)]) == 0
+    assert (out / "leaderboard.csv").read_text(encoding="utf-8").splitlines()[0] == ",".join(CSV_COLUMNS)
+    (out / "leaderboard.csv").write_text("env,grade\nme,A\n", encoding="utf-8")  # (a user's CSV is still no leaderboard's)
+    assert main(["leaderboard", str(results), "--out", str(out)]) == 2
+    assert (out / "leaderboard.csv").read_text(encoding="utf-8") == "env,grade\nme,A\n"
+
+
 def _page_commands(tmp_path: Path, notes: Path) -> dict[str, list[str]]:
     studies = tmp_path / "studies"
     studies.mkdir()

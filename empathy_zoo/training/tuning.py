@@ -614,7 +614,7 @@ TUNED_MARK = b"(study.json beside this file)"
 def _check_own_output(path: Path) -> None:
     """Refuse (``ValueError`` naming it) a regular file at ``path`` that is not what a study writes
     there (:data:`_OPENINGS`, :data:`TUNED_MARK`): a user's notes, a sweep file, another file named
-    so is never replaced. An empty file holds nothing to lose."""
+    so is never replaced. An empty file holds nothing to lose (:func:`~empathy_zoo.names.check_own_file`)."""
     if not path.is_file() or path.stat().st_size == 0:
         return
     if path.name == TUNED_FILE:
