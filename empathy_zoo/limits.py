@@ -34,6 +34,7 @@ __all__ = [
     "MAX_JOURNAL_BYTES",
     "MAX_JSON_DEPTH",
     "MAX_LABEL",
+    "MAX_LOG_CSV_BYTES",
     "MAX_LEARNER_BYTES",
     "MAX_NAME",
     "MAX_NOTE_BYTES",
@@ -120,6 +121,9 @@ MAX_RUNS_LIST_BYTES = 256 << 20
 """Largest list of runs beside a checkpoint read (256 MiB): ≈ 1 KB per run of its ensemble."""
 MAX_JOURNAL_BYTES = 1 << 30
 """Largest tuning journal (``study.journal``) read (1 GiB): a few KB per trial."""
+MAX_LOG_CSV_BYTES = 16 << 30
+"""Largest CSV log (``scalars.csv``) a resumed run reads (16 GiB), row by row: ≈ 0.4 GB for a run
+of 10⁹ steps at the default log interval, more where episodes are very short."""
 MAX_JSON_DEPTH = 64
 """Deepest nesting of arrays and objects in a JSON file (or journal line) read: the suite's own
 nest at most 6 deep; a deeper one is refused before it is parsed."""
@@ -186,6 +190,7 @@ BOUNDS: Mapping[str, int] = {
     "checkpoint": MAX_CHECKPOINT_BYTES,
     "list of runs": MAX_RUNS_LIST_BYTES,
     "tuning journal": MAX_JOURNAL_BYTES,
+    "CSV log": MAX_LOG_CSV_BYTES,
     "JSON nesting": MAX_JSON_DEPTH,
     "num_envs": MAX_VECTOR_ENVS,
     "trials": MAX_TRIALS,

@@ -40,12 +40,10 @@ from __future__ import annotations
 import csv
 import hashlib
 import importlib.util
-import io
 import json
 import netrc
 import os
 import sys
-import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -53,11 +51,16 @@ from urllib.parse import urlparse
 
 import numpy as np
 
-from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.experiment.log_backends import BACKENDS, parse_log
 from empathy_zoo.extras import install_command
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_no_links, check_replaceable
+from empathy_zoo.training.log_files import (
+    after_earlier_event_files,
+    check_csv_log,
+    check_event_file_names,
+    keep_csv_rows_up_to,
+)
 
 __all__ = [
     "BACKENDS",
@@ -139,7 +142,9 @@ def check_log_places(out_dir: str | Path, backends: Sequence[str], run_ids: Sequ
     symbolic link below ``out_dir`` (named with its target) or a file where a directory goes, and a
     CSV file (``scalars.csv``) that is anything but nothing or a regular file
     (:func:`empathy_zoo.names.check_replaceable`): asked of every run and backend before the first
-    logger creates its directory, so nothing is ever written through a link."""
+    logger creates its directory, so nothing is ever written through a link. The logs a resumed
+    run reads are checked too (:func:`empathy_zoo.training.log_files.check_csv_log`,
+    :func:`~empathy_zoo.training.log_files.check_event_file_names`), before anything trains."""
     for run_id in run_ids:
         for backend in backends:
             directory = check_no_links(out_dir, log_dir(out_dir, backend, run_id))
@@ -149,7 +154,9 @@ def check_log_places(out_dir: str | Path, backends: Sequence[str], run_ids: Sequ
                 if folder.exists() and not folder.is_dir():
                     raise ValueError(f"{folder} is a file, not a directory: runs log into it; move the file away")
             if backend == "csv":
-                check_replaceable(directory / CSV_FILE)
+                check_csv_log(check_replaceable(directory / CSV_FILE))
+            if backend == "tensorboard" and directory.is_dir():
+                check_event_file_names(directory)
 
 
 class RunLogger(Protocol):
@@ -176,7 +183,7 @@ class CsvLogger:
         self.path = check_replaceable(directory / CSV_FILE)  # (appended to: never through a link, never a FIFO)
         directory.mkdir(parents=True, exist_ok=True)
         if start_step > 0 and self.path.exists():
-            _keep_rows_up_to(self.path, start_step)
+            keep_csv_rows_up_to(self.path, start_step)
         fresh = not self.path.exists() or self.path.stat().st_size == 0
         self._file: Any = self.path.open("a", newline="", encoding="utf-8")
         self._writer = csv.writer(self._file)
@@ -199,24 +206,6 @@ class CsvLogger:
             self._file = None
 
 
-def _keep_rows_up_to(path: Path, step: int) -> None:
-    """Rewrite the CSV file ``path`` keeping its header and the rows of steps up to ``step`` (a
-    resumed run logs the later ones again); a row cut by a crash is dropped."""
-    with path.open(newline="", encoding="utf-8") as file:
-        rows = list(csv.reader(file))
-    kept = [rows[0]] if rows else []
-    for row in rows[1:]:
-        try:
-            if len(row) == 3 and int(row[0]) <= step:
-                float(row[2])
-                kept.append(row)
-        except ValueError:
-            continue
-    text = io.StringIO(newline="")
-    csv.writer(text).writerows(kept)
-    write_text_atomic(path, text.getvalue())
-
-
 class TensorBoardLogger:
     """TensorBoard event files in ``<dir>`` (``torch.utils.tensorboard.SummaryWriter``)."""
 
@@ -225,7 +214,7 @@ class TensorBoardLogger:
 
         directory.mkdir(parents=True, exist_ok=True)
         if start_step > 0:
-            _after_earlier_files(directory)
+            after_earlier_event_files(directory)
         # (a resumed run purges what was logged after its checkpoint; the writer batches its writes)
         self._writer: Any = SummaryWriter(str(directory), purge_step=start_step + 1 if start_step > 0 else None, max_queue=1000)
 
@@ -244,16 +233,6 @@ class TensorBoardLogger:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
-
-
-def _after_earlier_files(directory: Path) -> None:
-    """Return once a new event file of ``directory`` sorts after its earlier ones. TensorBoard
-    reads a run's files in the order of their names, ``events.out.tfevents.<second>.<host>.<pid>…``,
-    and a resumed run's purge of the steps after its checkpoint holds only for the files before
-    its own: one resumed within the second its earlier file was begun waits for the next second."""
-    seconds = [int(part) for path in directory.glob("events.out.tfevents.*") if (part := path.name.split(".")[3]).isdigit()]
-    while seconds and int(time.time()) <= max(seconds):
-        time.sleep(0.05)
 
 
 def wandb_mode() -> str:
