@@ -10,8 +10,13 @@ them; every other scenario and the task metric as secondary comparisons, reporte
 
 A run is read from its evaluation file in ``evaluations/<env>_test/``, checked against its result
 file (:func:`empathy_zoo.evaluation_file.evaluation_mismatch`). Runs read: DQN, and Empathic DQN
-at β = 0.5; in the default directories, only runs of an environment's own variant (beside its
-default partner). A seed's score is the mean over its evaluation episodes. Prints Markdown.
+at β = 0.5; in the default directories, only runs of an environment's own variant in its default
+world (every environment argument and partner at its default); in the population directory, only
+runs beside a population with every environment argument at its default. The runs read of one
+environment, method and group must be one experiment's seeds (another setting, world, population
+or budget beside them is refused, naming two runs), never a pool of two. A run of a group that has
+no evaluation on the test split is named in a note under the tables. A seed's score is the mean
+over its evaluation episodes. Prints Markdown.
 """
 
 from __future__ import annotations
@@ -25,10 +30,13 @@ from typing import Any
 
 import numpy as np
 
+from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.names import terminal_line
 from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, changes_carry_over, compare
+from leaderboard.run_facts import check_one_experiment, in_paper_setting
 
 __all__ = ["METHODS", "Scores", "GroupKey", "primary_and_secondary", "markdown", "read_scores", "main"]
 
@@ -134,13 +142,27 @@ def markdown(primaries: Sequence[Row], carries: Sequence[bool], secondaries: Seq
     return "\n".join(lines) + "\n"
 
 
-def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
-    """The scores of every run read (see the module page) from their test-split evaluations.
+def _in_group(run: RunResult, group: str) -> bool:
+    """Whether the reading reads ``run`` in ``group``: a compared method at its β, trained beside a
+    population (``population``) or its variant's default world (``default``), every environment
+    argument at its default (:func:`leaderboard.run_facts.in_paper_setting`)."""
+    if not _read_at(run) or _population_trained(run) != (group == POPULATION):
+        return False
+    if group == DEFAULT:
+        return (run.variant or run.env) == run.env and in_paper_setting(run)
+    defaults = DEFAULT_ARGUMENTS.get(run.env, {})
+    return all(name in defaults and defaults[name] == value for name, value in run.config.env_kwargs.items())
+
+
+def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[str] | None = None) -> Scores:
+    """The scores of every run read (see the module page) from their test-split evaluations; each
+    run of a group read that has no evaluation on the test split is named in ``notes``, where given.
 
     Raises ``ValueError``, naming the files, where a directory is given twice, the population
     directory holds no population-trained run of a compared method, a test split was evaluated
     with another definition than the shipped one (``empathy_zoo/scenarios/<env>_test.toml``) or of
-    an environment that ships no test split, or two evaluations give one group one seed twice."""
+    an environment that ships no test split, two evaluations give one group one seed twice, or the
+    runs of one group are of two experiments (naming two runs)."""
     from empathy_zoo.evaluation_file import evaluation_files, evaluation_mismatch, read_evaluation
     from empathy_zoo.scenarios import scenario_set_path
     from empathy_zoo.training.heldout import results_of
@@ -151,8 +173,14 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
     """Each test split's shipped definition, as an evaluation file records one."""
     read_from: dict[tuple[str, str, str, int], Path] = {}
     """The evaluation file each group's seed was read from."""
+    candidates: dict[GroupKey, list[RunResult]] = {}
+    """Every run each group would read, evaluated or not."""
+    read: dict[GroupKey, list[RunResult]] = {}
     for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
         runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
+        for run in runs.values():
+            if _in_group(run, group):
+                candidates.setdefault((run.env, run.method, group), []).append(run)
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             name = evaluation.scenario_set.name
@@ -171,9 +199,7 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
             mismatch = evaluation_mismatch(evaluation, run)
             if mismatch is not None:
                 raise ValueError(f"{path}: not an evaluation of run {run.run_id} ({mismatch})")
-            if not _read_at(run) or _population_trained(run) != (group == POPULATION):
-                continue
-            if group == DEFAULT and (run.variant or run.env) != run.env:
+            if not _in_group(run, group):
                 continue
             seed = (group, run.env, run.method, run.seed)
             if seed in read_from:
@@ -182,7 +208,18 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path]) -> Scores:
                     f"with seed {run.seed}; move one away"
                 )
             read_from[seed] = path
+            read.setdefault((run.env, run.method, group), []).append(run)
             add_scores(scores, run, evaluation, group)
+    check_one_experiment({f"the {group}-trained runs of {method} on {env}": runs for (env, method, group), runs in read.items()})
+    for key, runs in read.items():
+        evaluated = {id(run) for run in runs}
+        for run in candidates.get(key, []):
+            if id(run) not in evaluated and notes is not None:
+                notes.append(
+                    f"run {run.run_id} ({key[2]}-trained {key[1]} on {key[0]}, seed {run.seed}) has no evaluation on "
+                    f"{key[0]}_test, so its group counts {len(runs)} of its {len(candidates[key])} runs "
+                    f"(empathy-zoo evaluate --scenarios {key[0]}_test writes it)"
+                )
     if not any(group == POPULATION for (group, *_rest) in read_from):
         raise ValueError(
             f"{population_dir} holds no population-trained run of {' or '.join(METHODS)} evaluated on a test split "
@@ -228,10 +265,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("default", type=Path, nargs="+", help="results directories of the methods beside the default partner")
     args = parser.parse_args(argv)
     try:
-        primaries, carries, secondaries = primary_and_secondary(read_scores(args.population, args.default))
+        notes: list[str] = []
+        primaries, carries, secondaries = primary_and_secondary(read_scores(args.population, args.default, notes))
         if not primaries:
             raise ValueError("no environment and method has runs of both groups evaluated on its test split (<env>_test)")
         print(markdown(primaries, carries, secondaries), end="")
+        if notes:
+            print("\n" + "\n\n".join(f"Note: {markdown_text(note)}" for note in notes))
     except ValueError as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
