@@ -178,9 +178,9 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
     read: dict[GroupKey, list[RunResult]] = {}
     for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
         runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
-        for run in runs.values():
-            if _in_group(run, group):
-                candidates.setdefault((run.env, run.method, group), []).append(run)
+        for candidate in runs.values():
+            if _in_group(candidate, group):
+                candidates.setdefault((candidate.env, candidate.method, group), []).append(candidate)
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             name = evaluation.scenario_set.name
@@ -210,14 +210,14 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
             read_from[seed] = path
             read.setdefault((run.env, run.method, group), []).append(run)
             add_scores(scores, run, evaluation, group)
-    check_one_experiment({f"the {group}-trained runs of {method} on {env}": runs for (env, method, group), runs in read.items()})
-    for key, runs in read.items():
-        evaluated = {id(run) for run in runs}
-        for run in candidates.get(key, []):
-            if id(run) not in evaluated and notes is not None:
+    check_one_experiment({f"the {g}-trained runs of {method} on {env}": members for (env, method, g), members in read.items()})
+    for key, members in read.items():
+        evaluated = {id(member) for member in members}
+        for candidate in candidates.get(key, []):
+            if id(candidate) not in evaluated and notes is not None:
                 notes.append(
-                    f"run {run.run_id} ({key[2]}-trained {key[1]} on {key[0]}, seed {run.seed}) has no evaluation on "
-                    f"{key[0]}_test, so its group counts {len(runs)} of its {len(candidates[key])} runs "
+                    f"run {candidate.run_id} ({key[2]}-trained {key[1]} on {key[0]}, seed {candidate.seed}) has no evaluation "
+                    f"on {key[0]}_test, so its group counts {len(members)} of its {len(candidates[key])} runs "
                     f"(empathy-zoo evaluate --scenarios {key[0]}_test writes it)"
                 )
     if not any(group == POPULATION for (group, *_rest) in read_from):
