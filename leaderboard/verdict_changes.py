@@ -26,9 +26,13 @@ from empathy_zoo.names import terminal_line
 __all__ = ["Cell", "changes", "changes_markdown", "main", "shown_text", "verdicts"]
 
 Cell = tuple[str, str, str, str]
-"""(variant, phase, method row, metric)."""
+"""(variant, phase, method row, metric); a page whose tables name each row's DQN row (an
+``Against`` column) names the row ``METHOD, against DQN ROW`` (its seed count left out, so a row
+of 5 seeds and one of 10 are one row)."""
 
 _TABLE = "### P(improves on DQN): "
+_SEEDS_SUFFIX = re.compile(r" \([0-9,]+ seeds?\)$")
+"""The seed count an ``Against`` cell ends with (``DQN (5 seeds)``)."""
 _MARK = re.compile(r"^\s*([▲▼]?)")
 _ESCAPED = re.compile(r"\\(.)")
 _CELL_BAR = re.compile(r"(?<!\\)\|")
@@ -54,7 +58,10 @@ def shown_text(cell: str) -> str:
 
 
 def verdicts(page: str) -> dict[Cell, str]:
-    """Every cell of the page's "P(improves on DQN)" tables and its mark (``▲``, ``▼`` or ``""``)."""
+    """Every cell of the page's "P(improves on DQN)" tables and its mark (``▲``, ``▼`` or ``""``):
+    the metrics are the columns after ``Seeds``, a row is named by its ``Method`` and, where the
+    table has one, its ``Against`` cell (:data:`Cell`). A ``ValueError`` where one cell is read twice
+    (two rows of one name in a table): one would hide the other's mark."""
     cells: dict[Cell, str] = {}
     variant = phase = ""
     header: list[str] = []
@@ -73,9 +80,19 @@ def verdicts(page: str) -> dict[Cell, str]:
             elif not set(parts[0]) <= set(":-"):
                 # (strict=False: the page is read as text, as written; a row with more or fewer cells than its
                 # header is read as far as both go, as before)
-                for metric, value in zip(header[2:], parts[2:], strict=False):
+                first = header.index("Seeds") + 1 if "Seeds" in header else 2
+                row = parts[0]
+                if first > 2 and len(parts) > 1:  # (an Against column: the DQN row is part of the row's name)
+                    row = f"{parts[0]}, against {_SEEDS_SUFFIX.sub('', parts[1])}"
+                for metric, value in zip(header[first:], parts[first:], strict=False):
                     match = _MARK.match(value)
-                    cells[(variant, phase, parts[0], metric)] = match.group(1) if match else ""
+                    cell = (variant, phase, row, metric)
+                    if cell in cells:
+                        raise ValueError(
+                            f"two rows {shown_text(row)!r} in {shown_text(variant)!r}, {shown_text(phase)!r}: one would hide "
+                            "the other's mark; give pages the leaderboard wrote"
+                        )
+                    cells[cell] = match.group(1) if match else ""
                 if len(cells) > MAX_CELLS:
                     raise ValueError(f"the page holds more than {MAX_CELLS:,} verdict cells, the most it may (docs/limits.md)")
     return cells
