@@ -16,7 +16,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager, suppress
 from dataclasses import replace
@@ -39,6 +39,7 @@ from empathy_zoo.training.preflight import check_before_training, largest_checkp
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
 from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, plan_ensembles
+from empathy_zoo.training.set_aside import SUPERSEDED_SUFFIX, set_aside, settle_superseded
 from empathy_zoo.training.tracking import check_log_places, log_subdirs
 
 __all__ = [
@@ -55,8 +56,6 @@ __all__ = [
     "stop_workers",
 ]
 
-SUPERSEDED_SUFFIX = ".superseded"
-"""Suffix of a result file set aside while its run is retrained (``rerun_changed``)."""
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 """The signals that stop a sweep while it trains, even in a process started with them ignored
 (a job started with ``&`` by a script ignores SIGINT)."""
@@ -98,7 +97,8 @@ def train_runs(
     commits do not touch a given method, so a new one alone does not make results stale. When
     some finished runs were made by other code, ``ValueError`` lists them and what changed, before
     anything is written, unless ``options.rerun_changed``: then they are retrained, their result
-    files set aside as ``<run id>.json.superseded`` meanwhile, each removed once its run's new
+    files set aside as ``<run id>.json.superseded-<pid>-<mark>`` meanwhile
+    (:mod:`empathy_zoo.training.set_aside`), each removed once its run's new
     result is written and put back if it is not (an error, Ctrl-C). A process killed outright
     leaves it set aside: that run is retrained by the next call that asks for it. Finished runs
     whose code cannot be told (files written before plug-in hashes were recorded, modules without
@@ -151,8 +151,8 @@ def train_runs(
             stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
             if stale:
                 note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
-            _settle_superseded(out_dir / RUNS_DIR)
-            with _set_aside(out_dir, redo), stopped_by_signals():
+            settle_superseded(out_dir / RUNS_DIR)
+            with set_aside(out_dir, redo), stopped_by_signals():
                 _train_todo(specs, out_dir, options, on_result, note)
         except BaseException:
             for folder in reversed(made):  # (a call that stopped leaves no empty folder it made; one holding a file stays)
@@ -250,38 +250,6 @@ def _train_todo(
             _train_in_processes(chunks, out_dir, options, on_result, progress)
     finally:
         progress.close()
-
-
-@contextmanager
-def _set_aside(out_dir: Path, run_ids: Collection[str]) -> Iterator[None]:
-    """Set the result files of ``run_ids`` and the agent files beside them aside (``<name>.superseded``)
-    while they are retrained; afterwards each run's are removed if its new result was written, else
-    put back."""
-    moved: list[Path] = []
-    try:
-        for run_id in sorted(run_ids):
-            path = result_path(out_dir, run_id)
-            for kept in (path, *(path.with_name(run_id + suffix) for suffix in AGENT_SUFFIXES)):
-                if kept == path or kept.exists():
-                    moved.append(kept.rename(kept.with_name(kept.name + SUPERSEDED_SUFFIX)))
-        yield
-    finally:
-        _settle_superseded(out_dir / RUNS_DIR, moved)
-
-
-def _settle_superseded(runs_dir: Path, restore: Iterable[Path] = ()) -> None:
-    """Remove every set-aside file of ``runs_dir`` (a result file and its agent file) whose run has a
-    new result file; put those of ``restore`` without one back."""
-    restore = set(restore)
-    for old in sorted(runs_dir.glob(f"*{SUPERSEDED_SUFFIX}")):
-        name = old.name.removesuffix(SUPERSEDED_SUFFIX)
-        run_id = next((name.removesuffix(end) for end in (".json", *AGENT_SUFFIXES) if name.endswith(end)), None)
-        if run_id is None:
-            continue
-        if (runs_dir / f"{run_id}.json").exists():
-            old.unlink()
-        elif old in restore:
-            old.rename(old.with_name(name))
 
 
 def _counting(on_result: Callable[[dict[str, Any]], None] | None, progress: SweepProgress) -> Callable[[dict[str, Any]], None]:
