@@ -281,6 +281,13 @@ def load_heldout(
             for label, pairs in runs.items()
         }
         notes += _unevaluated(env, set_name, runs, results, noted)
+        episodes = sorted({evaluation.episodes for _, evaluation, _ in members})
+        if len(episodes) > 1:
+            fewest = next(path for _, evaluation, path in members if evaluation.episodes == episodes[0])
+            notes.append(
+                f"{env}, scenario set {set_name}: its runs were evaluated with {episodes[0]:,} to {episodes[-1]:,} episodes "
+                f"a scenario (one of {episodes[0]:,}: {fewest}); each seed counts once, its mean over its own episodes"
+            )
         groups.append(
             HeldoutGroup(
                 env,

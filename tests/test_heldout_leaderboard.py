@@ -213,6 +213,24 @@ def test_a_run_without_an_evaluation_is_named_in_a_note_with_its_rows_count(synt
     assert "empathic_dqn 0.9" not in group.runs and len(notes) == 1
 
 
+def test_seeds_evaluated_with_different_episode_counts_are_named_in_a_note(synthetic) -> None:
+    import json
+
+    from empathy_zoo.evaluation_file import evaluation_path
+
+    out, results = synthetic
+    path = evaluation_path(out, "synthetic", results[1].run_id)
+    document = json.loads(path.read_text())
+    document["episodes"] = 10
+    for entry in document["scenarios"]:
+        entry["metrics"] = {metric: values[:10] for metric, values in entry["metrics"].items()}
+    path.write_text(json.dumps(document))
+    (group,), notes = load_heldout(out, results)
+    (note,) = notes
+    assert "10 to 100 episodes" in note and str(path) in note
+    assert sum(len(pairs) for pairs in group.runs.values()) == len(results)
+
+
 def test_several_results_directories_match_each_evaluation_in_its_own(synthetic, tmp_path) -> None:
     import shutil
 
