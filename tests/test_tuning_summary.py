@@ -98,8 +98,7 @@ def test_the_command_finds_studies_at_any_depth(tmp_path: Path, capsys) -> None:
 
 
 def test_two_studies_of_one_variant_and_label_are_told_apart_by_their_folders(tmp_path: Path, capsys, monkeypatch) -> None:
-    from matplotlib.figure import Figure
-    from matplotlib.text import Text
+    from test_probe18_tuning import _texts_drawn
 
     from leaderboard import tuning_summary
 
@@ -109,19 +108,15 @@ def test_two_studies_of_one_variant_and_label_are_told_apart_by_their_folders(tm
         (where / "study.json").write_text(json.dumps(STUDIES[0]))
     (tmp_path / "third").mkdir()
     (tmp_path / "third" / "study.json").write_text(json.dumps(STUDIES[1]))
-    made: list[Figure] = []
+    figure = tmp_path / "studies.png"
 
-    class Recorded(Figure):
-        def __init__(self, *args: Any, **kwargs: Any) -> None:
-            super().__init__(*args, **kwargs)
-            made.append(self)
+    def draw() -> bytes:
+        assert main([str(tmp_path), "--figure", str(figure)]) == 0
+        return figure.read_bytes()
 
-    monkeypatch.setattr(tuning_summary, "Figure", Recorded)
-    assert main([str(tmp_path), "--figure", str(tmp_path / "studies.png")]) == 0
+    drawn = _texts_drawn(monkeypatch, tuning_summary, draw)
+    assert {"DQN (study first/DQN)", "DQN (study second/DQN)", "DQN"} <= drawn
     out = capsys.readouterr().out
     names = [line.split(" | ")[1] for line in out.splitlines() if line.startswith("| coexistence_v0")]
     assert names == ["DQN (study first/DQN)", "DQN (study second/DQN)"]
     assert "| sharing_v0 | DQN |" in out  # (a study alone with its variant and label keeps the label alone)
-    (figure,) = made
-    drawn = {text.get_text() for text in figure.findobj(Text)}
-    assert {"DQN (study first/DQN)", "DQN (study second/DQN)", "DQN"} <= drawn
