@@ -213,7 +213,8 @@ def tabular_model(env: str = DEFAULT_ENVIRONMENT, **env_kwargs: Any) -> TabularM
     layers = int(getattr(probe, "tabular_layers", 1))
     states = layers * cells * cells
     if states > MAX_STATES:
-        raise ValueError(f"{env} with {env_kwargs} has {states:,} joint states, more than {MAX_STATES:,}")
+        count = f"{states:,}" if states.bit_length() <= 256 else f"about 10^{math.floor(math.log10(states)):,}"
+        raise ValueError(f"{env} with {env_kwargs} has {count} joint states, more than {MAX_STATES:,}")
     draws = int(getattr(probe, "tabular_draws", 1))
     if draws < 1:
         raise ValueError(f"{env}'s engine declares {draws} draws of its step's chance; at least 1")

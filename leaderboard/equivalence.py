@@ -383,6 +383,14 @@ def simulated_power(shift: float, seeds: int, cells: int, trials: int = 400, see
     return found / trials
 
 
+def _mean_text(values: Sequence[float] | np.ndarray) -> str:
+    """The mean of ``values``' finite numbers to 3 decimals, or ``—`` where none is (a run too short
+    for a window of training episodes records none)."""
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    return f"{finite.mean():.3f}" if finite.size else "—"
+
+
 def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool = False) -> str:
     """Markdown: the verdict of :func:`equivalence` on two results directories with its power, its
     ten smallest p-values (every cell, in experiment order, with ``every_cell``), every differing
@@ -407,7 +415,7 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool
     for cell in shown:
         name = ", ".join(str(part) for part in cell.experiment if part not in (None, "closest"))
         lines.append(
-            f"| {name} | {cell.phase} | {cell.metric} | {np.nanmean(cell.old):.3f} | {np.nanmean(cell.new):.3f} "
+            f"| {name} | {cell.phase} | {cell.metric} | {_mean_text(cell.old)} | {_mean_text(cell.new)} "
             f"| {'constant' if cell.constant else f'{cell.p_value:.4f}'} | {'yes' if cell.differs else ''} |"
         )
     flips = verdict_flips(old, new)

@@ -20,11 +20,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
+from empathy_zoo.names import terminal_line
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn, row_key
 from leaderboard.versus_dqn import compact_metrics
@@ -177,7 +179,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if os.path.realpath(args.untuned) == os.path.realpath(args.tuned):
         parser.error(f"UNTUNED_DIR and TUNED_DIR are one directory ({args.tuned}): give the untuned rows' and the tuned rows'")
-    print(tuning_effect_table(tuning_effect(load_results(args.untuned), load_results(args.tuned)), args.changed_only))
+    try:
+        table = tuning_effect_table(tuning_effect(load_results(args.untuned), load_results(args.tuned)), args.changed_only)
+    except (ValueError, OSError) as error:
+        print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
+        return 2
+    print(table)
     return 0
 
 

@@ -44,3 +44,28 @@ def test_an_empty_file_in_an_outputs_place_is_replaced_as_tune_replaces_one(tmp_
     argv = ["analyse", "discrimination", str(QUICK.parent / "separation"), "--out", str(page)]
     assert main(argv) == 0
     assert page.read_bytes().startswith(b"# Discrimination matrix")
+
+
+def test_an_exact_model_of_astronomically_many_states_is_refused_by_its_bound(capsys) -> None:
+    from empathy_zoo.cli import main
+
+    assert main(["analyse", "exact", "sharing_v0", "size=255"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "joint states, more than 200,000" in err and "about 10^" in err
+
+
+def test_equivalence_shows_a_cell_without_values_as_a_dash(recwarn) -> None:
+    import numpy as np
+
+    from leaderboard.equivalence import _mean_text
+
+    assert _mean_text(np.array([np.nan, np.nan])) == "—" and _mean_text([1.0, np.nan, 2.0]) == "1.500"
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_tuning_effect_refuses_a_missing_directory_in_one_line_under_its_own_name(capsys) -> None:
+    from empathy_zoo.cli import main
+
+    assert main(["analyse", "tuning-effect", "/nonexistent/untuned", str(QUICK)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("empathy-zoo analyse tuning-effect: error:") and "does not exist" in err
