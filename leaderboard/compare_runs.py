@@ -6,7 +6,11 @@ equal value for value (what a version that changed nothing a run computes must g
     python -m leaderboard.compare_runs OLD_DIR NEW_DIR
 
 prints one line per matched pair and the counts; runs without a partner are counted apart. Two
-runs of one directory that match the same key are refused (:func:`runs_by_key`).
+runs of one directory that match the same key are refused (:func:`runs_by_key`), and so are two
+runs of one key but of two experiments (:func:`check_one_experiment_per_key`). A matched pair
+must agree on every setting both files record (a version may add or drop a setting, never change
+one's value), its reward transform's fields and its budget (steps, evaluation schedule); a pair
+that differs in one is refused naming it (:func:`setting_differences`).
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from leaderboard.run_facts import description_of
 
 PROG = "python -m leaderboard.compare_runs"
 
-__all__ = ["run_key", "runs_by_key", "compare_runs"]
+__all__ = ["check_one_experiment_per_key", "check_same_settings", "compare_runs", "run_key", "runs_by_key", "setting_differences"]
 
 
 def run_key(run: RunResult) -> tuple:
@@ -57,16 +61,71 @@ def runs_by_key(runs: Sequence[RunResult], key: Callable[[RunResult], tuple] = r
     return keyed
 
 
+def check_one_experiment_per_key(runs: Sequence[RunResult], key: Callable[[RunResult], tuple] | None = None) -> None:
+    """Refuse (``ValueError`` naming two runs) runs of one directory that ``key`` (by default
+    :func:`run_key` less the seed) takes for one experiment but whose run ids say are two (another
+    learning rate, γ, budget, reward field, label: what the key leaves out); they would be matched
+    or pooled as one."""
+    first: dict[tuple, RunResult] = {}
+    for run in runs:
+        other = first.setdefault(run_key(run)[:-1] if key is None else key(run), run)
+        if other.experiment != run.experiment:
+            raise ValueError(
+                f"runs {other.run_id} and {run.run_id} share variant, method, β, aggregation of the others, reward "
+                "transform, world and partners but are two experiments (another setting, budget or label): this tool "
+                "would match or pool them as one; compare directories that hold one of them each"
+            )
+
+
+def setting_differences(a: RunResult, b: RunResult) -> list[str]:
+    """What ``a`` and ``b`` (runs of one :func:`run_key`, from two directories) record differently:
+    a setting both record (a version may add or drop one), a field of the reward transform both
+    record, the steps or the evaluation schedule; each ``name: A against B``."""
+    found = []
+    shared = sorted(set(a.config.settings) & set(b.config.settings))
+    found += [
+        f"{n}: {a.config.settings[n]!r} against {b.config.settings[n]!r}"
+        for n in shared
+        if a.config.settings[n] != b.config.settings[n]
+    ]
+    ra, rb = a.config.reward or {}, b.config.reward or {}
+    found += [f"reward {n}: {ra[n]!r} against {rb[n]!r}" for n in sorted(set(ra) & set(rb)) if ra[n] != rb[n]]
+    if a.steps != b.steps:
+        found.append(f"steps: {a.steps!r} against {b.steps!r}")
+    for name in ("eval_interval", "eval_episodes"):
+        va, vb = getattr(a.config, name), getattr(b.config, name)
+        if va is not None and vb is not None and va != vb:
+            found.append(f"{name}: {va!r} against {vb!r}")
+    return found
+
+
+def check_same_settings(a: RunResult, b: RunResult) -> None:
+    """Refuse (``ValueError`` naming both runs and the first difference) a matched pair of two
+    experiments (:func:`setting_differences`)."""
+    differences = setting_differences(a, b)
+    if differences:
+        raise ValueError(
+            f"runs {a.run_id} and {b.run_id} match as one experiment (same variant, method, β, aggregation of the "
+            f"others, reward transform, world and partners) but differ in {differences[0]}"
+            f"{f' (and {len(differences) - 1} more)' if len(differences) > 1 else ''}: they are two experiments; "
+            "compare directories of the same experiments"
+        )
+
+
 def compare_runs(old: Sequence[RunResult], new: Sequence[RunResult]) -> dict[str, list[tuple]]:
     """``{"same": [...], "different": [...], "only_old": [...], "only_new": [...]}``: the keys
-    (:func:`run_key`) of the matched pairs by outcome, and of the runs without a partner."""
+    (:func:`run_key`) of the matched pairs by outcome, and of the runs without a partner. Two
+    experiments taken for one, in a directory or across them, raise ``ValueError`` (see the module page)."""
     by_key_old, by_key_new = runs_by_key(old), runs_by_key(new)
+    check_one_experiment_per_key(old)
+    check_one_experiment_per_key(new)
     outcome: dict[str, list[tuple]] = {"same": [], "different": [], "only_old": [], "only_new": []}
     for key in sorted(by_key_new, key=repr):
         if key not in by_key_old:
             outcome["only_new"].append(key)
             continue
         a, b = by_key_old[key], by_key_new[key]
+        check_same_settings(a, b)
         outcome["same" if a.train == b.train and a.eval == b.eval else "different"].append(key)
     outcome["only_old"] = sorted((key for key in by_key_old if key not in by_key_new), key=repr)
     return outcome

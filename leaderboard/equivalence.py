@@ -62,7 +62,7 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from empathy_zoo.names import positional_tool
 from leaderboard.aggregate import PHASES, run_scalars, table_env
-from leaderboard.compare_runs import run_key, runs_by_key
+from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, run_key, runs_by_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import table_metrics
 from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
@@ -246,8 +246,10 @@ def _experiment(run: RunResult) -> tuple:
 
 
 def _per_experiment(runs: Sequence[RunResult]) -> dict[tuple, list[RunResult]]:
-    """``runs`` by experiment (:func:`_experiment`); a seed twice in one is refused (:func:`runs_by_key`)."""
+    """``runs`` by experiment (:func:`_experiment`); a seed twice in one is refused (:func:`runs_by_key`),
+    and so are two experiments that the key takes for one (:func:`~leaderboard.compare_runs.check_one_experiment_per_key`)."""
     runs_by_key(runs, lambda run: (*_experiment(run), run.seed))
+    check_one_experiment_per_key(runs, _experiment)
     groups: dict[tuple, list[RunResult]] = {}
     for run in runs:
         groups.setdefault(_experiment(run), []).append(run)
@@ -259,6 +261,7 @@ def equivalence(old: Sequence[RunResult], new: Sequence[RunResult], level: float
     a, b = _per_experiment(old), _per_experiment(new)
     raw: list[Cell] = []
     for experiment in sorted(set(a) & set(b), key=repr):
+        check_same_settings(a[experiment][0], b[experiment][0])
         env = table_env(a[experiment][0])
         metrics = table_metrics(env, a[experiment][0].env)
         scalars_a = [run_scalars(run) for run in a[experiment]]
@@ -296,6 +299,7 @@ def tost_cells(
     a, b = _per_experiment(old), _per_experiment(new)
     cells = []
     for experiment in sorted(set(a) & set(b), key=repr):
+        check_same_settings(a[experiment][0], b[experiment][0])
         env = table_env(a[experiment][0])
         metrics = table_metrics(env, a[experiment][0].env)
         scalars_a = [run_scalars(run) for run in a[experiment]]
