@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import json
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -97,14 +98,19 @@ class Cell:
         return "–" if self.kind == "absent" else self.kind
 
 
+MODEL_FIELDS = ("env", "arguments", "gamma", "max_cycles", "cost_limit")
+"""What makes a separation table's exact model: two tables that agree on all of them are one task."""
+
+
 def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
     """Every ``*.json`` separation table of ``directory``, by task name (its file's stem), sorted;
     at most :data:`MAX_TABLES`, each named as a file name the suite makes (letters, digits, ``_``,
-    ``-``, ``.``)."""
+    ``-``, ``.``); two tables of one exact model (:data:`MODEL_FIELDS` equal) are refused, naming both."""
     paths = sorted(directory.glob("*.json"))
     if len(paths) > MAX_TABLES:
         raise ValueError(f"{directory}: {len(paths):,} separation tables; the matrix reads at most {MAX_TABLES}")
     tables = {}
+    models: dict[str, Path] = {}
     for path in paths:
         try:
             task = check_path_name(path.stem, "a task name")
@@ -113,6 +119,13 @@ def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
                 f"{directory}: a separation table's file name is no task name (letters, digits, '_', '-', '.'): {path.name!r}"
             ) from None
         tables[task] = read_separation_table(path)  # (checked: a regular file, bounded, every field in range)
+        model = json.dumps([tables[task].get(field) for field in MODEL_FIELDS], sort_keys=True)
+        other = models.setdefault(model, path)
+        if other != path:
+            raise ValueError(
+                f"{other} and {path} are tables of one exact model ({tables[task]['env']} with the same arguments, γ, "
+                "max_cycles and cost limit): the matrix would count one task twice; keep one"
+            )
     if not tables:
         raise ValueError(f"{directory}: no separation table (*.json); make one with empathy-zoo analyse separation")
     return tables

@@ -110,14 +110,22 @@ def marl_eval_layout(results: Iterable[RunResult]) -> dict[str, dict[str, dict[s
     the leaderboard's row order (:func:`leaderboard.aggregate.group_runs`), runs by seed, steps by
     training step with ``absolute_metrics`` last (marl-eval reads steps in this order).
 
-    ``ValueError`` for a run without a greedy evaluation, and for two labels of one task whose
+    ``ValueError`` for a run without a greedy evaluation, for two labels of one task whose
     algorithm names are one to marl-eval (equal once commas are dropped and letters lower-cased):
-    give one its own label (``--label DIR=PREFIX`` where they come from two directories).
+    give one its own label (``--label DIR=PREFIX`` where they come from two directories), and for
+    two variants whose names are one once lower-cased (``Coex`` and ``coex``).
     """
     layout: dict[str, dict[str, dict[str, dict[str, Any]]]] = {}
     labels: dict[tuple[str, str, str], str] = {}
+    tasks: dict[tuple[str, str], str] = {}
     for (task, label), runs in group_runs(results).items():
         environment = runs[0].env
+        named = tasks.setdefault((environment.lower(), task.lower()), task)
+        if named != task:
+            raise ValueError(
+                f"variants {named!r} and {task!r} of {environment} are one task to marl-eval, which lower-cases names: "
+                "their runs would land in one cell; give one variant another name"
+            )
         algorithm = algorithm_name(label)
         first = labels.setdefault((environment, task, algorithm.lower()), label)
         if first != label:

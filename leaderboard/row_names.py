@@ -30,6 +30,7 @@ from leaderboard.run_facts import is_dqn_reference
 __all__ = [
     "DQN_NAME",
     "check_reserved_label",
+    "reserved_label_reason",
     "IDENTICAL_MARK",
     "dqn_row_names",
     "identical_row_names",
@@ -54,19 +55,25 @@ def _ends_in_a_mark(label: str) -> bool:
     return False
 
 
+def reserved_label_reason(label: str, dqn_reference: bool) -> str | None:
+    """Why ``label`` cannot name a row of runs (``dqn_reference``: whether they are the DQN
+    reference), or ``None``: it reads as a name the leaderboard gives (:func:`check_reserved_label`)."""
+    shape = skeleton(label)
+    if _ends_in_a_mark(shape):
+        return "ends as a mark the leaderboard gives a row it finds to train as DQN (“≡ DQN”, “= DQN's runs”)"
+    if (shape == skeleton(DQN_NAME) or shape.startswith(skeleton(f"{DQN_NAME}, as"))) and not dqn_reference:
+        return f"reads as {DQN_NAME!r}, the leaderboard's name of the DQN reference, and this run is none"
+    return None
+
+
 def check_reserved_label(run: RunResult, path: Path) -> None:
     """Refuse (``ValueError`` naming the file) a run whose label reads as a name the leaderboard
     gives (:func:`~leaderboard.label_skeleton.skeleton`: lookalike letters, case, marks and
     spaces aside): ``DQN`` or ``DQN, as …`` on a run that is no DQN reference, or a label ending
     as a mark the leaderboard appends does (:data:`IDENTICAL_MARK`, :data:`SAME_RUNS_MARK`). The
     page would name the wrong row as the reference, or mark a row it did not mark."""
-    label = skeleton(run.method_label)
-    dqn = skeleton(DQN_NAME)
-    if _ends_in_a_mark(label):
-        why = "ends as a mark the leaderboard gives a row it finds to train as DQN (“≡ DQN”, “= DQN's runs”)"
-    elif (label == dqn or label.startswith(skeleton(f"{DQN_NAME}, as"))) and not is_dqn_reference(run):
-        why = f"reads as {DQN_NAME!r}, the leaderboard's name of the DQN reference, and this run is none"
-    else:
+    why = reserved_label_reason(run.method_label, is_dqn_reference(run))
+    if why is None:
         return
     raise ValueError(
         f"result file {path}: its label {run.method_label!r} {why} (config.description.dqn_reference); "

@@ -56,3 +56,44 @@ def test_the_command_refuses_two_budgets_in_one_line(tmp_path: Path, capsys) -> 
     assert main(["analyse", "compare-runs", str(tmp_path / "a"), str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "differ in steps" in err
+
+
+def test_a_sweep_label_that_reads_as_dqn_is_refused_before_anything_trains(tmp_path: Path, capsys) -> None:
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        '[sweep]\nname = "s"\nseeds = 1\nsteps = 400\neval_interval = 200\neval_episodes = 1\n'
+        "[settings]\nlearning_starts = 40\nepsilon_decay_steps = 300\n[envs.coexistence_v0]\nmax_cycles = 20\n"
+        '[[methods]]\nmethod = "empathic_dqn"\nselfishness = 0.5\nlabel = "dqn"\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    assert main(["reproduce", "--profile", str(sweep), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the label 'dqn' of empathic_dqn reads as 'DQN'" in err
+    assert not out.exists(), "nothing trained or written"
+
+
+def test_export_refuses_two_variants_one_to_marl_eval() -> None:
+    from leaderboard.export_marl_eval import marl_eval_layout
+
+    runs = []
+    for variant in ("Coex", "coex"):
+        document = _run(0)
+        document["variant"] = document["config"]["variant"] = variant
+        document["run_id"] = run_id(variant, document["method"], document["config"], 0)
+        runs.append(record(document))
+    with pytest.raises(ValueError, match="variants 'Coex' and 'coex' of coexistence_v0 are one task to marl-eval"):
+        marl_eval_layout(runs)
+
+
+def test_discrimination_refuses_one_exact_model_under_two_names(tmp_path: Path, capsys) -> None:
+    import shutil
+
+    shipped = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
+    for name in ("vase_v0.json", "helping_v0.json"):
+        shutil.copy(shipped / name, tmp_path / name)
+    shutil.copy(shipped / "vase_v0.json", tmp_path / "vase_copy.json")
+    assert main(["analyse", "discrimination", str(tmp_path), "--out", str(tmp_path / "D.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "are tables of one exact model" in err and "vase_copy.json" in err
+    assert not (tmp_path / "D.md").exists()

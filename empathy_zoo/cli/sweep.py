@@ -50,6 +50,7 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.training.runner import train_runs
     from leaderboard.report import write_leaderboard
     from leaderboard.reproduction import NotThePaperSweep, write_reproduction
+    from leaderboard.row_names import reserved_label_reason
 
     path = profile_path(args.profile)
     specs = load_sweep(path, seeds=args.seeds)
@@ -57,6 +58,10 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
         refusal = warmup_refusal(spec)
         if refusal is not None:
             raise ValueError(f"{path}: {refusal} (in its [settings], or in the method's [[methods]] table)")
+        label = spec.display_label()
+        reserved = reserved_label_reason(label, bool(spec.config()["description"]["dqn_reference"]))
+        if reserved is not None:  # (the leaderboard would refuse the runs once trained: refuse now)
+            raise ValueError(f"{path}: the label {label!r} of {spec.method} {reserved}; give the entry another label")
     out = Path(args.out) if args.out else Path("results") / path.stem
     values = {**RUN_DEFAULTS, **{k: v for k, v in vars(args).items() if k in RUN_DEFAULTS and v is not None}}
     values["progress"] = not args.no_progress
