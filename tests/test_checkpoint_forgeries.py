@@ -99,6 +99,15 @@ def _left_while_present(payload: dict[str, Any]) -> None:
     engine["left_at"]["__ndarray__"] = torch.where(present, t[:, None].expand_as(present), engine["left_at"]["__ndarray__"])
 
 
+def _battery_in_coexistence(payload: dict[str, Any]) -> None:
+    """A forgery: the robot of each run given as many batteries as its clock (within [0, t]), in
+    Coexistence, where no agent uses batteries."""
+    engine = payload["vector"]["engine"]
+    t = engine["t"]["__ndarray__"]
+    assert bool((t > 0).any()), "a clock past 0 to forge"
+    engine["inventory"]["__ndarray__"][:, 0] = t
+
+
 ENGINE = "vector.engine"
 STREAM = f"{ENGINE}.streams"
 GENERATOR = f"{STREAM}.bit_generators.0"
@@ -154,6 +163,7 @@ FORGERIES: dict[str, tuple[Callable[[dict[str, Any]], None], str]] = {
     "left_at of a present agent": (_left_while_present, "left_at holds a time for an agent still present"),
     "inventory 10**6": (_set(f"{ENGINE}.inventory.__ndarray__", _first(10**6)), "inventory"),
     "harms negative": (_set(f"{ENGINE}.episode_harms.__ndarray__", _first(-1)), "episode_harms"),
+    "a battery in Coexistence": (_battery_in_coexistence, "its environment has no batteries"),
     "cells of one agent": (_set(f"{ENGINE}.cells.__ndarray__", lambda t: t[:, :1].clone()), "cells"),
     "presence as integers": (
         _set(f"{ENGINE}.present", lambda _: {"__ndarray__": torch.ones(2, 2, dtype=torch.int64), "dtype": "int64"}),

@@ -29,7 +29,7 @@ import numpy as np
 
 from empathy_zoo.actions import Action
 from empathy_zoo.engine.base import StepEvents
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.limits import MAX_CYCLES, MAX_SEED
 from empathy_zoo.randomness import STREAMS, derive_key
 from empathy_zoo.safe_data import from_safe
@@ -133,6 +133,7 @@ def _template(runs: Mapping[str, Any] | None) -> dict[str, Any] | None:
         "range": (low, high),
         "block": engine.streams.block,
         "reward_bound": engine.step_reward_bound,
+        "facts": ENVIRONMENT_TABLE.get(runs["env"]),
     }
 
 
@@ -199,6 +200,11 @@ def check_vector(saved: Any, obs: Any, runs: int, settings: Mapping[str, Any] | 
         )
     _within(engine["inventory"], "vector.engine.inventory", 0, t[:, None], "[0, t] (a battery a step at most)")
     _within(engine["episode_harms"], "vector.engine.episode_harms", 0, t[:, None] * (agents - 1), "[0, t·others] (harms)")
+    facts = template["facts"] if template else None
+    if facts is not None and not facts.batteries:  # (the environment table: no agent uses batteries)
+        _within(engine["inventory"], "vector.engine.inventory", 0, 0, "0 (its environment has no batteries)")
+    if facts is not None and not facts.can_harm:  # (no agent can be harmed)
+        _within(engine["episode_harms"], "vector.engine.episode_harms", 0, 0, "0 (no agent of its environment can be harmed)")
     if not engine["running"].all():
         raise ForgedState("vector.engine.running holds False: a checkpoint is taken with every episode running")
     if template:
