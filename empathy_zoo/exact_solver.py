@@ -69,7 +69,7 @@ from empathy_zoo.engine.arguments import argument_defaults, check_env_arguments
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES
 from empathy_zoo.exact_alone import alone_policy, alone_steps, alone_values, gone_continuation
 from empathy_zoo.exact_chance import FixedDraws, check_draws
-from empathy_zoo.limits import MAX_REFERENCE_CYCLES
+from empathy_zoo.limits import MAX_EXACT_WORK, MAX_REFERENCE_CYCLES
 from empathy_zoo.names import terminal_line
 from empathy_zoo.reference import TIES, ReferenceOutcome, greedy_policy
 
@@ -525,6 +525,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         model = tabular_model(args.env, **command_line_arguments(args.arguments))
+        work = model.states * episode_steps(model)
+        if work > MAX_EXACT_WORK:
+            raise ValueError(
+                f"{args.env} with {model.env_kwargs} is {model.states:,} states × {episode_steps(model):,} steps = "
+                f"{work:,} of work, past the bound of {MAX_EXACT_WORK:,} (MAX_EXACT_WORK, docs/limits.md: some four "
+                "minutes); model a smaller grid or shorter episodes"
+            )
     except ValueError as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2

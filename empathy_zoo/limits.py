@@ -26,6 +26,7 @@ __all__ = [
     "MAX_CYCLES",
     "MAX_EVALUATIONS",
     "MAX_EVAL_EPISODES",
+    "MAX_EXACT_WORK",
     "MAX_EVALUATE_CYCLES",
     "MAX_EVALUATION_BYTES",
     "MAX_FIGURE_PIXELS",
@@ -144,6 +145,10 @@ MAX_REFERENCE_WORK = 100_000_000_000
 group at both bounds above takes about 10¹¹, some 20 s on a laptop core; the paper's 50 points at
 size 7 and 500 cycles take 6.5·10⁷. A group that would pass it gets no reference curve, said in
 one line: a forged directory of many such groups costs one group's time, not each one's."""
+MAX_EXACT_WORK = 100_000_000
+"""Most work of ``analyse exact``'s table, counted as its model's ``states × max_cycles`` (each of
+its 15 points steps every state once a step): about 2.4 µs each on a laptop core, so at most some
+four minutes; the default Coexistence (2,401 states, 500 steps) takes 1.2·10⁶, a few seconds."""
 MAX_WATCH_STEPS = MAX_REFERENCE_CYCLES
 """Most steps ``watch`` plays of one episode: an agent file's ``max_cycles`` may be up to
 :data:`MAX_CYCLES`, and a longer episode is cut short there, said before it plays, as the
@@ -197,6 +202,7 @@ BOUNDS: Mapping[str, int] = {
     "reference curve size": MAX_REFERENCE_SIZE,
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
     "reference curves' work": MAX_REFERENCE_WORK,
+    "exact table's work": MAX_EXACT_WORK,
     "watch episode steps": MAX_WATCH_STEPS,
     "wall_time_s": MAX_WALL_TIME_S,
     "memory_bytes": MAX_LEARNER_BYTES,

@@ -69,3 +69,13 @@ def test_tuning_effect_refuses_a_missing_directory_in_one_line_under_its_own_nam
     assert main(["analyse", "tuning-effect", "/nonexistent/untuned", str(QUICK)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("empathy-zoo analyse tuning-effect: error:") and "does not exist" in err
+
+
+def test_an_exact_table_past_its_work_bound_is_refused_before_anything_is_computed(capsys, monkeypatch) -> None:
+    from empathy_zoo import exact_solver
+    from empathy_zoo.cli import main
+
+    monkeypatch.setattr(exact_solver, "outcome_table", lambda *_: pytest.fail("computed past the bound"))
+    assert main(["analyse", "exact", "coexistence_v0", "size=21", "max_cycles=10000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "194,481 states × 10,000 steps" in err and "past the bound of 100,000,000" in err
