@@ -40,7 +40,7 @@ from leaderboard.episodes import episodes_section
 from leaderboard.evaluation_dirs import MatchedEvaluation, match_evaluations
 from leaderboard.heldout import heldout_section
 from leaderboard.improvement import improvements_over_dqn, uncompared_rows
-from leaderboard.leaderboard_page import TRADEOFF, definitions_section, leaderboard_page, score_sections
+from leaderboard.leaderboard_page import TITLE, TRADEOFF, definitions_section, leaderboard_page, score_sections
 from leaderboard.page import Section
 from leaderboard.page_html import to_html
 from leaderboard.page_markdown import markdown_text, to_markdown
@@ -381,19 +381,37 @@ def _remove_stale_stages(out: Path) -> None:
             shutil.rmtree(path, ignore_errors=True)
 
 
+STAGED_OPENINGS = {
+    MARKDOWN_NAME: f"# {TITLE}\n".encode(),
+    CSV_NAME: CSV_OPENING,
+    HTML_NAME: b"<!DOCTYPE html>",
+    ".png": PNG_OPENING,
+    ".gif": GIF_OPENING,
+}
+"""What each page (by name) and each figure (by suffix) a render stages begins with."""
+
+
+def _staged_file(entry: Path, opening: bytes | None) -> bool:
+    """Whether ``entry`` is a file a render writes: a temporary file of an atomic write in progress,
+    or a regular file (no link) that is empty or begins with ``opening`` (``None``: none is)."""
+    if _ATOMIC_TEMP.search(entry.name):
+        return entry.is_file() and not entry.is_symlink()
+    if opening is None or entry.is_symlink() or not entry.is_file():
+        return False
+    with open(entry, "rb") as handle:
+        head = handle.read(len(opening))
+    return head in (b"", opening)
+
+
 def _rendered_only(stage: Path) -> bool:
-    """Whether ``stage`` holds only what a render writes: its pages and ``figures/`` of images."""
-    pages = {MARKDOWN_NAME, CSV_NAME, HTML_NAME}
+    """Whether ``stage`` holds only what a render writes: its pages, each a regular file that begins
+    as that page does, and ``figures/`` of PNG and GIF images (:data:`STAGED_OPENINGS`); anything
+    else (a folder named as a page, a user's text under a page's name) keeps the stage."""
     for entry in stage.iterdir():
-        if entry.is_symlink() or (entry.name not in pages and entry.name != FIGURES_DIR and not _ATOMIC_TEMP.search(entry.name)):
-            return False
-        if entry.name == FIGURES_DIR and (
-            not entry.is_dir()
-            or any(
-                f.is_symlink() or not f.is_file() or (f.suffix not in (".png", ".gif") and not _ATOMIC_TEMP.search(f.name))
-                for f in entry.iterdir()
-            )
-        ):
+        if entry.name == FIGURES_DIR and entry.is_dir() and not entry.is_symlink():
+            if not all(_staged_file(f, STAGED_OPENINGS.get(f.suffix)) for f in entry.iterdir()):
+                return False
+        elif not _staged_file(entry, STAGED_OPENINGS.get(entry.name)):
             return False
     return True
 

@@ -86,10 +86,17 @@ def test_a_stale_leaderboard_stage_holding_a_users_file_is_left(tmp_path: Path) 
     users.mkdir()
     (users / "own").write_text("mine")
     (rendered / "figures").mkdir(parents=True)
-    (rendered / "LEADERBOARD.md").write_text("half")
-    (rendered / "figures" / "a.png").write_bytes(b"png")
+    (rendered / "LEADERBOARD.md").write_text("# empathy-zoo leaderboard\n\nhalf")  # (what a render stages, as it begins)
+    (rendered / "figures" / "a.png").write_bytes(b"\x89PNG\r\n\x1a\n...")
+    folder, notes = (results / f".leaderboard.ezoo-200000000{i}-deadbeef.tmp" for i in (3, 4))  # (probe 26: names of
+    (folder / "LEADERBOARD.md").mkdir(parents=True)  # pages, but a folder and a user's text: no render's)
+    (folder / "LEADERBOARD.md" / "notes.txt").write_text("precious")
+    notes.mkdir()
+    (notes / "leaderboard.csv").write_text("my own notes, not a page")
     report.write_leaderboard(results, n_resamples=50, on_note=lambda _: None)
     assert (users / "own").read_text() == "mine" and not rendered.exists()
+    assert (folder / "LEADERBOARD.md" / "notes.txt").read_text() == "precious"
+    assert (notes / "leaderboard.csv").read_text() == "my own notes, not a page"
 
 
 @pytest.mark.parametrize("text", ["{}", "[" * 100_000 + "]" * 100_000, "{not json", '{"plan": 3, "trials": []}'])
