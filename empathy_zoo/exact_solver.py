@@ -496,13 +496,15 @@ own bounds, checked next, are far smaller)."""
 def command_line_arguments(items: list[str]) -> dict[str, int | str]:
     """``ARG=VALUE`` items as environment arguments: a VALUE of ASCII digits, with an optional
     sign, is an int, anything else a string, each then checked by the environment (which names its
-    bounds). An item without ``=``, or an integer of over :data:`MAX_ARGUMENT_DIGITS` digits, is one
-    ``ValueError`` line."""
+    bounds). An item without ``=``, an argument given twice, or an integer of over
+    :data:`MAX_ARGUMENT_DIGITS` digits, is one ``ValueError`` line."""
     kwargs: dict[str, int | str] = {}
     for item in items:
         key, equals, value = item.partition("=")
         if not equals:
             raise ValueError(f"{item!r} is not ARG=VALUE")
+        if key in kwargs:
+            raise ValueError(f"{key} is given twice ({kwargs[key]!r} and {value!r}): give each argument once")
         digits = value.removeprefix("-").removeprefix("+")
         if digits.isascii() and digits.isdigit():
             if len(digits) > MAX_ARGUMENT_DIGITS:

@@ -79,3 +79,12 @@ def test_an_exact_table_past_its_work_bound_is_refused_before_anything_is_comput
     assert main(["analyse", "exact", "coexistence_v0", "size=21", "max_cycles=10000"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "194,481 states × 10,000 steps" in err and "past the bound of 100,000,000" in err
+
+
+@pytest.mark.parametrize("tool", ["exact", "separation"])
+def test_an_exact_model_argument_given_twice_is_refused(tool: str, capsys) -> None:
+    from empathy_zoo.cli import main
+
+    assert main(["analyse", tool, "coexistence_v0", "size=5", "size=7"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "size is given twice (5 and '7')" in err
