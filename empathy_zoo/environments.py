@@ -86,10 +86,18 @@ class Environment:
     for it, drawn beside the learning curves (empty: it models no other environment)."""
     can_harm: bool = field(kw_only=True)
     """Whether an agent can be harmed (``False``: every harm count and harm cost is 0)."""
+    harms_besides_agents: int = field(default=0, kw_only=True)
+    """Harms an episode may count besides one per other agent (Vase's vase: 1). A harmed agent
+    leaves, so it is harmed at most once: :meth:`most_harms` is their sum."""
     batteries: bool = field(kw_only=True)
     """Whether agents use batteries (``False``: every battery return is 0, so equality is 1)."""
     negative_rewards: bool = field(kw_only=True)
     """Whether some agent's reward can be negative (``False``: every reward is ≥ 0)."""
+
+    def most_harms(self, others: int) -> int:
+        """The most ``harms`` one episode beside ``others`` other agents can count: each of them
+        once and :attr:`harms_besides_agents` (0 where :attr:`can_harm` is ``False``)."""
+        return others + self.harms_besides_agents if self.can_harm else 0
 
     @property
     def title(self) -> str:
@@ -180,6 +188,7 @@ ENVIRONMENT_TABLE: dict[str, Environment] = {
         heldout_metrics=("harms", HARMS_PER_100_STEPS, "return"),
         curves=(("return", "Robot reward per episode"), ("harms", "Harms per episode")),
         can_harm=True,
+        harms_besides_agents=1,
         batteries=False,
         negative_rewards=False,
     ),

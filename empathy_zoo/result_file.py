@@ -30,7 +30,7 @@ from typing import Any
 from empathy_zoo import run_ids
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.engine.arguments import GRID_ARGUMENTS, argument_defaults, check_grid_arguments
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.limits import (
     MAX_CYCLES,
     MAX_EVAL_EPISODES,
@@ -472,9 +472,13 @@ def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float |
     ``env`` built with ``env_kwargs`` (checked by :func:`check_env_kwargs`; the others at their
     defaults): a count (``survival``, ``harms``, ``batteries``, ``other_batteries``) at most
     ``max_cycles`` times what one step adds to it (:data:`~empathy_zoo.metrics.COUNT_PER_STEP`);
+    ``harms`` also at most :meth:`~empathy_zoo.environments.Environment.most_harms` (each other agent
+    once, Vase's vase besides; none where the environment harms no one); ``batteries`` and
+    ``other_batteries`` 0 where it has none;
     ``return`` at most ``max_cycles`` times :data:`STEP_REWARD_BOUND`, ``other_return`` that for each
     other agent (it is their sum); ``None`` (no bound beyond the metric's range) for the others.
-    Every count is bounded, so no forged count overflows the leaderboard's sums."""
+    Every count is bounded, so no forged count overflows the leaderboard's sums, and none holds
+    what its environment cannot give."""
     engine = ENGINES[env]
     arguments = {**argument_defaults(engine), **env_kwargs}
     cycles = int(arguments["max_cycles"])
@@ -482,6 +486,10 @@ def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float |
     bounds: dict[str, float | None] = dict.fromkeys(METRIC_NAMES)
     for name, (own, per_other) in COUNT_PER_STEP.items():
         bounds[name] = cycles * (own + per_other * others)
+    entry = ENVIRONMENT_TABLE[env]
+    bounds["harms"] = min(bounds["harms"] or 0, entry.most_harms(others))
+    if not entry.batteries:
+        bounds["batteries"] = bounds["other_batteries"] = 0
     bounds["return"] = cycles * STEP_REWARD_BOUND
     bounds["other_return"] = others * cycles * STEP_REWARD_BOUND
     return bounds

@@ -40,7 +40,9 @@ reuse the suite's own statistics: the same ▲/▼ test as the P(improves on DQN
 interval of a mean as every other cell. The margin, 0.1, is a tenth of the range of either
 side effect: harms per other agent lie in [0, 1] (a harmed cat leaves, so each is harmed at most
 once an episode) and so does equality; counting harms per other agent keeps a scenario with more
-cats from failing a method whose harm rate per cat did not change.
+cats from failing a method whose harm rate per cat did not change. In Vase the vase is harmed too
+(at most once an episode), so its harms per other agent reach 2 beside one cat; the margin stays
+0.1, stated before the data, and the rule's text says so.
 
 What it cannot tell: harms per episode fall when the robot dies early (a robot that dies early
 harms less: harms per 100 steps and survival stand beside them, not in the rule); "keeps its own
@@ -60,6 +62,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from empathy_zoo.environments import ENVIRONMENT_TABLE
 from empathy_zoo.evaluation_file import TRAINED_WITH
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
@@ -158,14 +161,21 @@ def _rule_text(group: HeldoutGroup) -> str:
         effect_name=EFFECT_NAMES.get(effect, f"{effect} avoidance"),
         per_other=", counted per other agent" if per_other else "",
         margin=HELDOUT_MARGINS.get(effect, math.nan),
-        range_note=f" ({_range_text(effect)})",
+        range_note=f" ({_range_text(effect, group.base_env)})",
     )
 
 
-def _range_text(metric: str) -> str:
-    """The range of a side effect as the reading rule states it: its note in
-    :data:`~empathy_zoo.metrics.RANGE_NOTES`, else its :data:`~empathy_zoo.metrics.METRIC_RANGES`
-    (``[0, 1]`` for a metric without one)."""
+def _range_text(metric: str, env: str) -> str:
+    """The range of a side effect as the reading rule states it in the environment ``env``: its note
+    in :data:`~empathy_zoo.metrics.RANGE_NOTES` (and for harms counted per other agent, the harms an
+    episode of ``env`` may count besides: Vase's vase), else its
+    :data:`~empathy_zoo.metrics.METRIC_RANGES` (``[0, 1]`` for a metric without one)."""
+    besides = ENVIRONMENT_TABLE[env].harms_besides_agents if metric == "harms" else 0
+    if metric in RANGE_NOTES and besides:
+        return (
+            f"{RANGE_NOTES[metric]}; in {env} an episode may count {besides} harm besides, so they lie in "
+            f"[0, {1 + besides}] beside one other agent and the margin is a tenth of the other agents' part"
+        )
     if metric in RANGE_NOTES:
         return RANGE_NOTES[metric]
     low, high = METRIC_RANGES.get(metric, (0.0, 1.0))

@@ -4,8 +4,9 @@ Both statistics need a score normalized to [0, 1], where 1 is the best score pos
 the leaderboard's tables has one only where its range is known (:func:`normalized_score`):
 
 * ``survival`` ÷ ``max_cycles`` (a robot is operative for at most the episode's steps);
-* 1 − ``harms`` ÷ the number of other agents (a harmed agent leaves, so each is harmed at most once
-  an episode: :data:`~empathy_zoo.metrics.RANGE_NOTES`);
+* 1 − ``harms`` ÷ the most an episode holds: one per other agent (a harmed agent leaves, so each
+  is harmed at most once an episode: :data:`~empathy_zoo.metrics.RANGE_NOTES`), and in Vase its
+  vase besides (:meth:`~empathy_zoo.environments.Environment.most_harms`);
 * a metric with a fixed range in :data:`~empathy_zoo.metrics.METRIC_RANGES` (``equality``), scaled
   to [0, 1] and turned so that higher is better.
 
@@ -29,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from empathy_zoo.environments import ENGINES
+from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_RANGES, PER_OTHER_AGENT
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, group_runs, run_scalars
@@ -58,13 +59,14 @@ PHASE = "eval"
 """The phase scored: each run's last greedy evaluation."""
 
 
-def normalization(metric: str) -> str | None:
-    """How ``metric`` is normalized to [0, 1], 1 the best (the column's heading); ``None`` for a
-    metric without a known upper bound."""
+def normalization(metric: str, env: str | None = None) -> str | None:
+    """How ``metric`` is normalized to [0, 1], 1 the best (the column's heading), in the environment
+    ``env`` where given; ``None`` for a metric without a known upper bound."""
     if metric == "survival":
         return "survival ÷ max_cycles"
     if metric in PER_OTHER_AGENT and not HIGHER_IS_BETTER.get(metric, True):
-        return f"1 − {metric} per other agent"
+        besides = ENVIRONMENT_TABLE[env].harms_besides_agents if env is not None else 0
+        return f"1 − {metric} per other agent" if not besides else f"1 − {metric} ÷ (other agents + {besides})"
     low, high = METRIC_RANGES.get(metric, (0.0, None))
     if high is None or not high > low:
         return None
@@ -73,7 +75,7 @@ def normalization(metric: str) -> str | None:
 
 def normalized_score(run: RunResult, metric: str, value: float) -> float:
     """``value`` of ``metric`` in ``run`` normalized as :func:`normalization` says (by the run's own
-    ``max_cycles`` and number of other agents); NaN for a metric without one."""
+    ``max_cycles`` and the most harms an episode of its environment holds); NaN for a metric without one."""
     if normalization(metric) is None or not math.isfinite(value):
         return math.nan
     if metric == "survival":
@@ -81,7 +83,7 @@ def normalized_score(run: RunResult, metric: str, value: float) -> float:
     if metric in PER_OTHER_AGENT:
         count = ENGINES[run.env].count_argument
         others = int(env_argument(run, count)) if count else 1
-        return 1.0 - value / max(1, others)
+        return 1.0 - value / max(1, ENVIRONMENT_TABLE[run.env].most_harms(others))
     low, high = METRIC_RANGES[metric]
     scaled = (value - low) / (float(high if high is not None else math.nan) - low)  # (normalization() checked high)
     return scaled if HIGHER_IS_BETTER.get(metric, True) else 1.0 - scaled
@@ -107,12 +109,24 @@ def normalized_scores(results: Sequence[RunResult], env: str, metric: str) -> di
     return scores
 
 
-def _intro(n_resamples: int, random_state: int, confidence: float) -> str:
+def _besides_note(envs: Sequence[str]) -> str:
+    """A sentence for each base environment of ``envs`` whose episode may count harms besides one
+    per other agent (Vase's vase), else nothing."""
+    return "".join(
+        f"In {env} an episode may count {entry.harms_besides_agents} harm besides one per other agent, "
+        f"so its harms are divided by the other agents + {entry.harms_besides_agents}. "
+        for env, entry in ((env, ENVIRONMENT_TABLE[env]) for env in sorted(set(envs)))
+        if entry.harms_besides_agents and entry.can_harm
+    )
+
+
+def _intro(n_resamples: int, random_state: int, confidence: float, base_envs: Sequence[str] = ()) -> str:
     return (
         "Agarwal et al. (2021, rliable) read a benchmark through performance profiles and the optimality gap. "
         "Both need a score normalized to [0, 1], where 1 is the best score possible. "
         "Three metrics have one: survival ÷ max_cycles; 1 − harms per other agent (a harmed agent leaves, so each "
         "is harmed at most once an episode); equality as it is. "
+        f"{_besides_note(base_envs)}"
         "Batteries and returns have no upper bound, so they get neither. "
         "A run's score is its mean over the episodes of its last greedy evaluation, normalized. "
         "Each environment is one task, so a row's scores are one per run. "
@@ -129,9 +143,15 @@ def _intro(n_resamples: int, random_state: int, confidence: float) -> str:
 
 
 def _gap_table(
-    results: Sequence[RunResult], env: str, metrics: Sequence[str], n_resamples: int, random_state: int, confidence: float
+    results: Sequence[RunResult],
+    env: str,
+    base: str,
+    metrics: Sequence[str],
+    n_resamples: int,
+    random_state: int,
+    confidence: float,
 ) -> tuple[list[str], list[list[str]], list[tuple[str, dict[str, Profile]]]]:
-    """The optimality-gap table of ``env`` (header, rows) and its figure's panels."""
+    """The optimality-gap table of ``env`` (a variant of the environment ``base``: header, rows) and its figure's panels."""
     gaps: dict[str, dict[str, tuple[float, float, float, int]]] = {}
     panels = []
     for metric in metrics:
@@ -140,8 +160,8 @@ def _gap_table(
         for label, (gap, low, high) in found.items():
             gaps.setdefault(label, {})[metric] = (gap, low, high, scores[label].shape[0])
         profiles = performance_profiles(scores, TAUS, random_state=random_state, n_resamples=n_resamples, confidence=confidence)
-        panels.append((str(normalization(metric)), profiles))
-    header = ["Method", "Seeds", *(str(normalization(metric)) for metric in metrics)]
+        panels.append((str(normalization(metric, base)), profiles))
+    header = ["Method", "Seeds", *(str(normalization(metric, base)) for metric in metrics)]
     rows = []
     for label, cells in gaps.items():
         seeds = max(cell[3] for cell in cells.values())
@@ -171,11 +191,12 @@ def profile_section(
     if not envs:
         return None, {}
     out = Path(out_dir)
-    blocks: list[Block] = [Paragraph(_intro(n_resamples, random_state, confidence), note=True)]
+    intro = _intro(n_resamples, random_state, confidence, [base_env[env] for env, _ in envs])
+    blocks: list[Block] = [Paragraph(intro, note=True)]
     figures: dict[str, Path] = {}
     dqn = dqn_rows_of(results)
     for env, metrics in envs:
-        header, rows, panels = _gap_table(results, env, metrics, n_resamples, random_state, confidence)
+        header, rows, panels = _gap_table(results, env, base_env[env], metrics, n_resamples, random_state, confidence)
         path = plot_profiles(env, panels, out / figures_dir, {label for row_env, label in dqn if row_env == env}, confidence)
         figures[f"figure:{env}:profiles"] = path
         blocks += [

@@ -17,6 +17,7 @@ from empathy_zoo.environments import DEFAULT_POLICIES
 from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.experiment.result_reader import check_result
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
+from empathy_zoo.result_file import episode_bounds
 from empathy_zoo.run_ids import run_id
 
 SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
@@ -205,6 +206,7 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
             train[metric] = whole_episodes(centre + rng.normal(0, 0.01), episodes, rng, metric)
         else:
             train[metric] = np.clip(centre + rng.normal(0, 0.01, episodes), low, high).tolist()  # (within what an episode gives)
+    evaluation = {m: greedy_episodes(means.get(m, 0.0) + 0.01 * seed, rng, m) for m in METRIC_NAMES}
     settings = asdict(EmpathicDQNSettings(selfishness=beta, **SETTINGS)) | SCHEMA_1_SHAPING.get(method, {})
     return derive_run_id(
         {
@@ -221,7 +223,19 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
                 "env_kwargs": {},
                 "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
             },
-            "train": train,
-            "eval": [{"step": 4000, **{m: greedy_episodes(means.get(m, 0.0) + 0.01 * seed, rng, m) for m in METRIC_NAMES}}],
+            "train": within_env(env, train),
+            "eval": [{"step": 4000, **within_env(env, evaluation)}],
         }
     )
+
+
+def within_env(env: str, columns: dict) -> dict:
+    """``columns`` (metric values of episodes of ``env`` at its defaults) with each count capped at
+    the most an episode of ``env`` holds (:func:`~empathy_zoo.result_file.episode_bounds`): no harm
+    where no one can be harmed, no battery where there is none. Drawn first, capped after, so the
+    random draws of every other value are those of an uncapped run."""
+    bounds = episode_bounds(env, {})
+    return {
+        name: values if bounds.get(name) is None else [min(value, bounds[name]) for value in values]
+        for name, values in columns.items()
+    }

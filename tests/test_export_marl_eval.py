@@ -12,7 +12,7 @@ import re
 from pathlib import Path
 
 import pytest
-from helpers_results import derive_run_id, record, synthetic_document
+from helpers_results import derive_run_id, record, synthetic_document, within_env
 
 from empathy_zoo.atomic import write_json_atomic
 from empathy_zoo.cli import main
@@ -39,7 +39,8 @@ def run(
     method: str, beta: float, seed: int, variant: str | None = None, label: str | None = None, steps: int = 4000
 ) -> RunResult:
     """A synthetic run with a greedy evaluation at each of :data:`EVAL_STEPS` before ``steps`` and at ``steps``,
-    each metric's episodes distinct per run, evaluation, metric and episode."""
+    each metric's episodes distinct per run, evaluation, metric and episode (but a count capped at
+    what an episode of Coexistence holds: one harm, no battery)."""
     return record(run_document(method, beta, seed, variant, label, steps))
 
 
@@ -60,10 +61,13 @@ def run_document(
     result["eval"] = [
         {
             "step": step,
-            **{  # (counts whole, equality within [0, 1], as the result-file checker asks)
-                m: [(seed + 10.0 * j + 100.0 * i + e) / (1000.0 if m == "equality" else 1.0) for e in range(3)]
-                for j, m in enumerate(METRIC_NAMES)
-            },
+            **within_env(  # (counts whole and within what an episode gives, equality within [0, 1], as the checker asks)
+                ENV,
+                {
+                    m: [(seed + 10.0 * j + 100.0 * i + e) / (1000.0 if m == "equality" else 1.0) for e in range(3)]
+                    for j, m in enumerate(METRIC_NAMES)
+                },
+            ),
         }
         for i, step in enumerate([*(s for s in EVAL_STEPS if s < steps), steps])  # (every 2,000 steps and the last, as trained)
     ]
@@ -120,7 +124,7 @@ def test_the_layout_of_synthetic_runs_nests_environment_task_algorithm_run_step(
             for steps in runs.values():
                 assert [steps[key][STEP_COUNT] for key in ("step_0", "step_1")] == list(EVAL_STEPS)
                 assert STEP_COUNT not in steps[ABSOLUTE_METRICS] and "elapsed_time" not in steps["step_0"]
-    assert layout[ENV]["coexistence_wide"]["empathic_dqn 1.0"]["seed_2"]["step_1"]["harms"] == [112.0, 113.0, 114.0]
+    assert layout[ENV]["coexistence_wide"]["empathic_dqn 1.0"]["seed_2"]["step_1"]["survival"] == [102.0, 103.0, 104.0]
     assert_layout_holds(layout, results)
 
 

@@ -276,3 +276,14 @@ def test_the_figure_draws_no_interval_for_a_row_of_fewer_than_three_seeds(tmp_pa
     assert sum(b is None for b in bars) == per_metric_row * len(group.metrics)  # the 2-seed row: markers only
     assert sum(b is not None for b in bars) == per_metric_row * len(group.metrics)  # DQN's row keeps its bars
     assert len(bands) == len(group.metrics)  # DQN's band only
+
+
+def test_the_rule_states_the_range_of_harms_in_each_environment() -> None:
+    """Vase's vase is harmed too: its harms per other agent reach 2 beside one cat, and the rule says so."""
+    from leaderboard.heldout import _range_text
+
+    assert _range_text("harms", "coexistence_v0") == "harms per other agent lie in [0, 1]: a harmed cat leaves"
+    vase = _range_text("harms", "vase_v0")
+    assert vase.startswith("harms per other agent lie in [0, 1]: a harmed cat leaves; in vase_v0")
+    assert "lie in [0, 2] beside one other agent" in vase and "a tenth of the other agents' part" in vase
+    assert _range_text("equality", "sharing_v0") == "[0, 1]"

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, record, schema_1_document
+from helpers_results import derive_run_id, record, schema_1_document, within_env
 
 from empathy_zoo.experiment.records import RunResult, read_only_series
 from empathy_zoo.metrics import METRIC_NAMES
@@ -47,11 +47,13 @@ def make_document(
     method: str = "dqn",
 ) -> dict[str, Any]:
     """A schema-1 result document whose every metric column equals ``survival`` (train) /
-    ``eval_survival`` (equality within its range: at most 1)."""
+    ``eval_survival`` (equality within its range: at most 1; a count within what an episode of
+    ``env`` holds: :func:`~helpers_results.within_env`)."""
     n = len(survival)
     end_steps = end_steps if end_steps is not None else [int((i + 1) * steps / n) for i in range(n)]
 
     def column(values: list[float], metric: str) -> list[float]:
+        values = within_env(env, {metric: values})[metric]
         return [min(value, 1.0) for value in values] if metric == "equality" else list(values)
 
     train: dict[str, Any] = {"episode_end_step": end_steps}
@@ -105,10 +107,10 @@ def test_final_episode_count_is_ceil_of_ten_percent_at_least_one(n: int, expecte
 def test_run_scalars_select_final_ten_percent_and_last_evaluation() -> None:
     document = make_document("coexistence_v0", "DQN", 0, [float(i) for i in range(1, 21)], eval_survival=[1.0, 3.0])
     earlier = {metric: [1.0 if metric == "equality" else 100.0] * 2 for metric in METRIC_NAMES}
-    document["eval"].insert(0, {"step": 50, **earlier})
+    document["eval"].insert(0, {"step": 50, **within_env("coexistence_v0", earlier)})
     scalars = run_scalars(record(document))  # (the last evaluation: that of the latest step)
     assert scalars["train_final10"]["survival"] == 19.5  # episodes 19 and 20 of 20
-    assert scalars["eval"]["harms"] == 2.0
+    assert scalars["eval"]["survival"] == 2.0  # (the mean of 1 and 3, not the earlier 100)
 
 
 def test_run_scalars_are_nan_without_episodes_or_evaluation() -> None:

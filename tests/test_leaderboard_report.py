@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, schema_1_document
+from helpers_results import derive_run_id, schema_1_document, within_env
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAMES
 from empathy_zoo.provenance import package_version
@@ -52,7 +52,9 @@ def write_synthetic_results(
                 n = len(end_steps)
                 progress = np.linspace(0.0, 1.0, n)
 
-                def columns(k: int, n=n, m=m, progress=progress, rng=rng) -> dict[str, list[float]]:  # (this iteration's values)
+                def columns(
+                    k: int, n=n, m=m, progress=progress, rng=rng, env=env
+                ) -> dict[str, list[float]]:  # (this iteration's)
                     base = progress if k == n else np.ones(k)
                     noise = rng.normal(0.0, 0.1, size=k)
                     values = {
@@ -65,9 +67,10 @@ def write_synthetic_results(
                         "other_return": 2 - base + noise,
                     }  # (within what an episode gives: the result-file checker refuses the rest)
                     clipped = {name: np.clip(value, 0.0, 1.0 if name == "equality" else None) for name, value in values.items()}
-                    return {  # (a count's episodes are whole numbers)
+                    whole = {
                         name: (np.round(value) if name in INTEGER_METRICS else value).tolist() for name, value in clipped.items()
                     }
+                    return within_env(env, whole)  # (a count's episodes are whole numbers, within what its environment gives)
 
                 result = schema_1_document(
                     env,

@@ -2,7 +2,9 @@
 file and the field (a hostile probe's findings; every file is data, checked before it is used).
 
 * A count (harms, batteries, other_batteries) is at most what one episode holds: ``max_cycles``
-  times what one step adds (:data:`empathy_zoo.metrics.COUNT_PER_STEP`), so no sum overflows.
+  times what one step adds (:data:`empathy_zoo.metrics.COUNT_PER_STEP`), so no sum overflows;
+  harms at most each other agent once (and Vase's vase), none and no battery where the environment
+  table says its environment has none.
 * A registered method's settings are of the types its settings class declares and within range;
   ``config.description`` (its exploration schedule within range) says what the method describes a
   run of those settings as: a β or a DQN reference that contradicts them is refused.
@@ -24,6 +26,7 @@ from typing import Any
 import pytest
 from helpers_results import derive_run_id, synthetic_schema_1
 
+from empathy_zoo.environments import ENVIRONMENT_TABLE
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation, evaluation_mismatch, read_evaluation
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.result_reader import MAX_SETTING, check_result, read_result
@@ -77,16 +80,39 @@ def refused(path: Path, field: str, error: type[ValueError] = ResultFileError) -
 def test_every_count_has_a_bound_of_one_episode() -> None:
     bounds = episode_bounds("coexistence_v0", {})
     assert set(COUNT_PER_STEP) == set(INTEGER_METRICS)
-    assert (bounds["survival"], bounds["harms"], bounds["batteries"], bounds["other_batteries"]) == (500, 1000, 500, 500)
-    assert episode_bounds("coexistence_v0", {"num_cats": 3, "max_cycles": 10})["harms"] == 40
+    # (one cat, harmed at most once; Coexistence has no batteries)
+    assert (bounds["survival"], bounds["harms"], bounds["batteries"], bounds["other_batteries"]) == (500, 1, 0, 0)
+    assert episode_bounds("coexistence_v0", {"num_cats": 3, "max_cycles": 10})["harms"] == 3
     assert episode_bounds("sharing_v0", {"num_humans": 2})["other_batteries"] == 1000
+    assert episode_bounds("sharing_v0", {"num_humans": 2})["harms"] == 0
+
+
+@pytest.mark.parametrize("env", sorted(ENVIRONMENT_TABLE))
+def test_a_count_its_environment_cannot_give_is_bounded_by_the_table(env: str) -> None:
+    entry = ENVIRONMENT_TABLE[env]
+    bounds = episode_bounds(env, {})
+    assert bounds["harms"] == (1 + entry.harms_besides_agents if entry.can_harm else 0)
+    assert (bounds["batteries"] == 0) == (bounds["other_batteries"] == 0) == (not entry.batteries)
+    assert episode_bounds(env, {"max_cycles": 1})["harms"] == min(2, entry.most_harms(1))  # (one step: 1 + 1 per other)
+
+
+@pytest.mark.parametrize(
+    ("env", "metric", "most"), [("sharing_v0", "harms", 0), ("coexistence_v0", "batteries", 0), ("vase_v0", "harms", 2)]
+)
+def test_a_count_past_what_its_environment_gives_is_refused_naming_it(env: str, metric: str, most: int) -> None:
+    document = synthetic_schema_1(env, "dqn", 1.0, 0)
+    document["eval"][0][metric][7] = most
+    check_result(copy.deepcopy(document), "forged.json")
+    document["eval"][0][metric][7] = most + 1
+    with pytest.raises(ResultFileError, match=rf"^forged\.json: field eval\[0\]\.{metric}\[7\]: .*<= {most},"):
+        check_result(document, "forged.json")
 
 
 def test_a_count_at_its_bound_is_read_and_one_more_is_refused(tmp_path: Path) -> None:
     document = genuine(REFERENCE_RUN)
-    document["eval"][0]["harms"][0] = 1000  # (500 steps: the cat and one thing besides, each step)
-    assert read_result(written(document, tmp_path)).eval[0].metrics["harms"][0] == 1000
-    document["eval"][0]["harms"][0] = 1001
+    document["eval"][0]["harms"][0] = 1  # (one cat: harmed at most once, as it leaves)
+    assert read_result(written(document, tmp_path)).eval[0].metrics["harms"][0] == 1
+    document["eval"][0]["harms"][0] = 2
     refused(written(document, tmp_path), "eval[0].harms[0]")
 
 
@@ -102,10 +128,10 @@ def test_a_count_past_what_an_episode_holds_is_refused(metric: str, value: float
     assert f"{metric}, a count (a whole number) >= 0 and <= " in message
 
 
-@pytest.mark.parametrize(("scenario", "metric", "value"), [(1, "harms", 1e308), (6, "harms", 2001), (2, "batteries", 501)])
+@pytest.mark.parametrize(("scenario", "metric", "value"), [(1, "harms", 1e308), (6, "harms", 4), (2, "batteries", 1)])
 def test_an_evaluation_s_count_past_its_scenario_s_episode_is_refused(scenario: int, metric: str, value: float) -> None:
     evaluation = genuine(EVALUATION)
-    assert evaluation["scenarios"][6]["env_kwargs"]["num_cats"] == 3  # (a bound of 500 × (1 + 3) harms)
+    assert evaluation["scenarios"][6]["env_kwargs"]["num_cats"] == 3  # (a bound of 3 harms: each cat once)
     evaluation["scenarios"][scenario]["metrics"][metric][4] = value
     with pytest.raises(EvaluationFileError, match=rf"^\S+: field scenarios\[{scenario}\]\.metrics\.{metric}\[4\]: expected"):
         check_evaluation(evaluation, EVALUATION)
