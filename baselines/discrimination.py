@@ -16,7 +16,7 @@ A method with a selfishness weight enters at one β (:data:`MATRIX_BETA`, the pa
 A second table says, per method with β and task, how many distinct optima its β values give: one
 means β changes nothing there.
 
-    python -m baselines.discrimination                       # -> docs/results/separation/DISCRIMINATION.md
+    python -m baselines.discrimination                       # the shipped tables -> ./DISCRIMINATION.md
     python -m baselines.discrimination DIR --epsilon 0.05 --out FILE
 
 The cells come from exact optima only. Whether trained runs separate a pair is the leaderboard's
@@ -64,8 +64,11 @@ DEFAULT_DIR = Path(__file__).resolve().parents[1] / "docs" / "results" / "separa
 """The shipped separation tables, wherever the command runs from."""
 TITLE = "# Discrimination matrix: which task tells which methods apart"
 """The page's first line (a file that does not begin so is no page of this tool: ``--out`` never replaces it)."""
-"""Where the shipped separation tables lie."""
+PAGE = "DISCRIMINATION.md"
+"""The page's name where ``--out`` is not given: in the current folder, so that no default run
+replaces the shipped page beside the shipped tables."""
 MAX_METHODS = 200
+"""The most methods the matrix reads, over all its tables."""
 MAX_TABLES = 50
 """The most separation tables (tasks) the matrix reads (the suite ships 6)."""
 MAX_CELLS = 100_000
@@ -363,14 +366,16 @@ def main(
             metavar="DIR",
             help="a results directory of trained runs (repeat)",
         )
-    parser.add_argument("--out", type=_path, default=None, help="the page (default: DIR/DISCRIMINATION.md)")
+    parser.add_argument(
+        "--out", type=_path, default=None, help=f"the page (default: {PAGE} in the current folder, never beside the tables)"
+    )
     args = parser.parse_args(argv)
     refused = _refused_argument(args)
     if refused is not None:  # (before any table is read: the argument itself, one line)
         print(f"{prog}: error: {terminal_line(refused)}", file=sys.stderr)
         return 2
     results: list[Path] = getattr(args, "results", [])
-    out = args.out or args.directory / "DISCRIMINATION.md"
+    out = args.out or Path(PAGE)
     command = "empathy-zoo analyse discrimination" + (
         "" if Path(args.directory).resolve() == DEFAULT_DIR else f" {args.directory}"
     )

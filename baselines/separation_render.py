@@ -6,7 +6,8 @@ losslessly; :func:`to_markdown` renders it for the docs. The command
     python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]
 
 builds the table of ``ENV`` (default ``coexistence_v0``) with the engine arguments given and writes
-``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default ``docs/results/separation``). ``<name>`` is
+``DIR/<name>.json`` and ``DIR/<name>.md`` (``DIR`` default the current folder; the shipped tables
+were written with ``--out docs/results/separation``, which no default touches). ``<name>`` is
 the environment's name, followed by ``_<rules>`` when a ``rules`` argument is given. The returns of
 an outcome appear where the table holds them (the environment's task is the robot's return).
 """
@@ -25,8 +26,8 @@ from empathy_zoo.exact_solver import command_line_arguments, tabular_model
 
 __all__ = ["to_json", "from_json", "to_markdown", "equivalence_classes", "file_name", "main"]
 
-OUT = Path("docs/results/separation")
-"""Where the command writes by default."""
+OUT = Path(".")
+"""Where the command writes by default: the current folder (never the shipped tables' folder)."""
 RETURNS = ("robot_return", "other_return", "changed", "batteries", "other_batteries", "equality")
 """The outcome fields a table holds only where the environment's task is the robot's return (the
 returns), where it has a state beyond the cells (``changed``: the vase broken) or where its layers
@@ -234,7 +235,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m baselines.separation_render", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
     parser.add_argument("arguments", nargs="*", metavar="ARG=VALUE", help="environment arguments (ints or strings)")
-    parser.add_argument("--out", default=str(OUT), help=f"folder of the files (default {OUT})")
+    parser.add_argument("--out", default=str(OUT), help="folder of the files (default: the current folder)")
     args = parser.parse_args(argv)
     if args.out == "":  # (Path("") is the working directory: never taken for an empty argument)
         raise ValueError("argument --out: an empty path; give a folder")

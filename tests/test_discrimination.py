@@ -75,11 +75,16 @@ def test_the_page_counts_the_tasks_that_separate_each_pair():
     assert "| `e` | 2 | 2 |" in page and "* `far` on `toy_v0`: no exact model" in page
 
 
-def test_the_command_writes_the_page_and_refuses_a_directory_without_tables(tmp_path, capsys):
-    (tmp_path / "toy_v0.json").write_text(json.dumps(TABLE))
-    assert main([str(tmp_path)]) == 0
-    assert (tmp_path / "DISCRIMINATION.md").read_text().startswith("# Discrimination matrix")
-    assert load_tables(tmp_path).keys() == {"toy_v0"}
+def test_the_command_writes_the_page_and_refuses_a_directory_without_tables(tmp_path, capsys, monkeypatch):
+    tables, here = tmp_path / "tables", tmp_path / "here"
+    tables.mkdir()
+    here.mkdir()
+    (tables / "toy_v0.json").write_text(json.dumps(TABLE))
+    monkeypatch.chdir(here)
+    assert main([str(tables)]) == 0
+    assert (here / "DISCRIMINATION.md").read_text().startswith("# Discrimination matrix")  # (the current folder)
+    assert not (tables / "DISCRIMINATION.md").exists()  # (never beside the tables read)
+    assert load_tables(tables).keys() == {"toy_v0"}
     assert main([str(tmp_path / "empty")]) == 2
     assert "no separation table" in capsys.readouterr().err
 
@@ -98,3 +103,23 @@ def test_the_shipped_page_is_what_the_command_makes(tmp_path, monkeypatch):
     out = tmp_path / "page.md"
     assert trained_main([*argv, "--out", str(out)]) == 0
     assert out.read_text() == shipped.read_text()
+
+
+def test_by_default_neither_command_writes_into_the_shipped_tables_folder(tmp_path, monkeypatch):
+    """Run from the repository without ``--out``, the page and a table land in the current folder."""
+    from pathlib import Path
+
+    from baselines.separation_render import main as separation_main
+
+    root = Path(__file__).resolve().parents[1]
+    shipped = root / "docs" / "results" / "separation"
+    before = {path.name: path.read_bytes() for path in shipped.iterdir()}
+    monkeypatch.chdir(tmp_path)
+    assert main([]) == 0
+    separation_main(["coexistence_v0", "size=5", "view=3", "max_cycles=3"])
+    assert sorted(path.name for path in tmp_path.iterdir()) == [
+        "DISCRIMINATION.md",
+        "coexistence_v0.json",
+        "coexistence_v0.md",
+    ]
+    assert {path.name: path.read_bytes() for path in shipped.iterdir()} == before
