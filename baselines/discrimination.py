@@ -248,10 +248,12 @@ def discrimination_markdown(
     epsilon: float,
     command: str,
     trained: Mapping[tuple[str, str, str], TrainedPart] | None = None,
+    notes: Sequence[str] = (),
 ) -> str:
     """The page: the matrix of every pair of methods over every task, then β's groups. With
     ``trained`` (``{(task, first, second): part}``, pairs in the matrix's order), each cell also
-    says what trained runs found, and a column counts the tasks whose runs separate the pair."""
+    says what trained runs found, and a column counts the tasks whose runs separate the pair;
+    ``notes`` (the trained runs not read, and why) close the page."""
     indexes = {task: TableIndex.of(table, task) for task, table in tables.items()}
     methods = list(dict.fromkeys(method for index in indexes.values() for method in index.rows))
     if len(methods) > MAX_METHODS:
@@ -316,6 +318,8 @@ def discrimination_markdown(
         lines += ["", "## Not in a table", ""]
         for task, entry in omitted:  # (names and reasons from the tables' files: data)
             lines.append(f"* {code_span(entry['method'])} on {code_span(task)}: {markdown_text(entry['reason'])}")
+    if notes:
+        lines += ["", "## Trained runs not read", "", *(f"* {markdown_text(note)}" for note in notes)]
     return "\n".join(lines) + "\n"
 
 
@@ -339,8 +343,11 @@ def _refused_argument(args: argparse.Namespace) -> str | None:
     return None
 
 
-TrainedCells = Callable[[Mapping[str, Mapping[str, Any]], Sequence[Path]], Mapping[tuple[str, str, str], TrainedPart]]
-"""What reads trained runs into cells: ``(tables, results directories) -> {(task, first, second): part}``."""
+TrainedCells = Callable[
+    [Mapping[str, Mapping[str, Any]], Sequence[Path]], tuple[Mapping[tuple[str, str, str], TrainedPart], Sequence[str]]
+]
+"""What reads trained runs into cells: ``(tables, results directories) -> ({(task, first, second): part}, notes)``,
+a note per reason some runs were not read."""
 
 
 def main(
@@ -385,8 +392,8 @@ def main(
     try:
         check_own_file(out, "discrimination page", TITLE.encode())  # (before any table is read)
         tables = load_tables(args.directory)
-        cells = trained(tables, results) if trained is not None and results else None
-        page = discrimination_markdown(tables, args.epsilon, command, cells)
+        cells, notes = trained(tables, results) if trained is not None and results else (None, ())
+        page = discrimination_markdown(tables, args.epsilon, command, cells, notes)
     except MissingPair as error:
         print(f"{prog}: error: {terminal_line(error.in_folder(args.directory))}", file=sys.stderr)
         return 2

@@ -27,12 +27,33 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.markdown_escape import code_span
+from empathy_zoo.markdown_escape import code_span, markdown_text
 from empathy_zoo.names import terminal_line
 from leaderboard.run_facts import in_paper_setting
-from leaderboard.trained_separation import FEWER, MORE, Judgement, Prediction, at_beta, judge, predictions, task_separates
+from leaderboard.trained_separation import (
+    BETA,
+    FEWER,
+    MORE,
+    Judgement,
+    Prediction,
+    at_beta,
+    judge,
+    predictions,
+    task_separates,
+)
 
-__all__ = ["Reading", "can_harm", "final_harms", "markdown", "read_runs", "main"]
+__all__ = [
+    "NOT_READ",
+    "Reading",
+    "can_harm",
+    "final_harms",
+    "markdown",
+    "not_read_notes",
+    "read_runs",
+    "selfish_methods",
+    "why_not_read",
+    "main",
+]
 
 TABLES = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
 """The shipped separation tables (``<task>.json``)."""
@@ -63,12 +84,8 @@ def final_harms(results: Sequence[RunResult], selfish_methods: Mapping[str, bool
     found: dict[tuple[str, str], dict[int, float]] = {}
     experiments: dict[tuple[str, str], RunResult] = {}
     for run in results:
-        if (run.variant or run.env) != run.env or not run.eval or not in_paper_setting(run):
+        if why_not_read(run, selfish_methods) is not None:
             continue
-        if selfish_methods.get(run.method, False):
-            beta = run.config.settings.get("selfishness")
-            if beta is None or not at_beta(beta):  # (the number itself: 0.5000001 is not 0.5)
-                continue
         first = experiments.setdefault((run.env, run.method), run)
         if first.experiment != run.experiment:
             raise ValueError(
@@ -82,10 +99,72 @@ def final_harms(results: Sequence[RunResult], selfish_methods: Mapping[str, bool
     return {key: [seeds[seed] for seed in sorted(seeds)] for key, seeds in found.items()}
 
 
+NOT_READ = {
+    "variant": "of a variant, not the task's own world",
+    "world": "trained outside the default world the tables model (another environment argument or partner)",
+    "evaluation": "without a greedy evaluation",
+    "beta": f"of a method with β at another β than {BETA}",
+}
+"""Why :func:`final_harms` leaves a run out, by the key :func:`why_not_read` gives."""
+
+
+def why_not_read(run: RunResult, selfish_methods: Mapping[str, bool]) -> str | None:
+    """The key of :data:`NOT_READ` that keeps ``run`` out of :func:`final_harms`, else ``None``."""
+    if (run.variant or run.env) != run.env:
+        return "variant"
+    if not in_paper_setting(run):
+        return "world"
+    if not run.eval:
+        return "evaluation"
+    if selfish_methods.get(run.method, False):
+        beta = run.config.settings.get("selfishness")
+        if beta is None or not at_beta(beta):  # (the number itself: 0.5000001 is not 0.5)
+            return "beta"
+    return None
+
+
+def not_read_notes(
+    results: Sequence[RunResult], selfish_methods: Mapping[str, bool], tasks: Sequence[str], methods: Sequence[str]
+) -> list[str]:
+    """One line per reason some runs of ``results`` are not read against the tables of ``tasks``
+    (naming ``methods``): its count and why (:data:`NOT_READ`, an environment no table models, a
+    method no table has a row of), so that no run is left out without a word."""
+    counts: dict[str, int] = {}
+    names: dict[str, set[str]] = {}
+    for run in results:
+        if run.env not in tasks:
+            why, name = "of an environment no table models", run.env
+        elif run.method not in methods:
+            why, name = "of a method no table has a row of", run.method
+        else:
+            key = why_not_read(run, selfish_methods)
+            if key is None:
+                continue
+            why, name = NOT_READ[key], ""
+        counts[why] = counts.get(why, 0) + 1
+        names.setdefault(why, set()).add(name)
+    return [
+        f"{count} run{'s' if count > 1 else ''} {why}"
+        + (f" ({_some(sorted(names[why]))})" if "" not in names[why] else "")
+        + ": not read"
+        for why, count in counts.items()
+    ]
+
+
+def _some(names: Sequence[str], most: int = 10) -> str:
+    """``names`` joined, at most ``most`` of them and a count of the rest."""
+    shown = ", ".join(names[:most])
+    return shown if len(names) <= most else f"{shown} and {len(names) - most:,} more"
+
+
+def selfish_methods(tables: Mapping[str, Mapping[str, Any]]) -> dict[str, bool]:
+    """``{method: whether it has a selfishness weight}`` over the rows of ``tables``."""
+    return {str(row["method"]): row.get("selfishness") is not None for table in tables.values() for row in table["rows"]}
+
+
 def read_runs(tables: Mapping[str, Mapping[str, Any]], results: Sequence[RunResult]) -> list[Reading]:
     """Every prediction of ``tables`` (``{task: separation table}``) read against ``results``."""
-    selfish = {str(row["method"]): row.get("selfishness") is not None for table in tables.values() for row in table["rows"]}
-    harms = final_harms(results, selfish)
+    harms = final_harms(results, selfish_methods(tables))
     readings = []
     for prediction in predictions({task: table for task, table in tables.items() if can_harm(task)}):
         method = harms.get((prediction.task, prediction.method), [])
@@ -95,8 +174,9 @@ def read_runs(tables: Mapping[str, Mapping[str, Any]], results: Sequence[RunResu
     return readings
 
 
-def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]]) -> str:
-    """The readings as Markdown: a table per task, then whether each task separates."""
+def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]], notes: Sequence[str] = ()) -> str:
+    """The readings as Markdown: a table per task, then whether each task separates, then ``notes``
+    (:func:`not_read_notes`: the runs not read, and why) where there are any."""
     lines: list[str] = []
     for task in tables:
         if not can_harm(task):
@@ -124,6 +204,8 @@ def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]
         judged = [reading.judgement for reading in rows if reading.judgement is not None]
         verdict = "yes" if task_separates(judged, task) else "no"
         lines += ["", f"Separates in trained runs: **{verdict}** (a ▲ or ▼ prediction holds).", ""]
+    if notes:
+        lines += ["## Runs not read", "", *(f"* {markdown_text(note)}" for note in notes), ""]
     return "\n".join(lines)
 
 
@@ -168,7 +250,10 @@ def main(argv: list[str] | None = None) -> int:
         tables = _read_tables(args.tables, sorted({run.env for run in results}))
         if not tables:
             raise ValueError(f"no separation table in {args.tables} is of a task the runs of {args.results} are on")
-        print(markdown(read_runs(tables, results), tables), end="")
+        selfish = selfish_methods(tables)
+        methods = [*dict.fromkeys(str(row["method"]) for table in tables.values() for row in table["rows"]), "dqn"]
+        notes = not_read_notes(results, selfish, list(tables), methods)
+        print(markdown(read_runs(tables, results), tables, notes), end="")
     except ValueError as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2

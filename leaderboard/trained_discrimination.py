@@ -138,21 +138,25 @@ def trained_cells(
 
 def cells_of_results(
     tables: Mapping[str, Mapping[str, Any]], results_dirs: Sequence[Path]
-) -> dict[tuple[str, str, str], TrainedCell]:
+) -> tuple[dict[tuple[str, str, str], TrainedCell], list[str]]:
     """The trained cells of the result files of ``results_dirs`` for the matrix of ``tables``
-    (every method of the tables, in their order; a task whose robot can harm)."""
+    (every method of the tables, in their order; a task whose robot can harm), and a note per
+    reason some runs were not read (:func:`leaderboard.separation_reading.not_read_notes`)."""
     from empathy_zoo.training.heldout import results_of
-    from leaderboard.separation_reading import can_harm
+    from leaderboard.improvement import is_dqn
+    from leaderboard.separation_reading import can_harm, not_read_notes, selfish_methods
 
     results = [result for directory in results_dirs for _, result in results_of(directory)]
     indexes = [TableIndex.of(table, task) for task, table in tables.items()]
     methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
-    selfish = {str(row["method"]): row.get("selfishness") is not None for t in tables.values() for row in t["rows"]}
+    selfish = selfish_methods(tables)
     harms, shared = method_harms(results, selfish)
     if shared:
         raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
     tasks = list(tables)
-    return trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
+    as_read = [dataclasses.replace(run, method="dqn") if is_dqn(run) else run for run in results]  # (as method_harms reads them)
+    notes = not_read_notes(as_read, selfish, tasks, methods)
+    return trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks}), notes
 
 
 def main(argv: Sequence[str] | None = None) -> int:

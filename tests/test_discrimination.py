@@ -123,3 +123,24 @@ def test_by_default_neither_command_writes_into_the_shipped_tables_folder(tmp_pa
         "coexistence_v0.md",
     ]
     assert {path.name: path.read_bytes() for path in shipped.iterdir()} == before
+
+
+def test_trained_runs_not_read_close_the_page_with_their_count_and_reason(tmp_path):
+    """A results directory's runs the matrix cannot read (another variant, another β) are counted, never dropped silently."""
+    from helpers_results import synthetic_document
+
+    from leaderboard.trained_discrimination import cells_of_results
+
+    runs = tmp_path / "results" / "runs"
+    runs.mkdir(parents=True)
+    for seed in range(3):
+        for method, beta in (("dqn", 1.0), ("e", 0.5), ("e", 0.25)):
+            document = synthetic_document("coexistence_v0", "empathic_dqn" if method == "e" else method, beta, seed)
+            (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
+    rows = [{**r, "method": "empathic_dqn"} if r["method"] == "e" else r for r in TABLE["rows"]]  # (a registered method)
+    table = {**TABLE, "rows": rows}
+    cells, notes = cells_of_results({"coexistence_v0": table}, [tmp_path / "results"])
+    assert notes == ["3 runs of a method with β at another β than 0.5: not read"]
+    page = discrimination_markdown({"coexistence_v0": table}, 0.01, "cmd", cells, notes)
+    assert page.endswith("## Trained runs not read\n\n* 3 runs of a method with β at another β than 0.5: not read\n")
+    assert "## Trained runs not read" not in discrimination_markdown({"coexistence_v0": table}, 0.01, "cmd", cells)

@@ -11,6 +11,7 @@ import pytest
 from helpers_results import synthetic_document, synthetic_result
 
 from empathy_zoo.cli import main
+from empathy_zoo.markdown_escape import markdown_text
 from leaderboard.separation_reading import final_harms, markdown, read_runs
 
 
@@ -68,7 +69,7 @@ def test_each_prediction_is_judged_on_its_methods_final_greedy_harms() -> None:
 
 
 def test_an_opposite_mark_fails_and_a_task_without_a_holding_mark_does_not_separate() -> None:
-    runs = _runs(dqn=1.0, dqn_harm_penalty=2.0)
+    runs = _runs(dqn=0.0, dqn_harm_penalty=1.0)  # (Charger: one cat, harmed at most once)
     (reading,) = [r for r in read_runs({"charger_v0": TABLE}, runs) if r.prediction.method == "dqn_harm_penalty"]
     assert reading.judgement.observed == "more" and reading.judgement.outcome == "fails"
     assert "Separates in trained runs: **no**" in markdown(read_runs({"charger_v0": TABLE}, runs), {"charger_v0": TABLE})
@@ -112,3 +113,42 @@ def test_the_command_reads_a_directory_and_says_what_it_cannot_read(tmp_path: Pa
     (tmp_path / "empty").mkdir()
     assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tmp_path / "empty")]) == 2
     assert "no separation table" in capsys.readouterr().err
+
+
+def test_every_run_left_out_is_counted_with_its_reason() -> None:
+    """No run is left out without a word: each reason says how many runs it kept out."""
+    import dataclasses
+
+    from empathy_zoo.experiment.records import RunResult
+    from leaderboard.separation_reading import not_read_notes, why_not_read
+
+    read = synthetic_result("charger_v0", "empathic_dqn", 0.5, 0, harms=1.0)
+    other_beta = [synthetic_result("charger_v0", "empathic_dqn", 0.25, s, harms=1.0) for s in (1, 2)]
+    document = synthetic_document("charger_v0", "dqn", 1.0, 3, harms=1.0)
+    variant = RunResult.from_checked({**document, "variant": "charger_big", "run_id": "charger_big__d-1.0__s3"})
+    world = synthetic_result("charger_v0", "dqn", 1.0, 4, fixed={"cat_0": "stay"}, harms=1.0)
+    unevaluated = dataclasses.replace(synthetic_result("charger_v0", "dqn", 1.0, 5, harms=1.0), eval=())
+    unknown = synthetic_result("charger_v0", "dqn_social_value", 1.0, 6, harms=1.0)
+    elsewhere = synthetic_result("coexistence_v0", "dqn", 1.0, 7, harms=1.0)
+    runs = [read, *other_beta, variant, world, unevaluated, unknown, elsewhere]
+    selfish = {"empathic_dqn": True}
+    assert [why_not_read(run, selfish) for run in (read, other_beta[0], variant, world, unevaluated)] == [
+        None,
+        "beta",
+        "variant",
+        "world",
+        "evaluation",
+    ]
+    notes = not_read_notes(runs, selfish, ["charger_v0"], ["dqn", "empathic_dqn"])
+    assert notes == [
+        "2 runs of a method with β at another β than 0.5: not read",
+        "1 run of a variant, not the task's own world: not read",
+        "1 run trained outside the default world the tables model (another environment argument or partner): not read",
+        "1 run without a greedy evaluation: not read",
+        "1 run of a method no table has a row of (dqn_social_value): not read",
+        "1 run of an environment no table models (coexistence_v0): not read",
+    ]
+    page = markdown(read_runs({"charger_v0": TABLE}, runs), {"charger_v0": TABLE}, notes)
+    assert page.endswith("".join(f"* {markdown_text(note)}\n" for note in notes))
+    assert "## Runs not read\n\n* 2 runs of a method with β at another β than 0.5: not read\n" in page
+    assert "## Runs not read" not in markdown(read_runs({"charger_v0": TABLE}, [read]), {"charger_v0": TABLE})
