@@ -5,6 +5,7 @@ with (:func:`check_label`, the one rule both apply)."""
 
 from __future__ import annotations
 
+import inspect
 import os
 import re
 import stat
@@ -231,6 +232,16 @@ def positional_tool(prog: str, usage: str, args: Sequence[str], count: int, body
     except (ValueError, OSError) as error:
         print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
+
+
+_ROLE = re.compile(r":[a-z]+:`~?([^`<]+?)(?:\s*<[^>]+>)?`")
+
+
+def tool_help(usage: str, doc: str | None) -> str:
+    """The ``--help`` text of a tool that :func:`positional_tool` runs: ``usage``, then its module's
+    docstring ``doc`` (what it reads, matches and refuses), its cross-references as plain names."""
+    text = _ROLE.sub(lambda found: found.group(1).strip(), inspect.cleandoc(doc or ""))
+    return f"{usage}\n\n{text}" if text else usage
 
 
 def cannot_create(directory: Path, error: OSError) -> ValueError:

@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.names import positional_tool
+from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import load_results
 from leaderboard.run_facts import description_of
 
@@ -134,10 +134,11 @@ def compare_runs(old: Sequence[RunResult], new: Sequence[RunResult]) -> dict[str
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.compare_runs OLD_DIR NEW_DIR``: one line per matched pair, then the counts."""
     args = list(sys.argv[1:] if argv is None else argv)
+    usage = f"usage: {PROG} OLD_DIR NEW_DIR"
     if args in (["-h"], ["--help"]):
-        print(main.__doc__)
+        print(tool_help(usage, __doc__))
         return 0
-    return positional_tool(PROG, f"usage: {PROG} OLD_DIR NEW_DIR", args, 2, _print_comparison)
+    return positional_tool(PROG, usage, args, 2, _print_comparison)
 
 
 def _print_comparison(paths: list[str]) -> int:

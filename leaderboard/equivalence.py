@@ -60,7 +60,7 @@ import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
-from empathy_zoo.names import positional_tool
+from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, run_key, runs_by_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
@@ -441,14 +441,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     import sys
 
     given = list(sys.argv[1:] if argv is None else argv)
-    if given in (["-h"], ["--help"]):
-        print(main.__doc__, "--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS.")
-        return 0
     options = {"--all", "--tost"}
     usage = (
         "usage: python -m leaderboard.equivalence FIRST_DIR SECOND_DIR [--all] [--tost]   "
         "(--all: every cell, not the ten smallest p; --tost: the equivalence test within TOST_MARGINS)"
     )
+    if given in (["-h"], ["--help"]):
+        print(tool_help(usage, __doc__))
+        return 0
 
     def print_report(paths: list[str]) -> int:
         print(report(paths[0], paths[1], every_cell="--all" in given, with_tost="--tost" in given))

@@ -18,7 +18,7 @@ from empathy_zoo.environments import ENVIRONMENT_TABLE, entry_of
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
-from empathy_zoo.names import positional_tool
+from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
 from leaderboard.legends import holm_survivors, multiplicity_note
@@ -110,10 +110,11 @@ def versus_dqn_tables(results: Sequence[RunResult], metrics_of: Mapping[str, Seq
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.versus_dqn RESULTS_DIR``: the tables against DQN, printed."""
     args = list(sys.argv[1:] if argv is None else argv)
+    usage = f"usage: {PROG} RESULTS_DIR"
     if args in (["-h"], ["--help"]):
-        print(main.__doc__)
+        print(tool_help(usage, __doc__))
         return 0
-    return positional_tool(PROG, f"usage: {PROG} RESULTS_DIR", args, 1, _print_tables)
+    return positional_tool(PROG, usage, args, 1, _print_tables)
 
 
 def _print_tables(paths: list[str]) -> int:
