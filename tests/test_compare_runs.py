@@ -10,8 +10,8 @@ from leaderboard.compare_runs import compare_runs
 def test_runs_are_matched_by_experiment_and_seed_and_compared_column_by_column() -> None:
     old = [synthetic_result("coexistence_v0", "dqn", 1.0, seed, harms=0.5) for seed in range(3)]
 
-    def one_more_harm(document: dict) -> None:  # one value of one column changed
-        document["train"]["harms"][0] += 1
+    def one_more_harm(document: dict) -> None:  # one value of one column changed (within the one cat's 0 or 1)
+        document["train"]["harms"][0] = 1 - document["train"]["harms"][0]
 
     new = [old[0], edited(old[1], one_more_harm), synthetic_result("coexistence_v0", "dqn", 1.0, 7, harms=0.5)]
     result = compare_runs(old, new)

@@ -17,7 +17,8 @@ SEEDS = range(10)
 
 def runs(draw_seed: int, harm_shift: float = 0.0, beta: float = 0.5, method: str = "empathic_dqn") -> list[RunResult]:
     """Ten seeds of one Coexistence experiment, each run's metric means drawn from ``draw_seed``'s
-    generator (harms ~ N(1 + shift·0.3, 0.3), survival ~ N(400, 30), the cat's return ~ N(450, 20))."""
+    generator (harms ~ N(0.5 + shift·0.1, 0.08), within the one cat's [0, 1]; survival ~ N(400, 30),
+    the cat's return ~ N(450, 20))."""
     rng = np.random.default_rng(draw_seed)
     return [
         synthetic_result(
@@ -25,7 +26,7 @@ def runs(draw_seed: int, harm_shift: float = 0.0, beta: float = 0.5, method: str
             method,
             beta,
             seed,
-            harms=float(rng.normal(1.0 + harm_shift * 0.3, 0.3)),
+            harms=float(rng.normal(0.5 + harm_shift * 0.1, 0.08)),
             survival=float(rng.normal(400, 30)),
             other_return=float(rng.normal(450, 20)),
             **{"return": 0.0},

@@ -110,11 +110,13 @@ def test_three_seeds_against_three_can_never_give_a_verdict() -> None:
 
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> RunResult:
-    """A run whose one training episode and greedy episode survived ``value`` steps and harmed
-    ``value // 100`` cats (more with longer survival)."""
+    """A run beside four cats whose one training episode and greedy episode survived ``value`` steps
+    and harmed ``value // 100`` cats (more with longer survival)."""
     train = {"episode_end_step": [10], "survival": [value], "harms": [value // 100]}
     evaluations = [{"step": 10, "survival": [value], "harms": [value // 100]}]
-    return hand_made_result("coexistence_v0", method, seed, train, evaluations, settings={"selfishness": selfishness})
+    return hand_made_result(
+        "coexistence_v0", method, seed, train, evaluations, settings={"selfishness": selfishness}, env_kwargs={"num_cats": 4}
+    )
 
 
 def _verdicts(method_values: list[float], dqn_values: list[float]) -> dict[str, Improvement]:
