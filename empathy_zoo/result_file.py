@@ -142,6 +142,8 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
         raise check.fail("env", f"a registered environment ({', '.join(ENGINES)})", result["env"])
     if result.get("variant") is not None:
         check.name(result["variant"], "variant")
+        if result["variant"] in ENGINES and result["variant"] != result["env"]:
+            raise check.fail("variant", f"a variant of {result['env']} (not named as another environment)", result["variant"])
     check.text(result["method"], "method")
     check.label(result["method_label"], "method_label")
     steps = check.integer(result["steps"], "steps", 1, MAX_STEPS)

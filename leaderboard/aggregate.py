@@ -192,8 +192,17 @@ def load_result_files(results_dir: str | os.PathLike[str]) -> list[tuple[Path, R
 def check_runs(runs: Sequence[tuple[str | os.PathLike[str], RunResult]]) -> None:
     """``ValueError`` when two of ``runs`` (``(where it is, result)``) are one row's runs from two
     experiments (:func:`empathy_zoo.result_file.check_one_experiment_per_label`) or are the same
-    run, ``(env, method_label, seed)``, which would be counted twice."""
+    run, ``(env, method_label, seed)``, which would be counted twice, or when one variant (a table)
+    holds runs of two environments, whose rows and DQN would be read as one environment's."""
     check_one_experiment_per_label((result.table_env, result.method_label, result.run_id, str(where)) for where, result in runs)
+    environment: dict[str, tuple[str, str]] = {}
+    for where, result in runs:
+        first_env, first = environment.setdefault(result.table_env, (result.env, str(where)))
+        if first_env != result.env:
+            raise ValueError(
+                f"{first} and {where} are both of variant {result.table_env!r} but of two environments "
+                f"({first_env}, {result.env}): a variant is one environment's table; rename one variant"
+            )
     seen: dict[tuple[str, str, int], str] = {}
     for where, result in runs:
         key = (result.table_env, result.method_label, result.seed)

@@ -413,6 +413,11 @@ def _env_table(variant: str, table: Any, methods: list[dict[str, Any]], source: 
     if env not in ENGINES:
         key = "env" if "env" in checked else "variant name (or set env = ...)"
         raise SweepConfigError(f"{where} {key}: unknown environment {env!r}; registered: {sorted(ENGINES)}")
+    if variant in ENGINES and variant != env:
+        raise SweepConfigError(
+            f"{where} env: {env!r}, but the variant is named as another environment ({variant}), whose table "
+            "its runs would be read in; name the variant otherwise"
+        )
     kwargs = {key: value for key, value in checked.items() if key not in ("env", "fixed", "methods")}
     own = own_arguments(ENGINES[env])
     for key in kwargs:

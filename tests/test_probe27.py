@@ -1,0 +1,50 @@
+"""A hostile probe's findings (probe 27), each refused or said where it was once accepted in silence:
+
+* a variant is one environment's table: a result file whose variant is named as another
+  environment, a sweep that declares one, and a folder whose variant holds runs of two
+  environments are refused (their rows were read in the other environment's table).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from helpers_results import derive_run_id, synthetic_document
+
+from empathy_zoo.experiment.result_reader import check_result
+from empathy_zoo.experiment.sweep_file import parse_sweep
+from empathy_zoo.experiment.values import SweepConfigError
+from empathy_zoo.result_file import ResultFileError
+from leaderboard.aggregate import load_results
+
+
+def _with_variant(env: str, variant: str, seed: int = 0, beta: float = 1.0) -> dict:
+    document = synthetic_document(env, "dqn", beta, seed)
+    document["variant"] = variant
+    document["config"] = {**document["config"], "variant": variant}
+    return derive_run_id(document)
+
+
+def test_a_result_file_s_variant_named_as_another_environment_is_refused() -> None:
+    with pytest.raises(ResultFileError, match=r"^forged\.json: field variant: expected a variant of coexistence_v0"):
+        check_result(_with_variant("coexistence_v0", "sharing_v0"), "forged.json")
+    check_result(_with_variant("coexistence_v0", "coexistence_v0"), "own.json")  # (its own name: the default variant)
+
+
+def test_a_sweep_variant_named_as_another_environment_is_refused() -> None:
+    sweep = {"methods": [{"method": "dqn"}], "envs": {"sharing_v0": {"env": "coexistence_v0"}}}
+    with pytest.raises(SweepConfigError, match=r"\[envs\.sharing_v0\] env: 'coexistence_v0', but the variant is named as"):
+        parse_sweep(sweep, "s.toml")
+    assert parse_sweep({"methods": [{"method": "dqn"}], "envs": {"cats": {"env": "coexistence_v0"}}}, "s.toml")
+
+
+def test_a_variant_of_two_environments_is_refused_naming_two_runs(tmp_path: Path) -> None:
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for env, beta in (("coexistence_v0", 1.0), ("sharing_v0", 0.5)):  # (two rows: labels dqn 1.0 and dqn 0.5)
+        document = _with_variant(env, "foo", beta=beta)
+        (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
+    with pytest.raises(ValueError, match=r"are both of variant 'foo' but of two environments \(.*\): a variant is one"):
+        load_results(tmp_path)
