@@ -216,7 +216,7 @@ def _render(
     improvements = improvements_over_dqn(
         results, {env: env_metrics(env, base_env, METRIC_NAMES) for env in base_env}, confidence=confidence
     )
-    uncompared = uncompared_rows(results) if comparison else []
+    uncompared = uncompared_rows(results)  # (named with one directory too: no row is left out without a word)
     rows = None
     if comparison:
         directories = read.row_directories()

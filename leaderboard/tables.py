@@ -288,12 +288,12 @@ def names_baselines(provenance: Provenance, cells: Sequence[Improvement]) -> boo
 
 
 def uncompared_note(uncompared: Sequence[tuple[str, str]], env: str | None, markdown: bool = False) -> str:
-    """The sentence naming ``env``'s rows that no DQN row of their variant and budget is compared
+    """The sentence naming ``env``'s rows that no DQN row of their variant, world and budget is compared
     with (their labels :func:`markdown_text` with ``markdown``)."""
     labels = [markdown_text(label) if markdown else label for row_env, label in uncompared if row_env == env]
     if not labels:
         return ""
-    return "Not compared with DQN (no DQN row of their variant and budget): " + ", ".join(labels) + "."
+    return "Not compared with DQN (no DQN row of their variant, world and budget): " + ", ".join(labels) + "."
 
 
 def table_seeds(scores: Sequence[Score], env: str, phase: str) -> list[int]:

@@ -20,9 +20,10 @@ from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.metrics import WHOLE_NUMBER_METRICS
 from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import group_runs, load_results, score_runs
-from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn
+from leaderboard.improvement import VERDICT_MARKS, Improvement, improvements_over_dqn, is_dqn, uncompared_rows
 from leaderboard.legends import holm_survivors, multiplicity_note
 from leaderboard.multiplicity import HOLM_MARK
+from leaderboard.tables import uncompared_note
 
 PROG = "python -m leaderboard.versus_dqn"
 
@@ -62,24 +63,28 @@ def versus_dqn_tables(results: Sequence[RunResult], metrics_of: Mapping[str, Seq
             if (key := (variant, label, phase, metric)) in verdicts
         ]
     holm = {id(cell) for cell, keep in zip(shown, holm_survivors(shown), strict=True) if keep}
+    uncompared = uncompared_rows(results)
     lines: list[str] = []
     for variant, metrics in metrics_of.items():
         labels = [label for (env, label) in groups if env == variant]
         dqn = [label for label in labels if all(is_dqn(run) for run in groups[(variant, label)])]
         seeds = {label: len(groups[(variant, label)]) for label in labels}
-        heading = (
-            ", ".join(
-                f"{m} {_format(scores[(variant, dqn[0], 'eval', m)].mean, m)} / "
-                f"{_format(scores[(variant, dqn[0], 'train_final10', m)].mean, m)}"
+
+        def heading(row: str, metrics: Sequence[str] = metrics, variant: str = variant) -> str:
+            return ", ".join(
+                f"{m} {_format(scores[(variant, row, 'eval', m)].mean, m)} / "
+                f"{_format(scores[(variant, row, 'train_final10', m)].mean, m)}"
                 for m in metrics
             )
-            if dqn
-            else ""
-        )
+
+        if len(dqn) == 1:
+            headings = [f"DQN ({seeds[dqn[0]]} seeds): {heading(dqn[0])} (greedy / training)."]
+        else:  # (several DQN rows, of other budgets or worlds: each row is compared with its own)
+            headings = [f"{markdown_text(row)} ({seeds[row]} seeds): {heading(row)} (greedy / training)." for row in dqn]
         lines += [
             f"### {variant}",
             "",
-            f"DQN ({seeds[dqn[0]]} seeds): {heading} (greedy / training)." if dqn else "",
+            "\n".join(headings),
             "",
             "| method | seeds | " + " | ".join(metrics) + " |",
             "|---|---|" + "---|" * len(metrics),
@@ -98,6 +103,8 @@ def versus_dqn_tables(results: Sequence[RunResult], metrics_of: Mapping[str, Seq
                 cells.append(" / ".join(parts))
             lines.append(f"| {markdown_text(label)} | {seeds[label]} | " + " | ".join(cells) + " |")
         lines.append("")
+        note = uncompared_note(uncompared, variant, markdown=True)
+        lines += [note, ""] if note else []
     if shown:
         lines += [
             "▲ / ▼: better / worse than DQN by the exact two-sided Mann–Whitney permutation test at 5 %; "

@@ -149,7 +149,7 @@ def test_a_row_without_dqn_of_its_budget_is_named_not_compared(tmp_path: Path) -
     assert improvements_over_dqn(read.results, {ENV: ["harms"]}) == []
     assert uncompared_rows(read.results) == [(ENV, f"{EMPATHIC} · 8,000 steps")]
     markdown = write_leaderboard([mine, shipped], tmp_path / "out")["markdown"].read_text(encoding="utf-8")
-    assert f"Not compared with DQN (no DQN row of their variant and budget): {EMPATHIC} · 8,000 steps." in markdown
+    assert f"Not compared with DQN (no DQN row of their variant, world and budget): {EMPATHIC} · 8,000 steps." in markdown
     assert "### P(improves on DQN)" not in markdown
 
 

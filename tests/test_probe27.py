@@ -48,3 +48,41 @@ def test_a_variant_of_two_environments_is_refused_naming_two_runs(tmp_path: Path
         (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
     with pytest.raises(ValueError, match=r"are both of variant 'foo' but of two environments \(.*\): a variant is one"):
         load_results(tmp_path)
+
+
+def _write(directory: Path, documents: list[dict]) -> Path:
+    (directory / "runs").mkdir(parents=True, exist_ok=True)
+    for document in documents:
+        (directory / "runs" / f"{document['run_id']}.json").write_text(json.dumps(document))
+    return directory
+
+
+def _other_world(tmp_path: Path) -> Path:
+    """DQN in the default world and Empathic DQN beside a cat that stays: no DQN of its world."""
+    dqn = [synthetic_document("coexistence_v0", "dqn", 1.0, seed, harms=0.5) for seed in range(5)]
+    stay = [
+        synthetic_document("coexistence_v0", "empathic_dqn", 0.5, seed, fixed={"cat_0": "stay"}, harms=0.0) for seed in range(5)
+    ]
+    return _write(tmp_path / "results", dqn + stay)
+
+
+def test_a_one_directory_leaderboard_names_a_row_no_dqn_is_compared_with(tmp_path: Path) -> None:
+    from leaderboard.report import write_leaderboard
+
+    page = write_leaderboard([_other_world(tmp_path)], tmp_path / "out", command="c")["markdown"].read_text(encoding="utf-8")
+    assert "Not compared with DQN (no DQN row of their variant, world and budget): empathic_dqn 0.5." in page
+
+
+def test_versus_dqn_names_a_row_no_dqn_is_compared_with_and_shows_every_dqn_row(tmp_path: Path) -> None:
+    from leaderboard.versus_dqn import versus_dqn_tables
+
+    tables = versus_dqn_tables(load_results(_other_world(tmp_path)))
+    assert "Not compared with DQN (no DQN row of their variant, world and budget): empathic_dqn 0.5." in tables
+    stay_dqn = [
+        derive_run_id({**document, "method_label": "dqn stay"})
+        for document in (
+            synthetic_document("coexistence_v0", "dqn", 1.0, seed, fixed={"cat_0": "stay"}, harms=0.0) for seed in range(5)
+        )
+    ]  # (a second DQN row: DQN beside the cat that stays)
+    tables = versus_dqn_tables(load_results(_write(tmp_path / "results", stay_dqn)))
+    assert "\ndqn stay (5 seeds): " in tables and "\ndqn 1.0 (5 seeds): " in tables and "Not compared" not in tables
