@@ -86,3 +86,35 @@ def test_versus_dqn_names_a_row_no_dqn_is_compared_with_and_shows_every_dqn_row(
     ]  # (a second DQN row: DQN beside the cat that stays)
     tables = versus_dqn_tables(load_results(_write(tmp_path / "results", stay_dqn)))
     assert "\ndqn stay (5 seeds): " in tables and "\ndqn 1.0 (5 seeds): " in tables and "Not compared" not in tables
+
+
+def test_train_removes_only_its_own_orphan_list_of_runs(tmp_path: Path) -> None:
+    """A list of runs without its checkpoint is removed, and said, only where the suite wrote it:
+    its own name and opening; a user's file of the same suffix stays."""
+    from empathy_zoo.atomic import write_json_atomic
+    from empathy_zoo.training.resume import MANIFEST_FORMAT, plan_ensembles
+
+    checkpoints = tmp_path / "checkpoints"
+    checkpoints.mkdir()
+    (checkpoints / "notes.runs.json").write_text('{"my": "notes"}')
+    (checkpoints / "zz.runs.json").write_text('{\n "format": 2}')  # (the opening, not the name)
+    (checkpoints / "coexistence_v0-0123456789abcdef.runs.json").write_text('{"mine": 1}')  # (the name, not the opening)
+    own = checkpoints / "coexistence_v0-fedcba9876543210.runs.json"
+    write_json_atomic(own, {"format": MANIFEST_FORMAT, "runs": []})
+    notes: list[str] = []
+    assert plan_ensembles([], tmp_path, 1, notes.append) == []
+    assert sorted(path.name for path in checkpoints.iterdir()) == [
+        "coexistence_v0-0123456789abcdef.runs.json",
+        "notes.runs.json",
+        "zz.runs.json",
+    ]
+    assert notes == [f"removed {own}: a list of runs without its checkpoint (a run killed before its first checkpoint)"]
+
+
+def test_the_name_a_misnamed_checkpoint_resumes_under_is_that_of_its_runs_environment() -> None:
+    from empathy_zoo.training.resume import _AskedRuns, _env_of
+
+    ids = ["coexistence_v0__dqn-33c116fb__s0"]
+    assert _env_of(ids, _AskedRuns({}), Path("mymodel.pt")) == "coexistence_v0"  # (not "", the given name's prefix)
+    assert _env_of(ids, _AskedRuns({}), Path("sharing_v0-0123.pt")) == "sharing_v0"
+    assert _env_of(["cats__dqn-33c116fb__s0"], _AskedRuns({}), Path("mymodel.pt")) == "<environment>"

@@ -44,6 +44,7 @@ import hashlib
 import inspect
 import json
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -111,6 +112,38 @@ def _free_suffix(suffix: str, *paths: Path) -> str:
         if not any(os.path.lexists(path.with_name(path.name + tail)) for path in paths):
             return tail
         number += 1
+
+
+_OWN_MANIFEST = re.compile(r"(?P<env>[A-Za-z0-9_.-]+)-[0-9a-f]{16}" + re.escape(MANIFEST_SUFFIX))
+"""The name the suite gives a list of runs: ``<environment>-<16 hex digits>.runs.json``."""
+_MANIFEST_OPENING = b'{\n "format": '
+"""How a list of runs the suite wrote begins (:func:`write_manifest`)."""
+
+
+def _own_orphan(manifest: Path) -> bool:
+    """Whether ``manifest`` (a list of runs without its checkpoint) is one the suite wrote and may
+    remove: a regular file of the suite's own name (:data:`_OWN_MANIFEST`, of a registered
+    environment) that begins as :func:`write_manifest` writes one. Any other file is left alone."""
+    from empathy_zoo.environments import ENGINES
+
+    found = _OWN_MANIFEST.fullmatch(manifest.name)
+    if found is None or found["env"] not in ENGINES or manifest.is_symlink() or not manifest.is_file():
+        return False
+    with manifest.open("rb") as handle:
+        return handle.read(len(_MANIFEST_OPENING)) == _MANIFEST_OPENING
+
+
+def _env_of(ids: Sequence[str], runs_asked: _AskedRuns, checkpoint: Path) -> str:
+    """The environment a checkpoint of the runs ``ids`` is named for: that of its first run where it
+    is asked for here, else the prefix of the name it was given (``<environment>-<digest>.pt``) or
+    of its first run id (``<variant>__…``) where either is a registered environment, else a placeholder."""
+    from empathy_zoo.environments import ENGINES
+
+    spec = runs_asked.known.get(ids[0]) if ids else None
+    if spec is not None:
+        return spec.env
+    guesses = [checkpoint.stem.rpartition("-")[0], ids[0].partition("__")[0] if ids else ""]
+    return next((guess for guess in guesses if guess in ENGINES), "<environment>")
 
 
 def _set_aside_misnamed(checkpoint: Path, suffix: str = MISNAMED_SUFFIX) -> Path:
@@ -285,8 +318,9 @@ def plan_ensembles(
     chunks: list[list[RunSpec]] = []
     usual = [[spec.run_id for spec in chunk] for chunk in group_specs(todo, max_parallel_runs)]
     for manifest in directory.glob(f"*{MANIFEST_SUFFIX}"):  # a manifest written just before a kill
-        if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists():
+        if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists() and _own_orphan(manifest):
             manifest.unlink()
+            on_note(f"removed {manifest}: a list of runs without its checkpoint (a run killed before its first checkpoint)")
     checkpoints = sorted(directory.glob("*.pt"), key=lambda p: (-p.stat().st_mtime_ns, p.name)) if directory.is_dir() else []
     kept: list[tuple[Path, str, list[str]]] = []
     runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if every_run is None else every_run)})
@@ -298,7 +332,7 @@ def plan_ensembles(
             on_note(
                 f"set aside checkpoint {checkpoint} as {aside.name}: it holds the runs {', '.join(ids)}, not those its "
                 f"name is for (was it renamed or copied?); to resume them, give it back its own name "
-                f"{_checkpoint_file(out_dir, checkpoint.stem.rpartition('-')[0], ids).name}"
+                f"{_checkpoint_file(out_dir, _env_of(ids, runs_asked, checkpoint), ids).name}"
             )
             continue
         asked = [run_id for run_id in ids if run_id in pending]
