@@ -55,6 +55,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -62,7 +63,7 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import PHASES, run_scalars, table_env
-from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, run_key, runs_by_key
+from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, compare_runs, run_key, runs_by_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import table_metrics
 from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
@@ -402,10 +403,23 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool
     margin (:func:`tost_report`)."""
     from leaderboard.aggregate import load_results
 
+    if Path(old_dir).resolve() == Path(new_dir).resolve():
+        raise ValueError(f"{new_dir} is given twice (as {old_dir} too): its runs would be compared with themselves")
     old, new = load_results(old_dir), load_results(new_dir)
     result = equivalence(old, new)
     tested = sorted(result.tested, key=lambda cell: cell.p_value)
+    pairs = compare_runs(old, new)
+    copies = bool(pairs["same"]) and not pairs["different"]
     lines = [
+        *(
+            [
+                f"Every matched pair of runs ({len(pairs['same'])}) is identical column for column: the two sets hold "
+                "the same numbers (a copy, or a kernel that changed nothing), so no test below tells two processes apart.",
+                "",
+            ]
+            if copies
+            else []
+        ),
         f"**{result.verdict}**: {len(result.differing)} of {len(tested)} tested cells differ at a family-wise "
         f"{FAMILY_LEVEL:.0%} (Holm; {len(result.cells) - len(tested)} constant cells not tested; "
         f"{len(old)} runs against {len(new)}; experiments without a partner: {len(result.only_old)} + {len(result.only_new)})",

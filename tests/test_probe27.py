@@ -118,3 +118,16 @@ def test_the_name_a_misnamed_checkpoint_resumes_under_is_that_of_its_runs_enviro
     assert _env_of(ids, _AskedRuns({}), Path("mymodel.pt")) == "coexistence_v0"  # (not "", the given name's prefix)
     assert _env_of(ids, _AskedRuns({}), Path("sharing_v0-0123.pt")) == "sharing_v0"
     assert _env_of(["cats__dqn-33c116fb__s0"], _AskedRuns({}), Path("mymodel.pt")) == "<environment>"
+
+
+def test_equivalence_refuses_one_directory_twice_and_says_when_the_sets_are_one(tmp_path: Path) -> None:
+    import shutil
+
+    from leaderboard.equivalence import report
+
+    quick = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"
+    with pytest.raises(ValueError, match="is given twice .*: its runs would be compared with themselves"):
+        report(str(quick), str(quick / "runs" / ".."))
+    copy = tmp_path / "copy"
+    shutil.copytree(quick / "runs", copy / "runs")
+    assert report(str(quick), str(copy)).startswith("Every matched pair of runs (30) is identical column for column")
