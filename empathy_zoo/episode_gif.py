@@ -11,6 +11,15 @@ DejaVu Sans: the title, the step, the robot's last action, a legend of what the 
 (:func:`empathy_zoo.render.legend`: the engine's declared colours and the battery's) and the
 metrics (:data:`~empathy_zoo.metrics.METRIC_NAMES`). Each frame lasts one tick of the
 environment's ``render_fps``; the last one is held :data:`HOLD_MS`.
+
+A frame is at most :data:`~empathy_zoo.limits.MAX_GIF_FRAME_SIDE` (1,600) pixels wide, grid and panel
+together (:func:`frame_layout`): a grid whose 24-pixel cells would make it wider is drawn with
+smaller cells, the largest of 12, 8, 6, 4, 3, 2 or 1 pixels that fits, by keeping every 2nd, 3rd, …
+pixel of the 24-pixel picture (its grid lines fall on kept pixels), when each step is recorded. Sizes
+up to 54 keep their 24-pixel cells (the default 7 × 7 grid, enlarged twice, is drawn as it always
+was); a 255 × 255 grid is drawn at 4 pixels a cell, a frame of 1,307 × 1,045 pixels (its 24-pixel
+cells made frames of 6,407 × 6,145, and ``watch --gif`` was killed at 16.7 GB). The frame's height is the
+grid's or the panel's, whichever is taller, and the margins: the panel takes a few hundred pixels.
 """
 
 from __future__ import annotations
@@ -26,11 +35,12 @@ import numpy as np
 from empathy_zoo.actions import Action
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.greedy_episode import EpisodeOutcome, EpisodeStep, agent_env, play_greedy, watch_env
+from empathy_zoo.limits import MAX_GIF_FRAME_SIDE
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.policies import PolicyEntry
 from empathy_zoo.render import FLOOR_RGB, GRID_RGB, LegendEntry, legend, scaled, swatch
 
-__all__ = ["GIF_STEPS", "HOLD_MS", "GifEpisode", "EpisodeRecorder", "episode_gif", "grid_scale"]
+__all__ = ["GIF_STEPS", "HOLD_MS", "FrameLayout", "GifEpisode", "EpisodeRecorder", "episode_gif", "frame_layout", "grid_scale"]
 
 GIF_STEPS = 60
 """Steps a GIF shows at most by default (a short episode: a few hundred KB)."""
@@ -46,6 +56,8 @@ LINE = 19
 """Pixels per line of text."""
 SWATCH = 24
 """Cell pixels of a legend swatch."""
+CELL_PIXELS = 24
+"""Pixels a cell of the environment's ``rgb_array`` frame takes (:func:`empathy_zoo.render.render_rgb`'s default)."""
 PANEL_RGB = (255, 255, 255)
 TEXT_RGB = (0, 0, 0)
 
@@ -70,6 +82,51 @@ def grid_scale(grid_width: int) -> int:
     """The whole factor (at least 1) that brings a grid image ``grid_width`` pixels wide nearest to
     :data:`GRID_PIXELS` (2 for the paper's 7 × 7 grid of 24-pixel cells)."""
     return max(1, round(GRID_PIXELS / max(1, grid_width)))
+
+
+@dataclass(frozen=True)
+class FrameLayout:
+    """How a GIF draws a grid of ``size`` × ``size`` cells (:func:`frame_layout`)."""
+
+    cell: int
+    """Pixels a cell takes before the grid is enlarged (:data:`CELL_PIXELS`, or fewer for a large grid)."""
+    stride: int
+    """Every ``stride``-th pixel of the environment's frame is kept (``source cell // cell``; 1 keeps all)."""
+    factor: int
+    """The whole factor the kept grid is enlarged by (:func:`grid_scale`)."""
+    width: int
+    """Pixels of a frame's width: margins, the enlarged grid, its closing line and the panel."""
+    height: int
+    """Pixels of a frame's height: the enlarged grid with its closing line, or the panel, whichever
+    is taller, and the margins."""
+
+
+def _panel_height(legend_entries: int) -> int:
+    """Pixels the panel's text takes with ``legend_entries`` legend lines (as :meth:`EpisodeRecorder._frame` lays it out)."""
+    lines = 2 + 1 + 2 + len(METRIC_NAMES) + 1  # title, env; a gap; step, action; the metrics; the last frame's note
+    return lines * LINE + 3 * (LINE // 2) + legend_entries * (SWATCH + 6)
+
+
+def frame_layout(size: int, legend_entries: int = 2, source_cell: int = CELL_PIXELS) -> FrameLayout:
+    """The layout of a GIF frame of a ``size`` × ``size`` grid rendered at ``source_cell`` pixels a
+    cell, beside a panel of ``legend_entries`` legend lines: the largest cell of whole pixels that
+    divides ``source_cell`` (24, 12, 8, 6, 4, 3, 2, 1) whose frame is at most
+    :data:`~empathy_zoo.limits.MAX_GIF_FRAME_SIDE` pixels wide. Computes sizes only, draws nothing.
+    A grid too large for that even at 1 pixel a cell (over 1,300 cells a side, beyond the bound of
+    ``size``) is a ``ValueError``."""
+    if isinstance(size, bool) or not isinstance(size, int) or size < 1:
+        raise ValueError(f"a grid's size is a positive int, got {size!r}")
+    for cell in (c for c in range(source_cell, 0, -1) if source_cell % c == 0):
+        grid = size * cell
+        factor = grid_scale(grid)
+        width = MARGIN + grid * factor + factor + MARGIN + PANEL_WIDTH + MARGIN
+        if width <= MAX_GIF_FRAME_SIDE:
+            height = max(grid * factor + factor, _panel_height(legend_entries)) + 2 * MARGIN
+            return FrameLayout(cell, source_cell // cell, factor, width, height)
+    raise ValueError(
+        f"a GIF frame is at most {MAX_GIF_FRAME_SIDE:,} pixels wide: a grid of {size:,} cells a side does not fit "
+        "even at 1 pixel a cell (docs/limits.md)"
+    )
 
 
 def _fonts() -> tuple[Any, Any]:
@@ -114,8 +171,12 @@ class EpisodeRecorder:
         self._legend: list[LegendEntry] = []
         self._max_cycles = 0
         self._fps = 5
+        self._stride = 1
 
     def __call__(self, step: EpisodeStep) -> None:
+        """Keep ``step``'s ``rgb_array`` frame (up to ``max_steps``): for a grid too large for
+        :data:`~empathy_zoo.limits.MAX_GIF_FRAME_SIDE`, only every ``stride``-th pixel of it
+        (:func:`frame_layout`, decided at the reset), so the full-size frame is not kept."""
         if step.step > self.max_steps:
             return
         image = step.env.render()
@@ -126,6 +187,10 @@ class EpisodeRecorder:
             self._legend = legend(engine)
             self._max_cycles = int(engine.max_cycles)
             self._fps = int(step.env.unwrapped.metadata.get("render_fps", 5))
+            size = int(engine.size)
+            self._stride = frame_layout(size, len(self._legend), max(1, image.shape[1] // size)).stride
+        if self._stride > 1:  # (a large grid: keep its smaller cells only, not the full frame of every step)
+            image = np.ascontiguousarray(image[:: self._stride, :: self._stride])
         self._steps.append((image, step))
 
     @property
@@ -144,9 +209,10 @@ class EpisodeRecorder:
         if not self._steps:
             raise ValueError("no frame was recorded: pass the recorder as on_step to play_greedy")
         fonts = _fonts()
-        images = [self._frame(image, step, fonts, last=k == len(self._steps) - 1) for k, (image, step) in enumerate(self._steps)]
         palette = _palette(self._legend)
-        frames = [_indexed(image, palette) for image in images]
+        last = len(self._steps) - 1
+        # (each frame is drawn and indexed in turn: one RGB canvas at a time, not all of them)
+        frames = [_indexed(self._frame(image, step, fonts, k == last), palette) for k, (image, step) in enumerate(self._steps)]
         tick = max(20, round(1000 / self._fps))
         buffer = io.BytesIO()
         frames[0].save(
@@ -161,8 +227,7 @@ class EpisodeRecorder:
 
     def _panel_height(self) -> int:
         """Pixels the panel's text takes (as :meth:`_frame` lays it out)."""
-        lines = 2 + 1 + 2 + len(METRIC_NAMES) + 1  # title, env; a gap; step, action; the metrics; the last frame's note
-        return lines * LINE + 3 * (LINE // 2) + len(self._legend) * (SWATCH + 6)
+        return _panel_height(len(self._legend))
 
     def _frame(self, grid: np.ndarray, step: EpisodeStep, fonts: tuple[Any, Any], last: bool) -> np.ndarray:
         from PIL import Image, ImageDraw

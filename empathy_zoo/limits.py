@@ -26,11 +26,13 @@ __all__ = [
     "MAX_CYCLES",
     "MAX_EVALUATIONS",
     "MAX_EVAL_EPISODES",
+    "MAX_EXACT_TEST_SEEDS",
     "MAX_EXACT_WORK",
     "MAX_EVALUATE_CYCLES",
     "MAX_EVALUATION_BYTES",
     "MAX_FIGURE_PIXELS",
     "MAX_FIGURE_SIDE",
+    "MAX_GIF_FRAME_SIDE",
     "MAX_HIDDEN_SIZE",
     "MAX_JOURNAL_BYTES",
     "MAX_JSON_DEPTH",
@@ -149,6 +151,19 @@ MAX_EXACT_WORK = 100_000_000
 """Most work of ``analyse exact``'s table, counted as its model's ``states × max_cycles`` (each of
 its 15 points steps every state once a step): about 2.4 µs each on a laptop core, so at most some
 four minutes; the default Coexistence (2,401 states, 500 steps) takes 1.2·10⁶, a few seconds."""
+MAX_EXACT_TEST_SEEDS = 200
+"""Most seeds one exact permutation test compares, both sides together (``N``; the leaderboard's
+P(improves on DQN) cells, ``analyse versus-dqn``, ``equivalence``, ``tuning-effect``,
+``reproduction``, ``heldout-verdicts``): its null distribution is counted in a table of
+``(n + 1) × (N(N + 1) + 1)`` floats (``n`` seeds on the first side), swept once per seed, so memory
+grows as ``8·n·N²`` and time as ``n·N³``. Measured on a laptop core: 50 a side 0.07 s; 100 a side
+2.0 s and 32 MB; 199 against 1 (the costliest split of 200) about 2.5 times that, 64 MB; 200 a
+side 44.5 s and 258 MB; 1,000 a side 8 GB and some 7 hours. The paper compares 10 a side."""
+MAX_GIF_FRAME_SIDE = 1_600
+"""Most pixels a side of an episode GIF's frame (``watch --gif``, the leaderboard's greedy
+episodes) takes for its grid and panel: a grid whose 24-pixel cells would pass it is drawn with
+smaller cells (12, 8, 6, 4, 3, 2 or 1 pixels: every 2nd, 3rd, … pixel of the 24-pixel picture),
+so sizes up to 54 keep their 24-pixel cells and a 255 × 255 grid is drawn at 4 pixels a cell."""
 MAX_WATCH_STEPS = MAX_REFERENCE_CYCLES
 """Most steps ``watch`` plays of one episode: an agent file's ``max_cycles`` may be up to
 :data:`MAX_CYCLES`, and a longer episode is cut short there, said before it plays, as the
@@ -203,7 +218,9 @@ BOUNDS: Mapping[str, int] = {
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
     "reference curves' work": MAX_REFERENCE_WORK,
     "exact table's work": MAX_EXACT_WORK,
+    "seeds of one exact test": MAX_EXACT_TEST_SEEDS,
     "watch episode steps": MAX_WATCH_STEPS,
+    "GIF frame size": MAX_GIF_FRAME_SIDE,
     "wall_time_s": MAX_WALL_TIME_S,
     "memory_bytes": MAX_LEARNER_BYTES,
     "hidden_size recorded": MAX_HIDDEN_SIZE,

@@ -6,6 +6,11 @@ pair of runs (the Mann–Whitney statistic divided by ``n·m``, as in Agarwal et
 "Deep RL at the edge of the statistical precipice"), where "greater" means better for the metric
 (:data:`empathy_zoo.metrics.HIGHER_IS_BETTER`: fewer harms are better). 0.5 is a tie.
 
+The exact test compares at most :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS` (200) seeds, both
+sides together: its null distribution takes memory ``8·n·N²`` and time ``n·N³`` for ``n`` of ``N``
+seeds, so more are refused in one line (:func:`check_exact_test_seeds`) before anything is counted,
+and :func:`improvements_over_dqn` checks every cell before it computes the first.
+
 The verdict (better ▲ / worse ▼ than DQN) is the exact two-sided Mann–Whitney permutation test
 at 5 % (:func:`permutation_test`): the statistic is this probability itself, its null
 distribution is that of every split of the pooled runs into the two groups, ties get midranks and
@@ -43,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.limits import MAX_EXACT_TEST_SEEDS
 from empathy_zoo.metrics import HIGHER_IS_BETTER
 from leaderboard.aggregate import CONFIDENCE, DEFAULT_SEED, N_RESAMPLES, PHASES, group_runs, run_scalars
 from leaderboard.budgets import RunBudget, budgets_of
@@ -54,6 +60,7 @@ __all__ = [
     "permutation_test",
     "improvement_interval",
     "can_decide",
+    "check_exact_test_seeds",
     "smallest_decidable_seeds",
     "bootstrap_improvement",
     "interquartile_mean",
@@ -149,6 +156,26 @@ def smallest_decidable_seeds(confidence: float = CONFIDENCE) -> int:
     return n
 
 
+def check_exact_test_seeds(n_seeds: int, n_other_seeds: int) -> None:
+    """Refuse (``ValueError``, one line) an exact permutation test of ``n_seeds`` against
+    ``n_other_seeds`` finite runs when together they pass :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS`:
+    the null distribution's table would take ``8·(n_seeds + 1)·N(N + 1)`` bytes (``N`` both sides),
+    swept once per seed. Called before that table is allocated."""
+    total = n_seeds + n_other_seeds
+    if total > MAX_EXACT_TEST_SEEDS:
+        raise ValueError(
+            f"the exact permutation test compares at most {MAX_EXACT_TEST_SEEDS:,} seeds, both sides together, "
+            f"got {n_seeds:,} against {n_other_seeds:,} ({total:,}): its null distribution needs memory and time "
+            f"that grow as seeds³ and seeds⁴; compare at most {MAX_EXACT_TEST_SEEDS:,} seeds "
+            f"({MAX_EXACT_TEST_SEEDS // 2:,} a side), e.g. a results directory of fewer seeds per experiment (docs/limits.md)"
+        )
+
+
+def _finite_count(values: Sequence[float]) -> int:
+    """How many of ``values`` are finite (the runs a test compares)."""
+    return int(np.isfinite(np.asarray(values, dtype=np.float64)).sum())
+
+
 def _split(x: Sequence[float], y: Sequence[float], higher_is_better: bool) -> tuple[np.ndarray, np.ndarray]:
     a = np.asarray(x, dtype=np.float64).ravel()
     b = np.asarray(y, dtype=np.float64).ravel()
@@ -175,7 +202,10 @@ def _doubled_midranks(pooled: np.ndarray) -> np.ndarray:
 def _null_tails(doubled_ranks: tuple[int, ...], n: int) -> tuple[tuple[int, ...], tuple[float, ...]]:
     """The exact permutation distribution of ``D = |2W − n(N + 1)|`` (``W`` the sum of the midranks
     of ``n`` of the ``N`` pooled runs, every split equally likely): its support, ascending, and
-    ``P(D ≥ d)`` at each point. Counted by dynamic programming over sums of the doubled midranks."""
+    ``P(D ≥ d)`` at each point. Counted by dynamic programming over sums of the doubled midranks.
+    ``N`` beyond :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS` is refused before the table is made
+    (:func:`check_exact_test_seeds`)."""
+    check_exact_test_seeds(n, len(doubled_ranks) - n)
     ranks = np.asarray(doubled_ranks, dtype=np.int64)
     total = int(ranks.sum())
     counts = np.zeros((n + 1, total + 1), dtype=np.float64)
@@ -196,10 +226,12 @@ def permutation_test(x: Sequence[float], y: Sequence[float], higher_is_better: b
     """``(probability, p)``: the probability of improvement of ``x`` over ``y`` and the two-sided
     p of the exact Mann–Whitney permutation test (the share of splits of the pooled finite runs
     whose probability lies at least as far from 0.5; midranks for ties). NaN when a side has no
-    finite run."""
+    finite run. More than :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS` finite runs, both sides
+    together, are refused before anything is counted (:func:`check_exact_test_seeds`)."""
     a, b = _split(x, y, higher_is_better)
     if a.size == 0 or b.size == 0:
         return math.nan, math.nan
+    check_exact_test_seeds(a.size, b.size)
     ranks = _doubled_midranks(np.concatenate([a, b]))
     observed = abs(int(ranks[: a.size].sum()) - a.size * (a.size + b.size + 1))
     support, tails = _null_tails(tuple(sorted(int(r) for r in ranks)), a.size)
@@ -222,13 +254,16 @@ def improvement_interval(
     interval is the probability ± ``h``, clipped to [0, 1], ``h`` halfway between that distance and
     the farthest one the test accepts, so it excludes 0.5 exactly when the test rejects. Where no
     split could be rejected (too few runs, or too many ties) ``h`` is 0.5, so the interval always
-    contains 0.5. NaN when a side has no finite run.
+    contains 0.5. NaN when a side has no finite run. More than
+    :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS` finite runs, both sides together, are refused
+    before anything is counted (:func:`check_exact_test_seeds`).
     """
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence must lie strictly between 0 and 1, got {confidence}")
     a, b = _split(x, y, higher_is_better)
     if a.size == 0 or b.size == 0:
         return math.nan, math.nan, math.nan
+    check_exact_test_seeds(a.size, b.size)
     ranks = _doubled_midranks(np.concatenate([a, b]))
     support, tails = _null_tails(tuple(sorted(int(r) for r in ranks)), a.size)
     probability = (int(ranks[: a.size].sum()) - a.size * (a.size + 1)) / (2.0 * a.size * b.size)
@@ -352,11 +387,13 @@ def improvements_over_dqn(
     (``metrics_of[env]``: the metrics of that env's tables), with the interval that inverts the
     exact permutation test (:func:`improvement_interval`) and the test's p; a row is compared with
     every other DQN row of its variant, budget and world (:func:`dqn_rows`), one cell each, in row order.
-    A row without such a DQN row has none. The intervals draw nothing."""
+    A row without such a DQN row has none. The intervals draw nothing. Every cell's seeds are checked
+    against :data:`~empathy_zoo.limits.MAX_EXACT_TEST_SEEDS` (:func:`check_exact_test_seeds`) before
+    the first test is computed, so a refusal costs no test's time."""
     groups = group_runs(results)
     baselines = dqn_rows(results)
     scalars = {key: [run_scalars(run) for run in runs] for key, runs in groups.items()}
-    cells: list[Improvement] = []
+    compared: list[tuple[str, str, str, str, str, list[float], list[float]]] = []
     for (env, label), runs in groups.items():
         for baseline in baselines.get(row_key(env, runs), []):
             if baseline == label:
@@ -366,22 +403,28 @@ def improvements_over_dqn(
                 for metric in metrics_of.get(env, ()):
                     x = [values[phase][metric] for values in mine]
                     y = [values[phase][metric] for values in theirs]
-                    better = HIGHER_IS_BETTER.get(metric, True)
-                    p, low, high = improvement_interval(x, y, better, confidence=confidence)
-                    cells.append(
-                        Improvement(
-                            env,
-                            label,
-                            phase,
-                            metric,
-                            p,
-                            low,
-                            high,
-                            interquartile_mean(x),
-                            int(np.isfinite(x).sum()),
-                            int(np.isfinite(y).sum()),
-                            permutation_test(x, y, better)[1],
-                            baseline,
-                        )
-                    )
+                    n_x, n_y = _finite_count(x), _finite_count(y)
+                    if n_x and n_y:  # (a side without a finite run is no test: its cell is NaN)
+                        check_exact_test_seeds(n_x, n_y)
+                    compared.append((env, label, baseline, phase, metric, x, y))
+    cells: list[Improvement] = []
+    for env, label, baseline, phase, metric, x, y in compared:
+        better = HIGHER_IS_BETTER.get(metric, True)
+        p, low, high = improvement_interval(x, y, better, confidence=confidence)
+        cells.append(
+            Improvement(
+                env,
+                label,
+                phase,
+                metric,
+                p,
+                low,
+                high,
+                interquartile_mean(x),
+                int(np.isfinite(x).sum()),
+                int(np.isfinite(y).sum()),
+                permutation_test(x, y, better)[1],
+                baseline,
+            )
+        )
     return cells
