@@ -126,7 +126,7 @@ def test_equivalence_refuses_one_directory_twice_and_says_when_the_sets_are_one(
     from leaderboard.equivalence import report
 
     quick = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"
-    with pytest.raises(ValueError, match="is given twice .*: its runs would be compared with themselves"):
+    with pytest.raises(ValueError, match=r"is given twice .*: its runs would be compared with themselves"):
         report(str(quick), str(quick / "runs" / ".."))
     copy = tmp_path / "copy"
     shutil.copytree(quick / "runs", copy / "runs")
