@@ -220,6 +220,13 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
                     f"on {key[0]}_test, so its group counts {len(members)} of its {len(candidates[key])} runs "
                     f"(empathy-zoo evaluate --scenarios {key[0]}_test writes it)"
                 )
+    for key, members in candidates.items():
+        if key not in read and notes is not None:  # (a group none of whose runs was evaluated: named, never dropped in silence)
+            notes.append(
+                f"no run of the {len(members)} {key[2]}-trained runs of {key[1]} on {key[0]} has an evaluation on "
+                f"{key[0]}_test, so that group is not read and {key[1]} has no comparison that needs it "
+                f"(empathy-zoo evaluate --scenarios {key[0]}_test writes them)"
+            )
     if not any(group == POPULATION for (group, *_rest) in read_from):
         raise ValueError(
             f"{population_dir} holds no population-trained run of {' or '.join(METHODS)} evaluated on a test split "

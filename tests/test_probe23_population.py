@@ -92,3 +92,14 @@ def test_a_run_without_a_test_split_evaluation_is_named_in_a_note(tmp_path: Path
     assert f"{ROW} 10 (9) |" in out
     (note,) = [line for line in out.splitlines() if line.startswith("Note: ")]
     assert missing in note and "default-trained dqn on coexistence_v0, seed 3" in note and "counts 9 of its 10 runs" in note
+
+
+def test_a_group_none_of_whose_runs_was_evaluated_is_named_in_a_note(tmp_path: Path, capsys) -> None:
+    population, default = population_dirs(tmp_path)
+    experiment = _experiment(default, "coexistence_v0__dqn")
+    for path in (default / "evaluations" / SPLIT).glob(f"{experiment}__s*.json"):
+        path.unlink()
+    main(["analyse", "population-reading", str(population), str(default)])
+    out = capsys.readouterr().out
+    notes = [line for line in out.splitlines() if line.startswith("Note: ")]
+    assert any("no run of the 10 default-trained runs of dqn on coexistence_v0 has an evaluation" in note for note in notes), out
