@@ -400,7 +400,16 @@ def main(
     except ValueError as error:  # (a table or result file refused: one line naming it, no usage text)
         print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
-    print(f"wrote {write_text_atomic(out, page)}")
+    try:
+        written = write_text_atomic(out, page)
+    except ValueError as error:  # (something but a regular file put in its place meanwhile: a refusal)
+        print(f"{prog}: error: {terminal_line(error)}", file=sys.stderr)
+        return 2
+    except OSError as error:  # (a full disk: a machine failure, not a refusal; the page is as it was)
+        line = f"cannot write {out} ({error.strerror or error}): nothing half-written is left; free space or give another --out"
+        print(f"{prog}: error: {terminal_line(line)}", file=sys.stderr)
+        return 1
+    print(f"wrote {written}")
     return 0
 
 

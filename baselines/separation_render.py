@@ -224,11 +224,13 @@ def _identical(table: SeparationTable, row: str) -> bool:
 
 def main(argv: list[str] | None = None) -> None:
     """``python -m baselines.separation_render [ENV] [ARG=VALUE ...] [--out DIR]``: write the table's
-    files, each atomically; anything but a regular file in either's place (a link, a directory, a
-    FIFO) is refused before the table is computed, and nothing else in ``DIR`` is touched."""
+    files, both or neither (:func:`empathy_zoo.atomic.write_all_atomic`); anything but a regular
+    file in either's place (a link, a directory, a FIFO) is refused before the table is computed,
+    and nothing else in ``DIR`` is touched. A write that fails (a full disk) is an ``OSError``
+    naming the file, and leaves both files as they were."""
     import argparse
 
-    from empathy_zoo.atomic import write_text_atomic
+    from empathy_zoo.atomic import write_all_atomic
     from empathy_zoo.evaluation_file import check_not_read_folder
     from empathy_zoo.names import check_own_file, check_replaceable
 
@@ -247,13 +249,22 @@ def main(argv: list[str] | None = None) -> None:
     check_own_file(paths[1], "separation page", b"# Separation table: ")
     model = tabular_model(args.env, **kwargs)
     table = separation_table(model)
-    for path, text in zip(paths, (to_json(table), to_markdown(table)), strict=True):
-        print(write_text_atomic(path, text))
+    texts = (to_json(table), to_markdown(table))
+    try:
+        written = write_all_atomic([(path, text.encode("utf-8")) for path, text in zip(paths, texts, strict=True)])
+    except OSError as error:  # (a full disk): the pair is written whole or not at all
+        raise OSError(
+            f"cannot write {error.filename or paths[0]} ({error.strerror or error}): {paths[0].name} and "
+            f"{paths[1].name} in {args.out} are as they were; free space or give another --out"
+        ) from None
+    for path in written:
+        print(path)
 
 
 def module_main(argv: list[str] | None = None) -> int:
     """:func:`main` as ``python -m`` runs it: a refusal (``ValueError``) is one line on stderr and
-    exit status 2, as through ``empathy-zoo analyse separation``."""
+    exit status 2, a write that failed (``OSError``: a full disk) one line and exit status 1, as
+    through ``empathy-zoo analyse separation``."""
     import sys
 
     from empathy_zoo.names import terminal_line
@@ -263,6 +274,9 @@ def module_main(argv: list[str] | None = None) -> int:
     except ValueError as error:
         print(f"python -m baselines.separation_render: error: {terminal_line(error)}", file=sys.stderr)
         return 2
+    except OSError as error:
+        print(f"python -m baselines.separation_render: error: {terminal_line(error)}", file=sys.stderr)
+        return 1
     return 0
 
 

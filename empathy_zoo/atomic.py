@@ -19,7 +19,7 @@ import re
 import secrets
 import shutil
 import stat
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -32,6 +32,7 @@ __all__ = [
     "write_text_atomic",
     "write_json_atomic",
     "write_with_atomic",
+    "write_all_atomic",
     "read_json",
     "check_output_dir",
     "remove_stale_temp_files",
@@ -74,6 +75,55 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
     ``0666 & ~umask`` (the kernel applies the umask), a rewritten one the mode it had."""
     path = check_replaceable(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _write_temp(path, write)
+    try:
+        os.replace(tmp, check_replaceable(path))
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def write_all_atomic(files: Sequence[tuple[str | os.PathLike[str], bytes]]) -> list[Path]:
+    """Write every ``(path, data)`` of ``files`` or none: each to a temporary file of the suite's
+    own, run-specific name beside it (as :func:`write_with_atomic` names one), fsynced, and only
+    once all are written rename each over its path, in order; returns the paths. Every path is
+    checked (:func:`empathy_zoo.names.check_replaceable`) before anything is written. A write or
+    rename that fails (a full disk) removes every temporary file this call made and raises
+    ``OSError`` with the failed call's ``errno`` and ``strerror`` and, as its ``filename``, the path
+    it was writing: what was in place before stays (a rename, which needs no room for the data,
+    failing after an earlier one succeeded leaves that earlier file renamed)."""
+    paths = [check_replaceable(path) for path, _ in files]
+    staged: list[Path] = []
+    current = paths[0] if paths else None
+    try:
+        for path, (_, data) in zip(paths, files, strict=True):
+            current = path
+            path.parent.mkdir(parents=True, exist_ok=True)
+            staged.append(_write_temp(path, _writer(data)))
+        for path, tmp in zip(paths, staged, strict=True):
+            current = path
+            os.replace(tmp, check_replaceable(path))
+    except BaseException as error:
+        for tmp in staged:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+        if isinstance(error, OSError):
+            raise OSError(error.errno, error.strerror or str(error), str(current)) from error
+        raise
+    return paths
+
+
+def _writer(data: bytes) -> Callable[[BinaryIO], object]:
+    """What writes ``data`` to a file."""
+    return lambda handle: handle.write(data)
+
+
+def _write_temp(path: Path, write: Callable[[BinaryIO], object]) -> Path:
+    """A temporary file beside ``path`` (:func:`_create_temp`) holding what ``write(file)`` wrote,
+    fsynced, with the mode ``path`` has (a new file: the mode it was created with); removed again
+    when writing it fails."""
     fd, tmp = _create_temp(path)
     try:
         with os.fdopen(fd, "wb") as handle:
@@ -82,12 +132,11 @@ def write_with_atomic(path: str | os.PathLike[str], write: Callable[[BinaryIO], 
             write(handle)
             handle.flush()
             os.fsync(handle.fileno())
-        os.replace(tmp, check_replaceable(path))
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
-    return path
+    return tmp
 
 
 def _create_temp(path: Path) -> tuple[int, Path]:

@@ -314,11 +314,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         figure = None
         if args.figure is not None:
             figure = _checked(Path(args.root), lambda s: render_studies_png(s, folders=folders), studies)
-        if figure is not None:
-            write_bytes_atomic(args.figure, figure)
-    except (ValueError, OSError) as error:
+    except (ValueError, OSError) as error:  # (a refusal: a study or the figure's place, one line)
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
+    if figure is not None:
+        try:
+            write_bytes_atomic(args.figure, figure)
+        except ValueError as error:  # (something but a regular file put in its place meanwhile: a refusal)
+            print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
+            return 2
+        except OSError as error:  # (a full disk: a machine failure, not a refusal; nothing half-written is left)
+            line = f"cannot write {args.figure} ({error.strerror or error}): nothing half-written is left; "
+            print(f"{parser.prog}: error: {terminal_line(line + 'free space or give another --figure')}", file=sys.stderr)
+            return 1
     print(table)
     if figure is not None:
         print(f"\nwrote {args.figure}")

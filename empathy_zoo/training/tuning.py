@@ -75,6 +75,7 @@ in one line where it is missing.
 from __future__ import annotations
 
 import contextlib
+import errno
 import importlib
 import multiprocessing
 import os
@@ -356,9 +357,28 @@ def run_study(
                 raise
             for stale in remove_stale_temp_files(out):
                 note(f"removed {stale}, a write killed mid-way")
-            return _study(optuna, plan, out, options, command, progress, on_trial, note, has_plan)
+            try:
+                return _study(optuna, plan, out, options, command, progress, on_trial, note, has_plan)
+            except OSError as error:  # (a full disk): a bare system error is said naming the file, or the folder
+                if error.errno is None or error.errno not in _WRITE_ERRNOS or error.strerror != os.strerror(error.errno):
+                    raise  # (a message of the suite's, naming what it could not write; or no failed write)
+                raise _cannot_write(Path(os.fsdecode(error.filename)) if error.filename else out, error) from None
     finally:
         optuna.logging.set_verbosity(verbosity)
+
+
+_WRITE_ERRNOS = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EFBIG", "EROFS") if hasattr(errno, name))
+"""The system errors only a write fails with (a full disk, a quota, a file too large, a read-only disk)."""
+
+
+def _cannot_write(path: Path, error: OSError) -> OSError:
+    """The ``OSError`` a study's failed write (a full disk) ends with: one line naming ``path`` (a
+    file of the study, or its folder) and what to do. Every trial told is in the journal: the same
+    command resumes the study."""
+    return OSError(
+        f"cannot write {path} ({error.strerror or error}); free space, then run the same command again "
+        "to resume the study (the trials told so far are kept)"
+    )
 
 
 def check_journal(
@@ -423,7 +443,18 @@ def _open_study(optuna: Any, plan: StudyPlan, out: Path, update_kernel: str, has
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
 
-    storage = JournalStorage(JournalFileBackend(str(out / JOURNAL_FILE), lock_obj=cast(Any, _HeldWithDirectory())))
+    journal = out / JOURNAL_FILE
+
+    class _NamedJournal(JournalFileBackend):
+        """Optuna's journal file, whose failed append (a full disk) is an ``OSError`` naming it."""
+
+        def append_logs(self, logs: list[dict[str, Any]]) -> None:
+            try:
+                super().append_logs(logs)
+            except OSError as error:
+                raise _cannot_write(journal, error) from None
+
+    storage = JournalStorage(_NamedJournal(str(journal), lock_obj=cast(Any, _HeldWithDirectory())))
     study = optuna.create_study(
         storage=storage, study_name="tune", direction=plan.direction, pruner=_pruner(optuna, plan), load_if_exists=True
     )
