@@ -12,7 +12,8 @@ Per metric (:func:`leaderboard.versus_dqn.compact_metrics`) and phase the table 
 means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
 no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
 named, never dropped; a directory with two DQN rows in one variant is refused (a verdict would be
-one of several), and so is a tuned row whose method, world or budget is not its untuned row's.
+one of several), and so is a tuned row whose method, world or budget is not its untuned row's, and
+a row with no DQN row of its variant, world and budget beside it (it has no verdict to compare).
 Nothing new is tested: this is a view of two leaderboards' cells.
 """
 
@@ -28,7 +29,7 @@ from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.names import terminal_line
 from leaderboard.aggregate import group_runs, load_results, score_runs
-from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn, row_key
+from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn, row_key, uncompared_rows
 from leaderboard.versus_dqn import compact_metrics
 
 __all__ = ["TUNED_SUFFIX", "VerdictPair", "TuningEffect", "tuning_effect", "tuning_effect_table"]
@@ -95,6 +96,7 @@ def tuning_effect(
     new_means, new_verdicts, new_references = _cells(tuned, metrics)
     untuned_groups = group_runs(untuned)
     old_rows = set(untuned_groups)
+    old_alone, new_alone = set(uncompared_rows(untuned)), set(uncompared_rows(tuned))
     pairs: list[VerdictPair] = []
     unmatched: list[tuple[str, str]] = []
     for variant, label in groups:
@@ -106,6 +108,12 @@ def tuning_effect(
         reference = (variant, label) in new_references
         if reference != ((variant, base) in old_references):
             raise ValueError(f"{variant}: {label!r} and {base!r} are not both DQN references or both methods")
+        for row, alone, which in (((variant, base), old_alone, "untuned"), ((variant, label), new_alone, "tuned")):
+            if row in alone:
+                raise ValueError(
+                    f"{variant}: the {which} row {row[1]!r} has no DQN row of its variant, world and budget beside it, "
+                    f"so it has no verdict to compare; give the {which} directory its DQN row"
+                )
         for metric in metrics[variant]:
             for phase in PHASE_NAMES:
                 pairs.append(

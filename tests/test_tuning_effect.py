@@ -54,3 +54,17 @@ def test_a_directory_with_two_dqn_rows_in_a_variant_is_refused() -> None:
     tuned = _rows("dqn", 1.0, "DQN, tuned", harms=0.9)
     with pytest.raises(ValueError, match="coexistence_v0 has 2 DQN reference rows"):
         tuning_effect(untuned, tuned, {"coexistence_v0": ("harms",)})
+
+
+@pytest.mark.parametrize("which", ["tuned", "untuned"])
+def test_a_row_with_no_dqn_beside_it_is_refused_never_read_as_the_reference(which: str) -> None:
+    """Without a DQN row there is no verdict: before, the row read "changed by tuning" (6 of 6) or "(the reference)"."""
+    untuned = _rows("empathic_dqn", 0.5, "E", harms=0.1)
+    tuned = _rows("empathic_dqn", 0.5, "E, tuned", harms=0.1)
+    if which == "tuned":
+        untuned += _rows("dqn", 1.0, "DQN", harms=0.9)
+    else:
+        tuned += _rows("dqn", 1.0, "DQN, tuned", harms=0.9)
+    row = "E, tuned" if which == "tuned" else "E"
+    with pytest.raises(ValueError, match=f"the {which} row '{row}' has no DQN row of its variant, world and budget"):
+        tuning_effect(untuned, tuned, {"coexistence_v0": ("harms",)})
