@@ -311,8 +311,20 @@ def _unevaluated(
 ) -> list[str]:
     """A note per run of a row of the set (``runs``) that ``results`` holds and that has no
     evaluation in it, naming the run and how many of its row's runs the row counts; a run a note
-    has left out already (``noted``) is not named twice, and a row of no evaluation is no row of the set."""
+    has left out already (``noted``) is not named twice; the rows of the environment none of whose
+    runs has an evaluation in the set are named too, in one note, with their counts of runs (they
+    are in none of the set's tables)."""
     notes = []
+    rows: dict[str, list[RunResult]] = {}
+    for run in results:
+        if run.table_env == env and run.method_label not in runs:
+            rows.setdefault(run.method_label, []).append(run)
+    missing = [f"{label} ({len(row)} runs)" for label, row in rows.items() if not any(id(run) in noted for run in row)]
+    if missing:
+        notes.append(
+            f"{env}, scenario set {set_name}: rows with no evaluation in it, so in none of its tables: "
+            f"{', '.join(missing)} (empathy-zoo evaluate writes them)"
+        )
     for label, pairs in runs.items():
         evaluated = {id(run) for run, _ in pairs}
         row = [run for run in results if run.table_env == env and run.method_label == label]

@@ -209,8 +209,9 @@ def test_a_run_without_an_evaluation_is_named_in_a_note_with_its_rows_count(synt
     assert section is not None
     assert missing.run_id in section_markdown(section.section)
     unevaluated = [synthetic_run(COEXISTENCE, "empathic_dqn", 0.9, seed) for seed in SEEDS]  # (a row of no evaluation:
-    (group,), notes = load_heldout(out, [*results, *unevaluated])  # absent from the section, as it is from the set)
-    assert "empathic_dqn 0.9" not in group.runs and len(notes) == 1
+    (group,), notes = load_heldout(out, [*results, *unevaluated])  # absent from the section, named in a note)
+    assert "empathic_dqn 0.9" not in group.runs and len(notes) == 2
+    assert any("rows with no evaluation in it, so in none of its tables: empathic_dqn 0.9 (5 runs)" in note for note in notes)
 
 
 def test_seeds_evaluated_with_different_episode_counts_are_named_in_a_note(synthetic) -> None:
