@@ -131,3 +131,14 @@ def test_equivalence_refuses_one_directory_twice_and_says_when_the_sets_are_one(
     copy = tmp_path / "copy"
     shutil.copytree(quick / "runs", copy / "runs")
     assert report(str(quick), str(copy)).startswith("Every matched pair of runs (30) is identical column for column")
+
+
+def test_an_argument_that_is_no_utf8_text_is_refused_before_anything_is_written(tmp_path: Path, capsys) -> None:
+    """A path of undecodable bytes (``\\udcff``) cannot go into the command line a page records: one line, exit 2."""
+    from empathy_zoo.cli import main
+
+    out = tmp_path / "lb\udcff"
+    assert main(["leaderboard", str(Path(__file__).resolve().parents[1] / "docs" / "results" / "quick"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "is not UTF-8 text" in err and "\\udcff" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

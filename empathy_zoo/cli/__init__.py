@@ -32,6 +32,7 @@ One module per group of subcommands: :mod:`~empathy_zoo.cli.train` (with
 from __future__ import annotations
 
 import argparse
+import io
 import shlex
 import signal
 import sys
@@ -129,9 +130,30 @@ def _out_of_memory(error: BaseException) -> str:
     )
 
 
+def _utf8(text: str) -> bool:
+    """Whether ``text`` encodes as UTF-8 (a path of undecodable bytes holds lone surrogates, which do not)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    for stream in (sys.stdout, sys.stderr):  # (a name from disk that is no UTF-8 text is printed escaped, never fatal)
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
+    unreadable = next((item for item in argv if not _utf8(item)), None)
+    if unreadable is not None:  # (before anything is read or written: the command line is recorded in what it writes)
+        return _error(
+            ValueError(
+                f"argument {unreadable!a} is not UTF-8 text; the suite records its command line in what it "
+                "writes: rename the path (or give another)"
+            ),
+            2,
+        )
     try:
         args = parse_args(argv)
     except SystemExit as exit_:  # argparse: --help (0) or a usage error (2, message printed)
