@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import json
 import math
 import os
 import sys
@@ -60,6 +61,8 @@ __all__ = [
     "check_figure_size",
     "check_study",
     "find_studies",
+    "study_files",
+    "study_notes",
     "summarise",
     "study_names",
     "summary_table",
@@ -98,11 +101,73 @@ class StudySummary:
 
 
 def find_studies(root: str | os.PathLike[str]) -> list[Path]:
-    """Every ``study.json`` under ``root``, sorted; ``ValueError`` where there is none."""
+    """Every study file under ``root``, sorted, each file once (:func:`study_files`); ``ValueError``
+    where there is none."""
+    return study_files(root)[0]
+
+
+def study_files(root: str | os.PathLike[str]) -> tuple[list[Path], list[tuple[Path, Path]]]:
+    """Every ``study.json`` under ``root``, sorted, each file once, and the paths left out:
+    ``(path, the path read in its place)``. A file reached by two paths (a symbolic link to it, a
+    second hard link: one device and inode) is read by one of them, the first that is no symbolic
+    link (the first of all where each is one). A path that cannot be looked at (a dangling link)
+    is kept, for the read to refuse. ``ValueError`` where there is none."""
     found = sorted(Path(root).rglob(STUDY_FILE))
     if not found:
         raise ValueError(f"no {STUDY_FILE} under {root}: run empathy-zoo tune first")
-    return found
+    by_file: dict[tuple[int, int], list[Path]] = {}
+    for path in found:
+        try:
+            status = path.stat()
+        except OSError:
+            by_file[(-1, len(by_file))] = [path]  # (its own; the read names what is wrong with it)
+            continue
+        by_file.setdefault((status.st_dev, status.st_ino), []).append(path)
+    kept: list[Path] = []
+    left_out: list[tuple[Path, Path]] = []
+    for paths in by_file.values():
+        read = next((path for path in paths if not path.is_symlink()), paths[0])
+        kept.append(read)
+        left_out.extend((path, read) for path in paths if path != read)
+    return sorted(kept), sorted(left_out)
+
+
+MAX_NOTED = 10
+"""The most study files a note names one by one; past it, the rest are counted."""
+
+
+def _named(items: Sequence[str]) -> str:
+    """``items`` joined, at most :data:`MAX_NOTED` of them named, then ``and N more``."""
+    shown = "; ".join(items[:MAX_NOTED])
+    return shown + (f"; and {len(items) - MAX_NOTED:,} more" if len(items) > MAX_NOTED else "")
+
+
+def study_notes(left_out: Sequence[tuple[Path, Path]], read: Sequence[tuple[Path, Any]]) -> list[str]:
+    """The notes a summary prints beside its table (none where each file is a study of its own): the
+    paths left out, each a file read by another path (:func:`study_files`), and the files read
+    (``(path, document)``) that hold the same study document as one before them, a copy (listed,
+    each on its own line, as a study). At most :data:`MAX_NOTED` named a note, the rest counted."""
+    notes = []
+    if left_out:
+        pairs = [f"{path} is {kept}" for path, kept in left_out]
+        notes.append(
+            f"{len(left_out):,} path(s) lead to a study file read already (a symbolic or hard link), not read again: "
+            f"{_named(pairs)}"
+        )
+    first: dict[str, Path] = {}
+    copies = []
+    for path, study in read:
+        key = json.dumps(study, sort_keys=True, allow_nan=False)
+        if key in first:
+            copies.append(f"{path} is a copy of {first[key]}")
+        else:
+            first[key] = path
+    if copies:
+        notes.append(
+            f"{len(copies):,} study file(s) hold the same study as another (one document, copied), each on a line of "
+            f"its own: {_named(copies)}; move a copy away"
+        )
+    return notes
 
 
 def summarise(study: Mapping[str, Any], where: str = "") -> StudySummary:
@@ -303,7 +368,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.figure is not None:
             check_figure_path(args.figure)
-        paths = find_studies(args.root)
+        paths, left_out = study_files(args.root)
         if args.figure is not None:
             check_figure_path(args.figure, paths)
         read = [(path, check_study(read_study(path), path)) for path in paths]
@@ -327,6 +392,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             line = f"cannot write {args.figure} ({error.strerror or error}): nothing half-written is left; "
             print(f"{parser.prog}: error: {terminal_line(line + 'free space or give another --figure')}", file=sys.stderr)
             return 1
+    for note in study_notes(left_out, read):
+        print(f"{parser.prog}: note: {terminal_line(note)}", file=sys.stderr)
     print(table)
     if figure is not None:
         print(f"\nwrote {args.figure}")

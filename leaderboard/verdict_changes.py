@@ -65,6 +65,7 @@ def verdicts(page: str) -> dict[Cell, str]:
     cells: dict[Cell, str] = {}
     variant = phase = ""
     header: list[str] = []
+    first = 2
     for line in page.splitlines():
         if line.startswith("## "):
             variant, phase, header = line[3:].strip(), "", []
@@ -77,10 +78,11 @@ def verdicts(page: str) -> dict[Cell, str]:
             parts = [part.strip().replace("\\|", "|") for part in _CELL_BAR.split(line.strip().strip("|"))]
             if not header:
                 header = parts
+                first = header.index("Seeds") + 1 if "Seeds" in header else 2
+                _check_columns(header[first:], variant, phase)
             elif not set(parts[0]) <= set(":-"):
                 # (strict=False: the page is read as text, as written; a row with more or fewer cells than its
                 # header is read as far as both go, as before)
-                first = header.index("Seeds") + 1 if "Seeds" in header else 2
                 row = parts[0]
                 if first > 2 and len(parts) > 1:  # (an Against column: the DQN row is part of the row's name)
                     row = f"{parts[0]}, against {_SEEDS_SUFFIX.sub('', parts[1])}"
@@ -98,6 +100,19 @@ def verdicts(page: str) -> dict[Cell, str]:
     return cells
 
 
+def _check_columns(metrics: list[str], variant: str, phase: str) -> None:
+    """Refuse (``ValueError``, naming it) a metric column a table's header names twice: its cells would
+    be one cell of each row, one hiding the other's mark."""
+    seen: set[str] = set()
+    for metric in metrics:
+        if metric in seen:
+            raise ValueError(
+                f"two columns {shown_text(metric)!r} in {shown_text(variant)!r}, {shown_text(phase)!r}: one would hide "
+                "the other's marks; give pages the leaderboard wrote"
+            )
+        seen.add(metric)
+
+
 def changes(old: dict[Cell, str], new: dict[Cell, str]) -> list[tuple[Cell, str, str]]:
     """The cells of both pages whose marks differ: ``(cell, old mark, new mark)``, in the new page's order."""
     return [(cell, old[cell], mark) for cell, mark in new.items() if cell in old and old[cell] != mark]
@@ -110,12 +125,20 @@ def _kind(before: str, after: str) -> str:
 
 
 def changes_markdown(old_page: str, new_page: str) -> str:
-    """A Markdown table of the marks that differ, with a count of the cells compared."""
+    """A Markdown table of the marks that differ, with a count of the cells compared and, where a
+    cell is on one page only (a row gone, a column renamed), a line per page counting and naming
+    those cells (:func:`_one_page`); pages of the same cells have no such lines."""
     old, new = verdicts(old_page), verdicts(new_page)
     changed = changes(old, new)
     common = sum(1 for cell in new if cell in old)
+    old_only = {cell: mark for cell, mark in old.items() if cell not in new}
+    new_only = {cell: mark for cell, mark in new.items() if cell not in old}
     lines = [
         f"{common} cells on both pages; {len(changed)} marks differ ({sum(1 for _, b, a in changed if b and a)} change sign).",
+    ]
+    if old_only or new_only:  # (a row or a column on one page only: its cells are named, not compared)
+        lines += [_one_page(old_only, "old"), _one_page(new_only, "new")]
+    lines += [
         "",
         "| variant | phase | method | metric | old | new | change |",
         "|---|---|---|---|:-:|:-:|---|",
@@ -124,6 +147,23 @@ def changes_markdown(old_page: str, new_page: str) -> str:
         variant, phase, method, metric = (shown_text(name) for name in names)  # (from the pages: data)
         lines.append(f"| {variant} | {phase} | {method} | {metric} | {before or '–'} | {after or '–'} | {_kind(before, after)} |")
     return "\n".join(lines) + "\n"
+
+
+MAX_NAMED = 10
+"""The most cells of one page only that the summary names one by one; past it, the rest are counted."""
+
+
+def _one_page(cells: dict[Cell, str], page: str) -> str:
+    """A line counting the cells on the ``page`` (``old`` or ``new``) only, in its order, and naming
+    at most :data:`MAX_NAMED` of them (``method · metric (variant, phase) mark``), then ``and N more``."""
+    if not cells:
+        return f"0 cells on the {page} page only."
+    named = [
+        f"{shown_text(method)} · {shown_text(metric)} ({shown_text(variant)}, {shown_text(phase)}) {mark or '–'}"
+        for (variant, phase, method, metric), mark in list(cells.items())[:MAX_NAMED]
+    ]
+    more = f"; and {len(cells) - MAX_NAMED:,} more" if len(cells) > MAX_NAMED else ""
+    return f"{len(cells)} cells on the {page} page only, not compared: {'; '.join(named)}{more}."
 
 
 def main(argv: list[str] | None = None) -> int:
