@@ -176,16 +176,21 @@ def _journal_fails_at(monkeypatch: pytest.MonkeyPatch, call: int) -> None:
     monkeypatch.setattr(JournalFileBackend, "append_logs", append_logs)
 
 
-def test_tune_names_the_journal_when_the_disk_fills_mid_study_and_resumes(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
-) -> None:
+def _tiny_study(tmp_path: Path) -> tuple[Path, Path, Callable[..., int]]:
+    """The tiny tuning sweep written into ``tmp_path``, the study's folder, and what runs ``tune``."""
     pytest.importorskip("optuna")
     from helpers_sweeps import TUNE_SWEEP
     from helpers_tune import run_tune
 
     sweep = tmp_path / "tiny.toml"
     sweep.write_text(TUNE_SWEEP)
-    out = tmp_path / "tun"
+    return sweep, tmp_path / "tun", run_tune
+
+
+def test_tune_names_the_journal_when_the_disk_fills_mid_study_and_resumes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
+    sweep, out, run_tune = _tiny_study(tmp_path)
     _journal_fails_at(monkeypatch, 18)  # (the study and its first trial stored; the disk fills in the second)
     assert run_tune(sweep, out, 2) == 1
     err = capsys.readouterr().err
@@ -202,15 +207,8 @@ def test_tune_names_the_journal_when_the_disk_fills_mid_study_and_resumes(
 def test_tune_names_its_folder_for_a_file_whose_write_says_no_name(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
 ) -> None:
-    pytest.importorskip("optuna")
-    from helpers_sweeps import TUNE_SWEEP
-    from helpers_tune import run_tune
-
+    sweep, out, run_tune = _tiny_study(tmp_path)
     from empathy_zoo.training import tuning
-
-    sweep = tmp_path / "tiny.toml"
-    sweep.write_text(TUNE_SWEEP)
-    out = tmp_path / "tun"
 
     def full(path: Any, payload: Any) -> Path:
         raise _full_disk()
