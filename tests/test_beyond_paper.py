@@ -21,7 +21,7 @@ def _results(out: Path) -> list[RunResult]:
     runs = [synthetic_run("coexistence_v0", "empathic_dqn", beta, seed) for beta in (1.0, 0.5) for seed in range(5)]
     for run in runs:
         write_json_atomic(out / "runs" / f"{run.run_id}.json", run.to_document())
-    harms = {1.0: 0.8, 0.5: 0.1}
+    harms = {1.0: 0.45, 0.5: 0.1}  # (a chasing cat doubles them, within the one cat: at most 1 an episode)
     values = [
         (
             run,
