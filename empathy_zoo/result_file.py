@@ -185,6 +185,10 @@ def check_result_fields(document: Any, path: str | Path) -> dict[str, Any]:
     lengths = {name: len(column) for name, column in train.items()}
     if len(set(lengths.values())) > 1:
         raise ResultFileError(f"{path}: field train: columns of different lengths {lengths}; move the file away")
+    for i, (start, end, survival) in enumerate(zip([0, *ends], ends, train["survival"], strict=False)):
+        if survival > end - start:  # (a robot operative past its episode's end)
+            expected = f"survival, at most the episode's {end - start:,} steps (it ends at step {end:,})"
+            raise check.fail(f"train.survival[{i}]", expected, survival)
     if not isinstance(result["eval"], list):
         raise check.fail("eval", "an array of evaluations", result["eval"])
     episodes, previous = result["config"].get("eval_episodes"), 0

@@ -20,8 +20,8 @@ from empathy_zoo.metrics import INTEGER_METRICS, METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.result_file import episode_bounds
 from empathy_zoo.run_ids import run_id
 
-SETTINGS = {"learning_starts": 100, "epsilon_decay_steps": 3900}
-"""Schedule of the synthetic runs: 4,000 steps, ε at its floor on the last one."""
+SETTINGS = {"learning_starts": 500, "epsilon_decay_steps": 19_500}
+"""Schedule of the synthetic runs: 20,000 steps (:data:`SYNTHETIC_STEPS`), ε at its floor on the last one."""
 
 
 SCHEMA_1_SHAPING = {"dqn_harm_penalty": {"harm_penalty": -100.0}, "dqn_equality": {"equality_shaping": True}}
@@ -171,6 +171,9 @@ def bounded(metric: str) -> tuple[float, float | None]:
     return low, float(MAX_CYCLES) if metric == "survival" else high
 
 
+SYNTHETIC_STEPS = 20_000
+"""The training budget of every synthetic run: 40 episodes of :data:`MAX_CYCLES` steps."""
+
 EVAL_EPISODES = 100
 """Greedy episodes per evaluation of a synthetic run: a mean of counts is then exact to 0.01."""
 
@@ -197,8 +200,8 @@ def greedy_episodes(mean: float, rng: np.random.Generator, metric: str) -> list[
 def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dict | None = None, **means: float) -> dict:
     """The result of :func:`synthetic_document` as a schema-1 file holds it."""
     rng = np.random.default_rng(seed)
-    episodes = 40
-    train = {"episode_end_step": list(range(100, 100 * (episodes + 1), 100))}
+    episodes = SYNTHETIC_STEPS // MAX_CYCLES  # (40 whole episodes of max_cycles: any survival fits in them)
+    train = {"episode_end_step": list(range(MAX_CYCLES, SYNTHETIC_STEPS + 1, MAX_CYCLES))}
     for metric in METRIC_NAMES:
         centre = means.get(metric, 0.0)
         low, high = bounded(metric)
@@ -216,7 +219,7 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
             "method": method,
             "method_label": f"{method} {beta}",
             "seed": seed,
-            "steps": 4000,
+            "steps": SYNTHETIC_STEPS,
             "config": {
                 "settings": settings,
                 "variant": env,
@@ -224,7 +227,7 @@ def synthetic_schema_1(env: str, method: str, beta: float, seed: int, fixed: dic
                 "fixed": dict(DEFAULT_POLICIES[env] if fixed is None else fixed),
             },
             "train": within_env(env, train),
-            "eval": [{"step": 4000, **within_env(env, evaluation)}],
+            "eval": [{"step": SYNTHETIC_STEPS, **within_env(env, evaluation)}],
         }
     )
 
@@ -239,3 +242,10 @@ def within_env(env: str, columns: dict) -> dict:
         name: values if bounds.get(name) is None else [min(value, bounds[name]) for value in values]
         for name, values in columns.items()
     }
+
+
+def within_episodes(end_steps: list[int], columns: dict) -> dict:
+    """Training ``columns`` with each episode's survival capped at its own length (its end step
+    less the one before: the result-file checker refuses a robot operative past its episode's end)."""
+    lengths = [end - start for start, end in zip([0, *end_steps], end_steps, strict=False)]
+    return columns | {"survival": [min(value, length) for value, length in zip(columns["survival"], lengths, strict=True)]}

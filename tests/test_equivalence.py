@@ -123,6 +123,6 @@ def test_split_flips_counts_flips_between_halves_of_the_pooled_runs() -> None:
 
 
 def test_runs_of_another_budget_are_another_experiment() -> None:
-    longer = [edited(run, lambda document: document.update(steps=8000)) for run in runs(2)]
+    longer = [edited(run, lambda document: document.update(steps=40000)) for run in runs(2)]
     result = equivalence(runs(1), longer)
     assert result.verdict == "nothing compared" and len(result.only_old) == len(result.only_new) == 1

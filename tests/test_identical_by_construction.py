@@ -161,7 +161,7 @@ def test_a_row_whose_runs_equal_dqns_is_marked_though_not_by_construction(tmp_pa
     differs[2] = edited(differs[2], one_less)
     assert same_runs_row_names(dqn + differs) == {}
     assert same_runs_row_names(dqn + row("dqn_considerate", "Be Considerate", seeds=(0, 1, 2, 7))) == {}
-    longer = [edited(run, lambda document: document.update(steps=8000)) for run in row("dqn_considerate", "Be Considerate")]
+    longer = [edited(run, lambda document: document.update(steps=40000)) for run in row("dqn_considerate", "Be Considerate")]
     assert same_runs_row_names(dqn + longer) == {}
     # a row marked by construction keeps that mark (Be Considerate in Sharing)
     sharing = [synthetic_result("sharing_v0", m, 1.0, s) for m in ("dqn", "dqn_considerate") for s in (0, 1)]

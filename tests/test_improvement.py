@@ -7,7 +7,7 @@ import json
 import math
 
 import pytest
-from helpers_results import derive_run_id, hand_made_result
+from helpers_results import MAX_CYCLES, derive_run_id, hand_made_result
 
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.improvement import (
@@ -56,9 +56,14 @@ def _run(method: str, seed: int, value: float, selfishness: float = 1.0, env: st
     """A run whose one training episode and greedy episode survived ``value`` steps and harmed a
     cat in a run of short survival (below 5 steps)."""
     harms = [int(value < 5)]
-    train = {"episode_end_step": [10], "survival": [value], "harms": harms}
+    train = {"episode_end_step": [MAX_CYCLES], "survival": [value], "harms": harms}
     return hand_made_result(
-        env, method, seed, train, [{"step": 10, "survival": [value], "harms": harms}], settings={"selfishness": selfishness}
+        env,
+        method,
+        seed,
+        train,
+        [{"step": MAX_CYCLES, "survival": [value], "harms": harms}],
+        settings={"selfishness": selfishness},
     )
 
 

@@ -166,6 +166,7 @@ RESULT_FORGERIES = {
     "train return NaN": ("train.return.0", math.nan, "train.return[0]"),
     "equality 2": ("eval.0.equality.2", 2, "eval[0].equality[2]"),
     "survival past max_cycles": ("eval.0.survival.0", 501, "eval[0].survival[0]"),
+    "train survival past its episode": ("train.episode_end_step.0", 100, "train.survival[0]"),  # (it survived 400)
     "ragged evaluation": ("eval.0.harms", [0.0, 0.0], "eval[0].harms"),
     "unknown environment": ("env", "foo_v0", "env"),
     "malformed policy label": ("config.fixed.cat_0", "random_walk(", "config.fixed.cat_0"),
@@ -323,6 +324,13 @@ def _nan_first(tensor: torch.Tensor) -> torch.Tensor:
     return tensor
 
 
+def _survival_past_its_episode(payload: dict[str, Any]) -> None:
+    """The first logged episode ends one step before its survival (the episode after it longer)."""
+    log = payload["logs"][0]
+    assert log["survival"][0] >= 2, "an episode the robot survived 2 steps or more"
+    log["episode_end_step"][0] = log["survival"][0] - 1
+
+
 CHECKPOINT_FORGERIES = {
     "step -5": _set("step", lambda _: -5),
     "step 1e9": _set("step", lambda _: 10**9),
@@ -339,6 +347,7 @@ CHECKPOINT_FORGERIES = {
     "log entry a string": _set("logs.0.harms.0", lambda _: "many"),
     "log entry negative": _set("logs.0.batteries.0", lambda _: -5),
     "log survival past max_cycles": _set("logs.0.survival.0", lambda _: 10**6),
+    "log survival past its episode": _survival_past_its_episode,
     "log not a table": _set("logs.0", lambda _: [1, 2]),
     "evaluation NaN": _set("evaluations.0.0.harms.0", lambda _: math.nan),
     "evaluation at another step": _set("evaluations.0.0.step", lambda _: 50),

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, hand_made_result, record, synthetic_document, synthetic_result
+from helpers_results import MAX_CYCLES, derive_run_id, hand_made_result, record, synthetic_document, synthetic_result
 
 from empathy_zoo.experiment.records import RunResult
 from leaderboard.aggregate import bootstrap_mean_ci, mean_ci, student_t_interval
@@ -112,8 +112,8 @@ def test_three_seeds_against_three_can_never_give_a_verdict() -> None:
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> RunResult:
     """A run beside four cats whose one training episode and greedy episode survived ``value`` steps
     and harmed ``value // 100`` cats (more with longer survival)."""
-    train = {"episode_end_step": [10], "survival": [value], "harms": [value // 100]}
-    evaluations = [{"step": 10, "survival": [value], "harms": [value // 100]}]
+    train = {"episode_end_step": [MAX_CYCLES], "survival": [value], "harms": [value // 100]}
+    evaluations = [{"step": MAX_CYCLES, "survival": [value], "harms": [value // 100]}]
     return hand_made_result(
         "coexistence_v0", method, seed, train, evaluations, settings={"selfishness": selfishness}, env_kwargs={"num_cats": 4}
     )

@@ -105,7 +105,8 @@ def test_final_episode_count_is_ceil_of_ten_percent_at_least_one(n: int, expecte
 
 
 def test_run_scalars_select_final_ten_percent_and_last_evaluation() -> None:
-    document = make_document("coexistence_v0", "DQN", 0, [float(i) for i in range(1, 21)], eval_survival=[1.0, 3.0])
+    survival = [float(i) for i in range(1, 21)]  # (20 episodes of 20 steps: each survives at most its length)
+    document = make_document("coexistence_v0", "DQN", 0, survival, eval_survival=[1.0, 3.0], steps=400)
     earlier = {metric: [1.0 if metric == "equality" else 100.0] * 2 for metric in METRIC_NAMES}
     document["eval"].insert(0, {"step": 50, **within_env("coexistence_v0", earlier)})
     scalars = run_scalars(record(document))  # (the last evaluation: that of the latest step)

@@ -31,7 +31,7 @@ EMPATHIC = "empathic_dqn 0.5"
 PENALTY = "dqn_harm_penalty 1.0"
 
 
-def run(method: str, beta: float, seed: int, steps: int = 4000, learning_rate: float | None = None, **means: float) -> dict:
+def run(method: str, beta: float, seed: int, steps: int = 20000, learning_rate: float | None = None, **means: float) -> dict:
     """A synthetic result of ``steps`` training steps; ``learning_rate`` (in place of the default)
     tells two experiments of one label apart (their configs, so their run ids, differ by more than
     the seed)."""
@@ -50,15 +50,15 @@ def write_dir(directory: Path, runs: list[dict]) -> Path:
     return directory
 
 
-def dqn(steps: int = 4000, harms: float = 0.1, learning_rate: float | None = None) -> list[dict]:
+def dqn(steps: int = 20000, harms: float = 0.1, learning_rate: float | None = None) -> list[dict]:
     return [run("empathic_dqn", 1.0, seed, steps, learning_rate, harms=harms, survival=400.0) for seed in SEEDS]
 
 
-def empathic(steps: int = 4000, harms: float = 0.5) -> list[dict]:
+def empathic(steps: int = 20000, harms: float = 0.5) -> list[dict]:
     return [run("empathic_dqn", 0.5, seed, steps, harms=harms, survival=400.0) for seed in SEEDS]
 
 
-def penalty(steps: int = 4000, harms: float = 0.05) -> list[dict]:
+def penalty(steps: int = 20000, harms: float = 0.05) -> list[dict]:
     return [run("dqn_harm_penalty", 1.0, seed, steps, harms=harms, survival=300.0) for seed in SEEDS]
 
 
@@ -75,8 +75,8 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     markdown = paths["markdown"].read_text(encoding="utf-8")
     rows = table_lines(markdown, "Final greedy evaluation")
     assert [row.split(" | ")[0] for row in rows] == [f"| {PENALTY}", f"| {SHOWN}", f"| {EMPATHIC}"]
-    assert f"- `{mine}`: 5 runs, 4,000 steps; empathy-zoo " in markdown and f"- `{shipped}`: 10 runs, 4,000 steps;" in markdown
-    assert f"Every run has the same training budget: 4,000 steps, eval 2,000 × {EVAL_EPISODES}" in markdown
+    assert f"- `{mine}`: 5 runs, 20,000 steps; empathy-zoo " in markdown and f"- `{shipped}`: 10 runs, 20,000 steps;" in markdown
+    assert f"Every run has the same training budget: 20,000 steps, eval 2,000 × {EVAL_EPISODES}" in markdown
     # the other directory's method is compared with the shipped DQN, and the table says so
     compared = table_lines(markdown, "P(improves on DQN): Final greedy evaluation")
     against = [row.split(" | ")[:2] for row in compared]
@@ -87,9 +87,9 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
     named = ("method_label", *COMPARISON_CSV_COLUMNS)
     facts = {tuple(row[column] for column in named) for row in table}
     assert facts == {
-        (PENALTY, "4000", "2000", str(EVAL_EPISODES), str(mine)),
-        (EMPATHIC, "4000", "2000", str(EVAL_EPISODES), str(shipped)),
-        (SHOWN, "4000", "2000", str(EVAL_EPISODES), str(shipped)),
+        (PENALTY, "20000", "2000", str(EVAL_EPISODES), str(mine)),
+        (EMPATHIC, "20000", "2000", str(EVAL_EPISODES), str(shipped)),
+        (SHOWN, "20000", "2000", str(EVAL_EPISODES), str(shipped)),
     }
     assert "Read from 2 results directories" in paths["html"].read_text(encoding="utf-8")
 
@@ -97,29 +97,31 @@ def test_two_directories_of_one_budget_make_one_table_with_the_rows_of_both(tmp_
 def test_rows_of_different_budgets_are_kept_apart_and_compared_only_with_dqn_of_their_budget(tmp_path: Path) -> None:
     # the short budget's DQN never harms and the method does, the long budget's DQN harms far more:
     # mixing the two DQN groups would flip (or blur) every verdict on harms
-    short = write_dir(tmp_path / "short", dqn(4000, harms=0.0) + empathic(4000, harms=1.0))
-    long = write_dir(tmp_path / "long", dqn(8000, harms=1.0) + empathic(8000, harms=0.0))  # (one cat: at most 1 an episode)
+    short = write_dir(tmp_path / "short", dqn(20000, harms=0.0) + empathic(20000, harms=1.0))
+    long = write_dir(tmp_path / "long", dqn(40000, harms=1.0) + empathic(40000, harms=0.0))  # (one cat: at most 1 an episode)
     read = load_results_dirs([short, long])
-    assert read.budgets == (RunBudget(4000, 2000, EVAL_EPISODES), RunBudget(8000, 2000, EVAL_EPISODES)) and read.budget_in_labels
+    assert (
+        read.budgets == (RunBudget(20000, 2000, EVAL_EPISODES), RunBudget(40000, 2000, EVAL_EPISODES)) and read.budget_in_labels
+    )
     cells = improvements_over_dqn(read.results, {ENV: ["harms"]})
     verdicts = {(cell.method_label, cell.baseline_label, cell.phase): cell.verdict for cell in cells}
     assert verdicts == {
-        (f"{EMPATHIC} · 4,000 steps", f"{DQN} · 4,000 steps", "eval"): "worse",
-        (f"{EMPATHIC} · 4,000 steps", f"{DQN} · 4,000 steps", "train_final10"): "worse",
-        (f"{EMPATHIC} · 8,000 steps", f"{DQN} · 8,000 steps", "eval"): "better",
-        (f"{EMPATHIC} · 8,000 steps", f"{DQN} · 8,000 steps", "train_final10"): "better",
+        (f"{EMPATHIC} · 20,000 steps", f"{DQN} · 20,000 steps", "eval"): "worse",
+        (f"{EMPATHIC} · 20,000 steps", f"{DQN} · 20,000 steps", "train_final10"): "worse",
+        (f"{EMPATHIC} · 40,000 steps", f"{DQN} · 40,000 steps", "eval"): "better",
+        (f"{EMPATHIC} · 40,000 steps", f"{DQN} · 40,000 steps", "train_final10"): "better",
     }
     assert all(cell.n_baseline_seeds == 5 for cell in cells)  # one DQN group each, never both pooled
     markdown = write_leaderboard([short, long], tmp_path / "out", command="c")["markdown"].read_text(encoding="utf-8")
     rows = table_lines(markdown, "Final greedy evaluation")
     assert [row.split(" | ")[:2] for row in rows] == [
-        [f"| {SHOWN} · 4,000 steps", "5"],
-        [f"| {SHOWN} · 8,000 steps", "5"],
-        [f"| {EMPATHIC} · 4,000 steps", "5"],
-        [f"| {EMPATHIC} · 8,000 steps", "5"],
+        [f"| {SHOWN} · 20,000 steps", "5"],
+        [f"| {SHOWN} · 40,000 steps", "5"],
+        [f"| {EMPATHIC} · 20,000 steps", "5"],
+        [f"| {EMPATHIC} · 40,000 steps", "5"],
     ]
     compared = table_lines(markdown, "P(improves on DQN): Final greedy evaluation")
-    assert [row.split(" | ")[1] for row in compared] == [f"{SHOWN} · 4,000 steps (5 seeds)", f"{SHOWN} · 8,000 steps (5 seeds)"]
+    assert [row.split(" | ")[1] for row in compared] == [f"{SHOWN} · 20,000 steps (5 seeds)", f"{SHOWN} · 40,000 steps (5 seeds)"]
     harms = [row.split(" | ")[4] for row in compared]  # Method | Against | Seeds | survival | harms | …
     assert harms[0].startswith("▼") and harms[1].startswith("▲")
     assert "The runs have 2 training budgets: each row's label ends with its budget" in markdown
@@ -136,20 +138,20 @@ def test_evaluation_settings_join_the_budget_where_they_differ(tmp_path: Path) -
         derive_run_id(result)
     read = load_results_dirs([write_dir(tmp_path / "a", dqn()), write_dir(tmp_path / "b", other)])
     assert sorted({result.method_label for result in read.results}) == [
-        f"{DQN} · 4,000 steps, eval 2,000 × 10",
-        f"{DQN} · 4,000 steps, eval 2,000 × {EVAL_EPISODES}",
+        f"{DQN} · 20,000 steps, eval 2,000 × 10",
+        f"{DQN} · 20,000 steps, eval 2,000 × {EVAL_EPISODES}",
     ]
-    assert budget_of(record(other[0])).text() == "4,000 steps, eval 2,000 × 10"
+    assert budget_of(record(other[0])).text() == "20,000 steps, eval 2,000 × 10"
 
 
 def test_a_row_without_dqn_of_its_budget_is_named_not_compared(tmp_path: Path) -> None:
-    shipped = write_dir(tmp_path / "shipped", dqn(4000))
-    mine = write_dir(tmp_path / "mine", empathic(8000))
+    shipped = write_dir(tmp_path / "shipped", dqn(20000))
+    mine = write_dir(tmp_path / "mine", empathic(40000))
     read = load_results_dirs([mine, shipped])
     assert improvements_over_dqn(read.results, {ENV: ["harms"]}) == []
-    assert uncompared_rows(read.results) == [(ENV, f"{EMPATHIC} · 8,000 steps")]
+    assert uncompared_rows(read.results) == [(ENV, f"{EMPATHIC} · 40,000 steps")]
     markdown = write_leaderboard([mine, shipped], tmp_path / "out")["markdown"].read_text(encoding="utf-8")
-    assert f"Not compared with DQN (no DQN row of their variant, world and budget): {EMPATHIC} · 8,000 steps." in markdown
+    assert f"Not compared with DQN (no DQN row of their variant, world and budget): {EMPATHIC} · 40,000 steps." in markdown
     assert "### P(improves on DQN)" not in markdown
 
 
@@ -212,7 +214,7 @@ def test_one_directory_as_it_was_no_comparison_header_columns_or_against(tmp_pat
     paths = write_leaderboard(directory)
     markdown = paths["markdown"].read_text(encoding="utf-8")
     assert paths["markdown"].parent == directory and "Read from" not in markdown and "Against" not in markdown
-    assert "| empathic_dqn 0.5 | 5 |" in markdown and "·  4,000" not in markdown
+    assert "| empathic_dqn 0.5 | 5 |" in markdown and "·  20,000" not in markdown
     assert next(csv.reader(io.StringIO(paths["csv"].read_text(encoding="utf-8")))) == list(CSV_COLUMNS)
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, schema_1_document, within_env
+from helpers_results import derive_run_id, schema_1_document, within_env, within_episodes
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_DEFINITIONS, METRIC_NAMES
 from empathy_zoo.provenance import package_version
@@ -79,7 +79,7 @@ def write_synthetic_results(
                     seed,
                     steps,
                     {"settings": {"selfishness": 0.5} if method == "empathic_dqn" else {}, "env_kwargs": {}, "fixed": {}},
-                    {"episode_end_step": end_steps, **columns(n)},
+                    {"episode_end_step": end_steps, **within_episodes(end_steps, columns(n))},
                     [{"step": s, **columns(5)} for s in (steps // 2, steps)],
                     wall_time_s=1.0,
                     version="0.1.0",

@@ -12,7 +12,7 @@ import tracemalloc
 
 import numpy as np
 import pytest
-from helpers_results import derive_run_id, hand_made_result
+from helpers_results import MAX_CYCLES, derive_run_id, hand_made_result
 
 import leaderboard.improvement as improvement
 from empathy_zoo.experiment.records import RunResult
@@ -94,9 +94,9 @@ def test_a_smaller_bound_is_checked_the_same_way(monkeypatch) -> None:
 
 def _run(method: str, seed: int, value: float, selfishness: float = 1.0) -> RunResult:
     """A run whose one training episode and greedy evaluation survived ``value`` steps."""
-    train = {"episode_end_step": [10], "survival": [value]}
+    train = {"episode_end_step": [MAX_CYCLES], "survival": [value]}
     return hand_made_result(
-        "coexistence_v0", method, seed, train, [{"step": 10, "survival": [value]}], settings={"selfishness": selfishness}
+        "coexistence_v0", method, seed, train, [{"step": MAX_CYCLES, "survival": [value]}], settings={"selfishness": selfishness}
     )
 
 

@@ -13,7 +13,7 @@ from leaderboard.reference_curves import reference_curve
 
 def test_reference_follows_the_runs_epsilon_schedule() -> None:
     runs = [synthetic_result("coexistence_v0", "empathic_dqn", 0.5, seed, harms=0.1, survival=450) for seed in range(3)]
-    steps = np.array([50.0, 2000.0, 3990.0, 10_000.0])  # warm-up, decaying, near the end, after
+    steps = np.array([250.0, 10_000.0, 19_950.0, 50_000.0])  # warm-up, decaying, near the end, after
     harms = reference_curve(runs, "harms", steps)
     assert harms is not None
     settings = runs[0].config.settings
@@ -47,7 +47,7 @@ def test_figure_with_references_is_written(tmp_path) -> None:
 
 
 def test_the_in_view_and_silver_variants_get_their_own_target() -> None:
-    steps = np.array([10_000.0])  # ε at its floor, 0.01
+    steps = np.array([50_000.0])  # ε at its floor, 0.01
     for method, arguments in (("empathic_dqn_in_view", {"in_view_only": True}), ("empathic_dqn_silver", {"rule": "silver"})):
         runs = [synthetic_result("coexistence_v0", method, 0.25, 0)]
         harms = reference_curve(runs, "harms", steps)

@@ -75,9 +75,9 @@ def test_a_peak_needs_separation_not_just_the_highest_mean() -> None:
 
 def test_survival_is_judged_against_the_reference_at_the_phase_epsilon() -> None:
     runs = _paper_like()
-    # the final 10 % of training is steps 3600-4000, where ε falls from ≈ 0.112 to 0.01
+    # the final 10 % of training is steps 18,000-20,000, where ε falls from ≈ 0.112 to 0.01
     schedule = training_window_epsilons(next(r for r in runs if r.env == "coexistence_v0"))
-    assert sum(schedule.values()) == 400 and min(schedule) == 0.01 and 0.11 < max(schedule) < 0.12
+    assert sum(schedule.values()) == 2000 and min(schedule) == 0.01 and 0.11 < max(schedule) < 0.12
 
     # a reference that asks for more survival than the runs show fails the claim in training only
     def strict(selfishness: float, epsilon: float, *, gamma: float, max_cycles: int) -> FakeOutcome:
@@ -112,11 +112,11 @@ def test_training_window_share_is_the_steps_of_the_final_episodes_not_ten_percen
     from leaderboard.reproduction import training_window_share
 
     run = synthetic_result("coexistence_v0", "empathic_dqn", 0.5, 0)
-    assert training_window_share(run) == pytest.approx(0.1)  # 40 episodes of 100 steps: 4 of them, 400 steps
-    # the same 40 episodes, the last four 400 steps long: 10 % of the episodes is 1,600 of 5,200 steps
-    run = with_training(run, episode_end_step=[*range(100, 3700, 100), 4000, 4400, 4800, 5200])
-    assert training_window_share(run) == pytest.approx(1600 / 5200)
-    assert sum(training_window_epsilons(run).values()) == 1600
+    assert training_window_share(run) == pytest.approx(0.1)  # 40 episodes of 500 steps: 4 of them, 2,000 steps
+    # 40 episodes, the first 36 of them 300 steps long: 10 % of the episodes is 2,000 of 12,800 steps
+    run = with_training(run, episode_end_step=[*range(300, 10801, 300), 11300, 11800, 12300, 12800])
+    assert training_window_share(run) == pytest.approx(2000 / 12800)
+    assert sum(training_window_epsilons(run).values()) == 2000
     run = with_training(run, episode_end_step=[])
     assert training_window_share(run) != training_window_share(run)  # NaN without episodes
 
@@ -209,5 +209,5 @@ def test_the_evidence_states_the_share_the_range_and_the_rise() -> None:
     assert "over every tie-break" in with_range["greedy"]
     assert "(10.0–10.0 % of each run's steps)" in with_range["training"]
     assert "first half → second half" in with_range["training"] and "first half" not in with_range["greedy"]
-    assert sorted(calls) == [(0.25, 1), (0.25, 2000), (0.5, 1), (0.5, 2000)]  # 5 runs × 400 steps in training
+    assert sorted(calls) == [(0.25, 1), (0.25, 10000), (0.5, 1), (0.5, 10000)]  # 5 runs × 2,000 steps in training
     assert "tie-break" not in evidence()["training"]  # a reference of one's own and no range: none shown

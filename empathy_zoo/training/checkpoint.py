@@ -373,6 +373,9 @@ def _check_log(path: Path, where: str, log: Any, step: int, bounds: Mapping[str,
         for i, value in enumerate(log[metric]):
             if _value_problem(value, metric, bounds.get(metric), metric in INTEGER_METRICS):
                 raise corrupted(path, f"{where}[{metric!r}][{i}] is {shown(value)}, no {metric} of an episode")
+    for i, survival in enumerate(log["survival"]):
+        if survival > ends[i] - (ends[i - 1] if i else 0):
+            raise corrupted(path, f"{where}['survival'][{i}] is {shown(survival)}, more than its episode's steps")
     for i, price in enumerate(log.get(PRICE_COLUMN, [])):
         if not number(price, 0):
             raise corrupted(path, f"{where}[{PRICE_COLUMN!r}][{i}] is {shown(price)}, no finite price >= 0")
