@@ -38,7 +38,7 @@ from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.document_checks import finite_float, shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
-from empathy_zoo.names import check_own_file, check_path_name, terminal_line
+from empathy_zoo.names import check_own_file, check_path_name, check_replaceable, resolved, terminal_line
 
 __all__ = [
     "DEFAULT_DIR",
@@ -383,14 +383,13 @@ def main(
         return 2
     results: list[Path] = getattr(args, "results", [])
     out = args.out or Path(PAGE)
-    command = "empathy-zoo analyse discrimination" + (
-        "" if Path(args.directory).resolve() == DEFAULT_DIR else f" {args.directory}"
-    )
-    if args.epsilon != 0.01:
-        command += f" --epsilon {args.epsilon:g}"
-    command += "".join(f" --results {path}" for path in results)
     try:
-        check_own_file(out, "discrimination page", TITLE.encode())  # (before any table is read)
+        command = "empathy-zoo analyse discrimination" + ("" if resolved(args.directory) == DEFAULT_DIR else f" {args.directory}")
+        if args.epsilon != 0.01:
+            command += f" --epsilon {args.epsilon:g}"
+        command += "".join(f" --results {path}" for path in results)
+        check_replaceable(out)  # (before any table is read: only nothing or a regular file, no loop on its way)
+        check_own_file(out, "discrimination page", TITLE.encode())
         tables = load_tables(args.directory)
         cells, notes = trained(tables, results) if trained is not None and results else (None, ())
         page = discrimination_markdown(tables, args.epsilon, command, cells, notes)

@@ -37,7 +37,7 @@ from empathy_zoo.environments import DEFAULT_POLICIES, ENGINES, default_policies
 from empathy_zoo.evaluation_record import EvaluationResult, ScenarioScores
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_SCENARIOS, MAX_SEED
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_path_name
+from empathy_zoo.names import check_path_name, resolved
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.record_parts import AgentRef
 from empathy_zoo.result_file import RUNS_DIR, check_agent_record, check_env_kwargs, episode_bounds
@@ -134,7 +134,7 @@ def check_not_read_folder(folder: str | os.PathLike[str], what: str) -> None:
     (``evaluations/<set>``), as typed and where ``..`` and links lead. A file written there would
     be read as a broken result or evaluation, and refuse the whole directory."""
     typed = Path(folder)
-    for place in (typed, typed.absolute().resolve()):
+    for place in (typed, resolved(typed.absolute())):
         if place.name == RUNS_DIR or place.parent.name == EVALUATIONS_DIR:
             raise ValueError(
                 f"{what} lies in a folder of a results directory ({place}), whose JSON files are read as results "

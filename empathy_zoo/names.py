@@ -5,6 +5,7 @@ with (:func:`check_label`, the one rule both apply)."""
 
 from __future__ import annotations
 
+import errno
 import inspect
 import os
 import re
@@ -76,16 +77,30 @@ def check_label(value: Any, what: str) -> str:
     return value
 
 
+def resolved(path: str | os.PathLike[str]) -> Path:
+    """``path`` made absolute with every symbolic link followed (:meth:`Path.resolve`), or a
+    one-line ``ValueError`` naming it where it cannot be: a loop of symbolic links raises
+    ``RuntimeError`` up to Python 3.12 and ``OSError`` after. Every path a user gives is resolved here."""
+    try:
+        return Path(path).resolve()
+    except (RuntimeError, OSError) as error:
+        raise ValueError(f"{path} cannot be resolved ({_first_line(error)}): a loop of symbolic links; move it away") from None
+
+
+def _refuse_a_loop(path: Path, error: OSError) -> None:
+    """A one-line ``ValueError`` naming ``path`` where looking at it met a loop of symbolic links
+    (``ELOOP``: a folder on its way links to itself); other errors are left to the write to report."""
+    if error.errno == errno.ELOOP:
+        raise ValueError(f"{path} cannot be resolved ({_first_line(error)}): a loop of symbolic links; move it away") from None
+
+
 def confined(root: str | os.PathLike[str], *parts: str) -> Path:
     """``root / parts…``, or a ``ValueError`` when that path would lie outside ``root``, pass
     through a symbolic link below it (:func:`check_no_links`) or cannot be resolved (a loop of
     symbolic links)."""
     base = Path(root)
     path = base.joinpath(*parts)
-    try:
-        inside = path.resolve().is_relative_to(base.resolve())
-    except (RuntimeError, OSError) as error:  # (a loop of symbolic links: RuntimeError up to Python 3.12, OSError after)
-        raise ValueError(f"{path} cannot be resolved ({_first_line(error)}): a loop of symbolic links; move it away") from None
+    inside = resolved(path).is_relative_to(resolved(base))
     if not inside:
         raise ValueError(f"{path} lies outside {base}; refusing to write there")
     return check_no_links(base, path)
@@ -148,7 +163,8 @@ def check_own_file(path: str | os.PathLike[str], kind: str, opening: bytes) -> P
             return target
         with open(target, "rb") as handle:
             head = handle.read(len(opening))
-    except OSError:
+    except OSError as error:
+        _refuse_a_loop(target, error)
         return target
     if head != opening:
         shown = terminal_line(opening.rstrip(b"\n").decode("utf-8", errors="backslashreplace"))
@@ -190,7 +206,8 @@ def check_replaceable(path: str | os.PathLike[str]) -> Path:
     target = Path(path)
     try:
         mode = os.lstat(target).st_mode
-    except OSError:
+    except OSError as error:
+        _refuse_a_loop(target, error)
         return target
     if stat.S_ISREG(mode):
         return target
@@ -251,6 +268,12 @@ def cannot_create(directory: Path, error: OSError) -> ValueError:
     reason = error.strerror or str(error)
     for place in (directory, *directory.parents):
         if place.is_symlink() and not place.exists():
+            try:
+                place.resolve(strict=True)
+            except (RuntimeError, OSError) as looking:  # (a loop raises RuntimeError up to Python 3.12, ELOOP after)
+                if isinstance(looking, RuntimeError) or looking.errno == errno.ELOOP:
+                    reason = f"{place} is a loop of symbolic links (a link to {os.readlink(place)})"
+                    break
             reason = f"{place} is a symbolic link to {os.readlink(place)}, which does not exist"
             break
     return ValueError(f"cannot create output directory {directory} ({reason}); choose another output directory (--out)")

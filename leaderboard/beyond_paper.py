@@ -14,8 +14,8 @@ DQN), so either command leaves the same files.
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
+from empathy_zoo.names import resolved
 from leaderboard.heldout import heldout_section
 from leaderboard.page_markdown import section_markdown
 from leaderboard.sources import load_results_dirs
@@ -36,8 +36,8 @@ BEYOND_LEAD = (
 def beyond_the_paper(results_dir: str | os.PathLike[str], report_path: str | os.PathLike[str]) -> str:
     """The section's Markdown for the report written to ``report_path`` (``""`` when
     ``results_dir`` holds no evaluation files); its figures go to ``results_dir/figures``."""
-    report_dir = Path(report_path).resolve().parent
-    figures = Path(results_dir).resolve() / "figures"
+    report_dir = resolved(report_path).parent
+    figures = resolved(results_dir) / "figures"
     section = heldout_section(
         results_dir,
         list(load_results_dirs([results_dir], dqn_named=True).results),  # (rows named as the leaderboard's)

@@ -32,6 +32,7 @@ from empathy_zoo.data_files import data_files
 from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evaluation_mismatch, read_evaluation
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
+from empathy_zoo.names import resolved
 
 __all__ = ["MatchedEvaluation", "evaluation_dir_files", "match_evaluations"]
 
@@ -97,10 +98,10 @@ def match_evaluations(
     ``ValueError`` naming the file or the directory, before anything is written."""
     if not evaluation_dirs:
         return []
-    read_dirs = {Path(directory).resolve(): os.fspath(directory) for directory in results_dirs}
+    read_dirs = {resolved(directory): os.fspath(directory) for directory in results_dirs}
     seen_dirs: dict[Path, str] = {}
     for directory in evaluation_dirs:
-        where = Path(directory).resolve()
+        where = resolved(directory)
         if where in read_dirs:
             raise ValueError(
                 f"--evaluations {directory} is the results directory {read_dirs[where]}: "

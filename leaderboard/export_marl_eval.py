@@ -45,7 +45,7 @@ from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.evaluation_file import check_not_read_folder
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.names import check_output_file
+from empathy_zoo.names import check_output_file, resolved
 from empathy_zoo.result_file import RUNS_DIR
 from leaderboard.aggregate import group_runs
 from leaderboard.sources import load_results_dirs
@@ -156,7 +156,7 @@ def check_export_path(out: str | os.PathLike[str], results_dirs: Sequence[str | 
         )
     for directory in results_dirs:
         root = Path(directory) / RUNS_DIR if (Path(directory) / RUNS_DIR).is_dir() else Path(directory)
-        if root.is_dir() and path.absolute().parent.resolve() == root.resolve():
+        if root.is_dir() and resolved(path.absolute().parent) == resolved(root):
             raise ValueError(
                 f"{out} lies where the result files of {directory} are read ({root}): it would be read as one; write it elsewhere"
             )

@@ -34,7 +34,7 @@ from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
-from empathy_zoo.names import terminal_line
+from empathy_zoo.names import resolved, terminal_line
 from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, changes_carry_over, compare
 from leaderboard.run_facts import check_one_experiment, in_paper_setting
 
@@ -260,10 +260,10 @@ def _check_distinct(population_dir: Path, default_dirs: Sequence[Path]) -> None:
     """Refuse (``ValueError``) a directory given twice: its runs would be compared with themselves."""
     seen: dict[Path, Path] = {}
     for directory in (population_dir, *default_dirs):
-        resolved = Path(directory).resolve()
-        if resolved in seen:
-            raise ValueError(f"{directory} is given twice (as {seen[resolved]} too): its runs would be compared with themselves")
-        seen[resolved] = Path(directory)
+        where = resolved(directory)
+        if where in seen:
+            raise ValueError(f"{directory} is given twice (as {seen[where]} too): its runs would be compared with themselves")
+        seen[where] = Path(directory)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.names import check_label
+from empathy_zoo.names import check_label, resolved
 from leaderboard.aggregate import check_runs, load_result_files
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
 from leaderboard.row_names import (
@@ -127,11 +127,11 @@ def parse_label_options(options: Sequence[str] | None) -> dict[str | os.PathLike
     return labels
 
 
-def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:
+def _prefixes(given: Sequence[str], dirs: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:
     prefixes: list[str | None] = [None] * len(given)
     for directory, prefix in labels.items():
-        where = Path(directory).resolve()
-        if where not in resolved:
+        where = resolved(directory)
+        if where not in dirs:
             read = ", ".join(given)
             split = (
                 f" (the option is split at its last '=': a prefix holds none, so {directory} is read as the directory)"
@@ -143,7 +143,7 @@ def _prefixes(given: Sequence[str], resolved: Sequence[Path], labels: Mapping[st
             )
         if not isinstance(prefix, str) or not prefix.strip():
             raise ValueError(f"--label {directory}: the prefix must be a non-empty one-line text, got {prefix!r}")
-        prefixes[resolved.index(where)] = check_label(prefix.strip(), f"--label {directory}=: the prefix")
+        prefixes[dirs.index(where)] = check_label(prefix.strip(), f"--label {directory}=: the prefix")
     return prefixes
 
 
@@ -176,11 +176,11 @@ def load_results_dirs(
     dirs = [Path(directory) for directory in given]
     if not dirs:
         raise ValueError("no results directory to read")
-    resolved = [directory.resolve() for directory in dirs]
-    for i, directory in enumerate(resolved):
-        if directory in resolved[:i]:
-            raise ValueError(f"results directory {given[i]} is given twice (as {given[resolved.index(directory)]} too)")
-    prefixes = _prefixes(given, resolved, labels or {})
+    resolved_dirs = [resolved(directory) for directory in dirs]
+    for i, directory in enumerate(resolved_dirs):
+        if directory in resolved_dirs[:i]:
+            raise ValueError(f"results directory {given[i]} is given twice (as {given[resolved_dirs.index(directory)]} too)")
+    prefixes = _prefixes(given, resolved_dirs, labels or {})
     files = [(i, path, result) for i, directory in enumerate(dirs) for path, result in load_result_files(directory)]
     budgets = budgets_of(result for _, _, result in files)
     with_evaluation = shows_evaluation(budgets)

@@ -49,7 +49,7 @@ from empathy_zoo.limits import (
     MAX_WALL_TIME_S,
 )
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.names import PNG_OPENING, check_output_file, terminal_line
+from empathy_zoo.names import PNG_OPENING, check_output_file, resolved, terminal_line
 from empathy_zoo.training.study_plan import DIRECTIONS, curve_value
 from empathy_zoo.training.trials_figure import literal_text
 from leaderboard.tables import markdown_text
@@ -111,8 +111,13 @@ def study_files(root: str | os.PathLike[str]) -> tuple[list[Path], list[tuple[Pa
     ``(path, the path read in its place)``. A file reached by two paths (a symbolic link to it, a
     second hard link: one device and inode) is read by one of them, the first that is no symbolic
     link (the first of all where each is one). A path that cannot be looked at (a dangling link)
-    is kept, for the read to refuse. ``ValueError`` where there is none."""
-    found = sorted(Path(root).rglob(STUDY_FILE))
+    is kept, for the read to refuse (``Path.rglob`` skips a name that does not exist: it is not used). Folders are
+    walked without following links to them, as ``rglob`` walks. ``ValueError`` where there is none, or ``root`` is a loop
+    of symbolic links."""
+    resolved(root)
+    found = sorted(
+        Path(folder) / name for folder, folders, files in os.walk(root) for name in (*folders, *files) if name == STUDY_FILE
+    )
     if not found:
         raise ValueError(f"no {STUDY_FILE} under {root}: run empathy-zoo tune first")
     by_file: dict[tuple[int, int], list[Path]] = {}
@@ -416,7 +421,7 @@ def check_figure_path(figure: str | os.PathLike[str], studies: Sequence[Path] = 
     drawing would replace it)."""
     path = Path(figure)
     for study in studies:
-        if path.resolve() == study.resolve() or (path.exists() and _same_file(path, study)):
+        if resolved(path) == resolved(study) or (path.exists() and _same_file(path, study)):
             raise ValueError(
                 f"{figure} lies where the study file {study} is read (it is that file): the figure would replace it; "
                 "write it elsewhere"

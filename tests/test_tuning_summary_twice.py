@@ -89,3 +89,21 @@ def test_many_links_are_named_up_to_the_bound_then_counted(tmp_path: Path, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"{PROG}: note: {NOTED + 2} path(s) lead to a study file")
     assert f"l{NOTED - 1:02d}/study.json is" in err and f"l{NOTED:02d}/" not in err and err.endswith("; and 2 more\n")
+
+
+@pytest.mark.parametrize("place", ["dangling", "loop"])
+def test_a_study_json_that_leads_nowhere_is_refused_not_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], place
+) -> None:
+    """``Path.rglob`` skips a name whose target does not exist: such a study would vanish from the
+    table without a word. It is found and refused in one line naming it."""
+    _write(tmp_path / "a", STUDIES[0])
+    (tmp_path / "x").mkdir()
+    broken = tmp_path / "x" / "study.json"
+    broken.symlink_to("nowhere" if place == "dangling" else "study.json")
+    from leaderboard.tuning_summary import study_files
+
+    assert broken in study_files(tmp_path)[0]
+    assert cli_main(["analyse", "tuning-summary", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{PROG}: error: ") and err.count("\n") == 1 and str(broken) in err, err

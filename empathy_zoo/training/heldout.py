@@ -46,6 +46,7 @@ from empathy_zoo.experiment.model import EnvVariant
 from empathy_zoo.experiment.records import AgentRef, RunResult
 from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATE_CYCLES, check_at_most, cpu_count
+from empathy_zoo.names import resolved
 from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
@@ -114,6 +115,7 @@ def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
     file-name order; a directory without result files raises ``ValueError``, and so does a result or
     agent file there that is no regular file (:func:`empathy_zoo.data_files.data_files`)."""
     root = Path(results_dir)
+    resolved(root)  # (a loop of symbolic links is named as one, not as missing)
     if not root.is_dir():
         raise ValueError(f"results directory {root} does not exist")
     runs = root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root

@@ -41,6 +41,7 @@ from typing import Any
 
 from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.extras import install_command
+from empathy_zoo.names import resolved
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.ensemble import train_ensemble
 from empathy_zoo.training.options import RunnerOptions
@@ -134,7 +135,7 @@ def train_with_ray(
     specs (a test makes it kill its worker once to check that the task is retried).
     """
     ray = import_ray()
-    out_dir = Path(out_dir).resolve()
+    out_dir = resolved(out_dir)
     if not chunks:
         return
     started_here = not ray.is_initialized()
