@@ -7,12 +7,27 @@ take it through :func:`read_separation_table`: a regular file of at most
 readers use checked against its range (rows of unique names, outcomes and pairs that name those
 rows, finite numbers in their ranges, and a pair's ``differ`` true exactly when its
 ``differing_states`` is above 0, those at most its ``reachable_states``, as the producer writes
-them). Every refusal is one ``ValueError`` line naming the file and the field.
+them), and the table consistent with itself as the producer writes it:
+
+* every row has one outcome at every ε of the outcomes: a reader that looks one up (the scenarios
+  reading's predictions, at ε = 0) never finds none. The one exception is the producer's own: a row
+  of a method the table lists in ``omitted`` (its optimum found no fixed point at some ε) may lack
+  an outcome at an ε, and then has no pair there either;
+* an outcome's ``harms`` at most what one episode of the table's environment, built with its
+  ``arguments``, can count (:func:`empathy_zoo.result_file.episode_bounds`: one Charger cat is
+  harmed at most once), and its ``survival`` at most the episode's steps (``max_cycles``, which,
+  where the table records it, is the one its environment and arguments give);
+* a pair's ``harms_difference`` (``survival_difference``, ``equality_difference`` where it holds
+  them) is its first row's outcome at its ε minus its second's, as the producer computes it, up to
+  a float's rounding (:data:`ROUNDING` of the larger operand).
+
+Every refusal is one ``ValueError`` line naming the file and the field.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +55,10 @@ MAX_ENTRIES = 100_000
 MAX_ROW_NAME = 200
 """The longest row name or method name (the shipped ones are under 40 characters)."""
 ROUNDING = 1e-9
-"""How far a probability summed over states may pass 1 by rounding."""
+"""How far a probability summed over states may pass 1 by rounding; likewise, relative to the
+larger of its figures, how far an expected count may pass its bound (the shipped helping table's
+harms are 1.0000000000000002 where one partner is harmed at most once) and a pair's difference may
+stand from its outcomes' (the producer's are exact)."""
 MAX_COUNT = 10**9
 """The largest harms, survival or count of states a table may hold (the bound of ``max_cycles``)."""
 
@@ -139,9 +157,9 @@ def _plain_rest(check: DocumentChecker, entry: dict[str, Any], read: frozenset[s
         check.plain(value, f"{where}{key}")
 
 
-_READ_TOP = frozenset(("env", "arguments", "rows", "outcomes", "pairs", "omitted"))
+_READ_TOP = frozenset(("env", "arguments", "max_cycles", "rows", "outcomes", "pairs", "omitted"))
 _READ_ROW = frozenset(("name", "method", "selfishness", "identical_to", "reason"))
-_READ_OUTCOME = frozenset(("row", "epsilon", "harms", "robot_harmed", "survival", "changed"))
+_READ_OUTCOME = frozenset(("row", "epsilon", "harms", "robot_harmed", "survival", "changed", "equality"))
 _READ_PAIR = frozenset(
     (
         "first",
@@ -151,11 +169,14 @@ _READ_PAIR = frozenset(
         "differing_states",
         "reachable_states",
         "harms_difference",
+        "survival_difference",
         "equality_difference",
         "by_construction",
     )
 )
 _READ_OMISSION = frozenset(("method", "reason"))
+_DIFFERENCES = (("harms_difference", "harms"), ("survival_difference", "survival"), ("equality_difference", "equality"))
+"""Each difference a pair may hold and the outcome figure it is the first row's minus the second's of."""
 
 
 def _environment(check: DocumentChecker, value: Any) -> str:
@@ -166,6 +187,58 @@ def _environment(check: DocumentChecker, value: Any) -> str:
     if name not in ENGINES:
         raise check.fail("env", f"a registered environment ({', '.join(sorted(ENGINES))})", value)
     return name
+
+
+def _episode_bounds(check: DocumentChecker, table: Mapping[str, Any], arguments: list[list[Any]]) -> tuple[float, float]:
+    """The most ``harms`` and ``survival`` one episode of the table can count: what its environment
+    built with its arguments can (:func:`empathy_zoo.result_file.episode_bounds`; :data:`MAX_COUNT`
+    for a table that names none), the survival at most its ``max_cycles`` where it records them."""
+    from empathy_zoo.engine.arguments import argument_defaults
+    from empathy_zoo.environments import ENGINES
+    from empathy_zoo.limits import MAX_CYCLES
+    from empathy_zoo.result_file import check_env_kwargs, episode_bounds
+
+    harms: float = MAX_COUNT
+    cycles: int | None = None
+    if "env" in table:
+        env = table["env"]
+        names = [name for name, _ in arguments]
+        for i, name in enumerate(names):
+            if name in names[:i]:
+                raise check.fail(f"arguments[{i}][0]", "an argument not given before", name)
+        kwargs = check_env_kwargs(check, env, dict(arguments), "arguments")
+        bounds = episode_bounds(env, kwargs)
+        harms = float(bounds["harms"] or 0)
+        cycles = int({**argument_defaults(ENGINES[env]), **kwargs}["max_cycles"])
+    if "max_cycles" in table:
+        recorded = check.integer(table["max_cycles"], "max_cycles", 1, MAX_CYCLES)
+        if cycles is not None and recorded != cycles:
+            expected = f"the steps of an episode of {table['env']} built with the table's arguments ({cycles:,})"
+            raise check.fail("max_cycles", expected, recorded)
+        cycles = recorded
+    return harms, float(MAX_COUNT if cycles is None else cycles)
+
+
+def _at_most(check: DocumentChecker, value: float, most: float, field: str, what: str) -> None:
+    """``value`` (a checked count) at most ``most``, up to a float's rounding (:data:`ROUNDING`)."""
+    if value > most + ROUNDING * max(1.0, most):
+        raise check.fail(field, f"at most {most:g} ({what})", value)
+
+
+def _check_differences(
+    check: DocumentChecker, pair: Mapping[str, Any], where: str, first: Mapping[str, Any], second: Mapping[str, Any]
+) -> None:
+    """Each difference ``pair`` holds (:data:`_DIFFERENCES`) the first row's outcome ``first`` minus
+    the second's, ``second``, as the producer computes it, up to a float's rounding of the larger
+    figure (a difference the outcomes do not give, their figure absent or ``null``, is left as read)."""
+    for key, figure in _DIFFERENCES:
+        stored, a, b = pair.get(key), first.get(figure), second.get(figure)
+        if stored is None or a is None or b is None:
+            continue
+        expected = float(a) - float(b)
+        if abs(float(stored) - expected) > ROUNDING * max(1.0, abs(float(a)), abs(float(b))):
+            rows = f"the first row's {figure} ({shown(pair['first'])}: {a!r}) minus the second's ({shown(pair['second'])}: {b!r})"
+            raise check.fail(f"{where}.{key}", f"{expected!r}, {rows} at ε = {pair['epsilon']!r}", stored)
 
 
 def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
@@ -189,7 +262,9 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
             check.name(pair[1], f"arguments[{i}][1]")  # (an option's word: shown in page headings)
         else:
             check.integer(pair[1], f"arguments[{i}][1]", -(10**9), 10**9)
+    most_harms, most_survival = _episode_bounds(check, table, arguments)
     names: set[str] = set()
+    methods: dict[str, str] = {}  # (each row's method)
     same_as: dict[str, str] = {}  # (each row's first row by identical_to: rows marked identical, directly or not, share it)
     for i, row in enumerate(_entries(check, table["rows"], "rows", MAX_ROWS)):
         where = f"rows[{i}]"
@@ -198,7 +273,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         name = _short(check, row["name"], f"{where}.name")
         if name in names:
             raise check.fail(f"{where}.name", "a name no other row has", name)
-        _short(check, row["method"], f"{where}.method")
+        methods[name] = _short(check, row["method"], f"{where}.method")
         if row.get("selfishness") is not None:
             _fraction(check, row["selfishness"], f"{where}.selfishness")
         for key in ("identical_to", "reason"):
@@ -207,7 +282,7 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
             raise check.fail(f"{where}.identical_to", "the name of a row before it", row["identical_to"])
         same_as[name] = same_as[row["identical_to"]] if row.get("identical_to") else name
         names.add(name)  # (after identical_to is checked: a row is never identical to itself)
-    outcomes: set[tuple[str, float]] = set()
+    outcomes: dict[tuple[str, float], dict[str, Any]] = {}
     for i, outcome in enumerate(_entries(check, table["outcomes"], "outcomes")):
         where = f"outcomes[{i}]"
         check.has(outcome, ("row", "epsilon", "harms", "robot_harmed"), f"{where}.")
@@ -216,14 +291,35 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         epsilon = _fraction(check, outcome["epsilon"], f"{where}.epsilon")
         if (row_name, epsilon) in outcomes:
             raise check.fail(f"{where}.epsilon", f"an ε at which row {shown(row_name)} has no other outcome", epsilon)
-        outcomes.add((row_name, epsilon))
-        _bounded(check, outcome["harms"], f"{where}.harms")
+        outcomes[row_name, epsilon] = outcome
+        harms = _bounded(check, outcome["harms"], f"{where}.harms")
+        _at_most(check, harms, most_harms, f"{where}.harms", "the most harms an episode of the table's environment counts")
         _fraction(check, outcome["robot_harmed"], f"{where}.robot_harmed")
         if "survival" in outcome:
-            _bounded(check, outcome["survival"], f"{where}.survival")
+            survival = _bounded(check, outcome["survival"], f"{where}.survival")
+            _at_most(check, survival, most_survival, f"{where}.survival", "the steps of an episode: max_cycles")
         if outcome.get("changed") is not None:
             _probability(check, outcome["changed"], f"{where}.changed")
-    epsilons = {epsilon for _, epsilon in outcomes}
+        if outcome.get("equality") is not None:
+            _probability(check, outcome["equality"], f"{where}.equality")
+    omitted: set[str] = set()
+    for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
+        check.has(omission, ("method", "reason"), f"omitted[{i}].")
+        _plain_rest(check, omission, _READ_OMISSION, f"omitted[{i}].")
+        omitted.add(check.text(omission["method"], f"omitted[{i}].method"))
+        check.text(omission["reason"], f"omitted[{i}].reason")
+    epsilons = sorted({epsilon for _, epsilon in outcomes})
+    for name in methods:  # (in the rows' order: the first missing one named is the table's first)
+        if methods[name] in omitted:
+            continue  # (the producer's: an optimum with no fixed point at some ε, its method omitted there)
+        for epsilon in epsilons:
+            if (name, epsilon) not in outcomes:
+                shown_epsilons = ", ".join(f"{e!r}" for e in epsilons[:10])
+                raise check.error(
+                    f"{check.path}: field outcomes: missing the outcome of row {shown(name)} at ε = {epsilon!r} (every "
+                    f"row has one at each ε of the outcomes, {shown_epsilons}, unless omitted lists its method "
+                    f"{shown(methods[name])}); the file is damaged or not {check.suite}: {check.remedy}"
+                )
     pairs: set[tuple[frozenset[str], float]] = set()
     for i, pair in enumerate(_entries(check, table["pairs"], "pairs")):
         where = f"pairs[{i}]"
@@ -240,6 +336,9 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
         if (frozenset((first, second)), epsilon) in pairs:
             raise check.fail(f"{where}.second", f"a row not paired with {shown(first)} at ε = {epsilon!r} before", second)
         pairs.add((frozenset((first, second)), epsilon))
+        for key, name in (("first", first), ("second", second)):
+            if (name, epsilon) not in outcomes:  # (a row of an omitted method, with no outcome here)
+                raise check.fail(f"{where}.{key}", f"a row with an outcome at ε = {epsilon!r}", name)
         if not isinstance(pair["differ"], bool):
             raise check.fail(f"{where}.differ", "true or false", pair["differ"])
         if pair["differ"] and same_as[first] == same_as[second]:
@@ -255,12 +354,9 @@ def check_separation_table(document: Any, path: Path) -> dict[str, Any]:
                 expected = f"at most reachable_states ({pair['reachable_states']:,}): states that differ are reachable"
                 raise check.fail(f"{where}.differing_states", expected, differing)
         _bounded(check, pair["harms_difference"], f"{where}.harms_difference", None)
-        if pair.get("equality_difference") is not None:
-            _bounded(check, pair["equality_difference"], f"{where}.equality_difference", None)
+        for key in ("survival_difference", "equality_difference"):
+            if pair.get(key) is not None:
+                _bounded(check, pair[key], f"{where}.{key}", None)
         _optional_text(check, pair["by_construction"], f"{where}.by_construction")
-    for i, omission in enumerate(_entries(check, table.get("omitted", []), "omitted")):
-        check.has(omission, ("method", "reason"), f"omitted[{i}].")
-        _plain_rest(check, omission, _READ_OMISSION, f"omitted[{i}].")
-        check.text(omission["method"], f"omitted[{i}].method")
-        check.text(omission["reason"], f"omitted[{i}].reason")
+        _check_differences(check, pair, where, outcomes[first, epsilon], outcomes[second, epsilon])
     return table

@@ -132,10 +132,15 @@ def predictions(tables: Mapping[str, Mapping[str, Any]]) -> list[Prediction]:
         harms = {o["row"]: counted_harms(o) for o in table["outcomes"] if float(o["epsilon"]) == EPSILON}
         if "dqn" not in harms:
             raise ValueError(f"separation table {task} has no DQN outcome at ε = {EPSILON:g}")
+        omitted = {omission["method"] for omission in table.get("omitted", [])}
         for row in table["rows"]:
             method = _row_method(row)
-            if method is None or method == "dqn" or row.get("identical_to") or row["name"] not in harms:
+            if method is None or method == "dqn" or row.get("identical_to"):
                 continue  # (a row identical to another by construction is not trained: nothing to read)
+            if row["name"] not in harms:
+                if method in omitted:  # (the table omits it at some ε: no prediction, as the module page says)
+                    continue
+                raise ValueError(f"separation table {task} has no outcome of row {row['name']!r} at ε = {EPSILON:g}")
             difference = harms[row["name"]] - harms["dqn"]
             if difference <= -MATERIAL:
                 expected = FEWER

@@ -45,7 +45,10 @@ TABLE = {
         pair("e β=0.5", "e β=0", True, 3, -0.5),
         pair("e β=0.25", "e β=0", True, 3, -0.5),
     ],
-    "outcomes": [{"row": "dqn", "epsilon": 0.01, "harms": 1.0, "robot_harmed": 0.0}],
+    "outcomes": [  # (every row at each ε, harms whose differences are the pairs')
+        {"row": name, "epsilon": 0.01, "harms": harms, "robot_harmed": 0.0}
+        for name, harms in (("dqn", 1.0), ("twin", 1.0), ("e β=0.5", 0.25), ("e β=0.25", 0.25), ("e β=0", 0.75))
+    ],
     "omitted": [{"method": "far", "reason": "no exact model"}],
 }
 

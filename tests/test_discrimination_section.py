@@ -26,7 +26,8 @@ def tables(tmp_path: Path) -> Path:
         | {"by_construction": ""}
         for a, b, d in (("dqn", "dqn_harm_penalty", True), ("dqn", "e", True), ("dqn_harm_penalty", "e", False))
     ]
-    outcomes = [{"row": r["name"], "epsilon": 0.01, "harms": 0.0, "robot_harmed": 0.0} for r in rows]
+    harms = {"dqn": 0.9, "dqn_harm_penalty": 0.0, "e": 0.0}  # (each pair's harms_difference is its rows' difference)
+    outcomes = [{"row": r["name"], "epsilon": 0.01, "harms": harms[r["name"]], "robot_harmed": 0.0} for r in rows]
     folder = tmp_path / "tables"
     folder.mkdir()
     (folder / "charger_v0.json").write_text(json.dumps({"env": "charger_v0", "rows": rows, "outcomes": outcomes, "pairs": pairs}))

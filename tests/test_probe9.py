@@ -42,7 +42,7 @@ def table(rows: int = 3, methods: int = 3) -> dict[str, Any]:
         "rows": [{"name": n, "method": f"m{i % methods}", "selfishness": 0.5} for i, n in enumerate(names)],
         "outcomes": [{"row": n, "epsilon": 0.01, "harms": 0.1, "robot_harmed": 0.0} for n in names],
         "pairs": [
-            {"first": a, "second": b, "epsilon": 0.01, "differ": True, "differing_states": 3, "harms_difference": 0.1}
+            {"first": a, "second": b, "epsilon": 0.01, "differ": True, "differing_states": 3, "harms_difference": 0.0}
             | {"by_construction": ""}
             for i, a in enumerate(names)
             for b in names[i + 1 :]
