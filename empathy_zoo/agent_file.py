@@ -84,6 +84,7 @@ __all__ = [
     "load_agent",
     "load_run_agent",
     "check_against_result",
+    "check_agent_hash",
     "result_entry",
     "RESULT_FIELD",
     "file_sha256",
@@ -412,12 +413,8 @@ def load_agent(
     path = Path(path)
     data = read_data(path, "agent file")
     sha256 = hashlib.sha256(data).hexdigest()
-    if expected_sha256 is not None and sha256 != str(expected_sha256).lower():
-        records = f"its result file {result_file} records" if result_file is not None else "expected"
-        raise ValueError(
-            f"agent file {path} has SHA-256 {sha256}, but {records} {expected_sha256}: "
-            "it was changed or replaced after the run wrote it; refusing to load it"
-        )
+    if expected_sha256 is not None:
+        _check_sha256(path, sha256, expected_sha256, result_file)
     source = {"file": str(path), "sha256": sha256}
     members = _zip_members(path, data)
     member = _library_member(path, data, members)
@@ -462,6 +459,25 @@ def load_agent(
     description = _description(header, obs_size, num_actions, list(heads), document["acting"], source)
     description["layers"] = [obs_size] + [int(t.shape[0]) for t in heads[document["acting"]][1::2]]
     return TrainedAgent(heads, document["acting"], description)
+
+
+def check_agent_hash(path: str | Path, expected_sha256: str, result_file: str | Path | None = None) -> None:
+    """Refuse the agent file at ``path`` as :func:`load_agent` refuses it when its SHA-256 is not
+    ``expected_sha256`` (what ``result_file`` records): the same ``ValueError``, naming both files.
+    Nothing of it is loaded: the file is read through the bounded reader (a file over the agent
+    file's cap, or one that is no regular file, raises as there) and hashed, no more; a check
+    before work that ends in :func:`load_agent` (``empathy-zoo reproduce`` before it trains)."""
+    path = Path(path)
+    _check_sha256(path, file_sha256(path), expected_sha256, result_file)
+
+
+def _check_sha256(path: Path, sha256: str, expected_sha256: str, result_file: str | Path | None) -> None:
+    if sha256 != str(expected_sha256).lower():
+        records = f"its result file {result_file} records" if result_file is not None else "expected"
+        raise ValueError(
+            f"agent file {path} has SHA-256 {sha256}, but {records} {expected_sha256}: "
+            "it was changed or replaced after the run wrote it; refusing to load it"
+        )
 
 
 def load_run_agent(result_file: str | Path) -> TrainedAgent | SB3Agent:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from empathy_zoo.agent_file import load_agent
+from empathy_zoo.agent_file import check_agent_hash, load_agent
 from empathy_zoo.environments import default_policies
 from empathy_zoo.episode_gif import GIF_STEPS, GifEpisode, episode_gif
 from empathy_zoo.experiment.agent_method import check_agent_method
@@ -63,6 +63,7 @@ __all__ = [
     "chosen_runs",
     "trained_world",
     "ForgedWorld",
+    "check_row_agent",
     "play_row_episodes",
     "episodes_section",
 ]
@@ -214,6 +215,40 @@ def trained_world(run: RunResult, allowed_imports: Collection[str] = ()) -> tupl
     return env, env_kwargs, fixed
 
 
+def _row_inputs(
+    run: RunResult, origin: str, allowed_imports: Collection[str]
+) -> tuple[Path, Path, tuple[str, dict[str, Any], dict[str, PolicyEntry]]] | str:
+    """``(result file, agent file, world)`` of a row's chosen ``run`` (read from ``origin``), or why it
+    shows no episode (a note: its agent file is missing, its partner is a plug-in not allowed); a
+    forged world raises ``ValueError`` naming the result file. Its agent file is not read."""
+    root = _runs_root(origin)
+    entry = run.agent
+    assert entry is not None
+    result_file = root / f"{check_path_name(run.run_id, 'run id')}.json"
+    agent_file = confined(root, entry.file)
+    if not agent_file.is_file():
+        return f"agent file {agent_file}, named by result file {result_file}, is missing"
+    try:
+        world = trained_world(run, allowed_imports)
+    except ForgedWorld as error:
+        raise ValueError(f"{result_file}: {error}") from None
+    except ValueError as error:
+        return str(error)
+    return result_file, agent_file, world
+
+
+def check_row_agent(run: RunResult, origin: str, allowed_imports: Collection[str] = ()) -> None:
+    """Refuse now what :func:`play_row_episodes` refuses of ``run`` when it is its row's chosen run
+    (:func:`chosen_runs`; ``origin``: the directory it was read from): a forged world, and an agent
+    file whose SHA-256 is not the one its result file records (the same ``ValueError``, naming both
+    files). The agent is not loaded, only its file hashed
+    (:func:`empathy_zoo.agent_file.check_agent_hash`); a run that would get a note passes."""
+    inputs = _row_inputs(run, origin, allowed_imports)
+    if not isinstance(inputs, str):
+        assert run.agent is not None
+        check_agent_hash(inputs[1], run.agent.sha256, result_file=inputs[0])
+
+
 # ---------------------------------------------------------------------------- playing
 def play_row_episodes(
     results: Sequence[RunResult],
@@ -234,25 +269,14 @@ def play_row_episodes(
     notes: list[str] = []
     ready = []
     for (env, label), (run, origin) in chosen.items():
-        root = _runs_root(origin)
-        entry = run.agent
-        assert entry is not None
-        result_file = root / f"{check_path_name(run.run_id, 'run id')}.json"
-        agent_file = confined(root, entry.file)
-        if not agent_file.is_file():
-            notes.append(
-                f"{label} ({env}): agent file {agent_file}, named by result file {result_file}, is missing; no episode shown"
-            )
+        inputs = _row_inputs(run, origin, allowed_imports)
+        if isinstance(inputs, str):
+            notes.append(f"{label} ({env}): {inputs}; no episode shown")
             continue
+        result_file, agent_file, world = inputs
+        assert run.agent is not None
         try:
-            world = trained_world(run, allowed_imports)
-        except ForgedWorld as error:
-            raise ValueError(f"{result_file}: {error}") from None
-        except ValueError as error:
-            notes.append(f"{label} ({env}): {error}; no episode shown")
-            continue
-        try:
-            agent = check_agent_method(load_agent(agent_file, entry.sha256, result_file=result_file))
+            agent = check_agent_method(load_agent(agent_file, run.agent.sha256, result_file=result_file))
         except ImportError as error:
             notes.append(f"{label} ({env}): {error}; no episode shown")
             continue

@@ -25,7 +25,14 @@ from empathy_zoo.cli.common import (
 if TYPE_CHECKING:
     from empathy_zoo.experiment.records import RunResult
 
-__all__ = ["add_sweep_commands", "cmd_leaderboard", "cmd_reproduce", "cmd_reproduction", "cmd_sensitivity"]
+__all__ = [
+    "add_sweep_commands",
+    "check_leaderboard_inputs",
+    "cmd_leaderboard",
+    "cmd_reproduce",
+    "cmd_reproduction",
+    "cmd_sensitivity",
+]
 
 PRODUCED_BY = "(the command that trained these runs is in each result file's config)"
 """What a report says produced its results when ``--produced-by`` does not."""
@@ -73,6 +80,7 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
     workers = values["workers"]
     options = runner_options(args, values)
     finished, done = read_results(specs, out)  # the leaderboard reads them all: refuse now, not after training
+    check_leaderboard_inputs(specs, finished, out, rerun_changed=options.rerun_changed)  # (and its agents, evaluations)
     experiments = len({spec.experiment_id for spec in specs})
     print(
         f"{PROG}: sweep {path} — {len(specs)} runs ({experiments} experiments × {len(specs) // experiments} seeds) "
@@ -97,6 +105,42 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
     except NotThePaperSweep as reason:
         print(f"{PROG}: no REPRODUCTION.md: {reason}; the paper's claims are judged only on its own experiments")
     return 0
+
+
+def check_leaderboard_inputs(
+    specs: Sequence[Any], finished: Mapping[Path, RunResult], out: Path, *, rerun_changed: bool = False
+) -> None:
+    """Refuse now, before ``reproduce`` trains or writes anything, what its leaderboard of ``out``
+    would refuse once every run of ``specs`` is trained: the same ``ValueError``, one line naming
+    the file. ``finished``: the result files of ``out`` (:func:`~empathy_zoo.cli.common.read_results`).
+
+    * Agent files: of each row (variant and label), the run whose agent its "Greedy episodes" section
+      loads (:func:`leaderboard.episodes.chosen_runs`, the lowest seed that kept one) is checked as
+      that section checks it, without loading the agent (:func:`leaderboard.episodes.check_row_agent`:
+      its world, and its file's SHA-256 against the one its result file records). A row is skipped
+      where a run trained now has a lower seed (that run, not this one, is shown); so is every finished
+      run of ``specs`` with ``rerun_changed`` (it may be trained again, its agent file replaced).
+    * Evaluation files (``evaluations/*/*.json``): read and checked against the runs they evaluate as
+      the "Held-out partners" section reads them (:func:`leaderboard.heldout_scores.load_heldout`).
+
+    Cost: one read and SHA-256 of one agent file per row (each at most its cap, docs/limits.md), and a
+    read of every evaluation file: what the leaderboard reads of them anyway, without loading a network."""
+    from empathy_zoo.result_file import result_path
+    from leaderboard.episodes import check_row_agent, chosen_runs
+    from leaderboard.heldout_scores import load_heldout
+
+    trained = {s.run_id for s in specs if rerun_changed or result_path(out, s.run_id) not in finished}
+    kept = [result for result in finished.values() if result.run_id not in trained]
+    lowest: dict[tuple[str, str], int] = {}  # (the lowest seed a run trained now has, by row)
+    for spec in specs:
+        if spec.run_id in trained:
+            row = (spec.variant.label, spec.display_label())
+            lowest[row] = min(lowest.get(row, spec.seed), spec.seed)
+    origin = str(out)  # (as write_leaderboard(out) reads the directory)
+    for row, (run, directory) in chosen_runs(kept, [origin] * len(kept)).items():
+        if run.seed < lowest.get(row, run.seed + 1):
+            check_row_agent(run, directory)
+    load_heldout(out, kept)
 
 
 def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
