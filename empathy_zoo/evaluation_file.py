@@ -128,17 +128,34 @@ def evaluations_root(results_dir: str | os.PathLike[str]) -> Path:
     return Path(results_dir) / EVALUATIONS_DIR
 
 
+RESULT_FILE_NAME = re.compile(r"[A-Za-z0-9_.-]+__[A-Za-z0-9_.-]+-[0-9a-f]{8}__s[0-9]+\.json")
+"""The name of a result file (its run id, :func:`empathy_zoo.run_ids.run_id`, and ``.json``)."""
+
+
 def check_not_read_folder(folder: str | os.PathLike[str], what: str) -> None:
     """Refuse (``ValueError`` naming ``what``, the file or folder to write) a ``folder`` whose JSON
-    files a results directory reads as its own: a ``runs`` folder, or an evaluation set's folder
-    (``evaluations/<set>``), as typed and where ``..`` and links lead. A file written there would
-    be read as a broken result or evaluation, and refuse the whole directory."""
+    files a results directory reads as its own: a ``runs`` folder, an evaluation set's folder
+    (``evaluations/<set>``), as typed and where ``..`` and links lead, or a folder of result files
+    (one with no ``runs`` folder that holds a file named as a result file is: every JSON file in
+    it is read as a result). A file written there would be read as a broken result or evaluation,
+    and refuse the whole directory. Looking stops at the first result file's name."""
     typed = Path(folder)
     for place in (typed, resolved(typed.absolute())):
         if place.name == RUNS_DIR or place.parent.name == EVALUATIONS_DIR:
             raise ValueError(
                 f"{what} lies in a folder of a results directory ({place}), whose JSON files are read as results "
                 "or evaluations: write it elsewhere"
+            )
+    if typed.is_dir() and not (typed / RUNS_DIR).is_dir():
+        try:
+            with os.scandir(typed) as entries:
+                found = next((entry.name for entry in entries if RESULT_FILE_NAME.fullmatch(entry.name)), None)
+        except OSError:  # (a folder that cannot be listed: writing into it says what is wrong)
+            found = None
+        if found is not None:
+            raise ValueError(
+                f"{what} lies in a folder of result files ({typed}, which holds {found}), whose JSON files are all read "
+                "as results: write it elsewhere"
             )
 
 

@@ -65,7 +65,7 @@ def test_a_report_under_a_file_is_refused_naming_out(tmp_path: Path, capsys) -> 
 
 
 def test_export_never_replaces_a_file_of_another_kind(tmp_path: Path, capsys) -> None:
-    for victim in (tmp_path / RESULT.name, tmp_path / "study.json"):
+    for victim in (tmp_path / "mine.json", tmp_path / "study.json"):  # (a result file's name: a folder of results)
         shutil.copy(RESULT, victim)
         before = victim.read_bytes()
         _refused(["export", str(QUICK), "--format", "marl-eval", "--out", str(victim)], capsys, "no marl-eval export")
@@ -109,7 +109,7 @@ def test_export_still_refuses_the_folder_a_flat_results_directory_is_read_from(t
     flat = tmp_path / "flat"
     flat.mkdir()
     shutil.copy(RESULT, flat / RESULT.name)
-    _refused(["export", str(flat), "--format", "marl-eval", "--out", str(flat / "x.json")], capsys, "it would be read as one")
+    _refused(["export", str(flat), "--format", "marl-eval", "--out", str(flat / "x.json")], capsys, "folder of result files")
     assert not (flat / "x.json").exists()
 
 
