@@ -35,6 +35,7 @@ __all__ = [
     "coexistence_codes",
     "UNREACHABLE",
     "MAX_TABLE_SIZE",
+    "check_table_size",
 ]
 
 ROBOT, CAT = 0, 1
@@ -155,15 +156,22 @@ def _shortest_steps(successors: np.ndarray) -> np.ndarray:
         reached = grown
 
 
-@functools.lru_cache(maxsize=4)
-def coexistence_reachability(size: int) -> ReachabilityTable:
-    """The :class:`ReachabilityTable` of Coexistence (one cat) on a ``size × size`` grid, built
-    once per process (see the module page)."""
+def check_table_size(size: int) -> None:
+    """Refuse (``ValueError``, one line naming the size and :data:`MAX_TABLE_SIZE`) a grid too large
+    for an exact table: what :func:`coexistence_reachability` checks first, and what a caller that
+    knows the size from its arguments alone checks before any other work (``analyse separation``)."""
     if size > MAX_TABLE_SIZE:
         raise ValueError(
             f"an exact reachability table of Coexistence on size={size} would hold about "
             f"{(size**2 * (size**2 - 5)) ** 2 / 1e6:.0f} MB; it is built for sizes up to {MAX_TABLE_SIZE}"
         )
+
+
+@functools.lru_cache(maxsize=4)
+def coexistence_reachability(size: int) -> ReachabilityTable:
+    """The :class:`ReachabilityTable` of Coexistence (one cat) on a ``size × size`` grid, built
+    once per process (see the module page)."""
+    check_table_size(size)
     n = size * size
     codes, successors = _successors(size)
     by_code = np.full((n * n + n + 1, successors.shape[1]), n * n + n, dtype=np.int64)  # the end leads nowhere else

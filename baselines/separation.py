@@ -54,14 +54,17 @@ from __future__ import annotations
 
 import contextlib
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from itertools import combinations
+from typing import Any
 
 import numpy as np
 
 from baselines.considerate_exact import considerate_values
 from baselines.considerate_tabular import considerate_ending_policy, considerate_model_values
 from baselines.lagrangian import Lagrangian
+from baselines.reachability_table import check_table_size
 from baselines.registry import METHODS
 from baselines.separation_batteries import battery_figures, equality_reward, layer_figures
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
@@ -70,6 +73,7 @@ from baselines.separation_values import in_view_values, silver_values
 from baselines.separation_world import attainable_utility_reward
 from baselines.separation_world import relative_reachability_reward as world_reachability_reward
 from baselines.shaping import HARM_PENALTY
+from empathy_zoo.engine.arguments import check_env_arguments
 from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
 from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import (
@@ -92,6 +96,7 @@ __all__ = [
     "Omission",
     "SeparationTable",
     "separation_table",
+    "check_bounds",
     "silver_values",
     "in_view_values",
     "reachable_states",
@@ -348,8 +353,31 @@ def _coexistence(model: TabularModel) -> bool:
 def _paper_rules(model: TabularModel) -> bool:
     """Whether the model's engine plays the paper's rules (what Be Considerate's exact module and
     the reachability table model)."""
-    engine = ENGINES[model.env](1, **model.env_kwargs)
+    return _plays_paper_rules(ENGINES[model.env](1, **model.env_kwargs))
+
+
+def _plays_paper_rules(engine: object) -> bool:
+    """Whether ``engine`` is Coexistence's under the paper's rules."""
     return isinstance(engine, CoexistenceEngine) and getattr(engine, "options", None) == RULE_SETS["paper"]
+
+
+def check_bounds(env: str, env_kwargs: Mapping[str, Any]) -> None:
+    """Refuse (``ValueError``, one line naming the bound) the table of ``env`` with ``env_kwargs``
+    where one of its rows would be refused past a bound that follows from the arguments alone,
+    before any model is built or solved: relative reachability's row under Coexistence's paper
+    rules builds the exact reachability table, for grids up to
+    :data:`~baselines.reachability_table.MAX_TABLE_SIZE` (:func:`~baselines.reachability_table.check_table_size`).
+    The other rows' bounds omit a row rather than refuse the table (:data:`WORLD_STATES`). An
+    environment or argument the exact model cannot take is left to
+    :func:`~empathy_zoo.exact_solver.tabular_model` to name, as before; an argument the engine
+    refuses is refused here in the same words."""
+    engine_class = ENGINES.get(env)
+    if engine_class is None or not hasattr(engine_class, "start_distribution"):
+        return
+    check_env_arguments(engine_class, dict(env_kwargs))  # (as tabular_model checks them, in the same words)
+    engine = engine_class(1, **env_kwargs)
+    if engine.num_agents == 2 and _plays_paper_rules(engine):
+        check_table_size(math.isqrt(engine.num_cells))  # (the size relative_reachability_reward's table is built for)
 
 
 def _considerate_policy(model: TabularModel, epsilon: float, gamma: float, paper: bool) -> np.ndarray:
@@ -375,7 +403,9 @@ def separation_table(
     gamma: float = 0.99,
     cost_limit: float = Lagrangian().cost_limit,
 ) -> SeparationTable:
-    """The :class:`SeparationTable` of ``model`` (see the module page)."""
+    """The :class:`SeparationTable` of ``model`` (see the module page); ``ValueError`` before any
+    row is solved where a row's bound refuses the model (:func:`check_bounds`)."""
+    check_bounds(model.env, model.env_kwargs)
     cycles = episode_steps(model)
     paper = _paper_rules(model)
     considerate = paper or not (model.robot_harmed.any() or _coexistence(model))

@@ -20,7 +20,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
+from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, check_bounds, separation_table
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import command_line_arguments, tabular_model
 
@@ -247,6 +247,7 @@ def main(argv: list[str] | None = None) -> None:
     check_not_read_folder(args.out, f"--out {args.out} (its separation tables)")
     check_own_file(paths[0], "separation table", b'{\n "env": ')
     check_own_file(paths[1], "separation page", b"# Separation table: ")
+    check_bounds(args.env, kwargs)  # (a row's bound that follows from the arguments: before any model is built)
     model = tabular_model(args.env, **kwargs)
     table = separation_table(model)
     texts = (to_json(table), to_markdown(table))

@@ -7,6 +7,9 @@ as power; one that changes sign is a finding.
 
     python -m leaderboard.verdict_changes OLD/LEADERBOARD.md NEW/LEADERBOARD.md
 
+A page of no such table (a README, an empty file, a leaderboard of runs with no DQN row) is
+refused in one line naming it, status 2: its "0 marks differ" would read as "no verdict moved".
+
 Pure text: the pages are read as Markdown, nothing is recomputed. A page may come from anyone:
 each name copied from it (variant, phase, method, metric) is shown as text, its Markdown escapes
 undone and escaped again, and any control or format character shown as its code (``\\x1b``), so
@@ -186,19 +189,26 @@ MAX_PAGE_BYTES = 64 * 2**20
 
 def _read_page(path: Path) -> str:
     """A leaderboard page's text: a regular UTF-8 file of at most :data:`MAX_PAGE_BYTES` holding at
-    most :data:`MAX_CELLS` verdict cells, else a ``ValueError`` naming it (a FIFO, a device or a
-    directory is refused, never read)."""
+    least one and at most :data:`MAX_CELLS` verdict cells, else a ``ValueError`` naming it (a FIFO, a
+    device or a directory is refused, never read; a page of no "P(improves on DQN)" table, such as a
+    README, an empty file or a leaderboard of runs with no DQN row, is refused: its "0 marks differ"
+    would read as "no verdict moved")."""
     from empathy_zoo.limits import read_bounded
 
     try:
         text = read_bounded(path, MAX_PAGE_BYTES, "leaderboard page").decode("utf-8")
-        verdicts(text)  # (its cells within their bound, before two pages' are compared)
+        cells = verdicts(text)  # (its cells within their bound, before two pages' are compared)
     except UnicodeDecodeError as error:
         raise ValueError(f"{path} is not UTF-8 text ({error})") from None
     except OSError as error:
         raise ValueError(f"{path}: {error.strerror or error}") from None
     except ValueError as error:
         raise ValueError(f"leaderboard page {path}: {error}") from None
+    if not cells:  # (a README, an empty file, a page of no DQN row: "0 marks differ" would read as "no verdict moved")
+        raise ValueError(
+            f'leaderboard page {path}: holds no verdict table ("{_TABLE}…" over a table of cells) to compare; '
+            "give a LEADERBOARD.md the leaderboard wrote from runs with a DQN row"
+        )
     return text
 
 
