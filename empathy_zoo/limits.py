@@ -51,6 +51,7 @@ __all__ = [
     "MAX_SCENARIOS",
     "MAX_SEED",
     "MAX_SEEDS",
+    "MAX_SEPARATION_WORK",
     "MAX_SIZE",
     "MAX_STEPS",
     "MAX_TABLE_BYTES",
@@ -151,6 +152,15 @@ MAX_EXACT_WORK = 100_000_000
 """Most work of ``analyse exact``'s table, counted as its model's ``states × max_cycles`` (each of
 its 15 points steps every state once a step): about 2.4 µs each on a laptop core, so at most some
 four minutes; the default Coexistence (2,401 states, 500 steps) takes 1.2·10⁶, a few seconds."""
+MAX_SEPARATION_WORK = 30_000_000_000
+"""Most work of ``analyse separation``'s table, counted from its arguments alone as its model's
+``states × draws × (value solves × sweeps + outcomes × max_cycles)`` (:func:`baselines.separation.table_work`:
+each solve its value iteration's 3,308 sweeps at γ = 0.99; the Lagrangian's bisection, 19 a ε, counted
+where it is computed). Measured at about 8·10⁻⁸ s each on small models (the charger table: 1.05·10⁹,
+85 s; Sharing's: 7.2·10⁹, some ten minutes) and 2·10⁻⁷ s or more on large ones (charger size 14:
+1.3·10¹⁰, some 48 minutes, estimated from one solve and one outcome timed), so a table past it takes
+an hour or more; the charger table at size 21, 6.5·10¹⁰, would take some three hours and is
+refused, and the shipped tables take at most a quarter of it. Checked before any model is built."""
 MAX_EXACT_TEST_SEEDS = 200
 """Most seeds one exact permutation test compares, both sides together (``N``; the leaderboard's
 P(improves on DQN) cells, ``analyse versus-dqn``, ``equivalence``, ``tuning-effect``,
@@ -218,6 +228,7 @@ BOUNDS: Mapping[str, int] = {
     "reference curve max_cycles": MAX_REFERENCE_CYCLES,
     "reference curves' work": MAX_REFERENCE_WORK,
     "exact table's work": MAX_EXACT_WORK,
+    "separation table's work": MAX_SEPARATION_WORK,
     "seeds of one exact test": MAX_EXACT_TEST_SEEDS,
     "watch episode steps": MAX_WATCH_STEPS,
     "GIF frame size": MAX_GIF_FRAME_SIDE,
