@@ -501,6 +501,19 @@ def episode_bounds(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float |
     return bounds
 
 
+def constant_metrics(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float]:
+    """The metrics every episode of ``env`` built with ``env_kwargs`` gives one value, by
+    construction, with that value: a count whose bound is 0 (:func:`episode_bounds`: ``harms``
+    where no one can be harmed, ``batteries`` and ``other_batteries`` where there is none) is 0, and
+    ``equality`` of no batteries at all is 1 (its definition, :data:`~empathy_zoo.metrics.METRIC_DOCS`).
+    Nothing tuned or compared on one of them can tell runs apart."""
+    bounds = episode_bounds(env, env_kwargs)
+    constant = {name: 0.0 for name in ("harms", "batteries", "other_batteries") if bounds[name] == 0}
+    if "batteries" in constant and "other_batteries" in constant:
+        constant["equality"] = 1.0
+    return constant
+
+
 def _check_config(check: DocumentChecker, result: Mapping[str, Any]) -> None:
     """``config``: its tables and fields, each within what a run is built with."""
     config = check.table(result["config"], "config")

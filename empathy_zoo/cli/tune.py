@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Any
 from empathy_zoo.cli.common import PROG, add_progress_style, check_device, help_text, path_text, positive
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+
     from empathy_zoo.experiment.search_space import ParamSpec
 
 __all__ = ["DEFAULT_TRIALS", "DEFAULT_TUNING_SEEDS", "add_tune", "cmd_tune", "default_objective"]
@@ -47,6 +49,23 @@ def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
             raise ValueError(f"{env} has no task metric on record: name the objective with --objective METRIC")
         metric = ENVIRONMENT_TABLE[env].task
     return metric, "maximize" if HIGHER_IS_BETTER.get(metric, True) else "minimize"
+
+
+def check_objective_moves(env: str, env_kwargs: Mapping[str, Any], metric: str) -> None:
+    """A ``ValueError`` where ``metric`` takes one value in every episode of ``env`` built with
+    ``env_kwargs`` (:func:`~empathy_zoo.result_file.constant_metrics`: no battery, no one to harm):
+    every trial would tie, and the study would choose nothing. Named with the metrics that move."""
+    from empathy_zoo.metrics import METRIC_NAMES
+    from empathy_zoo.result_file import constant_metrics
+
+    constant = constant_metrics(env, env_kwargs)
+    if metric in constant:
+        moving = ", ".join(name for name in METRIC_NAMES if name not in constant)
+        raise ValueError(
+            f"--objective {metric}: every episode of {env} gives {metric} {constant[metric]:g} (the environment table: "
+            f"{'no one to harm' if metric == 'harms' else 'no batteries'}), so every trial would tie; name one that "
+            f"moves there: {moving}"
+        )
 
 
 def cmd_tune(args: argparse.Namespace, command: str) -> int:
@@ -82,6 +101,7 @@ def cmd_tune(args: argparse.Namespace, command: str) -> int:
     budget = Budget(steps, min(interval, steps), base.eval_episodes)
     params = parse_params(args.param, base.method_object())
     metric, direction = default_objective(base.env, args.objective)
+    check_objective_moves(base.env, base.env_kwargs, metric)
     plan = StudyPlan(
         source=args.sweep if args.sweep in profiles() else str(path),  # (a shipped profile by its name, not its path here)
         base=replace(base, budget=budget),
