@@ -5,7 +5,8 @@
 The new rule (:func:`leaderboard.heldout_scores.reading_rule`) says "generalises" only where the
 method avoided the side effect beside its own partners (▲ against DQN there) and kept it beside
 the held-out one; the old one (:func:`leaderboard.heldout_scores.old_reading_rule`) asked only the
-second. Read from the directory's result and evaluation files; writes nothing.
+second. Read from the directory's result and evaluation files; writes nothing. A directory with
+no reading (no evaluation files) is refused in one line.
 """
 
 from __future__ import annotations
@@ -72,7 +73,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _print_verdicts(paths: list[str]) -> int:
-    print(verdicts_markdown(heldout_verdicts(paths[0])))
+    rows = heldout_verdicts(paths[0])
+    if not rows:  # ("changed: 0 of 0" would read as "no verdict moved")
+        raise ValueError(
+            f"{paths[0]} holds no held-out reading (no evaluation beside held-out partners of a method and of DQN): "
+            f"run empathy-zoo evaluate {paths[0]} --scenarios SET first"
+        )
+    print(verdicts_markdown(rows))
     return 0
 
 

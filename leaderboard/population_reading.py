@@ -15,7 +15,9 @@ world (every environment argument and partner at its default); in the population
 runs beside a population with every environment argument at its default. The runs read of one
 environment, method and group must be one experiment's seeds (another setting, world, population
 or budget beside them is refused, naming two runs), never a pool of two. A run of a group that has
-no evaluation on the test split is named in a note under the tables. A seed's score is the mean
+no evaluation on the test split is named in a note under the tables, and so is every other run of a
+directory given that is not read: counted per directory and reason (another method or β, another
+world, the other group), and a directory none of whose runs is read. A seed's score is the mean
 over its evaluation episodes. Prints Markdown.
 """
 
@@ -146,17 +148,82 @@ def _in_group(run: RunResult, group: str) -> bool:
     """Whether the reading reads ``run`` in ``group``: a compared method at its β, trained beside a
     population (``population``) or its variant's default world (``default``), every environment
     argument at its default (:func:`leaderboard.run_facts.in_paper_setting`)."""
-    if not _read_at(run) or _population_trained(run) != (group == POPULATION):
-        return False
+    return _why_not_read(run, group) is None
+
+
+def _why_not_read(run: RunResult, group: str) -> tuple[str, list[str]] | None:
+    """Why the reading does not read ``run`` of a directory of ``group`` (:func:`_in_group`): the
+    reason, said of a run, and what of the run it names (a method, a β, the arguments and partners
+    outside the default world); ``None`` for a run it reads."""
+    if run.method not in METHODS:
+        return f"of a method other than {' and '.join(METHODS)}", [run.method]
+    if not _read_at(run):
+        selfishness = run.config.settings.get("selfishness")
+        return f"of {run.method} at a β other than {METHODS[run.method]}", [repr(selfishness)]
+    if _population_trained(run) != (group == POPULATION):
+        if group == POPULATION:
+            return "trained beside no population (the first directory's runs are read as population-trained only)", []
+        return "trained beside a population (population-trained runs are read from the first directory only)", []
+    defaults = DEFAULT_ARGUMENTS.get(run.env)
     if group == DEFAULT:
-        return (run.variant or run.env) == run.env and in_paper_setting(run)
-    defaults = DEFAULT_ARGUMENTS.get(run.env, {})
-    return all(name in defaults and defaults[name] == value for name, value in run.config.env_kwargs.items())
+        if defaults is None:
+            return "of an environment the suite does not ship", [run.env]
+        if (run.variant or run.env) == run.env and in_paper_setting(run):
+            return None
+        return "trained outside the default world", _outside_default_world(run, defaults)
+    arguments = _other_arguments(run, defaults or {})
+    return None if not arguments else ("trained beside a population outside the default world", arguments)
+
+
+def _other_arguments(run: RunResult, defaults: Mapping[str, Any]) -> list[str]:
+    """Each environment argument of ``run`` not at its default (``name value``)."""
+    return [f"{name} {value}" for name, value in run.config.env_kwargs.items() if name not in defaults or defaults[name] != value]
+
+
+def _outside_default_world(run: RunResult, defaults: Mapping[str, Any]) -> list[str]:
+    """What of ``run``'s world is not its environment's default world: its variant, each argument
+    and each fixed agent's policy that differs from the default's."""
+    from empathy_zoo.environments import DEFAULT_POLICIES
+
+    differs = [] if (run.variant or run.env) == run.env else [f"variant {run.variant}"]
+    differs += _other_arguments(run, defaults)
+    partners, fixed = DEFAULT_POLICIES.get(run.env, {}), dict(run.config.fixed)
+    differs += [
+        f"{agent} {fixed.get(agent, 'none')}" for agent in sorted({*partners, *fixed}) if fixed.get(agent) != partners.get(agent)
+    ]
+    return differs
+
+
+def _not_read_notes(
+    unread: Mapping[tuple[str, str], list[list[str]]], read_in: Mapping[str, int], totals: Mapping[str, int]
+) -> list[str]:
+    """One note per directory and reason some of its runs are not read (``unread``: per
+    ``(directory, reason)``, what each such run names), giving their count (``all``: every run of
+    the directory, of its ``totals``) and what they name; and one per directory none of whose runs
+    is read (``read_in``: runs read per directory) for no one reason, so that no run of a directory
+    given is left out without a word."""
+    notes = []
+    for (directory, why), named in unread.items():
+        names = sorted({name for names in named for name in names})
+        shown = ", ".join(names[:10]) + (f" and {len(names) - 10:,} more" if len(names) > 10 else "")
+        count, every = len(named), len(named) == totals[directory]
+        runs = f"all {count} runs of {directory}" if every else f"{count} run{'s' if count > 1 else ''} of {directory}"
+        if every and count == 1:
+            runs = f"1 run of {directory} (its only run)"
+        notes.append(f"{runs} {why}" + (f" ({shown})" if shown else "") + ": not read")
+    for directory, total in totals.items():
+        one_reason = any(where == directory and len(named) == total for (where, _), named in unread.items())
+        if not read_in.get(directory) and not one_reason:
+            notes.append(
+                f"none of the {total} runs of {directory} is read" if total > 1 else f"the 1 run of {directory} is not read"
+            )
+    return notes
 
 
 def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[str] | None = None) -> Scores:
     """The scores of every run read (see the module page) from their test-split evaluations; each
-    run of a group read that has no evaluation on the test split is named in ``notes``, where given.
+    run of a group read that has no evaluation on the test split is named in ``notes``, where given,
+    and every other run of the directories not read is counted there, per directory and reason.
 
     Raises ``ValueError``, naming the files, where a directory is given twice, the population
     directory holds no population-trained run of a compared method, a test split was evaluated
@@ -176,11 +243,20 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
     candidates: dict[GroupKey, list[RunResult]] = {}
     """Every run each group would read, evaluated or not."""
     read: dict[GroupKey, list[RunResult]] = {}
+    unread: dict[tuple[str, str], list[list[str]]] = {}
+    """Per directory and reason, what each run it does not read names (:func:`_why_not_read`)."""
+    read_in: dict[str, int] = {}
+    """How many runs of each directory are read."""
+    totals: dict[str, int] = {}
     for directory, group in [(population_dir, POPULATION), *((d, DEFAULT) for d in default_dirs)]:
         runs: Mapping[str, RunResult] = {run.run_id: run for _, run in results_of(directory)}
+        totals[str(directory)] = len(runs)
         for candidate in runs.values():
-            if _in_group(candidate, group):
+            why = _why_not_read(candidate, group)
+            if why is None:
                 candidates.setdefault((candidate.env, candidate.method, group), []).append(candidate)
+            else:
+                unread.setdefault((str(directory), why[0]), []).append(why[1])
         for path in evaluation_files(directory):
             evaluation = read_evaluation(path)
             name = evaluation.scenario_set.name
@@ -209,6 +285,7 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
                 )
             read_from[seed] = path
             read.setdefault((run.env, run.method, group), []).append(run)
+            read_in[str(directory)] = read_in.get(str(directory), 0) + 1
             add_scores(scores, run, evaluation, group)
     check_one_experiment({f"the {g}-trained runs of {method} on {env}": members for (env, method, g), members in read.items()})
     for key, members in read.items():
@@ -227,6 +304,8 @@ def read_scores(population_dir: Path, default_dirs: Sequence[Path], notes: list[
                 f"{key[0]}_test, so that group is not read and {key[1]} has no comparison that needs it "
                 f"(empathy-zoo evaluate --scenarios {key[0]}_test writes them)"
             )
+    if notes is not None:
+        notes += _not_read_notes(unread, read_in, totals)
     if not any(group == POPULATION for (group, *_rest) in read_from):
         raise ValueError(
             f"{population_dir} holds no population-trained run of {' or '.join(METHODS)} evaluated on a test split "
@@ -275,7 +354,10 @@ def main(argv: list[str] | None = None) -> int:
         notes: list[str] = []
         primaries, carries, secondaries = primary_and_secondary(read_scores(args.population, args.default, notes))
         if not primaries:
-            raise ValueError("no environment and method has runs of both groups evaluated on its test split (<env>_test)")
+            unread = "".join(f"; {note}" for note in notes)
+            raise ValueError(
+                f"no environment and method has runs of both groups evaluated on its test split (<env>_test){unread}"
+            )
         print(markdown(primaries, carries, secondaries), end="")
         if notes:
             print("\n" + "\n\n".join(f"Note: {markdown_text(note)}" for note in notes))

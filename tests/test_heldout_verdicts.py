@@ -213,3 +213,16 @@ def test_two_sets_scenarios_of_one_name_are_told_apart(synthetic) -> None:
     rows = heldout_verdicts(out)
     assert len(rows) == 12 and len({(r.method_label, r.scenario) for r in rows}) == 12
     assert {r.scenario for r in rows} == {f"{name}: {s}" for name in ("again", "synthetic") for s in SCENARIOS}
+
+
+def test_a_directory_with_no_reading_is_refused_not_read_as_nothing_changed(synthetic, tmp_path, capsys) -> None:
+    from empathy_zoo.atomic import write_json_atomic
+    from empathy_zoo.cli import main
+
+    _, results = synthetic
+    bare = tmp_path / "bare"  # (the runs without their evaluations)
+    for run in results:
+        write_json_atomic(bare / "runs" / f"{run.run_id}.json", run.to_document())
+    assert main(["analyse", "heldout-verdicts", str(bare)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(bare) in err and "holds no held-out reading" in err, err

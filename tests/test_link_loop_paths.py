@@ -38,12 +38,19 @@ COMMANDS: dict[str, list[str]] = {
     "analyse discrimination --out through a loop": ["analyse", "discrimination", "--out", "LOOP/a.md"],
     "analyse verdict-changes of a loop": ["analyse", "verdict-changes", "LOOP", "LOOP"],
     "analyse tuning-summary of a loop": ["analyse", "tuning-summary", "LOOP"],
+    "analyse tuning-summary --figure through a loop": ["analyse", "tuning-summary", "STUDIES", "--figure", "LOOP/x.png"],
+    "leaderboard --evaluations of a loop": ["leaderboard", "RESULTS", "--out", "OUT/board", "--evaluations", "LOOP"],
+    "reproduction --out through a loop": ["reproduction", "QUICK", "--out", "LOOP/x.md"],
+    "sensitivity --out through a loop": ["sensitivity", "QUICK", "--out", "LOOP/x.md"],
+    "analyse coexistence-sensitivity --out through a loop": ["analyse", "coexistence-sensitivity", "QUICK", "--out", "LOOP/x.md"],
 }
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _filled(args: list[str], loop: Path, out: Path, results: Path) -> list[str]:
     (agent,) = sorted((results / "runs").glob("coexistence_v0__dqn-*.agent.pt"))
-    places = {"LOOP": loop, "OUT": out, "RESULTS": results, "AGENT": agent}
+    shipped = {"QUICK": ROOT / "docs" / "results" / "quick", "STUDIES": ROOT / "docs" / "results" / "methods" / "tuning"}
+    places = {"LOOP": loop, "OUT": out, "RESULTS": results, "AGENT": agent, **shipped}
     filled = []
     for arg in args:
         head, _, tail = arg.partition("/")
