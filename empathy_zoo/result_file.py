@@ -21,6 +21,7 @@ that knows the methods built in at schema 2 (:data:`SCHEMA_2_METHODS`).
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -43,7 +44,7 @@ from empathy_zoo.limits import (
 )
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
 from empathy_zoo.metrics import COUNT_PER_STEP, METRIC_NAMES
-from empathy_zoo.names import check_path_name
+from empathy_zoo.names import check_path_name, resolved
 
 __all__ = [
     "AGENT_SUFFIXES",
@@ -613,6 +614,15 @@ def others_room(engine: Any, size: int) -> tuple[int, str]:
 
 
 RUNS_DIR = "runs"
+
+
+def read_folder(results_dir: str | os.PathLike[str]) -> Path:
+    """The folder whose result files a results directory's readers read, resolved (every link
+    followed, :func:`~empathy_zoo.names.resolved`): ``results_dir/runs`` where it is a directory,
+    else ``results_dir`` itself. Two directories are one where their read folders are one
+    (``DIR`` and ``DIR/runs``), so a directory given twice is told however it is written."""
+    folder = resolved(results_dir)
+    return folder / RUNS_DIR if (folder / RUNS_DIR).is_dir() else folder
 
 
 def result_path(out_dir: Path, run_id: str) -> Path:

@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import positional_tool, tool_help
+from empathy_zoo.result_file import read_folder
 from leaderboard.aggregate import load_results
 from leaderboard.run_facts import description_of
 
@@ -142,6 +143,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _print_comparison(paths: list[str]) -> int:
+    if read_folder(paths[0]) == read_folder(paths[1]):  # (DIR and DIR/runs are one directory)
+        raise ValueError(f"{paths[1]} is given twice (as {paths[0]} too): its runs would be compared with themselves")
     result = compare_runs(load_results(paths[0]), load_results(paths[1]))
     for verdict in ("same", "different"):
         for key in result[verdict]:

@@ -60,7 +60,8 @@ import numpy as np
 
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.metrics import EQUIVALENCE_MARGINS
-from empathy_zoo.names import positional_tool, resolved, tool_help
+from empathy_zoo.names import positional_tool, tool_help
+from empathy_zoo.result_file import read_folder
 from leaderboard.aggregate import PHASES, run_scalars, table_env
 from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, compare_runs, run_key, runs_by_key
 from leaderboard.improvement import improvements_over_dqn, permutation_test
@@ -402,7 +403,7 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool
     margin (:func:`tost_report`)."""
     from leaderboard.aggregate import load_results
 
-    if resolved(old_dir) == resolved(new_dir):
+    if read_folder(old_dir) == read_folder(new_dir):  # (DIR and DIR/runs are one directory)
         raise ValueError(f"{new_dir} is given twice (as {old_dir} too): its runs would be compared with themselves")
     old, new = load_results(old_dir), load_results(new_dir)
     result = equivalence(old, new)

@@ -36,7 +36,8 @@ from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
-from empathy_zoo.names import resolved, terminal_line
+from empathy_zoo.names import terminal_line
+from empathy_zoo.result_file import read_folder
 from leaderboard.population_transfer import PRIMARY_SCENARIO, Comparison, changes_carry_over, compare
 from leaderboard.run_facts import check_one_experiment, in_paper_setting
 
@@ -339,7 +340,7 @@ def _check_distinct(population_dir: Path, default_dirs: Sequence[Path]) -> None:
     """Refuse (``ValueError``) a directory given twice: its runs would be compared with themselves."""
     seen: dict[Path, Path] = {}
     for directory in (population_dir, *default_dirs):
-        where = resolved(directory)
+        where = read_folder(directory)  # (DIR and DIR/runs are one directory)
         if where in seen:
             raise ValueError(f"{directory} is given twice (as {seen[where]} too): its runs would be compared with themselves")
         seen[where] = Path(directory)

@@ -32,7 +32,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from empathy_zoo.experiment.records import RunResult
-from empathy_zoo.names import check_label, resolved
+from empathy_zoo.names import check_label
+from empathy_zoo.result_file import read_folder
 from leaderboard.aggregate import check_runs, load_result_files
 from leaderboard.budgets import RunBudget, budget_of, budgets_of, shows_evaluation
 from leaderboard.row_names import (
@@ -130,7 +131,7 @@ def parse_label_options(options: Sequence[str] | None) -> dict[str | os.PathLike
 def _prefixes(given: Sequence[str], dirs: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:
     prefixes: list[str | None] = [None] * len(given)
     for directory, prefix in labels.items():
-        where = resolved(directory)
+        where = read_folder(directory)
         if where not in dirs:
             read = ", ".join(given)
             split = (
@@ -176,7 +177,7 @@ def load_results_dirs(
     dirs = [Path(directory) for directory in given]
     if not dirs:
         raise ValueError("no results directory to read")
-    resolved_dirs = [resolved(directory) for directory in dirs]
+    resolved_dirs = [read_folder(directory) for directory in dirs]  # (DIR and DIR/runs are one directory)
     for i, directory in enumerate(resolved_dirs):
         if directory in resolved_dirs[:i]:
             raise ValueError(f"results directory {given[i]} is given twice (as {given[resolved_dirs.index(directory)]} too)")

@@ -11,16 +11,16 @@ writes: :mod:`empathy_zoo.training.tuning`); its untuned row is ``<label>`` on t
 Per metric (:func:`leaderboard.versus_dqn.compact_metrics`) and phase the table gives both rows'
 means and verdicts; a verdict that differs is *changed by tuning*. The DQN rows themselves have
 no verdict: their means are shown (``DQN`` → ``DQN, tuned``). A tuned row with no untuned row is
-named, never dropped; a directory with two DQN rows in one variant is refused (a verdict would be
-one of several), and so is a tuned row whose method, world or budget is not its untuned row's, and
-a row with no DQN row of its variant, world and budget beside it (it has no verdict to compare).
+named, never dropped, and a tuned directory with no tuned method to compare is refused; a
+directory with two DQN rows in one variant is refused (a verdict would be one of several), and so
+is a tuned row whose method, world or budget is not its untuned row's, and a row with no DQN row
+of its variant, world and budget beside it (it has no verdict to compare).
 Nothing new is tested: this is a view of two leaderboards' cells.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.markdown_escape import markdown_text
 from empathy_zoo.names import terminal_line
+from empathy_zoo.result_file import read_folder
 from leaderboard.aggregate import group_runs, load_results, score_runs
 from leaderboard.improvement import VERDICT_MARKS, improvements_over_dqn, is_dqn, row_key, uncompared_rows
 from leaderboard.versus_dqn import compact_metrics
@@ -128,6 +129,14 @@ def tuning_effect(
                         tuned_verdict=None if reference else new_verdicts.get((variant, label, phase, metric)),
                     )
                 )
+    if not any(pair.untuned_verdict is not None for pair in pairs):  # ("changed: 0 of 0" would read as "tuning changed nothing")
+        tuned_rows = [label for _, label in groups if label.endswith(TUNED_SUFFIX)]
+        why = (
+            f"its tuned rows ({', '.join(repr(label) for label in sorted(set(tuned_rows))[:5])}) have no untuned row but DQN's"
+            if tuned_rows
+            else f"no row of it is labelled '<label>{TUNED_SUFFIX}' (what empathy-zoo tune writes)"
+        )
+        raise ValueError(f"the tuned directory holds no tuned method to compare with its untuned row: {why}")
     return TuningEffect(tuple(pairs), tuple(unmatched))
 
 
@@ -174,7 +183,7 @@ def tuning_effect_table(effect: TuningEffect, changed_only: bool = False) -> str
     lines.append(f"Verdicts changed by tuning: {sum(p.changed for p in compared)} of {len(compared)}.")
     if effect.unmatched:
         shown = ", ".join(f"'{markdown_text(label)}' ({markdown_text(variant)})" for variant, label in effect.unmatched)
-        lines.append(f"Tuned rows with no untuned row (not compared): {shown}.")
+        lines.append(f"Rows of the tuned directory not compared (no untuned row, or no '{TUNED_SUFFIX}' label): {shown}.")
     return "\n".join(lines)
 
 
@@ -185,9 +194,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("tuned", help="results directory of the tuned rows (with the tuned DQN)")
     parser.add_argument("--changed-only", action="store_true", help="list only the verdicts tuning changed")
     args = parser.parse_args(argv)
-    if os.path.realpath(args.untuned) == os.path.realpath(args.tuned):
-        parser.error(f"UNTUNED_DIR and TUNED_DIR are one directory ({args.tuned}): give the untuned rows' and the tuned rows'")
     try:
+        if read_folder(args.untuned) == read_folder(args.tuned):  # (DIR and DIR/runs are one directory)
+            raise ValueError(
+                f"UNTUNED_DIR and TUNED_DIR are one directory ({args.tuned}): give the untuned rows' and the tuned rows'"
+            )
         table = tuning_effect_table(tuning_effect(load_results(args.untuned), load_results(args.tuned)), args.changed_only)
     except (ValueError, OSError) as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
