@@ -202,8 +202,16 @@ def markdown(readings: Sequence[Reading], tables: Mapping[str, Mapping[str, Any]
                 f"| {reading.seeds} ({reading.dqn_seeds}) | {probability} | {observed} | {outcome} |"
             )
         judged = [reading.judgement for reading in rows if reading.judgement is not None]
-        verdict = "yes" if task_separates(judged, task) else "no"
-        lines += ["", f"Separates in trained runs: **{verdict}** (a ▲ or ▼ prediction holds).", ""]
+        if judged:
+            verdict = "yes" if task_separates(judged, task) else "no"
+            lines += ["", f"Separates in trained runs: **{verdict}** (a ▲ or ▼ prediction holds).", ""]
+        else:  # (a verdict of no judged row would read as "does not separate")
+            lines += ["", "Separates in trained runs: **not judged** (no method has runs beside DQN's here).", ""]
+        alone = [
+            f"{reading.prediction.method} ({reading.seeds} runs)" for reading in rows if reading.seeds and not reading.dqn_seeds
+        ]
+        if alone:
+            lines += [f"Not judged for want of DQN runs of {task} beside them: {markdown_text(', '.join(alone))}.", ""]
     if notes:
         lines += ["## Runs not read", "", *(f"* {markdown_text(note)}" for note in notes), ""]
     return "\n".join(lines)

@@ -152,3 +152,14 @@ def test_every_run_left_out_is_counted_with_its_reason() -> None:
     assert page.endswith("".join(f"* {markdown_text(note)}\n" for note in notes))
     assert "## Runs not read\n\n* 2 runs of a method with β at another β than 0.5: not read\n" in page
     assert "## Runs not read" not in markdown(read_runs({"charger_v0": TABLE}, [read]), {"charger_v0": TABLE})
+
+
+def test_a_task_of_no_judged_row_is_not_judged_and_names_the_runs_without_dqn() -> None:
+    runs = _runs(dqn_harm_penalty=0.0, empathic_dqn=1.0)  # (no DQN runs: nothing can be judged)
+    readings = read_runs({"charger_v0": TABLE}, runs)
+    assert all(reading.judgement is None for reading in readings)
+    page = markdown(readings, {"charger_v0": TABLE})
+    assert "Separates in trained runs: **not judged**" in page and "**no**" not in page
+    assert (
+        "Not judged for want of DQN runs of charger_v0 beside them: dqn_harm_penalty (10 runs), empathic_dqn (10 runs)." in page
+    )
