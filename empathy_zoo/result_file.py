@@ -43,7 +43,7 @@ from empathy_zoo.limits import (
     MAX_WALL_TIME_S,
 )
 from empathy_zoo.method_description import DescriptionError, check_description, default_description
-from empathy_zoo.metrics import COUNT_PER_STEP, METRIC_NAMES
+from empathy_zoo.metrics import COUNT_PER_STEP, INTEGER_METRICS, METRIC_NAMES
 from empathy_zoo.names import check_path_name, resolved
 
 __all__ = [
@@ -509,7 +509,7 @@ def constant_metrics(env: str, env_kwargs: Mapping[str, Any]) -> dict[str, float
     ``equality`` of no batteries at all is 1 (its definition, :data:`~empathy_zoo.metrics.METRIC_DOCS`).
     Nothing tuned or compared on one of them can tell runs apart."""
     bounds = episode_bounds(env, env_kwargs)
-    constant = {name: 0.0 for name in ("harms", "batteries", "other_batteries") if bounds[name] == 0}
+    constant = {name: 0.0 for name in METRIC_NAMES if name in INTEGER_METRICS and bounds[name] == 0}
     if "batteries" in constant and "other_batteries" in constant:
         constant["equality"] = 1.0
     return constant
