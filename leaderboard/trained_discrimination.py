@@ -141,7 +141,8 @@ def cells_of_results(
 ) -> tuple[dict[tuple[str, str, str], TrainedCell], list[str]]:
     """The trained cells of the result files of ``results_dirs`` for the matrix of ``tables``
     (every method of the tables, in their order; a task whose robot can harm), and a note per
-    reason some runs were not read (:func:`leaderboard.separation_reading.not_read_notes`)."""
+    reason some runs were not read (:func:`leaderboard.separation_reading.not_read_notes`) and per
+    method whose runs of a task fall in no cell. Runs that make no cell at all are refused."""
     from empathy_zoo.training.heldout import results_of
     from leaderboard.improvement import is_dqn
     from leaderboard.separation_reading import can_harm, not_read_notes, selfish_methods
@@ -156,7 +157,18 @@ def cells_of_results(
     tasks = list(tables)
     as_read = [dataclasses.replace(run, method="dqn") if is_dqn(run) else run for run in results]  # (as method_harms reads them)
     notes = not_read_notes(as_read, selfish, tasks, methods)
-    return trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks}), notes
+    cells = trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
+    if not cells:  # (every cell "0 of 0" would read as "separates nothing")
+        read = ", ".join(sorted({f"{method} on {task}" for task, method in harms})) or "none"
+        raise ValueError(
+            f"the runs of --results {' '.join(map(str, results_dirs))} make no cell: no two methods of the tables have runs "
+            f"of one task whose robot can harm (runs read: {read}); give runs of DQN and a method on one task"
+        )
+    in_cells = {(task, method) for task, first, second in cells for method in (first, second)}
+    for (task, method), values in sorted(harms.items()):
+        if (task, method) not in in_cells and method in methods and can_harm(task):
+            notes.append(f"{len(values)} runs of {method} on {task}: in no cell (no other method of the tables has runs there)")
+    return cells, notes
 
 
 def main(argv: Sequence[str] | None = None) -> int:

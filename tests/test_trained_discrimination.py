@@ -119,3 +119,40 @@ def test_the_command_refuses_a_results_directory_it_cannot_read(tmp_path: Path, 
     assert main(argv) == 2
     assert "x.json" in capsys.readouterr().err
     assert not (tmp_path / "D.md").exists()
+
+
+def _tables_and_runs(tmp_path: Path, methods: tuple[tuple[str, float, float], ...], env: str = "charger_v0") -> Path:
+    tables = tmp_path / "tables"
+    tables.mkdir()
+    (tables / "charger_v0.json").write_text(json.dumps(TABLE))
+    runs = tmp_path / "res" / "runs"
+    runs.mkdir(parents=True)
+    for seed in range(10):
+        for method, beta, harms in methods:
+            document = synthetic_document(env, method, beta, seed, harms=harms)
+            (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
+    return tables
+
+
+def test_runs_that_make_no_cell_are_refused_not_read_as_zero_of_zero(tmp_path: Path, capsys) -> None:
+    tables = _tables_and_runs(tmp_path, (("dqn_harm_penalty", 1.0, 0.0),))  # (one method alone: no pair)
+    out = tmp_path / "D.md"
+    argv = ["analyse", "discrimination", str(tables), "--results", str(tmp_path / "res"), "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "make no cell" in err and "dqn_harm_penalty on charger_v0" in err, err
+    assert not out.exists()
+
+
+def test_a_method_whose_runs_fall_in_no_cell_is_named(tmp_path: Path, capsys) -> None:
+    from leaderboard.trained_discrimination import cells_of_results
+
+    tables = _tables_and_runs(tmp_path, (("dqn", 1.0, 1.0), ("dqn_harm_penalty", 1.0, 0.0)))
+    runs = tmp_path / "res" / "runs"
+    for seed in range(3):  # (a method of the tables on a task no other method of them has runs of)
+        document = synthetic_document("vase_v0", "empathic_dqn", 0.5, seed, harms=0.0)
+        (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
+    table = json.loads((tables / "charger_v0.json").read_text())
+    cells, notes = cells_of_results({"charger_v0": table, "vase_v0": {**table, "env": "vase_v0"}}, [tmp_path / "res"])
+    assert set(cells) == {("charger_v0", "dqn", "dqn_harm_penalty")}
+    assert any(note.startswith("3 runs of empathic_dqn on vase_v0: in no cell") for note in notes), notes
