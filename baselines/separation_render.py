@@ -232,7 +232,7 @@ def main(argv: list[str] | None = None) -> None:
 
     from empathy_zoo.atomic import write_all_atomic
     from empathy_zoo.evaluation_file import check_not_read_folder
-    from empathy_zoo.names import check_own_file, check_replaceable
+    from empathy_zoo.names import check_output_folder, check_own_file, check_replaceable
 
     parser = argparse.ArgumentParser(prog="python -m baselines.separation_render", description=main.__doc__)
     parser.add_argument("env", nargs="?", default=DEFAULT_ENVIRONMENT)
@@ -243,6 +243,7 @@ def main(argv: list[str] | None = None) -> None:
         raise ValueError("argument --out: an empty path; give a folder")
     kwargs = command_line_arguments(args.arguments)  # (a ValueError: one line, as the environment's own)
     name = file_name(args.env, kwargs)
+    check_output_folder(args.out)  # (a file in the folder's place: refused before the long part, not after it)
     paths = [check_replaceable(Path(args.out) / f"{name}{suffix}") for suffix in (".json", ".md")]  # (before the long part)
     check_not_read_folder(args.out, f"--out {args.out} (its separation tables)")
     check_own_file(paths[0], "separation table", b'{\n "env": ')

@@ -195,6 +195,20 @@ def check_output_file(out: str | os.PathLike[str], kind: str, suffix: str, examp
     return path
 
 
+def check_output_folder(out: str | os.PathLike[str], option: str = "--out") -> Path:
+    """``out`` as a path if a folder is there or can be made there (nothing is made): a ``ValueError``
+    naming it where ``out`` itself, or the nearest of its parents that exists, is no directory (a
+    file in the way), or a loop of symbolic links lies on its way. Asked before a long computation
+    whose results go into ``out``, so a folder that cannot be is refused before the work, not after."""
+    path = Path(out)
+    resolved(path)  # (a loop on the way: named as one)
+    existing = next((folder for folder in (path, *path.parents) if folder.exists()), None)
+    if existing is not None and not existing.is_dir():
+        where = "is a file" if existing == path else f"lies under {existing}, which is a file"
+        raise ValueError(f"{option} {out} {where}, not a folder: give a folder for the files")
+    return path
+
+
 def check_replaceable(path: str | os.PathLike[str]) -> Path:
     """``path`` if the suite may write a file there: nothing is there, or a regular file that is
     no symbolic link (which the write replaces, or appends to); else a ``ValueError`` naming
