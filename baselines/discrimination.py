@@ -38,7 +38,7 @@ from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
 from empathy_zoo.document_checks import finite_float, shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
-from empathy_zoo.names import check_own_file, check_path_name, check_replaceable, resolved, terminal_line
+from empathy_zoo.names import check_output_folder, check_own_file, check_path_name, check_replaceable, resolved, terminal_line
 
 __all__ = [
     "DEFAULT_DIR",
@@ -388,6 +388,7 @@ def main(
         if args.epsilon != 0.01:
             command += f" --epsilon {args.epsilon:g}"
         command += "".join(f" --results {path}" for path in results)
+        check_output_folder(Path(out).parent, "the folder of --out")  # (a file in its place: before any table is read)
         check_replaceable(out)  # (before any table is read: only nothing or a regular file, no loop on its way)
         check_own_file(out, "discrimination page", TITLE.encode())
         tables = load_tables(args.directory)

@@ -28,3 +28,11 @@ def test_a_folder_or_a_place_for_one_passes(tmp_path: Path) -> None:
     assert check_output_folder(tmp_path) == tmp_path
     assert check_output_folder(tmp_path / "new" / "deeper") == tmp_path / "new" / "deeper"
     assert not (tmp_path / "new").exists()  # (nothing is made)
+
+
+def test_discrimination_refuses_an_out_under_a_file_before_reading_a_table(tmp_path: Path, capsys) -> None:
+    (tmp_path / "nd").write_text("kept\n")
+    assert main(["analyse", "discrimination", "--out", str(tmp_path / "nd" / "x.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a folder" in err and str(tmp_path / "nd") in err, err
+    assert (tmp_path / "nd").read_text() == "kept\n"
