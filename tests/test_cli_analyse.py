@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -21,11 +22,13 @@ def test_every_tool_has_a_main(name: str) -> None:
     assert callable(importlib.import_module(TOOLS[name].module).main)
 
 
-def test_compare_runs_prints_what_python_m_prints(capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["analyse", "compare-runs", str(QUICK), str(QUICK)]) == 0
+def test_compare_runs_prints_what_python_m_prints(capsys: pytest.CaptureFixture[str], tmp_path) -> None:
+    copy = tmp_path / "quick"  # (a copy: one directory given twice is refused)
+    shutil.copytree(QUICK / "runs", copy / "runs")
+    assert main(["analyse", "compare-runs", str(QUICK), str(copy)]) == 0
     ours = capsys.readouterr().out
     theirs = subprocess.run(
-        [sys.executable, "-m", "leaderboard.compare_runs", str(QUICK), str(QUICK)], capture_output=True, text=True, check=True
+        [sys.executable, "-m", "leaderboard.compare_runs", str(QUICK), str(copy)], capture_output=True, text=True, check=True
     ).stdout
     assert ours == theirs
     assert ours.splitlines()[-1] == "same: 30, different: 0, only_old: 0, only_new: 0"

@@ -35,14 +35,9 @@ _LISTED = 5
 
 
 def _run_agent(result_file: Path) -> Any:
-    """The agent its result file names, a missing agent file said as such. The result file is read
-    by the result-file reader first (:func:`~empathy_zoo.experiment.result_reader.read_result`), as
-    the leaderboard and ``evaluate`` read it: a malformed one (an evaluation file, NaN and junk
-    beside an ``agent`` entry) is refused naming the field."""
+    """The agent its result file names, a missing agent file said as such."""
     from empathy_zoo.agent_file import load_run_agent
-    from empathy_zoo.experiment.result_reader import read_result
 
-    read_result(result_file, named=False)
     try:
         return load_run_agent(result_file)
     except FileNotFoundError as error:
