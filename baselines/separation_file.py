@@ -91,7 +91,16 @@ def read_separation_table(path: str | os.PathLike[str]) -> dict[str, Any]:
         document = parse_json(data.decode("utf-8"))
     except (ValueError, RecursionError) as error:
         raise SeparationTableError(f"separation table {where} is no JSON ({type(error).__name__}: {str(error)[:200]})") from None
-    return check_separation_table(document, where)
+    table = check_separation_table(document, where)
+    if "env" in table:  # (readers key a table by its file's name: a table saved under another task's name is refused)
+        rules = dict(table.get("arguments", [])).get("rules")
+        named = table["env"] if rules in (None, "paper") else f"{table['env']}_{rules}"
+        if where.stem != named:
+            raise SeparationTableError(
+                f"separation table {where} holds the table of {named} (its env and rules), not of {where.stem}: "
+                f"name it {named}.json, as empathy-zoo analyse separation does"
+            )
+    return table
 
 
 def _entries(check: DocumentChecker, value: Any, field: str, most: int = MAX_ENTRIES) -> list[dict[str, Any]]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -243,3 +244,21 @@ def test_a_pairs_difference_its_rows_outcomes_do_not_give_is_refused(tmp_path: P
     figure = key.removesuffix("_difference")
     assert before == a[figure] - b[figure]  # (the producer's sign: the first row's minus the second's)
     _refused(_written(tmp_path, table, task), f"pairs[{index}].{key}", f"expected {before!r}, the first row's {figure} (")
+
+
+def test_a_table_saved_under_another_tasks_name_is_refused(tmp_path: Path, capsys) -> None:
+    """Readers key a table by its file's name: Vase's table saved as coexistence_v0.json would be
+    read as Coexistence's predictions."""
+    from baselines.separation_file import read_separation_table
+
+    shipped = Path(__file__).resolve().parents[1] / "docs" / "results" / "separation"
+    (tmp_path / "tables").mkdir()
+    shutil.copyfile(shipped / "vase_v0.json", tmp_path / "tables" / "coexistence_v0.json")
+    with pytest.raises(ValueError, match=r"holds the table of vase_v0 .*not of coexistence_v0: name it vase_v0\.json"):
+        read_separation_table(tmp_path / "tables" / "coexistence_v0.json")
+    from empathy_zoo.cli import main
+
+    assert main(["analyse", "discrimination", str(tmp_path / "tables"), "--out", str(tmp_path / "d.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "vase_v0" in err, err
+    assert not (tmp_path / "d.md").exists()
