@@ -177,15 +177,19 @@ def check_gif_path(path: str) -> Path:
 
 def cmd_watch(args: argparse.Namespace, command: str) -> int:
     """Greedy episodes of a trained agent, each one's metrics printed; a GIF of the first."""
-    from empathy_zoo.episode_gif import EpisodeRecorder
+    from empathy_zoo.episode_gif import GIF_STEPS, EpisodeRecorder
     from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
     from empathy_zoo.limits import MAX_CYCLES, MAX_WATCH_STEPS, check_at_most
     from empathy_zoo.policies import entry_label
     from empathy_zoo.render import render_text
 
     check_episodes(args.episodes, args.seed)
+    given = args.gif_steps is not None
+    args.gif_steps = args.gif_steps if given else GIF_STEPS
     positive("--gif-steps", args.gif_steps)
     check_at_most("--gif-steps", args.gif_steps, MAX_CYCLES, "the bound of max_cycles: no episode is longer")
+    if given and args.gif is None:  # (a GIF's length with no GIF: never silently ignored)
+        raise ValueError("--gif-steps sets the length of the GIF --gif writes: give --gif PATH too, or leave --gif-steps out")
     if args.gif is not None:
         check_gif_path(args.gif)  # (its directory is made when the GIF is written: a refusal creates none)
     agent = find_agent(args.target, args.dir)
@@ -252,7 +256,7 @@ def add_watch(sub: Any) -> None:
     )
     watch.add_argument("--gif", metavar="FILE", default=None, help="write a GIF of the first episode")
     watch.add_argument(
-        "--gif-steps", type=int, default=GIF_STEPS, metavar="N", help=f"steps the GIF shows at most (default: {GIF_STEPS})"
+        "--gif-steps", type=int, default=None, metavar="N", help=f"steps the GIF shows at most (default: {GIF_STEPS})"
     )
     add_allow_import(watch)
     watch.set_defaults(handler=cmd_watch)
