@@ -85,17 +85,22 @@ def test_the_page_shows_each_trained_part_and_counts_the_tasks_that_separate() -
     assert "trained" not in discrimination_markdown({"charger_v0": TABLE}, 0.01, "cmd")
 
 
-@pytest.mark.parametrize("results", [True, False])
-def test_the_command_reads_results_directories(tmp_path: Path, capsys, results) -> None:
+def _tables_and_runs(tmp_path: Path, methods: tuple[tuple[str, float, float], ...], env: str = "charger_v0") -> Path:
     tables = tmp_path / "tables"
     tables.mkdir()
     (tables / "charger_v0.json").write_text(json.dumps(TABLE))
     runs = tmp_path / "res" / "runs"
     runs.mkdir(parents=True)
     for seed in range(10):
-        for method, beta, harms in (("dqn", 1.0, 1.0), ("dqn_harm_penalty", 1.0, 0.0), ("empathic_dqn", 0.5, 0.0)):
-            document = synthetic_document("charger_v0", method, beta, seed, harms=harms)
+        for method, beta, harms in methods:
+            document = synthetic_document(env, method, beta, seed, harms=harms)
             (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
+    return tables
+
+
+@pytest.mark.parametrize("results", [True, False])
+def test_the_command_reads_results_directories(tmp_path: Path, capsys, results) -> None:
+    tables = _tables_and_runs(tmp_path, (("dqn", 1.0, 1.0), ("dqn_harm_penalty", 1.0, 0.0), ("empathic_dqn", 0.5, 0.0)))
     out = tmp_path / "D.md"
     argv = ["analyse", "discrimination", str(tables), "--out", str(out)]
     argv += ["--results", str(tmp_path / "res")] if results else []
@@ -119,19 +124,6 @@ def test_the_command_refuses_a_results_directory_it_cannot_read(tmp_path: Path, 
     assert main(argv) == 2
     assert "x.json" in capsys.readouterr().err
     assert not (tmp_path / "D.md").exists()
-
-
-def _tables_and_runs(tmp_path: Path, methods: tuple[tuple[str, float, float], ...], env: str = "charger_v0") -> Path:
-    tables = tmp_path / "tables"
-    tables.mkdir()
-    (tables / "charger_v0.json").write_text(json.dumps(TABLE))
-    runs = tmp_path / "res" / "runs"
-    runs.mkdir(parents=True)
-    for seed in range(10):
-        for method, beta, harms in methods:
-            document = synthetic_document(env, method, beta, seed, harms=harms)
-            (runs / f"{document['run_id']}.json").write_text(json.dumps(document))
-    return tables
 
 
 def test_runs_that_make_no_cell_are_refused_not_read_as_zero_of_zero(tmp_path: Path, capsys) -> None:
