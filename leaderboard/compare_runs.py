@@ -2,6 +2,7 @@
 the run of the other of the same variant, method, β, aggregation of the others, reward transform,
 world, partners and seed, and the pair is *same* when their training and evaluation columns are
 equal value for value (what a version that changed nothing a run computes must give).
+Two directories of which no run has a partner in the other are refused: nothing is compared.
 
     python -m leaderboard.compare_runs OLD_DIR NEW_DIR
 
@@ -26,7 +27,15 @@ from leaderboard.run_facts import description_of
 
 PROG = "python -m leaderboard.compare_runs"
 
-__all__ = ["check_one_experiment_per_key", "check_same_settings", "compare_runs", "run_key", "runs_by_key", "setting_differences"]
+__all__ = [
+    "check_one_experiment_per_key",
+    "check_same_settings",
+    "check_something_matched",
+    "compare_runs",
+    "run_key",
+    "runs_by_key",
+    "setting_differences",
+]
 
 
 def run_key(run: RunResult) -> tuple:
@@ -132,6 +141,29 @@ def compare_runs(old: Sequence[RunResult], new: Sequence[RunResult]) -> dict[str
     return outcome
 
 
+def check_something_matched(
+    first: str, second: str, only_first: Sequence[tuple], only_second: Sequence[tuple], what: str
+) -> None:
+    """Refuse (``ValueError`` naming one unmatched ``what`` of each side) two directories ``first``
+    and ``second`` of which no ``what`` (run, experiment) has a partner in the other: nothing
+    would be compared, and counts of zero would read as a finding."""
+    if only_first or only_second:
+        sides = [(first, only_first), (second, only_second)]
+        examples = "; ".join(f"{len(keys)} only in {path}, e.g. {_shown_key(keys[0])}" for path, keys in sides if keys)
+        raise ValueError(f"{first} and {second} hold no {what} in common ({examples}): nothing would be compared")
+    raise ValueError(f"{first} and {second} hold no runs: nothing would be compared")
+
+
+def _shown_key(key: tuple) -> str:
+    """A key's parts that are set, comma-separated (its env, method, β, ...), a part of
+    ``(name, value)`` pairs (world, partners) as ``name=value``."""
+    return ", ".join(
+        " ".join(f"{name}={value}" for name, value in part) if isinstance(part, tuple) else str(part)
+        for part in key
+        if part not in (None, (), "closest")
+    )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m leaderboard.compare_runs OLD_DIR NEW_DIR``: one line per matched pair, then the counts."""
     args = list(sys.argv[1:] if argv is None else argv)
@@ -146,6 +178,8 @@ def _print_comparison(paths: list[str]) -> int:
     if read_folder(paths[0]) == read_folder(paths[1]):  # (DIR and DIR/runs are one directory)
         raise ValueError(f"{paths[1]} is given twice (as {paths[0]} too): its runs would be compared with themselves")
     result = compare_runs(load_results(paths[0]), load_results(paths[1]))
+    if not result["same"] and not result["different"]:
+        check_something_matched(paths[0], paths[1], result["only_old"], result["only_new"], "run")
     for verdict in ("same", "different"):
         for key in result[verdict]:
             print(f"{verdict:9s} {key}")

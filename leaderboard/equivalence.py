@@ -14,6 +14,7 @@ rule, fixed before the runs it judges:
   something in its environment (:attr:`empathy_zoo.environments.Environment.table_metrics`), a cell holds each set's
   per-seed values (:func:`leaderboard.aggregate.run_scalars`). A cell whose values are all equal on
   both sides (every run harm-free, say) says nothing and is counted as *constant*, not tested.
+  Two sets with no experiment in common are refused: nothing would be compared.
 * **Test.** Each cell: the exact two-sided Mann–Whitney permutation test of one set's values
   against the other's (:func:`leaderboard.improvement.permutation_test`: midranks for ties, the
   exact null distribution of every split).
@@ -63,7 +64,14 @@ from empathy_zoo.metrics import EQUIVALENCE_MARGINS
 from empathy_zoo.names import positional_tool, tool_help
 from empathy_zoo.result_file import read_folder
 from leaderboard.aggregate import PHASES, run_scalars, table_env
-from leaderboard.compare_runs import check_one_experiment_per_key, check_same_settings, compare_runs, run_key, runs_by_key
+from leaderboard.compare_runs import (
+    check_one_experiment_per_key,
+    check_same_settings,
+    check_something_matched,
+    compare_runs,
+    run_key,
+    runs_by_key,
+)
 from leaderboard.improvement import improvements_over_dqn, permutation_test
 from leaderboard.tables import table_metrics
 from leaderboard.tost import EQUIVALENT, NOT_SHOWN, TOO_FEW, TostResult, tost
@@ -407,6 +415,8 @@ def report(old_dir: str, new_dir: str, every_cell: bool = False, with_tost: bool
         raise ValueError(f"{new_dir} is given twice (as {old_dir} too): its runs would be compared with themselves")
     old, new = load_results(old_dir), load_results(new_dir)
     result = equivalence(old, new)
+    if not result.cells:
+        check_something_matched(old_dir, new_dir, result.only_old, result.only_new, "experiment")
     tested = sorted(result.tested, key=lambda cell: cell.p_value)
     pairs = compare_runs(old, new)
     copies = bool(pairs["same"]) and not pairs["different"]

@@ -116,3 +116,19 @@ def test_a_positional_tool_takes_no_unknown_option_for_a_path(module: str) -> No
         [sys.executable, "-m", f"leaderboard.{module}", "--bogus", str(QUICK)], capture_output=True, text=True, cwd=ROOT
     )
     assert done.returncode == 2 and done.stderr.startswith(f"usage: python -m leaderboard.{module} "), done.stderr
+
+
+@pytest.mark.parametrize(("tool", "what", "count"), [("compare-runs", "run", 15), ("equivalence", "experiment", 5)])
+def test_two_directories_of_no_common_experiment_are_refused(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, tool: str, what: str, count: int
+) -> None:
+    coexistence, sharing = tmp_path / "c", tmp_path / "s"
+    for folder, env in ((coexistence, "coexistence_v0"), (sharing, "sharing_v0")):
+        (folder / "runs").mkdir(parents=True)
+        for source in (QUICK / "runs").glob(f"{env}__*.json"):
+            shutil.copy(source, folder / "runs" / source.name)
+    capsys.readouterr()
+    assert main(["analyse", tool, str(coexistence), str(sharing)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, (out, err)
+    assert f"hold no {what} in common ({count} only in {coexistence}" in err and f"{count} only in {sharing}" in err, err
