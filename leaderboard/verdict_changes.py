@@ -9,6 +9,7 @@ as power; one that changes sign is a finding.
 
 A page of no such table (a README, an empty file, a leaderboard of runs with no DQN row) is
 refused in one line naming it, status 2: its "0 marks differ" would read as "no verdict moved".
+So is one file given twice (a copy of a page is compared).
 
 Pure text: the pages are read as Markdown, nothing is recomputed. A page may come from anyone:
 each name copied from it (variant, phase, method, metric) is shown as text, its Markdown escapes
@@ -19,6 +20,7 @@ no page opens HTML, a link or emphasis in the list, or sends a terminal escape t
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from pathlib import Path
@@ -176,6 +178,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         old, new = (_read_page(path) for path in (args.old, args.new))
+        if os.path.samefile(args.old, args.new):  # (one file, however written: "0 marks differ" would say nothing)
+            raise ValueError(f"{args.new} is given twice (as {args.old} too): a page would be compared with itself")
     except ValueError as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2

@@ -27,9 +27,25 @@ def test_verdict_changes_reads_pages_bounded(tmp_path: Path, capsys, kind: str) 
     assert err.count("\n") == 1 and str(path) in err
 
 
-def test_verdict_changes_of_a_page_with_itself_lists_no_change(capsys) -> None:
-    assert main(["analyse", "verdict-changes", str(PAGE), str(PAGE)]) == 0
-    assert "|" in capsys.readouterr().out
+def test_verdict_changes_of_a_page_with_its_copy_lists_no_change(tmp_path: Path, capsys) -> None:
+    copy_of_page = tmp_path / "LEADERBOARD.md"
+    copy_of_page.write_bytes(PAGE.read_bytes())
+    assert main(["analyse", "verdict-changes", str(PAGE), str(copy_of_page)]) == 0
+    out = capsys.readouterr().out
+    assert "|" in out and " 0 marks differ" in out, out
+
+
+@pytest.mark.parametrize("second", ["same", "link", "dotted"])
+def test_verdict_changes_refuses_one_page_given_twice(tmp_path: Path, capsys, second: str) -> None:
+    page = tmp_path / "LEADERBOARD.md"
+    page.write_bytes(PAGE.read_bytes())
+    other = {"same": page, "link": tmp_path / "link.md", "dotted": tmp_path / "." / "LEADERBOARD.md"}[second]
+    if second == "link":
+        other.symlink_to(page)
+    capsys.readouterr()
+    assert main(["analyse", "verdict-changes", str(page), str(other)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and f"{other} is given twice (as {page} too)" in err, err
 
 
 def test_an_evaluation_of_no_episode_is_refused() -> None:
