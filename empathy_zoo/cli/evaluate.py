@@ -82,7 +82,12 @@ def add_evaluate(sub: Any) -> None:
     parser.add_argument(
         "--episodes", type=int, metavar="N", help=f"greedy episodes per run and scenario (default: {DEFAULT_EPISODES})"
     )
-    parser.add_argument("--out", type=path_text, metavar="DIR", help="where evaluations/ goes (default: RESULTS_DIR)")
+    parser.add_argument(
+        "--out",
+        type=path_text,
+        metavar="DIR",
+        help="where evaluations/ goes (default: RESULTS_DIR); not another results directory",
+    )
     parser.add_argument(
         "--threads",
         type=int,

@@ -35,6 +35,7 @@ from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import (
     FORMAT,
     SCHEMA,
+    check_not_read_folder,
     evaluation_mismatch,
     evaluation_path,
     evaluations_root,
@@ -116,6 +117,8 @@ def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
     agent file there that is no regular file (:func:`empathy_zoo.data_files.data_files`)."""
     root = Path(results_dir)
     resolved(root)  # (a loop of symbolic links is named as one, not as missing)
+    if root.is_file():
+        raise ValueError(f"results directory {root} is a file, not a directory: name the directory that holds the result files")
     if not root.is_dir():
         raise ValueError(f"results directory {root} does not exist")
     runs = root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
@@ -125,6 +128,24 @@ def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
     if not paths:
         raise ValueError(f"no result files (*.json) in {runs}: train runs first")
     return [(path, read_result(path)) for path in paths]
+
+
+def check_evaluations_folder(results_dir: str | Path, out: Path) -> None:
+    """Refuse (``ValueError`` naming it) an ``out`` other than ``results_dir`` where evaluations of
+    its runs would be read as another directory's: a results directory (one holding a ``runs``
+    folder), a folder of result files, a ``runs`` folder or an evaluation set's folder
+    (:func:`empathy_zoo.evaluation_file.check_not_read_folder`). Their leaderboard would take the
+    files for evaluations of its own runs; ``results_dir`` itself, or a folder of no runs, is the
+    place (``leaderboard --evaluations`` reads the latter)."""
+    if resolved(out) == resolved(results_dir):
+        return
+    check_not_read_folder(out, f"the evaluations' folder {out}")
+    if (out / RUNS_DIR).is_dir():
+        raise ValueError(
+            f"the evaluations' folder {out} is another results directory (it holds {out / RUNS_DIR}): its leaderboard "
+            f"would read evaluations of {results_dir}'s runs as its own; write them into {results_dir} or a folder "
+            "of no runs (leaderboard --evaluations reads it)"
+        )
 
 
 def same_world(a: EnvVariant, b: EnvVariant) -> bool:
@@ -324,6 +345,7 @@ def evaluate_results(
         raise ValueError("out_dir is an empty path: name the directory ('.' for the current one)")
     runs = results_of(results_dir)
     out = Path(results_dir if out_dir is None else out_dir)
+    check_evaluations_folder(results_dir, out)
     summary = EvaluationSummary()
     kept = []
     for path, result in runs:
