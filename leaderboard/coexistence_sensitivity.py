@@ -179,10 +179,18 @@ def sensitivity_markdown(results: Sequence[RunResult], command: str, reference_o
     return "\n".join(lines)
 
 
-def reproduction_section(results: Sequence[RunResult], command: str, reference_of: ReferenceOf = exact_reference) -> str:
+def reproduction_section(
+    results: Sequence[RunResult], command: str, reference_of: ReferenceOf = exact_reference, least_conditions: int = 1
+) -> str:
     """REPRODUCTION.md's section on the rules: the conditions and the table of verdicts and answers
-    (the evidence is on the study's own page, ``SENSITIVITY.md``, beside its results)."""
+    (the evidence is on the study's own page, ``SENSITIVITY.md``, beside its results). Results of
+    fewer than ``least_conditions`` conditions raise ``ValueError`` (one condition compares nothing)."""
     conditions = condition_runs(results)
+    if len(conditions) < least_conditions:
+        raise ValueError(
+            f"these results hold {len(conditions)} condition(s) of {COEXISTENCE} ({', '.join(conditions)}), not the "
+            f"{least_conditions} or more a rules sweep compares (profile coexistence_sensitivity trains 2)"
+        )
     judged = judge_conditions(results, reference_of)
     return "\n".join(
         [

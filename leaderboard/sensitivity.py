@@ -236,11 +236,19 @@ def _word(ok: bool | None) -> str:
     return "—" if ok is None else ("reproduced" if ok else "not reproduced")
 
 
-def sensitivity_markdown(results: Sequence[RunResult], command: str) -> str:
-    """The sensitivity section: one table per phase, a row per condition and β."""
+def sensitivity_markdown(results: Sequence[RunResult], command: str, least_conditions: int = 1) -> str:
+    """The sensitivity section: one table per phase, a row per condition and β. Results of fewer
+    than ``least_conditions`` conditions raise ``ValueError`` (REPRODUCTION.md asks for two: one
+    condition compares nothing)."""
     rows = sensitivity_rows(results)
     if not rows:
         raise ValueError("no Empathic DQN runs of sharing_v0 in these results")
+    if len(rows) < least_conditions:
+        raise ValueError(
+            f"these results hold {len(rows)} fidelity condition(s) of sharing_v0 "
+            f"({'; '.join(_condition_text(condition) for condition in rows)}), not the {least_conditions} or more a "
+            "sensitivity sweep compares (profile sharing_sensitivity trains 8)"
+        )
     lines = [
         "## When does C5 hold? Sharing under the fidelity options",
         "",

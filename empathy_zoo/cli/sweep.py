@@ -152,20 +152,19 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
 
     out = _report_out(args) or Path(args.results) / "REPRODUCTION.md"  # (checked before anything is read)
     note = _read_note(args.note)
+    _check_sweeps_apart(args)
     appendix = ""
     if args.sensitivity:
         appendix = sensitivity_markdown(
-            load_results(args.sensitivity),
-            f"empathy-zoo reproduce --profile sharing_sensitivity --out {args.sensitivity}   "
-            f"(result files in {args.sensitivity}; its LEADERBOARD.md names the exact command)",
+            load_results(args.sensitivity), _sweep_source(args.sensitivity, "sharing_sensitivity"), least_conditions=2
         )
     if args.coexistence_sensitivity:
         from leaderboard.coexistence_sensitivity import reproduction_section
 
         rules = reproduction_section(
             load_results(args.coexistence_sensitivity),
-            f"empathy-zoo reproduce --profile coexistence_sensitivity --out {args.coexistence_sensitivity}   "
-            f"(result files in {args.coexistence_sensitivity}; its LEADERBOARD.md names the exact command)",
+            _sweep_source(args.coexistence_sensitivity, "coexistence_sensitivity"),
+            least_conditions=2,
         )
         appendix = "\n\n".join(part for part in (appendix, rules) if part)
     missing = missing_paper_experiments(load_checked_results(args.results))  # (a forged file: refused before any figure)
@@ -176,6 +175,30 @@ def cmd_reproduction(args: argparse.Namespace, command: str) -> int:
     written = write_reproduction(args.results, out, command=args.produced_by or PRODUCED_BY, note=note, appendix=appendix)
     print(f"{PROG}: wrote {written}")
     return 0
+
+
+def _check_sweeps_apart(args: argparse.Namespace) -> None:
+    """Refuse a directory given as two of ``reproduction``'s inputs (the results, ``--sensitivity``,
+    ``--coexistence-sensitivity``; ``DIR`` and ``DIR/runs`` are one): one set of runs is no
+    sensitivity sweep of itself."""
+    from empathy_zoo.result_file import read_folder
+
+    given = [("RESULTS_DIR", args.results), ("--sensitivity", args.sensitivity)]
+    given.append(("--coexistence-sensitivity", args.coexistence_sensitivity))
+    seen: dict[Path, str] = {}
+    for option, path in given:
+        if path is None:
+            continue
+        folder = read_folder(path)
+        if folder in seen:
+            raise ValueError(f"{option} {path} is given twice (as {seen[folder]} too): a sensitivity sweep is runs of its own")
+        seen[folder] = f"{option} {path}" if option != "RESULTS_DIR" else f"the results directory {path}"
+
+
+def _sweep_source(directory: str, profile: str) -> str:
+    """What a sensitivity section says made its runs: their files, and the profile that trains such
+    a sweep (the files do not record the command that trained them)."""
+    return f"the result files in {directory} (empathy-zoo reproduce --profile {profile} --out {directory} trains such a sweep)"
 
 
 def cmd_sensitivity(args: argparse.Namespace, command: str) -> int:
