@@ -11,6 +11,7 @@ of methods whether their optimal policies differ. Built on
 | Call | `separation_table(model, selfishness=(0.75, 0.5, 0.25, 0.0), epsilons=(0.0, 0.01, 0.05)) -> SeparationTable` |
 | Command | `empathy-zoo analyse separation [ENV] [ARG=VALUE ...] [--out DIR]` |
 | Files | `docs/results/separation/<name>.json` and `.md` (rendering: :mod:`baselines.separation_render`) |
+| Bounds | checked from the arguments before any model is built: :mod:`baselines.separation_bounds` |
 
 ## Rows and the values each acts on (at their fixed point, γ = 0.99)
 * `dqn`: `Q*`. `dqn_silver_literal` and `dqn_equality` are DQN by construction (their registry marks);
@@ -35,7 +36,7 @@ of methods whether their optimal policies differ. Built on
   (:mod:`baselines.separation_world`).
 * `dqn_aup`: `Q*` of the reward less AUP's penalty with exact auxiliary values, seed 0's
   (:mod:`baselines.separation_world`). Each of these two rows is computed up to a number of
-  states (:data:`WORLD_STATES`): AUP's is not on Sharing.
+  states (:data:`baselines.separation_bounds.WORLD_STATES`): AUP's is not on Sharing.
 
 ## Policies, outcomes, pairs
 The greedy policy splits ties evenly (:func:`empathy_zoo.reference.greedy_policy`). The outcome is
@@ -54,30 +55,26 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from itertools import combinations
-from typing import Any
 
 import numpy as np
 
 from baselines.considerate_exact import considerate_values
 from baselines.considerate_tabular import considerate_ending_policy, considerate_model_values
 from baselines.lagrangian import Lagrangian
-from baselines.reachability_table import check_table_size
 from baselines.registry import METHODS
 from baselines.separation_batteries import battery_figures, equality_reward, layer_figures
+from baselines.separation_bounds import EPSILONS, SELFISHNESS, WORLD_STATES, check_bounds, plays_paper_rules
 from baselines.separation_lagrangian import LAMBDA_RANGE, epsilon_greedy, lagrangian_dual, lagrangian_note, lagrangian_values
 from baselines.separation_reachability import relative_reachability_reward
 from baselines.separation_values import in_view_values, silver_values
 from baselines.separation_world import attainable_utility_reward
 from baselines.separation_world import relative_reachability_reward as world_reachability_reward
 from baselines.shaping import HARM_PENALTY
-from empathy_zoo.engine.arguments import check_env_arguments
-from empathy_zoo.engine.coexistence import RULE_SETS, CoexistenceEngine
+from empathy_zoo.engine.coexistence import CoexistenceEngine
 from empathy_zoo.environments import ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import (
-    MAX_STATES,
     PolicyOutcome,
     TabularModel,
     alone_policy,
@@ -86,7 +83,6 @@ from empathy_zoo.exact_solver import (
     optimal_values,
     outcome,
 )
-from empathy_zoo.limits import MAX_REFERENCE_CYCLES, MAX_SEPARATION_WORK
 from empathy_zoo.reference import greedy_policy
 
 __all__ = [
@@ -98,18 +94,12 @@ __all__ = [
     "Omission",
     "SeparationTable",
     "separation_table",
-    "check_bounds",
-    "table_work",
     "silver_values",
     "in_view_values",
     "reachable_states",
     "policies_differ",
 ]
 
-SELFISHNESS = (0.75, 0.5, 0.25, 0.0)
-"""β of the empathic rows (β = 1 is DQN)."""
-EPSILONS = (0.0, 0.01, 0.05)
-"""Exploration rates of the outcomes."""
 POLICY_TOLERANCE = 1e-12
 """Action probabilities closer than this count as equal."""
 RETURN = "return"
@@ -334,16 +324,11 @@ def _rows(
 
 WORLD_ROWS = ("dqn_relative_reachability", "dqn_aup")
 """The rows computed on the model's own states (:mod:`baselines.separation_world`), on every model
-small enough (:data:`WORLD_STATES`); relative reachability's under the paper's Coexistence rules
-is the displacement table's instead (:data:`PAPER_RR`)."""
+small enough (:data:`~baselines.separation_bounds.WORLD_STATES`); relative reachability's under the
+paper's Coexistence rules is the displacement table's instead (:data:`PAPER_RR`)."""
 PAPER_RR = "dqn_relative_reachability"
 """The world row that Coexistence under the paper's rules computes from its displacement model
 (:mod:`baselines.separation_reachability`), as the paper's runs read it."""
-WORLD_STATES = {"dqn_relative_reachability": 50_000, "dqn_aup": 10_000}
-"""The most states of a model whose world rows are computed: relative reachability's table of the
-fewest steps holds a byte for every two states (1 GB for Sharing's 31,201 with the robot alone and
-the end); AUP's 30 auxiliary values take one sweep of value iteration over every state, action,
-other move and reward (about a second on Sharing's) for hundreds of sweeps."""
 TWINS = ("dqn_silver_literal", "dqn_equality")
 """Methods a row shows only where the registry marks them identical to another on the environment."""
 
@@ -356,107 +341,7 @@ def _coexistence(model: TabularModel) -> bool:
 def _paper_rules(model: TabularModel) -> bool:
     """Whether the model's engine plays the paper's rules (what Be Considerate's exact module and
     the reachability table model)."""
-    return _plays_paper_rules(ENGINES[model.env](1, **model.env_kwargs))
-
-
-def _plays_paper_rules(engine: object) -> bool:
-    """Whether ``engine`` is Coexistence's under the paper's rules."""
-    return isinstance(engine, CoexistenceEngine) and getattr(engine, "options", None) == RULE_SETS["paper"]
-
-
-AUP_SOLVES = 31
-"""Value solves of AUP's row where it is computed: its 30 exact auxiliary values and its own optimum."""
-CONSIDERATE_SOLVES = 8
-"""Value solves counted for Be Considerate's policy at one ε: its rounds of the robot's optimum and
-the other's value (some 7 value solves' time on the charger table, measured)."""
-
-
-def _value_sweeps(gamma: float) -> int:
-    """The most sweeps of one value iteration at ``gamma`` (:func:`~empathy_zoo.exact_solver.optimal_values`'s
-    limit, rewards of magnitude 1): 3,308 at γ = 0.99."""
-    return 100 + math.ceil(math.log(1e-10 * (1.0 - gamma) ** 2) / math.log(gamma)) if 0.0 < gamma < 1.0 else 2
-
-
-def _lagrangian_steps() -> int:
-    """The most multipliers the Lagrangian's bisection tries at one ε (:func:`lagrangian_multiplier`):
-    0, the top, the bottom and every halving of ``log λ`` down to a relative 10⁻³ (19)."""
-    low, high = LAMBDA_RANGE
-    return 3 + math.ceil(math.log2(math.log(high / low) / math.log(1.001)))
-
-
-def table_work(
-    engine: Any,
-    env: str,
-    selfishness: tuple[float, ...] = SELFISHNESS,
-    epsilons: tuple[float, ...] = EPSILONS,
-    gamma: float = 0.99,
-) -> tuple[int, str]:
-    """The work of the separation table of ``env``, its engine built with the table's arguments
-    (``engine``), counted from the arguments alone, and how it is counted: each state of the model
-    stepped once with every joint action and draw, ``states × draws × (value solves × sweeps +
-    outcomes × max_cycles)``. The value solves: ``Q*``; the harm penalty's and equality's where
-    they are not DQN by construction; relative reachability's and AUP's 31 up to their states
-    (:data:`WORLD_STATES`); and at each ε the Lagrangian's bisection (19, where it is not DQN by
-    construction) and Be Considerate's rounds (:data:`CONSIDERATE_SOLVES`, where they are computed
-    on the model: off Coexistence). Each is counted at its value iteration's most sweeps
-    (:func:`_value_sweeps`). The outcomes: one per row and ε (``8 + 3 × len(selfishness)``, the
-    most rows) and the bisection's. Pairs cost a reachability search per distinct policy, far
-    less; a world row's own table is bounded apart (:data:`WORLD_STATES`, the reachability table's
-    size)."""
-    states = int(getattr(engine, "tabular_layers", 1)) * engine.num_cells**2
-    draws = int(getattr(engine, "tabular_draws", 1))
-    cycles = int(engine.max_cycles)
-    paper = _plays_paper_rules(engine)
-    lagrangian = METHODS["dqn_lagrangian"].identical_to.get(env) is None
-    considerate = not isinstance(engine, CoexistenceEngine)  # (the paper's rules: on the displacement model, far less)
-    per_epsilon = (_lagrangian_steps() if lagrangian else 0) + (CONSIDERATE_SOLVES if considerate else 0)
-    shaped = [name for name in ("dqn_harm_penalty", "dqn_equality") if METHODS[name].identical_to.get(env) is None]
-    reachability = paper or states <= WORLD_STATES["dqn_relative_reachability"]
-    aup = AUP_SOLVES if states <= WORLD_STATES["dqn_aup"] else 0
-    solves = 1 + len(shaped) + reachability + aup + len(epsilons) * per_epsilon
-    outcomes = len(epsilons) * (8 + 3 * len(selfishness) + (_lagrangian_steps() if lagrangian else 0))
-    sweeps = _value_sweeps(gamma)
-    work = states * draws * (solves * sweeps + outcomes * cycles)
-    shown = f"{states:,} states" + (f" × {draws} draws" if draws > 1 else "")
-    return work, f"{shown} × ({solves} value solves × {sweeps:,} sweeps + {outcomes} outcomes × {cycles:,} steps)"
-
-
-def check_bounds(
-    env: str,
-    env_kwargs: Mapping[str, Any],
-    selfishness: tuple[float, ...] = SELFISHNESS,
-    epsilons: tuple[float, ...] = EPSILONS,
-    *,
-    gamma: float = 0.99,
-) -> None:
-    """Refuse (``ValueError``, one line naming the bound) the table of ``env`` with ``env_kwargs``
-    where one of its rows would be refused past a bound that follows from the arguments alone,
-    before any model is built or solved: relative reachability's row under Coexistence's paper
-    rules builds the exact reachability table, for grids up to
-    :data:`~baselines.reachability_table.MAX_TABLE_SIZE` (:func:`~baselines.reachability_table.check_table_size`);
-    and the whole table's work (:func:`table_work`, at ``selfishness``, ``epsilons`` and ``gamma``)
-    is at most :data:`~empathy_zoo.limits.MAX_SEPARATION_WORK`.
-    The other rows' bounds omit a row rather than refuse the table (:data:`WORLD_STATES`). An
-    environment or argument the exact model cannot take is left to
-    :func:`~empathy_zoo.exact_solver.tabular_model` to name, as before (``max_cycles`` and the joint
-    states past their bounds too); an argument the engine refuses is refused here in the same words."""
-    engine_class = ENGINES.get(env)
-    if engine_class is None or not hasattr(engine_class, "start_distribution"):
-        return
-    check_env_arguments(engine_class, dict(env_kwargs))  # (as tabular_model checks them, in the same words)
-    engine = engine_class(1, **env_kwargs)
-    if engine.num_agents != 2 or int(engine.max_cycles) > MAX_REFERENCE_CYCLES:
-        return  # (tabular_model names these, before anything is built)
-    if _plays_paper_rules(engine):
-        check_table_size(math.isqrt(engine.num_cells))  # (the size relative_reachability_reward's table is built for)
-    if int(getattr(engine, "tabular_layers", 1)) * engine.num_cells**2 > MAX_STATES:
-        return  # (tabular_model names the joint states past its bound, as before)
-    work, counted = table_work(engine, env, tuple(selfishness), tuple(epsilons), gamma)
-    if work > MAX_SEPARATION_WORK:
-        raise ValueError(
-            f"the separation table of {env} with {dict(env_kwargs)} is {counted} = {work:,} of work, past the bound of "
-            f"{MAX_SEPARATION_WORK:,} (MAX_SEPARATION_WORK, docs/limits.md: about an hour); give a smaller size or max_cycles"
-        )
+    return plays_paper_rules(ENGINES[model.env](1, **model.env_kwargs))
 
 
 def _considerate_policy(model: TabularModel, epsilon: float, gamma: float, paper: bool) -> np.ndarray:
@@ -483,7 +368,7 @@ def separation_table(
     cost_limit: float = Lagrangian().cost_limit,
 ) -> SeparationTable:
     """The :class:`SeparationTable` of ``model`` (see the module page); ``ValueError`` before any
-    row is solved where a bound refuses the table (:func:`check_bounds`)."""
+    row is solved where a bound refuses the table (:func:`~baselines.separation_bounds.check_bounds`)."""
     check_bounds(model.env, model.env_kwargs, selfishness, epsilons, gamma=gamma)
     cycles = episode_steps(model)
     paper = _paper_rules(model)
@@ -592,7 +477,8 @@ def separation_table(
 
 
 def _too_large(method: str, states: int) -> str:
-    """Why a world row is not computed on a model of ``states`` states (:data:`WORLD_STATES`)."""
+    """Why a world row is not computed on a model of ``states`` states
+    (:data:`~baselines.separation_bounds.WORLD_STATES`)."""
     what = {
         "dqn_relative_reachability": "its table of the fewest steps between every two states",
         "dqn_aup": "its 30 exact auxiliary values, by value iteration,",

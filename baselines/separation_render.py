@@ -20,7 +20,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, check_bounds, separation_table
+from baselines.separation import Omission, Pair, Row, RowOutcome, SeparationTable, separation_table
+from baselines.separation_bounds import check_bounds
 from empathy_zoo.environments import DEFAULT_ENVIRONMENT, ENGINES, ENVIRONMENT_TABLE
 from empathy_zoo.exact_solver import command_line_arguments, tabular_model
 

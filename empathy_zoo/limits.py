@@ -154,7 +154,7 @@ its 15 points steps every state once a step): about 2.4 µs each on a laptop cor
 four minutes; the default Coexistence (2,401 states, 500 steps) takes 1.2·10⁶, a few seconds."""
 MAX_SEPARATION_WORK = 30_000_000_000
 """Most work of ``analyse separation``'s table, counted from its arguments alone as its model's
-``states × draws × (value solves × sweeps + outcomes × max_cycles)`` (:func:`baselines.separation.table_work`:
+``states × draws × (value solves × sweeps + outcomes × max_cycles)`` (:func:`baselines.separation_bounds.table_work`:
 each solve its value iteration's 3,308 sweeps at γ = 0.99; the Lagrangian's bisection, 19 a ε, counted
 where it is computed). Measured at about 8·10⁻⁸ s each on small models (the charger table: 1.05·10⁹,
 85 s; Sharing's: 7.2·10⁹, some ten minutes) and 2·10⁻⁷ s or more on large ones (charger size 14:

@@ -67,13 +67,13 @@ def test_the_table_refuses_such_a_model_before_solving_any_row() -> None:
     ],
 )
 def test_arguments_within_every_bound_pass_the_check(env: str, arguments: dict[str, Any]) -> None:
-    from baselines.separation import check_bounds
+    from baselines.separation_bounds import check_bounds
 
     check_bounds(env, arguments)
 
 
 def test_an_argument_the_engine_refuses_is_refused_in_its_own_words() -> None:
-    from baselines.separation import check_bounds
+    from baselines.separation_bounds import check_bounds
 
     with pytest.raises(ValueError, match="takes no argument"):
         check_bounds("coexistence_v0", {"sise": 10})

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from baselines import separation
+from baselines import separation, separation_bounds
 from empathy_zoo.cli import main as cli_main
 from empathy_zoo.environments import ENGINES
 from empathy_zoo.limits import BOUNDS, MAX_SEPARATION_WORK
@@ -30,7 +30,7 @@ def _shipped() -> list[tuple[str, dict[str, Any]]]:
 
 
 def _work(env: str, arguments: dict[str, Any]) -> int:
-    from baselines.separation import table_work
+    from baselines.separation_bounds import table_work
 
     return table_work(ENGINES[env](1, **arguments), env)[0]
 
@@ -62,18 +62,18 @@ def test_the_table_refuses_such_a_model_before_solving_any_row() -> None:
 
 def test_the_bound_is_inclusive(monkeypatch: pytest.MonkeyPatch) -> None:
     work = _work("charger_v0", {"size": 8, "max_cycles": 300})
-    monkeypatch.setattr(separation, "MAX_SEPARATION_WORK", work)
-    separation.check_bounds("charger_v0", {"size": 8, "max_cycles": 300})  # (at the bound: passes)
-    monkeypatch.setattr(separation, "MAX_SEPARATION_WORK", work - 1)
+    monkeypatch.setattr(separation_bounds, "MAX_SEPARATION_WORK", work)
+    separation_bounds.check_bounds("charger_v0", {"size": 8, "max_cycles": 300})  # (at the bound: passes)
+    monkeypatch.setattr(separation_bounds, "MAX_SEPARATION_WORK", work - 1)
     with pytest.raises(ValueError, match=rf"= {work:,} of work, past the bound of {work - 1:,} "):
-        separation.check_bounds("charger_v0", {"size": 8, "max_cycles": 300})
+        separation_bounds.check_bounds("charger_v0", {"size": 8, "max_cycles": 300})
 
 
 def test_the_work_grows_with_the_grid_the_episode_and_the_rows() -> None:
     base = _work("charger_v0", {})
     assert _work("charger_v0", {"max_cycles": 501}) > base
     assert _work("charger_v0", {"size": 8}) > base
-    from baselines.separation import table_work
+    from baselines.separation_bounds import table_work
 
     engine = ENGINES["charger_v0"](1)
     assert table_work(engine, "charger_v0", epsilons=(0.0,))[0] < base < table_work(engine, "charger_v0", (0.5,) * 5)[0]
@@ -96,7 +96,7 @@ def test_the_table_passes_its_own_selfishness_and_epsilons(monkeypatch: pytest.M
 
 @pytest.mark.parametrize(("env", "arguments"), _shipped(), ids=lambda value: str(value))
 def test_every_shipped_table_passes_with_a_wide_margin(env: str, arguments: dict[str, Any]) -> None:
-    separation.check_bounds(env, arguments)
+    separation_bounds.check_bounds(env, arguments)
     assert _work(env, arguments) * 4 <= MAX_SEPARATION_WORK
 
 
