@@ -7,6 +7,7 @@ a :class:`agents.base.Method` composes (see :mod:`baselines.methods`)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -14,6 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from agents.base import StepBatch
+from agents.rewards import MAX_TRANSFORM_WEIGHT
 from agents.transform_state import StateBounds, check_smoothed
 from empathy_zoo.metrics import equality
 
@@ -66,6 +68,25 @@ class InequityAversion:
     """β: weight of being ahead of the other agent."""
     smoothing: float = 0.99 * 0.95
     """γλ: how much of the smoothed reward carries to the next step."""
+
+    def __post_init__(self) -> None:
+        """Refuse a smoothing outside ``[0, 1)`` (the smoothed rewards would grow without end) and
+        weights whose inequity can outweigh :data:`agents.rewards.MAX_TRANSFORM_WEIGHT` rewards of a
+        step: the smoothed rewards differ by at most ``R/(1 − γλ)`` (``R`` the largest reward of a
+        step), so ``max(|α|, |β|)/(1 − γλ)`` is the most one step's reward is multiplied by."""
+        for field in ("disadvantageous", "advantageous", "smoothing"):
+            value = getattr(self, field)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{field} must be a finite number, got {value!r}")
+        if not 0.0 <= self.smoothing < 1.0:
+            raise ValueError(f"smoothing must be in [0, 1), got {self.smoothing!r}")
+        gain = max(abs(self.disadvantageous), abs(self.advantageous)) / (1.0 - self.smoothing)
+        if gain > MAX_TRANSFORM_WEIGHT:
+            raise ValueError(
+                f"max(|disadvantageous|, |advantageous|) / (1 − smoothing) must be at most {MAX_TRANSFORM_WEIGHT:,g} "
+                f"(agents.rewards.MAX_TRANSFORM_WEIGHT: the most a step's reward is weighed by, docs/limits.md), "
+                f"got {gain:,.6g}"
+            )
 
     def initial_state(self, num_runs: int, envs_per_run: int) -> dict[str, np.ndarray]:
         return {side: np.zeros((num_runs, envs_per_run)) for side in ("own", "other")}

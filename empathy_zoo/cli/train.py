@@ -130,7 +130,7 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
                 + ("no reward transform" if method.reward is None else "a reward transform without fields")
             )
         check_keys(table, kinds, f"{path}: [reward]")
-        reward |= {k: check_value(v, kinds[k], f"{path}: [reward] {k}") for k, v in table.items()}
+        reward |= {k: _reward_value(method, k, check_value(v, kinds[k], f"{path}: [reward] {k}"), path) for k, v in table.items()}
     for key in RUN_KEYS.keys() - {"seed", "fixed"}:
         if key in given:
             run[key] = given[key]
@@ -144,6 +144,19 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
         run["progress"] = False
     run["reward"] = reward | given_reward(args)
     return run, merged_settings(settings, given_settings(args))
+
+
+def _reward_value(method: Any, field: str, value: Any, path: str) -> Any:
+    """``value`` of the ``[reward]`` key ``field`` of the ``--config`` file ``path``, as the reward
+    transform takes it (:func:`agents.rewards.check_field_value`: within its bound), else
+    :class:`~empathy_zoo.experiment.values.SweepConfigError` naming the file, the table and the key."""
+    from agents.rewards import TransformFieldError, check_field_value
+    from empathy_zoo.experiment.values import SweepConfigError
+
+    try:
+        return check_field_value(method.reward, field, value)
+    except TransformFieldError as error:
+        raise SweepConfigError(f"{path}: [reward] {field}: {error.problem}") from None
 
 
 def cmd_train(args: argparse.Namespace, command: str) -> int:

@@ -91,14 +91,32 @@ def _settings(check: DocumentChecker, method: Any, result: Mapping[str, Any]) ->
 def _reward(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> Any:
     """The reward transform ``config.reward`` records, which must be ``method``'s: ``null`` for a
     method without one, else a record of the same name (its fields are the file's: a transform may
-    have gained a field since the run was made); ``None`` or the method's own transform."""
+    have gained a field since the run was made); ``None`` or the method's own transform with the
+    file's values of its fields, each checked as a run's is when it is configured
+    (:func:`agents.rewards.configure_transform`: of its type, within its bound, then the transform's
+    own checks), a field it no longer has left as recorded."""
+    from agents.rewards import TransformFieldError, check_field_value  # (lazily, as the registry: agents imports torch)
+
     recorded = result["config"].get("reward")
     own = method.reward
     matches = own is None if recorded is None else own is not None and recorded.get("name") == own.name
-    if matches:
+    if not matches:
+        expected = "null (it trains on the environment's reward)" if own is None else f"a reward named {own.name!r}"
+        raise check.fail("config.reward", f"{expected}, as {result['method']} trains", recorded)
+    if recorded is None:
         return own
-    expected = "null (it trains on the environment's reward)" if own is None else f"a reward named {own.name!r}"
-    raise check.fail("config.reward", f"{expected}, as {result['method']} trains", recorded)
+    kinds = method.reward_fields()
+    fields = {name: value for name, value in recorded.items() if name in kinds}
+    for name, value in fields.items():
+        try:
+            check_field_value(own, name, value, method.name)
+        except TransformFieldError as error:
+            raise check.fail(f"config.reward.{name}", f"{error.wanted}, as a reward field of {method.name}", value) from None
+    try:
+        return method.make_reward(fields)
+    except (TypeError, ValueError, OverflowError) as error:
+        why = one_line(str(error), 300)
+        raise check.fail("config.reward", f"reward fields {result['method']} takes ({why})", recorded) from None
 
 
 def _check_described(check: DocumentChecker, method: Any, settings: Any, reward: Any, result: Mapping[str, Any]) -> None:

@@ -69,7 +69,7 @@ from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-from agents.rewards import transform_config, transform_fields
+from agents.rewards import TransformFieldError, check_field_value, transform_config, transform_fields
 from baselines.registry import METHODS, get_method
 from baselines.sb3_transforms import SB3_REFUSED
 from empathy_zoo.engine.arguments import argument_types, own_arguments
@@ -325,6 +325,8 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         if not values:
             raise SweepConfigError(f"{where} {shown}: empty grid (give at least one value)")
         checked = [check_value(v, kind, f"{where} {shown}") for v in values]
+        if part == "reward":  # (the bound of every transform's field, said here with the key that gives it)
+            checked = [_reward_value(method, key, v, f"{where} {shown}") for v in checked]
         if len(set(map(repr, checked))) != len(checked):
             raise SweepConfigError(f"{where} {shown}: value listed twice in the grid {values}")
         axes.append([(part, key, v) for v in checked])
@@ -347,6 +349,16 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
         "grid": grid,
         "swept_reward": swept,
     }
+
+
+def _reward_value(method: Any, field: str, value: Any, where: str) -> Any:
+    """``value`` of the reward field ``field`` of ``method``, as :func:`agents.rewards.check_field_value`
+    takes it (within :data:`agents.rewards.MAX_TRANSFORM_WEIGHT`, ...), else :class:`SweepConfigError`
+    naming ``where`` (the file, its ``[[methods]]`` entry and the key)."""
+    try:
+        return check_field_value(method.reward, field, value)
+    except TransformFieldError as error:
+        raise SweepConfigError(f"{where}: {error.problem}") from None
 
 
 def _composed_hint(method: str, transform: str) -> str:
