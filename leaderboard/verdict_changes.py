@@ -9,7 +9,7 @@ as power; one that changes sign is a finding.
 
 A page of no such table (a README, an empty file, a leaderboard of runs with no DQN row) is
 refused in one line naming it, status 2: its "0 marks differ" would read as "no verdict moved".
-So is one file given twice (a copy of a page is compared).
+So is one file given twice (a copy of a page is compared), and two pages that share no cell.
 
 Pure text: the pages are read as Markdown, nothing is recomputed. A page may come from anyone:
 each name copied from it (variant, phase, method, metric) is shown as text, its Markdown escapes
@@ -163,10 +163,7 @@ def _one_page(cells: dict[Cell, str], page: str) -> str:
     at most :data:`MAX_NAMED` of them (``method · metric (variant, phase) mark``), then ``and N more``."""
     if not cells:
         return f"0 cells on the {page} page only."
-    named = [
-        f"{shown_text(method)} · {shown_text(metric)} ({shown_text(variant)}, {shown_text(phase)}) {mark or '–'}"
-        for (variant, phase, method, metric), mark in list(cells.items())[:MAX_NAMED]
-    ]
+    named = [f"{_cell_text(cell)} {mark or '–'}" for cell, mark in list(cells.items())[:MAX_NAMED]]
     more = f"; and {len(cells) - MAX_NAMED:,} more" if len(cells) > MAX_NAMED else ""
     return f"{len(cells)} cells on the {page} page only, not compared: {'; '.join(named)}{more}."
 
@@ -180,11 +177,32 @@ def main(argv: list[str] | None = None) -> int:
         old, new = (_read_page(path) for path in (args.old, args.new))
         if os.path.samefile(args.old, args.new):  # (one file, however written: "0 marks differ" would say nothing)
             raise ValueError(f"{args.new} is given twice (as {args.old} too): a page would be compared with itself")
+        _check_common_cells(args.old, verdicts(old), args.new, verdicts(new))
     except ValueError as error:
         print(f"{parser.prog}: error: {terminal_line(error)}", file=sys.stderr)
         return 2
     print(changes_markdown(old, new), end="")
     return 0
+
+
+def _check_common_cells(old_path: Path, old: dict[Cell, str], new_path: Path, new: dict[Cell, str]) -> None:
+    """Refuse (``ValueError`` naming both pages and a cell of each) two pages that share no verdict
+    cell: nothing would be compared, and "0 marks differ" would read as "no verdict moved"."""
+    if any(cell in old for cell in new):
+        return
+    first = next(iter(old))
+    second = next(iter(new))
+    raise ValueError(
+        f"leaderboard pages {old_path} and {new_path} share no verdict cell (variant, phase, method and metric): "
+        f"{len(old)} cells on the first only, e.g. {_cell_text(first)}; {len(new)} on the second only, e.g. "
+        f"{_cell_text(second)}: nothing would be compared"
+    )
+
+
+def _cell_text(cell: Cell) -> str:
+    """A cell as the summary names it: method · metric (variant, phase), each name shown as text."""
+    variant, phase, method, metric = cell
+    return f"{shown_text(method)} · {shown_text(metric)} ({shown_text(variant)}, {shown_text(phase)})"
 
 
 MAX_PAGE_BYTES = 64 * 2**20

@@ -52,22 +52,32 @@ def test_every_shipped_page_with_verdict_tables_is_still_compared(tmp_path: Path
     pages = sorted((ROOT / "docs" / "results").glob("**/LEADERBOARD.md"))
     with_tables = [page for page in pages if verdicts(page.read_text(encoding="utf-8"))]
     assert len(with_tables) >= 6
-    quick = tmp_path / "quick.md"  # (a copy: one file given twice is refused)
-    quick.write_bytes(QUICK.read_bytes())
     for page in with_tables:
-        assert cli_main(["analyse", "verdict-changes", str(page), str(quick)]) == 0
+        copy_of_page = tmp_path / "copy.md"  # (a copy: one file given twice is refused, as are pages of no common cell)
+        copy_of_page.write_bytes(page.read_bytes())
+        assert cli_main(["analyse", "verdict-changes", str(page), str(copy_of_page)]) == 0
         assert capsys.readouterr().out.split("\n", 1)[0].endswith("change sign).")
 
 
-def test_a_page_whose_tables_share_no_cell_is_still_named_cell_by_cell(
+def test_two_pages_that_share_no_cell_are_refused_naming_a_cell_of_each(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     old, new = tmp_path / "old.md", tmp_path / "new.md"
     old.write_text("## env\n### P(improves on DQN): Final greedy evaluation\n" + TABLE, encoding="utf-8")
     new.write_text("## other\n### P(improves on DQN): Final greedy evaluation\n" + TABLE, encoding="utf-8")
-    assert cli_main(["analyse", "verdict-changes", str(old), str(new)]) == 0
-    assert capsys.readouterr().out.splitlines()[:3] == [
-        "0 cells on both pages; 0 marks differ (0 change sign).",
-        "1 cells on the old page only, not compared: A · harms (env, Final greedy evaluation) ▲.",
-        "1 cells on the new page only, not compared: A · harms (other, Final greedy evaluation) ▲.",
-    ]
+    capsys.readouterr()
+    assert cli_main(["analyse", "verdict-changes", str(old), str(new)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, (out, err)
+    assert f"leaderboard pages {old} and {new} share no verdict cell" in err
+    assert (
+        "1 cells on the first only, e.g. A · harms (env, Final greedy evaluation); 1 on the second only, e.g. A · harms " in err
+    )
+
+
+def test_the_shipped_pages_of_two_tasks_are_refused_as_sharing_no_cell(capsys: pytest.CaptureFixture[str]) -> None:
+    results = ROOT / "docs" / "results"
+    first, second = results / "sharing_sensitivity" / "LEADERBOARD.md", results / "coexistence_sensitivity" / "LEADERBOARD.md"
+    capsys.readouterr()
+    assert cli_main(["analyse", "verdict-changes", str(first), str(second)]) == 2
+    assert "share no verdict cell" in capsys.readouterr().err
