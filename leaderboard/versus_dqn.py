@@ -7,6 +7,8 @@ marks the cells would give where nothing differed (:func:`leaderboard.legends.mu
     python -m leaderboard.versus_dqn docs/results/methods
 
 prints the tables the methods NOTE quotes (a view of the leaderboard's cells, nothing new computed).
+A directory of which no row is compared with DQN (no DQN row of its variant, world and budget, or
+DQN runs only) is refused (:func:`check_something_compared`).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from leaderboard.tables import uncompared_note
 
 PROG = "python -m leaderboard.versus_dqn"
 
-__all__ = ["versus_dqn_tables", "compact_metrics"]
+__all__ = ["check_something_compared", "versus_dqn_tables", "compact_metrics"]
 
 
 def compact_metrics(variant: str, env: str, metrics_of: Mapping[str, Sequence[str]] | None = None) -> tuple[str, ...]:
@@ -125,8 +127,27 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _print_tables(paths: list[str]) -> int:
-    print(versus_dqn_tables(load_results(paths[0])))
+    results = load_results(paths[0])
+    check_something_compared(results, paths[0])
+    print(versus_dqn_tables(results))
     return 0
+
+
+def check_something_compared(results: Sequence[RunResult], where: str) -> None:
+    """Refuse (``ValueError`` naming ``where`` and the rows) results of which no row but DQN's has a
+    DQN row of its variant, budget and world to be compared with: the tables would mark nothing."""
+    rows = [row for row, runs in group_runs(results).items() if not all(is_dqn(run) for run in runs)]
+    uncompared = uncompared_rows(results)
+    if len(uncompared) < len(rows):
+        return
+    if not rows:
+        raise ValueError(f"{where} holds DQN runs only: no method to compare with DQN")
+    named = ", ".join(f"{label} ({variant})" for variant, label in uncompared[:5])
+    more = f" and {len(uncompared) - 5} more" if len(uncompared) > 5 else ""
+    raise ValueError(
+        f"{where} holds no DQN row of the variant, world and budget of any of its rows ({named}{more}): nothing is "
+        "compared with DQN; add the DQN runs of the same sweep"
+    )
 
 
 if __name__ == "__main__":
