@@ -130,8 +130,15 @@ def parse_label_options(options: Sequence[str] | None) -> dict[str | os.PathLike
 
 def _prefixes(given: Sequence[str], dirs: Sequence[Path], labels: Mapping[str | os.PathLike[str], str]) -> list[str | None]:
     prefixes: list[str | None] = [None] * len(given)
+    named: dict[Path, str | os.PathLike[str]] = {}
     for directory, prefix in labels.items():
         where = read_folder(directory)
+        if where in named:  # (DIR and DIR/runs are one directory: a second prefix would drop the first)
+            raise ValueError(
+                f"--label {directory}={prefix}: {directory} is the directory {named[where]} is, which has a prefix "
+                f"already ({labels[named[where]]!r}); give one --label per directory"
+            )
+        named[where] = directory
         if where not in dirs:
             read = ", ".join(given)
             split = (

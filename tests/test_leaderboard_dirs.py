@@ -209,6 +209,17 @@ def test_bad_directory_lists_and_labels_are_refused(tmp_path: Path) -> None:
             parse_label_option(bad)
 
 
+@pytest.mark.parametrize("second", ["runs", "dotted"])
+def test_one_directory_given_two_prefixes_is_refused(tmp_path: Path, second: str) -> None:
+    a = write_dir(tmp_path / "a", dqn())
+    b = write_dir(tmp_path / "b", empathic())
+    again = {"runs": a / "runs", "dotted": tmp_path / "b" / ".." / "a"}[second]
+    with pytest.raises(
+        ValueError, match=rf"--label {again}=Y: {again} is the directory {a} is, which has a prefix already \('X'\)"
+    ):
+        load_results_dirs([a, b], {a: "X", again: "Y"})
+
+
 def test_one_directory_as_it_was_no_comparison_header_columns_or_against(tmp_path: Path) -> None:
     directory = write_dir(tmp_path / "one", dqn() + empathic())
     paths = write_leaderboard(directory)
