@@ -36,6 +36,7 @@ from typing import Any, Protocol
 
 from baselines.separation_file import read_separation_table
 from empathy_zoo.atomic import write_text_atomic
+from empathy_zoo.data_files import check_input_dir
 from empathy_zoo.document_checks import finite_float, shown
 from empathy_zoo.markdown_escape import code_span, markdown_text
 from empathy_zoo.names import check_output_folder, check_own_file, check_path_name, check_replaceable, resolved, terminal_line
@@ -54,7 +55,9 @@ __all__ = [
     "all_beta_groups",
     "beta_groups",
     "cell",
+    "check_epsilon",
     "discrimination_markdown",
+    "held_epsilons",
     "load_tables",
     "main",
     "method_rows",
@@ -108,7 +111,9 @@ MODEL_FIELDS = ("env", "arguments", "gamma", "max_cycles", "cost_limit")
 def load_tables(directory: Path) -> dict[str, dict[str, Any]]:
     """Every ``*.json`` separation table of ``directory``, by task name (its file's stem), sorted;
     at most :data:`MAX_TABLES`, each named as a file name the suite makes (letters, digits, ``_``,
-    ``-``, ``.``); two tables of one exact model (:data:`MODEL_FIELDS` equal) are refused, naming both."""
+    ``-``, ``.``); two tables of one exact model (:data:`MODEL_FIELDS` equal) are refused, naming both,
+    and a ``directory`` that is a file, or missing, as such (:func:`empathy_zoo.data_files.check_input_dir`)."""
+    check_input_dir(directory, "separation tables' folder", "name the folder that holds the tables (<task>.json)")
     paths = sorted(directory.glob("*.json"))
     if len(paths) > MAX_TABLES:
         raise ValueError(f"{directory}: {len(paths):,} separation tables; the matrix reads at most {MAX_TABLES}")
@@ -196,6 +201,37 @@ class TableIndex:
         equal = pair.get("equality_difference")
         equality = sign * float(equal) if equal is not None and self.nobody_harmed else None  # (nobody harmed: equality)
         return Cell("separated", int(pair["differing_states"]), sign * float(pair["harms_difference"]), equality)
+
+
+def held_epsilons(table: Mapping[str, Any]) -> list[float]:
+    """The ε values ``table`` was computed at (those of its outcomes and pairs), ascending."""
+    return sorted({float(entry["epsilon"]) for key in ("outcomes", "pairs") for entry in table.get(key, ())})
+
+
+def check_epsilon(tables: Mapping[str, Mapping[str, Any]], epsilon: float, directory: Path) -> None:
+    """Refuse (``ValueError``, one line naming ``--epsilon``) an ``epsilon`` some table of
+    ``directory`` (``{task: table}``) was not computed at, with the ε values the tables hold: such
+    a table has no pair there, which would otherwise be refused as a pair missing from it. A table
+    of no outcomes and no pairs (nothing to read at any ε) is not asked."""
+    held = {task: values for task, table in tables.items() if (values := held_epsilons(table))}
+    lacking = [task for task, values in held.items() if epsilon not in values]
+    if not lacking:
+        return
+    from baselines.separation import EPSILONS  # (lazily: it imports the exact solvers; only to say what is computed)
+
+    def listed(values: Sequence[float]) -> str:
+        return ", ".join(f"{value:g}" for value in values) or "none"
+
+    common = sorted(set.intersection(*(set(values) for values in held.values())))
+    where = (
+        f"the separation tables in {directory}"
+        if len(lacking) == len(held)
+        else f"the separation tables of {', '.join(lacking)} in {directory}"
+    )
+    raise ValueError(
+        f"--epsilon {epsilon:g}: {where} hold no pairs at that ε (every table holds ε = {listed(common)}); "
+        f"give one of those (empathy-zoo analyse separation computes a table at ε = {listed(EPSILONS)})"
+    )
 
 
 def cell(table: Mapping[str, Any], first: str, second: str, epsilon: float, task: str = "") -> Cell:
@@ -392,6 +428,7 @@ def main(
         check_replaceable(out)  # (before any table is read: only nothing or a regular file, no loop on its way)
         check_own_file(out, "discrimination page", TITLE.encode())
         tables = load_tables(args.directory)
+        check_epsilon(tables, args.epsilon, args.directory)  # (before any pair or run is read)
         cells, notes = trained(tables, results) if trained is not None and results else (None, ())
         page = discrimination_markdown(tables, args.epsilon, command, cells, notes)
     except MissingPair as error:

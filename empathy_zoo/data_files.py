@@ -4,7 +4,8 @@ A result, evaluation or agent file may come from anyone, and so may whatever lie
 FIFO, a device, a directory, a dangling symbolic link or a loop of links named ``runs/<id>.json``
 would otherwise be left out of a listing without a word, and the run with it. :func:`data_files`
 lists the files a command reads (the names matching a pattern) and refuses, with one
-``ValueError`` line naming it, any of them that is no regular file.
+``ValueError`` line naming it, any of them that is no regular file; :func:`check_input_dir`
+refuses a directory argument that names a file, or nothing, in the words every tool uses.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["data_files", "check_regular_file"]
+__all__ = ["check_input_dir", "check_regular_file", "data_files"]
 
 _KINDS = {
     stat.S_IFIFO: "a FIFO (named pipe)",
@@ -49,6 +50,23 @@ def check_regular_file(path: str | os.PathLike[str], what: str = "file") -> Path
         link = f" (a symbolic link to {os.readlink(name)})" if os.path.islink(name) else ""
         raise ValueError(f"{what} {name}{link} is {kind}, not a regular file; move it away")
     return Path(name)
+
+
+def check_input_dir(path: str | os.PathLike[str], what: str, hint: str) -> Path:
+    """``path`` if it is a directory (or a symbolic link to one) a command reads; else a
+    ``ValueError`` naming it as ``what`` (``"results directory"``): ``{what} PATH is a file, not a
+    directory: {hint}`` where something else is there (a file, a FIFO), ``{what} PATH does not
+    exist`` where nothing is, and a loop of symbolic links named as one
+    (:func:`empathy_zoo.names.resolved`)."""
+    from empathy_zoo.names import resolved
+
+    root = Path(path)
+    resolved(root)  # (a loop of symbolic links is named as one, not as missing)
+    if root.is_dir():
+        return root
+    if root.exists():
+        raise ValueError(f"{what} {root} is a file, not a directory: {hint}")
+    raise ValueError(f"{what} {root} does not exist")
 
 
 def data_files(directory: Path, pattern: str, what: str = "file") -> list[Path]:

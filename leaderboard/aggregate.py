@@ -31,11 +31,10 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
-from empathy_zoo.data_files import data_files
+from empathy_zoo.data_files import check_input_dir, data_files
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
-from empathy_zoo.names import resolved
 from empathy_zoo.result_file import AGENT_SUFFIXES, check_one_experiment_per_label
 from empathy_zoo.result_file import SCHEMA as SCHEMA_VERSION
 from leaderboard.ordering import label_order
@@ -148,12 +147,7 @@ def result_files(results_dir: str | os.PathLike[str]) -> list[Path]:
     a device, a directory, a dangling symbolic link or a loop of links) raises ``ValueError`` naming
     it (:func:`empathy_zoo.data_files.data_files`): no run is left out without a word.
     """
-    root = Path(results_dir)
-    resolved(root)  # (a loop of symbolic links is named as one, not as missing)
-    if root.exists() and not root.is_dir():
-        raise ValueError(f"results directory {root} is a file, not a directory: name the directory that holds the result files")
-    if not root.is_dir():
-        raise ValueError(f"results directory {root} does not exist")
+    root = check_input_dir(results_dir, "results directory", "name the directory that holds the result files")
     if (root / "runs").is_dir():
         root = root / "runs"
     for suffix in AGENT_SUFFIXES:

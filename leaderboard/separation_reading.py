@@ -228,11 +228,12 @@ def can_harm(task: str) -> bool:
 def _read_tables(folder: Path, tasks: Sequence[str]) -> dict[str, dict[str, Any]]:
     """The separation tables of ``tasks`` in ``folder``, those there: each read and checked
     (:func:`baselines.separation_file.read_separation_table`; anything in a table's place that is
-    no regular file, or a table out of range, is refused naming it)."""
+    no regular file, or a table out of range, is refused naming it). A ``folder`` that is a file,
+    or missing, is refused as such (:func:`empathy_zoo.data_files.check_input_dir`)."""
     from baselines.separation_file import read_separation_table
+    from empathy_zoo.data_files import check_input_dir
 
-    if not folder.is_dir():
-        raise ValueError(f"separation tables' folder {folder} is not a directory")
+    check_input_dir(folder, "separation tables' folder", "give --tables the folder that holds the tables (<task>.json)")
     return {task: read_separation_table(folder / f"{task}.json") for task in tasks if os.path.lexists(folder / f"{task}.json")}
 
 

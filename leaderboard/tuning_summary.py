@@ -36,6 +36,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import LogLocator
 
 from empathy_zoo.atomic import write_bytes_atomic
+from empathy_zoo.data_files import check_input_dir
 from empathy_zoo.document_checks import DocumentChecker, finite_float, shown
 from empathy_zoo.limits import (
     MAX_CYCLES,
@@ -113,8 +114,8 @@ def study_files(root: str | os.PathLike[str]) -> tuple[list[Path], list[tuple[Pa
     link (the first of all where each is one). A path that cannot be looked at (a dangling link)
     is kept, for the read to refuse (``Path.rglob`` skips a name that does not exist: it is not used). Folders are
     walked without following links to them, as ``rglob`` walks. ``ValueError`` where there is none, or ``root`` is a loop
-    of symbolic links."""
-    resolved(root)
+    of symbolic links, or is a file or missing (:func:`empathy_zoo.data_files.check_input_dir`)."""
+    check_input_dir(root, "tuning directory", "name the directory holding study.json files (what tune --out wrote into)")
     found = sorted(
         Path(folder) / name for folder, folders, files in os.walk(root) for name in (*folders, *files) if name == STUDY_FILE
     )

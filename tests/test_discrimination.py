@@ -88,8 +88,11 @@ def test_the_command_writes_the_page_and_refuses_a_directory_without_tables(tmp_
     assert (here / "DISCRIMINATION.md").read_text().startswith("# Discrimination matrix")  # (the current folder)
     assert not (tables / "DISCRIMINATION.md").exists()  # (never beside the tables read)
     assert load_tables(tables).keys() == {"toy_v0"}
+    (tmp_path / "empty").mkdir()
     assert main([str(tmp_path / "empty")]) == 2
     assert "no separation table" in capsys.readouterr().err
+    assert main([str(tmp_path / "missing")]) == 2
+    assert f"separation tables' folder {tmp_path / 'missing'} does not exist" in capsys.readouterr().err
 
 
 def test_the_shipped_page_is_what_the_command_makes(tmp_path, monkeypatch):

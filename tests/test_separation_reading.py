@@ -109,7 +109,7 @@ def test_the_command_reads_a_directory_and_says_what_it_cannot_read(tmp_path: Pa
     assert "| `dqn_harm_penalty` | 1.000 | 0.000 | ▲ fewer | 10 (10) |" in out and "| holds |" in out
     assert "## `sharing_v0`\n\nNot read: its robot cannot harm" in out
     assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tmp_path / "none")]) == 2
-    assert "is not a directory" in capsys.readouterr().err
+    assert f"separation tables' folder {tmp_path / 'none'} does not exist" in capsys.readouterr().err
     (tmp_path / "empty").mkdir()
     assert main(["analyse", "separation-reading", str(tmp_path), "--tables", str(tmp_path / "empty")]) == 2
     assert "no separation table" in capsys.readouterr().err

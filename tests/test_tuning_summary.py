@@ -93,7 +93,10 @@ def test_the_command_finds_studies_at_any_depth(tmp_path: Path, capsys) -> None:
     assert main([str(tmp_path), "--figure", str(tmp_path / "studies.png")]) == 0
     assert "| sharing_v0 | DQN |" in capsys.readouterr().out
     assert (tmp_path / "studies.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    (tmp_path / "coexistence_v0" / "none").mkdir()
     with pytest.raises(ValueError, match=re.escape("no study.json")):
+        find_studies(tmp_path / "coexistence_v0" / "none")
+    with pytest.raises(ValueError, match=re.escape(f"tuning directory {tmp_path / 'coexistence_v0' / 'nowhere'} does not exist")):
         find_studies(tmp_path / "coexistence_v0" / "nowhere")
 
 

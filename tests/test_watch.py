@@ -14,73 +14,58 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from agents.empathic_dqn import EmpathicDQN
-from agents.settings import EmpathicDQNSettings
 from empathy_zoo import FixedAgents, load_agent
-from empathy_zoo.agent_file import result_entry, write_agent_file
 from empathy_zoo.cli.watch import add_watch, find_agent
 from empathy_zoo.environments import face_module
 from empathy_zoo.episode_gif import GIF_STEPS, HOLD_MS, MARGIN, SWATCH, episode_gif, grid_scale
 from empathy_zoo.greedy_episode import agent_env, play_greedy, watch_env
 from empathy_zoo.metrics import METRIC_NAMES
-from empathy_zoo.policies import entry_label
 from empathy_zoo.render import legend, scaled
 from empathy_zoo.result_file import RUNS_DIR
-from empathy_zoo.run_ids import run_id as derived_run_id
-from empathy_zoo.training.ensemble import learner_batch
-from empathy_zoo.vector import VectorEnv
 
 TINY = {"learning_starts": 64, "replay_capacity": 2_000, "epsilon_decay_steps": 300, "target_update_interval": 50}
 STEPS = 300
 MAX_CYCLES = 60
 ENVS = {"coexistence_v0": {"cat_0": "random_walk"}, "sharing_v0": {"human_0": {"policy": "patrol", "period": 3}}}
 """The fixed agents each run trains beside (its agent file records their labels, as a result file's ``config.fixed``)."""
-NO_AGENT = "coexistence_v0__dqn-0000__s0"
+SHIPPED = Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / RUNS_DIR
+NO_AGENT = "coexistence_v0__dqn_harm_penalty-684a7c7f__s0"
+"""A shipped run whose result file is copied with its ``agent`` entry ``null``: a real result file of a run that kept no agent."""
 
 
-def header_fields(env: str) -> dict:
-    """The header of the run trained on ``env`` but its run id."""
-    return {
-        "method": "empathic_dqn",
-        "settings": {**TINY, "selfishness": 0.5},
-        "env": env,
-        "env_kwargs": {"max_cycles": MAX_CYCLES},
-        "fixed": {agent: entry_label(entry) for agent, entry in ENVS[env].items()},
-        "seed": 0,
-    }
+def spec(env: str):
+    """The tiny one-run Empathic DQN on ``env`` (``STEPS`` steps, episodes of ``MAX_CYCLES``) beside its fixed agents."""
+    from empathy_zoo.experiment import RunSpec
+
+    return RunSpec.of(
+        env=env,
+        method="empathic_dqn",
+        settings={**TINY, "selfishness": 0.5},
+        steps=STEPS,
+        eval_interval=STEPS,
+        eval_episodes=1,
+        fixed=ENVS[env],
+        env_kwargs={"max_cycles": MAX_CYCLES},
+    )
 
 
 def run_id(env: str) -> str:
-    """The run id its header's fields give, as the trainer names a run."""
-    return derived_run_id(env, "empathic_dqn", header_fields(env), 0)
-
-
-def trained_agent_file(env: str, runs: Path) -> Path:
-    """Train a one-run Empathic DQN ``STEPS`` steps on ``env`` as the trainer does, keep its agent
-    file in ``runs`` and a result file naming it (what ``watch`` reads of a result file: ``agent``)."""
-    venv = VectorEnv(env, 1, fixed=ENVS[env], max_cycles=MAX_CYCLES)
-    learner = EmpathicDQN([EmpathicDQNSettings(selfishness=0.5, **TINY)], [0], venv.obs_size, venv.num_actions)
-    obs = venv.reset(seed=0)[:, 0]
-    for _ in range(STEPS):
-        actions = learner.act(obs[:, None, :])
-        result = venv.step(actions.reshape(1, 1))
-        learner.observe(learner_batch(obs, actions, result))
-        obs = result.observations[:, 0]
-    assert learner.grad_steps > 0
-    header = {"run_id": run_id(env), **header_fields(env)}
-    written = write_agent_file(learner, 0, runs / f"{run_id(env)}.agent.pt", header)
-    (runs / f"{run_id(env)}.json").write_text(json.dumps({"run_id": run_id(env), "agent": result_entry(written)}))
-    return runs / written[0]
+    """The run id the trainer names the run on ``env``."""
+    return spec(env).run_id
 
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory) -> Path:
+    """A results directory as ``train --out`` writes it: the tiny run on each of ``ENVS`` trained by
+    the runner (result file and agent file), and a result file of a run that kept no agent."""
+    from empathy_zoo.training.runner import RunnerOptions, train_runs
+
     out = tmp_path_factory.mktemp("results")
-    runs = out / RUNS_DIR
-    runs.mkdir()
-    for env in ENVS:
-        trained_agent_file(env, runs)
-    (runs / f"{NO_AGENT}.json").write_text(json.dumps({"run_id": NO_AGENT, "agent": None}))
+    options = RunnerOptions(progress=False, checkpoint_interval=0)
+    written = train_runs([spec(env) for env in ENVS], out, options, on_note=lambda _: None)
+    assert sorted(path.name for path in written) == sorted(f"{run_id(env)}.json" for env in ENVS)
+    kept = json.loads((SHIPPED / f"{NO_AGENT}.json").read_text())
+    (out / RUNS_DIR / f"{NO_AGENT}.json").write_text(json.dumps({**kept, "agent": None}))
     return out
 
 

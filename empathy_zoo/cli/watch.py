@@ -35,9 +35,15 @@ _LISTED = 5
 
 
 def _run_agent(result_file: Path) -> Any:
-    """The agent its result file names, a missing agent file said as such."""
+    """The agent its result file names, a missing agent file said as such. The result file is read
+    first as every reader reads one (:func:`~empathy_zoo.experiment.result_reader.read_result`, by
+    any name: a copy renamed to watch it still plays): a malformed one, or a JSON file that only
+    holds an ``agent`` entry (an evaluation file, a file written by hand), is refused naming it and
+    the field, before its agent file is loaded."""
     from empathy_zoo.agent_file import load_run_agent
+    from empathy_zoo.experiment.result_reader import read_result
 
+    read_result(result_file, named=False)
     try:
         return load_run_agent(result_file)
     except FileNotFoundError as error:
@@ -61,7 +67,7 @@ def _agent_file(path: Path) -> Any:
             entry = read_json(result)
             entry = entry.get(RESULT_FIELD) if isinstance(entry, dict) else None
             if isinstance(entry, dict) and entry.get("file") == path.name:  # (its run's: checked against its SHA-256)
-                return _run_agent(result)
+                return _run_agent(result)  # (the file that names it is read as a result file: a malformed one is refused)
     return load_agent(path)
 
 
