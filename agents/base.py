@@ -16,8 +16,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from agents.rewards import RewardTransform, configure_transform, transform_config, transform_fields
+from agents.rewards import RewardTransform, transform_config
 from agents.step_batch import StepBatch
+from agents.transform_fields import configure_transform, transform_fields
 from empathy_zoo.method_description import check_description, default_description
 from empathy_zoo.setting_values import check_recorded_settings, settings_record
 

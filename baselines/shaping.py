@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from agents.base import StepBatch
-from agents.rewards import MAX_TRANSFORM_WEIGHT
+from agents.transform_fields import MAX_TRANSFORM_WEIGHT
 from agents.transform_state import StateBounds, check_smoothed
 from empathy_zoo.metrics import equality
 
@@ -71,7 +71,7 @@ class InequityAversion:
 
     def __post_init__(self) -> None:
         """Refuse a smoothing outside ``[0, 1)`` (the smoothed rewards would grow without end) and
-        weights whose inequity can outweigh :data:`agents.rewards.MAX_TRANSFORM_WEIGHT` rewards of a
+        weights whose inequity can outweigh :data:`agents.transform_fields.MAX_TRANSFORM_WEIGHT` rewards of a
         step: the smoothed rewards differ by at most ``R/(1 − γλ)`` (``R`` the largest reward of a
         step), so ``max(|α|, |β|)/(1 − γλ)`` is the most one step's reward is multiplied by."""
         for field in ("disadvantageous", "advantageous", "smoothing"):
@@ -84,7 +84,7 @@ class InequityAversion:
         if gain > MAX_TRANSFORM_WEIGHT:
             raise ValueError(
                 f"max(|disadvantageous|, |advantageous|) / (1 − smoothing) must be at most {MAX_TRANSFORM_WEIGHT:,g} "
-                f"(agents.rewards.MAX_TRANSFORM_WEIGHT: the most a step's reward is weighed by, docs/limits.md), "
+                f"(agents.transform_fields.MAX_TRANSFORM_WEIGHT: the most a step's reward is weighed by, docs/limits.md), "
                 f"got {gain:,.6g}"
             )
 

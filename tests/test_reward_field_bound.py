@@ -1,5 +1,5 @@
 """Every numeric field of a reward transform is bounded when the transform is configured
-(:func:`agents.rewards.configure_transform`), so a field that would shape rewards past what the
+(:func:`agents.transform_fields.configure_transform`), so a field that would shape rewards past what the
 replay memory holds (:data:`agents.replay.MAX_ABS_REWARD`) is refused up front, naming the file,
 the table and the key, on every way in: a sweep file (at ``--dry-run``), ``train --config``,
 ``train``'s options, a result file read back, a tuning range's ends."""
@@ -40,14 +40,14 @@ penalty = {penalty}
 
 
 def _bound() -> float:
-    from agents.rewards import MAX_TRANSFORM_WEIGHT
+    from agents.transform_fields import MAX_TRANSFORM_WEIGHT
 
     return MAX_TRANSFORM_WEIGHT
 
 
 def _float_fields() -> list[tuple[str, str]]:
     """``(method, field)`` of every float field of every registered method's reward transform."""
-    from agents.rewards import transform_fields
+    from agents.transform_fields import transform_fields
 
     return [
         (name, field)
@@ -119,7 +119,7 @@ def test_a_result_file_past_the_bound_is_refused_by_the_reader():
 
 
 def test_configure_transform_accepts_the_bound_and_refuses_just_above():
-    from agents.rewards import TransformFieldError, configure_transform
+    from agents.transform_fields import TransformFieldError, configure_transform
 
     transform = get_method("dqn_harm_penalty").reward
     for value in (_bound(), -_bound(), int(_bound())):
@@ -131,7 +131,7 @@ def test_configure_transform_accepts_the_bound_and_refuses_just_above():
 
 @pytest.mark.parametrize(("method", "field"), _float_fields())
 def test_every_float_field_of_every_transform_is_refused_past_the_bound(method, field):
-    from agents.rewards import TransformFieldError
+    from agents.transform_fields import TransformFieldError
 
     for value in (_bound() + 1, -(_bound() + 1)):
         with pytest.raises(TransformFieldError, match=f"^{field} must be a number within"):
@@ -145,14 +145,14 @@ def test_the_generator_covers_every_shipped_transform_with_float_fields():
 
 
 def test_an_int_field_past_its_bound_is_refused():
-    from agents.rewards import MAX_TRANSFORM_COUNT, TransformFieldError
+    from agents.transform_fields import MAX_TRANSFORM_COUNT, TransformFieldError
 
     with pytest.raises(TransformFieldError, match="replay_capacity must be an int within"):
         RunSpec.of(method="dqn_aup", reward={"replay_capacity": MAX_TRANSFORM_COUNT + 1})
 
 
 def test_inequity_aversion_bounds_the_weight_of_its_smoothed_rewards():
-    from agents.rewards import MAX_TRANSFORM_WEIGHT
+    from agents.transform_fields import MAX_TRANSFORM_WEIGHT
 
     with pytest.raises(ValueError, match=r"smoothing must be in \[0, 1\)"):
         RunSpec.of(method="dqn_inequity_aversion", reward={"smoothing": 2.0})
@@ -174,7 +174,7 @@ def test_a_tuning_range_past_the_bound_is_refused_before_a_study(tmp_path):
 
 
 def test_relative_reachabilitys_fields_have_their_types():
-    from agents.rewards import transform_fields
+    from agents.transform_fields import transform_fields
 
     kinds = transform_fields(get_method("dqn_relative_reachability").reward)
     assert kinds == {"weight": float, "discount": float, "final_penalty": str}

@@ -148,9 +148,9 @@ def train_values(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, An
 
 def _reward_value(method: Any, field: str, value: Any, path: str) -> Any:
     """``value`` of the ``[reward]`` key ``field`` of the ``--config`` file ``path``, as the reward
-    transform takes it (:func:`agents.rewards.check_field_value`: within its bound), else
+    transform takes it (:func:`agents.transform_fields.check_field_value`: within its bound), else
     :class:`~empathy_zoo.experiment.values.SweepConfigError` naming the file, the table and the key."""
-    from agents.rewards import TransformFieldError, check_field_value
+    from agents.transform_fields import TransformFieldError, check_field_value
     from empathy_zoo.experiment.values import SweepConfigError
 
     try:

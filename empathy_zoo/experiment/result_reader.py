@@ -93,9 +93,9 @@ def _reward(check: DocumentChecker, method: Any, result: Mapping[str, Any]) -> A
     method without one, else a record of the same name (its fields are the file's: a transform may
     have gained a field since the run was made); ``None`` or the method's own transform with the
     file's values of its fields, each checked as a run's is when it is configured
-    (:func:`agents.rewards.configure_transform`: of its type, within its bound, then the transform's
+    (:func:`agents.transform_fields.configure_transform`: of its type, within its bound, then the transform's
     own checks), a field it no longer has left as recorded."""
-    from agents.rewards import TransformFieldError, check_field_value  # (lazily, as the registry: agents imports torch)
+    from agents.transform_fields import TransformFieldError, check_field_value  # (lazily, as the registry: agents imports torch)
 
     recorded = result["config"].get("reward")
     own = method.reward

@@ -69,7 +69,8 @@ from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-from agents.rewards import TransformFieldError, check_field_value, transform_config, transform_fields
+from agents.rewards import transform_config
+from agents.transform_fields import TransformFieldError, check_field_value, transform_fields
 from baselines.registry import METHODS, get_method
 from baselines.sb3_transforms import SB3_REFUSED
 from empathy_zoo.engine.arguments import argument_types, own_arguments
@@ -352,8 +353,8 @@ def _method_entry(entry: dict[str, Any], index: int, source: str) -> dict[str, A
 
 
 def _reward_value(method: Any, field: str, value: Any, where: str) -> Any:
-    """``value`` of the reward field ``field`` of ``method``, as :func:`agents.rewards.check_field_value`
-    takes it (within :data:`agents.rewards.MAX_TRANSFORM_WEIGHT`, ...), else :class:`SweepConfigError`
+    """``value`` of the reward field ``field`` of ``method``, as :func:`agents.transform_fields.check_field_value`
+    takes it (within :data:`agents.transform_fields.MAX_TRANSFORM_WEIGHT`, ...), else :class:`SweepConfigError`
     naming ``where`` (the file, its ``[[methods]]`` entry and the key)."""
     try:
         return check_field_value(method.reward, field, value)
