@@ -3,7 +3,8 @@
 :func:`check_output_dir` is asked before any long work starts: it refuses an output directory
 that is a file, cannot be created or cannot be written (as much as a result file and its agent file
 take, or the largest file the caller will write there, a checkpoint: a full disk too), so no
-training is lost at the first write.
+training is lost at the first write. :func:`check_output_places` asks what of that needs no write
+(a dry run's check).
 
 Temporary files carry the suite's own marker (``.<name>.ezoo-<pid>-<8 hex>.tmp``, a probe
 ``.ezoo-write-probe-<pid>-<8 hex>``): :func:`remove_stale_temp_files` deletes only names of exactly
@@ -35,6 +36,8 @@ __all__ = [
     "write_all_atomic",
     "read_json",
     "check_output_dir",
+    "check_output_folders",
+    "check_output_places",
     "remove_stale_temp_files",
     "process_alive",
     "MAX_PID",
@@ -180,14 +183,7 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
     Every directory is checked before the first is created, and a refusal removes again the
     directories this call created (while empty): a refused call leaves the file system as it was."""
     root = Path(path)
-    directories = (root, *(root / sub for sub in subdirs))
-    for directory in directories:  # (all of them before any is created)
-        check_no_links(root, directory)  # (the output directory itself may be a link; nothing below it)
-        if directory.exists() and not directory.is_dir():
-            raise ValueError(
-                f"output directory {directory} is a file, not a directory; "
-                "choose another output directory (--out) or move the file away"
-            )
+    directories = check_output_folders(root, subdirs)  # (all of them before any is created)
     missing = [folder for directory in directories for folder in (*reversed(directory.parents), directory) if not folder.exists()]
     created = list(dict.fromkeys(missing))
     try:
@@ -199,6 +195,50 @@ def check_output_dir(path: str | os.PathLike[str], subdirs: tuple[str, ...] = ()
                 folder.rmdir()
         raise
     return root
+
+
+def check_output_places(path: str | os.PathLike[str], subdirs: tuple[str, ...] = (), largest_file: int = PROBE_BYTES) -> Path:
+    """What :func:`check_output_dir` asks of ``path`` and ``path / sub`` that needs no write: the
+    same ``ValueError`` when one is a file or passes through a link below ``path``, when the nearest
+    folder that exists of one cannot be written to by this user (its permissions, ``os.access``),
+    or when its file system has less than ``largest_file`` free (asked when more than
+    :data:`PROBE_BYTES`). Nothing is created or written (a dry run's check): a disk that refuses
+    the write itself (full to its last blocks, read-only mounted) is found only by
+    :func:`check_output_dir`."""
+    root = Path(path)
+    for directory in check_output_folders(root, subdirs):
+        existing = next(folder for folder in (directory, *directory.parents) if folder.exists() or folder == folder.parent)
+        if not os.access(existing, os.W_OK | os.X_OK):
+            raise ValueError(
+                f"output directory {directory} is not writable ({existing} does not let this user write); "
+                "choose another output directory (--out) or fix its permissions"
+            )
+        if largest_file > PROBE_BYTES:
+            _check_room(directory, shutil.disk_usage(existing).free, largest_file)
+    return root
+
+
+def check_output_folders(root: Path, subdirs: tuple[str, ...]) -> tuple[Path, ...]:
+    """``root`` and ``root / sub`` for each of ``subdirs``, once each is no file and has no
+    symbolic link below ``root`` (the output directory itself may be a link); else ``ValueError``."""
+    directories = (root, *(root / sub for sub in subdirs))
+    for directory in directories:
+        check_no_links(root, directory)
+        if directory.exists() and not directory.is_dir():
+            raise ValueError(
+                f"output directory {directory} is a file, not a directory; "
+                "choose another output directory (--out) or move the file away"
+            )
+    return directories
+
+
+def _check_room(directory: Path, free: int, largest_file: int) -> None:
+    """Refuse ``directory`` when ``free`` bytes are less than ``largest_file``."""
+    if free < largest_file:
+        raise ValueError(
+            f"output directory {directory} has {format_bytes(free)} free, less than the {format_bytes(largest_file)} "
+            "of the largest file this run writes there (a checkpoint); free space or choose another output directory (--out)"
+        )
 
 
 def _check_directory(directory: Path, largest_file: int) -> None:
@@ -218,11 +258,8 @@ def _check_directory(directory: Path, largest_file: int) -> None:
             f"output directory {directory} is not writable ({error.strerror or error}); "
             "choose another output directory (--out) or fix its permissions"
         ) from None
-    if free is not None and free < largest_file:
-        raise ValueError(
-            f"output directory {directory} has {format_bytes(free)} free, less than the {format_bytes(largest_file)} "
-            "of the largest file this run writes there (a checkpoint); free space or choose another output directory (--out)"
-        )
+    if free is not None:
+        _check_room(directory, free, largest_file)
 
 
 def remove_stale_temp_files(directory: str | os.PathLike[str]) -> list[Path]:

@@ -24,6 +24,7 @@ from empathy_zoo.cli.common import (
 
 if TYPE_CHECKING:
     from empathy_zoo.experiment.records import RunResult
+    from empathy_zoo.training.options import RunnerOptions
 
 __all__ = [
     "add_sweep_commands",
@@ -96,6 +97,7 @@ def _reproduce(args: argparse.Namespace, command: str) -> int:
             flush=True,
         )
     if args.dry_run:
+        _check_without_writing(specs, out, options, finished)
         print(dry_run_plan(specs, finished, out, group_specs(specs, values["max_parallel_runs"]), workers), flush=True)
         return 0
     train_runs(specs, out, options, finished=finished)
@@ -293,6 +295,25 @@ def _read_note(path: str | None) -> str:
     return text
 
 
+def _check_without_writing(specs: Sequence[Any], out: Path, options: RunnerOptions, finished: Mapping[Path, RunResult]) -> None:
+    """What ``reproduce --dry-run`` checks of a sweep's training: every check ``train_runs`` makes
+    before it writes (:func:`~empathy_zoo.training.runner.check_runs`, the same ``ValueError``), the
+    checkpoints it would resume or set aside (:func:`~empathy_zoo.training.resume.survey_ensembles`), and
+    of the output folders what needs no write (:func:`empathy_zoo.atomic.check_output_places`); its
+    warnings are said on stderr as the real command says them. Nothing is created or written."""
+    import sys
+
+    from empathy_zoo.atomic import check_output_places
+    from empathy_zoo.training.resume import survey_ensembles
+    from empathy_zoo.training.runner import check_runs
+
+    plan = check_runs(specs, out, options, finished=finished)
+    check_output_places(out, plan.subdirs, plan.room)
+    survey_ensembles(plan.todo, out, options.max_parallel_runs, every_run=specs)  # (the checkpoints: read, nothing changed)
+    for warning in plan.warnings:
+        print(f"{PROG}: {warning}", file=sys.stderr, flush=True)
+
+
 def dry_run_plan(
     specs: Sequence[Any], finished: Mapping[Path, RunResult], out: Path, ensembles: Sequence[Sequence[Any]], workers: int
 ) -> str:
@@ -301,9 +322,13 @@ def dry_run_plan(
     runs of ``out`` were trained at (their ``wall_time_s`` per step, the median), where it has any.
     Nothing is trained or written."""
     from empathy_zoo.result_file import result_path
+    from empathy_zoo.training.runner import NOT_CHECKED_WITHOUT_WRITING
 
     done_ids = {result.run_id for result in finished.values()}
-    lines = [f"{PROG}: dry run: nothing is trained or written"]
+    lines = [
+        f"{PROG}: dry run: nothing is trained or written",
+        f"{PROG}: every check made before training passed, but those that need a write: {'; '.join(NOT_CHECKED_WITHOUT_WRITING)}",
+    ]
     experiments: dict[str, list[Any]] = {}
     for spec in specs:
         experiments.setdefault(spec.experiment_id, []).append(spec)
@@ -371,7 +396,8 @@ def add_sweep_commands(sub: Any) -> None:
     reproduce.add_argument(
         "--dry-run",
         action="store_true",
-        help="print the planned runs, what is finished and an estimate of the time; train nothing",
+        help="check everything the command checks before it trains (refused as it would be), then print the "
+        "planned runs, what is finished and an estimate of the time; train and write nothing",
     )
     add_runner_options(reproduce)
     reproduce.set_defaults(handler=cmd_reproduce)

@@ -36,6 +36,13 @@ be read is set aside (``<name>.runs.json.unreadable``, or ``.unreadable.2``, …
 are used instead.
 
 Every decision but a plain resume is reported through ``on_note``, one line each.
+
+Nothing is changed while the checkpoints are looked at: :func:`survey_ensembles` reads them (and
+loads each checkpoint that resumes, or whose list of runs cannot be read, with the checks of
+:func:`~empathy_zoo.training.checkpoint.load_checkpoint`) and raises any refusal (a damaged
+checkpoint, a checkpoint that holds other runs than its list of runs) before a file is removed or
+set aside; :meth:`EnsemblePlan.apply` then makes those changes, in order, and says each. So a
+refused command leaves ``checkpoints/`` as it was, an unreadable list of runs included.
 """
 
 from __future__ import annotations
@@ -57,7 +64,16 @@ from empathy_zoo.names import check_path_name
 from empathy_zoo.result_file import result_path
 from empathy_zoo.training.checkpoint import RUNS_LIST_SUFFIX, CheckpointError, load_checkpoint, runs_list_path
 
-__all__ = ["CHECKPOINT_DIR", "checkpoint_path", "manifest_path", "write_manifest", "remove_checkpoint", "plan_ensembles"]
+__all__ = [
+    "CHECKPOINT_DIR",
+    "EnsemblePlan",
+    "checkpoint_path",
+    "manifest_path",
+    "write_manifest",
+    "remove_checkpoint",
+    "plan_ensembles",
+    "survey_ensembles",
+]
 
 CHECKPOINT_DIR = "checkpoints"
 MANIFEST_SUFFIX = RUNS_LIST_SUFFIX
@@ -245,28 +261,77 @@ class _Ensemble:
     misnamed: bool = False
     """It holds other runs than its name says (a renamed or copied file): set it aside, as it
     would be taken for the checkpoint of the runs its name is for."""
+    loaded: bool = False
+    """Its run ids were read from the checkpoint itself (loaded and checked already)."""
 
 
-def _ensemble_of(checkpoint: Path, asked: _AskedRuns, on_note: Callable[[str], None]) -> _Ensemble:
-    """``checkpoint``'s ensemble, from its list of runs (or, without a readable one, from its own run ids)."""
+Change = Callable[[], str]
+"""A change :meth:`EnsemblePlan.apply` makes (or only a note it says): it returns the line said."""
+
+
+@dataclass
+class EnsemblePlan:
+    """What :func:`survey_ensembles` found, nothing changed yet: the ensembles that train, and the
+    changes to ``checkpoints/`` (removals, files set aside) with their notes, in order."""
+
+    todo: list[RunSpec]
+    """The runs to do."""
+    chunks: list[list[RunSpec]]
+    """The ensembles that train them: checkpointed ones first, as they were, then new ones."""
+    changes: list[Change]
+    """The changes and notes, in the order they are made and said."""
+
+    def apply(self, on_note: Callable[[str], None]) -> list[list[RunSpec]]:
+        """Make every change of the plan (each under a name nothing holds then: nothing is
+        replaced), saying each through ``on_note``; returns :attr:`chunks`."""
+        for change in self.changes:
+            on_note(change())
+        return self.chunks
+
+
+def _said(text: str) -> Change:
+    """A note alone, said when the plan is applied."""
+    return lambda: text
+
+
+def _set_aside_unreadable_change(manifest: Path, checkpoint: Path, error: ValueError) -> Change:
+    """Setting aside the list of runs ``manifest`` of ``checkpoint`` that cannot be read (``error``)."""
+
+    def change() -> str:
+        aside = _set_aside_unreadable(manifest)  # (under a name nothing holds yet: nothing is replaced)
+        return (
+            f"set aside {manifest} as {aside.name}: it cannot be read as the list of runs of checkpoint "
+            f"{checkpoint.name} ({error}); that checkpoint's own run ids are read instead"
+        )
+
+    return change
+
+
+def _ensemble_of(checkpoint: Path, asked: _AskedRuns, changes: list[Change]) -> _Ensemble:
+    """``checkpoint``'s ensemble, from its list of runs (or, without a readable one, from its own run
+    ids: the list is then set aside, a change added to ``changes``)."""
     manifest = manifest_path(checkpoint)
     if manifest.exists():
         try:
             records = read_manifest(manifest, checkpoint)
         except ValueError as error:
-            aside = _set_aside_unreadable(manifest)  # (under a name nothing holds yet: nothing is replaced)
-            on_note(
-                f"set aside {manifest} as {aside.name}: it cannot be read as the list of runs of checkpoint "
-                f"{checkpoint.name} ({error}); that checkpoint's own run ids are read instead"
-            )
+            changes.append(_set_aside_unreadable_change(manifest, checkpoint, error))
         else:
             return _ensemble_of_records(checkpoint, records, asked)
     ids = _checkpoint_run_ids(checkpoint)  # (written before checkpoints had a list of runs, or it was unreadable)
     if _checkpoint_file(checkpoint.parent.parent, checkpoint.stem.rpartition("-")[0], ids) != checkpoint:
-        return _Ensemble(ids, None, "misnamed", misnamed=True)
+        return _Ensemble(ids, None, "misnamed", misnamed=True, loaded=True)
     if all(run_id in asked.known for run_id in ids):
-        return _Ensemble(ids, [asked.known[run_id] for run_id in ids])
-    return _Ensemble(ids, None, "it holds runs not asked for here, and has no list of runs to rebuild them from")
+        return _Ensemble(ids, [asked.known[run_id] for run_id in ids], loaded=True)
+    return _Ensemble(ids, None, "it holds runs not asked for here, and has no list of runs to rebuild them from", loaded=True)
+
+
+def _check_resumable(checkpoint: Path, ids: Sequence[str]) -> None:
+    """Load ``checkpoint`` (an ensemble that resumes) with :func:`load_checkpoint`'s checks and
+    refuse it where it is damaged or holds other runs than ``ids`` (its list of runs), as resuming
+    from it would: before anything is changed, not once training starts."""
+    if _checkpoint_run_ids(checkpoint) != list(ids):
+        raise ValueError(f"checkpoint {checkpoint} belongs to other runs; move it away")
 
 
 def _ensemble_of_records(checkpoint: Path, records: list[dict[str, Any]], asked: _AskedRuns) -> _Ensemble:
@@ -306,78 +371,135 @@ def plan_ensembles(
     on_note: Callable[[str], None],
     every_run: Sequence[RunSpec] | None = None,
 ) -> list[list[RunSpec]]:
-    """The ensembles that train the runs ``todo`` (see the module documentation); ``every_run``:
-    every run asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from.
+    """The ensembles that train the runs ``todo``: :func:`survey_ensembles`, then its plan applied
+    (the changes to ``checkpoints/`` made and said through ``on_note``)."""
+    return survey_ensembles(todo, out_dir, max_parallel_runs, every_run).apply(on_note)
+
+
+def survey_ensembles(
+    todo: Sequence[RunSpec],
+    out_dir: Path,
+    max_parallel_runs: int,
+    every_run: Sequence[RunSpec] | None = None,
+) -> EnsemblePlan:
+    """The ensembles that train the runs ``todo`` and the changes to ``checkpoints/`` that go with
+    them (see the module documentation), found without changing anything; ``every_run``: every run
+    asked for, those finished too (default ``todo``), what a checkpoint's runs are rebuilt from.
     A checkpoint or list of runs in ``checkpoints/`` that is no regular file (a FIFO, a directory, a
-    dangling symbolic link or a loop of links) raises ``ValueError`` naming it, before anything is changed."""
+    dangling symbolic link or a loop of links), a checkpoint that resumes or whose list of runs
+    cannot be read that is damaged, and one that holds other runs than its list of runs raise
+    ``ValueError`` naming it, and nothing is changed."""
     directory = Path(out_dir) / CHECKPOINT_DIR
     data_files(directory, "*.pt", "checkpoint")  # (each a regular file, or refused before anything is changed)
     data_files(directory, f"*{MANIFEST_SUFFIX}", "list of runs")
     pending = {spec.run_id: spec for spec in todo}
     claimed: dict[str, Path] = {}
     chunks: list[list[RunSpec]] = []
+    changes: list[Change] = []
     usual = [[spec.run_id for spec in chunk] for chunk in group_specs(todo, max_parallel_runs)]
-    for manifest in directory.glob(f"*{MANIFEST_SUFFIX}"):  # a manifest written just before a kill
+    for manifest in sorted(directory.glob(f"*{MANIFEST_SUFFIX}")):  # a manifest written just before a kill
         if not manifest.with_name(manifest.name.removesuffix(MANIFEST_SUFFIX) + ".pt").exists() and _own_orphan(manifest):
-            manifest.unlink()
-            on_note(f"removed {manifest}: a list of runs without its checkpoint (a run killed before its first checkpoint)")
+            changes.append(_removal(manifest))
     checkpoints = sorted(directory.glob("*.pt"), key=lambda p: (-p.stat().st_mtime_ns, p.name)) if directory.is_dir() else []
     kept: list[tuple[Path, str, list[str]]] = []
     runs_asked = _AskedRuns({spec.run_id: spec for spec in (todo if every_run is None else every_run)})
     for checkpoint in checkpoints:  # the most recent first: it wins an overlap
-        ensemble = _ensemble_of(checkpoint, runs_asked, on_note)
+        ensemble = _ensemble_of(checkpoint, runs_asked, changes)
         ids, specs = ensemble.ids, ensemble.specs
         if ensemble.misnamed:
-            aside = _set_aside_misnamed(checkpoint)
-            on_note(
-                f"set aside checkpoint {checkpoint} as {aside.name}: it holds the runs {', '.join(ids)}, not those its "
-                f"name is for (was it renamed or copied?); to resume them, give it back its own name "
-                f"{_checkpoint_file(out_dir, _env_of(ids, runs_asked, checkpoint), ids).name}"
-            )
+            own_name = _checkpoint_file(out_dir, _env_of(ids, runs_asked, checkpoint), ids).name
+            changes.append(_misnamed_aside(checkpoint, ids, own_name))
             continue
         asked = [run_id for run_id in ids if run_id in pending]
         finished = [run_id for run_id in ids if run_id not in pending and result_path(out_dir, run_id).exists()]
         overlap = [run_id for run_id in ids if run_id in claimed]
         if specs is not None and asked and not overlap:
+            if not ensemble.loaded:
+                _check_resumable(checkpoint, ids)  # (a damaged one is refused here, before any change)
             chunks.append(specs)
             claimed.update(dict.fromkeys(ids, checkpoint))
             others = [run_id for run_id in ids if run_id not in pending and run_id not in finished]
             if ids not in usual:  # a plain resume goes without saying
-                on_note(
-                    f"resuming {len(ids)} run(s) together from checkpoint {checkpoint}, as they were checkpointed"
-                    + (f"; {len(finished)} of them already finished are recomputed, not written again" if finished else "")
-                    + (f"; not asked for here, but finished and written too: {', '.join(others)}" if others else "")
+                changes.append(
+                    _said(
+                        f"resuming {len(ids)} run(s) together from checkpoint {checkpoint}, as they were checkpointed"
+                        + (f"; {len(finished)} of them already finished are recomputed, not written again" if finished else "")
+                        + (f"; not asked for here, but finished and written too: {', '.join(others)}" if others else "")
+                    )
                 )
             continue
         if not asked and len(finished) == len(ids):
-            remove_checkpoint(checkpoint)
-            on_note(f"removed checkpoint {checkpoint}: all its runs are finished")
+            changes.append(_checkpoint_removal(checkpoint, "all its runs are finished"))
         elif not asked:
-            on_note(f"kept checkpoint {checkpoint}: it holds unfinished runs not asked for here ({', '.join(ids)})")
+            changes.append(_said(f"kept checkpoint {checkpoint}: it holds unfinished runs not asked for here ({', '.join(ids)})"))
         elif not overlap and not ensemble.dead:
             kept.append((checkpoint, ensemble.problem, asked))  # (said below, once the fresh ensembles are known)
         else:
             why = f"it overlaps the newer checkpoint {claimed[overlap[0]]}" if overlap else ensemble.problem
-            remove_checkpoint(checkpoint)
             restart = [run_id for run_id in asked if run_id not in claimed]
-            on_note(
-                f"removed checkpoint {checkpoint}: {why}"
-                + (f"; these runs start again from scratch: {', '.join(restart)}" if restart else "")
+            changes.append(
+                _checkpoint_removal(
+                    checkpoint, why + (f"; these runs start again from scratch: {', '.join(restart)}" if restart else "")
+                )
             )
     rest = [spec for spec in todo if spec.run_id not in claimed]
     fresh = group_specs(rest, max_parallel_runs)
     taken = {checkpoint_path(out_dir, chunk) for chunk in fresh}
     for checkpoint, problem, asked in kept:
         if checkpoint in taken:  # (a fresh ensemble of these very runs would resume from it, then delete it)
-            aside = _set_aside_misnamed(checkpoint, DISOWNED_SUFFIX)
-            on_note(
-                f"set aside checkpoint {checkpoint} as {aside.name}: {problem}, yet its name is that of these runs, "
-                f"which start again from scratch: {', '.join(asked)}; to resume from it, give it back its name "
-                "and its list of runs the specs of its runs"
-            )
+            changes.append(_disowned_aside(checkpoint, problem, asked))
         else:
-            on_note(
-                f"kept checkpoint {checkpoint}: {problem}; it resumes when they are asked for too; "
-                f"these runs start again from scratch: {', '.join(asked)}"
+            changes.append(
+                _said(
+                    f"kept checkpoint {checkpoint}: {problem}; it resumes when they are asked for too; "
+                    f"these runs start again from scratch: {', '.join(asked)}"
+                )
             )
-    return chunks + fresh
+    return EnsemblePlan(list(todo), chunks + fresh, changes)
+
+
+def _removal(manifest: Path) -> Change:
+    """Removing ``manifest``, a list of runs the suite wrote whose checkpoint was never written."""
+
+    def change() -> str:
+        manifest.unlink()
+        return f"removed {manifest}: a list of runs without its checkpoint (a run killed before its first checkpoint)"
+
+    return change
+
+
+def _checkpoint_removal(checkpoint: Path, why: str) -> Change:
+    """Removing ``checkpoint`` and its list of runs, because ``why``."""
+
+    def change() -> str:
+        remove_checkpoint(checkpoint)
+        return f"removed checkpoint {checkpoint}: {why}"
+
+    return change
+
+
+def _misnamed_aside(checkpoint: Path, ids: Sequence[str], own_name: str) -> Change:
+    """Setting ``checkpoint`` (of the runs ``ids``, whose own name is ``own_name``) aside as misnamed."""
+
+    def change() -> str:
+        aside = _set_aside_misnamed(checkpoint)
+        return (
+            f"set aside checkpoint {checkpoint} as {aside.name}: it holds the runs {', '.join(ids)}, not those its "
+            f"name is for (was it renamed or copied?); to resume them, give it back its own name {own_name}"
+        )
+
+    return change
+
+
+def _disowned_aside(checkpoint: Path, problem: str, asked: Sequence[str]) -> Change:
+    """Setting ``checkpoint`` aside as disowned: ``problem``, yet the runs ``asked`` train under its name."""
+
+    def change() -> str:
+        aside = _set_aside_misnamed(checkpoint, DISOWNED_SUFFIX)
+        return (
+            f"set aside checkpoint {checkpoint} as {aside.name}: {problem}, yet its name is that of these runs, "
+            f"which start again from scratch: {', '.join(asked)}; to resume from it, give it back its name "
+            "and its list of runs the specs of its runs"
+        )
+
+    return change

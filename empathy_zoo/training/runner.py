@@ -16,10 +16,10 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager, suppress
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -38,14 +38,17 @@ from empathy_zoo.training.options import RunnerOptions
 from empathy_zoo.training.preflight import check_before_training, largest_checkpoint_bytes
 from empathy_zoo.training.progress import QueueDrain, QueueReporter, SweepProgress
 from empathy_zoo.training.ray_backend import check_ray_address, import_ray, train_with_ray
-from empathy_zoo.training.resume import CHECKPOINT_DIR, checkpoint_path, plan_ensembles
+from empathy_zoo.training.resume import CHECKPOINT_DIR, EnsemblePlan, checkpoint_path, survey_ensembles
 from empathy_zoo.training.set_aside import SUPERSEDED_SUFFIX, set_aside, settle_superseded
 from empathy_zoo.training.tracking import check_log_places, log_subdirs
 
 __all__ = [
+    "NOT_CHECKED_WITHOUT_WRITING",
     "RunnerOptions",
     "Stopped",
+    "TrainingPlan",
     "check_file_places",
+    "check_runs",
     "read_finished",
     "stopped_by_signals",
     "train_runs",
@@ -110,6 +113,74 @@ def train_runs(
     the same call resumes from them."""
     note = on_note or _print_note
     out_dir = Path(out_dir)
+    plan = check_runs(specs, out_dir, options, note, finished)
+    redo, warnings, subdirs, room = plan.redo, plan.warnings, plan.subdirs, plan.room
+    with hold_output_dir(out_dir, command_line(), note):
+        made = list(
+            dict.fromkeys(f for sub in subdirs for f in (*reversed((out_dir / sub).parents), out_dir / sub) if not f.exists())
+        )
+        check_output_dir(out_dir, subdirs, largest_file=room)  # (inside the lock: nothing made before it)
+        try:
+            ensembles = survey_ensembles(plan.todo, out_dir, options.max_parallel_runs, every_run=specs)  # (reads only)
+            for warning in warnings:  # (said once everything before training has passed)
+                note(warning)
+            stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
+            if stale:
+                note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
+            settle_superseded(out_dir / RUNS_DIR)
+            with set_aside(out_dir, redo), stopped_by_signals():
+                _train_todo(ensembles, out_dir, options, on_result, note)
+        except BaseException:
+            for folder in reversed(made):  # (a call that stopped leaves no empty folder it made; one holding a file stays)
+                with suppress(OSError):
+                    folder.rmdir()
+            raise
+    return [result_path(out_dir, s.run_id) for s in specs]
+
+
+@dataclass(frozen=True)
+class TrainingPlan:
+    """What :func:`check_runs` found: what :func:`train_runs` does once it holds the output directory."""
+
+    redo: set[str]
+    """The finished runs to retrain (made by other code, ``rerun_changed``)."""
+    todo: list[RunSpec]
+    """The runs to train: those without a result file, and ``redo``."""
+    warnings: list[str]
+    """What to say once every check has passed (:func:`~empathy_zoo.training.preflight.check_before_training`)."""
+    subdirs: tuple[str, ...]
+    """The folders of the output directory written to (results, checkpoints, logs)."""
+    room: int
+    """The bytes the largest file written there takes (a checkpoint's estimate, or a result's)."""
+
+
+NOT_CHECKED_WITHOUT_WRITING = (
+    "a probe file written to each output folder (only its permissions and free space were asked)",
+    "the output directory's lock (another process training there)",
+)
+"""What :func:`train_runs` checks once it holds the output directory and :func:`check_runs` (with
+:func:`empathy_zoo.atomic.check_output_places`) cannot without writing: a dry run says so."""
+
+
+def check_runs(
+    specs: Sequence[RunSpec],
+    out_dir: Path,
+    options: RunnerOptions,
+    note: Callable[[str], None] | None = None,
+    finished: Mapping[Path, RunResult] | None = None,
+) -> TrainingPlan:
+    """Every check :func:`train_runs` makes before it takes the output directory's lock, in its
+    order, writing nothing: the same ``ValueError`` (one line naming the run, file or option). Runs
+    listed twice and the options; the result files of ``out_dir`` read and checked (``finished``
+    when the caller has read them); one label one experiment among those files and ``specs``
+    (:func:`~empathy_zoo.result_file.check_one_experiment_per_label`); finished runs made by other
+    code (said through ``note``, refused without ``options.rerun_changed``); the runs to train
+    (:func:`~empathy_zoo.training.preflight.check_before_training`: budgets, evaluation size,
+    checkpointable fixed policies, the learner's memory, each built from settings with one
+    environment and nothing allocated); the places their logs, result, agent and checkpoint files
+    go; and the room the largest file needs. ``note`` defaults to printing to stderr.
+    ``reproduce --dry-run`` asks it too."""
+    note = note or _print_note
     ids = [s.run_id for s in specs]
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
     if duplicates:
@@ -131,35 +202,14 @@ def train_runs(
         ]
     )
     redo = _runs_to_redo(specs, out_dir, finished, options, note)
-    warnings = check_before_training(
-        [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo], options
-    )
-    local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     todo = [s for s in specs if result_path(out_dir, s.run_id) not in finished or s.run_id in redo]
+    warnings = check_before_training(todo, options)
+    local_checkpoints = options.backend == "local" and options.checkpoint_interval > 0
     room = max(PROBE_BYTES, largest_checkpoint_bytes(todo, options)) if local_checkpoints and todo else PROBE_BYTES
     check_log_places(out_dir, options.log, [s.run_id for s in todo])  # (no link where a run logs)
     check_file_places(out_dir, todo, options.max_parallel_runs if local_checkpoints else None)
     subdirs = (RUNS_DIR, *((CHECKPOINT_DIR,) if local_checkpoints else ()), *log_subdirs(options.log))
-    with hold_output_dir(out_dir, command_line(), note):
-        made = list(
-            dict.fromkeys(f for sub in subdirs for f in (*reversed((out_dir / sub).parents), out_dir / sub) if not f.exists())
-        )
-        check_output_dir(out_dir, subdirs, largest_file=room)  # (inside the lock: nothing made before it)
-        try:
-            for warning in warnings:  # (said once everything before training has passed)
-                note(warning)
-            stale = [path for sub in ("", RUNS_DIR, CHECKPOINT_DIR) for path in remove_stale_temp_files(out_dir / sub)]
-            if stale:
-                note(f"removed {len(stale)} temporary file(s) of writes killed mid-way (e.g. {stale[0]})")
-            settle_superseded(out_dir / RUNS_DIR)
-            with set_aside(out_dir, redo), stopped_by_signals():
-                _train_todo(specs, out_dir, options, on_result, note)
-        except BaseException:
-            for folder in reversed(made):  # (a call that stopped leaves no empty folder it made; one holding a file stays)
-                with suppress(OSError):
-                    folder.rmdir()
-            raise
-    return [result_path(out_dir, s.run_id) for s in specs]
+    return TrainingPlan(redo, todo, warnings, subdirs, room)
 
 
 def check_file_places(out_dir: Path, todo: Sequence[RunSpec], max_parallel_runs: int | None) -> None:
@@ -188,7 +238,7 @@ def check_file_places(out_dir: Path, todo: Sequence[RunSpec], max_parallel_runs:
 def _runs_to_redo(
     specs: Sequence[RunSpec],
     out_dir: Path,
-    finished: dict[Path, RunResult],
+    finished: Mapping[Path, RunResult],
     options: RunnerOptions,
     note: Callable[[str], None],
 ) -> set[str]:
@@ -223,16 +273,16 @@ def _runs_to_redo(
 
 
 def _train_todo(
-    specs: Sequence[RunSpec],
+    ensembles: EnsemblePlan,
     out_dir: Path,
     options: RunnerOptions,
     on_result: Callable[[dict[str, Any]], None] | None,
     note: Callable[[str], None],
 ) -> None:
-    """Train the runs of ``specs`` that have no result file (``train_runs`` checked everything)."""
-    todo = [s for s in specs if not result_path(out_dir, s.run_id).exists()]
-    chunks = plan_ensembles(todo, out_dir, options.max_parallel_runs, note, every_run=specs)
-    wanted = {s.run_id for s in todo}
+    """Train the runs to do of ``ensembles`` (``train_runs`` checked everything, the checkpoints
+    too), once the changes to ``checkpoints/`` it plans are made and said."""
+    chunks = ensembles.apply(note)
+    wanted = {s.run_id for s in ensembles.todo}
     if on_result is not None:  # (a resumed ensemble may finish runs not asked for here)
         given, on_result = on_result, lambda result: given(result) if result["run_id"] in wanted else None
     progress = SweepProgress(
