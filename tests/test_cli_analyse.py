@@ -132,3 +132,11 @@ def test_two_directories_of_no_common_experiment_are_refused(
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1, (out, err)
     assert f"hold no {what} in common ({count} only in {coexistence}" in err and f"{count} only in {sharing}" in err, err
+
+
+@pytest.mark.parametrize("name", list(TOOLS))
+def test_a_tools_help_names_the_command_typed(capsys: pytest.CaptureFixture[str], name: str) -> None:
+    capsys.readouterr()
+    assert main(["analyse", name, "--help"]) == 0
+    out = capsys.readouterr().out
+    assert f"empathy-zoo analyse {name}" in out and f"python -m {TOOLS[name].module}" not in out, out[:300]

@@ -56,8 +56,12 @@ def cmd_analyse(args: argparse.Namespace, command: str) -> int:
     tool = TOOLS[args.tool]
     main = importlib.import_module(tool.module).main
     renamed = _Renamed(sys.stderr, f"python -m {tool.module}", f"{PROG} analyse {args.tool}")
+    helped = _Renamed(sys.stdout, f"python -m {tool.module}", f"{PROG} analyse {args.tool}")
+    asks_help = any(
+        arg in ("-h", "--help") for arg in args.args
+    )  # (its help names the command typed; other output is the tool's)
     try:
-        with contextlib.redirect_stderr(renamed):
+        with contextlib.redirect_stderr(renamed), contextlib.redirect_stdout(helped if asks_help else sys.stdout):
             status = main(list(args.args))
     except SystemExit as exit_:  # a tool's own usage message (a string) or status
         if isinstance(exit_.code, str):
