@@ -40,7 +40,7 @@ from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import check_path_name, resolved
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.record_parts import AgentRef
-from empathy_zoo.result_file import RUNS_DIR, check_agent_record, check_env_kwargs, episode_bounds
+from empathy_zoo.result_file import RUNS_DIR, check_agent_record, check_env_kwargs, episode_bounds, results_root
 
 
 class RunFacts(Protocol):
@@ -124,8 +124,11 @@ class EvaluationFileError(ValueError):
 
 def evaluations_root(results_dir: str | os.PathLike[str]) -> Path:
     """Where the evaluation files of ``results_dir`` go: ``<results_dir>/evaluations`` (a results
-    directory holds its result files in ``runs/``, or is itself a folder of result files)."""
-    return Path(results_dir) / EVALUATIONS_DIR
+    directory holds its result files in ``runs/``, or is itself a folder of result files), and
+    ``DIR/evaluations`` for ``DIR/runs``, the runs folder of ``DIR``
+    (:func:`empathy_zoo.result_file.results_root`): a directory's evaluations are one place however
+    it is given, and never inside a ``runs`` folder."""
+    return results_root(results_dir) / EVALUATIONS_DIR
 
 
 RESULT_FILE_NAME = re.compile(r"[A-Za-z0-9_.-]+__[A-Za-z0-9_.-]+-[0-9a-f]{8}__s[0-9]+\.json")
@@ -169,11 +172,21 @@ def evaluation_path(results_dir: str | os.PathLike[str], scenario_set: str, run_
 
 
 def evaluation_files(results_dir: str | os.PathLike[str]) -> list[Path]:
-    """Every evaluation file of ``results_dir``, sorted (``[]`` when it has no ``evaluations/``);
-    names starting with ``.`` (writes in progress) are left out. Anything else named
-    ``evaluations/*/*.json`` that is no regular file (a FIFO, a directory, a dangling symbolic
-    link) raises ``ValueError`` naming it (:func:`empathy_zoo.data_files.data_files`)."""
-    return data_files(evaluations_root(results_dir), "*/*.json", "evaluation file")
+    """Every evaluation file of ``results_dir``, sorted (``[]`` when it has no ``evaluations/``,
+    :func:`evaluations_root`); names starting with ``.`` (writes in progress) are left out. Anything
+    else named ``evaluations/*/*.json`` that is no regular file (a FIFO, a directory, a dangling
+    symbolic link) raises ``ValueError`` naming it (:func:`empathy_zoo.data_files.data_files`), and
+    so does an ``evaluations`` folder inside the directory's ``runs`` folder (where ``empathy-zoo
+    evaluate DIR/runs`` once wrote them): it is not read, so it is named rather than passed over."""
+    root = evaluations_root(results_dir)
+    runs = root.parent / RUNS_DIR
+    misplaced = runs / EVALUATIONS_DIR
+    if runs.is_dir() and not (runs / RUNS_DIR).is_dir() and os.path.lexists(misplaced):
+        raise ValueError(
+            f"{misplaced} lies inside the runs folder, where no evaluation is read: move its set folders into {root} "
+            f"(where the evaluations of {results_dir} are read)"
+        )
+    return data_files(root, "*/*.json", "evaluation file")
 
 
 def _checker(path: Path) -> DocumentChecker:

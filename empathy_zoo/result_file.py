@@ -57,6 +57,7 @@ __all__ = [
     "check_agent_record",
     "check_result_fields",
     "result_checker",
+    "results_root",
     "check_env_kwargs",
     "episode_bounds",
     "evaluation_steps",
@@ -623,6 +624,22 @@ def read_folder(results_dir: str | os.PathLike[str]) -> Path:
     (``DIR`` and ``DIR/runs``), so a directory given twice is told however it is written."""
     folder = resolved(results_dir)
     return folder / RUNS_DIR if (folder / RUNS_DIR).is_dir() else folder
+
+
+def results_root(results_dir: str | os.PathLike[str]) -> Path:
+    """The results directory a results path stands for: the folder above it where the path, every
+    link followed, is a directory named ``runs`` that holds no ``runs`` folder of its own (``DIR/runs``,
+    the runs folder ``train --out DIR`` makes, stands for ``DIR``), else ``results_dir`` itself. Its
+    evaluations lie in ``<results root>/evaluations`` (:func:`empathy_zoo.evaluation_file.evaluations_root`)
+    however the directory is given. A folder named ``runs`` is always read this way, a user's flat
+    folder of result files so named too: its evaluations go beside it, never inside it (a ``runs``
+    folder's JSON files are read as results). The folder above is as written where the path's own
+    name is ``runs``, else the resolved one (``.`` inside a runs folder, or a link to one)."""
+    path = Path(results_dir)
+    folder = resolved(path)
+    if folder.name != RUNS_DIR or not folder.is_dir() or (folder / RUNS_DIR).is_dir():
+        return path
+    return path.parent if path.name == RUNS_DIR else folder.parent
 
 
 def result_path(out_dir: Path, run_id: str) -> Path:

@@ -18,8 +18,9 @@ one that records another seed, method or world than its run's, one of a run and 
 already evaluated beside the runs or in another ``--evaluations`` directory, and one that is not an
 evaluation file of this suite. So are a directory that does not exist, holds no evaluation file, is
 given twice, or is one of the results directories read (its evaluations are read beside its runs
-already). Evaluation files beside the runs keep their own rule: one that matches no run is left out
-with a note.
+already), each told however it is written: ``DIR/runs`` is ``DIR``, whose evaluations lie in
+``DIR/evaluations`` (:func:`empathy_zoo.result_file.results_root`). Evaluation files beside the
+runs keep their own rule: one that matches no run is left out with a note.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evalu
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import resolved
+from empathy_zoo.result_file import results_root
 
 __all__ = ["MatchedEvaluation", "evaluation_dir_files", "match_evaluations"]
 
@@ -98,10 +100,10 @@ def match_evaluations(
     ``ValueError`` naming the file or the directory, before anything is written."""
     if not evaluation_dirs:
         return []
-    read_dirs = {resolved(directory): os.fspath(directory) for directory in results_dirs}
+    read_dirs = {resolved(results_root(directory)): os.fspath(directory) for directory in results_dirs}
     seen_dirs: dict[Path, str] = {}
     for directory in evaluation_dirs:
-        where = resolved(directory)
+        where = resolved(results_root(directory))  # (DIR/runs is DIR: its evaluations are DIR/evaluations)
         if where in read_dirs:
             raise ValueError(
                 f"--evaluations {directory} is the results directory {read_dirs[where]}: "

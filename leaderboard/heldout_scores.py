@@ -213,7 +213,8 @@ def load_heldout(
     origins: Sequence[str] | None = None,
     extra: Sequence[tuple[RunResult, EvaluationResult, Path]] = (),
 ) -> tuple[list[HeldoutGroup], list[str]]:
-    """The evaluation files of ``results_dirs`` grouped by environment and scenario set, each matched
+    """The evaluation files of ``results_dirs`` (``DIR/evaluations``, for ``DIR/runs`` too:
+    :func:`empathy_zoo.evaluation_file.evaluations_root`) grouped by environment and scenario set, each matched
     with its run among ``results`` (as :func:`leaderboard.aggregate.load_results` gives them), and
     notes on what was left out: an evaluation whose run is not among ``results``, or of an agent
     file other than the one its result file records (the run was trained again). With several

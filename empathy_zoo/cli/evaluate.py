@@ -86,7 +86,7 @@ def add_evaluate(sub: Any) -> None:
         "--out",
         type=path_text,
         metavar="DIR",
-        help="where evaluations/ goes (default: RESULTS_DIR); not another results directory",
+        help="where evaluations/ goes (default: RESULTS_DIR, DIR for DIR/runs); not another results directory",
     )
     parser.add_argument(
         "--threads",

@@ -30,7 +30,7 @@ import torch
 
 from empathy_zoo.agent_file import load_run_agent
 from empathy_zoo.atomic import check_output_dir, remove_stale_temp_files, write_json_atomic
-from empathy_zoo.data_files import data_files
+from empathy_zoo.data_files import check_input_dir, data_files
 from empathy_zoo.environments import DEFAULT_ARGUMENTS
 from empathy_zoo.evaluation_file import (
     FORMAT,
@@ -52,7 +52,7 @@ from empathy_zoo.output_lock import command_line, hold_output_dir
 from empathy_zoo.policies import entry_label
 from empathy_zoo.provenance import package_version
 from empathy_zoo.randomness import STREAMS
-from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR
+from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, results_root
 from empathy_zoo.scenarios import Scenario, ScenarioSet, default_set_name, load_scenario_set, trained_with
 from empathy_zoo.training.evaluation import evaluate_greedy
 from empathy_zoo.training.progress import progress_bar
@@ -115,12 +115,7 @@ def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
     when it holds the files), read and checked (:func:`empathy_zoo.experiment.result_reader.read_result`), in
     file-name order; a directory without result files raises ``ValueError``, and so does a result or
     agent file there that is no regular file (:func:`empathy_zoo.data_files.data_files`)."""
-    root = Path(results_dir)
-    resolved(root)  # (a loop of symbolic links is named as one, not as missing)
-    if root.is_file():
-        raise ValueError(f"results directory {root} is a file, not a directory: name the directory that holds the result files")
-    if not root.is_dir():
-        raise ValueError(f"results directory {root} does not exist")
+    root = check_input_dir(results_dir, "results directory", "name the directory that holds the result files")
     runs = root / RUNS_DIR if (root / RUNS_DIR).is_dir() else root
     for suffix in AGENT_SUFFIXES:
         data_files(runs, f"*{suffix}", "agent file")
@@ -131,19 +126,21 @@ def results_of(results_dir: str | Path) -> list[tuple[Path, RunResult]]:
 
 
 def check_evaluations_folder(results_dir: str | Path, out: Path) -> None:
-    """Refuse (``ValueError`` naming it) an ``out`` other than ``results_dir`` where evaluations of
-    its runs would be read as another directory's: a results directory (one holding a ``runs``
-    folder), a folder of result files, a ``runs`` folder or an evaluation set's folder
-    (:func:`empathy_zoo.evaluation_file.check_not_read_folder`). Their leaderboard would take the
-    files for evaluations of its own runs; ``results_dir`` itself, or a folder of no runs, is the
-    place (``leaderboard --evaluations`` reads the latter)."""
-    if resolved(out) == resolved(results_dir):
+    """Refuse (``ValueError`` naming it) an ``out`` other than the results directory of
+    ``results_dir`` (:func:`empathy_zoo.result_file.results_root`: ``DIR`` for ``DIR/runs``) where
+    evaluations of its runs would be read as another directory's: a results directory (one holding
+    a ``runs`` folder), a folder of result files, a ``runs`` folder (``DIR/runs`` itself too) or an
+    evaluation set's folder (:func:`empathy_zoo.evaluation_file.check_not_read_folder`). Their
+    leaderboard would take the files for evaluations of its own runs; the results directory itself,
+    or a folder of no runs, is the place (``leaderboard --evaluations`` reads the latter)."""
+    root = results_root(results_dir)
+    if resolved(out) == resolved(root):
         return
     check_not_read_folder(out, f"the evaluations' folder {out}")
     if (out / RUNS_DIR).is_dir():
         raise ValueError(
             f"the evaluations' folder {out} is another results directory (it holds {out / RUNS_DIR}): its leaderboard "
-            f"would read evaluations of {results_dir}'s runs as its own; write them into {results_dir} or a folder "
+            f"would read evaluations of {results_dir}'s runs as its own; write them into {root} or a folder "
             "of no runs (leaderboard --evaluations reads it)"
         )
 
@@ -319,7 +316,9 @@ def evaluate_results(
     anything is read or created: they are played at once).
 
     ``scenario_sets``: shipped names, TOML files or :class:`ScenarioSet` objects; ``None`` = the
-    shipped set of each environment the runs are of. ``out_dir`` (default ``results_dir``) gets
+    shipped set of each environment the runs are of. ``out_dir`` (default: the results directory,
+    ``DIR`` for ``results_dir`` ``DIR/runs``, :func:`empathy_zoo.result_file.results_root`, so that
+    nothing is written into a ``runs`` folder and every reader finds the files) gets
     ``evaluations/<set>/<run id>.json`` (:func:`empathy_zoo.evaluation_file.evaluation_path`).
     Files already there are skipped when made of the same agent, set and episodes, refused by name
     otherwise; ``on_written(path)`` is called after each file written. Another process evaluating
@@ -344,7 +343,7 @@ def evaluate_results(
     if out_dir is not None and not os.fspath(out_dir):
         raise ValueError("out_dir is an empty path: name the directory ('.' for the current one)")
     runs = results_of(results_dir)
-    out = Path(results_dir if out_dir is None else out_dir)
+    out = results_root(results_dir) if out_dir is None else Path(out_dir)
     check_evaluations_folder(results_dir, out)
     summary = EvaluationSummary()
     kept = []
