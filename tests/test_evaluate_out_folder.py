@@ -71,3 +71,25 @@ def test_a_results_directory_that_is_a_file_is_named_as_one(places: Path, capsys
     capsys.readouterr()
     assert main(["evaluate", str(afile), "--episodes", "2", "--no-progress"]) == 2
     assert f"results directory {afile} is a file, not a directory" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("second", ["coexistence_v0", "FILE", "DOTTED"])
+def test_a_scenario_set_given_twice_is_refused(
+    places: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, second: str
+) -> None:
+    from empathy_zoo.scenarios import load_scenario_set
+
+    monkeypatch.chdir(places)
+    (places / "sc").mkdir()
+    shipped = load_scenario_set("coexistence_v0").source
+    (places / "sc" / "coexistence_v0.toml").write_bytes(Path(shipped).read_bytes())
+    first = "coexistence_v0" if second == "coexistence_v0" else "sc/coexistence_v0.toml"
+    again = {"coexistence_v0": "coexistence_v0", "FILE": "sc/coexistence_v0.toml", "DOTTED": "./sc/../sc/coexistence_v0.toml"}[
+        second
+    ]
+    before = _tree(places)
+    capsys.readouterr()
+    assert main(["evaluate", "one", "--scenarios", first, "--scenarios", again, "--episodes", "1", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "scenario set 'coexistence_v0' is given twice" in err, err
+    assert _tree(places) == before

@@ -368,6 +368,10 @@ def evaluate_results(
             raise ValueError(
                 f"two scenario sets are named {scenario_set.name!r} ({by_name[scenario_set.name].source}, {scenario_set.source})"
             )
+        if scenario_set.name in by_name:  # (one set twice, by name or by two spellings of its file: said, not merged)
+            raise ValueError(
+                f"scenario set {scenario_set.name!r} is given twice ({by_name[scenario_set.name].source}, {scenario_set.source})"
+            )
         by_name[scenario_set.name] = scenario_set
     envs = {s.env for s in by_name.values()}
     summary.without_set = [result.run_id for _, result in kept if result.env not in envs]
