@@ -6,7 +6,10 @@ profile's runs were read (docs/results/scenarios/READING.md, addendum "the matri
 cells").
 
 **The rule.** For a task whose robot can harm, and two methods that both have trained runs of
-the task's own variant (a method with a β at β = 0.5, as the exact matrix reads it): each seed's
+the task's own variant (a method with a β at β = 0.5, as the exact matrix reads it), trained in
+the world the task's table models (every environment argument, ``max_cycles`` included, and
+partner: :func:`leaderboard.separation_reading.in_table_world`; a run of another world is named in
+the page's notes, never read against the table): each seed's
 score is its mean harms per episode over the final greedy evaluation
 (:func:`leaderboard.separation_reading.final_harms`). The two methods' seeds are compared by the
 leaderboard's own test (:func:`leaderboard.improvement.improvement_interval` and
@@ -95,9 +98,12 @@ Harms = dict[tuple[str, str], list[float]]
 """Per-seed harms by ``(task, method)``."""
 
 
-def method_harms(results: Sequence[RunResult], selfish: Mapping[str, bool]) -> tuple[Harms, list[str]]:
+def method_harms(
+    results: Sequence[RunResult], selfish: Mapping[str, bool], tables: Mapping[str, Mapping[str, Any]] | None = None
+) -> tuple[Harms, list[str]]:
     """``({(task, method): per-seed harms}, methods not read)``: each method's runs read by
-    :func:`leaderboard.separation_reading.final_harms` (a method with β at β = 0.5), a run its
+    :func:`leaderboard.separation_reading.final_harms` (a method with β at β = 0.5; a run only in
+    the world its task's table of ``tables`` models, the default world without them), a run its
     result file describes as standard DQN read as ``dqn`` (the paper's profile trains DQN as Empathic
     DQN at β = 1). A method two of whose rows share a seed on one task (a tuned row beside an
     untuned one) is not read, and listed."""
@@ -112,7 +118,7 @@ def method_harms(results: Sequence[RunResult], selfish: Mapping[str, bool]) -> t
     shared = []
     for method, runs in by_method.items():
         try:
-            harms.update(final_harms(runs, selfish))
+            harms.update(final_harms(runs, selfish, tables))
         except ValueError:
             shared.append(method)
     return harms, shared
@@ -151,18 +157,19 @@ def cells_of_results(
     indexes = [TableIndex.of(table, task) for task, table in tables.items()]
     methods = list(dict.fromkeys(method for index in indexes for method in index.rows))
     selfish = selfish_methods(tables)
-    harms, shared = method_harms(results, selfish)
+    harms, shared = method_harms(results, selfish, tables)
     if shared:
         raise ValueError(f"two rows of {', '.join(shared)} share a seed on one task; give one results directory per row")
     tasks = list(tables)
     as_read = [dataclasses.replace(run, method="dqn") if is_dqn(run) else run for run in results]  # (as method_harms reads them)
-    notes = not_read_notes(as_read, selfish, tasks, methods)
+    notes = not_read_notes(as_read, selfish, tasks, methods, tables)
     cells = trained_cells(tasks, methods, harms, {task: can_harm(task) for task in tasks})
     if not cells:  # (every cell "0 of 0" would read as "separates nothing")
-        read = ", ".join(sorted({f"{method} on {task}" for task, method in harms})) or "none"
+        read = ", ".join(sorted({f"{method} on {task}" for task, method in harms if task in tables})) or "none"
+        unread = "".join(f"; {note}" for note in notes)  # (why the others were not: a run of another world named)
         raise ValueError(
             f"the runs of --results {' '.join(map(str, results_dirs))} make no cell: no two methods of the tables have runs "
-            f"of one task whose robot can harm (runs read: {read}); give runs of DQN and a method on one task"
+            f"of one task whose robot can harm (runs read: {read}{unread}); give runs of DQN and a method on one task"
         )
     in_cells = {(task, method) for task, first, second in cells for method in (first, second)}
     for (task, method), values in sorted(harms.items()):
