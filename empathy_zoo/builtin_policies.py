@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import secrets
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from empathy_zoo.actions import NUM_ACTIONS, Action
 from empathy_zoo.limits import MAX_CYCLES
+from empathy_zoo.policy_parameters import Parameter, Whole, check_arguments
 from empathy_zoo.randomness import counter_integer, counter_integers, derive_key
 
 __all__ = ["CounterStream", "CounterStreamBatch", "RandomWalk", "Patrol", "Stay"]
@@ -142,6 +143,8 @@ class RandomWalk(CounterStream):
     per environment whether it acts alone or batched."""
 
     needs_observation = False
+    parameters: ClassVar[dict[str, Parameter]] = {}
+    """It takes no argument."""
 
     def act(self, observation: np.ndarray, info: Mapping[str, Any]) -> int:
         key, count = self._take()
@@ -167,13 +170,15 @@ class Patrol:
     """
 
     needs_observation = False
+    parameters: ClassVar[dict[str, Parameter]] = {
+        "period": Whole(1, MAX_CYCLES),
+        "first": Whole(0, NUM_ACTIONS - 1, "an action"),
+        "then": Whole(0, NUM_ACTIONS - 1, "an action"),
+    }
+    """Its arguments, their types and ranges (:mod:`empathy_zoo.policy_parameters`)."""
 
     def __init__(self, period: int = 7, first: int = Action.UP, then: int = Action.RIGHT) -> None:
-        if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or not 1 <= period <= MAX_CYCLES:
-            raise ValueError(f"period must be an int in [1, {MAX_CYCLES:,}], got {period!r:.80}")
-        for name, action in (("first", first), ("then", then)):
-            if isinstance(action, bool) or not isinstance(action, (int, np.integer)) or not 0 <= action < NUM_ACTIONS:
-                raise ValueError(f"{name} must be an action in [0, {NUM_ACTIONS}), got {action!r:.80}")
+        check_arguments(type(self).__name__, Patrol, {"period": period, "first": first, "then": then})
         self.period, self.first, self.then = int(period), int(first), int(then)
         self._t = 0
 
@@ -219,6 +224,8 @@ class Stay:
 
     needs_observation = False
     stateless = True
+    parameters: ClassVar[dict[str, Parameter]] = {}
+    """It takes no argument."""
 
     def reset(self, seed: int | None = None) -> None:
         pass

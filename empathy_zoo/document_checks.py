@@ -18,7 +18,7 @@ from typing import Any
 
 from empathy_zoo.metrics import INTEGER_METRICS, METRIC_RANGES
 from empathy_zoo.names import LABEL_REFUSED_CATEGORIES, check_label, check_path_name
-from empathy_zoo.policies import parse_entry_label
+from empathy_zoo.policies import checked_entry
 
 __all__ = ["DocumentChecker", "finite_float", "one_line", "shown"]
 
@@ -209,11 +209,14 @@ class DocumentChecker:
             raise self.fail(field, f"{expected} ({error})", value) from None
 
     def policy_label(self, value: Any, field: str) -> str:
-        """A fixed policy's label as a run records it (``patrol``, ``patrol(period=3)``), parsed as
-        text by :func:`empathy_zoo.policies.parse_entry_label`: no policy is imported or resolved."""
+        """A fixed policy's label as a run records it (``patrol``, ``patrol(period=3)``), checked by
+        :func:`empathy_zoo.policies.checked_entry`, the rule a policy is built by: a registered
+        policy with arguments it takes, of their type and range, every partner it names registered;
+        or a ``package.module:Name``, kept as text (never imported: replaying it needs
+        ``--allow-import``). Nothing is imported or built."""
         self.text(value, field)
         try:
-            parse_entry_label(value)
+            checked_entry(value)
         except ValueError as error:
             raise self.fail(field, f"a fixed policy's label ({error})", value) from None
         return value

@@ -11,7 +11,7 @@ import sys
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["resolve_name", "PLUGIN_NAME", "MAX_PLUGIN_NAME"]
+__all__ = ["resolve_name", "is_registered", "PLUGIN_NAME", "MAX_PLUGIN_NAME"]
 
 MAX_PLUGIN_NAME = 500
 """Most characters a registered name or a ``package.module:Name`` may have (docs/limits.md)."""
@@ -19,6 +19,25 @@ MAX_PLUGIN_NAME = 500
 _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
 PLUGIN_NAME = re.compile(rf"{_IDENTIFIER}(?:\.{_IDENTIFIER})*:{_IDENTIFIER}")
 """What a ``package.module:Name`` plug-in name looks like."""
+
+
+def is_registered(spec: Any, registry: Mapping[str, Any], kind: str) -> bool:
+    """Whether ``spec`` is a name in ``registry`` (``True``) or a well-formed ``package.module:Name``
+    (``False``; nothing is imported); any other ``spec`` raises ``ValueError`` saying why."""
+    if not isinstance(spec, str) or not spec:
+        raise ValueError(f"a {kind} is named by a non-empty string, got {spec!r:.80}")
+    if len(spec) > MAX_PLUGIN_NAME:
+        raise ValueError(f"a {kind}'s name is at most {MAX_PLUGIN_NAME} characters, got {len(spec):,} ({spec[:40]!r}...)")
+    if spec in registry:
+        return True
+    if ":" not in spec:
+        raise ValueError(f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')")
+    if not PLUGIN_NAME.fullmatch(spec):
+        raise ValueError(
+            f"{spec!r} is not a valid 'package.module:Name' (dotted module path, a colon, a name) "
+            f"nor a registered {kind}: {sorted(registry)}"
+        )
+    return False
 
 
 def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
@@ -29,19 +48,8 @@ def resolve_name(spec: str, registry: Mapping[str, Any], kind: str) -> Any:
     Raises ``ValueError`` naming the unknown entry and what is registered, a malformed name, or
     what importing the module raised.
     """
-    if not isinstance(spec, str) or not spec:
-        raise ValueError(f"a {kind} is named by a non-empty string, got {spec!r}")
-    if len(spec) > MAX_PLUGIN_NAME:
-        raise ValueError(f"a {kind}'s name is at most {MAX_PLUGIN_NAME} characters, got {len(spec):,} ({spec[:40]!r}...)")
-    if spec in registry:
+    if is_registered(spec, registry, kind):
         return registry[spec]
-    if ":" not in spec:
-        raise ValueError(f"unknown {kind} {spec!r}; registered: {sorted(registry)} (or give 'package.module:ClassName')")
-    if not PLUGIN_NAME.fullmatch(spec):
-        raise ValueError(
-            f"{spec!r} is not a valid 'package.module:Name' (dotted module path, a colon, a name) "
-            f"nor a registered {kind}: {sorted(registry)}"
-        )
     module_name, _, attribute = spec.partition(":")
     if os.getcwd() not in sys.path:  # like `python -m`: modules of the working directory resolve
         sys.path.append(os.getcwd())

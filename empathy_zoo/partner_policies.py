@@ -27,12 +27,14 @@ seed, as :class:`~empathy_zoo.builtin_policies.RandomWalk` does, and has a batch
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from empathy_zoo.actions import Action
 from empathy_zoo.builtin_policies import CounterStream, CounterStreamBatch
+from empathy_zoo.limits import MAX_CYCLES
+from empathy_zoo.policy_parameters import REGISTRY, AgentName, Members, Parameter, Partner, Share, Weights, Whole, check_arguments
 from empathy_zoo.randomness import STREAMS, counter_uniform, derive_key
 
 __all__ = [
@@ -58,9 +60,6 @@ MOVES_BY_ACTION: tuple[tuple[Action, int, int], ...] = (
 )
 """Every action and its ``(row, col)`` displacement (SPEC §1), in action order."""
 _DIRECTIONS = (Action.UP, Action.DOWN, Action.LEFT, Action.RIGHT)
-REGISTRY: dict[str, type] = {}
-"""The registered policies :class:`Noisy` and :class:`Population` build their members from, by
-name: :data:`empathy_zoo.policies.POLICIES`, which that module puts here (it imports this one)."""
 
 
 def _slow_walk_action(draw: float, move_probability: float) -> int:
@@ -78,12 +77,11 @@ class SlowWalk(CounterStream):
     seed (the same numbers alone or batched)."""
 
     needs_observation = False
+    parameters: ClassVar[dict[str, Parameter]] = {"move_probability": Share()}
+    """Its arguments, their types and ranges (:mod:`empathy_zoo.policy_parameters`)."""
 
     def __init__(self, move_probability: float = 0.1) -> None:
-        if isinstance(move_probability, bool) or not isinstance(move_probability, (int, float)):
-            raise ValueError(f"move_probability must be a number in (0, 1], got {move_probability!r}")
-        if not 0.0 < float(move_probability) <= 1.0:
-            raise ValueError(f"move_probability must lie in (0, 1], got {move_probability}")
+        check_arguments(type(self).__name__, SlowWalk, {"move_probability": move_probability})
         super().__init__()
         self.move_probability = float(move_probability)
 
@@ -111,12 +109,6 @@ class _SlowWalkBatch(CounterStreamBatch):
         return np.where(draws < p, np.asarray(_DIRECTIONS, dtype=np.int64)[moves], int(Action.STAY)).astype(np.int64)
 
 
-def _check_target(target: Any) -> str:
-    if not isinstance(target, str) or not target:
-        raise ValueError(f"target must be an agent's name (e.g. 'robot_0'), got {target!r}")
-    return target
-
-
 def _torus_offset(delta: int, size: int) -> int:
     """The shortest signed displacement ``delta`` on a ring of ``size`` cells (a tie goes forward)."""
     delta %= size
@@ -133,11 +125,12 @@ class Chase:
 
     needs_state = True
     stateless = True
+    parameters: ClassVar[dict[str, Parameter]] = {"target": AgentName(), "every": Whole(1, MAX_CYCLES)}
+    """Its arguments, their types and ranges (:mod:`empathy_zoo.policy_parameters`)."""
 
     def __init__(self, target: str = "robot_0", every: int = 1) -> None:
-        if isinstance(every, bool) or not isinstance(every, int) or every < 1:
-            raise ValueError(f"every must be a positive int, got {every!r}")
-        self.target, self.every = _check_target(target), every
+        check_arguments(type(self).__name__, Chase, {"target": target, "every": every})
+        self.target, self.every = target, int(every)
 
     def reset(self, seed: int | None = None) -> None:
         pass
@@ -164,9 +157,12 @@ class KeepAway:
 
     needs_state = True
     stateless = True
+    parameters: ClassVar[dict[str, Parameter]] = {"target": AgentName()}
+    """Its argument, its type (:mod:`empathy_zoo.policy_parameters`)."""
 
     def __init__(self, target: str = "robot_0") -> None:
-        self.target = _check_target(target)
+        check_arguments(type(self).__name__, KeepAway, {"target": target})
+        self.target = target
 
     def reset(self, seed: int | None = None) -> None:
         pass
@@ -194,11 +190,12 @@ class NearestBattery:
     knows no battery it cannot see."""
 
     stateless = True
+    parameters: ClassVar[dict[str, Parameter]] = {"period": Whole(1, MAX_CYCLES)}
+    """Its argument, its type and range (:mod:`empathy_zoo.policy_parameters`)."""
 
     def __init__(self, period: int = 7) -> None:
-        if isinstance(period, bool) or not isinstance(period, int) or period < 1:
-            raise ValueError(f"period must be a positive int, got {period!r}")
-        self.period = period
+        check_arguments(type(self).__name__, NearestBattery, {"period": period})
+        self.period = int(period)
 
     def reset(self, seed: int | None = None) -> None:
         pass
@@ -229,14 +226,12 @@ class Noisy(CounterStream):
     per step from the counter-based stream of its seed decides both: a draw ``u < noise`` gives
     action ``⌊5u/noise⌋``. It reads what its partner reads."""
 
+    parameters: ClassVar[dict[str, Parameter]] = {"partner": Partner("noisy", stateless=True), "noise": Share()}
+    """Its arguments, their types and ranges (:mod:`empathy_zoo.policy_parameters`)."""
+
     def __init__(self, partner: str = "chase", noise: float = 0.2) -> None:
-        if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not 0 < noise <= 1:
-            raise ValueError(f"noise must be a number in (0, 1], got {noise!r}")
-        if not isinstance(partner, str) or partner not in REGISTRY or partner == "noisy":
-            raise ValueError(f"partner must name a registered policy other than 'noisy', got {partner!r}")
+        check_arguments(type(self).__name__, Noisy, {"partner": partner, "noise": noise})
         base = REGISTRY[partner]()
-        if getattr(base, "stateless", False) is not True:
-            raise ValueError(f"partner must keep nothing between steps (stateless = True); {partner!r} does not")
         super().__init__()
         self.partner, self.noise, self._base = partner, float(noise), base
         self.needs_state = bool(getattr(base, "needs_state", False))
@@ -270,19 +265,15 @@ class Population(CounterStream):
     reset continues a stream of that seed: a run repeats exactly. Its state is its stream's, the member's index and every
     member's own state, so a checkpointed run resumes it exactly."""
 
+    parameters: ClassVar[dict[str, Parameter]] = {
+        "members": Members("population", MAX_MEMBERS),
+        "weights": Weights("members", MAX_WEIGHT),
+    }
+    """Its arguments, their types and ranges (:mod:`empathy_zoo.policy_parameters`)."""
+
     def __init__(self, members: Sequence[str] = ("chase", "keep_away"), weights: Sequence[float] | None = None) -> None:
-        if isinstance(members, str) or not isinstance(members, Sequence) or not 1 <= len(members) <= MAX_MEMBERS:
-            raise ValueError(f"members must be a list of 1 to {MAX_MEMBERS} registered policy names, got {members!r}")
-        for name in members:
-            if not isinstance(name, str) or name not in REGISTRY or name == "population":
-                raise ValueError(f"members must name registered policies other than 'population', got {name!r}")
-        if len(set(members)) != len(members):
-            raise ValueError(f"members must differ (give a member more weight instead), got {list(members)!r}")
+        check_arguments(type(self).__name__, Population, {"members": members, "weights": weights})
         shares = [1.0] * len(members) if weights is None else weights
-        if isinstance(shares, str) or not isinstance(shares, Sequence) or len(shares) != len(members):
-            raise ValueError(f"weights must be a list of {len(members)} numbers (one per member), got {weights!r}")
-        if any(isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w <= MAX_WEIGHT for w in shares):
-            raise ValueError(f"weights must be positive finite numbers of at most {MAX_WEIGHT:g}, got {list(shares)!r:.200}")
         super().__init__()
         total = sum(float(w) for w in shares)
         self.members, self.weights = list(members), [float(w) for w in shares]

@@ -28,18 +28,20 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from empathy_zoo import partner_policies
 from empathy_zoo.actions import NUM_ACTIONS, Action, check_action
 from empathy_zoo.builtin_policies import Patrol, RandomWalk, Stay
 from empathy_zoo.import_names import resolve_name
 from empathy_zoo.partner_policies import Chase, KeepAway, NearestBattery, Noisy, Population, SlowWalk
+from empathy_zoo.policy_parameters import MAX_POLICY_INT, REGISTRY, UnlistedPlugin, check_arguments, check_policy
 
 if TYPE_CHECKING:
     from empathy_zoo.engine.base import GridEngine
 
 __all__ = [
     "parse_entry_label",
+    "checked_entry",
     "recorded_entry",
+    "MAX_POLICY_INT",
     "FixedPolicy",
     "BatchedPolicy",
     "RandomWalk",
@@ -198,19 +200,24 @@ class _PolicyCopies:
             load_policy_state(policy, saved)
 
 
-POLICIES: dict[str, type] = {
-    "random_walk": RandomWalk,
-    "patrol": Patrol,
-    "stay": Stay,
-    "slow_walk": SlowWalk,
-    "chase": Chase,
-    "keep_away": KeepAway,
-    "nearest_battery": NearestBattery,
-    "noisy": Noisy,
-    "population": Population,
-}
-"""Fixed policies by name."""
-partner_policies.REGISTRY = POLICIES  # (what the noisy and population partners build members from)
+POLICIES: dict[str, type] = REGISTRY
+"""Fixed policies by name (the dict :mod:`empathy_zoo.policy_parameters` checks names against, and
+the noisy and population partners build their members from). A registered class declares the
+arguments it takes in ``parameters`` (see :mod:`empathy_zoo.policy_parameters`); one that does
+not has its argument names checked against its signature."""
+POLICIES.update(
+    {
+        "random_walk": RandomWalk,
+        "patrol": Patrol,
+        "stay": Stay,
+        "slow_walk": SlowWalk,
+        "chase": Chase,
+        "keep_away": KeepAway,
+        "nearest_battery": NearestBattery,
+        "noisy": Noisy,
+        "population": Population,
+    }
+)
 
 
 # ---------------------------------------------------------------------------- naming and building
@@ -264,11 +271,11 @@ def make_policy(spec: PolicyEntry | FixedPolicy, **kwargs: Any) -> FixedPolicy:
             raise ValueError("keyword arguments are only accepted with a policy name")
         policy = spec
     else:
-        factory = resolve_name(spec, POLICIES, "fixed policy")
-        _check_factory(spec, factory)
-        _check_arguments(spec, factory, kwargs)
-        for key, value in kwargs.items():
-            _check_value(spec, key, value)
+        factory = check_policy(spec, kwargs, plugins=None)  # (the rule a recorded label is read by)
+        if factory is None:  # a package.module:Name: imported, then checked like a registered one
+            factory = resolve_name(spec, POLICIES, "fixed policy")
+            _check_factory(spec, factory)
+            check_arguments(spec, factory, kwargs)
         try:
             policy = factory(**kwargs)
         except (TypeError, OverflowError) as error:
@@ -288,40 +295,6 @@ def _check_factory(spec: str, factory: Any) -> None:
         raise ValueError(
             f"{spec!r} is not a fixed policy: it needs reset(seed) and act(observation, info) (no {', '.join(missing)})"
         )
-
-
-MAX_POLICY_INT = 1_000_000_000
-"""The largest magnitude of an int argument of a fixed policy (a period, a step count): no episode
-is longer (:data:`~empathy_zoo.limits.MAX_CYCLES`)."""
-
-
-def _check_value(spec: str, key: str, value: Any) -> None:
-    """Raise ``ValueError`` naming ``key`` when an argument value (or one inside a list) is a
-    number no policy takes: an int beyond :data:`MAX_POLICY_INT`, or a float that is not finite."""
-    values = value if isinstance(value, (list, tuple)) else [value]
-    for item in values:
-        if isinstance(item, (list, tuple)):
-            _check_value(spec, key, item)
-        elif isinstance(item, (int, np.integer)) and not isinstance(item, bool) and abs(int(item)) > MAX_POLICY_INT:
-            raise ValueError(f"cannot build fixed policy {spec!r}: {key} = {item!r:.40} is beyond ±{MAX_POLICY_INT:,}")
-        elif isinstance(item, (float, np.floating)) and not np.isfinite(item):
-            raise ValueError(f"cannot build fixed policy {spec!r}: {key} = {item!r} is not a finite number")
-
-
-def _check_arguments(spec: str, factory: Any, kwargs: Mapping[str, Any]) -> None:
-    """Raise ``ValueError`` naming a keyword argument ``factory`` does not take."""
-    try:
-        parameters = inspect.signature(factory).parameters.values()
-    except (TypeError, ValueError):  # no signature to read: the call itself will say
-        return
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
-        return
-    named = [p.name for p in parameters if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
-    for key in kwargs:
-        if key not in named:
-            raise ValueError(
-                f"cannot build fixed policy {spec!r}: it takes no argument {key!r} (its arguments: {', '.join(named) or 'none'})"
-            )
 
 
 def policy_name(policy: Any) -> str:
@@ -427,25 +400,35 @@ def entry_policy_name(entry: PolicyEntry) -> str:
     return entry if isinstance(entry, str) else str(entry["policy"])
 
 
+def checked_entry(label: Any, allowed_imports: Collection[str] | None = None) -> PolicyEntry:
+    """The policy entry ``label`` records (a label, :func:`parse_entry_label`, or an entry,
+    :func:`policy_entry`), checked by the rule every fixed policy is built by
+    (:func:`~empathy_zoo.policy_parameters.check_policy`), importing and building nothing: a
+    registered policy with arguments it takes, of their type and range, every partner it names
+    registered; or a ``package.module:Name`` (with any arguments, unchecked until it is imported)
+    when ``allowed_imports`` is ``None`` (kept as text) or holds it. Otherwise ``ValueError``
+    (:class:`~empathy_zoo.policy_parameters.UnlistedPlugin` for a ``package.module:Name`` not allowed)."""
+    entry = parse_entry_label(label) if isinstance(label, str) else policy_entry(label)
+    arguments = {} if isinstance(entry, str) else {key: value for key, value in entry.items() if key != "policy"}
+    check_policy(entry_policy_name(entry), arguments, allowed_imports)
+    return entry
+
+
 def recorded_entry(label: Any, where: str, allowed_imports: Collection[str] = ()) -> PolicyEntry:
-    """The policy entry a file records as ``label`` (a label, :func:`parse_entry_label`, or an
-    entry, :func:`policy_entry`), checked to name a registered policy or one of
-    ``allowed_imports``: a file is data, so a ``package.module:Name`` it records is never imported
-    unless the user named it (``--allow-import``). Otherwise ``ValueError`` naming ``where`` (the
-    file and field) and what to do; nothing is imported."""
+    """The policy entry a file records as ``label``, checked by :func:`checked_entry` to be a
+    registered policy it may build or one of ``allowed_imports``: a file is data, so a
+    ``package.module:Name`` it records is never imported unless the user named it
+    (``--allow-import``). Otherwise ``ValueError`` naming ``where`` (the file and field) and what
+    to do; nothing is imported."""
     try:
-        entry = parse_entry_label(label) if isinstance(label, str) else policy_entry(label)
+        return checked_entry(label, allowed_imports)
+    except UnlistedPlugin as error:
+        raise ValueError(
+            f"{where} names fixed policy {error.name!r}, which is not registered: a file never makes the suite import "
+            f"code; if you trust that module, pass --allow-import {error.name} (or name the policy yourself: --fixed AGENT=POLICY)"
+        ) from None
     except ValueError as error:
         raise ValueError(f"{where}: {error}") from None
-    name = entry_policy_name(entry)
-    if name not in POLICIES and ":" not in name:
-        raise ValueError(f"{where} names fixed policy {name!r}, which is not registered: {sorted(POLICIES)}")
-    if name not in POLICIES and name not in allowed_imports:
-        raise ValueError(
-            f"{where} names fixed policy {name!r}, which is not registered: a file never makes the suite import "
-            f"code; if you trust that module, pass --allow-import {name} (or name the policy yourself: --fixed AGENT=POLICY)"
-        )
-    return entry
 
 
 MAX_LABEL_CHARS = 4_096
