@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 import inspect
 import json
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from empathy_zoo.engine.base import GridEngine
 
 __all__ = [
+    "check_allowed_imports_named",
     "parse_entry_label",
     "checked_entry",
     "recorded_entry",
@@ -393,6 +394,29 @@ def plain_data_problem(value: Any, arrays: bool, where: str = "the value") -> st
         return None
     allowed = "numbers, strings, booleans, None, lists and tables" + (", numeric numpy arrays" if arrays else "")
     return f"{where} is a {type(value).__module__}.{type(value).__qualname__} (plain data is {allowed})"
+
+
+def check_allowed_imports_named(allowed_imports: Collection[str], labels: Iterable[Any], where: str) -> None:
+    """Refuse (``ValueError`` naming it) a name of ``allowed_imports`` (``--allow-import``) that no
+    partner label of ``labels`` (those recorded in ``where``, and any given on the command line)
+    names as its policy: it would allow nothing, and a misspelt one would leave the intended
+    plug-in refused without a word. A label that does not parse names nothing here (its reader
+    refuses it)."""
+    if not allowed_imports:
+        return
+    named = set()
+    for label in labels:
+        try:
+            named.add(entry_policy_name(parse_entry_label(label) if isinstance(label, str) else label))
+        except (ValueError, KeyError, TypeError):
+            continue
+    unused = sorted(set(allowed_imports) - named)
+    if unused:
+        plugins = sorted(name for name in named if ":" in name)
+        raise ValueError(
+            f"--allow-import {unused[0]}: no partner {where} names it, so it allows nothing "
+            f"(plug-in partners named there: {', '.join(plugins) if plugins else 'none'})"
+        )
 
 
 def entry_policy_name(entry: PolicyEntry) -> str:

@@ -23,6 +23,7 @@ from empathy_zoo.atomic import (
 from empathy_zoo.metrics import METRIC_NAMES
 from empathy_zoo.names import GIF_OPENING, PNG_OPENING, check_no_links, check_own_file, check_replaceable
 from empathy_zoo.output_lock import hold_output_dir
+from empathy_zoo.policies import check_allowed_imports_named
 from empathy_zoo.provenance import git_commit, package_version
 from leaderboard.aggregate import (
     CONFIDENCE,
@@ -198,6 +199,8 @@ def _render(
     """Write every file of the leaderboard of ``read`` into ``out`` (a staging directory: the
     pages link their figures relative to it); returns them as :func:`write_leaderboard` names them."""
     results = read.results
+    fixed = (label for run in results for label in run.config.fixed.values())
+    check_allowed_imports_named(allowed_imports, fixed, "of the result files read")  # (before any figure)
     dqn_rows = dqn_rows_of(results)
     provenance = Provenance(
         command=command,

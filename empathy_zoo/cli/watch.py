@@ -186,7 +186,7 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.episode_gif import GIF_STEPS, EpisodeRecorder
     from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
     from empathy_zoo.limits import MAX_CYCLES, MAX_WATCH_STEPS, check_at_most
-    from empathy_zoo.policies import entry_label
+    from empathy_zoo.policies import check_allowed_imports_named, entry_label
     from empathy_zoo.render import render_text
 
     check_episodes(args.episodes, args.seed)
@@ -200,6 +200,8 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
         check_gif_path(args.gif)  # (its directory is made when the GIF is written: a refusal creates none)
     agent = find_agent(args.target, args.dir)
     fixed = dict(args.fixed or [])
+    named = [*dict(agent.describe().get("fixed") or {}).values(), *fixed.values()]
+    check_allowed_imports_named(args.allow_import or (), named, "of the agent file or --fixed")
     allowed = frozenset(args.allow_import or ())
     env = agent_env(agent, fixed, render_mode="rgb_array" if args.gif else None, allowed_imports=allowed)
     d = agent.describe()

@@ -49,7 +49,7 @@ from empathy_zoo.experiment.result_reader import read_result
 from empathy_zoo.limits import MAX_EVAL_EPISODES, MAX_EVALUATE_CYCLES, check_at_most, cpu_count
 from empathy_zoo.names import resolved
 from empathy_zoo.output_lock import command_line, hold_output_dir
-from empathy_zoo.policies import entry_label
+from empathy_zoo.policies import check_allowed_imports_named, entry_label
 from empathy_zoo.provenance import package_version
 from empathy_zoo.randomness import STREAMS
 from empathy_zoo.result_file import AGENT_SUFFIXES, RUNS_DIR, results_root
@@ -343,6 +343,8 @@ def evaluate_results(
     if out_dir is not None and not os.fspath(out_dir):
         raise ValueError("out_dir is an empty path: name the directory ('.' for the current one)")
     runs = results_of(results_dir)
+    fixed = (label for _, result in runs for label in result.config.fixed.values())
+    check_allowed_imports_named(allowed_imports, fixed, f"of the result files in {results_dir}")
     out = results_root(results_dir) if out_dir is None else Path(out_dir)
     check_evaluations_folder(results_dir, out)
     summary = EvaluationSummary()
