@@ -16,6 +16,7 @@ from empathy_zoo.atomic import (
     TEMP_MARKER,
     TEMP_SUFFIX,
     check_output_dir,
+    check_output_folders,
     process_alive,
     remove_stale_temp_files,
     write_text_atomic,
@@ -267,13 +268,7 @@ def _render(
 def _checked_out(out: Path) -> Path:
     """``out`` once nothing in the way of writing the leaderboard there is found, creating
     nothing: ``ValueError`` when it or its ``figures`` is a file, or a symbolic link lies below it."""
-    for directory in (out, out / FIGURES_DIR):
-        check_no_links(out, directory)
-        if directory.exists() and not directory.is_dir():
-            raise ValueError(
-                f"output directory {directory} is a file, not a directory; "
-                "choose another output directory (--out) or move the file away"
-            )
+    check_output_folders(out, (FIGURES_DIR,))
     return out
 
 

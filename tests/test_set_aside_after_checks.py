@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_probe24_set_aside import _dead_pid
 
 TRAIN = [
     "train",
@@ -49,15 +50,6 @@ def _tree(root: Path) -> list[tuple[str, str, int, bytes]]:
             else:
                 entries.append((str(path.relative_to(root)), "file", path.stat().st_size, path.read_bytes()))
     return sorted(entries)
-
-
-def _dead_pid() -> int:
-    """A process id no live process has (a child that has exited and been reaped)."""
-    pid = os.fork()
-    if pid == 0:
-        os._exit(0)
-    os.waitpid(pid, 0)
-    return pid
 
 
 def test_a_refused_train_leaves_an_unreadable_list_of_runs_where_it_was(tmp_path: Path, capsys) -> None:
