@@ -51,7 +51,7 @@ from empathy_zoo.limits import (
 )
 from empathy_zoo.metrics import METRIC_NAMES, METRIC_RANGES
 from empathy_zoo.names import PNG_OPENING, check_output_file, resolved, terminal_line
-from empathy_zoo.training.study_plan import DIRECTIONS, curve_value
+from empathy_zoo.training.study_plan import DIRECTIONS, curve_value, objective_direction
 from empathy_zoo.training.trials_figure import literal_text
 from leaderboard.tables import markdown_text
 
@@ -487,7 +487,10 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     else :class:`StudyFileError` naming ``path`` and the field. Every string anywhere one line of
     printable text, every number finite; what a table or figure shows (``plan.variant`` a name,
     ``plan.label``, each parameter's name and spec, each chosen text value) a label
-    (:func:`empathy_zoo.names.check_label`); the objective's metric and its reduction the suite's;
+    (:func:`empathy_zoo.names.check_label`); the objective's metric and its reduction the suite's,
+    the metric one ``tune`` takes for the study's environment (:func:`_check_moves`), its direction
+    the metric's (:func:`~empathy_zoo.training.study_plan.objective_direction`); ``experiment``,
+    ``variant``, ``method``, ``env`` and ``env_kwargs`` one experiment's (:func:`_worlds`);
     each env step count a whole number within ``trials × tuning seeds × steps`` at their bounds;
     each trial's state one ``tune`` writes, its wall time within ten years; every parameter value
     one of the plan's parameters, within its range (a ``choice``'s one of its values: a number or a
@@ -504,8 +507,8 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     ``plan.budget.trials`` the trials ``env_steps_at_most`` holds, ``trials_done`` (an int) the
     counted ones; an ``int`` range of whole ends, a ``log`` range above 0; every value
     of a trial (``value``, ``last_value``, each point of its ``curve`` and each seed's part of it)
-    within its metric's range (:func:`metric_bounds`); each curve point's ``per_seed`` one value per
-    tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
+    within its metric's range in the study's world (:func:`metric_bounds`); each curve point's
+    ``per_seed`` one value per tuning seed, its step the next of the plan's evaluation schedule (every ``eval_interval`` steps
     and the budget's last); ``best`` the finished trial its ``number`` names, with its value and
     parameters, and no finished trial better in the objective's ``direction``; the budget
     ``trials × tuning seeds × steps`` for at most :data:`MAX_TRIALS` trials, no more trials than it
@@ -536,6 +539,14 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
     direction = objective["direction"]
     if direction not in DIRECTIONS:
         raise check.fail("plan.objective.direction", " or ".join(DIRECTIONS), direction)
+    if direction != objective_direction(metric):
+        raise check.fail(
+            "plan.objective.direction",
+            f"{objective_direction(metric)}, how tune optimises {metric} (its fixed direction)",
+            direction,
+        )
+    worlds = _worlds(check, plan)
+    _check_moves(check, worlds, metric)
     budget = check.table(plan["budget"], "plan.budget")
     check.has(budget, ("env_steps_at_most", "steps", "eval_interval"), "plan.budget.")
     at_most = check.integer(budget["env_steps_at_most"], "plan.budget.env_steps_at_most", 1, MAX_ENV_STEPS)
@@ -556,7 +567,7 @@ def check_study(document: Any, path: str | os.PathLike[str]) -> dict[str, Any]:
             f"seeds × {steps:,} steps)",
             budget["trials"],
         )
-    bounds = metric_bounds(metric)
+    bounds = metric_bounds(metric, worlds)
     trained = check.integer(study["env_steps_trained"], "env_steps_trained", 0, at_most)
     specs = {name: _spec(check, name, spec) for name, spec in check.table(plan["params"], "plan.params").items()}
     over = objective.get("over", "last")
@@ -667,12 +678,79 @@ def _curve_values(check: DocumentChecker, trial: Mapping[str, Any], where: str, 
             raise check.fail(f"{where}.{name}", expected, value)
 
 
-def metric_bounds(metric: str) -> tuple[float, float | None]:
+def metric_bounds(metric: str, worlds: Sequence[tuple[str, Mapping[str, Any]]]) -> tuple[float, float | None]:
     """The range of a value of ``metric`` a study records (a mean over episodes and seeds):
-    :data:`~empathy_zoo.metrics.METRIC_RANGES`, survival at most :data:`~empathy_zoo.limits.MAX_CYCLES`
-    (a study records no ``max_cycles``; no run's is longer)."""
+    :data:`~empathy_zoo.metrics.METRIC_RANGES`, at most what one episode of its world can hold
+    (:func:`~empathy_zoo.result_file.episode_bounds`; the largest of ``worlds`` where the study
+    names several, :func:`_worlds`)."""
+    from empathy_zoo.result_file import episode_bounds
+
     low, high = METRIC_RANGES[metric]
-    return (low, MAX_CYCLES) if metric == "survival" and high is None else (low, high)
+    most = [episode_bounds(env, kwargs)[metric] for env, kwargs in worlds]
+    if any(bound is None for bound in most):
+        return low, high
+    world = max(bound for bound in most if bound is not None)
+    return low, world if high is None else min(high, world)
+
+
+def _largest_world(env: str) -> dict[str, Any]:
+    """The arguments of ``env`` whose episodes hold the most of every count: ``max_cycles`` and its
+    count of other agents at :data:`~empathy_zoo.limits.MAX_CYCLES` (the most a run is built with,
+    :func:`~empathy_zoo.result_file.check_env_kwargs`)."""
+    from empathy_zoo.environments import ENGINES
+
+    count = ENGINES[env].count_argument
+    return {"max_cycles": MAX_CYCLES, **({count: MAX_CYCLES} if count else {})}
+
+
+def _worlds(check: DocumentChecker, plan: Mapping[str, Any]) -> list[tuple[str, Mapping[str, Any]]]:
+    """The environments (with their arguments) the study's plan may have run on, checked as ``tune``
+    makes a plan: ``experiment`` its ``variant`` and ``method``'s id
+    (:func:`~empathy_zoo.run_ids.experiment_id`, ``<variant>__<method>-<hash>``; the two written
+    together, or neither); ``env`` (which ``tune`` writes with ``env_kwargs``) a registered
+    environment, the ``variant``'s own where the variant is named as one (a sweep file holds no
+    other), ``env_kwargs`` its arguments within their ranges
+    (:func:`~empathy_zoo.result_file.check_env_kwargs`). A study written before ``env`` was
+    recorded: the variant's environment at its largest arguments (:func:`_largest_world`), or every
+    environment's where the variant has a name of its own."""
+    from empathy_zoo.environments import ENGINES
+    from empathy_zoo.result_file import check_env_kwargs
+    from empathy_zoo.run_ids import experiment_id
+
+    variant = plan["variant"]
+    if "experiment" in plan or "method" in plan:  # (tune writes both; a table of studies reads neither)
+        check.has(plan, ("experiment", "method"), "plan.")
+        method = check.text(plan["method"], "plan.method")
+        experiment = check.text(plan["experiment"], "plan.experiment")
+        head, _, digest = experiment.rpartition("-")
+        if not head.startswith(f"{variant}__") or len(digest) != 8 or any(c not in "0123456789abcdef" for c in digest):
+            raise check.fail(
+                "plan.experiment", f"the id of an experiment of its variant ({variant}__<method>-<8 hex digits>)", experiment
+            )
+        if head != experiment_id(variant, method, {}).rpartition("-")[0]:
+            raise check.fail("plan.method", f"the method of its experiment ({experiment})", method)
+    if "env" not in plan and "env_kwargs" not in plan:
+        envs = [variant] if variant in ENGINES else sorted(ENGINES)
+        return [(env, _largest_world(env)) for env in envs]
+    check.has(plan, ("env", "env_kwargs"), "plan.")
+    env = plan["env"]
+    if env not in ENGINES:
+        raise check.fail("plan.env", f"one of the environments ({', '.join(sorted(ENGINES))})", env)
+    if variant in ENGINES and variant != env:
+        raise check.fail("plan.env", f"{variant}, the environment its variant is named as", env)
+    return [(env, check_env_kwargs(check, env, plan["env_kwargs"], "plan.env_kwargs"))]
+
+
+def _check_moves(check: DocumentChecker, worlds: Sequence[tuple[str, Mapping[str, Any]]], metric: str) -> None:
+    """Refuse an objective's ``metric`` that every episode of the study's world gives one value
+    (:func:`~empathy_zoo.result_file.constant_metrics`, as ``tune`` refuses it: every trial would tie)."""
+    from empathy_zoo.result_file import constant_metrics
+
+    if all(metric in constant_metrics(env, kwargs) for env, kwargs in worlds):
+        envs = ", ".join(sorted({env for env, _ in worlds}))
+        raise check.fail(
+            "plan.objective.metric", f"a metric that moves in {envs} (tune refuses one every episode gives one value)", metric
+        )
 
 
 def _in_range(check: DocumentChecker, value: Any, field: str, metric: str, bounds: tuple[float, float | None]) -> float:

@@ -204,11 +204,18 @@ def _no_drawing(*args: Any, **kwargs: Any) -> Any:
     raise _Drawn
 
 
+def _rename_variant(document: dict[str, Any], variant: str) -> None:
+    """Name the study's variant ``variant``, its experiment id with it (as ``tune`` names both)."""
+    plan = document["plan"]
+    plan["experiment"] = variant + plan["experiment"].removeprefix(plan["variant"])
+    plan["variant"] = variant
+
+
 def _variants(counts: list[int]) -> list[dict[str, Any]]:
     """Studies of ``len(counts)`` variants, ``counts[i]`` of variant ``i`` (one document, shared)."""
     studies = []
     for i, count in enumerate(counts):
-        document = _document(lambda d, i=i: d["plan"].__setitem__("variant", f"variant_{i:03d}"))
+        document = _document(lambda d, i=i: _rename_variant(d, f"variant_{i:03d}"))
         studies += [document] * count
     return studies
 

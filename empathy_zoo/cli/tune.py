@@ -42,13 +42,13 @@ def default_objective(env: str, metric: str | None = None) -> tuple[str, str]:
     """``(metric, direction)`` of a study on environment ``env``: ``metric`` (default: the
     environment's task metric), maximised unless fewer is better."""
     from empathy_zoo.environments import ENVIRONMENT_TABLE
-    from empathy_zoo.metrics import HIGHER_IS_BETTER
+    from empathy_zoo.training.study_plan import objective_direction
 
     if metric is None:
         if env not in ENVIRONMENT_TABLE:
             raise ValueError(f"{env} has no task metric on record: name the objective with --objective METRIC")
         metric = ENVIRONMENT_TABLE[env].task
-    return metric, "maximize" if HIGHER_IS_BETTER.get(metric, True) else "minimize"
+    return metric, objective_direction(metric)
 
 
 def check_objective_moves(env: str, env_kwargs: Mapping[str, Any], metric: str) -> None:

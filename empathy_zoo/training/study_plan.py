@@ -16,7 +16,7 @@ import numpy as np
 from empathy_zoo.experiment.model import Budget, RunSpec
 from empathy_zoo.experiment.search_space import ParamSpec
 from empathy_zoo.limits import MAX_SEED, MAX_SEEDS, MAX_STEPS, MAX_TRIALS, check_at_most
-from empathy_zoo.metrics import METRIC_NAMES
+from empathy_zoo.metrics import HIGHER_IS_BETTER, METRIC_NAMES
 
 __all__ = [
     "DIRECTIONS",
@@ -27,6 +27,7 @@ __all__ = [
     "TUNING_SEED_BASE",
     "StudyPlan",
     "curve_value",
+    "objective_direction",
     "select_experiment",
     "ties_at_best",
     "trial_value",
@@ -42,6 +43,15 @@ STARTUP_TRIALS = 5
 of a laptop study of 10 trials; Optuna's own default, 10, would leave such a study all random)."""
 DIRECTIONS = ("maximize", "minimize")
 """How an objective is optimised."""
+
+
+def objective_direction(metric: str) -> str:
+    """How ``tune`` optimises ``metric``: ``minimize`` where fewer is better
+    (:data:`~empathy_zoo.metrics.HIGHER_IS_BETTER`), else ``maximize``; the one rule ``tune`` and
+    the readers of its studies hold a study's direction to."""
+    return "maximize" if HIGHER_IS_BETTER.get(metric, True) else "minimize"
+
+
 OBJECTIVE_OVER: dict[str, str] = {
     "last": "mean over the tuning seeds of the metric's mean in the run's last greedy evaluation",
     "curve": (
@@ -130,11 +140,14 @@ class StudyPlan:
             raise ValueError(f"tuning seeds {overlap} are reporting seeds of {self.source}: tune on other seeds")
 
     def record(self) -> dict[str, Any]:
-        """The plan as ``study.json`` keeps it."""
+        """The plan as ``study.json`` keeps it: with the environment and its arguments (``env``,
+        ``env_kwargs``: the world its values are bounded by, as a reader checks them)."""
         return {
             "sweep_file": self.source,
             "experiment": self.base.experiment_id,
             "variant": self.base.variant.label,
+            "env": self.base.env,
+            "env_kwargs": self.base.env_kwargs,
             "method": self.base.method,
             "label": self.base.display_label(),
             "params": {spec.name: spec.text.partition("=")[2] for spec in self.params},

@@ -98,9 +98,11 @@ _FIELDS: dict[int, tuple[str, ...]] = {
 
 def stored_plan(plan: StudyPlan, update_kernel: str) -> dict[str, Any]:
     """The plan as the journal stores it (``op_code`` 2): :meth:`StudyPlan.record` without the
-    number of trials (a resumed study may change it), with the update kernel its trials train with."""
+    number of trials (a resumed study may change it) and without ``env`` and ``env_kwargs`` (its
+    ``experiment`` id's hash holds them; a journal written before the record had them resumes),
+    with the update kernel its trials train with."""
     record = plan.record()
-    wanted = {key: value for key, value in record.items() if key != "budget"}
+    wanted = {key: value for key, value in record.items() if key not in ("budget", "env", "env_kwargs")}
     wanted["budget"] = {k: v for k, v in record["budget"].items() if k not in ("trials", "env_steps_at_most")}
     wanted["update_kernel"] = update_kernel
     return wanted
