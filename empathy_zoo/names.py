@@ -251,12 +251,21 @@ def terminal_line(text: object) -> str:
 
 def positional_tool(prog: str, usage: str, args: Sequence[str], count: int, body: Callable[[list[str]], int]) -> int:
     """Run a tool that takes ``count`` paths and nothing else: ``body(paths)``'s status, or 2 with
-    ``usage`` (``usage: python -m ...``) when the arguments are not ``count`` paths (an unknown
-    option included), or 2 with one line ``prog: error: ...`` when a file it reads is refused
-    (a ``ValueError`` or ``OSError``: never a traceback)."""
+    ``usage`` (``usage: python -m ...``) and a line ``prog: error: ...`` saying what is wrong (as
+    argparse says it) when the arguments are not ``count`` paths (an unknown option included), or
+    2 with one line ``prog: error: ...`` when a file it reads is refused (a ``ValueError`` or
+    ``OSError``: never a traceback)."""
     paths = list(args)
-    if len(paths) != count or any(path.startswith("-") for path in paths):
-        print(usage, file=sys.stderr)
+    options = [path for path in paths if path.startswith("-")]
+    if options or len(paths) != count:
+        wanted = f"{count} path{'s' if count != 1 else ''}"
+        given = ", ".join(terminal_line(path) for path in paths[:5]) + (", ..." if len(paths) > 5 else "")
+        problem = (
+            f"unrecognized arguments: {' '.join(terminal_line(option) for option in options[:5])}"
+            if options
+            else f"takes {wanted}, got {len(paths)}{f': {given}' if paths else ''}"
+        )
+        print(f"{usage}\n{prog}: error: {problem}", file=sys.stderr)
         return 2
     try:
         return body(paths)

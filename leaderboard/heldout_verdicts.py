@@ -16,7 +16,7 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import replace
 
-from empathy_zoo.names import positional_tool
+from empathy_zoo.names import positional_tool, tool_help
 from leaderboard.aggregate import load_results
 from leaderboard.heldout_scores import Reading, heldout_cells, load_heldout, readings
 from leaderboard.tables import markdown_table
@@ -66,10 +66,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     import sys
 
     args = list(sys.argv[1:] if argv is None else argv)
+    usage = f"usage: {PROG} RESULTS_DIR"
     if args in (["-h"], ["--help"]):
-        print(main.__doc__)
+        print(tool_help(usage, __doc__))
         return 0
-    return positional_tool(PROG, f"usage: {PROG} RESULTS_DIR", args, 1, _print_verdicts)
+    return positional_tool(PROG, usage, args, 1, _print_verdicts)
 
 
 def _print_verdicts(paths: list[str]) -> int:

@@ -36,7 +36,27 @@ def test_compare_runs_prints_what_python_m_prints(capsys: pytest.CaptureFixture[
 
 def test_a_usage_error_names_the_subcommand(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["analyse", "compare-runs", str(QUICK)]) == 2
-    assert capsys.readouterr().err.strip() == "usage: empathy-zoo analyse compare-runs OLD_DIR NEW_DIR"
+    assert capsys.readouterr().err.splitlines() == [
+        "usage: empathy-zoo analyse compare-runs OLD_DIR NEW_DIR",
+        f"empathy-zoo analyse compare-runs: error: takes 2 paths, got 1: {QUICK}",
+    ]
+
+
+@pytest.mark.parametrize(
+    ("args", "problem"),
+    [
+        (["q", "q"], "takes 1 path, got 2: q, q"),
+        (["q", "--foo"], "unrecognized arguments: --foo"),
+        ([], "takes 1 path, got 0"),
+    ],
+)
+def test_a_usage_error_says_what_is_wrong(capsys: pytest.CaptureFixture[str], args: list[str], problem: str) -> None:
+    capsys.readouterr()
+    assert main(["analyse", "heldout-verdicts", *args]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "usage: empathy-zoo analyse heldout-verdicts RESULTS_DIR",
+        f"empathy-zoo analyse heldout-verdicts: error: {problem}",
+    ]
 
 
 def test_a_tool_help_exits_zero(capsys: pytest.CaptureFixture[str]) -> None:
