@@ -71,6 +71,7 @@ __all__ = [
     "EvaluationFileError",
     "evaluation_path",
     "evaluations_root",
+    "check_no_stray_json",
     "check_not_read_folder",
     "evaluation_files",
     "check_evaluation",
@@ -137,14 +138,14 @@ RESULT_FILE_NAME = re.compile(r"[A-Za-z0-9_.-]+__[A-Za-z0-9_.-]+-[0-9a-f]{8}__s[
 
 def check_not_read_folder(folder: str | os.PathLike[str], what: str) -> None:
     """Refuse (``ValueError`` naming ``what``, the file or folder to write) a ``folder`` whose JSON
-    files a results directory reads as its own: a ``runs`` folder, an evaluation set's folder
-    (``evaluations/<set>``), as typed and where ``..`` and links lead, or a folder of result files
+    files a results directory reads as its own: a ``runs`` folder, an ``evaluations`` folder or an
+    evaluation set's folder (``evaluations/<set>``), as typed and where ``..`` and links lead, or a folder of result files
     (one with no ``runs`` folder that holds a file named as a result file is: every JSON file in
     it is read as a result). A file written there would be read as a broken result or evaluation,
     and refuse the whole directory. Looking stops at the first result file's name."""
     typed = Path(folder)
     for place in (typed, resolved(typed.absolute())):
-        if place.name == RUNS_DIR or place.parent.name == EVALUATIONS_DIR:
+        if place.name in (RUNS_DIR, EVALUATIONS_DIR) or place.parent.name == EVALUATIONS_DIR:
             raise ValueError(
                 f"{what} lies in a folder of a results directory ({place}), whose JSON files are read as results "
                 "or evaluations: write it elsewhere"
@@ -186,7 +187,22 @@ def evaluation_files(results_dir: str | os.PathLike[str]) -> list[Path]:
             f"{misplaced} lies inside the runs folder, where no evaluation is read: move its set folders into {root} "
             f"(where the evaluations of {results_dir} are read)"
         )
+    check_no_stray_json(root)
     return data_files(root, "*/*.json", "evaluation file")
+
+
+def check_no_stray_json(root: Path) -> None:
+    """Refuse (``ValueError`` naming it) a JSON file at the top of an ``evaluations`` folder
+    ``root``: evaluations lie in ``<root>/<scenario set>/``, so it would be passed over without a
+    word (an export written there, a file moved up by hand). Names starting with ``.`` are left out."""
+    if not root.is_dir():
+        return
+    stray = sorted(path for path in root.glob("*.json") if not path.name.startswith("."))
+    if stray:
+        raise ValueError(
+            f"{stray[0]} lies at the top of the evaluations folder {root}, where no evaluation is read "
+            f"(they lie in {root}/<scenario set>/): move it away"
+        )
 
 
 def _checker(path: Path) -> DocumentChecker:

@@ -30,7 +30,14 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from empathy_zoo.data_files import data_files
-from empathy_zoo.evaluation_file import EVALUATIONS_DIR, evaluation_files, evaluation_mismatch, read_evaluation
+from empathy_zoo.evaluation_file import (
+    EVALUATIONS_DIR,
+    check_no_stray_json,
+    evaluation_files,
+    evaluation_mismatch,
+    evaluations_root,
+    read_evaluation,
+)
 from empathy_zoo.evaluation_record import EvaluationResult
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.names import resolved
@@ -56,6 +63,7 @@ def evaluation_dir_files(directory: str | os.PathLike[str]) -> list[Path]:
         )
     found = evaluation_files(root)
     if not found and root.name == EVALUATIONS_DIR:
+        check_no_stray_json(root)
         found = data_files(root, "*/*.json", "evaluation file")
     if not found:
         raise ValueError(
@@ -101,6 +109,7 @@ def match_evaluations(
     if not evaluation_dirs:
         return []
     read_dirs = {resolved(results_root(directory)): os.fspath(directory) for directory in results_dirs}
+    read_evaluations = {resolved(evaluations_root(directory)): os.fspath(directory) for directory in results_dirs}
     seen_dirs: dict[Path, str] = {}
     for directory in evaluation_dirs:
         where = resolved(results_root(directory))  # (DIR/runs is DIR: its evaluations are DIR/evaluations)
@@ -108,6 +117,11 @@ def match_evaluations(
             raise ValueError(
                 f"--evaluations {directory} is the results directory {read_dirs[where]}: "
                 "its evaluations are read beside its runs already"
+            )
+        if where in read_evaluations:
+            raise ValueError(
+                f"--evaluations {directory} is the evaluations folder of the results directory {read_evaluations[where]}: "
+                "it is read beside its runs already"
             )
         if where in seen_dirs:
             raise ValueError(f"--evaluations {directory} is given twice (as {seen_dirs[where]} too)")
