@@ -136,16 +136,19 @@ RESULT_FILE_NAME = re.compile(r"[A-Za-z0-9_.-]+__[A-Za-z0-9_.-]+-[0-9a-f]{8}__s[
 """The name of a result file (its run id, :func:`empathy_zoo.run_ids.run_id`, and ``.json``)."""
 
 
-def check_not_read_folder(folder: str | os.PathLike[str], what: str) -> None:
+def check_not_read_folder(folder: str | os.PathLike[str], what: str, runs_by_name: bool = True) -> None:
     """Refuse (``ValueError`` naming ``what``, the file or folder to write) a ``folder`` whose JSON
     files a results directory reads as its own: a ``runs`` folder, an ``evaluations`` folder or an
     evaluation set's folder (``evaluations/<set>``), as typed and where ``..`` and links lead, or a folder of result files
     (one with no ``runs`` folder that holds a file named as a result file is: every JSON file in
     it is read as a result). A file written there would be read as a broken result or evaluation,
-    and refuse the whole directory. Looking stops at the first result file's name."""
+    and refuse the whole directory. Looking stops at the first result file's name. With
+    ``runs_by_name`` false, a folder named ``runs`` is refused only where it holds result files (an
+    output directory of ``train``, whose default is ``runs``)."""
     typed = Path(folder)
+    names = (RUNS_DIR, EVALUATIONS_DIR) if runs_by_name else (EVALUATIONS_DIR,)
     for place in (typed, resolved(typed.absolute())):
-        if place.name in (RUNS_DIR, EVALUATIONS_DIR) or place.parent.name == EVALUATIONS_DIR:
+        if place.name in names or place.parent.name == EVALUATIONS_DIR:
             raise ValueError(
                 f"{what} lies in a folder of a results directory ({place}), whose JSON files are read as results "
                 "or evaluations: write it elsewhere"

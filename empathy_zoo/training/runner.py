@@ -25,6 +25,7 @@ from typing import Any
 
 from empathy_zoo.atomic import PROBE_BYTES, check_output_dir, remove_stale_temp_files
 from empathy_zoo.data_files import data_files
+from empathy_zoo.evaluation_file import check_not_read_folder
 from empathy_zoo.experiment.model import RunSpec, group_specs
 from empathy_zoo.experiment.records import RunResult
 from empathy_zoo.experiment.result_reader import read_result
@@ -193,6 +194,7 @@ def check_runs(
         raise ValueError(f"unknown backend {options.backend!r}; choose 'local' or 'ray'")
     if options.backend == "ray" and not import_ray().is_initialized():
         check_ray_address(options.address)  # (missing Ray, or no cluster there, is said before anything is written)
+    check_not_read_folder(out_dir, f"the output directory {out_dir}", runs_by_name=False)  # (its files would stop being read)
     if finished is None:
         finished = read_finished(out_dir)
     check_one_experiment_per_label(
