@@ -203,9 +203,10 @@ class EpisodeRecorder:
         """The frames kept reach the episode's end."""
         return bool(self._steps) and self._steps[-1][1].over
 
-    def gif(self) -> bytes:
+    def gif(self, comment: str = "") -> bytes:
         """The GIF of the frames kept (looping; each frame one tick of the env's ``render_fps``,
-        the last held :data:`HOLD_MS`)."""
+        the last held :data:`HOLD_MS`); a ``comment`` is written as its comment extension (the
+        mark of the tool that wrote it, e.g. :data:`~empathy_zoo.names.WATCH_GIF_MARK`)."""
         if not self._steps:
             raise ValueError("no frame was recorded: pass the recorder as on_step to play_greedy")
         fonts = _fonts()
@@ -222,6 +223,7 @@ class EpisodeRecorder:
             append_images=frames[1:],
             duration=[tick] * (len(frames) - 1) + [HOLD_MS],
             loop=0,
+            **({"comment": comment.encode("latin-1")} if comment else {}),
         )
         return buffer.getvalue()
 

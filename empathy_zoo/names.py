@@ -32,6 +32,13 @@ __all__ = [
     "cannot_create",
     "PNG_OPENING",
     "GIF_OPENING",
+    "FIGURE_MARK_KEY",
+    "TUNING_SUMMARY_MARK",
+    "TRIALS_MARK",
+    "IMPORTANCE_MARK",
+    "WATCH_GIF_MARK",
+    "check_marked_figure",
+    "figure_marker",
     "confined",
     "positional_tool",
     "terminal_line",
@@ -148,6 +155,51 @@ PNG_OPENING = b"\x89PNG\r\n\x1a\n"
 """The first bytes of every PNG file."""
 GIF_OPENING = b"GIF8"
 """The first bytes of every GIF file (``GIF87a``, ``GIF89a``)."""
+
+FIGURE_MARK_KEY = "Software"
+"""The key of the PNG ``tEXt`` chunk that marks a figure the suite wrote (its value: one of the marks below)."""
+TUNING_SUMMARY_MARK = "empathy-zoo tuning-summary"
+"""The mark of the figure ``analyse tuning-summary --figure`` writes."""
+TRIALS_MARK = "empathy-zoo trials"
+"""The mark of the ``trials.png`` figure ``tune`` writes."""
+IMPORTANCE_MARK = "empathy-zoo importance"
+"""The mark of the ``importance.png`` figure ``tune`` writes."""
+WATCH_GIF_MARK = "empathy-zoo watch"
+"""The comment of the GIF ``watch --gif`` writes."""
+MARK_HEAD_BYTES = 64 * 1024
+"""Bytes of a file read, at most, to find its mark (the suite writes it before the image data)."""
+
+
+def figure_marker(opening: bytes, mark: str) -> bytes:
+    """The bytes ``mark`` takes in a file that begins with ``opening``: a PNG's ``tEXt`` chunk
+    keyed :data:`FIGURE_MARK_KEY` (as Matplotlib's ``savefig(metadata=...)`` writes it), a GIF's
+    comment extension (as Pillow's ``save(comment=...)`` writes it)."""
+    text = mark.encode("latin-1")
+    if opening == PNG_OPENING:
+        data = FIGURE_MARK_KEY.encode("latin-1") + b"\0" + text
+        return len(data).to_bytes(4, "big") + b"tEXt" + data
+    return b"\x21\xfe" + bytes([len(text)]) + text + b"\0"
+
+
+def check_marked_figure(path: str | os.PathLike[str], kind: str, opening: bytes, mark: str) -> Path:
+    """``path`` if nothing is there, or anything but a regular file (:func:`check_replaceable`
+    says what of those), or an empty file, or a file that begins with ``opening`` and holds the
+    mark ``mark`` (:func:`figure_marker`) in its first :data:`MARK_HEAD_BYTES` bytes: a ``kind``
+    figure the suite wrote there; else a ``ValueError`` naming it. Another image (a user's, or
+    one the suite wrote for another purpose) is never replaced."""
+    target = Path(path)
+    try:
+        status = os.lstat(target)
+        if not stat.S_ISREG(status.st_mode) or status.st_size == 0:
+            return target
+        with open(target, "rb") as handle:
+            head = handle.read(MARK_HEAD_BYTES)
+    except OSError as error:
+        _refuse_a_loop(target, error)
+        return target
+    if not head.startswith(opening) or figure_marker(opening, mark) not in head:
+        raise ValueError(f"{target} exists and is no {kind} figure this suite wrote: move it away or choose another path")
+    return target
 
 
 def check_own_file(path: str | os.PathLike[str], kind: str, opening: bytes) -> Path:

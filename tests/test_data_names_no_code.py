@@ -219,7 +219,9 @@ def test_watch_gif_never_replaces_a_device_a_link_or_a_directory(tmp_path) -> No
     with pytest.raises(ValueError, match="not a regular file"):
         check_gif_path(str(tmp_path / "pipe.gif"))
     (tmp_path / "pipe.gif").unlink()
-    (tmp_path / "real.gif").write_bytes(b"GIF89a")
+    from empathy_zoo.names import GIF_OPENING, WATCH_GIF_MARK, figure_marker
+
+    (tmp_path / "real.gif").write_bytes(b"GIF89a" + figure_marker(GIF_OPENING, WATCH_GIF_MARK))  # (a GIF watch wrote)
     os.symlink(tmp_path / "real.gif", tmp_path / "link.gif")
     with pytest.raises(ValueError, match="symbolic link"):
         check_gif_path(str(tmp_path / "link.gif"))

@@ -225,7 +225,7 @@ STUDY = ROOT / "docs" / "results" / "methods" / "tuning" / "coexistence_v0" / "d
 
 
 def _study_refused(tmp_path: Path, change: Any, field: str) -> None:
-    from leaderboard.tuning_summary import StudyFileError, check_study
+    from leaderboard.study_file import StudyFileError, check_study
 
     document = json.loads(STUDY.read_text())
     check_study(document, STUDY)  # (as shipped)

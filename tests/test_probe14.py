@@ -60,7 +60,7 @@ def test_an_agent_header_without_a_run_id_has_none_to_check(tmp_path: Path) -> N
 
 
 def _study_refused(tmp_path: Path, change: Any, field: str) -> None:
-    from leaderboard.tuning_summary import StudyFileError, check_study
+    from leaderboard.study_file import StudyFileError, check_study
 
     document = json.loads(STUDY.read_text())
     change(document)

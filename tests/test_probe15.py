@@ -19,7 +19,7 @@ from empathy_zoo.agent_file import write_agent_file
 from empathy_zoo.evaluation_file import EvaluationFileError, check_evaluation
 from empathy_zoo.experiment.result_reader import check_result, read_result
 from empathy_zoo.result_file import ResultFileError
-from leaderboard.tuning_summary import StudyFileError, check_study, read_study
+from leaderboard.study_file import StudyFileError, check_study, read_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = sorted((ROOT / "docs" / "results" / "quick" / "runs").glob("coexistence_v0__empathic_dqn-*__s0.json"))[0]

@@ -15,7 +15,7 @@ import pytest
 
 from empathy_zoo.cli import main
 from empathy_zoo.training.study_plan import curve_value
-from leaderboard.tuning_summary import StudyFileError, check_study
+from leaderboard.study_file import StudyFileError, check_study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "docs" / "results" / "methods" / "tuning" / "coexistence_v0" / "dqn" / "study.json"
@@ -102,7 +102,7 @@ def test_the_figure_is_never_written_over_a_study(tmp_path: Path, capsys: Any) -
     _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(link)], str(link))
     hard = tmp_path / "elsewhere.png"
     os.link(path, hard)  # (the same file under a .png name)
-    _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(hard)], str(hard), "is no PNG file")
+    _refused_by_the_command(tmp_path, capsys, [str(tmp_path), "--figure", str(hard)], str(hard), "is no tuning-summary figure")
     assert path.read_bytes() == before and hard.read_bytes() == before
 
 
@@ -210,9 +210,9 @@ def test_a_choice_value_of_another_type_is_refused(tmp_path: Path, values: list[
 
 def test_what_tune_writes_reads(tmp_path: Path) -> None:
     from empathy_zoo.training import tuning
-    from leaderboard import tuning_summary
+    from leaderboard import study_file
 
-    assert tuning.STUDY_SCHEMA == tuning_summary.STUDY_SCHEMA
+    assert tuning.STUDY_SCHEMA == study_file.STUDY_SCHEMA
     assert check_study(_document(lambda d: d.pop("schema")), tmp_path / "study.json")  # (a study before schemas)
 
     def interrupted(document: dict[str, Any]) -> None:  # (stopped between its ask and its parameters)

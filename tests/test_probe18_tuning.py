@@ -23,7 +23,8 @@ from empathy_zoo.cli import main
 from empathy_zoo.experiment.search_space import parse_param
 from empathy_zoo.limits import MAX_FIGURE_PIXELS, MAX_FIGURE_SIDE, MAX_RANGE_END
 from empathy_zoo.training.trials_figure import render_importance_png, render_trials_png
-from leaderboard.tuning_summary import StudyFileError, check_study, render_studies_png
+from leaderboard.study_file import StudyFileError, check_study
+from leaderboard.tuning_summary import render_studies_png
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "docs" / "results" / "methods" / "tuning"

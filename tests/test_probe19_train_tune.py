@@ -63,7 +63,7 @@ def test_tune_resumed_with_fewer_trials_than_done_is_refused_up_front(
 def test_tune_resumed_with_as_many_trials_as_done_rewrites_a_study_the_checker_takes(
     study: tuple[Path, Path], tmp_path: Path
 ) -> None:
-    from leaderboard.tuning_summary import check_study
+    from leaderboard.study_file import check_study
 
     sweep, genuine = study
     out = tmp_path / "study"

@@ -315,7 +315,7 @@ STUDY_CONTRADICTIONS = {
 
 
 def test_every_shipped_study_passes() -> None:
-    from leaderboard.tuning_summary import check_study
+    from leaderboard.study_file import check_study
 
     shipped = sorted((RESULTS.parent).rglob("study.json"))
     assert STUDY in shipped

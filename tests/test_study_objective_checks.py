@@ -124,14 +124,14 @@ def test_a_plan_tune_cannot_write_is_refused_naming_its_field(
 
 
 def test_the_real_study_of_a_tiny_tune_is_read(real_study: dict[str, Any], tmp_path: Path) -> None:
-    from leaderboard.tuning_summary import check_study
+    from leaderboard.study_file import check_study
 
     assert real_study["plan"]["env"] == "coexistence_v0" and real_study["plan"]["env_kwargs"] == {"max_cycles": _max_cycles()}
     assert check_study(copy.deepcopy(real_study), tmp_path / "study.json") == real_study
 
 
 def test_values_at_the_world_bound_are_read(real_study: dict[str, Any], tmp_path: Path) -> None:
-    from leaderboard.tuning_summary import check_study
+    from leaderboard.study_file import check_study
 
     harms = copy.deepcopy(real_study)
     _objective("harms", "minimize")(harms)

@@ -10,7 +10,8 @@ from typing import Any
 
 import pytest
 
-from leaderboard.tuning_summary import find_studies, main, render_studies_png, summarise, summary_table
+from leaderboard.study_file import find_studies
+from leaderboard.tuning_summary import main, render_studies_png, summarise, summary_table
 
 
 def _curve(state: str, value: float | None) -> list[dict[str, Any]]:

@@ -13,7 +13,7 @@ import pytest
 from test_tuning_summary import STUDIES
 
 from empathy_zoo.cli import main as cli_main
-from leaderboard.tuning_summary import find_studies
+from leaderboard.study_file import find_studies
 
 PROG = "empathy-zoo analyse tuning-summary"
 NOTED = 10
@@ -38,7 +38,7 @@ def test_a_study_reached_by_a_symbolic_and_a_hard_link_is_read_once(tmp_path: Pa
     (root / "c").mkdir()
     os.link(real, root / "c" / "study.json")
     assert find_studies(root) == [real]
-    from leaderboard.tuning_summary import study_files
+    from leaderboard.study_file import study_files
 
     assert study_files(root) == ([real], [(root / "c" / "study.json", real), (root / "study.json", real)])
     assert cli_main(["analyse", "tuning-summary", str(root)]) == 0
@@ -52,7 +52,7 @@ def test_a_study_reached_by_a_symbolic_and_a_hard_link_is_read_once(tmp_path: Pa
 
 def test_a_study_only_links_reach_is_read_once_by_its_first(tmp_path: Path) -> None:
     elsewhere = _write(tmp_path / "elsewhere", STUDIES[1])
-    from leaderboard.tuning_summary import study_files
+    from leaderboard.study_file import study_files
 
     root = tmp_path / "root"
     for folder in ("x", "y"):
@@ -101,7 +101,7 @@ def test_a_study_json_that_leads_nowhere_is_refused_not_left_out(
     (tmp_path / "x").mkdir()
     broken = tmp_path / "x" / "study.json"
     broken.symlink_to("nowhere" if place == "dangling" else "study.json")
-    from leaderboard.tuning_summary import study_files
+    from leaderboard.study_file import study_files
 
     assert broken in study_files(tmp_path)[0]
     assert cli_main(["analyse", "tuning-summary", str(tmp_path)]) == 2

@@ -145,11 +145,13 @@ def check_gif_path(path: str) -> Path:
     nothing: a path ending in ``.gif`` is given (``""`` is refused, not read as the current
     directory; any other suffix too, so a result or agent file is never replaced), nothing or a
     regular file is there (never a directory, a link, a device or a pipe: only a regular file is
-    ever replaced, :func:`empathy_zoo.names.check_replaceable`), and its directory takes a file
+    ever replaced, :func:`empathy_zoo.names.check_replaceable`), a regular file there is a GIF
+    ``watch`` wrote (its :data:`~empathy_zoo.names.WATCH_GIF_MARK` comment:
+    :func:`empathy_zoo.names.check_marked_figure`), and its directory takes a file
     (probed with a file of the suite's own name, removed at once; where the directory is missing,
     its nearest existing parent is probed and the directory is made only when the GIF is
     written); else a ``ValueError`` naming it."""
-    from empathy_zoo.names import GIF_OPENING, check_own_file, check_replaceable
+    from empathy_zoo.names import GIF_OPENING, WATCH_GIF_MARK, check_marked_figure, check_replaceable
 
     if not path:
         raise ValueError("--gif '': an empty path; name the GIF's file (e.g. --gif episode.gif)")
@@ -166,7 +168,7 @@ def check_gif_path(path: str) -> Path:
         raise ValueError(f"--gif {path} is no GIF file name: name the file to write, ending in .gif (e.g. --gif episode.gif)")
     try:
         check_replaceable(target)
-        check_own_file(target, "GIF file", GIF_OPENING)  # (never a user's other file of that name)
+        check_marked_figure(target, "watch GIF", GIF_OPENING, WATCH_GIF_MARK)  # (never a user's or a leaderboard's GIF)
     except ValueError as error:
         raise ValueError(f"--gif {error}") from None
     parent = next((folder for folder in target.absolute().parents if folder.exists() or folder.is_symlink()), None)
@@ -186,6 +188,7 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
     from empathy_zoo.episode_gif import GIF_STEPS, EpisodeRecorder
     from empathy_zoo.greedy_episode import EpisodeStep, agent_env, agent_policies, format_metrics, play_greedy
     from empathy_zoo.limits import MAX_CYCLES, MAX_WATCH_STEPS, check_at_most
+    from empathy_zoo.names import WATCH_GIF_MARK
     from empathy_zoo.policies import check_allowed_imports_named, entry_label
     from empathy_zoo.render import render_text
 
@@ -232,7 +235,7 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
         cut = "" if outcome.ended else f" (its first {outcome.steps:,} steps)"
         print(f"episode {episode} (seed {seed}){cut}: {format_metrics(outcome.metrics)}", flush=True)
     if recorder is not None:
-        data = recorder.gif()
+        data = recorder.gif(WATCH_GIF_MARK)  # (the mark check_gif_path reads before replacing it)
         path = write_gif(args.gif, data)
         steps = recorder.frames - 1
         shown = f"the whole of episode 0, {steps} steps" if recorder.whole_episode else f"episode 0's first {steps} steps"

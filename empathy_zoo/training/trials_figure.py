@@ -34,6 +34,7 @@ from typing import Any
 
 from empathy_zoo.atomic import write_bytes_atomic
 from empathy_zoo.figure_text import literal_text
+from empathy_zoo.names import IMPORTANCE_MARK, TRIALS_MARK
 
 __all__ = [
     "IMPORTANCE_FIGURE",
@@ -65,10 +66,12 @@ def _figure(size: tuple[float, float]) -> Any:
     return figure
 
 
-def _png(figure: Any, dpi: int) -> bytes:
-    """PNG bytes of ``figure``, with no software stamp (the same figure gives the same bytes)."""
+def _png(figure: Any, dpi: int, mark: str) -> bytes:
+    """PNG bytes of ``figure``, stamped with the suite's ``mark`` in place of Matplotlib's version
+    (the same figure gives the same bytes; ``tune`` replaces only a figure holding its mark:
+    :func:`empathy_zoo.names.check_marked_figure`)."""
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
+    figure.savefig(buffer, format="png", dpi=dpi, metadata={"Software": mark})
     return buffer.getvalue()
 
 
@@ -125,7 +128,7 @@ def render_trials_png(study: Mapping[str, Any], dpi: int = 110) -> bytes:
         ),
         fontsize="medium",
     )
-    return _png(figure, dpi)
+    return _png(figure, dpi, TRIALS_MARK)
 
 
 def write_trials_figure(study: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
@@ -203,7 +206,7 @@ def render_importance_png(study: Mapping[str, Any], importances: Mapping[str, fl
         fontsize="medium",
     )
     axes.tick_params(axis="y", labelsize="small")
-    return _png(figure, dpi)
+    return _png(figure, dpi, IMPORTANCE_MARK)
 
 
 def write_importance_figure(

@@ -96,7 +96,15 @@ from empathy_zoo.experiment.model import RunSpec
 from empathy_zoo.experiment.search_space import check_ends, point_runs
 from empathy_zoo.experiment.sweep_writer import experiment_sweep
 from empathy_zoo.extras import install_command
-from empathy_zoo.names import PNG_OPENING, check_no_links, check_own_file, check_replaceable
+from empathy_zoo.names import (
+    IMPORTANCE_MARK,
+    PNG_OPENING,
+    TRIALS_MARK,
+    check_marked_figure,
+    check_no_links,
+    check_own_file,
+    check_replaceable,
+)
 from empathy_zoo.output_lock import hold_output_dir
 from empathy_zoo.training.checkpoint import DivergedError
 from empathy_zoo.training.ensemble import train_ensemble
@@ -105,6 +113,7 @@ from empathy_zoo.training.preflight import check_before_training
 from empathy_zoo.training.runner import exit_with_parent, stop_workers
 from empathy_zoo.training.study_plan import OVER_WORDS, PRUNE_STARTUP_TRIALS, StudyPlan, curve_value, trial_value
 from empathy_zoo.training.tracking import log_subdirs
+from empathy_zoo.training.trials_figure import IMPORTANCE_FIGURE, TRIALS_FIGURE
 from empathy_zoo.training.tuning_journal import check_study_lines, stored_plan
 
 __all__ = [
@@ -638,6 +647,8 @@ def study_document(study: Any, plan: StudyPlan, command: str, optuna: Any, updat
 
 _OPENINGS = {STUDY_FILE: b'{\n "schema": ', JOURNAL_FILE: b'{"op_code":', ".png": PNG_OPENING}
 """What every file of each name (a figure: of each suffix) that a study writes begins with."""
+_FIGURE_MARKS = {TRIALS_FIGURE: TRIALS_MARK, IMPORTANCE_FIGURE: IMPORTANCE_MARK}
+"""The mark every figure of each name a study's command writes holds (:func:`~empathy_zoo.names.check_marked_figure`)."""
 TUNED_MARK = b"(study.json beside this file)"
 """What the first line of every ``tuned.toml`` holds (its comment names the study it comes from)."""
 
@@ -645,7 +656,9 @@ TUNED_MARK = b"(study.json beside this file)"
 def _check_own_output(path: Path) -> None:
     """Refuse (``ValueError`` naming it) a regular file at ``path`` that is not what a study writes
     there (:data:`_OPENINGS`, :data:`TUNED_MARK`): a user's notes, a sweep file, another file named
-    so is never replaced. An empty file holds nothing to lose (:func:`~empathy_zoo.names.check_own_file`)."""
+    so is never replaced. A figure (:data:`_FIGURE_MARKS`) must hold its mark unless a study lies
+    beside it (a figure an older version wrote, unmarked, beside its study is replaced). An empty
+    file holds nothing to lose (:func:`~empathy_zoo.names.check_own_file`)."""
     if not path.is_file() or path.stat().st_size == 0:
         return
     if path.name == TUNED_FILE:
@@ -657,9 +670,25 @@ def _check_own_output(path: Path) -> None:
                 "the suite replaces only its own; move the file away or give another --out"
             )
         return
+    mark = _FIGURE_MARKS.get(path.name)
+    if mark is not None and not _study_beside(path):  # (beside a study: an older version's unmarked figure is its own)
+        check_marked_figure(path, path.stem, PNG_OPENING, mark)
+        return
     opening = _OPENINGS.get(path.name) or _OPENINGS.get(path.suffix)
     if opening is not None:
         check_own_file(path, f"{path.name} of a study", opening)
+
+
+def _study_beside(path: Path) -> bool:
+    """Whether a study's own ``study.json`` (non-empty, beginning as every one does) lies beside ``path``."""
+    study = path.parent / STUDY_FILE
+    try:
+        if not study.is_file() or study.is_symlink():
+            return False
+        with open(study, "rb") as handle:
+            return handle.read(len(_OPENINGS[STUDY_FILE])) == _OPENINGS[STUDY_FILE]
+    except OSError:
+        return False
 
 
 def _write_outputs(study: Any, plan: StudyPlan, out: Path, command: str, optuna: Any, options: RunnerOptions) -> dict[str, Any]:
