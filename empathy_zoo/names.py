@@ -181,6 +181,20 @@ def figure_marker(opening: bytes, mark: str) -> bytes:
     return b"\x21\xfe" + bytes([len(text)]) + text + b"\0"
 
 
+def _head(target: Path, count: int) -> bytes | None:
+    """The first ``count`` bytes of the regular, non-empty file ``target``; ``None`` where nothing
+    is there, anything but a regular file, or an empty file (a loop of links refused by name)."""
+    try:
+        status = os.lstat(target)
+        if not stat.S_ISREG(status.st_mode) or status.st_size == 0:
+            return None
+        with open(target, "rb") as handle:
+            return handle.read(count)
+    except OSError as error:
+        _refuse_a_loop(target, error)
+        return None
+
+
 def check_marked_figure(path: str | os.PathLike[str], kind: str, opening: bytes, mark: str) -> Path:
     """``path`` if nothing is there, or anything but a regular file (:func:`check_replaceable`
     says what of those), or an empty file, or a file that begins with ``opening`` and holds the
@@ -188,14 +202,8 @@ def check_marked_figure(path: str | os.PathLike[str], kind: str, opening: bytes,
     figure the suite wrote there; else a ``ValueError`` naming it. Another image (a user's, or
     one the suite wrote for another purpose) is never replaced."""
     target = Path(path)
-    try:
-        status = os.lstat(target)
-        if not stat.S_ISREG(status.st_mode) or status.st_size == 0:
-            return target
-        with open(target, "rb") as handle:
-            head = handle.read(MARK_HEAD_BYTES)
-    except OSError as error:
-        _refuse_a_loop(target, error)
+    head = _head(target, MARK_HEAD_BYTES)
+    if head is None:
         return target
     if not head.startswith(opening) or figure_marker(opening, mark) not in head:
         raise ValueError(f"{target} exists and is no {kind} figure this suite wrote: move it away or choose another path")
@@ -209,14 +217,8 @@ def check_own_file(path: str | os.PathLike[str], kind: str, opening: bytes) -> P
     figure's signature); else a ``ValueError`` naming it: the suite replaces a file only with one of
     the same kind, never a user's other file of that name. Only ``len(opening)`` bytes are read."""
     target = Path(path)
-    try:
-        status = os.lstat(target)
-        if not stat.S_ISREG(status.st_mode) or status.st_size == 0:
-            return target
-        with open(target, "rb") as handle:
-            head = handle.read(len(opening))
-    except OSError as error:
-        _refuse_a_loop(target, error)
+    head = _head(target, len(opening))
+    if head is None:
         return target
     if head != opening:
         shown = terminal_line(opening.rstrip(b"\n").decode("utf-8", errors="backslashreplace"))
