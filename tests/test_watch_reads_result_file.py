@@ -58,3 +58,15 @@ def test_an_evaluation_file_is_no_result_file_to_watch(tmp_path: Path, capsys) -
     for target in (path, path.with_name(AGENT)):
         assert main(["watch", str(target)]) == 2
         assert one_error_line(capsys).startswith(f"empathy-zoo: error: {path}: field ")
+
+
+def test_dir_with_a_path_is_refused_as_an_option_that_cannot_act(tmp_path, capsys) -> None:
+    from pathlib import Path
+
+    from empathy_zoo.cli import main
+
+    agent = next((Path(__file__).resolve().parents[1] / "docs" / "results" / "quick" / "runs").glob("*.agent.pt"))
+    capsys.readouterr()
+    assert main(["watch", str(agent), "--dir", str(tmp_path), "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--dir names where a run id is looked up; {agent} is a path" in err, err

@@ -25,7 +25,7 @@ from typing import Any
 from empathy_zoo.cli.allow_import import add_allow_import
 from empathy_zoo.cli.common import PROG, RUN_DEFAULTS, AgentPolicies, agent_policy, positive
 
-__all__ = ["add_watch", "check_episodes", "check_gif_path", "cmd_watch", "find_agent", "write_gif"]
+__all__ = ["add_watch", "check_episodes", "check_gif_path", "cmd_watch", "find_agent", "is_path", "write_gif"]
 
 GIF_PROBE_PREFIX = ".ezoo-gif-probe-"
 """Name prefix of the empty file ``--gif`` writes and removes to see that its directory takes a file."""
@@ -96,13 +96,12 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
     result file. Anything not found, not an agent file, changed since its run wrote it, of a method
     neither registered here nor a ``package.module:NAME`` plug-in (never imported), or a run that
     kept no agent, raises ``ValueError`` saying which."""
-    from empathy_zoo.agent_file import AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX
     from empathy_zoo.experiment.agent_method import check_agent_method
     from empathy_zoo.result_file import result_path
 
     path = Path(target)
     try:
-        if path.is_file() or target.endswith((AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, ".json")) or "/" in target:
+        if is_path(target):
             return check_agent_method(_agent_file(path))
         result = result_path(Path(results_dir), target)
         if not os.path.lexists(result):
@@ -110,6 +109,13 @@ def find_agent(target: str, results_dir: str | Path = RUN_DEFAULTS["out"]) -> An
         return check_agent_method(_run_agent(result))  # (anything but a regular file there is refused, named)
     except ImportError as error:  # (a Stable-Baselines3 agent without SB3 installed)
         raise ValueError(str(error)) from None
+
+
+def is_path(target: str) -> bool:
+    """Whether ``watch``'s ``target`` is read as a path (an agent or result file), not as a run id."""
+    from empathy_zoo.agent_file import AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX
+
+    return Path(target).is_file() or target.endswith((AGENT_SUFFIX, LIBRARY_AGENT_SUFFIX, ".json")) or "/" in target
 
 
 def check_episodes(episodes: int, seed: int) -> None:
@@ -201,7 +207,9 @@ def cmd_watch(args: argparse.Namespace, command: str) -> int:
         raise ValueError("--gif-steps sets the length of the GIF --gif writes: give --gif PATH too, or leave --gif-steps out")
     if args.gif is not None:
         check_gif_path(args.gif)  # (its directory is made when the GIF is written: a refusal creates none)
-    agent = find_agent(args.target, args.dir)
+    if args.dir is not None and is_path(args.target):  # (an option that cannot act: never silently ignored)
+        raise ValueError(f"--dir names where a run id is looked up; {args.target} is a path, read as given: leave --dir out")
+    agent = find_agent(args.target, RUN_DEFAULTS["out"] if args.dir is None else args.dir)
     fixed = dict(args.fixed or [])
     named = [*dict(agent.describe().get("fixed") or {}).values(), *fixed.values()]
     check_allowed_imports_named(args.allow_import or (), named, "of the agent file or --fixed")
@@ -251,7 +259,7 @@ def add_watch(sub: Any) -> None:
     watch.add_argument("target", metavar="RUN_ID_OR_AGENT_FILE", help="a run id (in --dir), or an agent or result file")
     watch.add_argument(
         "--dir",
-        default=RUN_DEFAULTS["out"],
+        default=None,
         metavar="RESULTS_DIR",
         help=f"where a run id's result file is: RESULTS_DIR/runs/<run id>.json (default: {RUN_DEFAULTS['out']}, as train --out)",
     )
