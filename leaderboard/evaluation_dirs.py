@@ -62,7 +62,7 @@ def evaluation_dir_files(directory: str | os.PathLike[str]) -> list[Path]:
             f"--evaluations {directory} is not a directory (give the directory empathy-zoo evaluate --out wrote into)"
         )
     found = evaluation_files(root)
-    if not found and root.name == EVALUATIONS_DIR:
+    if not found and resolved(root).name == EVALUATIONS_DIR:  # (that folder itself, or a link to it)
         check_no_stray_json(root)
         found = data_files(root, "*/*.json", "evaluation file")
     if not found:

@@ -60,3 +60,10 @@ def test_a_json_file_at_the_top_of_an_evaluations_folder_is_refused(
 def test_a_directorys_own_evaluations_given_again_are_named_its_own(results: Path, capsys: pytest.CaptureFixture[str]) -> None:
     words = "--evaluations q/evaluations is the evaluations folder of the results directory q: it is read beside its runs already"
     _refused(capsys, ["leaderboard", "q", "--evaluations", "q/evaluations", "--out", "lb"], words)
+
+
+def test_a_link_to_an_evaluations_folder_is_read_as_that_folder(results: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (results / "ev_link").symlink_to(results / "q" / "evaluations")
+    capsys.readouterr()
+    assert main(["leaderboard", "q3", "--evaluations", "ev_link", "--out", "lb"]) == 0, capsys.readouterr().err
+    assert "Held-out partners" in (results / "lb" / "LEADERBOARD.md").read_text(encoding="utf-8")
